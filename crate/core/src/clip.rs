@@ -1,0 +1,277 @@
+//! Motion clips: per-frame local joint rotations and translations at a fixed frame rate, and
+//! forward kinematics to world space.
+
+use std::sync::Arc;
+
+use glam::{Mat4, Quat, Vec3};
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::skeleton::Skeleton;
+
+/// A per-frame local translation of one joint (the root's always; others where the source
+/// animates them). Joints without a track use their rest offset.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TranslationTrack {
+    pub joint: usize,
+    /// One value per frame, metres, in the parent's frame.
+    pub values: Vec<Vec3>,
+}
+
+/// A motion clip.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Clip {
+    /// Display name ("salsa_01", "Dance").
+    pub name: String,
+    /// The file (or "built-in") the clip came from.
+    pub source: String,
+    /// Frames per second; `> 0`.
+    pub fps: f32,
+    pub skeleton: Arc<Skeleton>,
+    /// Local rotations, `frame_count * skeleton.len()`, frame-major.
+    pub rotations: Vec<Quat>,
+    /// Animated translations; the root's is always first when present.
+    pub translations: Vec<TranslationTrack>,
+}
+
+#[derive(Debug, Error, PartialEq)]
+pub enum ClipError {
+    #[error("clip '{name}': frame rate must be positive and finite, got {fps}")]
+    BadFps { name: String, fps: f32 },
+    #[error("clip '{name}': {rotations} rotations is not a whole number of frames of {joints} joints")]
+    RaggedRotations { name: String, rotations: usize, joints: usize },
+    #[error("clip '{name}': translation track of joint {joint} has {values} values for {frames} frames")]
+    RaggedTranslations { name: String, joint: usize, values: usize, frames: usize },
+    #[error("clip '{name}' has no frames")]
+    Empty { name: String },
+    #[error("clip '{name}': skeleton joints are not ordered parents before children")]
+    Unordered { name: String },
+}
+
+impl Clip {
+    /// Checks every invariant the rest of the engine relies on.
+    pub fn validate(&self) -> Result<(), ClipError> {
+        let name = self.name.clone();
+        if !(self.fps.is_finite() && self.fps > 0.0) {
+            return Err(ClipError::BadFps { name, fps: self.fps });
+        }
+        let joints = self.skeleton.len();
+        if joints == 0 || self.rotations.is_empty() {
+            return Err(ClipError::Empty { name });
+        }
+        if self.rotations.len() % joints != 0 {
+            return Err(ClipError::RaggedRotations { name, rotations: self.rotations.len(), joints });
+        }
+        if !self.skeleton.is_topologically_ordered() {
+            return Err(ClipError::Unordered { name });
+        }
+        let frames = self.frame_count();
+        for t in &self.translations {
+            if t.values.len() != frames || t.joint >= joints {
+                return Err(ClipError::RaggedTranslations { name, joint: t.joint, values: t.values.len(), frames });
+            }
+        }
+        Ok(())
+    }
+
+    pub fn frame_count(&self) -> usize {
+        match self.skeleton.len() {
+            0 => 0,
+            n => self.rotations.len() / n,
+        }
+    }
+
+    pub fn duration_secs(&self) -> f32 {
+        self.frame_count() as f32 / self.fps
+    }
+
+    pub fn joint_count(&self) -> usize {
+        self.skeleton.len()
+    }
+
+    /// Local rotations of one frame.
+    pub fn frame_rotations(&self, frame: usize) -> &[Quat] {
+        let n = self.skeleton.len();
+        &self.rotations[frame * n..(frame + 1) * n]
+    }
+
+    fn local_translation(&self, joint: usize, frame: usize) -> Vec3 {
+        for t in &self.translations {
+            if t.joint == joint {
+                return t.values[frame];
+            }
+        }
+        self.skeleton.joints[joint].rest_offset
+    }
+
+    /// Root translation of a frame (the first root joint's local translation).
+    pub fn root_translation(&self, frame: usize) -> Vec3 {
+        self.local_translation(0, frame)
+    }
+
+    /// World position of every joint at `frame`, into `out` (resized).
+    pub fn world_positions_into(&self, frame: usize, out: &mut Vec<Vec3>) {
+        let n = self.skeleton.len();
+        out.clear();
+        out.reserve(n);
+        let mut rots: Vec<Quat> = Vec::with_capacity(n);
+        let local = self.frame_rotations(frame);
+        for (i, j) in self.skeleton.joints.iter().enumerate() {
+            let t = self.local_translation(i, frame);
+            match j.parent {
+                None => {
+                    rots.push(local[i]);
+                    out.push(t);
+                }
+                Some(p) => {
+                    let pr = rots[p];
+                    rots.push(pr * local[i]);
+                    let pp = out[p];
+                    out.push(pp + pr * t);
+                }
+            }
+        }
+    }
+
+    pub fn world_positions(&self, frame: usize) -> Vec<Vec3> {
+        let mut v = Vec::new();
+        self.world_positions_into(frame, &mut v);
+        v
+    }
+
+    /// World matrices of every joint at `frame` (for skinning).
+    pub fn world_matrices_into(&self, frame: usize, out: &mut Vec<Mat4>) {
+        let local = self.frame_rotations(frame);
+        out.clear();
+        for (i, j) in self.skeleton.joints.iter().enumerate() {
+            let m = Mat4::from_rotation_translation(local[i], self.local_translation(i, frame));
+            let w = match j.parent {
+                None => m,
+                Some(p) => out[p] * m,
+            };
+            out.push(w);
+        }
+    }
+
+    /// World positions of every frame, frame-major (`frame_count * joints`).
+    pub fn all_world_positions(&self) -> Vec<Vec3> {
+        let n = self.skeleton.len();
+        let mut all = Vec::with_capacity(n * self.frame_count());
+        let mut tmp = Vec::with_capacity(n);
+        for f in 0..self.frame_count() {
+            self.world_positions_into(f, &mut tmp);
+            all.extend_from_slice(&tmp);
+        }
+        all
+    }
+
+    /// Pose at a time in seconds: nearest frames blended (slerp / lerp); clamps to the clip.
+    pub fn sample_into(&self, time_secs: f32, rotations: &mut Vec<Quat>, translations: &mut Vec<Vec3>) {
+        let frames = self.frame_count();
+        let n = self.skeleton.len();
+        let x = (time_secs * self.fps).clamp(0.0, (frames.saturating_sub(1)) as f32);
+        let f0 = x.floor() as usize;
+        let f1 = (f0 + 1).min(frames - 1);
+        let a = x - f0 as f32;
+        rotations.clear();
+        translations.clear();
+        for i in 0..n {
+            let q0 = self.rotations[f0 * n + i];
+            let q1 = self.rotations[f1 * n + i];
+            rotations.push(q0.slerp(q1, a));
+            translations.push(self.local_translation(i, f0).lerp(self.local_translation(i, f1), a));
+        }
+    }
+
+    /// Frames `start..end` as a new clip.
+    pub fn slice(&self, start: usize, end: usize, name: impl Into<String>) -> Clip {
+        let n = self.skeleton.len();
+        let end = end.min(self.frame_count());
+        let start = start.min(end);
+        Clip {
+            name: name.into(),
+            source: self.source.clone(),
+            fps: self.fps,
+            skeleton: self.skeleton.clone(),
+            rotations: self.rotations[start * n..end * n].to_vec(),
+            translations: self
+                .translations
+                .iter()
+                .map(|t| TranslationTrack { joint: t.joint, values: t.values[start..end].to_vec() })
+                .collect(),
+        }
+    }
+
+    /// Resampled to `fps` (slerp between neighbouring frames); keeps the duration.
+    pub fn resampled(&self, fps: f32) -> Clip {
+        let frames = self.frame_count();
+        let n = self.skeleton.len();
+        let new_frames = ((self.duration_secs() * fps).round() as usize).max(1);
+        let mut rotations = Vec::with_capacity(new_frames * n);
+        let mut tracks: Vec<TranslationTrack> =
+            self.translations.iter().map(|t| TranslationTrack { joint: t.joint, values: Vec::with_capacity(new_frames) }).collect();
+        for k in 0..new_frames {
+            let x = (k as f32 * self.fps / fps).min((frames - 1) as f32);
+            let f0 = x.floor() as usize;
+            let f1 = (f0 + 1).min(frames - 1);
+            let a = x - f0 as f32;
+            for i in 0..n {
+                rotations.push(self.rotations[f0 * n + i].slerp(self.rotations[f1 * n + i], a));
+            }
+            for (dst, src) in tracks.iter_mut().zip(&self.translations) {
+                dst.values.push(src.values[f0].lerp(src.values[f1], a));
+            }
+        }
+        Clip { name: self.name.clone(), source: self.source.clone(), fps, skeleton: self.skeleton.clone(), rotations, translations: tracks }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::skeleton::Joint;
+
+    fn two_bone() -> Clip {
+        let sk = Skeleton {
+            joints: vec![
+                Joint { name: "a".into(), parent: None, rest_offset: Vec3::ZERO, rest_rotation: Quat::IDENTITY, end_site: false },
+                Joint { name: "b".into(), parent: Some(0), rest_offset: Vec3::Y, rest_rotation: Quat::IDENTITY, end_site: false },
+            ],
+        };
+        let q = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
+        Clip {
+            name: "t".into(),
+            source: "test".into(),
+            fps: 10.0,
+            skeleton: Arc::new(sk),
+            rotations: vec![Quat::IDENTITY, Quat::IDENTITY, q, Quat::IDENTITY],
+            translations: vec![TranslationTrack { joint: 0, values: vec![Vec3::ZERO, Vec3::X] }],
+        }
+    }
+
+    #[test]
+    fn forward_kinematics_rotates_children() {
+        let c = two_bone();
+        c.validate().unwrap();
+        let p = c.world_positions(1);
+        assert!((p[0] - Vec3::X).length() < 1e-6);
+        assert!((p[1] - Vec3::new(0.0, 0.0, 0.0)).length() < 1e-6, "{:?}", p[1]);
+    }
+
+    #[test]
+    fn validate_rejects_ragged_and_bad_fps() {
+        let mut c = two_bone();
+        c.fps = 0.0;
+        assert!(matches!(c.validate(), Err(ClipError::BadFps { .. })));
+        let mut c = two_bone();
+        c.rotations.pop();
+        assert!(matches!(c.validate(), Err(ClipError::RaggedRotations { .. })));
+    }
+
+    #[test]
+    fn resample_keeps_duration() {
+        let c = two_bone().resampled(20.0);
+        assert_eq!(c.frame_count(), 4);
+        c.validate().unwrap();
+    }
+}

@@ -1,0 +1,158 @@
+//! Importers: BVH and glTF/GLB, from bytes (no filesystem), into [`Clip`]s on their own
+//! skeleton, plus the skinned meshes a glTF character carries for rendering.
+//!
+//! Every importer returns a typed [`ImportError`] naming the file and, where it can, the line,
+//! joint or accessor at fault; no input makes it panic.
+
+pub mod bvh;
+pub mod gltf;
+
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::clip::Clip;
+use crate::humanoid::{HumanoidMap, HumanoidStatus};
+use crate::skeleton::Skeleton;
+
+pub use self::gltf::{MeshPart, SkinnedMesh};
+
+/// What the person (or the caller) can say about a file before it is read.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ImportOptions {
+    /// Play the file at this frame rate instead of the one its header states (the CMU salsa
+    /// BVH files say 120 fps but were recorded at 60). `None`: trust the file.
+    pub fps_override: Option<f32>,
+    /// Metres per file unit for BVH. `None`: guess from the skeleton's size (a figure taller
+    /// than 20 units is taken to be in centimetres, taller than 3 in decimetres... see
+    /// [`bvh::guess_unit_scale`]).
+    pub unit_scale: Option<f32>,
+    /// Rate glTF animations are resampled to, frames per second. Default 30.
+    pub gltf_fps: f32,
+}
+
+impl Default for ImportOptions {
+    fn default() -> Self {
+        Self { fps_override: None, unit_scale: None, gltf_fps: 30.0 }
+    }
+}
+
+/// The file formats the engine reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Format {
+    Bvh,
+    Gltf,
+}
+
+/// Everything one file gave.
+#[derive(Clone, Debug)]
+pub struct Imported {
+    pub format: Format,
+    pub skeleton: Arc<Skeleton>,
+    /// One clip per animation (BVH: one). A glTF file without animations gives one
+    /// single-frame clip in its rest pose.
+    pub clips: Vec<Clip>,
+    /// Drawable character parts (glTF only).
+    pub mesh: Option<SkinnedMesh>,
+    pub humanoid: HumanoidMap,
+    pub status: HumanoidStatus,
+    /// Things that were read but not used (morph weights, textures, ...).
+    pub warnings: Vec<String>,
+}
+
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ImportError {
+    #[error("{file}: the file is empty")]
+    Empty { file: String },
+    #[error("{file}: not a BVH, glTF or GLB file (it starts with {start:?})")]
+    UnknownFormat { file: String, start: String },
+    #[error("{file}:{line}:{column}: {message}")]
+    Bvh { file: String, line: usize, column: usize, message: String },
+    #[error("{file}: invalid glTF: {message}")]
+    Gltf { file: String, message: String },
+    #[error("{file}: {message}")]
+    Unsupported { file: String, message: String },
+    #[error("{file}: {message}")]
+    Invalid { file: String, message: String },
+}
+
+impl ImportError {
+    /// A short machine-readable kind, stable for the JS API ("empty", "bvh-syntax", ...).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            ImportError::Empty { .. } => "empty",
+            ImportError::UnknownFormat { .. } => "unknown-format",
+            ImportError::Bvh { .. } => "bvh",
+            ImportError::Gltf { .. } => "gltf",
+            ImportError::Unsupported { .. } => "unsupported",
+            ImportError::Invalid { .. } => "invalid",
+        }
+    }
+}
+
+/// Which format the bytes are, from their first bytes (not the file name, which may lie).
+pub fn sniff(bytes: &[u8]) -> Option<Format> {
+    if bytes.starts_with(b"glTF") {
+        return Some(Format::Gltf);
+    }
+    let text_start: Vec<u8> = bytes
+        .iter()
+        .copied()
+        .skip_while(|b| b.is_ascii_whitespace() || *b == 0xEF || *b == 0xBB || *b == 0xBF)
+        .take(16)
+        .collect();
+    if text_start.starts_with(b"HIERARCHY") {
+        return Some(Format::Bvh);
+    }
+    if text_start.starts_with(b"{") {
+        return Some(Format::Gltf);
+    }
+    None
+}
+
+/// Reads a motion file of any supported format.
+pub fn import_bytes(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Imported, ImportError> {
+    if bytes.iter().all(|b| b.is_ascii_whitespace()) {
+        return Err(ImportError::Empty { file: file.to_string() });
+    }
+    match sniff(bytes) {
+        Some(Format::Bvh) => bvh::import(file, bytes, options),
+        Some(Format::Gltf) => gltf::import(file, bytes, options),
+        None => {
+            let start: String = bytes
+                .iter()
+                .take(12)
+                .map(|&b| if b.is_ascii_graphic() || b == b' ' { b as char } else { '.' })
+                .collect();
+            Err(ImportError::UnknownFormat { file: file.to_string(), start })
+        }
+    }
+}
+
+/// Fills in the humanoid mapping and the clip validation shared by every importer.
+pub(crate) fn finish(
+    format: Format,
+    file: &str,
+    skeleton: Arc<Skeleton>,
+    clips: Vec<Clip>,
+    mesh: Option<SkinnedMesh>,
+    warnings: Vec<String>,
+) -> Result<Imported, ImportError> {
+    for c in &clips {
+        c.validate().map_err(|e| ImportError::Invalid { file: file.to_string(), message: e.to_string() })?;
+    }
+    let humanoid = HumanoidMap::from_skeleton(&skeleton);
+    let status = humanoid.status(&skeleton);
+    Ok(Imported { format, skeleton, clips, mesh, humanoid, status, warnings })
+}
+
+/// File name without directories or extension ("salsa_01" from "a/b/salsa_01.bvh").
+pub fn stem(file: &str) -> &str {
+    let base = file.rsplit(['/', '\\']).next().unwrap_or(file);
+    match base.rfind('.') {
+        Some(i) if i > 0 => &base[..i],
+        _ => base,
+    }
+}

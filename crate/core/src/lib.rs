@@ -1,0 +1,18 @@
+//! Odori core: everything the dance engine computes, in pure Rust.
+//!
+//! This crate must stay free of web crates (wasm-bindgen, web-sys, js-sys, wgpu): it builds and
+//! tests natively, and the same code is compiled to wasm by `crate/web`. Coordinates inside the
+//! core are right-handed, Y up, in metres; angles are radians; time is in seconds or frames, and
+//! names say which.
+
+pub mod builtin;
+pub mod clip;
+pub mod humanoid;
+pub mod import;
+pub mod normalize;
+pub mod skeleton;
+
+pub use clip::{Clip, ClipError, TranslationTrack};
+pub use humanoid::{Canon, HumanoidMap, HumanoidStatus};
+pub use import::{ImportError, ImportOptions, Imported};
+pub use skeleton::{Joint, Skeleton};
