@@ -158,7 +158,7 @@ mod tests {
         for c in Canon::ALL {
             assert_eq!(m.get(c), Some(c.index()), "{c:?}");
         }
-        assert_eq!(m.status(&sk), HumanoidStatus::Complete);
+        assert_eq!(m.status(&sk, None), HumanoidStatus::Complete);
     }
 
     #[test]

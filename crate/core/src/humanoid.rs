@@ -230,7 +230,7 @@ enum Part {
 fn body_word(w: &str) -> Option<Part> {
     let w = w.trim_end_matches(|c: char| c.is_ascii_digit());
     Some(match w {
-        "hips" | "hip" | "root" | "pelvis" => Part::Hips,
+        "hips" | "hip" | "pelvis" => Part::Hips,
         "spine" | "abdomen" | "waist" | "lowerback" | "belly" | "torsolower" => Part::SpineLike,
         "chest" | "upperchest" | "thorax" | "upperback" | "torso" | "spineupper" => Part::Chest,
         "neck" | "neckupper" => Part::Neck,
@@ -449,8 +449,10 @@ impl HumanoidMap {
         }
     }
 
-    /// Humanoid status of a mapped skeleton, judged on its rest pose.
-    pub fn status(&self, sk: &Skeleton) -> HumanoidStatus {
+    /// Humanoid status of a mapped skeleton, judged on its rest pose and on a few frames of
+    /// `clip` (rigs such as iClone's BVH exports have a meaningless rest pose: their bone
+    /// frames are baked into the animation). Upright in any of them counts.
+    pub fn status(&self, sk: &Skeleton, clip: Option<&Clip>) -> HumanoidStatus {
         let missing = self.missing();
         let essential: Vec<&str> = missing.iter().filter(|c| c.essential()).map(|c| c.name()).collect();
         if !essential.is_empty() {
@@ -458,25 +460,36 @@ impl HumanoidMap {
                 reason: format!("no humanoid {} found among its {} joints", essential.join(", "), sk.len()),
             };
         }
-        let rest = sk.rest_positions();
-        let p = |c: Canon| rest[self.get(c).unwrap_or(0)];
-        let hips = (p(Canon::LeftUpperLeg) + p(Canon::RightUpperLeg)) * 0.5;
-        let up = p(Canon::Head) - hips;
-        let feet = (p(Canon::LeftFoot) + p(Canon::RightFoot)) * 0.5;
-        let down = feet - hips;
+        let mut poses = vec![sk.rest_positions()];
+        if let Some(c) = clip {
+            let n = c.frame_count();
+            for k in 0..5 {
+                poses.push(c.world_positions(k * n.saturating_sub(1) / 4));
+            }
+        }
         let tilt = |v: Vec3, dir: Vec3| v.normalize_or_zero().dot(dir).clamp(-1.0, 1.0).acos().to_degrees();
-        let spine_tilt = tilt(up, Vec3::Y);
-        if spine_tilt > 50.0 {
+        // (spine tilt from vertical, leg tilt from straight down) per pose; keep the most upright.
+        let best = poses
+            .iter()
+            .map(|pose| {
+                let p = |c: Canon| pose[self.get(c).unwrap_or(0)];
+                let hips = (p(Canon::LeftUpperLeg) + p(Canon::RightUpperLeg)) * 0.5;
+                let feet = (p(Canon::LeftFoot) + p(Canon::RightFoot)) * 0.5;
+                (tilt(p(Canon::Head) - hips, Vec3::Y), tilt(feet - hips, -Vec3::Y))
+            })
+            .min_by(|a, b| a.0.max(a.1).total_cmp(&b.0.max(b.1)))
+            .unwrap_or((180.0, 180.0));
+        if best.0 > 50.0 {
             return HumanoidStatus::NotHumanoid {
                 reason: format!(
-                    "its body is not upright: hips to head is {spine_tilt:.0}° from vertical in the rest pose (a four-legged or lying figure); humanoid operations need a standing two-legged body"
+                    "its body is not upright: hips to head is {:.0}° from vertical (a four-legged or lying figure); humanoid operations need a standing two-legged body",
+                    best.0
                 ),
             };
         }
-        let leg_tilt = tilt(down, -Vec3::Y);
-        if leg_tilt > 50.0 {
+        if best.1 > 50.0 {
             return HumanoidStatus::NotHumanoid {
-                reason: format!("its legs do not hang below the hips: hips to feet is {leg_tilt:.0}° from straight down in the rest pose"),
+                reason: format!("its legs do not hang below the hips: hips to feet is {:.0}° from straight down", best.1),
             };
         }
         if missing.is_empty() {

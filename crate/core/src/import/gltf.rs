@@ -369,7 +369,8 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
         if duration > 3600.0 {
             return Err(ImportError::Invalid { file: file.to_string(), message: format!("animation '{name}' lasts {duration} s; longer than an hour is refused") });
         }
-        let frames = (duration * fps).round() as usize + 1;
+        // Enough frames that the last one reaches the animation's end (sampling clamps there).
+        let frames = (duration * fps - 1e-3).ceil().max(0.0) as usize + 1;
         let mut rotations = Vec::with_capacity(frames * nj);
         let mut pos_joints: Vec<usize> = pos_tracks.keys().copied().collect();
         pos_joints.sort_unstable();

@@ -144,7 +144,7 @@ pub(crate) fn finish(
         c.validate().map_err(|e| ImportError::Invalid { file: file.to_string(), message: e.to_string() })?;
     }
     let humanoid = HumanoidMap::from_skeleton(&skeleton);
-    let status = humanoid.status(&skeleton);
+    let status = humanoid.status(&skeleton, clips.first());
     Ok(Imported { format, skeleton, clips, mesh, humanoid, status, warnings })
 }
 
