@@ -1,6 +1,6 @@
 //! Joint hierarchies: names, parents (always before children), rest offsets and rotations.
 
-use glam::{Quat, Vec3};
+use glam::{Mat4, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// One joint of a skeleton.
@@ -78,6 +78,28 @@ impl Skeleton {
             }
         }
         pos
+    }
+
+    /// Forward kinematics of one pose given local rotations and translations (one per joint):
+    /// world positions into `positions`, and world matrices into `matrices` when given.
+    pub fn forward_kinematics(&self, local_rotations: &[Quat], local_translations: &[Vec3], positions: &mut Vec<Vec3>, mut matrices: Option<&mut Vec<Mat4>>) {
+        let n = self.len().min(local_rotations.len()).min(local_translations.len());
+        positions.clear();
+        let mut rots: Vec<Quat> = Vec::with_capacity(n);
+        if let Some(m) = matrices.as_deref_mut() {
+            m.clear();
+        }
+        for i in 0..n {
+            let (r, p) = match self.joints[i].parent {
+                None => (local_rotations[i], local_translations[i]),
+                Some(p) => (rots[p] * local_rotations[i], positions[p] + rots[p] * local_translations[i]),
+            };
+            rots.push(r);
+            positions.push(p);
+            if let Some(m) = matrices.as_deref_mut() {
+                m.push(Mat4::from_rotation_translation(r, p));
+            }
+        }
     }
 
     /// Index pairs (parent, child) of every bone, for drawing.

@@ -1,1 +1,486 @@
-//! placeholder
+//! Odori's wgpu renderer: a ground grid, stick figures (any number, each its own colour),
+//! and GPU-skinned characters. It knows nothing of the app: it is given a device, a target
+//! and, per frame, a camera and what to draw.
+//!
+//! Works on WebGPU and on WebGL2 (wgpu's GL backend): no storage buffers, palettes in a 16 KiB
+//! uniform block (256 joints), WGSL compiled by naga for either.
+
+mod camera;
+pub use camera::OrbitCamera;
+
+use glam::{Mat4, Vec3};
+use odori_core::import::SkinnedMesh;
+use wgpu::util::DeviceExt;
+
+/// Joints a skinned mesh may use (the uniform palette's size).
+pub const MAX_PALETTE: usize = 256;
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth24Plus;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CameraUniform {
+    view_proj: [[f32; 4]; 4],
+    eye: [f32; 4],
+    light: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LineVertex {
+    p: [f32; 3],
+    color: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CapsuleInstance {
+    a: [f32; 4],
+    b: [f32; 4],
+    color: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct MeshVertex {
+    p: [f32; 3],
+    n: [f32; 3],
+    joints: [u32; 4],
+    weights: [f32; 4],
+    color: [f32; 4],
+}
+
+/// One stick figure to draw this frame.
+pub struct Figure<'a> {
+    /// World positions of the joints, metres.
+    pub joints: &'a [Vec3],
+    /// (parent, child) joint index pairs.
+    pub bones: &'a [(usize, usize)],
+    /// Linear RGB(A).
+    pub color: [f32; 4],
+    /// Bone radius, metres (joints are drawn 1.3× as thick; the head larger: see `head`).
+    pub radius: f32,
+    /// Joint drawn as the head (a ball of 4× radius), if any.
+    pub head: Option<usize>,
+}
+
+/// A skinned mesh uploaded once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MeshHandle(usize);
+
+/// One skinned mesh to draw this frame: `palette[k]` = world(joint k) · bind(k).
+pub struct MeshDraw<'a> {
+    pub mesh: MeshHandle,
+    pub palette: &'a [Mat4],
+}
+
+struct GpuMesh {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    palette_len: usize,
+}
+
+struct PaletteSlot {
+    buffer: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+}
+
+/// Errors the renderer reports instead of panicking.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RenderError {
+    /// The mesh needs more joints than the palette holds; draw it as a stick figure instead.
+    PaletteTooLarge { joints: usize, max: usize },
+    EmptyMesh,
+}
+
+impl std::fmt::Display for RenderError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RenderError::PaletteTooLarge { joints, max } => write!(f, "the mesh uses {joints} joints; the renderer skins at most {max}"),
+            RenderError::EmptyMesh => write!(f, "the mesh has no triangles"),
+        }
+    }
+}
+
+impl std::error::Error for RenderError {}
+
+pub struct Renderer {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    camera_buffer: wgpu::Buffer,
+    camera_bg: wgpu::BindGroup,
+    palette_layout: wgpu::BindGroupLayout,
+    line_pipeline: wgpu::RenderPipeline,
+    figure_pipeline: wgpu::RenderPipeline,
+    mesh_pipeline: wgpu::RenderPipeline,
+    grid: wgpu::Buffer,
+    grid_count: u32,
+    instances: wgpu::Buffer,
+    instance_capacity: usize,
+    meshes: Vec<GpuMesh>,
+    palettes: Vec<PaletteSlot>,
+    depth: Option<(wgpu::TextureView, u32, u32)>,
+    scratch: Vec<CapsuleInstance>,
+    /// Background colour.
+    pub clear: wgpu::Color,
+}
+
+fn grid_lines() -> Vec<LineVertex> {
+    let mut v = Vec::new();
+    let n = 10;
+    let step = 0.5;
+    let ext = n as f32 * step;
+    for i in -n..=n {
+        let x = i as f32 * step;
+        let c = if i == 0 { [0.45, 0.45, 0.5, 1.0] } else { [0.22, 0.23, 0.27, 1.0] };
+        v.push(LineVertex { p: [x, 0.0, -ext], color: c });
+        v.push(LineVertex { p: [x, 0.0, ext], color: c });
+        v.push(LineVertex { p: [-ext, 0.0, x], color: c });
+        v.push(LineVertex { p: [ext, 0.0, x], color: c });
+    }
+    v
+}
+
+impl Renderer {
+    /// Builds the pipelines for a target of `format`.
+    pub fn new(device: wgpu::Device, queue: wgpu::Queue, format: wgpu::TextureFormat) -> Renderer {
+        let common = include_str!("shaders/common.wgsl");
+        let module = |name: &str, src: &str| {
+            device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(name),
+                source: wgpu::ShaderSource::Wgsl(format!("{common}\n{src}").into()),
+            })
+        };
+        let lines_sm = module("lines", include_str!("shaders/lines.wgsl"));
+        let figure_sm = module("figure", include_str!("shaders/figure.wgsl"));
+        let mesh_sm = module("mesh", include_str!("shaders/mesh.wgsl"));
+
+        let uniform_entry = |visibility| wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility,
+            ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        };
+        let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("camera"),
+            entries: &[uniform_entry(wgpu::ShaderStages::VERTEX_FRAGMENT)],
+        });
+        let palette_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("palette"),
+            entries: &[uniform_entry(wgpu::ShaderStages::VERTEX)],
+        });
+        let camera_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("camera"),
+            size: std::mem::size_of::<CameraUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let camera_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("camera"),
+            layout: &camera_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_buffer.as_entire_binding() }],
+        });
+        let basic_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("basic"),
+            bind_group_layouts: &[Some(&camera_layout)],
+            immediate_size: 0,
+        });
+        let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("mesh"),
+            bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout)],
+            immediate_size: 0,
+        });
+        let depth_state = Some(wgpu::DepthStencilState {
+            format: DEPTH,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        });
+        let pipeline = |label: &str,
+                        layout: &wgpu::PipelineLayout,
+                        sm: &wgpu::ShaderModule,
+                        buffers: &[Option<wgpu::VertexBufferLayout>],
+                        topology: wgpu::PrimitiveTopology,
+                        cull: Option<wgpu::Face>| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState { module: sm, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers },
+                primitive: wgpu::PrimitiveState { topology, cull_mode: cull, ..Default::default() },
+                depth_stencil: depth_state.clone(),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: sm,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let line_pipeline = pipeline(
+            "lines",
+            &basic_layout,
+            &lines_sm,
+            &[Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<LineVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
+            })],
+            wgpu::PrimitiveTopology::LineList,
+            None,
+        );
+        let figure_pipeline = pipeline(
+            "figure",
+            &basic_layout,
+            &figure_sm,
+            &[Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<CapsuleInstance>() as u64,
+                step_mode: wgpu::VertexStepMode::Instance,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4],
+            })],
+            wgpu::PrimitiveTopology::TriangleList,
+            None,
+        );
+        let mesh_pipeline = pipeline(
+            "mesh",
+            &mesh_layout,
+            &mesh_sm,
+            &[Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<MeshVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4],
+            })],
+            wgpu::PrimitiveTopology::TriangleList,
+            None,
+        );
+        let grid_v = grid_lines();
+        let grid = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("grid"),
+            contents: bytemuck::cast_slice(&grid_v),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let instance_capacity = 256;
+        let instances = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("capsules"),
+            size: (instance_capacity * std::mem::size_of::<CapsuleInstance>()) as u64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Renderer {
+            device,
+            queue,
+            camera_buffer,
+            camera_bg,
+            palette_layout,
+            line_pipeline,
+            figure_pipeline,
+            mesh_pipeline,
+            grid,
+            grid_count: grid_v.len() as u32,
+            instances,
+            instance_capacity,
+            meshes: Vec::new(),
+            palettes: Vec::new(),
+            depth: None,
+            scratch: Vec::new(),
+            clear: wgpu::Color { r: 0.055, g: 0.06, b: 0.075, a: 1.0 },
+        }
+    }
+
+    pub fn device(&self) -> &wgpu::Device {
+        &self.device
+    }
+
+    pub fn queue(&self) -> &wgpu::Queue {
+        &self.queue
+    }
+
+    /// Uploads a skinned mesh (vertex joints index its palette).
+    pub fn upload_mesh(&mut self, mesh: &SkinnedMesh) -> Result<MeshHandle, RenderError> {
+        if mesh.palette.len() > MAX_PALETTE {
+            return Err(RenderError::PaletteTooLarge { joints: mesh.palette.len(), max: MAX_PALETTE });
+        }
+        let mut vertices = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        for part in &mesh.parts {
+            let base = vertices.len() as u32;
+            for k in 0..part.positions.len() {
+                let j = part.joints[k];
+                vertices.push(MeshVertex {
+                    p: part.positions[k],
+                    n: part.normals[k],
+                    joints: [j[0] as u32, j[1] as u32, j[2] as u32, j[3] as u32],
+                    weights: part.weights[k],
+                    color: part.color,
+                });
+            }
+            indices.extend(part.indices.iter().map(|i| i + base));
+        }
+        if indices.is_empty() {
+            return Err(RenderError::EmptyMesh);
+        }
+        let vb = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("mesh vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let ib = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("mesh indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        self.meshes.push(GpuMesh { vertices: vb, indices: ib, index_count: indices.len() as u32, palette_len: mesh.palette.len() });
+        Ok(MeshHandle(self.meshes.len() - 1))
+    }
+
+    fn ensure_depth(&mut self, width: u32, height: u32) {
+        if matches!(&self.depth, Some((_, w, h)) if *w == width && *h == height) {
+            return;
+        }
+        let tex = self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("depth"),
+            size: wgpu::Extent3d { width: width.max(1), height: height.max(1), depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        self.depth = Some((tex.create_view(&Default::default()), width, height));
+    }
+
+    fn ensure_palettes(&mut self, n: usize) {
+        while self.palettes.len() < n {
+            let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("palette"),
+                size: (MAX_PALETTE * 64) as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("palette"),
+                layout: &self.palette_layout,
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
+            });
+            self.palettes.push(PaletteSlot { buffer, bind_group });
+        }
+    }
+
+    /// Draws one frame into `target` (of the format given at creation).
+    pub fn render(
+        &mut self,
+        target: &wgpu::TextureView,
+        width: u32,
+        height: u32,
+        camera: &OrbitCamera,
+        figures: &[Figure],
+        meshes: &[MeshDraw],
+    ) {
+        self.ensure_depth(width, height);
+        let aspect = width.max(1) as f32 / height.max(1) as f32;
+        let cam = CameraUniform {
+            view_proj: camera.view_proj(aspect).to_cols_array_2d(),
+            eye: camera.eye().extend(1.0).to_array(),
+            light: Vec3::new(0.4, 0.9, 0.6).normalize().extend(0.0).to_array(),
+        };
+        self.queue.write_buffer(&self.camera_buffer, 0, bytemuck::bytes_of(&cam));
+
+        // Capsules for every figure.
+        self.scratch.clear();
+        for fig in figures {
+            let r = fig.radius;
+            for &(p, c) in fig.bones {
+                if let (Some(a), Some(b)) = (fig.joints.get(p), fig.joints.get(c)) {
+                    self.scratch.push(CapsuleInstance { a: a.extend(r).to_array(), b: b.extend(0.0).to_array(), color: fig.color });
+                }
+            }
+            for (j, p) in fig.joints.iter().enumerate() {
+                let rr = if Some(j) == fig.head { r * 4.0 } else { r * 1.3 };
+                let col = if Some(j) == fig.head { fig.color.map(|x| x * 0.9) } else { fig.color };
+                self.scratch.push(CapsuleInstance { a: p.extend(rr).to_array(), b: p.extend(0.0).to_array(), color: col });
+            }
+        }
+        if self.scratch.len() > self.instance_capacity {
+            self.instance_capacity = self.scratch.len().next_power_of_two();
+            self.instances = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("capsules"),
+                size: (self.instance_capacity * std::mem::size_of::<CapsuleInstance>()) as u64,
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+        }
+        if !self.scratch.is_empty() {
+            self.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&self.scratch));
+        }
+        let drawable: Vec<&MeshDraw> =
+            meshes.iter().filter(|m| self.meshes.get(m.mesh.0).is_some_and(|g| m.palette.len() >= g.palette_len)).collect();
+        self.ensure_palettes(drawable.len());
+        for (slot, m) in drawable.iter().enumerate() {
+            let n = m.palette.len().min(MAX_PALETTE);
+            self.queue.write_buffer(&self.palettes[slot].buffer, 0, bytemuck::cast_slice(&m.palette[..n]));
+        }
+
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        {
+            let depth_view = &self.depth.as_ref().map(|d| &d.0).expect("depth texture was just made");
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("scene"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(self.clear), store: wgpu::StoreOp::Store },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: depth_view,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.camera_bg, &[]);
+            pass.set_pipeline(&self.line_pipeline);
+            pass.set_vertex_buffer(0, self.grid.slice(..));
+            pass.draw(0..self.grid_count, 0..1);
+            if !drawable.is_empty() {
+                pass.set_pipeline(&self.mesh_pipeline);
+                for (slot, m) in drawable.iter().enumerate() {
+                    let g = &self.meshes[m.mesh.0];
+                    pass.set_bind_group(1, &self.palettes[slot].bind_group, &[]);
+                    pass.set_vertex_buffer(0, g.vertices.slice(..));
+                    pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..g.index_count, 0, 0..1);
+                }
+            }
+            if !self.scratch.is_empty() {
+                pass.set_pipeline(&self.figure_pipeline);
+                pass.set_vertex_buffer(0, self.instances.slice(..));
+                pass.draw(0..6, 0..self.scratch.len() as u32);
+            }
+        }
+        self.queue.submit([encoder.finish()]);
+    }
+}
+
+/// Distinct figure colours (linear RGB): orange, teal, violet, lime, rose, sky, amber, mint.
+pub const FIGURE_COLORS: [[f32; 4]; 8] = [
+    [0.95, 0.45, 0.10, 1.0],
+    [0.10, 0.65, 0.80, 1.0],
+    [0.60, 0.35, 0.90, 1.0],
+    [0.45, 0.80, 0.15, 1.0],
+    [0.90, 0.25, 0.45, 1.0],
+    [0.35, 0.55, 0.95, 1.0],
+    [0.95, 0.75, 0.15, 1.0],
+    [0.25, 0.85, 0.60, 1.0],
+];
+
+/// Matrix helper for callers: palette entry = world · bind.
+pub fn palette_entry(world: Mat4, bind: Mat4) -> Mat4 {
+    world * bind
+}

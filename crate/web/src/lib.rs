@@ -1,1 +1,87 @@
-//! placeholder
+//! WebAssembly bindings of the Odori engine: the only crate that knows about JavaScript.
+//!
+//! Two handles: [`Library`] (motion clips: import, inspect, pose; no rendering, usable from
+//! Node or a worker) and [`Viewer`] (wgpu on a canvas: WebGPU when the browser has it, WebGL2
+//! otherwise). Every error becomes a JS `Error` named `OdoriError` with a `kind` and, for
+//! imports, the `file`; no panic crosses into JS with a bad file (and if a bug panics, the
+//! panic hook prints it to the console).
+
+mod error;
+mod library;
+mod viewer;
+
+pub use error::OdoriError;
+pub use library::Library;
+pub use viewer::Viewer;
+
+use wasm_bindgen::prelude::*;
+
+#[wasm_bindgen(start)]
+pub fn start() {
+    console_error_panic_hook::set_once();
+}
+
+/// The engine's version (the crate's).
+#[wasm_bindgen]
+pub fn version() -> String {
+    env!("CARGO_PKG_VERSION").into()
+}
+
+#[wasm_bindgen(typescript_custom_section)]
+const TS_TYPES: &'static str = r#"
+/** What an Odori call throws: an Error with name "OdoriError", a machine-readable kind and, for imports, the file. */
+export interface OdoriError extends Error {
+  name: "OdoriError";
+  /** "empty" | "unknown-format" | "bvh" | "gltf" | "unsupported" | "invalid" | "not-found" | "bad-argument" | "gpu" */
+  kind: string;
+  file?: string;
+}
+export type HumanoidStatus =
+  | { kind: "complete" }
+  | { kind: "partial"; missing: string[] }
+  | { kind: "notHumanoid"; reason: string };
+export interface ClipInfo {
+  id: number;
+  name: string;
+  /** The file the clip came from, or "built-in". */
+  source: string;
+  format: "bvh" | "gltf" | "builtin";
+  fps: number;
+  frames: number;
+  durationSecs: number;
+  /** Joints of the clip's own skeleton, as the file counts them (BVH: ROOT and JOINT). */
+  joints: number;
+  /** Points `jointPositions` returns: the joints plus end sites / tip nodes. */
+  points: number;
+  humanoid: HumanoidStatus;
+  /** True when the clip drives a skinned character (glTF). */
+  hasMesh: boolean;
+}
+export interface ImportOptions {
+  /** Play at this frame rate instead of the file's (CMU salsa BVH headers say 120, the data is 60). */
+  fpsOverride?: number;
+  /** Metres per BVH unit; guessed from the skeleton's size when absent. */
+  unitScale?: number;
+  /** Resampling rate for glTF animations (default 30). */
+  gltfFps?: number;
+}
+export interface ImportReport {
+  file: string;
+  clips: ClipInfo[];
+  warnings: string[];
+}
+export interface FigureSpec {
+  clip: number;
+  timeSecs: number;
+  /** Linear RGB 0..1; default: a distinct colour per figure. */
+  color?: [number, number, number];
+  /** Added to every joint, metres (side-by-side layouts). */
+  offset?: [number, number, number];
+  /** "auto": the skinned character when the clip has one, else a stick figure. */
+  style?: "auto" | "stick" | "mesh";
+}
+export interface ViewerOptions {
+  /** "auto" (WebGPU if available, else WebGL2), "webgpu" or "webgl2". */
+  backend?: "auto" | "webgpu" | "webgl2";
+}
+"#;

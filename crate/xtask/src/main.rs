@@ -1,1 +1,274 @@
-fn main() {}
+//! Odori's build tool.
+//!
+//! - `build-web [--dev]`: cargo (wasm32) → wasm-bindgen → wasm-opt → `pkg/` with its
+//!   `package.json`, driven by `wasm-pack.toml`. Uses the active rustc's wasm32 std when it has
+//!   one; otherwise builds std from source with Debian's `rustc-web`/`cargo-web` (see
+//!   ../shared guides and the README).
+//! - `serve [--port N]`: a static server for the app (`/` → `www/`, `/pkg/` → `pkg/`), on
+//!   127.0.0.1, printing the URL.
+//! - `check-core-deps`: fails when the core's dependency tree contains a web crate.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{exit, Command};
+
+use serde::Deserialize;
+
+#[derive(Deserialize)]
+struct Settings {
+    package: PackageSettings,
+    toolchain: ToolchainSettings,
+    profile: std::collections::BTreeMap<String, ProfileSettings>,
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "kebab-case")]
+struct PackageSettings {
+    #[serde(rename = "crate")]
+    krate: String,
+    out_dir: String,
+    out_name: String,
+    target: String,
+    npm_name: String,
+    description: String,
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "kebab-case")]
+struct ToolchainSettings {
+    wasm_bindgen: String,
+    target: String,
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "kebab-case")]
+struct ProfileSettings {
+    cargo_profile: String,
+    wasm_opt: Vec<String>,
+    keep_debug_names: bool,
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("repository root")
+}
+
+fn fail(msg: impl AsRef<str>) -> ! {
+    eprintln!("xtask: {}", msg.as_ref());
+    exit(1)
+}
+
+fn run(cmd: &mut Command) {
+    eprintln!("+ {:?}", cmd);
+    match cmd.status() {
+        Ok(s) if s.success() => {}
+        Ok(s) => fail(format!("command failed ({s}): {cmd:?}")),
+        Err(e) => fail(format!("cannot run {cmd:?}: {e}")),
+    }
+}
+
+fn output(cmd: &mut Command) -> Option<String> {
+    cmd.output().ok().filter(|o| o.status.success()).map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+}
+
+/// Does this rustc have a prebuilt std for the target?
+fn has_target_std(rustc: &str, target: &str) -> bool {
+    let Some(dir) = output(Command::new(rustc).args(["--print", "target-libdir", "--target", target])) else { return false };
+    std::fs::read_dir(&dir).map(|d| d.flatten().any(|e| e.file_name().to_string_lossy().starts_with("libstd-"))).unwrap_or(false)
+}
+
+fn build_web(dev: bool) {
+    let root = root();
+    let settings: Settings = toml::from_str(&std::fs::read_to_string(root.join("wasm-pack.toml")).expect("wasm-pack.toml"))
+        .unwrap_or_else(|e| fail(format!("wasm-pack.toml: {e}")));
+    let profile_name = if dev { "dev" } else { "release" };
+    let profile = settings.profile.get(profile_name).unwrap_or_else(|| fail(format!("wasm-pack.toml has no [profile.{profile_name}]")));
+    let target = &settings.toolchain.target;
+
+    // 1. cargo build for wasm32.
+    let mut cargo;
+    if has_target_std("rustc", target) {
+        cargo = Command::new("cargo");
+    } else if Path::new("/usr/bin/cargo").exists() && Path::new("/usr/bin/rustc").exists() {
+        // Debian's rustc-web: build std from its sources (rust-web-src), link with lld-19.
+        cargo = Command::new("/usr/bin/cargo");
+        cargo
+            .env("RUSTC", "/usr/bin/rustc")
+            .env("RUSTDOC", "/usr/bin/rustdoc")
+            .env("RUSTC_BOOTSTRAP", "1")
+            .env("CARGO_UNSTABLE_BUILD_STD", "std,panic_abort")
+            .env("CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_LINKER", "wasm-ld-19");
+    } else {
+        fail("no Rust toolchain with a wasm32 std: run ./dev setup (installs rustc-web, cargo-web, rust-web-src, lld-19)");
+    }
+    cargo.current_dir(&root).args(["build", "--target", target, "-p", &settings.package.krate, "--profile", &profile.cargo_profile]);
+    run(&mut cargo);
+    let dir_name = if profile.cargo_profile == "dev" { "debug" } else { &profile.cargo_profile };
+    let wasm_in = root.join("target").join(target).join(dir_name).join(format!("{}.wasm", settings.package.krate.replace("odori-web", "odori").replace('-', "_")));
+    if !wasm_in.exists() {
+        fail(format!("expected {} after the cargo build", wasm_in.display()));
+    }
+
+    // 2. wasm-bindgen, the pinned version.
+    let version = output(Command::new("wasm-bindgen").arg("--version")).unwrap_or_default();
+    if !version.ends_with(&settings.toolchain.wasm_bindgen) {
+        fail(format!(
+            "wasm-bindgen {} is needed (found '{version}'): cargo install wasm-bindgen-cli --version {}",
+            settings.toolchain.wasm_bindgen, settings.toolchain.wasm_bindgen
+        ));
+    }
+    let out_dir = root.join(&settings.package.out_dir);
+    std::fs::create_dir_all(&out_dir).expect("create pkg/");
+    let mut wb = Command::new("wasm-bindgen");
+    wb.arg(&wasm_in).arg("--out-dir").arg(&out_dir).args(["--out-name", &settings.package.out_name, "--target", &settings.package.target]);
+    if profile.keep_debug_names {
+        wb.arg("--keep-debug");
+    }
+    run(&mut wb);
+
+    // 3. wasm-opt from node_modules (npm's binaryen).
+    let wasm_out = out_dir.join(format!("{}_bg.wasm", settings.package.out_name));
+    let raw = std::fs::metadata(&wasm_out).map(|m| m.len()).unwrap_or(0);
+    if !profile.wasm_opt.is_empty() {
+        let wasm_opt = root.join("node_modules/.bin/wasm-opt");
+        if !wasm_opt.exists() {
+            fail("node_modules/.bin/wasm-opt is missing: run npm ci (./dev setup does)");
+        }
+        let tmp = out_dir.join("opt.wasm");
+        run(Command::new(&wasm_opt).args(&profile.wasm_opt).arg(&wasm_out).arg("-o").arg(&tmp));
+        std::fs::rename(&tmp, &wasm_out).expect("replace wasm");
+    }
+    let opt = std::fs::metadata(&wasm_out).map(|m| m.len()).unwrap_or(0);
+
+    // 4. package.json for npm consumers.
+    let version = output(Command::new("cargo").current_dir(&root).args(["pkgid", "-p", &settings.package.krate]))
+        .and_then(|s| s.rsplit(['@', '#']).next().map(str::to_string))
+        .unwrap_or_else(|| "0.0.0".into());
+    let name = &settings.package.out_name;
+    let pkg = serde_json::json!({
+        "name": settings.package.npm_name,
+        "version": version,
+        "description": settings.package.description,
+        "license": "MIT OR Apache-2.0",
+        "type": "module",
+        "main": format!("{name}.js"),
+        "module": format!("{name}.js"),
+        "types": format!("{name}.d.ts"),
+        "files": [format!("{name}_bg.wasm"), format!("{name}.js"), format!("{name}.d.ts"), format!("{name}_bg.wasm.d.ts"), "README.md"],
+        "sideEffects": ["./snippets/*"],
+        "keywords": ["dance", "motion", "animation", "bvh", "gltf", "wasm", "webgpu"]
+    });
+    std::fs::write(out_dir.join("package.json"), serde_json::to_string_pretty(&pkg).unwrap() + "\n").expect("write package.json");
+    eprintln!("xtask: pkg/ ready: {} raw {} bytes, after wasm-opt {} bytes", wasm_out.display(), raw, opt);
+}
+
+fn content_type(path: &Path) -> &'static str {
+    match path.extension().and_then(|e| e.to_str()).unwrap_or("") {
+        "html" => "text/html; charset=utf-8",
+        "js" | "mjs" => "text/javascript; charset=utf-8",
+        "css" => "text/css; charset=utf-8",
+        "wasm" => "application/wasm",
+        "json" | "webmanifest" => "application/json",
+        "svg" => "image/svg+xml",
+        "png" => "image/png",
+        "ts" => "text/plain; charset=utf-8",
+        _ => "application/octet-stream",
+    }
+}
+
+fn respond(mut stream: TcpStream, www: &Path, pkg: &Path) {
+    let mut reader = BufReader::new(stream.try_clone().expect("clone stream"));
+    let mut request_line = String::new();
+    if reader.read_line(&mut request_line).is_err() {
+        return;
+    }
+    // Drain headers.
+    let mut line = String::new();
+    while reader.read_line(&mut line).map(|n| n > 2).unwrap_or(false) {
+        line.clear();
+    }
+    let mut parts = request_line.split_whitespace();
+    let (method, target) = (parts.next().unwrap_or(""), parts.next().unwrap_or("/"));
+    let path = target.split(['?', '#']).next().unwrap_or("/");
+    let path = percent_decode(path);
+    let (base, rel) = match path.strip_prefix("/pkg/") {
+        Some(rest) => (pkg, rest.to_string()),
+        None => (www, path.trim_start_matches('/').to_string()),
+    };
+    let rel = if rel.is_empty() || rel.ends_with('/') { format!("{rel}index.html") } else { rel };
+    let file = base.join(&rel);
+    let safe = !rel.split('/').any(|c| c == "..") && file.starts_with(base);
+    let (status, body, ctype) = match (safe, std::fs::read(&file)) {
+        (true, Ok(b)) => ("200 OK", b, content_type(&file)),
+        _ => ("404 Not Found", format!("not found: {path}\n").into_bytes(), "text/plain; charset=utf-8"),
+    };
+    let head = format!(
+        "HTTP/1.1 {status}\r\nContent-Type: {ctype}\r\nContent-Length: {}\r\nCache-Control: no-cache\r\nCross-Origin-Opener-Policy: same-origin\r\nConnection: close\r\n\r\n",
+        body.len()
+    );
+    let _ = stream.write_all(head.as_bytes());
+    if method != "HEAD" {
+        let _ = stream.write_all(&body);
+    }
+    let _ = stream.flush();
+    let _ = reader.read(&mut [0u8; 0]);
+}
+
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let Ok(v) = u8::from_str_radix(&s[i + 1..i + 3], 16) {
+                out.push(v);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn serve(port: u16) {
+    let root = root();
+    let (www, pkg) = (root.join("www"), root.join("pkg"));
+    if !pkg.join("odori_bg.wasm").exists() {
+        fail("pkg/odori_bg.wasm is missing: build first (./dev serve does)");
+    }
+    let listener = TcpListener::bind(("127.0.0.1", port)).unwrap_or_else(|e| fail(format!("cannot listen on 127.0.0.1:{port}: {e}")));
+    let port = listener.local_addr().map(|a| a.port()).unwrap_or(port);
+    println!("Odori is served at http://localhost:{port}/  (Ctrl-C stops)");
+    let _ = std::io::stdout().flush();
+    for stream in listener.incoming().flatten() {
+        let (www, pkg) = (www.clone(), pkg.clone());
+        std::thread::spawn(move || respond(stream, &www, &pkg));
+    }
+}
+
+fn check_core_deps() {
+    let root = root();
+    let tree = output(Command::new("cargo").current_dir(&root).args(["tree", "-p", "odori-core", "-e", "normal,build", "--prefix", "none", "--target", "all"]))
+        .unwrap_or_else(|| fail("cargo tree failed"));
+    let banned = ["wasm-bindgen", "web-sys", "js-sys", "wgpu", "serde-wasm-bindgen", "console_error_panic_hook"];
+    let found: Vec<&str> = tree.lines().filter(|l| banned.iter().any(|b| l.split_whitespace().next() == Some(b))).collect();
+    if !found.is_empty() {
+        fail(format!("the core's dependency tree contains web crates: {found:?}"));
+    }
+    println!("core dependency tree: {} crates, none of {banned:?}", tree.lines().collect::<std::collections::BTreeSet<_>>().len());
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match args.first().map(String::as_str) {
+        Some("build-web") => build_web(args.iter().any(|a| a == "--dev")),
+        Some("serve") => {
+            let port = args.iter().position(|a| a == "--port").and_then(|i| args.get(i + 1)).and_then(|p| p.parse().ok()).unwrap_or(8080);
+            serve(port)
+        }
+        Some("check-core-deps") => check_core_deps(),
+        _ => fail("usage: xtask build-web [--dev] | serve [--port N] | check-core-deps"),
+    }
+}

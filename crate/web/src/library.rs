@@ -1,0 +1,194 @@
+//! `Library`: the clips a person has loaded, addressed by numeric id.
+
+use std::rc::Rc;
+
+use odori_core::humanoid::{Canon, HumanoidMap};
+use odori_core::import::{import_bytes, Format, ImportOptions, SkinnedMesh};
+use odori_core::{builtin, Clip, HumanoidStatus};
+use serde::{Deserialize, Serialize};
+use wasm_bindgen::prelude::*;
+
+use crate::error::{from_js, to_js, JsResult, OdoriError};
+
+pub(crate) struct Entry {
+    pub id: u32,
+    pub clip: Clip,
+    pub format: &'static str,
+    #[allow(dead_code)] // kept for the search and choreography bindings
+    pub humanoid: HumanoidMap,
+    pub status: HumanoidStatus,
+    /// Shared by every clip of one glTF file; the id lets the viewer upload it once.
+    pub mesh: Option<(u32, Rc<SkinnedMesh>)>,
+    pub bones: Vec<(usize, usize)>,
+    pub head: Option<usize>,
+}
+
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct ClipInfo<'a> {
+    id: u32,
+    name: &'a str,
+    source: &'a str,
+    format: &'a str,
+    fps: f32,
+    frames: usize,
+    duration_secs: f32,
+    joints: usize,
+    points: usize,
+    humanoid: &'a HumanoidStatus,
+    has_mesh: bool,
+}
+
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct ImportReport<'a> {
+    file: &'a str,
+    clips: Vec<ClipInfo<'a>>,
+    warnings: Vec<String>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(rename_all = "camelCase", default, deny_unknown_fields)]
+struct JsImportOptions {
+    fps_override: Option<f32>,
+    unit_scale: Option<f32>,
+    gltf_fps: Option<f32>,
+}
+
+fn info(e: &Entry) -> ClipInfo<'_> {
+    ClipInfo {
+        id: e.id,
+        name: &e.clip.name,
+        source: &e.clip.source,
+        format: e.format,
+        fps: e.clip.fps,
+        frames: e.clip.frame_count(),
+        duration_secs: e.clip.duration_secs(),
+        joints: e.clip.skeleton.animated_joint_count(),
+        points: e.clip.joint_count(),
+        humanoid: &e.status,
+        has_mesh: e.mesh.is_some(),
+    }
+}
+
+/// The motion clips loaded in this session.
+#[wasm_bindgen]
+pub struct Library {
+    pub(crate) entries: Vec<Entry>,
+    next_id: u32,
+}
+
+impl Default for Library {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Library {
+    fn push(&mut self, clip: Clip, format: &'static str, humanoid: HumanoidMap, status: HumanoidStatus, mesh: Option<(u32, Rc<SkinnedMesh>)>) -> u32 {
+        let id = self.next_id;
+        self.next_id += 1;
+        let bones = clip.skeleton.bones();
+        let head = humanoid.get(Canon::Head).filter(|_| status.is_humanoid());
+        self.entries.push(Entry { id, clip, format, humanoid, status, mesh, bones, head });
+        id
+    }
+
+    pub(crate) fn entry(&self, id: u32) -> JsResult<&Entry> {
+        self.entries.iter().find(|e| e.id == id).ok_or_else(|| OdoriError::new("not-found", format!("no clip with id {id} in the library")))
+    }
+}
+
+#[wasm_bindgen]
+impl Library {
+    /// An empty library.
+    #[wasm_bindgen(constructor)]
+    pub fn new() -> Library {
+        Library { entries: Vec::new(), next_id: 1 }
+    }
+
+    /// Adds the engine's own demo clip; returns its `ClipInfo`.
+    #[wasm_bindgen(js_name = addBuiltinDemo, unchecked_return_type = "ClipInfo")]
+    pub fn add_builtin_demo(&mut self) -> JsValue {
+        let clip = builtin::demo_clip();
+        let map = HumanoidMap::from_skeleton(&clip.skeleton);
+        let status = map.status(&clip.skeleton, Some(&clip));
+        self.push(clip, "builtin", map, status, None);
+        self.entries.last().map(|e| to_js(&info(e))).unwrap_or(JsValue::NULL)
+    }
+
+    /// Reads a BVH, glTF or GLB file. Adds every clip it holds and returns an
+    /// `ImportReport`; on a bad file throws an `OdoriError` naming the file and the problem,
+    /// and the library is left as it was.
+    #[wasm_bindgen(js_name = importFile, unchecked_return_type = "ImportReport")]
+    pub fn import_file(
+        &mut self,
+        file_name: &str,
+        bytes: &[u8],
+        #[wasm_bindgen(unchecked_param_type = "ImportOptions | undefined")] options: JsValue,
+    ) -> Result<JsValue, OdoriError> {
+        let o: JsImportOptions = from_js(options, "import options", &["fpsOverride", "unitScale", "gltfFps"])?;
+        let mut opts = ImportOptions { fps_override: o.fps_override, unit_scale: o.unit_scale, ..Default::default() };
+        if let Some(f) = o.gltf_fps {
+            opts.gltf_fps = f;
+        }
+        if let Some(f) = opts.fps_override.filter(|f| !(f.is_finite() && *f > 0.0 && *f <= 1000.0)) {
+            return Err(OdoriError::new("bad-argument", format!("fpsOverride must be between 0 and 1000, got {f}")));
+        }
+        let im = import_bytes(file_name, bytes, &opts)?;
+        let format = match im.format {
+            Format::Bvh => "bvh",
+            Format::Gltf => "gltf",
+        };
+        let mesh = im.mesh.map(|m| (self.next_id, Rc::new(m)));
+        let first = self.entries.len();
+        for clip in im.clips {
+            self.push(clip, format, im.humanoid.clone(), im.status.clone(), mesh.clone());
+        }
+        let report = ImportReport { file: file_name, clips: self.entries[first..].iter().map(info).collect(), warnings: im.warnings };
+        Ok(to_js(&report))
+    }
+
+    /// Every clip, in the order they were added.
+    #[wasm_bindgen(unchecked_return_type = "ClipInfo[]")]
+    pub fn clips(&self) -> JsValue {
+        to_js(&self.entries.iter().map(info).collect::<Vec<_>>())
+    }
+
+    /// One clip's `ClipInfo`.
+    #[wasm_bindgen(unchecked_return_type = "ClipInfo")]
+    pub fn clip(&self, id: u32) -> Result<JsValue, OdoriError> {
+        Ok(to_js(&info(self.entry(id)?)))
+    }
+
+    /// Removes a clip; false when there was none with this id.
+    pub fn remove(&mut self, id: u32) -> bool {
+        let before = self.entries.len();
+        self.entries.retain(|e| e.id != id);
+        self.entries.len() != before
+    }
+
+    #[wasm_bindgen(getter)]
+    pub fn size(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// World joint positions (x, y, z per joint, metres, Y up) of a clip at a time in seconds,
+    /// interpolated between frames and clamped to the clip.
+    #[wasm_bindgen(js_name = jointPositions)]
+    pub fn joint_positions(&self, id: u32, time_secs: f32) -> Result<Vec<f32>, OdoriError> {
+        let e = self.entry(id)?;
+        Ok(crate::viewer::pose_at(&e.clip, time_secs).iter().flat_map(|p| p.to_array()).collect())
+    }
+
+    /// Bones of a clip's skeleton as (parent, child) index pairs, flattened.
+    pub fn bones(&self, id: u32) -> Result<Vec<u32>, OdoriError> {
+        Ok(self.entry(id)?.bones.iter().flat_map(|&(a, b)| [a as u32, b as u32]).collect())
+    }
+
+    /// Joint names of a clip's skeleton.
+    #[wasm_bindgen(js_name = jointNames)]
+    pub fn joint_names(&self, id: u32) -> Result<Vec<String>, OdoriError> {
+        Ok(self.entry(id)?.clip.skeleton.joints.iter().map(|j| j.name.clone()).collect())
+    }
+}

@@ -1,0 +1,293 @@
+//! `Viewer`: the wgpu renderer on a canvas, fed from a `Library` once per frame.
+
+use std::collections::HashMap;
+
+use glam::{Mat4, Quat, Vec3};
+use odori_core::Clip;
+use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, Renderer, FIGURE_COLORS};
+use serde::Deserialize;
+use wasm_bindgen::prelude::*;
+use web_sys::HtmlCanvasElement;
+
+use crate::error::{from_js, JsResult, OdoriError};
+use crate::library::{Entry, Library};
+
+#[derive(Deserialize, Default)]
+#[serde(rename_all = "camelCase", default, deny_unknown_fields)]
+struct ViewerOptions {
+    backend: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+struct FigureSpec {
+    clip: u32,
+    time_secs: f32,
+    color: Option<[f32; 3]>,
+    offset: Option<[f32; 3]>,
+    style: Option<String>,
+}
+
+/// Local pose of a clip at a time (interpolated), then world positions.
+pub(crate) fn pose_at(clip: &Clip, time_secs: f32) -> Vec<Vec3> {
+    let (mut r, mut t, mut p) = (Vec::new(), Vec::new(), Vec::new());
+    clip.sample_into(time_secs, &mut r, &mut t);
+    clip.skeleton.forward_kinematics(&r, &t, &mut p, None);
+    p
+}
+
+/// The 3D view of a page.
+#[wasm_bindgen]
+pub struct Viewer {
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    view_format: wgpu::TextureFormat,
+    renderer: Renderer,
+    camera: OrbitCamera,
+    backend: &'static str,
+    /// Uploaded meshes by the library's mesh id; `None` when the mesh cannot be skinned on
+    /// the GPU (too many joints) and is drawn as a stick figure instead.
+    meshes: HashMap<u32, Option<MeshHandle>>,
+    rot: Vec<Quat>,
+    trans: Vec<Vec3>,
+    mats: Vec<Mat4>,
+}
+
+fn gpu_err(msg: impl Into<String>) -> OdoriError {
+    OdoriError::new("gpu", msg)
+}
+
+#[wasm_bindgen]
+impl Viewer {
+    /// Opens a viewer on a canvas. `options.backend`: "auto" (default: WebGPU when the
+    /// browser offers it, else WebGL2), "webgpu" or "webgl2".
+    pub async fn create(
+        canvas: HtmlCanvasElement,
+        #[wasm_bindgen(unchecked_param_type = "ViewerOptions | undefined")] options: JsValue,
+    ) -> Result<Viewer, OdoriError> {
+        let o: ViewerOptions = from_js(options, "viewer options", &["backend"])?;
+        let want = o.backend.as_deref().unwrap_or("auto");
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        let instance = match want {
+            "webgl2" => {
+                desc.backends = wgpu::Backends::GL;
+                wgpu::Instance::new(desc)
+            }
+            "webgpu" => {
+                if !wgpu::util::is_browser_webgpu_supported().await {
+                    return Err(gpu_err("WebGPU was asked for but this browser offers no WebGPU adapter"));
+                }
+                desc.backends = wgpu::Backends::BROWSER_WEBGPU;
+                wgpu::Instance::new(desc)
+            }
+            "auto" => {
+                desc.backends = wgpu::Backends::BROWSER_WEBGPU | wgpu::Backends::GL;
+                wgpu::util::new_instance_with_webgpu_detection(desc).await
+            }
+            other => return Err(OdoriError::new("bad-argument", format!("backend must be auto, webgpu or webgl2, not '{other}'"))),
+        };
+        let (width, height) = (canvas.width().max(1), canvas.height().max(1));
+        let surface = instance
+            .create_surface(wgpu::SurfaceTarget::Canvas(canvas))
+            .map_err(|e| gpu_err(format!("cannot draw on the canvas: {e}")))?;
+        let adapter = instance
+            .request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                force_fallback_adapter: false,
+                compatible_surface: Some(&surface),
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| gpu_err(format!("no graphics adapter: {e}")))?;
+        let backend = match adapter.get_info().backend {
+            wgpu::Backend::BrowserWebGpu => "webgpu",
+            _ => "webgl2",
+        };
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("odori"),
+                required_features: wgpu::Features::empty(),
+                required_limits: wgpu::Limits::downlevel_webgl2_defaults().using_resolution(adapter.limits()),
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| gpu_err(format!("cannot open the graphics device: {e}")))?;
+        let caps = surface.get_capabilities(&adapter);
+        let format = *caps.formats.first().ok_or_else(|| gpu_err("the canvas offers no texture format"))?;
+        let view_format = format.add_srgb_suffix();
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            width,
+            height,
+            present_mode: wgpu::PresentMode::Fifo,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes.first().copied().unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            view_formats: if view_format != format { vec![view_format] } else { vec![] },
+            ..surface.get_default_config(&adapter, width, height).ok_or_else(|| gpu_err("the canvas cannot be configured"))?
+        };
+        surface.configure(&device, &config);
+        let renderer = Renderer::new(device, queue, view_format);
+        Ok(Viewer {
+            surface,
+            config,
+            view_format,
+            renderer,
+            camera: OrbitCamera::default(),
+            backend,
+            meshes: HashMap::new(),
+            rot: Vec::new(),
+            trans: Vec::new(),
+            mats: Vec::new(),
+        })
+    }
+
+    /// "webgpu" or "webgl2".
+    #[wasm_bindgen(getter)]
+    pub fn backend(&self) -> String {
+        self.backend.to_string()
+    }
+
+    /// Call when the canvas's pixel size changes.
+    pub fn resize(&mut self, width: u32, height: u32) {
+        let (w, h) = (width.clamp(1, 8192), height.clamp(1, 8192));
+        if (w, h) != (self.config.width, self.config.height) {
+            self.config.width = w;
+            self.config.height = h;
+            self.surface.configure(self.renderer.device(), &self.config);
+        }
+    }
+
+    /// Turns the camera around its target (dx, dy: fractions of the view's width and height).
+    pub fn orbit(&mut self, dx: f32, dy: f32) {
+        self.camera.orbit(dx, dy);
+    }
+
+    /// Moves the camera closer (negative) or farther (positive).
+    pub fn zoom(&mut self, steps: f32) {
+        self.camera.zoom(steps);
+    }
+
+    /// Where a world point lands on the canvas, in canvas pixels from the top left
+    /// (`[x, y]`), or `undefined` when it is behind the camera. For labels and tests.
+    pub fn project(&self, x: f32, y: f32, z: f32) -> Option<Vec<f32>> {
+        let aspect = self.config.width as f32 / self.config.height.max(1) as f32;
+        let clip = self.camera.view_proj(aspect) * glam::Vec4::new(x, y, z, 1.0);
+        if clip.w <= 1e-6 {
+            return None;
+        }
+        let ndc = clip.truncate() / clip.w;
+        Some(vec![(ndc.x * 0.5 + 0.5) * self.config.width as f32, (0.5 - ndc.y * 0.5) * self.config.height as f32])
+    }
+
+    /// Points the camera so every figure of `figures` is in view.
+    #[wasm_bindgen(js_name = frameFigures)]
+    pub fn frame_figures(
+        &mut self,
+        library: &Library,
+        #[wasm_bindgen(unchecked_param_type = "FigureSpec[]")] figures: JsValue,
+    ) -> Result<(), OdoriError> {
+        let specs = parse_figures(figures)?;
+        let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        for s in &specs {
+            let e = library.entry(s.clip)?;
+            let off = Vec3::from(s.offset.unwrap_or([0.0; 3]));
+            // Over the whole clip, so the figure stays in view while it travels.
+            let frames = e.clip.frame_count();
+            for k in 0..=8 {
+                let t = (k as f32 / 8.0) * (frames.saturating_sub(1)) as f32 / e.clip.fps;
+                for p in pose_at(&e.clip, t) {
+                    lo = lo.min(p + off);
+                    hi = hi.max(p + off);
+                }
+            }
+        }
+        if lo.x <= hi.x {
+            lo.y = lo.y.min(0.0);
+            self.camera.frame(lo, hi);
+        }
+        Ok(())
+    }
+
+    /// Draws one frame: each figure is a clip at a time.
+    pub fn draw(
+        &mut self,
+        library: &Library,
+        #[wasm_bindgen(unchecked_param_type = "FigureSpec[]")] figures: JsValue,
+    ) -> Result<(), OdoriError> {
+        let specs = parse_figures(figures)?;
+        // Poses first (positions for sticks, palettes for meshes).
+        let mut sticks: Vec<(Vec<Vec3>, &Entry, [f32; 4])> = Vec::new();
+        let mut palettes: Vec<(MeshHandle, Vec<Mat4>)> = Vec::new();
+        for (i, s) in specs.iter().enumerate() {
+            let e = library.entry(s.clip)?;
+            let off = Vec3::from(s.offset.unwrap_or([0.0; 3]));
+            let color = s.color.map(|c| [c[0], c[1], c[2], 1.0]).unwrap_or(FIGURE_COLORS[i % FIGURE_COLORS.len()]);
+            let style = s.style.as_deref().unwrap_or("auto");
+            if !matches!(style, "auto" | "stick" | "mesh") {
+                return Err(OdoriError::new("bad-argument", format!("figure style must be auto, stick or mesh, not '{style}'")));
+            }
+            e.clip.sample_into(s.time_secs, &mut self.rot, &mut self.trans);
+            let mut pos = Vec::new();
+            e.clip.skeleton.forward_kinematics(&self.rot, &self.trans, &mut pos, Some(&mut self.mats));
+            let handle = match (&e.mesh, style) {
+                (Some((mesh_id, mesh)), "auto" | "mesh") => *self
+                    .meshes
+                    .entry(*mesh_id)
+                    .or_insert_with(|| self.renderer.upload_mesh(mesh).ok()),
+                _ => None,
+            };
+            match (handle, &e.mesh) {
+                (Some(h), Some((_, mesh))) => {
+                    let shift = Mat4::from_translation(off);
+                    let pal = mesh.palette.iter().map(|(j, bind)| shift * self.mats[*j] * *bind).collect();
+                    palettes.push((h, pal));
+                }
+                _ => {
+                    for p in pos.iter_mut() {
+                        *p += off;
+                    }
+                    sticks.push((pos, e, color));
+                }
+            }
+        }
+        let figures: Vec<Figure> = sticks
+            .iter()
+            .map(|(pos, e, color)| Figure {
+                joints: pos,
+                bones: &e.bones,
+                color: *color,
+                radius: stick_radius(pos, &e.bones),
+                head: e.head,
+            })
+            .collect();
+        let meshes: Vec<MeshDraw> = palettes.iter().map(|(h, p)| MeshDraw { mesh: *h, palette: p }).collect();
+
+        let frame = match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                self.surface.configure(self.renderer.device(), &self.config);
+                return Ok(());
+            }
+            _ => return Ok(()),
+        };
+        let view = frame.texture.create_view(&wgpu::TextureViewDescriptor { format: Some(self.view_format), ..Default::default() });
+        self.renderer.render(&view, self.config.width, self.config.height, &self.camera, &figures, &meshes);
+        self.renderer.queue().present(frame);
+        Ok(())
+    }
+}
+
+fn parse_figures(figures: JsValue) -> JsResult<Vec<FigureSpec>> {
+    serde_wasm_bindgen::from_value(figures).map_err(|e| OdoriError::new("bad-argument", format!("figures: {e}")))
+}
+
+/// Bone thickness proportional to the figure's size (a 1.7 m body gets about 2 cm).
+fn stick_radius(pos: &[Vec3], bones: &[(usize, usize)]) -> f32 {
+    let total: f32 = bones.iter().map(|&(a, b)| (pos[a] - pos[b]).length()).sum();
+    // A humanoid's bones add up to roughly 4–6 body heights... per joint count varies; use
+    // the pose's vertical extent instead when available.
+    let (lo, hi) = pos.iter().fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p.y), h.max(p.y)));
+    let height = if hi > lo { hi - lo } else { total / 5.0 };
+    (height * 0.011).clamp(0.004, 0.2)
+}

@@ -1,0 +1,103 @@
+// Shared by the browser tests: the app's server, Debian's headless Chromium on either
+// graphics back end, and pixel reading from real screenshots.
+import { spawn } from "node:child_process";
+import { existsSync, mkdirSync } from "node:fs";
+import { fileURLToPath } from "node:url";
+import { dirname, join } from "node:path";
+import { chromium } from "playwright-core";
+
+export const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
+export const data = join(root, "..", "shared", "data");
+export const artifacts = join(root, "tests", "artifacts");
+mkdirSync(artifacts, { recursive: true });
+if (!existsSync(data)) throw new Error(`../shared/data is missing: the browser tests open real files from it (${data})`);
+
+const BASE_FLAGS = ["--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-dev-shm-usage"];
+export const BACKENDS = {
+  // WebGL2 needs no flag (SwiftShader through ANGLE); the page is told to use it.
+  webgl2: { flags: [], query: "?backend=webgl2" },
+  // WebGPU onto a canvas with software Vulkan (see the toolchain guide).
+  webgpu: { flags: ["--enable-unsafe-webgpu", "--enable-features=Vulkan", "--use-vulkan=swiftshader", "--use-angle=swiftshader"], query: "?backend=webgpu" },
+};
+
+/** Starts the app's static server on a free port; resolves to { url, stop }. */
+export function startServer() {
+  const bin = join(root, "target", "debug", "xtask");
+  return new Promise((resolve, reject) => {
+    const proc = spawn(bin, ["serve", "--port", "0"], { cwd: root, stdio: ["ignore", "pipe", "inherit"] });
+    let out = "";
+    proc.stdout.on("data", (d) => {
+      out += d;
+      const m = out.match(/http:\/\/localhost:(\d+)\//);
+      if (m) resolve({ url: `http://127.0.0.1:${m[1]}/`, stop: () => proc.kill() });
+    });
+    proc.on("exit", (code) => reject(new Error(`server exited (${code}): ${out}`)));
+    setTimeout(() => reject(new Error("server did not start in 20 s")), 20000);
+  });
+}
+
+export async function launch(backend) {
+  const browser = await chromium.launch({ executablePath: "/usr/bin/chromium", args: [...BASE_FLAGS, ...BACKENDS[backend].flags], headless: true });
+  const page = await browser.newPage({ viewport: { width: 1280, height: 800 } });
+  const logs = [];
+  page.on("console", (m) => logs.push(`[${m.type()}] ${m.text()}`));
+  page.on("pageerror", (e) => logs.push(`[pageerror] ${e.message}`));
+  return { browser, page, logs };
+}
+
+/** Opens the app and waits for the first drawn pose. */
+export async function openApp(page, server, backend) {
+  await page.goto(server.url + BACKENDS[backend].query);
+  await page.waitForFunction(() => document.body.dataset.ready, null, { timeout: 60000 });
+  const ready = await page.evaluate(() => document.body.dataset.ready);
+  if (ready !== "1") throw new Error(`the app did not start: ${await page.textContent("#messages")}`);
+}
+
+/**
+ * Screenshot of the canvas, decoded in the page: { width, height, rgba, save(name) }.
+ * Pixels are CSS pixels of the canvas element (device scale 1).
+ */
+export async function canvasPixels(page, name) {
+  const el = await page.$("#view");
+  const png = await el.screenshot(name ? { path: join(artifacts, name) } : {});
+  const { width, height, data } = await page.evaluate(async (b64) => {
+    const blob = await (await fetch(`data:image/png;base64,${b64}`)).blob();
+    const bmp = await createImageBitmap(blob);
+    const c = new OffscreenCanvas(bmp.width, bmp.height);
+    const g = c.getContext("2d");
+    g.drawImage(bmp, 0, 0);
+    const img = g.getImageData(0, 0, bmp.width, bmp.height);
+    // Back to Node as base64: far cheaper than a JSON array of millions of numbers.
+    let bin = "";
+    for (let i = 0; i < img.data.length; i += 0x8000) bin += String.fromCharCode.apply(null, img.data.subarray(i, i + 0x8000));
+    return { width: img.width, height: img.height, data: btoa(bin) };
+  }, png.toString("base64"));
+  return { width, height, rgba: new Uint8Array(Buffer.from(data, "base64")) };
+}
+
+export function pixel(img, x, y) {
+  const i = (Math.round(y) * img.width + Math.round(x)) * 4;
+  return [img.rgba[i], img.rgba[i + 1], img.rgba[i + 2]];
+}
+
+/** Pixels in a (2r+1)² window around (x, y) matching `pred`. */
+export function countNear(img, x, y, r, pred) {
+  let n = 0;
+  for (let dy = -r; dy <= r; dy++) for (let dx = -r; dx <= r; dx++) {
+    const px = x + dx, py = y + dy;
+    if (px < 0 || py < 0 || px >= img.width || py >= img.height) continue;
+    if (pred(pixel(img, px, py))) n++;
+  }
+  return n;
+}
+
+export function countAll(img, pred) {
+  let n = 0;
+  for (let i = 0; i < img.rgba.length; i += 4) if (pred([img.rgba[i], img.rgba[i + 1], img.rgba[i + 2]])) n++;
+  return n;
+}
+
+/** Strongly orange (figure colour 0) / teal (figure colour 1), whatever the shading. */
+export const isOrange = ([r, g, b]) => r > 90 && r > g * 1.25 && g > b * 1.2 && r - b > 60;
+export const isTeal = ([r, g, b]) => b > 70 && g > 50 && g > r * 1.5 && b > r * 1.6;
+export const isBackground = ([r, g, b]) => Math.max(r, g, b) < 90 && Math.abs(r - b) < 30;

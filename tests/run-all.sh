@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Every test of the project, in order: the core's dependency check, native Rust tests (unit,
+# integration, real data), the npm package in Node, and the app in headless Chromium on both
+# graphics back ends. Run through `./dev test`, which installs and builds first.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH="$HOME/.cargo/bin:$PATH"
+step() { printf '\n\033[1m== %s\033[0m\n' "$*"; }
+
+if [ ! -d ../shared/data ]; then
+  echo "tests: ../shared/data is missing. The real-data tests need the shared data beside the repository (../shared/data)." >&2
+  exit 1
+fi
+
+step "core dependency tree has no web crate"
+cargo run -q -p xtask -- check-core-deps
+
+step "native tests (cargo test: the core, its real-data integration tests, the build tool)"
+cargo test -q
+
+step "wasm package in Node and the app in headless Chromium (WebGL2 and WebGPU)"
+cargo build -q -p xtask
+node --test --test-reporter=spec tests/node/ tests/browser/

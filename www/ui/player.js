@@ -1,0 +1,112 @@
+// Playback: a clock in seconds drives the viewer; play, pause, scrub by frame, loop; the
+// selected clip plus any overlaid ones, each in its own colour; orbit by drag, zoom by wheel.
+export class Player {
+  constructor({ viewer, library, canvas, scrub, label, playButton, loop }) {
+    Object.assign(this, { viewer, library, canvas, scrub, label, playButton, loop });
+    this.clip = null;
+    this.overlays = [];
+    this.time = 0;
+    this.playing = true;
+    this.last = null;
+    this.onFirstFrame = null;
+    this.drawnOnce = false;
+    playButton.addEventListener("click", () => this.toggle());
+    scrub.addEventListener("input", () => {
+      this.pause();
+      this.time = Number(scrub.value) / this.info().fps;
+      this.drawNow();
+    });
+    window.addEventListener("keydown", (ev) => {
+      if (ev.target.matches("input[type=number], input[type=text], textarea")) return;
+      if (ev.code === "Space") { ev.preventDefault(); this.toggle(); }
+      if (ev.code === "ArrowRight") { this.step(1); }
+      if (ev.code === "ArrowLeft") { this.step(-1); }
+    });
+    this.bindCamera();
+  }
+
+  info() { return this.library.clip(this.clip); }
+
+  figures() {
+    const ids = [this.clip, ...this.overlays.filter((id) => id !== this.clip)];
+    return ids.map((id) => ({ clip: id, timeSecs: this.time }));
+  }
+
+  select(id) {
+    this.clip = id;
+    this.time = 0;
+    const c = this.info();
+    this.scrub.max = String(Math.max(0, c.frames - 1));
+    this.viewer.frameFigures(this.library, this.figures());
+    this.drawNow();
+  }
+
+  setOverlays(ids) {
+    this.overlays = ids;
+    this.viewer.frameFigures(this.library, this.figures());
+    this.drawNow();
+  }
+
+  toggle() { this.playing ? this.pause() : this.play(); }
+  play() { this.playing = true; this.playButton.textContent = "Pause"; this.last = null; }
+  pause() { this.playing = false; this.playButton.textContent = "Play"; }
+
+  step(frames) {
+    this.pause();
+    const c = this.info();
+    this.time = Math.min(Math.max(0, this.time + frames / c.fps), (c.frames - 1) / c.fps);
+    this.drawNow();
+  }
+
+  bindCamera() {
+    let drag = null;
+    this.canvas.addEventListener("pointerdown", (ev) => { drag = { x: ev.clientX, y: ev.clientY }; this.canvas.setPointerCapture(ev.pointerId); });
+    this.canvas.addEventListener("pointermove", (ev) => {
+      if (!drag) return;
+      const r = this.canvas.getBoundingClientRect();
+      this.viewer.orbit((ev.clientX - drag.x) / r.width, (ev.clientY - drag.y) / r.height);
+      drag = { x: ev.clientX, y: ev.clientY };
+      if (!this.playing) this.drawNow();
+    });
+    this.canvas.addEventListener("pointerup", () => { drag = null; });
+    this.canvas.addEventListener("wheel", (ev) => {
+      ev.preventDefault();
+      this.viewer.zoom(Math.sign(ev.deltaY));
+      if (!this.playing) this.drawNow();
+    }, { passive: false });
+  }
+
+  drawNow() {
+    if (this.clip == null) return;
+    const c = this.info();
+    const frame = Math.min(c.frames - 1, Math.floor(this.time * c.fps + 1e-4));
+    this.scrub.value = String(frame);
+    this.label.textContent = `${frame} / ${c.frames - 1}`;
+    this.viewer.draw(this.library, this.figures());
+    if (!this.drawnOnce) {
+      this.drawnOnce = true;
+      if (this.onFirstFrame) this.onFirstFrame();
+    }
+  }
+
+  start() {
+    const tick = (now) => {
+      if (this.playing && this.clip != null) {
+        const dt = this.last == null ? 0 : (now - this.last) / 1000;
+        this.last = now;
+        const c = this.info();
+        const end = (c.frames - 1) / c.fps;
+        this.time += Math.min(dt, 0.1);
+        if (this.time > end) {
+          if (this.loop.checked) this.time = end > 0 ? this.time % end : 0;
+          else { this.time = end; this.pause(); }
+        }
+        this.drawNow();
+      } else {
+        this.last = null;
+      }
+      requestAnimationFrame(tick);
+    };
+    requestAnimationFrame(tick);
+  }
+}
