@@ -31,7 +31,9 @@ impl OrbitCamera {
     pub fn view_proj(&self, aspect: f32) -> Mat4 {
         let view = glam::camera::rh::view::look_at_mat4(self.eye(), self.target, Vec3::Y);
         // wgpu: NDC depth in [0, 1], Y up (the "directx" convention).
-        let proj = glam::camera::rh::proj::directx::perspective(self.fov_y, aspect.max(1e-3), 0.05, 200.0);
+        // Near and far follow the distance, so a 3-m dancer and a 300-unit fox both fit.
+        let near = (self.distance * 0.01).max(0.01);
+        let proj = glam::camera::rh::proj::directx::perspective(self.fov_y, aspect.max(1e-3), near, near * 20_000.0);
         proj * view
     }
 
@@ -43,7 +45,7 @@ impl OrbitCamera {
 
     /// Wheel: positive zooms out.
     pub fn zoom(&mut self, steps: f32) {
-        self.distance = (self.distance * (1.0 + 0.1 * steps)).clamp(0.5, 60.0);
+        self.distance = (self.distance * (1.0 + 0.1 * steps)).clamp(0.2, 5_000.0);
     }
 
     /// Frames a box: target its centre, distance so it fits.
@@ -51,6 +53,6 @@ impl OrbitCamera {
         let c = (lo + hi) * 0.5;
         let r = ((hi - lo).length() * 0.5).max(0.3);
         self.target = c;
-        self.distance = (r / (self.fov_y * 0.5).tan() * 1.15).clamp(1.0, 60.0);
+        self.distance = (r / (self.fov_y * 0.5).tan() * 1.15).clamp(0.5, 5_000.0);
     }
 }
