@@ -31,6 +31,12 @@ pub use rms::{envelope, RmsEnvelope, STANDARD_BANDS};
 pub const MIN_ANALYSIS_SECS: f32 = 3.0;
 /// The longest audio [`analyze`] accepts, seconds (two hours).
 pub const MAX_ANALYSIS_SECS: f32 = 7200.0;
+/// Audio no longer than this, seconds, is taken to be a loop: tempos at which it holds a whole
+/// number of bars are preferred (see [`tempo::TempoSettings::loop_bars`]).
+pub const LOOP_MAX_SECS: f32 = 12.0;
+/// With at least this many tracked beats the reported tempo is their least-squares slope;
+/// with fewer, the tempo estimator's own value.
+const MIN_BEATS_FOR_SLOPE: usize = 8;
 /// Full-band RMS below this everywhere (−80 dBFS) counts as silence.
 pub const SILENCE_RMS: f32 = 1e-4;
 
@@ -93,7 +99,7 @@ pub struct AnalysisOptions {
 
 impl Default for AnalysisOptions {
     fn default() -> Self {
-        Self { beats_per_bar: 4, min_bpm: 50.0, max_bpm: 220.0, prior_bpm: 110.0, prior_octaves: 0.9, tightness: 100.0 }
+        Self { beats_per_bar: 4, min_bpm: 50.0, max_bpm: 220.0, prior_bpm: 110.0, prior_octaves: 0.9, tightness: 1000.0 }
     }
 }
 
@@ -125,8 +131,10 @@ impl AnalysisOptions {
 /// Analyses a song's RMS envelope into a beat grid with bars (spec §D).
 ///
 /// Band use: with several bands (the host's [`STANDARD_BANDS`]), band 0 is the loudness used
-/// for silence detection and bar intensity, bands 1.. feed onset strength, and band 1 (low) the
-/// downbeat accent. With a single band, it serves every purpose.
+/// for silence detection and bar intensity, bands 1.. feed onset strength, and bands 1 (low)
+/// and 2 (mid) the downbeat accents. With a single band, it serves every purpose.
+///
+/// Clips no longer than [`LOOP_MAX_SECS`] are treated as loops (a whole number of bars long).
 ///
 /// Errors: a malformed envelope ([`RmsEnvelope::validate`]), bad options, audio shorter than
 /// [`MIN_ANALYSIS_SECS`] or longer than [`MAX_ANALYSIS_SECS`], silence, or no steady pulse.
@@ -146,15 +154,19 @@ pub fn analyze(envelope: &RmsEnvelope, options: &AnalysisOptions) -> Result<Song
         return Err(MusicError::Silent { peak_rms, threshold: SILENCE_RMS });
     }
     let band_count = envelope.bands.len();
-    let (onset_bands, low_band): (Vec<usize>, usize) =
-        if band_count >= 2 { ((1..band_count).collect(), rms::BAND_LOW) } else { (vec![0], 0) };
-    let onsets = onset::onset_strength(envelope, &onset_bands, low_band);
+    let (onset_bands, low_band, mid_band): (Vec<usize>, usize, usize) = if band_count >= 2 {
+        ((1..band_count).collect(), rms::BAND_LOW, rms::BAND_MID.min(band_count - 1))
+    } else {
+        (vec![0], 0, 0)
+    };
+    let onsets = onset::onset_strength(envelope, &onset_bands, low_band, mid_band);
     let fps = 1.0 / envelope.hop_secs;
     let settings = tempo::TempoSettings {
         min_bpm: options.min_bpm,
         max_bpm: options.max_bpm,
         prior_bpm: options.prior_bpm,
         prior_octaves: options.prior_octaves,
+        loop_bars: (duration_secs <= LOOP_MAX_SECS).then_some((duration_secs, options.beats_per_bar)),
     };
     let candidates = tempo::tempo_candidates(&onsets.total, fps, &settings);
     let first = candidates.first().ok_or(MusicError::NoPulse)?;
@@ -165,13 +177,20 @@ pub fn analyze(envelope: &RmsEnvelope, options: &AnalysisOptions) -> Result<Song
     }
     let (phase, _confidence) = downbeats::bar_phase(
         &beat_frames,
-        &onsets.total,
         &onsets.low,
+        &onsets.mid,
         period_frames,
         options.beats_per_bar as usize,
     );
     let beat_times_secs: Vec<f32> = beat_frames.iter().map(|&f| f as f32 * envelope.hop_secs).collect();
-    let bpm = grid::bpm_of_beats(&beat_times_secs).unwrap_or(first.bpm).clamp(grid::MIN_GRID_BPM, grid::MAX_GRID_BPM);
+    // The tracked beats measure the tempo more finely than the 0.5 % comb steps, once there are
+    // enough of them to average out the player's timing.
+    let bpm = if beat_times_secs.len() >= MIN_BEATS_FOR_SLOPE {
+        grid::bpm_of_beats(&beat_times_secs).unwrap_or(first.bpm)
+    } else {
+        first.bpm
+    }
+    .clamp(grid::MIN_GRID_BPM, grid::MAX_GRID_BPM);
     Ok(SongGrid::assemble(
         duration_secs,
         bpm,

@@ -14,6 +14,8 @@ pub struct Onsets {
     pub total: Vec<f32>,
     /// Onset strength of the low band (or of the only band), same scale as `total`'s parts.
     pub low: Vec<f32>,
+    /// Onset strength of the mid band (or of the only band), same scale.
+    pub mid: Vec<f32>,
 }
 
 /// The log-compressed band, relative to its 99.5th percentile (robust to a single click).
@@ -43,7 +45,7 @@ fn rectified_flux(log: &[f32]) -> Vec<f32> {
 /// Onset strength of an envelope. `onset_bands` are the band indices summed into `total`;
 /// `low_band` is the band whose flux feeds downbeat estimation. Bands that are silent throughout
 /// contribute nothing. The result has the envelope's frame count.
-pub fn onset_strength(envelope: &RmsEnvelope, onset_bands: &[usize], low_band: usize) -> Onsets {
+pub fn onset_strength(envelope: &RmsEnvelope, onset_bands: &[usize], low_band: usize, mid_band: usize) -> Onsets {
     let frames = envelope.frame_count();
     let mut total = vec![0.0f32; frames];
     for &b in onset_bands {
@@ -51,17 +53,15 @@ pub fn onset_strength(envelope: &RmsEnvelope, onset_bands: &[usize], low_band: u
             total.iter_mut().zip(&flux).for_each(|(t, f)| *t += f);
         }
     }
-    let low = envelope
-        .bands
-        .get(low_band)
-        .and_then(|band| log_band(band))
-        .map(|l| rectified_flux(&l))
-        .unwrap_or_else(|| vec![0.0; frames]);
+    let band_flux = |b: usize| {
+        envelope.bands.get(b).and_then(|band| log_band(band)).map(|l| rectified_flux(&l)).unwrap_or_else(|| vec![0.0; frames])
+    };
+    let (low, mid) = (band_flux(low_band), band_flux(mid_band));
     let sd = std_dev(&total);
     if sd > 1e-9 {
         total.iter_mut().for_each(|t| *t /= sd);
     }
-    Onsets { total, low }
+    Onsets { total, low, mid }
 }
 
 /// Population standard deviation (0 for fewer than two values).
@@ -88,7 +88,7 @@ mod tests {
             }
         }
         let env = RmsEnvelope { hop_secs: 0.01, bands: vec![band] };
-        let o = onset_strength(&env, &[0], 0);
+        let o = onset_strength(&env, &[0], 0, 0);
         let peak = |lo: usize, hi: usize| (lo..hi).max_by(|&a, &b| o.total[a].total_cmp(&o.total[b])).unwrap();
         assert_eq!(peak(40, 100), 50);
         assert_eq!(peak(140, 200), 150);
@@ -99,7 +99,7 @@ mod tests {
     #[test]
     fn silent_band_gives_zero_onsets() {
         let env = RmsEnvelope { hop_secs: 0.01, bands: vec![vec![0.0; 100]] };
-        let o = onset_strength(&env, &[0], 0);
+        let o = onset_strength(&env, &[0], 0, 0);
         assert!(o.total.iter().chain(&o.low).all(|&v| v == 0.0));
     }
 }

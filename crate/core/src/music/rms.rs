@@ -81,8 +81,10 @@ pub const STANDARD_BANDS: [BandSpec; 4] = [
 
 /// Index of the full-band (loudness) envelope in [`STANDARD_BANDS`].
 pub const BAND_FULL: usize = 0;
-/// Index of the low band in [`STANDARD_BANDS`] (downbeat emphasis).
+/// Index of the low band in [`STANDARD_BANDS`] (downbeat emphasis: kick, bass).
 pub const BAND_LOW: usize = 1;
+/// Index of the mid band in [`STANDARD_BANDS`] (downbeat phase: the snare's backbeat).
+pub const BAND_MID: usize = 2;
 
 /// The frame-wise RMS envelope of a song: what the host passes to the core.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

@@ -24,6 +24,18 @@ pub struct TempoSettings {
     pub prior_bpm: f32,
     /// Standard deviation of the prior, octaves.
     pub prior_octaves: f32,
+    /// For a short clip taken to be a loop: its length, seconds, and beats per bar. Tempos at
+    /// which the clip holds a whole number of bars are then preferred (a loop repeats bar-wise),
+    /// others keep a quarter of their score.
+    pub loop_bars: Option<(f32, u32)>,
+}
+
+/// How well a tempo fits a loop of `duration_secs`: 1 for a whole number (≥ 1) of bars, falling
+/// to 0.25 a tenth of a bar away.
+fn loop_fit(bpm: f32, duration_secs: f32, beats_per_bar: u32) -> f32 {
+    let bars = duration_secs * bpm / 60.0 / beats_per_bar.max(1) as f32;
+    let d = (bars - bars.round().max(1.0)).abs();
+    0.25 + 0.75 * (-0.5 * (d / 0.05).powi(2)).exp()
 }
 
 /// Unbiased, normalised autocorrelation of the mean-removed curve for lags `0..=max_lag`.
@@ -96,7 +108,10 @@ pub fn tempo_candidates(onset: &[f32], fps: f32, settings: &TempoSettings) -> Ve
             })
             .sum();
         let octaves = (bpm / settings.prior_bpm).log2() / settings.prior_octaves.max(0.05);
-        let prior = (-0.5 * octaves * octaves).exp();
+        let mut prior = (-0.5 * octaves * octaves).exp();
+        if let Some((duration_secs, beats_per_bar)) = settings.loop_bars {
+            prior *= loop_fit(bpm, duration_secs, beats_per_bar);
+        }
         scores.push(TempoCandidate { bpm, score: comb * prior });
         bpm *= 1.005;
     }
@@ -130,7 +145,7 @@ mod tests {
     }
 
     fn settings() -> TempoSettings {
-        TempoSettings { min_bpm: 40.0, max_bpm: 240.0, prior_bpm: 120.0, prior_octaves: 1.0 }
+        TempoSettings { min_bpm: 40.0, max_bpm: 240.0, prior_bpm: 120.0, prior_octaves: 1.0, loop_bars: None }
     }
 
     #[test]
@@ -140,6 +155,15 @@ mod tests {
             let c = tempo_candidates(&x, 100.0, &settings());
             assert!((c[0].bpm / bpm - 1.0).abs() < 0.02, "{bpm}: {:?}", &c[..3]);
         }
+    }
+
+    #[test]
+    fn a_loop_prefers_tempos_with_whole_bars() {
+        assert!((loop_fit(90.0, 5.3333, 4) - 1.0).abs() < 1e-3);
+        assert!((loop_fit(180.0, 5.3333, 4) - 1.0).abs() < 1e-3);
+        assert!(loop_fit(103.0, 5.3333, 4) < 0.3);
+        // Less than a bar never fits.
+        assert!(loop_fit(20.0, 5.3333, 4) < 0.3);
     }
 
     #[test]
