@@ -194,23 +194,17 @@ pub fn hop_samples(sample_rate_hz: f32) -> usize {
 /// `[n·hop − hop, n·hop + hop)`, zero-padded, divisor `2·hop`).
 pub fn frame_rms(signal: &[f32], hop: usize) -> Vec<f32> {
     let hop = hop.max(1);
-    let frames = signal.len().div_ceil(hop);
-    // Prefix sums of squares in f64: exact enough for hours of audio, and what a JS host does
-    // with a Float64Array.
-    let mut prefix = Vec::with_capacity(signal.len() + 1);
-    let mut acc = 0.0f64;
-    prefix.push(0.0);
-    for &s in signal {
-        acc += f64::from(s) * f64::from(s);
-        prefix.push(acc);
-    }
+    // Energy of each hop-long block [m·hop, (m+1)·hop), in f64; frame n is blocks n−1 and n.
+    let blocks: Vec<f64> =
+        signal.chunks(hop).map(|c| c.iter().map(|&s| f64::from(s) * f64::from(s)).sum::<f64>()).collect();
     let denom = (2 * hop) as f64;
-    (0..frames)
-        .map(|n| {
-            let lo = (n * hop).saturating_sub(hop);
-            let hi = (n * hop + hop).min(signal.len());
-            let sum = prefix.get(hi).copied().unwrap_or(acc) - prefix.get(lo).copied().unwrap_or(0.0);
-            (sum.max(0.0) / denom).sqrt() as f32
+    let mut prev = 0.0f64;
+    blocks
+        .iter()
+        .map(|&b| {
+            let v = ((prev + b) / denom).sqrt() as f32;
+            prev = b;
+            v
         })
         .collect()
 }
