@@ -61,6 +61,11 @@ def main():
         lib_bpm = float(np.atleast_1d(tempo)[0])
         print(f"{rel:<62} {o.get('bpm', float('nan')):9.2f} {lib_bpm:12.2f}   (beat_track {secs*1000:.0f} ms from PCM; ours {o['analysisSecs']*1000:.1f} ms from the envelope)")
         rows.append((rel, o, lib_beats, lib_bpm))
+    print()
+    print("agreement between the two trackers where no ground truth exists (F of ours against librosa's beats, +-70 ms):")
+    for rel, o, lib_beats, lib_bpm in rows:
+        if rel != DRUMS:
+            print(f"  {rel:<62} {f_measure(np.array(o.get('beatTimesSecs', [])), lib_beats):.3f}")
     for rel, o, lib_beats, lib_bpm in rows:
         if rel != DRUMS:
             continue
