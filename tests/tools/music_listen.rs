@@ -56,7 +56,7 @@ fn main() {
         let mut mix: Vec<f32> =
             (0..n).map(|i| 0.7 * audio.channels.iter().map(|c| c[i]).sum::<f32>() / audio.channels.len() as f32).collect();
         for &t in &g.beat_times_secs {
-            let down = g.downbeat_times_secs.iter().any(|&d| d == t);
+            let down = g.downbeat_times_secs.contains(&t);
             add_click(&mut mix, audio.sample_rate_hz, t, if down { 1760.0 } else { 1100.0 }, if down { 0.5 } else { 0.3 });
         }
         let name = rel.rsplit('/').next().unwrap_or(rel).split('.').next().unwrap_or("song");

@@ -322,8 +322,7 @@ pub fn demo_song(sample_rate_hz: f32) -> Result<DemoSong, MusicError> {
                     for b in 0..4 {
                         let note = MELODY
                             .iter()
-                            .filter(|m| m.0 == cycle && m.1 <= b as f32)
-                            .next_back()
+                            .rfind(|m| m.0 == cycle && m.1 <= b as f32)
                             .map_or(chord[2] + 12, |m| m.3);
                         mix.lead(at(b as f32), beat * 0.8, midi_hz(note), 0.09);
                     }

@@ -69,11 +69,11 @@ pub fn bar_phase(
     let scores: Vec<f32> = (0..bpb)
         .map(|phase| {
             let kick = low_means[phase] - (low_total - low_means[phase]) / (bpb - 1) as f32;
-            let backbeat = if bpb % 2 == 0 {
+            let backbeat = if bpb.is_multiple_of(2) {
                 let (mut odd, mut even) = (0.0, 0.0);
                 for j in 0..bpb {
                     let v = snare_means[(phase + j) % bpb];
-                    if j % 2 == 1 {
+                    if !j.is_multiple_of(2) {
                         odd += v;
                     } else {
                         even += v;

@@ -203,6 +203,7 @@ pub fn analyze(envelope: &RmsEnvelope, options: &AnalysisOptions) -> Result<Song
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
 
@@ -218,7 +219,7 @@ mod tests {
             let phase_beats = t / beat;
             let in_beat = (phase_beats.fract()) * beat;
             let in_eighth = (phase_beats * 2.0).fract() * beat / 2.0;
-            let accent = if (phase_beats as usize) % 4 == 0 { 1.0 } else { 0.5 };
+            let accent = if (phase_beats as usize).is_multiple_of(4) { 1.0 } else { 0.5 };
             bands[1][n] += accent * (-in_beat / 0.08).exp();
             bands[3][n] += 0.2 * (-in_eighth / 0.03).exp();
             bands[2][n] += 0.1;

@@ -137,7 +137,7 @@ mod tests {
         let mut k = 0usize;
         let mut t = 0.0f32;
         while (t as usize) < frames {
-            x[t as usize] = if k % accent_every == 0 { 2.0 } else { 1.0 };
+            x[t as usize] = if k.is_multiple_of(accent_every) { 2.0 } else { 1.0 };
             t += period;
             k += 1;
         }
