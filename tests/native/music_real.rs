@@ -178,3 +178,24 @@ fn drum_grid_matches_the_golden_file_within_one_hop() {
     }
     assert!((golden["bpm"].as_f64().unwrap() - f64::from(g.bpm)).abs() < 0.5);
 }
+
+#[test]
+fn a_quiet_late_start_moves_the_grid_and_nothing_else() {
+    // The same performance 26 dB quieter, after 3.3 s of silence: the grid moves by 3.3 s and
+    // still meets the goals (the envelope is log-compressed relative to the song's own level).
+    let audio = decode_data(DRUMS);
+    let pad = (3.3 * audio.sample_rate_hz) as usize;
+    let shifted: Vec<Vec<f32>> =
+        audio.channels.iter().map(|c| std::iter::repeat_n(0.0, pad).chain(c.iter().map(|s| s * 0.05)).collect()).collect();
+    let refs: Vec<&[f32]> = shifted.iter().map(Vec::as_slice).collect();
+    let g = analyze(&odori_core::music::envelope(&refs, audio.sample_rate_hz).unwrap(), &AnalysisOptions::default()).unwrap();
+    let offset = pad as f32 / audio.sample_rate_hz;
+    let (beats, downbeats) = read_beats(DRUMS_BEATS);
+    let beats: Vec<f32> = beats.iter().map(|t| t + offset).collect();
+    let downbeats: Vec<f32> = downbeats.iter().map(|t| t + offset).collect();
+    let beat_f = f_measure(&g.beat_times_secs, &beats, TOLERANCE_SECS);
+    let downbeat_f = f_measure(&g.downbeat_times_secs, &downbeats, TOLERANCE_SECS);
+    println!("quiet late start: {:.2} BPM, beat F {beat_f:.3}, downbeat F {downbeat_f:.3}", g.bpm);
+    assert!(beat_f >= 0.9 && downbeat_f >= 0.8 && (g.bpm / 138.0 - 1.0).abs() <= 0.02);
+    assert!(g.beat_times_secs[0] >= offset - TOLERANCE_SECS, "no beats in the silence");
+}

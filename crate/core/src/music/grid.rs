@@ -383,6 +383,32 @@ mod tests {
     }
 
     #[test]
+    fn json_field_names_are_the_javascript_contract() {
+        let g = SongGrid::regular(4.0, 120.0, 0.0, 4, flat(4.0)).unwrap();
+        let v = serde_json::to_value(&g).unwrap();
+        for key in [
+            "durationSecs",
+            "bpm",
+            "beatsPerBar",
+            "beatTimesSecs",
+            "firstDownbeatIndex",
+            "firstDownbeatSecs",
+            "downbeatTimesSecs",
+            "bars",
+            "regular",
+            "loudness",
+        ] {
+            assert!(v.get(key).is_some(), "{key}");
+        }
+        assert!(v["bars"][0].get("startSecs").is_some() && v["loudness"].get("hopSecs").is_some());
+        // A correction from JavaScript may leave out any field.
+        let c: GridCorrection = serde_json::from_str(r#"{"tapTimesSecs":[0,0.5,1.0],"nudgeSecs":null}"#).unwrap();
+        assert_eq!(c.tap_times_secs, Some(vec![0.0, 0.5, 1.0]));
+        assert_eq!(c.bpm, None);
+        assert_eq!(g.corrected(&c).unwrap().bpm, 120.0);
+    }
+
+    #[test]
     fn bar_intensity_spans_the_song_range() {
         let mut loud = flat(16.0);
         for v in &mut loud.values[800..] {
