@@ -90,14 +90,18 @@ pub fn track_beats(onset: &[f32], period_frames: f32, tightness: f32) -> Vec<usi
     beats
 }
 
-/// Drops beats at either end whose smoothed onset is below half the RMS over all beats.
+/// Drops beats at either end whose smoothed onset is below [`TRIM_FRACTION`] of the median
+/// over all beats: silence before the music and a reverb tail after it hold no onsets, while
+/// the median (unlike a mean or an RMS) ignores the few loudest hits, so quieter real beats at
+/// the edges survive.
 fn trim_weak_ends(beats: &mut Vec<usize>, local: &[f32]) {
     if beats.is_empty() {
         return;
     }
     let value = |b: usize| local.get(b).copied().unwrap_or(0.0);
-    let rms = (beats.iter().map(|&b| value(b).powi(2)).sum::<f32>() / beats.len() as f32).sqrt();
-    let threshold = 0.5 * rms;
+    let mut values: Vec<f32> = beats.iter().map(|&b| value(b)).collect();
+    values.sort_by(f32::total_cmp);
+    let threshold = TRIM_FRACTION * values[values.len() / 2];
     let first = beats.iter().position(|&b| value(b) >= threshold).unwrap_or(beats.len());
     let last = beats.iter().rposition(|&b| value(b) >= threshold).map_or(0, |i| i + 1);
     if first >= last {
@@ -107,6 +111,9 @@ fn trim_weak_ends(beats: &mut Vec<usize>, local: &[f32]) {
         beats.drain(..first);
     }
 }
+
+/// See [`trim_weak_ends`].
+const TRIM_FRACTION: f32 = 0.2;
 
 #[cfg(test)]
 mod tests {
