@@ -199,3 +199,31 @@ fn a_quiet_late_start_moves_the_grid_and_nothing_else() {
     assert!(beat_f >= 0.9 && downbeat_f >= 0.8 && (g.bpm / 138.0 - 1.0).abs() <= 0.02);
     assert!(g.beat_times_secs[0] >= offset - TOLERANCE_SECS, "no beats in the silence");
 }
+
+#[test]
+fn the_drum_performance_played_faster_or_slower_is_still_tracked() {
+    // Resampling changes speed (and pitch): the true beats scale with it (0.7x = 96.6 BPM,
+    // 1.25x = 172.5 BPM).
+    let audio = decode_data(DRUMS);
+    let (beats, downbeats) = read_beats(DRUMS_BEATS);
+    for speed in [0.7f32, 0.8, 1.15, 1.25] {
+        let ch: Vec<Vec<f32>> =
+            audio.channels.iter().map(|c| resample(c, audio.sample_rate_hz * speed, audio.sample_rate_hz)).collect();
+        let refs: Vec<&[f32]> = ch.iter().map(Vec::as_slice).collect();
+        let g = analyze(&odori_core::music::envelope(&refs, audio.sample_rate_hz).unwrap(), &AnalysisOptions::default()).unwrap();
+        let b: Vec<f32> = beats.iter().map(|t| t / speed).collect();
+        let d: Vec<f32> = downbeats.iter().map(|t| t / speed).collect();
+        let beat_f = f_measure(&g.beat_times_secs, &b, TOLERANCE_SECS);
+        let downbeat_f = f_measure(&g.downbeat_times_secs, &d, TOLERANCE_SECS);
+        println!("drums at {speed}x: {:.2} BPM (true {:.1}), beat F {beat_f:.3}, downbeat F {downbeat_f:.3}", g.bpm, 138.0 * speed);
+        let ratio = g.bpm / (138.0 * speed);
+        if speed <= 1.15 {
+            assert!((ratio - 1.0).abs() <= 0.02, "{speed}x: {}", g.bpm);
+            assert!(beat_f >= 0.9 && downbeat_f >= 0.8, "{speed}x");
+        } else {
+            // At 172.5 BPM the tracker may hear half time (86 BPM), as many listeners do: the
+            // metrical level may halve, the tempo must still be right within it.
+            assert!((ratio - 1.0).abs() <= 0.02 || (ratio - 0.5).abs() <= 0.01, "{speed}x: {}", g.bpm);
+        }
+    }
+}

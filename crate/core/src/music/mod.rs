@@ -99,7 +99,7 @@ pub struct AnalysisOptions {
 
 impl Default for AnalysisOptions {
     fn default() -> Self {
-        Self { beats_per_bar: 4, min_bpm: 50.0, max_bpm: 220.0, prior_bpm: 110.0, prior_octaves: 0.9, tightness: 1000.0 }
+        Self { beats_per_bar: 4, min_bpm: 50.0, max_bpm: 220.0, prior_bpm: 120.0, prior_octaves: 0.9, tightness: 1000.0 }
     }
 }
 
