@@ -52,6 +52,7 @@ fn main() {
     let combined = GridCorrection { bpm: Some(128.0), beats_per_bar: Some(3), first_downbeat_secs: Some(1.0), ..Default::default() };
     let combined_secs = median_secs(101, || grid.corrected(&combined).expect("correction"));
 
+    let demo_secs = median_secs(3, || odori_core::music::demo_song(44100.0).expect("demo"));
     println!("frames per band: {}, bands: {}", env.frame_count(), env.bands.len());
     println!("result: {:.2} BPM, {} beats, {} bars", grid.bpm, grid.beat_times_secs.len(), grid.bars.len());
     println!("envelope from PCM (Rust fallback of the host's WebAudio step): {:.1} ms", env_secs * 1e3);
@@ -59,6 +60,7 @@ fn main() {
     println!("baseline, one pass summing the envelope:                       {:.3} ms", baseline_secs * 1e3);
     println!("ratio analysis / baseline:                                     {:.0}x", analysis_secs / baseline_secs);
     println!("real-time factor of the analysis:                              {:.0}x faster than real time", 180.0 / analysis_secs);
+    println!("demo song render (70 s at 44.1 kHz):                           {:.1} ms", demo_secs * 1e3);
     println!("correction with_bpm:                                           {:.1} us", bpm_secs * 1e6);
     println!("correction with_first_downbeat:                                {:.1} us", shift_secs * 1e6);
     println!("correction bpm + 3/4 + downbeat:                               {:.1} us", combined_secs * 1e6);

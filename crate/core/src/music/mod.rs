@@ -1,6 +1,6 @@
 //! Song analysis (spec §D): from the banded RMS envelope the host computes with WebAudio
 //! ([`rms`]) to tempo, beats, downbeats and bars with intensity ([`SongGrid`]), plus the grid
-//! corrections the user makes ([`grid`]), the product's own demo song ([`demo_song`]) and the
+//! corrections the user makes ([`grid`]), the product's own demo song ([`mod@demo_song`]) and the
 //! beat-tracking evaluation measure ([`eval`]).
 //!
 //! The pipeline of [`analyze`]: onset strength per band (log RMS flux, [`onset`]) → global tempo

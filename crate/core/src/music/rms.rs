@@ -24,6 +24,58 @@
 //! The result is an [`RmsEnvelope`]: `hop_secs` and one `Vec<f32>` of `N` values per band, in the
 //! order of [`STANDARD_BANDS`]. Analysis also accepts other band sets (see
 //! [`crate::music::analyze`]), but the browser and native paths agree only with these.
+//!
+//! For more than two channels the mean differs from WebAudio's 5.1 down-mix; the difference is
+//! a level change per channel, which the analysis (log-compressed, relative to each band's own
+//! level) barely sees.
+//!
+//! # Reference host code
+//!
+//! A JavaScript twin of [`envelope`] (all four bands rendered at once in an
+//! `OfflineAudioContext` at the buffer's own rate, then framed in JavaScript):
+//!
+//! ```js
+//! const BANDS = [
+//!   null,                                                         // 0 full: the mono mix
+//!   { type: "lowpass",  frequency: 150,  Q: -3.0103, stages: 2 }, // 1 low
+//!   { type: "bandpass", frequency: 800,  Q: 0.7,     stages: 1 }, // 2 mid
+//!   { type: "highpass", frequency: 4000, Q: -3.0103, stages: 2 }, // 3 high
+//! ];
+//! async function rmsEnvelope(buffer /* AudioBuffer */) {
+//!   const fs = buffer.sampleRate, len = buffer.length;
+//!   const ctx = new OfflineAudioContext({ numberOfChannels: BANDS.length, length: len, sampleRate: fs });
+//!   ctx.destination.channelInterpretation = "discrete";
+//!   const src = new AudioBufferSourceNode(ctx, { buffer });
+//!   const mono = new GainNode(ctx, { channelCount: 1, channelCountMode: "explicit", channelInterpretation: "speakers" });
+//!   const merge = new ChannelMergerNode(ctx, { numberOfInputs: BANDS.length });
+//!   src.connect(mono);
+//!   BANDS.forEach((b, i) => {
+//!     let node = mono;
+//!     for (let s = 0; b && s < b.stages; s++) {
+//!       const f = new BiquadFilterNode(ctx, { type: b.type, frequency: b.frequency, Q: b.Q });
+//!       node.connect(f);
+//!       node = f;
+//!     }
+//!     node.connect(merge, 0, i);
+//!   });
+//!   merge.connect(ctx.destination);
+//!   src.start(0);
+//!   const out = await ctx.startRendering();
+//!   const H = Math.max(1, Math.round(fs * 0.01)), N = Math.ceil(len / H);
+//!   const bands = BANDS.map((_, i) => {
+//!     const y = out.getChannelData(i), rms = new Float32Array(N);
+//!     let prev = 0; // energy of the previous hop-long block
+//!     for (let n = 0; n < N; n++) {
+//!       let e = 0;
+//!       for (let k = n * H, end = Math.min(len, k + H); k < end; k++) e += y[k] * y[k];
+//!       rms[n] = Math.sqrt((prev + e) / (2 * H));
+//!       prev = e;
+//!     }
+//!     return rms;
+//!   });
+//!   return { hopSecs: H / fs, bands };
+//! }
+//! ```
 
 use serde::{Deserialize, Serialize};
 
