@@ -15,6 +15,8 @@ use crate::bars::Bar;
 pub const MIN_GRID_BPM: f32 = 20.0;
 /// The fastest tempo a grid may have, BPM.
 pub const MAX_GRID_BPM: f32 = 400.0;
+/// The longest song a regular grid may span, seconds (twice the analysis limit).
+pub const MAX_GRID_SECS: f32 = 2.0 * super::MAX_ANALYSIS_SECS;
 /// The most beats a bar may have.
 pub const MAX_BEATS_PER_BAR: u32 = 16;
 
@@ -226,9 +228,12 @@ impl SongGrid {
     ) -> Result<Self, MusicError> {
         check_bpm(bpm)?;
         check_beats_per_bar(beats_per_bar)?;
-        check_time("first downbeat", first_downbeat_secs)?;
-        if !(duration_secs.is_finite() && duration_secs > 0.0) {
+        if !(duration_secs.is_finite() && duration_secs > 0.0 && duration_secs <= MAX_GRID_SECS) {
             return Err(MusicError::BadTime { what: "song duration", time_secs: duration_secs });
+        }
+        // Any downbeat within a song length of the song is meaningful; further out is a bug.
+        if !(first_downbeat_secs.is_finite() && first_downbeat_secs.abs() <= duration_secs + 60.0) {
+            return Err(MusicError::BadTime { what: "first downbeat", time_secs: first_downbeat_secs });
         }
         let period = 60.0 / f64::from(bpm);
         let anchor = f64::from(first_downbeat_secs);
@@ -236,7 +241,7 @@ impl SongGrid {
         let k0 = (-anchor / period).ceil() as i64;
         let k1 = ((f64::from(duration_secs) - anchor) / period).ceil() as i64;
         let beats: Vec<f32> = (k0..k1).map(|k| (anchor + k as f64 * period) as f32).filter(|&t| t >= 0.0 && t < duration_secs).collect();
-        let first = (-k0).rem_euclid(i64::from(beats_per_bar)) as usize;
+        let first = (-(k0 % i64::from(beats_per_bar))).rem_euclid(i64::from(beats_per_bar)) as usize;
         Ok(Self::assemble(duration_secs, bpm, beats_per_bar, beats, first, true, loudness))
     }
 
@@ -376,6 +381,13 @@ mod tests {
         assert!(g.with_bpm(f32::NAN).is_err());
         assert!(g.with_beats_per_bar(0).is_err());
         assert!(g.nudged(f32::INFINITY).is_err());
+        assert!(SongGrid::regular(30.0, 100.0, 1e30, 4, flat(30.0)).is_err());
+        assert!(SongGrid::regular(1e30, 100.0, 0.0, 4, flat(30.0)).is_err());
+        // Far nudges leave a tracked grid empty rather than failing or hanging.
+        let far = SongGrid { regular: false, ..g.clone() }.nudged(1e9).unwrap();
+        assert!(far.beat_times_secs.is_empty() && far.bars.is_empty());
+        // Typing a BPM then restores a grid over the whole song.
+        assert_eq!(far.with_bpm(120.0).unwrap().beat_times_secs.len(), 60);
         let tracked = SongGrid { regular: false, ..g.clone() };
         let n = tracked.nudged(-0.5).unwrap();
         assert_eq!(n.beat_times_secs.len(), g.beat_times_secs.len() - 1);
