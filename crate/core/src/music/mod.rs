@@ -45,7 +45,7 @@ pub const SILENCE_RMS: f32 = 1e-4;
 pub enum MusicError {
     #[error("no audio: the envelope or PCM is empty")]
     Empty,
-    #[error("envelope hop {hop_secs} s is not a positive duration of at most 0.1 s")]
+    #[error("envelope hop {hop_secs} s is outside 0.005..=0.05 s")]
     BadHop { hop_secs: f32 },
     #[error("envelope band {band} has {frames} frames, band 0 has {expected}")]
     RaggedBands { band: usize, frames: usize, expected: usize },
@@ -256,6 +256,8 @@ mod tests {
         assert!(matches!(analyze(&silent, &o), Err(MusicError::Silent { .. })));
         let short = RmsEnvelope { hop_secs: 0.01, bands: ok.bands.iter().map(|b| b[..200].to_vec()).collect() };
         assert!(matches!(analyze(&short, &o), Err(MusicError::TooShort { .. })));
+        let fine = RmsEnvelope { hop_secs: 1e-6, bands: ok.bands.clone() };
+        assert!(matches!(analyze(&fine, &o), Err(MusicError::BadHop { .. })));
         assert!(matches!(
             analyze(&ok, &AnalysisOptions { max_bpm: 10.0, ..o }),
             Err(MusicError::BadOption { what: "maxBpm", .. })

@@ -85,6 +85,11 @@ use super::MusicError;
 /// samples.
 pub const HOP_TARGET_SECS: f64 = 0.01;
 
+/// The shortest hop [`RmsEnvelope::validate`] accepts, seconds (finer hops only cost time).
+pub const MIN_HOP_SECS: f32 = 0.005;
+/// The longest hop [`RmsEnvelope::validate`] accepts, seconds (coarser hops blur beats).
+pub const MAX_HOP_SECS: f32 = 0.05;
+
 /// The lowest sample rate the envelope accepts, Hz.
 pub const MIN_SAMPLE_RATE_HZ: f32 = 8000.0;
 
@@ -159,10 +164,10 @@ impl RmsEnvelope {
         self.frame_count() as f32 * self.hop_secs
     }
 
-    /// Checks shape and values: at least one band, equal lengths, a finite positive hop,
-    /// finite non-negative values.
+    /// Checks shape and values: at least one band, equal lengths, a hop within
+    /// [`MIN_HOP_SECS`]..=[`MAX_HOP_SECS`], finite non-negative values.
     pub fn validate(&self) -> Result<(), MusicError> {
-        if !(self.hop_secs.is_finite() && self.hop_secs > 0.0 && self.hop_secs <= 0.1) {
+        if !(self.hop_secs.is_finite() && (MIN_HOP_SECS..=MAX_HOP_SECS).contains(&self.hop_secs)) {
             return Err(MusicError::BadHop { hop_secs: self.hop_secs });
         }
         let frames = self.frame_count();
