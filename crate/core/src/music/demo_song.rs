@@ -1,0 +1,393 @@
+//! The app's built-in demo song, "Odori Demo" (the project's own work, synthesised here so the
+//! product works with no file): 120 BPM, 4/4, A minor (Am–F–C–G), 34 bars plus a ring-out,
+//! with drums, bass, pads, an arpeggio and a lead melody, and sections of clearly different
+//! intensity: intro (4 bars), verse (8), chorus (8), break (4), chorus (8), outro (2).
+//!
+//! Rendering is deterministic (a fixed-seed noise generator, no clocks) and takes a few hundred
+//! milliseconds natively. Its true grid is exact by construction: a beat every 0.5 s from 0,
+//! a downbeat every 2 s from 0, so tests can check that analysis recovers it.
+
+use serde::{Deserialize, Serialize};
+
+use super::MusicError;
+
+/// Tempo of the demo song, BPM.
+pub const DEMO_BPM: f32 = 120.0;
+/// Beats per bar of the demo song.
+pub const DEMO_BEATS_PER_BAR: u32 = 4;
+/// Highest sample rate [`demo_song`] renders at, Hz.
+pub const MAX_DEMO_SAMPLE_RATE_HZ: f32 = 192_000.0;
+
+/// One section of the demo song.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct DemoSection {
+    /// "intro", "verse", "chorus", "break" or "outro".
+    pub name: String,
+    /// First bar (0-based) and number of bars.
+    pub start_bar: usize,
+    pub bar_count: usize,
+    pub start_secs: f32,
+    pub end_secs: f32,
+}
+
+/// The rendered demo song and its true grid. `samples` is large (about 3 M values at
+/// 44.1 kHz): the web layer should hand it to JavaScript as a `Float32Array`, not through serde.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct DemoSong {
+    pub sample_rate_hz: f32,
+    /// Mono PCM, full scale ±1 (peak 0.9).
+    pub samples: Vec<f32>,
+    pub bpm: f32,
+    pub beats_per_bar: u32,
+    /// The true first downbeat (0: the song starts on the one).
+    pub first_downbeat_secs: f32,
+    /// Number of bars with music (the ring-out after them is not a bar).
+    pub bar_count: usize,
+    pub sections: Vec<DemoSection>,
+}
+
+impl DemoSong {
+    /// Length of the rendered audio, seconds.
+    pub fn duration_secs(&self) -> f32 {
+        self.samples.len() as f32 / self.sample_rate_hz
+    }
+
+    /// The true beat times: every `60 / bpm` seconds through the last bar.
+    pub fn beat_times_secs(&self) -> Vec<f32> {
+        let n = self.bar_count * self.beats_per_bar as usize;
+        (0..n).map(|k| self.first_downbeat_secs + k as f32 * 60.0 / self.bpm).collect()
+    }
+
+    /// The true downbeat times, one per bar.
+    pub fn downbeat_times_secs(&self) -> Vec<f32> {
+        let bar = self.beats_per_bar as f32 * 60.0 / self.bpm;
+        (0..self.bar_count).map(|k| self.first_downbeat_secs + k as f32 * bar).collect()
+    }
+}
+
+/// Sections: (name, bars).
+const SECTIONS: [(&str, usize); 6] = [("intro", 4), ("verse", 8), ("chorus", 8), ("break", 4), ("chorus", 8), ("outro", 2)];
+/// Seconds of ring-out after the last bar.
+const RING_OUT_SECS: f32 = 2.0;
+
+/// Chord per bar of the four-bar cycle (MIDI notes) and its bass root.
+const CHORDS: [[u8; 3]; 4] = [[57, 60, 64], [57, 60, 65], [55, 60, 64], [55, 59, 62]];
+const ROOTS: [u8; 4] = [45, 41, 48, 43];
+
+/// Chorus melody over one 4-bar cycle: (bar, start beat, length in beats, MIDI note).
+const MELODY: [(usize, f32, f32, u8); 18] = [
+    (0, 0.0, 1.0, 76),
+    (0, 1.0, 0.5, 74),
+    (0, 1.5, 0.5, 72),
+    (0, 2.0, 1.5, 69),
+    (0, 3.5, 0.5, 72),
+    (1, 0.0, 1.0, 72),
+    (1, 1.0, 0.5, 69),
+    (1, 1.5, 0.5, 72),
+    (1, 2.0, 1.0, 74),
+    (1, 3.0, 1.0, 72),
+    (2, 0.0, 1.5, 76),
+    (2, 1.5, 0.5, 79),
+    (2, 2.0, 1.0, 76),
+    (2, 3.0, 1.0, 74),
+    (3, 0.0, 1.0, 74),
+    (3, 1.0, 1.0, 71),
+    (3, 2.0, 1.5, 67),
+    (3, 3.5, 0.5, 69),
+];
+
+fn midi_hz(note: u8) -> f32 {
+    440.0 * 2f32.powf((f32::from(note) - 69.0) / 12.0)
+}
+
+/// Deterministic white noise (xorshift32), values in [-1, 1).
+struct Noise(u32);
+
+impl Noise {
+    fn next(&mut self) -> f32 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        self.0 = x;
+        (x as f32 / u32::MAX as f32) * 2.0 - 1.0
+    }
+}
+
+/// PolyBLEP correction for a band-limited sawtooth.
+fn poly_blep(phase: f32, dt: f32) -> f32 {
+    if phase < dt {
+        let t = phase / dt;
+        t + t - t * t - 1.0
+    } else if phase > 1.0 - dt {
+        let t = (phase - 1.0) / dt;
+        t * t + t + t + 1.0
+    } else {
+        0.0
+    }
+}
+
+/// The renderer: a mono mix buffer and the sample rate.
+struct Mix {
+    fs: f32,
+    out: Vec<f32>,
+    noise: Noise,
+}
+
+impl Mix {
+    fn span(&self, start_secs: f32, len_secs: f32) -> (usize, usize) {
+        let a = (start_secs * self.fs).round().max(0.0) as usize;
+        let b = (((start_secs + len_secs) * self.fs).round().max(0.0) as usize).min(self.out.len());
+        (a.min(b), b)
+    }
+
+    fn kick(&mut self, t0: f32, gain: f32) {
+        let (a, b) = self.span(t0, 0.45);
+        let mut phase = 0.0f32;
+        for i in a..b {
+            let t = (i - a) as f32 / self.fs;
+            let f = 48.0 + 110.0 * (-t / 0.035).exp();
+            phase = (phase + f / self.fs).fract();
+            let click = if t < 0.004 { 0.3 * (1.0 - t / 0.004) } else { 0.0 };
+            self.out[i] += gain * ((2.0 * std::f32::consts::PI * phase).sin() * (-t / 0.22).exp() + click);
+        }
+    }
+
+    fn snare(&mut self, t0: f32, gain: f32) {
+        let (a, b) = self.span(t0, 0.3);
+        let mut prev = 0.0f32;
+        for i in a..b {
+            let t = (i - a) as f32 / self.fs;
+            let n = self.noise.next();
+            let hp = n - prev;
+            prev = n;
+            let tone = (2.0 * std::f32::consts::PI * 185.0 * t).sin() * (-t / 0.06).exp();
+            self.out[i] += gain * (0.55 * hp * (-t / 0.1).exp() + 0.6 * tone);
+        }
+    }
+
+    fn hat(&mut self, t0: f32, gain: f32, decay_secs: f32) {
+        let (a, b) = self.span(t0, decay_secs * 5.0);
+        let (mut p1, mut p2) = (0.0f32, 0.0f32);
+        for i in a..b {
+            let t = (i - a) as f32 / self.fs;
+            let n = self.noise.next();
+            // Second difference: a steep high-pass, the metallic hiss of a hat.
+            let hp = n - 2.0 * p1 + p2;
+            p2 = p1;
+            p1 = n;
+            self.out[i] += gain * 0.25 * hp * (-t / decay_secs).exp();
+        }
+    }
+
+    /// A band-limited saw voice through a one-pole low-pass, with an attack/decay/sustain/
+    /// release envelope. `cutoff_hz` sets the brightness.
+    #[allow(clippy::too_many_arguments)]
+    fn saw(&mut self, t0: f32, len_secs: f32, hz: f32, gain: f32, attack: f32, release: f32, cutoff_hz: f32, detune: f32) {
+        let (a, b) = self.span(t0, len_secs + release);
+        let k = 1.0 - (-2.0 * std::f32::consts::PI * cutoff_hz / self.fs).exp();
+        let mut lp = 0.0f32;
+        let mut phases = [0.0f32, 0.37];
+        let freqs = [hz * (1.0 + detune), hz * (1.0 - detune)];
+        for i in a..b {
+            let t = (i - a) as f32 / self.fs;
+            let mut s = 0.0;
+            for (p, f) in phases.iter_mut().zip(freqs) {
+                let dt = f / self.fs;
+                s += 2.0 * *p - 1.0 - poly_blep(*p, dt);
+                *p = (*p + dt).fract();
+            }
+            lp += k * (0.5 * s - lp);
+            let env = if t < attack {
+                t / attack
+            } else if t < len_secs {
+                0.75 + 0.25 * (-(t - attack) / 0.15).exp()
+            } else {
+                0.75 * (-(t - len_secs) / (release / 4.0)).exp()
+            };
+            self.out[i] += gain * env * lp;
+        }
+    }
+
+    /// A soft lead: sine plus a little third harmonic, with vibrato that sets in after the attack.
+    fn lead(&mut self, t0: f32, len_secs: f32, hz: f32, gain: f32) {
+        let (a, b) = self.span(t0, len_secs + 0.15);
+        let mut phase = 0.0f32;
+        for i in a..b {
+            let t = (i - a) as f32 / self.fs;
+            let vib = 1.0 + 0.004 * (2.0 * std::f32::consts::PI * 5.5 * t).sin() * (t / 0.3).min(1.0);
+            phase = (phase + hz * vib / self.fs).fract();
+            let w = 2.0 * std::f32::consts::PI * phase;
+            let env = (t / 0.012).min(1.0) * if t < len_secs { 1.0 - 0.3 * (t / len_secs) } else { 0.7 * (-(t - len_secs) / 0.04).exp() };
+            self.out[i] += gain * env * (w.sin() + 0.25 * (3.0 * w).sin() + 0.1 * (2.0 * w).sin());
+        }
+    }
+}
+
+/// Renders the demo song at `sample_rate_hz` (8 kHz to 192 kHz).
+pub fn demo_song(sample_rate_hz: f32) -> Result<DemoSong, MusicError> {
+    if !(sample_rate_hz.is_finite() && (super::rms::MIN_SAMPLE_RATE_HZ..=MAX_DEMO_SAMPLE_RATE_HZ).contains(&sample_rate_hz)) {
+        return Err(MusicError::BadSampleRate { sample_rate_hz, min_hz: super::rms::MIN_SAMPLE_RATE_HZ });
+    }
+    let beat = 60.0 / DEMO_BPM;
+    let bar_secs = beat * DEMO_BEATS_PER_BAR as f32;
+    let bar_count: usize = SECTIONS.iter().map(|s| s.1).sum();
+    let total_secs = bar_count as f32 * bar_secs + RING_OUT_SECS;
+    let mut mix = Mix { fs: sample_rate_hz, out: vec![0.0; (total_secs * sample_rate_hz) as usize], noise: Noise(0x0D0_121) };
+    let mut sections = Vec::new();
+    let mut bar0 = 0usize;
+    for (name, bars) in SECTIONS {
+        sections.push(DemoSection {
+            name: name.to_string(),
+            start_bar: bar0,
+            bar_count: bars,
+            start_secs: bar0 as f32 * bar_secs,
+            end_secs: (bar0 + bars) as f32 * bar_secs,
+        });
+        for local in 0..bars {
+            let bar = bar0 + local;
+            let t = bar as f32 * bar_secs;
+            let cycle = bar % 4;
+            let chord = CHORDS[cycle];
+            let root = ROOTS[cycle];
+            let at = |b: f32| t + b * beat;
+            match name {
+                "intro" => {
+                    for &n in &chord {
+                        mix.saw(t, bar_secs, midi_hz(n), 0.05, 0.4, 0.6, 1200.0, 0.004);
+                    }
+                    for e in 0..8 {
+                        mix.hat(at(e as f32 * 0.5), if e % 2 == 0 { 0.22 } else { 0.12 }, 0.025);
+                    }
+                    mix.kick(t, 0.25);
+                }
+                "verse" => {
+                    for &n in &chord {
+                        mix.saw(t, bar_secs, midi_hz(n), 0.035, 0.3, 0.5, 1500.0, 0.004);
+                    }
+                    for b in [0.0, 2.0, 2.5] {
+                        mix.kick(at(b), if b == 0.0 { 0.75 } else { 0.55 });
+                    }
+                    for b in [1.0, 3.0] {
+                        mix.snare(at(b), 0.32);
+                    }
+                    for e in 0..8 {
+                        mix.hat(at(e as f32 * 0.5), if e % 2 == 0 { 0.35 } else { 0.2 }, 0.03);
+                    }
+                    // Bass on eighths, root with a fifth on the last one.
+                    for e in 0..8 {
+                        let n = if e == 7 { root + 7 } else { root };
+                        mix.saw(at(e as f32 * 0.5), beat * 0.4, midi_hz(n), 0.22, 0.005, 0.04, 700.0, 0.0);
+                    }
+                    // Arpeggio through the chord tones, an octave up.
+                    for e in 0..8 {
+                        let n = chord[[0, 1, 2, 1][e % 4]] + 12;
+                        mix.saw(at(e as f32 * 0.5), beat * 0.3, midi_hz(n), 0.05, 0.003, 0.08, 2500.0, 0.0);
+                    }
+                }
+                "chorus" => {
+                    for &n in &chord {
+                        mix.saw(t, bar_secs, midi_hz(n), 0.06, 0.05, 0.4, 3000.0, 0.006);
+                        mix.saw(t, bar_secs, midi_hz(n + 12), 0.025, 0.05, 0.4, 3000.0, 0.006);
+                    }
+                    if local == 0 {
+                        mix.hat(t, 0.5, 0.4);
+                    }
+                    for b in 0..4 {
+                        mix.kick(at(b as f32), if b == 0 { 0.95 } else { 0.7 });
+                    }
+                    for b in [1.0, 3.0] {
+                        mix.snare(at(b), 0.42);
+                    }
+                    for e in 0..8 {
+                        let off = e % 2 == 1;
+                        mix.hat(at(e as f32 * 0.5), if off { 0.4 } else { 0.25 }, if off { 0.09 } else { 0.03 });
+                    }
+                    for e in 0..8 {
+                        let n = if e % 2 == 1 { root + 12 } else { root };
+                        mix.saw(at(e as f32 * 0.5), beat * 0.42, midi_hz(n), 0.26, 0.004, 0.04, 900.0, 0.0);
+                    }
+                    for &(mb, start, len, note) in MELODY.iter().filter(|m| m.0 == cycle) {
+                        let _ = mb;
+                        mix.lead(at(start), len * beat * 0.95, midi_hz(note), 0.16);
+                    }
+                }
+                "break" => {
+                    for &n in &chord {
+                        mix.saw(t, bar_secs, midi_hz(n), 0.045, 0.5, 0.8, 900.0, 0.005);
+                    }
+                    // The melody's first note of each beat, softly, on quarters.
+                    for b in 0..4 {
+                        let note = MELODY
+                            .iter()
+                            .rfind(|m| m.0 == cycle && m.1 <= b as f32)
+                            .map_or(chord[2] + 12, |m| m.3);
+                        mix.lead(at(b as f32), beat * 0.8, midi_hz(note), 0.09);
+                    }
+                    // The last bar builds up with a snare roll into the chorus.
+                    if local == bars - 1 {
+                        for s in 0..16 {
+                            mix.snare(at(s as f32 * 0.25), 0.08 + 0.3 * s as f32 / 16.0);
+                        }
+                    }
+                }
+                _ => {
+                    // Outro: the tonic rings out over a last downbeat.
+                    if local == 0 {
+                        for &n in &CHORDS[0] {
+                            mix.saw(t, bar_secs * 2.0, midi_hz(n), 0.06, 0.02, 1.5, 2000.0, 0.006);
+                        }
+                        mix.saw(t, bar_secs * 1.5, midi_hz(ROOTS[0]), 0.25, 0.005, 0.5, 600.0, 0.0);
+                        mix.hat(t, 0.5, 0.5);
+                    }
+                    mix.kick(t, 0.8);
+                    mix.kick(at(2.0), 0.5);
+                }
+            }
+        }
+        bar0 += bars;
+    }
+    // Gentle saturation, then a fixed peak of 0.9.
+    mix.out.iter_mut().for_each(|s| *s = (1.2 * *s).tanh());
+    let peak = mix.out.iter().fold(0.0f32, |m, s| m.max(s.abs()));
+    if peak > 0.0 {
+        mix.out.iter_mut().for_each(|s| *s *= 0.9 / peak);
+    }
+    Ok(DemoSong {
+        sample_rate_hz,
+        samples: mix.out,
+        bpm: DEMO_BPM,
+        beats_per_bar: DEMO_BEATS_PER_BAR,
+        first_downbeat_secs: 0.0,
+        bar_count,
+        sections,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn renders_deterministically_with_sections_of_different_loudness() {
+        let fs = 8000.0;
+        let a = demo_song(fs).unwrap();
+        let b = demo_song(fs).unwrap();
+        assert_eq!(a.samples, b.samples);
+        assert_eq!(a.bar_count, 34);
+        assert!((a.duration_secs() - 70.0).abs() < 0.01);
+        assert!(a.samples.iter().all(|s| s.is_finite() && s.abs() <= 0.9001));
+        let rms = |s: &DemoSection| {
+            let x = &a.samples[(s.start_secs * fs) as usize..(s.end_secs * fs) as usize];
+            (x.iter().map(|v| v * v).sum::<f32>() / x.len() as f32).sqrt()
+        };
+        let by_name = |n: &str| a.sections.iter().find(|s| s.name == n).map(rms).unwrap();
+        let (intro, verse, chorus, brk) = (by_name("intro"), by_name("verse"), by_name("chorus"), by_name("break"));
+        assert!(chorus > 1.3 * verse && verse > 1.3 * intro && chorus > 2.0 * brk, "{intro} {verse} {chorus} {brk}");
+        assert_eq!(a.beat_times_secs().len(), 136);
+        assert_eq!(a.downbeat_times_secs()[1], 2.0);
+        assert!(demo_song(1000.0).is_err());
+    }
+}

@@ -1,0 +1,175 @@
+//! Global tempo from the onset curve: the autocorrelation of onset strength, read as a comb
+//! over the first four multiples of each candidate beat period (so a tempo is supported by its
+//! bars as well as its beats), weighted by a log-normal tempo prior. The comb and the prior
+//! together settle half/double ambiguities: a doubled tempo gains its half-beat lag but loses
+//! the prior, a halved tempo loses its own beat lag.
+
+use serde::{Deserialize, Serialize};
+
+/// One tempo hypothesis and its score.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct TempoCandidate {
+    pub bpm: f32,
+    /// Comb score times prior (comparable only within one song).
+    pub score: f32,
+}
+
+/// The settings of tempo estimation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TempoSettings {
+    pub min_bpm: f32,
+    pub max_bpm: f32,
+    /// Centre of the log-normal prior, BPM.
+    pub prior_bpm: f32,
+    /// Standard deviation of the prior, octaves.
+    pub prior_octaves: f32,
+    /// For a short clip taken to be a loop: its length, seconds, and beats per bar. Tempos at
+    /// which the clip holds a whole number of bars are then preferred (a loop repeats bar-wise),
+    /// others keep a quarter of their score.
+    pub loop_bars: Option<(f32, u32)>,
+}
+
+/// How well a tempo fits a loop of `duration_secs`: 1 for a whole number (≥ 1) of bars, falling
+/// to 0.25 a tenth of a bar away.
+fn loop_fit(bpm: f32, duration_secs: f32, beats_per_bar: u32) -> f32 {
+    let bars = duration_secs * bpm / 60.0 / beats_per_bar.max(1) as f32;
+    let d = (bars - bars.round().max(1.0)).abs();
+    0.25 + 0.75 * (-0.5 * (d / 0.05).powi(2)).exp()
+}
+
+/// Unbiased, normalised autocorrelation of the mean-removed curve for lags `0..=max_lag`.
+pub(crate) fn autocorrelation(x: &[f32], max_lag: usize) -> Vec<f32> {
+    let n = x.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let mean = x.iter().map(|&v| f64::from(v)).sum::<f64>() / n as f64;
+    let centred: Vec<f64> = x.iter().map(|&v| f64::from(v) - mean).collect();
+    let max_lag = max_lag.min(n - 1);
+    let mut r = Vec::with_capacity(max_lag + 1);
+    for lag in 0..=max_lag {
+        let s: f64 = centred[..n - lag].iter().zip(&centred[lag..]).map(|(a, b)| a * b).sum();
+        r.push(s / (n - lag) as f64);
+    }
+    let r0 = r.first().copied().unwrap_or(0.0);
+    if r0 <= 0.0 {
+        return vec![0.0; r.len()];
+    }
+    r.iter().map(|v| (v / r0) as f32).collect()
+}
+
+/// Linear interpolation of `r` at a fractional lag (0 outside).
+fn at(r: &[f32], lag: f32) -> f32 {
+    if lag < 0.0 {
+        return 0.0;
+    }
+    let i = lag.floor() as usize;
+    let f = lag - i as f32;
+    match (r.get(i), r.get(i + 1)) {
+        (Some(&a), Some(&b)) => a + (b - a) * f,
+        (Some(&a), None) => a * (1.0 - f),
+        _ => 0.0,
+    }
+}
+
+/// Maximum of `r` within ±`tol` frames of `lag` (timing jitter of human playing).
+fn peak_near(r: &[f32], lag: f32, tol: f32) -> f32 {
+    let steps = 4;
+    (0..=2 * steps)
+        .map(|s| at(r, lag - tol + tol * s as f32 / steps as f32))
+        .fold(f32::NEG_INFINITY, f32::max)
+}
+
+/// Scores every tempo from `min_bpm` to `max_bpm` in 0.5 % steps and returns the candidates at
+/// local maxima, best first. `fps` is the onset curve's frame rate.
+pub fn tempo_candidates(onset: &[f32], fps: f32, settings: &TempoSettings) -> Vec<TempoCandidate> {
+    let min_bpm = settings.min_bpm.max(1.0);
+    let max_bpm = settings.max_bpm.max(min_bpm * 1.01);
+    let longest_period = 60.0 * fps / min_bpm;
+    let max_lag = (4.0 * longest_period).ceil() as usize + 2;
+    let r = autocorrelation(onset, max_lag.min(onset.len().saturating_sub(1) * 2 / 3));
+    if r.len() < 3 {
+        return Vec::new();
+    }
+    let mut scores = Vec::new();
+    let mut bpm = min_bpm;
+    while bpm <= max_bpm {
+        let period = 60.0 * fps / bpm;
+        let tol = (period * 0.02).max(0.5);
+        let comb: f32 = (1..=4)
+            .map(|k| {
+                let lag = period * k as f32;
+                if lag < r.len() as f32 - 1.0 {
+                    peak_near(&r, lag, tol).max(0.0) / (k as f32).sqrt()
+                } else {
+                    0.0
+                }
+            })
+            .sum();
+        let octaves = (bpm / settings.prior_bpm).log2() / settings.prior_octaves.max(0.05);
+        let mut prior = (-0.5 * octaves * octaves).exp();
+        if let Some((duration_secs, beats_per_bar)) = settings.loop_bars {
+            prior *= loop_fit(bpm, duration_secs, beats_per_bar);
+        }
+        scores.push(TempoCandidate { bpm, score: comb * prior });
+        bpm *= 1.005;
+    }
+    let mut peaks: Vec<TempoCandidate> = (0..scores.len())
+        .filter(|&i| {
+            let s = scores[i].score;
+            let left = i.checked_sub(1).map_or(f32::NEG_INFINITY, |j| scores[j].score);
+            let right = scores.get(i + 1).map_or(f32::NEG_INFINITY, |c| c.score);
+            s > 0.0 && s >= left && s > right
+        })
+        .map(|i| scores[i])
+        .collect();
+    peaks.sort_by(|a, b| b.score.total_cmp(&a.score));
+    peaks
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pulses(period: f32, frames: usize, accent_every: usize) -> Vec<f32> {
+        let mut x = vec![0.0f32; frames];
+        let mut k = 0usize;
+        let mut t = 0.0f32;
+        while (t as usize) < frames {
+            x[t as usize] = if k.is_multiple_of(accent_every) { 2.0 } else { 1.0 };
+            t += period;
+            k += 1;
+        }
+        x
+    }
+
+    fn settings() -> TempoSettings {
+        TempoSettings { min_bpm: 40.0, max_bpm: 240.0, prior_bpm: 120.0, prior_octaves: 1.0, loop_bars: None }
+    }
+
+    #[test]
+    fn finds_the_pulse_rate() {
+        for bpm in [80.0f32, 100.0, 128.0, 150.0] {
+            let x = pulses(6000.0 / bpm, 3000, 4);
+            let c = tempo_candidates(&x, 100.0, &settings());
+            assert!((c[0].bpm / bpm - 1.0).abs() < 0.02, "{bpm}: {:?}", &c[..3]);
+        }
+    }
+
+    #[test]
+    fn a_loop_prefers_tempos_with_whole_bars() {
+        assert!((loop_fit(90.0, 5.3333, 4) - 1.0).abs() < 1e-3);
+        assert!((loop_fit(180.0, 5.3333, 4) - 1.0).abs() < 1e-3);
+        assert!(loop_fit(103.0, 5.3333, 4) < 0.3);
+        // Less than a bar never fits.
+        assert!(loop_fit(20.0, 5.3333, 4) < 0.3);
+    }
+
+    #[test]
+    fn autocorrelation_is_one_at_zero_and_flat_for_constant() {
+        let r = autocorrelation(&[1.0, 0.0, 1.0, 0.0, 1.0, 0.0], 3);
+        assert!((r[0] - 1.0).abs() < 1e-6 && r[2] > 0.9 && r[1] < -0.9);
+        assert!(autocorrelation(&[2.0; 10], 3).iter().all(|&v| v == 0.0));
+    }
+}
