@@ -1,9 +1,12 @@
 // Odori app bootstrap: loads the wasm engine, opens the viewer, wires the UI modules.
-import init, { Library, Viewer, version } from "./pkg/odori.js";
+import init, { Library, Viewer, Song, DemoSong, version } from "./pkg/odori.js";
 import { LibraryPanel } from "./ui/library-panel.js";
 import { Player } from "./ui/player.js";
 import { FileLoader } from "./ui/files.js";
 import { Messages } from "./ui/messages.js";
+import { SongPanel } from "./ui/song-panel.js";
+import { SongPlayer, decodeSong, bufferFromSamples } from "./audio/song-player.js";
+import { rmsEnvelope } from "./audio/rms.js";
 
 const t0 = performance.now();
 const $ = (sel) => document.querySelector(sel);
@@ -59,9 +62,58 @@ async function main() {
   const demo = library.addBuiltinDemo();
   panel.refresh();
   panel.select(demo.id);
+  const songPlayer = new SongPlayer();
+  const songPanel = new SongPanel($("#song"), { player: songPlayer, messages });
+  player.songClock = songPlayer;
+  player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
   player.start();
+  bindSongInput($("#song-input"), songPanel, messages);
+  // The built-in demo song, analysed like any file (WebAudio envelope → core), after the
+  // first pose is on screen.
+  loadDemoSong(songPanel, messages);
   new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); }).observe(canvas);
-  window.odori = { library, viewer, player, panel, loader, messages, version: version() };
+  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, version: version() };
+}
+
+async function analyse(buffer) {
+  const env = await rmsEnvelope(buffer);
+  return Song.fromEnvelope(env.hopSecs, env.bands);
+}
+
+async function loadDemoSong(songPanel, messages) {
+  try {
+    const demo = DemoSong.render(44100);
+    const buffer = bufferFromSamples(demo.samples, demo.sampleRateHz);
+    demo.free();
+    songPanel.load(await analyse(buffer), "Demo song (built-in)", buffer);
+    document.body.dataset.song = "demo";
+  } catch (e) {
+    messages.error(`The demo song could not be made: ${e.message}`);
+  }
+}
+
+function bindSongInput(input, songPanel, messages) {
+  input.addEventListener("change", async () => {
+    const file = input.files[0];
+    input.value = "";
+    if (!file) return;
+    const status = document.querySelector("#status");
+    try {
+      status.textContent = `Decoding ${file.name}…`;
+      const bytes = new Uint8Array(await file.arrayBuffer());
+      const buffer = await decodeSong(bytes, file.name);
+      status.textContent = `Analysing ${file.name}…`;
+      const song = await analyse(buffer);
+      songPanel.load(song, file.name, buffer);
+      messages.info(`${file.name}: ${song.grid().bars.length} bars at ${song.grid().bpm.toFixed(1)} BPM`);
+      document.body.dataset.song = file.name;
+    } catch (e) {
+      const text = e.message.startsWith(file.name) ? e.message : `${file.name}: ${e.message}`;
+      messages.error(text);
+    } finally {
+      status.textContent = "";
+    }
+  });
 }
 
 function fitCanvas(canvas) {

@@ -9,6 +9,8 @@ export class Player {
     this.playing = true;
     this.last = null;
     this.onFirstFrame = null;
+    this.songClock = null;
+    this.onTick = null;
     this.drawnOnce = false;
     playButton.addEventListener("click", () => this.toggle());
     scrub.addEventListener("input", () => {
@@ -91,7 +93,15 @@ export class Player {
 
   start() {
     const tick = (now) => {
-      if (this.playing && this.clip != null) {
+      if (this.onTick) this.onTick();
+      if (this.songClock && this.songClock.playing && this.clip != null) {
+        // A song is playing: its audio clock drives the figure (the clip loops under it).
+        const c = this.info();
+        const end = (c.frames - 1) / c.fps;
+        const t = this.songClock.position();
+        this.time = end > 0 ? t % end : 0;
+        this.drawNow();
+      } else if (this.playing && this.clip != null) {
         const dt = this.last == null ? 0 : (now - this.last) / 1000;
         this.last = now;
         const c = this.info();

@@ -8,10 +8,12 @@
 
 mod error;
 mod library;
+mod music;
 mod viewer;
 
 pub use error::OdoriError;
 pub use library::Library;
+pub use music::{DemoSong, Song};
 pub use viewer::Viewer;
 
 use wasm_bindgen::prelude::*;

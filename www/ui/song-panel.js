@@ -1,0 +1,122 @@
+// The song strip: loudness over time with beat and bar lines, the playhead, and the grid
+// corrections (BPM, tap tempo, nudge, downbeat, beats per bar, reset) that re-derive the
+// bars at once. Shift-click on the strip puts a downbeat there; a plain click seeks.
+export class SongPanel {
+  constructor(root, { player, onGrid, messages }) {
+    this.root = root;
+    this.player = player;        // SongPlayer
+    this.onGrid = onGrid;        // called with the new grid after every change
+    this.messages = messages;
+    this.song = null;            // wasm Song
+    this.name = "";
+    this.grid = null;
+    this.taps = [];
+    this.canvas = root.querySelector("canvas");
+    this.$ = (s) => root.querySelector(s);
+    this.bind();
+  }
+
+  bind() {
+    const $ = this.$;
+    $("#song-play").addEventListener("click", () => this.toggle());
+    $("#song-bpm").addEventListener("change", (ev) => this.correct({ bpm: Number(ev.target.value) }));
+    $("#song-bpb").addEventListener("change", (ev) => this.correct({ beatsPerBar: Number(ev.target.value) }));
+    $("#song-earlier").addEventListener("click", (ev) => this.correct({ nudgeSecs: ev.shiftKey ? -0.05 : -0.01 }));
+    $("#song-later").addEventListener("click", (ev) => this.correct({ nudgeSecs: ev.shiftKey ? 0.05 : 0.01 }));
+    $("#song-downbeat").addEventListener("click", () => this.correct({ firstDownbeatSecs: this.player.position() }));
+    $("#song-reset").addEventListener("click", () => { if (this.song) this.setGrid(this.song.reset()); });
+    $("#song-metronome").addEventListener("change", (ev) => { this.player.metronome = ev.target.checked; });
+    $("#song-tap").addEventListener("click", () => this.tap());
+    this.canvas.addEventListener("click", (ev) => {
+      if (!this.song) return;
+      const r = this.canvas.getBoundingClientRect();
+      const t = ((ev.clientX - r.left) / r.width) * this.grid.durationSecs;
+      if (ev.shiftKey) this.correct({ firstDownbeatSecs: t });
+      else this.player.seek(t);
+    });
+    this.player.onEnded = () => { this.$("#song-play").textContent = "Play song"; };
+  }
+
+  load(song, name, buffer) {
+    this.song = song;
+    this.name = name;
+    this.player.load(buffer);
+    this.setGrid(song.grid());
+  }
+
+  tap() {
+    const now = performance.now() / 1000;
+    if (this.taps.length && now - this.taps[this.taps.length - 1] > 2.5) this.taps = [];
+    this.taps.push(now);
+    this.$("#song-tap").textContent = `Tap (${this.taps.length})`;
+    if (this.taps.length >= 4) this.correct({ tapTimesSecs: this.taps.slice(-16) });
+  }
+
+  correct(correction) {
+    if (!this.song) return;
+    try {
+      this.setGrid(this.song.correct(correction));
+    } catch (e) {
+      this.messages.error(`${this.name}: ${e.message}`);
+      this.setGrid(this.grid);
+    }
+  }
+
+  setGrid(grid) {
+    this.grid = grid;
+    this.player.setGrid(grid);
+    this.$("#song-bpm").value = grid.bpm.toFixed(1);
+    this.$("#song-bpb").value = String(grid.beatsPerBar);
+    this.$("#song-info").textContent = `${this.name} — ${grid.bpm.toFixed(1)} BPM, ${grid.bars.length} bars of ${grid.beatsPerBar}${grid.regular ? " (regular grid)" : ""}`;
+    this.root.dataset.bars = String(grid.bars.length);
+    this.draw();
+    if (this.onGrid) this.onGrid(grid);
+  }
+
+  toggle() {
+    if (this.player.playing) { this.player.stop(); this.$("#song-play").textContent = "Play song"; }
+    else { this.player.play(); this.$("#song-play").textContent = "Stop song"; }
+  }
+
+  draw() {
+    const c = this.canvas;
+    const dpr = Math.min(window.devicePixelRatio || 1, 2);
+    const w = Math.max(1, Math.round(c.clientWidth * dpr)), h = Math.max(1, Math.round(c.clientHeight * dpr));
+    if (c.width !== w || c.height !== h) { c.width = w; c.height = h; }
+    const g = c.getContext("2d");
+    g.fillStyle = "#10121a";
+    g.fillRect(0, 0, w, h);
+    if (!this.grid) return;
+    const { loudness, durationSecs: dur, bars, beatTimesSecs } = this.grid;
+    const x = (t) => (t / dur) * w;
+    // Bars shaded by their intensity, so loud sections read at a glance.
+    for (const b of bars) {
+      g.fillStyle = `rgba(242, 115, 26, ${0.05 + 0.25 * b.intensity})`;
+      g.fillRect(x(b.startSecs), 0, x(b.endSecs) - x(b.startSecs), h);
+    }
+    // Loudness as a mirrored envelope.
+    g.fillStyle = "#7fb6ff";
+    const vals = loudness.values, step = Math.max(1, Math.floor(vals.length / w));
+    for (let i = 0; i < vals.length; i += step) {
+      let m = 0;
+      for (let k = i; k < Math.min(vals.length, i + step); k++) m = Math.max(m, vals[k]);
+      const px = x(i * loudness.hopSecs), hh = m * (h * 0.42);
+      g.fillRect(px, h / 2 - hh, Math.max(1, w / (vals.length / step)), 2 * hh);
+    }
+    // Beat lines thin, bar lines bold and numbered.
+    g.fillStyle = "rgba(230, 230, 234, 0.25)";
+    for (const t of beatTimesSecs) g.fillRect(x(t), h * 0.75, 1, h * 0.25);
+    g.fillStyle = "#e6e6ea";
+    g.font = `${10 * dpr}px system-ui`;
+    let lastLabel = -1e9;
+    for (const b of bars) {
+      const px = x(b.startSecs);
+      g.fillRect(px, 0, Math.max(1, dpr), h);
+      if (px - lastLabel > 24 * dpr) { g.fillText(String(b.index + 1), px + 2 * dpr, 11 * dpr); lastLabel = px; }
+    }
+    // Playhead.
+    const p = this.player.position();
+    g.fillStyle = "#f2731a";
+    g.fillRect(x(p) - dpr, 0, 2 * dpr, h);
+  }
+}
