@@ -4,10 +4,12 @@
 //! beat-tracking evaluation measure ([`eval`]).
 //!
 //! The pipeline of [`analyze`]: onset strength per band (log RMS flux, [`onset`]) → global tempo
-//! (autocorrelation comb with a log-normal prior, [`tempo`]) → beats by dynamic programming
-//! (Ellis 2007, [`beats`]) → bar phase from low-band accents ([`downbeats`]) → bars whose
-//! intensity is the mean full-band RMS scaled to the song's range. All steps are deterministic
-//! and linear (or linear times the beat period) in the number of frames.
+//! (autocorrelation comb over beat and bar lags with a log-normal prior around 120 BPM, and a
+//! whole-bars preference for short loops, [`tempo`]) → beats by dynamic programming (Ellis 2007,
+//! [`beats`]) → bar phase from the kick (low band) and backbeat (mid band) accents
+//! ([`downbeats`]) → bars whose intensity is the mean full-band RMS scaled to the song's range.
+//! All steps are deterministic and linear (or linear times the beat period) in the number of
+//! frames: a 3-minute song takes a few tens of milliseconds natively.
 
 pub mod beats;
 pub mod demo_song;
@@ -262,6 +264,13 @@ mod tests {
             analyze(&ok, &AnalysisOptions { max_bpm: 10.0, ..o }),
             Err(MusicError::BadOption { what: "maxBpm", .. })
         ));
+    }
+
+    #[test]
+    fn analysis_is_deterministic() {
+        let e = pulse_envelope(128.0, 20.0);
+        let o = AnalysisOptions::default();
+        assert_eq!(analyze(&e, &o).unwrap(), analyze(&e, &o).unwrap());
     }
 
     #[test]
