@@ -46,6 +46,15 @@ fn main() {
     let combined_secs = median_secs(101, || grid.corrected(&combined).expect("correction"));
 
     let demo_secs = median_secs(3, || odori_core::music::demo_song(44100.0).expect("demo"));
+    // The wasm bench's input (tests/tools/wasm_bench): the demo song's envelope looped to 180 s.
+    let demo = odori_core::music::demo_song(44100.0).expect("demo");
+    let demo_env = envelope(&[&demo.samples], demo.sample_rate_hz).expect("demo envelope");
+    let frames = (180.0 / demo_env.hop_secs).round() as usize;
+    let demo_180 = odori_core::music::RmsEnvelope {
+        hop_secs: demo_env.hop_secs,
+        bands: demo_env.bands.iter().map(|b| b.iter().cycle().copied().take(frames).collect()).collect(),
+    };
+    let demo_analysis_secs = median_secs(21, || analyze(&demo_180, &options).expect("demo analysis"));
     println!("frames per band: {}, bands: {}", env.frame_count(), env.bands.len());
     println!("result: {:.2} BPM, {} beats, {} bars", grid.bpm, grid.beat_times_secs.len(), grid.bars.len());
     println!("envelope from PCM (Rust fallback of the host's WebAudio step): {:.1} ms", env_secs * 1e3);
@@ -54,6 +63,7 @@ fn main() {
     println!("ratio analysis / baseline:                                     {:.0}x", analysis_secs / baseline_secs);
     println!("real-time factor of the analysis:                              {:.0}x faster than real time", 180.0 / analysis_secs);
     println!("demo song render (70 s at 44.1 kHz):                           {:.1} ms", demo_secs * 1e3);
+    println!("core analysis of the wasm bench's input (demo looped to 180 s): {:.2} ms", demo_analysis_secs * 1e3);
     println!("correction with_bpm:                                           {:.1} us", bpm_secs * 1e6);
     println!("correction with_first_downbeat:                                {:.1} us", shift_secs * 1e6);
     println!("correction bpm + 3/4 + downbeat:                               {:.1} us", combined_secs * 1e6);

@@ -5,7 +5,7 @@
 mod music_audio;
 
 use music_audio::*;
-use odori_core::music::{analyze, envelope, AnalysisOptions, LoudnessCurve, MusicError, RmsEnvelope, SongGrid};
+use odori_core::music::{analyze, envelope, AnalysisOptions, MusicError, RmsEnvelope, SongGrid};
 
 #[test]
 fn a_file_that_will_not_decode_is_an_error_not_a_panic() {
@@ -34,9 +34,10 @@ fn a_two_second_clip_is_too_short_and_a_manual_grid_still_works() {
     let err = analyze(&env, &AnalysisOptions::default()).unwrap_err();
     assert!(matches!(err, MusicError::TooShort { .. }), "{err}");
     println!("2-s clip: {err}");
-    let manual = SongGrid::regular(env.duration_secs(), 120.0, 0.0, 4, LoudnessCurve::from_rms(env.hop_secs, &env.bands[0])).unwrap();
+    let manual = SongGrid::manual(&env, 120.0, 0.0, 4).unwrap();
     assert_eq!(manual.beat_times_secs.len(), 4);
     assert_eq!(manual.bars.len(), 1);
+    assert!(matches!(SongGrid::manual(&RmsEnvelope::default(), 120.0, 0.0, 4), Err(MusicError::BadTime { .. })));
 }
 
 #[test]

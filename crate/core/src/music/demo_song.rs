@@ -146,83 +146,143 @@ impl Mix {
     fn kick(&mut self, t0: f32, gain: f32) {
         let (a, b) = self.span(t0, 0.45);
         let mut phase = 0.0f32;
-        for i in a..b {
-            let t = (i - a) as f32 / self.fs;
-            let f = 48.0 + 110.0 * (-t / 0.035).exp();
+        let (mut sweep, mut amp) = (Decay::new(0.035, self.fs), Decay::new(0.22, self.fs));
+        let click_n = 0.004 * self.fs;
+        for (j, i) in (a..b).enumerate() {
+            let f = 48.0 + 110.0 * sweep.next();
             phase = (phase + f / self.fs).fract();
-            let click = if t < 0.004 { 0.3 * (1.0 - t / 0.004) } else { 0.0 };
-            self.out[i] += gain * ((2.0 * std::f32::consts::PI * phase).sin() * (-t / 0.22).exp() + click);
+            let click = if (j as f32) < click_n { 0.3 * (1.0 - j as f32 / click_n) } else { 0.0 };
+            self.out[i] += gain * ((2.0 * std::f32::consts::PI * phase).sin() * amp.next() + click);
         }
     }
 
     fn snare(&mut self, t0: f32, gain: f32) {
         let (a, b) = self.span(t0, 0.3);
         let mut prev = 0.0f32;
+        let mut tone = Phasor::new(185.0, self.fs);
+        let (mut tone_amp, mut noise_amp) = (Decay::new(0.06, self.fs), Decay::new(0.1, self.fs));
         for i in a..b {
-            let t = (i - a) as f32 / self.fs;
             let n = self.noise.next();
             let hp = n - prev;
             prev = n;
-            let tone = (2.0 * std::f32::consts::PI * 185.0 * t).sin() * (-t / 0.06).exp();
-            self.out[i] += gain * (0.55 * hp * (-t / 0.1).exp() + 0.6 * tone);
+            self.out[i] += gain * (0.55 * hp * noise_amp.next() + 0.6 * tone.next() * tone_amp.next());
         }
     }
 
     fn hat(&mut self, t0: f32, gain: f32, decay_secs: f32) {
         let (a, b) = self.span(t0, decay_secs * 5.0);
         let (mut p1, mut p2) = (0.0f32, 0.0f32);
+        let mut amp = Decay::new(decay_secs, self.fs);
         for i in a..b {
-            let t = (i - a) as f32 / self.fs;
             let n = self.noise.next();
             // Second difference: a steep high-pass, the metallic hiss of a hat.
             let hp = n - 2.0 * p1 + p2;
             p2 = p1;
             p1 = n;
-            self.out[i] += gain * 0.25 * hp * (-t / decay_secs).exp();
+            self.out[i] += gain * 0.25 * hp * amp.next();
         }
     }
 
-    /// A band-limited saw voice through a one-pole low-pass, with an attack/decay/sustain/
-    /// release envelope. `cutoff_hz` sets the brightness.
+    /// A band-limited saw voice (two detuned oscillators) through a one-pole low-pass, with an
+    /// attack / decay-to-sustain / release envelope. `cutoff_hz` sets the brightness.
     #[allow(clippy::too_many_arguments)]
     fn saw(&mut self, t0: f32, len_secs: f32, hz: f32, gain: f32, attack: f32, release: f32, cutoff_hz: f32, detune: f32) {
         let (a, b) = self.span(t0, len_secs + release);
         let k = 1.0 - (-2.0 * std::f32::consts::PI * cutoff_hz / self.fs).exp();
         let mut lp = 0.0f32;
         let mut phases = [0.0f32, 0.37];
-        let freqs = [hz * (1.0 + detune), hz * (1.0 - detune)];
-        for i in a..b {
-            let t = (i - a) as f32 / self.fs;
+        let dts = [hz * (1.0 + detune) / self.fs, hz * (1.0 - detune) / self.fs];
+        let attack_n = (attack * self.fs) as usize;
+        let len_n = (len_secs * self.fs) as usize;
+        let (mut decay, mut rel) = (Decay::new(0.15, self.fs), Decay::new(release / 4.0, self.fs));
+        let mut level = 0.0f32;
+        for (j, i) in (a..b).enumerate() {
             let mut s = 0.0;
-            for (p, f) in phases.iter_mut().zip(freqs) {
-                let dt = f / self.fs;
+            for (p, &dt) in phases.iter_mut().zip(&dts) {
                 s += 2.0 * *p - 1.0 - poly_blep(*p, dt);
                 *p = (*p + dt).fract();
             }
             lp += k * (0.5 * s - lp);
-            let env = if t < attack {
-                t / attack
-            } else if t < len_secs {
-                0.75 + 0.25 * (-(t - attack) / 0.15).exp()
+            let env = if j < attack_n {
+                level = j as f32 / attack_n as f32;
+                level
+            } else if j < len_n {
+                level = 0.75 + 0.25 * decay.next();
+                level
             } else {
-                0.75 * (-(t - len_secs) / (release / 4.0)).exp()
+                // The release starts from wherever the envelope is: no click.
+                level * rel.next()
             };
             self.out[i] += gain * env * lp;
         }
     }
 
-    /// A soft lead: sine plus a little third harmonic, with vibrato that sets in after the attack.
+    /// A soft lead: sine plus a little second and third harmonic, with vibrato that sets in
+    /// after the attack.
     fn lead(&mut self, t0: f32, len_secs: f32, hz: f32, gain: f32) {
         let (a, b) = self.span(t0, len_secs + 0.15);
         let mut phase = 0.0f32;
-        for i in a..b {
-            let t = (i - a) as f32 / self.fs;
-            let vib = 1.0 + 0.004 * (2.0 * std::f32::consts::PI * 5.5 * t).sin() * (t / 0.3).min(1.0);
+        let mut vibrato = Phasor::new(5.5, self.fs);
+        let (attack_n, len_n, fade_n) = (0.012 * self.fs, len_secs * self.fs, 0.3 * self.fs);
+        let mut rel = Decay::new(0.04, self.fs);
+        let mut level = 0.0f32;
+        for (j, i) in (a..b).enumerate() {
+            let jf = j as f32;
+            let vib = 1.0 + 0.004 * vibrato.next() * (jf / fade_n).min(1.0);
             phase = (phase + hz * vib / self.fs).fract();
-            let w = 2.0 * std::f32::consts::PI * phase;
-            let env = (t / 0.012).min(1.0) * if t < len_secs { 1.0 - 0.3 * (t / len_secs) } else { 0.7 * (-(t - len_secs) / 0.04).exp() };
-            self.out[i] += gain * env * (w.sin() + 0.25 * (3.0 * w).sin() + 0.1 * (2.0 * w).sin());
+            let (s1, c1) = (2.0 * std::f32::consts::PI * phase).sin_cos();
+            let (s2, s3) = (2.0 * s1 * c1, s1 * (3.0 - 4.0 * s1 * s1));
+            let env = if jf < len_n {
+                level = (jf / attack_n).min(1.0) * (1.0 - 0.3 * jf / len_n);
+                level
+            } else {
+                level * rel.next()
+            };
+            self.out[i] += gain * env * (s1 + 0.1 * s2 + 0.25 * s3);
         }
+    }
+}
+
+/// An exponential decay from 1 with time constant `tau_secs`, one sample per `next`.
+struct Decay {
+    value: f32,
+    factor: f32,
+}
+
+impl Decay {
+    fn new(tau_secs: f32, fs: f32) -> Self {
+        Self { value: 1.0, factor: (-1.0 / (tau_secs.max(1e-4) * fs)).exp() }
+    }
+
+    fn next(&mut self) -> f32 {
+        let v = self.value;
+        self.value *= self.factor;
+        v
+    }
+}
+
+/// A sine oscillator by rotation (one complex multiply per sample, in f64 so it stays on the
+/// unit circle for seconds).
+struct Phasor {
+    re: f64,
+    im: f64,
+    step_re: f64,
+    step_im: f64,
+}
+
+impl Phasor {
+    fn new(hz: f32, fs: f32) -> Self {
+        let w = 2.0 * std::f64::consts::PI * f64::from(hz) / f64::from(fs);
+        Self { re: 1.0, im: 0.0, step_re: w.cos(), step_im: w.sin() }
+    }
+
+    /// The sine, then one step on.
+    fn next(&mut self) -> f32 {
+        let v = self.im as f32;
+        let re = self.re * self.step_re - self.im * self.step_im;
+        self.im = self.im * self.step_re + self.re * self.step_im;
+        self.re = re;
+        v
     }
 }
 

@@ -245,6 +245,19 @@ impl SongGrid {
         Ok(Self::assemble(duration_secs, bpm, beats_per_bar, beats, first, true, loudness))
     }
 
+    /// The manual grid for a song analysis could not handle (too short, no pulse): a regular
+    /// grid over the envelope's length, with bar intensity from its band 0 (full-band RMS).
+    pub fn manual(
+        envelope: &super::RmsEnvelope,
+        bpm: f32,
+        first_downbeat_secs: f32,
+        beats_per_bar: u32,
+    ) -> Result<Self, MusicError> {
+        let full = envelope.bands.first().map_or(&[][..], Vec::as_slice);
+        let loudness = LoudnessCurve::from_rms(envelope.hop_secs, full);
+        Self::regular(envelope.duration_secs(), bpm, first_downbeat_secs, beats_per_bar, loudness)
+    }
+
     /// Re-derives downbeats and bars after the beats or bar settings changed.
     fn rebuilt(&self, beats: Vec<f32>, first_downbeat_index: usize, beats_per_bar: u32) -> Self {
         Self::assemble(self.duration_secs, self.bpm, beats_per_bar, beats, first_downbeat_index, self.regular, self.loudness.clone())
