@@ -11,6 +11,7 @@ pub mod clip;
 pub mod humanoid;
 pub mod import;
 pub mod normalize;
+pub mod search;
 pub mod skeleton;
 
 pub use clip::{Clip, ClipError, TranslationTrack};
