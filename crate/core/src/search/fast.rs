@@ -57,6 +57,8 @@ use super::{frame_distance_abandon, Prepared, SearchError, SearchProgress};
 
 /// Frames per precomputed target box.
 const CHUNK: usize = 16;
+/// Frames per query box.
+const QCHUNK: usize = 8;
 /// Columns per block: the row bounds and τ are refreshed per block.
 const BLOCK: usize = 128;
 const NONE: usize = usize::MAX;
@@ -95,16 +97,15 @@ fn boxes(data: &[f32], joints: &[(usize, f32)], out: &mut Vec<f32>) {
     }
 }
 
-/// `Σ_k w_k dist(frame_k, box_k)`: a lower bound of the frame distance to any frame whose
-/// joints all lie in their boxes.
+/// `Σ_k w_k dist(box a_k, box b_k)`: a lower bound of the frame distance between any frame
+/// inside boxes `a` and any frame inside boxes `b`.
 #[inline]
-fn box_bound(frame: &[f32], bx: &[f32], joints: &[(usize, f32)]) -> f32 {
+fn box_box(a: &[f32], b: &[f32], joints: &[(usize, f32)]) -> f32 {
     let mut s = 0.0f32;
-    for (b, &(k, w)) in bx.chunks_exact(6).zip(joints) {
+    for ((x, y), &(_, w)) in a.chunks_exact(6).zip(b.chunks_exact(6)).zip(joints) {
         let mut e = 0.0f32;
-        for a in 0..3 {
-            let x = frame[k + a];
-            let o = (b[a] - x).max(x - b[3 + a]).max(0.0);
+        for k in 0..3 {
+            let o = (x[k] - y[3 + k]).max(y[k] - x[3 + k]).max(0.0);
             e += o * o;
         }
         s += w * e.sqrt();
@@ -125,8 +126,15 @@ fn scan(
     let nj = joints.len();
     let total = index.total_frames();
     let mut stats = SearchStats { frames_searched: total, cells_total: total as u64 * rows as u64, ..Default::default() };
-    let mut qbox = Vec::new();
-    boxes(prep.query, joints, &mut qbox);
+    // Boxes of the query per QCHUNK frames.
+    let mut qboxes: Vec<f32> = Vec::new();
+    let mut tmp = Vec::new();
+    for ch in prep.query.chunks(QCHUNK * FRAME_FLOATS) {
+        boxes(ch, joints, &mut tmp);
+        qboxes.extend_from_slice(&tmp);
+    }
+    let nq = rows.div_ceil(QCHUNK);
+    let mut rq = vec![0f32; nq];
     let mut tau = prep.threshold;
     let mut pool: Vec<Candidate> = Vec::new();
     let mut pool_seen = 0usize;
@@ -139,9 +147,7 @@ fn scan(
     let mut rrest = vec![0f32; rows];
     let mut lbc: Vec<f32> = Vec::new();
     let mut chunk_boxes: Vec<f32> = Vec::new();
-    let mut wbox = vec![0f32; nj * 6];
     let mut fneg: Vec<f32> = Vec::new();
-    let mut tmp = Vec::new();
 
     for (ci, clip) in index.clips.iter().enumerate() {
         let target = &clip.features(prep.origin).data;
@@ -150,13 +156,15 @@ fn scan(
             done += cols;
             continue;
         }
-        // Column bounds c_j against the query's envelope, and target boxes per chunk.
-        lbc.clear();
-        lbc.extend(target.chunks_exact(FRAME_FLOATS).map(|f| box_bound(f, &qbox, joints)));
+        // Target boxes per chunk, and the column bounds c_j: for the columns of a chunk, the
+        // nearest query box to the chunk's box.
         chunk_boxes.clear();
+        lbc.clear();
         for ch in target.chunks(CHUNK * FRAME_FLOATS) {
             boxes(ch, joints, &mut tmp);
             chunk_boxes.extend_from_slice(&tmp);
+            let c = qboxes.chunks_exact(nj * 6).map(|q| box_box(q, &tmp, joints)).fold(f32::INFINITY, f32::min);
+            lbc.extend(std::iter::repeat_n(c, ch.len() / FRAME_FLOATS));
         }
         let (mut plo, mut phi) = (NONE, NONE);
         for b0 in (0..cols).step_by(BLOCK) {
@@ -170,26 +178,20 @@ fn scan(
             let tp = tau * (1.0 + 1e-4) + 1e-6;
             let wend = (b0 + BLOCK + prep.max_span - 1).min(cols);
             if prune {
-                // Box of every joint over the columns this block's paths can reach
-                // (a path through column j ∈ block ends by G + maxSpan − 1 ≤ j + maxSpan − 1).
-                wbox.fill(0.0);
-                for b in wbox.chunks_exact_mut(6) {
-                    b[..3].fill(f32::INFINITY);
-                    b[3..].fill(f32::NEG_INFINITY);
-                }
+                // Row bounds r_i: the nearest target chunk box, over the columns this block's
+                // paths can reach (a path through column j of the block ends by
+                // G + maxSpan − 1 ≤ j + maxSpan − 1), to the box of the query chunk holding row i.
+                rq.fill(f32::INFINITY);
                 for c in (b0 / CHUNK)..wend.div_ceil(CHUNK) {
-                    let src = &chunk_boxes[c * nj * 6..(c + 1) * nj * 6];
-                    for (d, s) in wbox.chunks_exact_mut(6).zip(src.chunks_exact(6)) {
-                        for a in 0..3 {
-                            d[a] = d[a].min(s[a]);
-                            d[3 + a] = d[3 + a].max(s[3 + a]);
-                        }
+                    let tb = &chunk_boxes[c * nj * 6..(c + 1) * nj * 6];
+                    for (r, qb) in rq.iter_mut().zip(qboxes.chunks_exact(nj * 6)) {
+                        *r = r.min(box_box(qb, tb, joints));
                     }
                 }
                 let mut acc = 0.0f32;
                 for i in (0..rows).rev() {
                     rrest[i] = acc;
-                    acc += box_bound(prep.q(i), &wbox, joints);
+                    acc += rq[i / QCHUNK];
                 }
                 fneg.clear();
                 fneg.push(0.0);

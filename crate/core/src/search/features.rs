@@ -202,24 +202,52 @@ pub struct SkippedClip {
     pub reason: String,
 }
 
+/// Frame rate every library clip is resampled to, so that "the same speed" means the same
+/// number of frames in every clip (the CMU files mix 60 and 120 fps).
+pub const DEFAULT_INDEX_FPS: f32 = 60.0;
+
 /// The search library: features of every humanoid clip, built once and reused by every query.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct FeatureIndex {
+    /// Frame rate of every clip's features: clips are resampled to it when added.
+    pub fps: f32,
     /// Searchable clips, in the order they were added (a result's `clipIndex` refers here).
     pub clips: Vec<ClipFeatures>,
     /// Clips that were offered but refused (non-humanoid, empty), with the reason.
     pub skipped: Vec<SkippedClip>,
 }
 
+impl Default for FeatureIndex {
+    fn default() -> Self {
+        FeatureIndex { fps: DEFAULT_INDEX_FPS, clips: Vec::new(), skipped: Vec::new() }
+    }
+}
+
 impl FeatureIndex {
-    /// An empty library.
+    /// An empty library at [`DEFAULT_INDEX_FPS`].
     pub fn new() -> FeatureIndex {
         FeatureIndex::default()
     }
 
-    /// Adds a clip. A non-humanoid or empty clip is refused: it is recorded in
-    /// [`FeatureIndex::skipped`] with its reason and the error is returned; the index stays
-    /// usable. Returns the clip's index.
+    /// An empty library whose clips are resampled to `fps` (falls back to
+    /// [`DEFAULT_INDEX_FPS`] when `fps` is not a positive number).
+    pub fn with_fps(fps: f32) -> FeatureIndex {
+        FeatureIndex { fps: if fps.is_finite() && fps > 0.0 { fps } else { DEFAULT_INDEX_FPS }, ..FeatureIndex::default() }
+    }
+
+    /// The clip as the index sees it: resampled to the index's frame rate when it differs.
+    /// Frame numbers in results refer to this timing (`frame / fps` seconds).
+    pub fn resampled<'c>(&self, clip: &'c Clip) -> std::borrow::Cow<'c, Clip> {
+        if clip.fps > 0.0 && (clip.fps - self.fps).abs() > 1e-3 && clip.frame_count() > 1 {
+            std::borrow::Cow::Owned(clip.resampled(self.fps))
+        } else {
+            std::borrow::Cow::Borrowed(clip)
+        }
+    }
+
+    /// Adds a clip, resampled to the index's frame rate. A non-humanoid or empty clip is
+    /// refused: it is recorded in [`FeatureIndex::skipped`] with its reason and the error is
+    /// returned; the index stays usable. Returns the clip's index.
     pub fn add_clip(&mut self, name: impl Into<String>, clip: &Clip, map: &HumanoidMap, status: &HumanoidStatus) -> Result<usize, SearchError> {
         let name = name.into();
         if let HumanoidStatus::NotHumanoid { reason } = status {
@@ -231,7 +259,8 @@ impl FeatureIndex {
             self.skipped.push(SkippedClip { name: name.clone(), reason: reason.clone() });
             return Err(SearchError::NotHumanoid { clip: name, reason });
         }
-        self.clips.push(ClipFeatures::from_clip(name, clip, map));
+        let clip = self.resampled(clip);
+        self.clips.push(ClipFeatures::from_clip(name, &clip, map));
         Ok(self.clips.len() - 1)
     }
 

@@ -31,7 +31,7 @@ use thiserror::Error;
 use crate::humanoid::{Canon, CANON_COUNT};
 use crate::normalize::Origin;
 
-pub use features::{ClipFeatures, FeatureIndex, JointCurve, MotionFeatures, SkippedClip, FRAME_FLOATS};
+pub use features::{ClipFeatures, FeatureIndex, JointCurve, MotionFeatures, SkippedClip, DEFAULT_INDEX_FPS, FRAME_FLOATS};
 pub use presets::BodyPreset;
 pub use results::{SearchMatch, SearchOutcome, SearchStats};
 
