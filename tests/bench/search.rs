@@ -74,13 +74,20 @@ fn main() {
     std::fs::write(out.join("shape.json"), format!("{{\"queryFrames\":{QUERY_FRAMES},\"libraryFrames\":{LIBRARY_FRAMES},\"floatsPerFrame\":{FRAME_FLOATS}}}")).expect("write shape");
     println!("exported query and library to {}", out.display());
 
+    // Thresholds are given per unit of joint weight (mean joint distance in body heights),
+    // times the preset's summed weights.
     let mut cases: Vec<(String, SearchParams)> = Vec::new();
-    let whole = SearchParams::preset(BodyPreset::WholeBody);
-    cases.push(("whole body, top 10, no threshold".into(), whole.clone()));
-    cases.push(("whole body, top 1".into(), SearchParams { max_results: 1, ..whole.clone() }));
-    cases.push(("whole body, top 50".into(), SearchParams { max_results: 50, ..whole.clone() }));
-    cases.push(("feet only, top 10".into(), SearchParams::preset(BodyPreset::FeetOnly)));
-    cases.push(("arms, top 10".into(), SearchParams::preset(BodyPreset::Arms)));
+    let with = |preset: BodyPreset, k: usize, per_joint: Option<f32>| {
+        let p = SearchParams::preset(preset);
+        let sum: f32 = p.weights.iter().sum();
+        SearchParams { max_results: k, threshold: per_joint.map(|t| t * sum), ..p }
+    };
+    cases.push(("whole body, top 10, threshold 0.05/joint".into(), with(BodyPreset::WholeBody, 10, Some(0.05))));
+    cases.push(("whole body, top 10, threshold 0.1/joint".into(), with(BodyPreset::WholeBody, 10, Some(0.1))));
+    cases.push(("whole body, top 1, no threshold".into(), with(BodyPreset::WholeBody, 1, None)));
+    cases.push(("whole body, top 10, no threshold".into(), with(BodyPreset::WholeBody, 10, None)));
+    cases.push(("feet only, top 10, threshold 0.05/joint".into(), with(BodyPreset::FeetOnly, 10, Some(0.05))));
+    cases.push(("arms, top 10, threshold 0.05/joint".into(), with(BodyPreset::Arms, 10, Some(0.05))));
     for (name, params) in &cases {
         let t = Instant::now();
         let plain = search_plain(&index, &query, params, &mut no_progress()).expect("plain search");
@@ -98,7 +105,8 @@ fn main() {
         let fast_secs = fast_times[fast_times.len() / 2];
         let ok = same(&plain, &fast);
         println!(
-            "{name}: plain DP {:.1} ms, fast {:.2} ms (median of 5), ratio {:.1}x; same results: {ok}; distances computed {} of {} cells ({:.2}%), rescanned: {}; best {:?}",
+            "{name}: {} matches; plain DP {:.1} ms, fast {:.2} ms (median of 5), ratio {:.1}x; same results: {ok}; distances computed {} of {} cells ({:.2}%), rescanned: {}; best {:?}",
+            plain.matches.len(),
             plain_secs * 1e3,
             fast_secs * 1e3,
             plain_secs / fast_secs,

@@ -209,7 +209,7 @@ fn legs_from_one_motion_arms_from_another() {
     let find = |name: &str| r.index.clips.iter().position(|c| c.name.contains(name)).unwrap_or_else(|| panic!("{name} not indexed"));
     let (legs_clip, arms_clip) = (find("salsa_02"), find("indian_04"));
     let len = 180;
-    let (legs_at, arms_at) = (900, 1500);
+    let (legs_at, arms_at) = (900, 600);
     let legs = r.index.clips[legs_clip].features(Origin::Hips);
     let arms = r.index.clips[arms_clip].features(Origin::Hips);
     let lower = BodyPreset::LowerBody.joints();

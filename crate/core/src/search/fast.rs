@@ -16,6 +16,12 @@
 //! in the plain DP and can only be worse now, so the same one is chosen and the start pointer is
 //! the same. Hence every relevant candidate is found with the same start, end and distance.
 //!
+//! *But the pruned scan can also report what the full DP never does:* where the full DP's best
+//! path into an end was removed (too long, or too costly to be reported), the next best path to
+//! that end may be reportable. So a candidate is checked before the selection takes it
+//! (`is_genuine`: the plain DP rerun on a window long enough that no path from before it can be
+//! cheaper, compared bit for bit). Candidates the selection skips for overlap need no check.
+//!
 //! *The bound.* A path from cell (i, j) with start G to an end (I−1, j') (0-based rows) enters
 //! every later row once (vertical or diagonal step) and every later column once (horizontal or
 //! diagonal step); a diagonal step costs 2d = d for its row + d for its column, so the rest of
@@ -40,27 +46,32 @@
 //! largest value any incoming edge could survive with (LB_Kim-like: the partial sum of a few
 //! joints is itself a lower bound of the distance).
 //!
-//! *The k-th best bound:* τ starts at the threshold and, after each block of columns, drops to
+//! *The k-th best bound:* τ starts at the threshold, or lower at a guess from probing the few
+//! places with the lowest bounds first (`probe`), and after each block of columns drops to
 //! the distance of the k-th match the best-first non-overlapping selection takes from the
 //! candidates found so far. τ only decreases, so every candidate with distance ≤ the final τ is
 //! found. The selection of a candidate depends only on better candidates, so if the candidates
-//! ≤ final τ already yield k matches, they are exactly the plain DP's first k. If not (a later,
-//! better candidate knocked earlier ones out by overlapping them), the scan is repeated with τ
-//! fixed at the threshold, which is the plain DP's own rule. Float sums in the bounds get a
+//! ≤ final τ already yield k checked matches, they are exactly the plain DP's first k. If not
+//! (a later, better candidate knocked earlier ones out by overlapping them, the guess was too
+//! low, or a candidate failed its check), the scan is repeated with τ fixed at the threshold,
+//! which is the plain DP's own rule. Float sums in the bounds get a
 //! relative margin of 1e-4 so rounding never prunes a reportable cell.
 
 use std::ops::ControlFlow;
 
 use super::features::{FeatureIndex, FRAME_FLOATS};
-use super::results::{finish, select, Candidate, SearchOutcome, SearchStats};
+use crate::humanoid::CANON_COUNT;
+use super::results::{finish, select, select_checked, Candidate, SearchOutcome, SearchStats};
 use super::{frame_distance_abandon, Prepared, SearchError, SearchProgress};
 
 /// Frames per precomputed target box.
-const CHUNK: usize = 16;
+const CHUNK: usize = super::features::BOX_CHUNK_FRAMES;
 /// Frames per query box.
-const QCHUNK: usize = 8;
+const QCHUNK: usize = 16;
 /// Columns per block: the row bounds and τ are refreshed per block.
-const BLOCK: usize = 128;
+const BLOCK: usize = 32;
+/// Most results for which the search first probes the most promising places for a bound.
+const PROBE_MAX_RESULTS: usize = 16;
 const NONE: usize = usize::MAX;
 
 pub(crate) fn run(
@@ -68,15 +79,57 @@ pub(crate) fn run(
     prep: &Prepared,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<SearchOutcome, SearchError> {
-    let (mut pool, mut stats, tau) = scan(index, prep, true, progress)?;
-    let mut selected = select(&mut pool, prep.max_results);
+    let bounds = Bounds::new(index, prep);
+    let (seed, probed) = if prep.max_results > PROBE_MAX_RESULTS { (f32::INFINITY, 0) } else { probe(index, prep, &bounds) };
+    let all: Vec<(usize, usize, usize)> =
+        index.clips.iter().enumerate().map(|(ci, c)| (ci, 0, c.frame_count())).filter(|s| s.2 >= prep.min_span).collect();
+    let (mut pool, mut stats, tau) = scan(index, prep, &bounds, &all, seed, true, progress)?;
+    stats.distances_computed += probed;
+    let mut st = super::dp::Columns::new(prep.query_frames);
+    let mut checked = 0u64;
+    let mut genuine = |c: &Candidate| {
+        let (ok, cells) = is_genuine(index, prep, &bounds, c, &mut st);
+        checked += cells;
+        ok
+    };
+    let mut selected = select_checked(&mut pool, prep.max_results, &mut genuine);
     if selected.len() < prep.max_results && tau < prep.threshold {
-        let (mut pool2, stats2, _) = scan(index, prep, false, progress)?;
-        selected = select(&mut pool2, prep.max_results);
+        let (mut pool2, stats2, _) = scan(index, prep, &bounds, &all, f32::INFINITY, false, progress)?;
+        selected = select_checked(&mut pool2, prep.max_results, &mut genuine);
         stats.distances_computed += stats2.distances_computed;
         stats.rescanned = true;
     }
+    stats.distances_computed += checked;
     Ok(finish(index, prep, &selected, stats))
+}
+
+/// Whether the full DP's path ending at the candidate's end is the one the pruned scan found.
+///
+/// Pruning only ever removes paths that cannot be reported, and keeps every reportable path
+/// exactly; but where the full DP's best path to an end was removed (its distance too large, or
+/// its span too long), the pruned scan may report the next best path to that end, which the
+/// full DP never reports. So before a candidate is taken it is checked: the plain DP is rerun
+/// fresh on columns `from..=end`, where `from` is far enough back that any path starting
+/// earlier crosses columns whose lower bounds alone already exceed the candidate's cost. That
+/// rerun gives the full DP's own value and start at this end (a path starting at or after
+/// `from` is computed with the same operations in the same order), and the candidate is genuine
+/// exactly when both agree. Returns the verdict and the cells computed.
+fn is_genuine(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds, c: &Candidate, st: &mut super::dp::Columns) -> (bool, u64) {
+    let target = &index.clips[c.clip].features(prep.origin).data;
+    let lbc = &bounds.clips[c.clip].lbc;
+    let mut from = c.end;
+    let mut sum = 0.0f32;
+    loop {
+        sum += lbc[from / CHUNK];
+        // Margin: the lower-bound sum must clear the cost despite rounding.
+        if from == 0 || (from < c.start && sum > c.cost * (1.0 + 1e-4) + 1e-6) {
+            break;
+        }
+        from -= 1;
+    }
+    let (g, start) = super::dp::end_cell(prep, target, from, c.end, st);
+    let cells = ((c.end + 1 - from) * prep.query_frames) as u64;
+    (g == c.cost && start == c.start, cells)
 }
 
 /// Bounding box (min xyz, max xyz) of each weighted joint over frames, `joints.len() * 6`.
@@ -113,29 +166,136 @@ fn box_box(a: &[f32], b: &[f32], joints: &[(usize, f32)]) -> f32 {
     s
 }
 
+/// Lower-bound tables of one clip: `dist[t * nq + q]` is the box-to-box bound between target
+/// chunk t and query chunk q; `lbc[t]` the column bound of every column of chunk t (its
+/// nearest query chunk).
+struct ClipBounds {
+    dist: Vec<f32>,
+    lbc: Vec<f32>,
+}
+
+impl ClipBounds {
+    /// `rq[q]` = the smallest bound between query chunk q and the target chunks covering
+    /// columns `from..to`.
+    fn row_bounds(&self, nq: usize, from: usize, to: usize, rq: &mut [f32]) {
+        rq.fill(f32::INFINITY);
+        for t in (from / CHUNK)..to.div_ceil(CHUNK) {
+            for (r, d) in rq.iter_mut().zip(&self.dist[t * nq..(t + 1) * nq]) {
+                *r = r.min(*d);
+            }
+        }
+    }
+}
+
+/// The query's chunk boxes and every clip's bound tables, built once per search.
+struct Bounds {
+    nq: usize,
+    clips: Vec<ClipBounds>,
+}
+
+impl Bounds {
+    fn new(index: &FeatureIndex, prep: &Prepared) -> Bounds {
+        let joints = &prep.joints;
+        let nj = joints.len();
+        let mut qboxes: Vec<f32> = Vec::new();
+        let mut tmp = Vec::new();
+        for ch in prep.query.chunks(QCHUNK * FRAME_FLOATS) {
+            boxes(ch, joints, &mut tmp);
+            qboxes.extend_from_slice(&tmp);
+        }
+        let nq = prep.query_frames.div_ceil(QCHUNK);
+        let clips = index
+            .clips
+            .iter()
+            .map(|clip| {
+                let all = clip.chunk_boxes(prep.origin);
+                let mut dist = Vec::new();
+                let mut lbc = Vec::new();
+                for ch in all.chunks_exact(CANON_COUNT * 6) {
+                    tmp.clear();
+                    for &(k, _) in joints {
+                        tmp.extend_from_slice(&ch[k * 2..k * 2 + 6]);
+                    }
+                    let mut best = f32::INFINITY;
+                    for q in qboxes.chunks_exact(nj * 6) {
+                        let d = box_box(q, &tmp, joints);
+                        dist.push(d);
+                        best = best.min(d);
+                    }
+                    lbc.push(best);
+                }
+                ClipBounds { dist, lbc }
+            })
+            .collect();
+        Bounds { nq, clips }
+    }
+}
+
+/// A first bound for the k-th best distance when there is no threshold: the plain DP run on the
+/// few places whose row bounds are lowest (each with `maxSpan` columns of run-up), and the
+/// k-th of the best-first selection among what it finds. It is only a guess (those local runs
+/// start fresh, so their paths may differ from the full scan's): the scan's final check keeps
+/// the answer exact whatever it is.
+fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
+    let k = prep.max_results;
+    let nq = bounds.nq;
+    let mut rq = vec![0f32; nq];
+    let mut places: Vec<(f32, usize, usize)> = Vec::new();
+    for (ci, clip) in index.clips.iter().enumerate() {
+        let cols = clip.frame_count();
+        if cols < prep.min_span {
+            continue;
+        }
+        for b0 in (0..cols).step_by(BLOCK) {
+            let wend = (b0 + BLOCK + prep.max_span - 1).min(cols);
+            bounds.clips[ci].row_bounds(nq, b0, wend, &mut rq);
+            let total: f32 = (0..prep.query_frames).map(|i| rq[i / QCHUNK]).sum();
+            places.push((total, ci, b0));
+        }
+    }
+    places.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let mut picked: Vec<(usize, usize)> = Vec::new();
+    let mut segments = Vec::new();
+    for &(_, ci, b0) in &places {
+        if picked.len() >= k {
+            break;
+        }
+        if picked.iter().any(|&(c, b)| c == ci && b.abs_diff(b0) < BLOCK + 2 * prep.max_span) {
+            continue;
+        }
+        picked.push((ci, b0));
+        let cols = index.clips[ci].frame_count();
+        // Most good matches are about as long as the query: look a quarter of it before the
+        // place and a query and a quarter after.
+        let q = prep.query_frames;
+        segments.push((ci, b0.saturating_sub(q / 4), (b0 + BLOCK + q + q / 4).min(cols)));
+    }
+    // The fast scan itself, on those places only, lowering its bound as it goes.
+    let Ok((mut pool, stats, _)) = scan(index, prep, bounds, &segments, f32::INFINITY, true, &mut |_| ControlFlow::Continue(())) else {
+        return (f32::INFINITY, 0);
+    };
+    let sel = select(&mut pool, k);
+    (sel.get(k - 1).map_or(f32::INFINITY, |c| c.score), stats.distances_computed)
+}
+
 type ScanResult = (Vec<Candidate>, SearchStats, f32);
 
 fn scan(
     index: &FeatureIndex,
     prep: &Prepared,
+    bounds: &Bounds,
+    segments: &[(usize, usize, usize)],
+    seed: f32,
     lower: bool,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<ScanResult, SearchError> {
     let rows = prep.query_frames;
     let joints = &prep.joints;
-    let nj = joints.len();
-    let total = index.total_frames();
+    let total: usize = segments.iter().map(|s| s.2 - s.1).sum();
     let mut stats = SearchStats { frames_searched: total, cells_total: total as u64 * rows as u64, ..Default::default() };
-    // Boxes of the query per QCHUNK frames.
-    let mut qboxes: Vec<f32> = Vec::new();
-    let mut tmp = Vec::new();
-    for ch in prep.query.chunks(QCHUNK * FRAME_FLOATS) {
-        boxes(ch, joints, &mut tmp);
-        qboxes.extend_from_slice(&tmp);
-    }
-    let nq = rows.div_ceil(QCHUNK);
+    let nq = bounds.nq;
     let mut rq = vec![0f32; nq];
-    let mut tau = prep.threshold;
+    let mut tau = prep.threshold.min(seed);
     let mut pool: Vec<Candidate> = Vec::new();
     let mut pool_seen = 0usize;
     let mut done = 0usize;
@@ -145,34 +305,19 @@ fn scan(
     let mut cg = vec![f32::INFINITY; rows];
     let mut cs = vec![0usize; rows];
     let mut rrest = vec![0f32; rows];
-    let mut lbc: Vec<f32> = Vec::new();
-    let mut chunk_boxes: Vec<f32> = Vec::new();
     let mut fneg: Vec<f32> = Vec::new();
 
-    for (ci, clip) in index.clips.iter().enumerate() {
-        let target = &clip.features(prep.origin).data;
+    for &(ci, from, to) in segments {
+        let target = &index.clips[ci].features(prep.origin).data;
         let cols = target.len() / FRAME_FLOATS;
-        if cols < prep.min_span {
-            done += cols;
-            continue;
-        }
-        // Target boxes per chunk, and the column bounds c_j: for the columns of a chunk, the
-        // nearest query box to the chunk's box.
-        chunk_boxes.clear();
-        lbc.clear();
-        for ch in target.chunks(CHUNK * FRAME_FLOATS) {
-            boxes(ch, joints, &mut tmp);
-            chunk_boxes.extend_from_slice(&tmp);
-            let c = qboxes.chunks_exact(nj * 6).map(|q| box_box(q, &tmp, joints)).fold(f32::INFINITY, f32::min);
-            lbc.extend(std::iter::repeat_n(c, ch.len() / FRAME_FLOATS));
-        }
+        let cb = &bounds.clips[ci];
         let (mut plo, mut phi) = (NONE, NONE);
-        for b0 in (0..cols).step_by(BLOCK) {
-            let p = SearchProgress { frames_done: done + b0, frames_total: total, candidates: pool.len() };
+        for b0 in (from..to).step_by(BLOCK) {
+            let p = SearchProgress { frames_done: done + b0 - from, frames_total: total, candidates: pool.len() };
             if progress(p).is_break() {
-                return Err(SearchError::Cancelled { frames_done: done + b0, frames_total: total });
+                return Err(SearchError::Cancelled { frames_done: done + b0 - from, frames_total: total });
             }
-            let b1 = (b0 + BLOCK).min(cols);
+            let b1 = (b0 + BLOCK).min(to);
             let prune = tau.is_finite();
             // Budget with a margin against rounding in the bound sums.
             let tp = tau * (1.0 + 1e-4) + 1e-6;
@@ -181,13 +326,7 @@ fn scan(
                 // Row bounds r_i: the nearest target chunk box, over the columns this block's
                 // paths can reach (a path through column j of the block ends by
                 // G + maxSpan − 1 ≤ j + maxSpan − 1), to the box of the query chunk holding row i.
-                rq.fill(f32::INFINITY);
-                for c in (b0 / CHUNK)..wend.div_ceil(CHUNK) {
-                    let tb = &chunk_boxes[c * nj * 6..(c + 1) * nj * 6];
-                    for (r, qb) in rq.iter_mut().zip(qboxes.chunks_exact(nj * 6)) {
-                        *r = r.min(box_box(qb, tb, joints));
-                    }
-                }
+                cb.row_bounds(nq, b0, wend, &mut rq);
                 let mut acc = 0.0f32;
                 for i in (0..rows).rev() {
                     rrest[i] = acc;
@@ -196,8 +335,8 @@ fn scan(
                 fneg.clear();
                 fneg.push(0.0);
                 let mut acc = 0.0f32;
-                for &c in &lbc[b0..wend] {
-                    acc += (c - tau).min(0.0);
+                for j in b0..wend {
+                    acc += (cb.lbc[j / CHUNK] - tau).min(0.0);
                     fneg.push(acc);
                 }
             }
@@ -321,7 +460,7 @@ fn scan(
                 pool_seen = pool.len();
             }
         }
-        done += cols;
+        done += to - from;
     }
     pool.retain(|c| c.score <= tau);
     Ok((pool, stats, tau))

@@ -101,7 +101,13 @@ pub struct ClipFeatures {
     pub fps: f32,
     hips: MotionFeatures,
     shoulders: OnceLock<MotionFeatures>,
+    /// Per origin (hips, shoulders): bounding boxes of every joint over each run of
+    /// [`BOX_CHUNK_FRAMES`] frames, `[min x, min y, min z, max x, max y, max z]` per joint.
+    boxes: [OnceLock<Vec<f32>>; 2],
 }
+
+/// Frames per precomputed joint bounding box (used by the fast search's lower bounds).
+pub const BOX_CHUNK_FRAMES: usize = 16;
 
 impl Clone for ClipFeatures {
     fn clone(&self) -> Self {
@@ -109,7 +115,13 @@ impl Clone for ClipFeatures {
         if let Some(s) = self.shoulders.get() {
             let _ = shoulders.set(s.clone());
         }
-        ClipFeatures { name: self.name.clone(), fps: self.fps, hips: self.hips.clone(), shoulders }
+        let boxes = [OnceLock::new(), OnceLock::new()];
+        for (dst, src) in boxes.iter().zip(&self.boxes) {
+            if let Some(b) = src.get() {
+                let _ = dst.set(b.clone());
+            }
+        }
+        ClipFeatures { name: self.name.clone(), fps: self.fps, hips: self.hips.clone(), shoulders, boxes }
     }
 }
 
@@ -117,7 +129,7 @@ impl ClipFeatures {
     /// Wraps hip-origin features.
     pub fn new(name: impl Into<String>, fps: f32, hips: MotionFeatures) -> ClipFeatures {
         let hips = if hips.origin == Origin::Hips { hips } else { MotionFeatures { origin: Origin::Hips, data: hips.data } };
-        ClipFeatures { name: name.into(), fps, hips, shoulders: OnceLock::new() }
+        ClipFeatures { name: name.into(), fps, hips, shoulders: OnceLock::new(), boxes: [OnceLock::new(), OnceLock::new()] }
     }
 
     /// Features of a humanoid clip: canonical positions (missing joints filled from their
@@ -147,6 +159,34 @@ impl ClipFeatures {
             Origin::Hips => &self.hips,
             Origin::Shoulders => self.shoulders.get_or_init(|| self.hips.to_shoulder_origin()),
         }
+    }
+
+    /// Joint bounding boxes per [`BOX_CHUNK_FRAMES`] frames for an origin, built on first use:
+    /// chunk-major, `CANON_COUNT * 6` floats per chunk.
+    pub fn chunk_boxes(&self, origin: Origin) -> &[f32] {
+        let slot = match origin {
+            Origin::Hips => &self.boxes[0],
+            Origin::Shoulders => &self.boxes[1],
+        };
+        slot.get_or_init(|| {
+            let data = &self.features(origin).data;
+            let mut out = Vec::with_capacity(data.len().div_ceil(BOX_CHUNK_FRAMES * FRAME_FLOATS) * CANON_COUNT * 6);
+            for chunk in data.chunks(BOX_CHUNK_FRAMES * FRAME_FLOATS) {
+                let base = out.len();
+                for _ in 0..CANON_COUNT {
+                    out.extend_from_slice(&[f32::INFINITY, f32::INFINITY, f32::INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY]);
+                }
+                for frame in chunk.chunks_exact(FRAME_FLOATS) {
+                    for (b, p) in out[base..].chunks_exact_mut(6).zip(frame.chunks_exact(3)) {
+                        for a in 0..3 {
+                            b[a] = b[a].min(p[a]);
+                            b[3 + a] = b[3 + a].max(p[a]);
+                        }
+                    }
+                }
+            }
+            out
+        })
     }
 
     /// Frames `start_frame..end_frame` as a new motion (a query cut from a library clip keeps
@@ -260,12 +300,14 @@ impl FeatureIndex {
             return Err(SearchError::NotHumanoid { clip: name, reason });
         }
         let clip = self.resampled(clip);
-        self.clips.push(ClipFeatures::from_clip(name, &clip, map));
-        Ok(self.clips.len() - 1)
+        let features = ClipFeatures::from_clip(name, &clip, map);
+        Ok(self.add_features(features))
     }
 
-    /// Adds ready-made features (for example a concatenated benchmark library).
+    /// Adds ready-made features (for example a concatenated benchmark library), and builds
+    /// its hip-origin bounding boxes.
     pub fn add_features(&mut self, features: ClipFeatures) -> usize {
+        features.chunk_boxes(Origin::Hips);
         self.clips.push(features);
         self.clips.len() - 1
     }

@@ -43,6 +43,22 @@ pub(crate) fn select(pool: &mut [Candidate], max_results: usize) -> Vec<Candidat
     taken
 }
 
+/// [`select`], but a candidate that would be taken is first checked by `genuine` and dropped
+/// if it fails (the fast search's check that the full DP chose that very path).
+pub(crate) fn select_checked(pool: &mut [Candidate], max_results: usize, genuine: &mut dyn FnMut(&Candidate) -> bool) -> Vec<Candidate> {
+    pool.sort_by(order);
+    let mut taken: Vec<Candidate> = Vec::new();
+    for c in pool.iter() {
+        if taken.len() >= max_results {
+            break;
+        }
+        if taken.iter().all(|t| t.clip != c.clip || c.end < t.start || c.start > t.end) && genuine(c) {
+            taken.push(*c);
+        }
+    }
+    taken
+}
+
 /// One match.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
