@@ -88,7 +88,40 @@ fn main() {
     cases.push(("whole body, top 10, no threshold".into(), with(BodyPreset::WholeBody, 10, None)));
     cases.push(("feet only, top 10, threshold 0.05/joint".into(), with(BodyPreset::FeetOnly, 10, Some(0.05))));
     cases.push(("arms, top 10, threshold 0.05/joint".into(), with(BodyPreset::Arms, 10, Some(0.05))));
-    for (name, params) in &cases {
+    // A query with no copy in the library: the same stretch mirrored left/right (sides swapped,
+    // lateral axis negated), so the library holds only other, similar motion.
+    let mirrored = {
+        use odori_core::humanoid::Canon::*;
+        let pairs = [
+            (LeftShoulder, RightShoulder),
+            (LeftUpperArm, RightUpperArm),
+            (LeftForearm, RightForearm),
+            (LeftHand, RightHand),
+            (LeftUpperLeg, RightUpperLeg),
+            (LeftLowerLeg, RightLowerLeg),
+            (LeftFoot, RightFoot),
+            (LeftToe, RightToe),
+        ];
+        let mut m = q.clone();
+        for fr in m.chunks_exact_mut(FRAME_FLOATS) {
+            for (a, b) in pairs {
+                for k in 0..3 {
+                    fr.swap(a.index() * 3 + k, b.index() * 3 + k);
+                }
+            }
+            for p in fr.chunks_exact_mut(3) {
+                p[2] = -p[2];
+            }
+        }
+        ClipFeatures::new("mirrored query", 60.0, MotionFeatures { origin: Origin::Hips, data: m })
+    };
+    let mut timings = Vec::new();
+    let mut runs: Vec<(String, SearchParams, &ClipFeatures)> = cases.into_iter().map(|(n, p)| (n, p, &query)).collect();
+    runs.push(("mirrored query (no copy in library), whole body, top 1, no threshold".into(), with(BodyPreset::WholeBody, 1, None), &mirrored));
+    runs.push(("mirrored query (no copy in library), whole body, top 10, no threshold".into(), with(BodyPreset::WholeBody, 10, None), &mirrored));
+    runs.push(("mirrored query (no copy in library), whole body, top 10, threshold 0.05/joint".into(), with(BodyPreset::WholeBody, 10, Some(0.05)), &mirrored));
+    for (name, params, query) in &runs {
+        let query: &ClipFeatures = query;
         let t = Instant::now();
         let plain = search_plain(&index, &query, params, &mut no_progress()).expect("plain search");
         let plain_secs = t.elapsed().as_secs_f64();
@@ -117,5 +150,7 @@ fn main() {
             fast.matches.first().map(|m| (m.start_frame, m.end_frame, m.distance)),
         );
         assert!(ok, "{name}: fast and plain differ");
+        timings.push(format!("{{\"name\":\"{name}\",\"plainMs\":{:.3},\"fastMs\":{:.3}}}", plain_secs * 1e3, fast_secs * 1e3));
     }
+    std::fs::write(out.join("timings.json"), format!("{{\"cases\":[{}]}}", timings.join(","))).expect("write timings");
 }

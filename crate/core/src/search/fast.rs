@@ -88,7 +88,7 @@ pub(crate) fn run(
     let mut st = super::dp::Columns::new(prep.query_frames);
     let mut checked = 0u64;
     let mut genuine = |c: &Candidate| {
-        let (ok, cells) = is_genuine(index, prep, &bounds, c, &mut st);
+        let (ok, cells) = is_genuine(index, prep, c, &mut st);
         checked += cells;
         ok
     };
@@ -105,31 +105,90 @@ pub(crate) fn run(
 
 /// Whether the full DP's path ending at the candidate's end is the one the pruned scan found.
 ///
-/// Pruning only ever removes paths that cannot be reported, and keeps every reportable path
-/// exactly; but where the full DP's best path to an end was removed (its distance too large, or
-/// its span too long), the pruned scan may report the next best path to that end, which the
-/// full DP never reports. So before a candidate is taken it is checked: the plain DP is rerun
-/// fresh on columns `from..=end`, where `from` is far enough back that any path starting
-/// earlier crosses columns whose lower bounds alone already exceed the candidate's cost. That
-/// rerun gives the full DP's own value and start at this end (a path starting at or after
-/// `from` is computed with the same operations in the same order), and the candidate is genuine
-/// exactly when both agree. Returns the verdict and the cells computed.
-fn is_genuine(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds, c: &Candidate, st: &mut super::dp::Columns) -> (bool, u64) {
-    let target = &index.clips[c.clip].features(prep.origin).data;
-    let lbc = &bounds.clips[c.clip].lbc;
-    let mut from = c.end;
-    let mut sum = 0.0f32;
-    loop {
-        sum += lbc[from / CHUNK];
-        // Margin: the lower-bound sum must clear the cost despite rounding.
-        if from == 0 || (from < c.start && sum > c.cost * (1.0 + 1e-4) + 1e-6) {
-            break;
+/// Pruning removes only paths that cannot be reported, and keeps every reportable path exactly;
+/// but where the full DP's best path P* into an end was removed, the pruned scan may report the
+/// next best path P' to that end, which the full DP never reports. Which P* can that be?
+/// * P* with span ≤ maxSpan and distance ≤ τ: never removed (each of its cells passes every
+///   test, by induction along it), so the scan found it: P' = P*.
+/// * P* with span ≤ maxSpan and distance > τ: it costs no more than P' but has a larger
+///   distance, so it is shorter and starts after P' does.
+/// * P* with span > maxSpan: it covers columns `end − maxSpan ..= end`, so it costs at least the
+///   sum of their column bounds; if that sum exceeds P''s cost, P* cannot exist.
+/// So the plain DP is rerun fresh from P''s start (or, when the last case cannot be ruled out,
+/// from far enough back that the column bounds of any earlier start exceed P''s cost) to the
+/// end: a path starting there or later gets exactly the full scan's operations, so P' is
+/// genuine exactly when this rerun returns P''s value and start. Returns the verdict and the
+/// cells computed.
+fn is_genuine(index: &FeatureIndex, prep: &Prepared, c: &Candidate, st: &mut super::dp::Columns) -> (bool, u64) {
+    let clip = &index.clips[c.clip];
+    let target = &clip.features(prep.origin).data;
+    let all_boxes = clip.chunk_boxes(prep.origin);
+    // Column bound of a chunk: the nearest query frame to the chunk's joint boxes (tighter than
+    // the scan's chunk-to-chunk bound, and computed only for the chunks a check walks over).
+    let mut tbox = Vec::with_capacity(prep.joints.len() * 6);
+    let mut chunk_bound = |t: usize| -> f32 {
+        let Some(ch) = all_boxes.get(t * CANON_COUNT * 6..(t + 1) * CANON_COUNT * 6) else { return 0.0 };
+        tbox.clear();
+        for &(k, _) in &prep.joints {
+            tbox.extend_from_slice(&ch[k * 2..k * 2 + 6]);
         }
-        from -= 1;
+        (0..prep.query_frames).map(|i| box_bound(prep.q(i), &tbox, &prep.joints)).fold(f32::INFINITY, f32::min)
+    };
+    let mut cells = 0u64;
+    // Margin: a lower-bound sum must clear the cost despite rounding.
+    let limit = c.cost * (1.0 + 1e-4) + 1e-6;
+    let mut from = c.start;
+    if c.end >= prep.max_span {
+        // Walk back from the end until the bounds exceed the cost; if that happens within the
+        // last maxSpan + 1 columns no over-long path can be cheaper.
+        let mut j = c.end;
+        let mut sum = 0.0f32;
+        let mut cur_chunk = usize::MAX;
+        let mut cur = 0.0f32;
+        loop {
+            if j / CHUNK != cur_chunk {
+                cur_chunk = j / CHUNK;
+                cur = chunk_bound(cur_chunk);
+                // A chunk bound costs about as much as one DP column.
+                cells += prep.query_frames as u64;
+            }
+            sum += cur;
+            if sum > limit && j + prep.max_span >= c.end {
+                // Columns end − maxSpan ..= end already exceed it: no over-long path can be
+                // cheaper, only P''s own window matters.
+                break;
+            }
+            if sum > limit && j < c.start {
+                from = j;
+                break;
+            }
+            if j == 0 {
+                from = 0;
+                break;
+            }
+            j -= 1;
+        }
     }
     let (g, start) = super::dp::end_cell(prep, target, from, c.end, st);
-    let cells = ((c.end + 1 - from) * prep.query_frames) as u64;
+    cells += ((c.end + 1 - from) * prep.query_frames) as u64;
     (g == c.cost && start == c.start, cells)
+}
+
+/// `Σ_k w_k dist(frame_k, box_k)`: a lower bound of the frame distance to any frame whose
+/// joints all lie in their boxes.
+#[inline]
+fn box_bound(frame: &[f32], bx: &[f32], joints: &[(usize, f32)]) -> f32 {
+    let mut s = 0.0f32;
+    for (b, &(k, w)) in bx.chunks_exact(6).zip(joints) {
+        let mut e = 0.0f32;
+        for a in 0..3 {
+            let x = frame[k + a];
+            let o = (b[a] - x).max(x - b[3 + a]).max(0.0);
+            e += o * o;
+        }
+        s += w * e.sqrt();
+    }
+    s
 }
 
 /// Bounding box (min xyz, max xyz) of each weighted joint over frames, `joints.len() * 6`.
@@ -265,10 +324,10 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
         }
         picked.push((ci, b0));
         let cols = index.clips[ci].frame_count();
-        // Most good matches are about as long as the query: look a quarter of it before the
-        // place and a query and a quarter after.
+        // The place's bound covers paths through its block and on for up to maxSpan columns;
+        // most good matches are about as long as the query.
         let q = prep.query_frames;
-        segments.push((ci, b0.saturating_sub(q / 4), (b0 + BLOCK + q + q / 4).min(cols)));
+        segments.push((ci, b0.saturating_sub(q / 2), (b0 + BLOCK + 2 * q).min(cols)));
     }
     // The fast scan itself, on those places only, lowering its bound as it goes.
     let Ok((mut pool, stats, _)) = scan(index, prep, bounds, &segments, f32::INFINITY, true, &mut |_| ControlFlow::Continue(())) else {
