@@ -67,7 +67,7 @@ use super::{frame_distance_abandon, Prepared, SearchError, SearchProgress};
 /// Frames per precomputed target box.
 const CHUNK: usize = super::features::BOX_CHUNK_FRAMES;
 /// Frames per query box.
-const QCHUNK: usize = 16;
+const QCHUNK: usize = 8;
 /// Columns per block: the row bounds and τ are refreshed per block.
 const BLOCK: usize = 32;
 /// Most results for which the search first probes the most promising places for a bound.

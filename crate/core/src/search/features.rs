@@ -329,3 +329,47 @@ impl FeatureIndex {
         Ok(clip.joint_curve(joint, origin))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::builtin::demo_clip;
+    use crate::normalize::normalized;
+
+    #[test]
+    fn shoulder_origin_matches_spec_normalisation() {
+        let clip = demo_clip();
+        let map = HumanoidMap::from_skeleton(&clip.skeleton);
+        let positions = canonical_positions(&clip, &map);
+        let f = ClipFeatures::from_clip("demo", &clip, &map);
+        for (origin, want) in [(Origin::Hips, normalized(&positions, Origin::Hips)), (Origin::Shoulders, normalized(&positions, Origin::Shoulders))] {
+            let got = &f.features(origin).data;
+            assert_eq!(got.len(), want.len() * 3);
+            for (g, w) in got.chunks_exact(3).zip(&want) {
+                assert!((Vec3::new(g[0], g[1], g[2]) - *w).length() < 1e-5, "{origin:?}: {g:?} vs {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn chunk_boxes_contain_every_frame_and_curves_read_back() {
+        let clip = demo_clip();
+        let map = HumanoidMap::from_skeleton(&clip.skeleton);
+        let f = ClipFeatures::from_clip("demo", &clip, &map);
+        let boxes = f.chunk_boxes(Origin::Hips);
+        let data = &f.features(Origin::Hips).data;
+        for (n, frame) in data.chunks_exact(FRAME_FLOATS).enumerate() {
+            let b = &boxes[(n / BOX_CHUNK_FRAMES) * CANON_COUNT * 6..];
+            for (j, p) in frame.chunks_exact(3).enumerate() {
+                for a in 0..3 {
+                    assert!(b[j * 6 + a] <= p[a] && p[a] <= b[j * 6 + 3 + a]);
+                }
+            }
+        }
+        let c = f.joint_curve(Canon::RightHand, Origin::Hips);
+        assert_eq!(c.x.len(), f.frame_count());
+        assert_eq!(c.joint, "rightHand");
+        let p = f.features(Origin::Hips).joint(7, Canon::RightHand).expect("frame 7");
+        assert_eq!((c.x[7], c.y[7], c.z[7]), (p.x, p.y, p.z));
+    }
+}
