@@ -12,6 +12,7 @@ pub mod humanoid;
 pub mod import;
 pub mod music;
 pub mod normalize;
+pub mod search;
 pub mod skeleton;
 
 pub use clip::{Clip, ClipError, TranslationTrack};

@@ -1,0 +1,144 @@
+//! The plain subsequence DP of spec §C: every cell of every clip, two columns of memory. It is
+//! the reference the fast search is tested against and the benchmark's baseline.
+
+use std::ops::ControlFlow;
+
+use super::features::{FeatureIndex, FRAME_FLOATS};
+use super::results::{finish, select, Candidate, SearchOutcome, SearchStats};
+use super::{frame_distance, Prepared, SearchError, SearchProgress};
+
+/// Columns between progress reports.
+pub(crate) const PROGRESS_COLUMNS: usize = 8192;
+
+pub(crate) fn run(
+    index: &FeatureIndex,
+    prep: &Prepared,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<SearchOutcome, SearchError> {
+    let total = index.total_frames();
+    let mut done = 0usize;
+    let mut pool = Vec::new();
+    let rows = prep.query_frames;
+    let mut cols_state = Columns::new(rows);
+    let mut stats = SearchStats { frames_searched: total, cells_total: (total as u64) * rows as u64, ..Default::default() };
+    for (ci, clip) in index.clips.iter().enumerate() {
+        let target = &clip.features(prep.origin).data;
+        let cols = target.len() / FRAME_FLOATS;
+        if cols < prep.min_span {
+            done += cols;
+            continue;
+        }
+        for c0 in (0..cols).step_by(PROGRESS_COLUMNS) {
+            let p = SearchProgress { frames_done: done + c0, frames_total: total, candidates: pool.len() };
+            if progress(p).is_break() {
+                return Err(SearchError::Cancelled { frames_done: done + c0, frames_total: total });
+            }
+            let c1 = (c0 + PROGRESS_COLUMNS).min(cols);
+            columns(prep, target, ci, c0..c1, c0 > 0, &mut cols_state, &mut pool);
+            stats.distances_computed += ((c1 - c0) * rows) as u64;
+        }
+        done += cols;
+    }
+    let selected = select(&mut pool, prep.max_results);
+    Ok(finish(index, prep, &selected, stats))
+}
+
+/// Two DP columns (value and start pointer per query frame).
+pub(crate) struct Columns {
+    prev_g: Vec<f32>,
+    prev_s: Vec<usize>,
+    cur_g: Vec<f32>,
+    cur_s: Vec<usize>,
+}
+
+impl Columns {
+    pub(crate) fn new(rows: usize) -> Columns {
+        Columns { prev_g: vec![0.0; rows], prev_s: vec![0; rows], cur_g: vec![0.0; rows], cur_s: vec![0; rows] }
+    }
+}
+
+/// The plain DP over target columns `range` of clip `clip`, pushing every candidate end with an
+/// admissible span and a distance within the threshold. With `resume` the previous column is
+/// the one left in `st` (the columns just before `range`); without it `range.start` is treated
+/// as the clip's first column.
+pub(crate) fn columns(
+    prep: &Prepared,
+    target: &[f32],
+    clip: usize,
+    range: std::ops::Range<usize>,
+    resume: bool,
+    st: &mut Columns,
+    pool: &mut Vec<Candidate>,
+) {
+    let rows = prep.query_frames;
+    let first = range.start;
+    for j in range {
+        let t = &target[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
+        st.cur_g[0] = frame_distance(prep.q(0), t, &prep.joints);
+        st.cur_s[0] = j;
+        let has_prev = resume || j > first;
+        for i in 1..rows {
+            let d = frame_distance(prep.q(i), t, &prep.joints);
+            let mut v = st.cur_g[i - 1] + d;
+            let mut s = st.cur_s[i - 1];
+            if has_prev {
+                let dg = st.prev_g[i - 1] + 2.0 * d;
+                if dg < v {
+                    v = dg;
+                    s = st.prev_s[i - 1];
+                }
+                let h = st.prev_g[i] + d;
+                if h < v {
+                    v = h;
+                    s = st.prev_s[i];
+                }
+            }
+            st.cur_g[i] = v;
+            st.cur_s[i] = s;
+        }
+        let (g, start) = (st.cur_g[rows - 1], st.cur_s[rows - 1]);
+        let span = j + 1 - start;
+        if span >= prep.min_span && span <= prep.max_span {
+            let score = g / (rows + span) as f32;
+            if score <= prep.threshold {
+                pool.push(Candidate { clip, start, end: j, score, cost: g });
+            }
+        }
+        std::mem::swap(&mut st.prev_g, &mut st.cur_g);
+        std::mem::swap(&mut st.prev_s, &mut st.cur_s);
+    }
+}
+
+/// The plain DP run fresh from column `from` through `end` (inclusive): the value and start
+/// pointer of the last query frame's cell at `end`. Cells whose full-scan path starts at or
+/// after `from` get exactly the full scan's values (same operations in the same order).
+pub(crate) fn end_cell(prep: &Prepared, target: &[f32], from: usize, end: usize, st: &mut Columns) -> (f32, usize) {
+    let rows = prep.query_frames;
+    for j in from..=end {
+        let t = &target[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
+        st.cur_g[0] = frame_distance(prep.q(0), t, &prep.joints);
+        st.cur_s[0] = j;
+        for i in 1..rows {
+            let d = frame_distance(prep.q(i), t, &prep.joints);
+            let mut v = st.cur_g[i - 1] + d;
+            let mut s = st.cur_s[i - 1];
+            if j > from {
+                let dg = st.prev_g[i - 1] + 2.0 * d;
+                if dg < v {
+                    v = dg;
+                    s = st.prev_s[i - 1];
+                }
+                let h = st.prev_g[i] + d;
+                if h < v {
+                    v = h;
+                    s = st.prev_s[i];
+                }
+            }
+            st.cur_g[i] = v;
+            st.cur_s[i] = s;
+        }
+        std::mem::swap(&mut st.prev_g, &mut st.cur_g);
+        std::mem::swap(&mut st.prev_s, &mut st.cur_s);
+    }
+    (st.prev_g[rows - 1], st.prev_s[rows - 1])
+}

@@ -1,0 +1,271 @@
+//! Search by example (issue 3, spec §B–C, seed 002): find where in the library a motion like
+//! the query happens, by subsequence DP matching over normalised canonical joint positions.
+//!
+//! The matching is spec §C exactly: frame distance `d(i, j) = Σ_k w_k ‖p_k(i) − q_k(j)‖`,
+//! recurrence `g(i, j) = min{g(i−1, j) + d, g(i−1, j−1) + 2d, g(i, j−1) + d}` (ties go to the
+//! first of these, in this order) with a start pointer `G` carried along the chosen
+//! predecessor, `g(1, j) = d(1, j)`, `G(1, j) = j` (a match may start anywhere). The DP itself
+//! is unconstrained; a match is the path ending at target frame `j`, spanning frames
+//! `G(I, j) ..= j` (span `s = j − G + 1`), with distance `g(I, j) / (I + s)` (the path's total
+//! step weight, spec §C), kept only when its speed ratio is bounded:
+//! `ceil(I · minSpanRatio) ≤ s ≤ floor(I · maxSpanRatio)` (defaults ½ and 2). Results are the
+//! non-overlapping matches at or below the threshold, best first: all candidates are sorted by
+//! (distance, clip, end frame) and taken greedily when their frame span does not overlap one
+//! already taken in the same clip, up to `maxResults`. Each result carries its warping path.
+//!
+//! [`search`] is the fast exact search (lower bounds and early abandoning, see `fast.rs`);
+//! [`search_plain`] computes every cell and is kept as the reference and benchmark baseline.
+//! Both return the same results.
+
+mod dp;
+mod fast;
+mod features;
+mod presets;
+mod results;
+
+use std::ops::ControlFlow;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::humanoid::{Canon, CANON_COUNT};
+use crate::normalize::Origin;
+
+pub use features::{ClipFeatures, FeatureIndex, JointCurve, MotionFeatures, SkippedClip, DEFAULT_INDEX_FPS, FRAME_FLOATS};
+pub use presets::BodyPreset;
+pub use results::{SearchMatch, SearchOutcome, SearchStats};
+
+/// Order in which a frame distance sums its joints: extremities first, so that early
+/// abandoning (which stops summing once the partial sum is too large) stops soon. Both
+/// searches sum in this order, so their distances are bit-for-bit the same.
+pub const DISTANCE_ORDER: [Canon; CANON_COUNT] = {
+    use Canon::*;
+    [
+        LeftHand, RightHand, LeftFoot, RightFoot, LeftToe, RightToe, LeftForearm, RightForearm, LeftLowerLeg, RightLowerLeg, Head,
+        LeftUpperArm, RightUpperArm, Neck, LeftUpperLeg, RightUpperLeg, LeftShoulder, RightShoulder, Chest, Spine, Hips,
+    ]
+};
+
+/// Everything that can go wrong in a search, with the offending values.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SearchError {
+    #[error("the query is empty: pick at least one frame")]
+    EmptyQuery,
+    #[error("the query is {query_frames} frames long, longer than every clip in the library (the longest has {longest_frames} frames)")]
+    QueryTooLong { query_frames: usize, longest_frames: usize },
+    #[error("all joint weights are zero: choose a body part or give at least one joint a weight above 0")]
+    AllWeightsZero,
+    #[error("joint weight for {joint} is {value}: weights must be finite and not negative")]
+    BadWeight { joint: &'static str, value: f32 },
+    #[error("bad search parameter {name} = {value}: {why}")]
+    BadParam { name: &'static str, value: f32, why: &'static str },
+    #[error("clip \"{clip}\" cannot be searched: {reason}")]
+    NotHumanoid { clip: String, reason: String },
+    #[error("the library has no searchable clips ({skipped} offered clips were skipped)")]
+    EmptyLibrary { skipped: usize },
+    #[error("clip index {clip_index} is out of range: the library has {clip_count} clips")]
+    UnknownClip { clip_index: usize, clip_count: usize },
+    #[error("frames {start_frame}..{end_frame} are not a non-empty range inside clip \"{clip}\" ({frames} frames)")]
+    BadRange { clip: String, start_frame: usize, end_frame: usize, frames: usize },
+    #[error("search cancelled after {frames_done} of {frames_total} library frames")]
+    Cancelled { frames_done: usize, frames_total: usize },
+}
+
+/// What to search for and how strictly.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct SearchParams {
+    /// Weight per canonical joint, in [`Canon::ALL`] order (`hips, spine, …, rightToe`);
+    /// finite, ≥ 0, not all zero. A preset sets 1 on its joints and 0 elsewhere.
+    pub weights: [f32; CANON_COUNT],
+    /// Normalisation origin: hips, or shoulders for arm-only searches (spec §B.1).
+    pub origin: Origin,
+    /// Largest distance (weighted mean frame distance along the path) a match may have;
+    /// `None` = no threshold, only `maxResults` limits.
+    pub threshold: Option<f32>,
+    /// Most matches to return (≥ 1).
+    pub max_results: usize,
+    /// A match spans at least `ceil(queryFrames · minSpanRatio)` frames (default 0.5:
+    /// the library motion is at most twice as fast as the query). In (0, 1].
+    pub min_span_ratio: f32,
+    /// A match spans at most `floor(queryFrames · maxSpanRatio)` frames (default 2: at most
+    /// twice as slow). ≥ 1.
+    pub max_span_ratio: f32,
+}
+
+impl Default for SearchParams {
+    fn default() -> Self {
+        SearchParams::preset(BodyPreset::WholeBody)
+    }
+}
+
+impl SearchParams {
+    /// Parameters for a preset, with threshold none, 10 results, span ratio ½ – 2.
+    pub fn preset(preset: BodyPreset) -> SearchParams {
+        SearchParams {
+            weights: preset.weights(),
+            origin: preset.origin(),
+            threshold: None,
+            max_results: 10,
+            min_span_ratio: 0.5,
+            max_span_ratio: 2.0,
+        }
+    }
+
+    /// Checks the parameters.
+    pub fn validate(&self) -> Result<(), SearchError> {
+        for (c, &w) in Canon::ALL.iter().zip(&self.weights) {
+            if !w.is_finite() || w < 0.0 {
+                return Err(SearchError::BadWeight { joint: c.name(), value: w });
+            }
+        }
+        if self.weights.iter().all(|&w| w == 0.0) {
+            return Err(SearchError::AllWeightsZero);
+        }
+        if let Some(t) = self.threshold {
+            if t.is_nan() || t < 0.0 {
+                return Err(SearchError::BadParam { name: "threshold", value: t, why: "must be a number ≥ 0 (or none)" });
+            }
+        }
+        if self.max_results == 0 {
+            return Err(SearchError::BadParam { name: "maxResults", value: 0.0, why: "must be at least 1" });
+        }
+        if !(self.min_span_ratio > 0.0 && self.min_span_ratio <= 1.0) {
+            return Err(SearchError::BadParam { name: "minSpanRatio", value: self.min_span_ratio, why: "must be in (0, 1]" });
+        }
+        if !(self.max_span_ratio >= 1.0 && self.max_span_ratio.is_finite()) {
+            return Err(SearchError::BadParam { name: "maxSpanRatio", value: self.max_span_ratio, why: "must be finite and ≥ 1" });
+        }
+        Ok(())
+    }
+
+    /// Shortest and longest span (frames) a match of a `query_frames`-frame query may have.
+    pub fn span_bounds(&self, query_frames: usize) -> (usize, usize) {
+        let lo = ((query_frames as f32 * self.min_span_ratio).ceil() as usize).max(1);
+        let hi = ((query_frames as f32 * self.max_span_ratio).floor() as usize).max(lo);
+        (lo, hi)
+    }
+}
+
+/// Where a running search is, passed to the progress callback between chunks of work.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct SearchProgress {
+    /// Library frames (DP columns) done so far.
+    pub frames_done: usize,
+    /// Library frames in total.
+    pub frames_total: usize,
+    /// Matches found so far (candidates at or below the current bound, before overlap removal).
+    pub candidates: usize,
+}
+
+/// The query and parameters reduced to what the DP loops read.
+pub(crate) struct Prepared<'a> {
+    /// Query features, `frames * FRAME_FLOATS`.
+    pub query: &'a [f32],
+    pub query_frames: usize,
+    /// (float offset in a frame, weight) of each joint with a non-zero weight, in
+    /// [`DISTANCE_ORDER`].
+    pub joints: Vec<(usize, f32)>,
+    pub min_span: usize,
+    pub max_span: usize,
+    /// `threshold`, or +∞.
+    pub threshold: f32,
+    pub max_results: usize,
+    pub origin: Origin,
+}
+
+impl<'a> Prepared<'a> {
+    fn new(index: &FeatureIndex, query: &'a ClipFeatures, params: &SearchParams) -> Result<Prepared<'a>, SearchError> {
+        params.validate()?;
+        let query_frames = query.frame_count();
+        if query_frames == 0 {
+            return Err(SearchError::EmptyQuery);
+        }
+        if index.clips.is_empty() {
+            return Err(SearchError::EmptyLibrary { skipped: index.skipped.len() });
+        }
+        let longest = index.clips.iter().map(ClipFeatures::frame_count).max().unwrap_or(0);
+        if query_frames > longest {
+            return Err(SearchError::QueryTooLong { query_frames, longest_frames: longest });
+        }
+        let joints = DISTANCE_ORDER
+            .iter()
+            .map(|c| (c.index() * 3, params.weights[c.index()]))
+            .filter(|(_, w)| *w > 0.0)
+            .collect();
+        let (min_span, max_span) = params.span_bounds(query_frames);
+        Ok(Prepared {
+            query: &query.features(params.origin).data,
+            query_frames,
+            joints,
+            min_span,
+            max_span,
+            threshold: params.threshold.unwrap_or(f32::INFINITY),
+            max_results: params.max_results,
+            origin: params.origin,
+        })
+    }
+
+    /// Query frame `i`.
+    #[inline]
+    pub fn q(&self, i: usize) -> &[f32] {
+        &self.query[i * FRAME_FLOATS..(i + 1) * FRAME_FLOATS]
+    }
+}
+
+/// Frame distance `Σ_k w_k ‖a_k − b_k‖` over the weighted joints, summed in their order.
+#[inline]
+pub(crate) fn frame_distance(a: &[f32], b: &[f32], joints: &[(usize, f32)]) -> f32 {
+    let mut s = 0.0f32;
+    for &(k, w) in joints {
+        let (dx, dy, dz) = (a[k] - b[k], a[k + 1] - b[k + 1], a[k + 2] - b[k + 2]);
+        s += w * (dx * dx + dy * dy + dz * dz).sqrt();
+    }
+    s
+}
+
+/// [`frame_distance`], abandoned as soon as the partial sum exceeds `limit` (then some value
+/// `> limit` is returned). When it is not abandoned the result is bit-for-bit
+/// [`frame_distance`]: the same operations in the same order.
+#[inline]
+pub(crate) fn frame_distance_abandon(a: &[f32], b: &[f32], joints: &[(usize, f32)], limit: f32) -> f32 {
+    let mut s = 0.0f32;
+    for &(k, w) in joints {
+        let (dx, dy, dz) = (a[k] - b[k], a[k + 1] - b[k + 1], a[k + 2] - b[k + 2]);
+        s += w * (dx * dx + dy * dy + dz * dz).sqrt();
+        if s > limit {
+            return s;
+        }
+    }
+    s
+}
+
+/// The fast exact search over every clip of the library. `progress` is called between chunks
+/// of work; returning `ControlFlow::Break(())` cancels the search ([`SearchError::Cancelled`]).
+pub fn search(
+    index: &FeatureIndex,
+    query: &ClipFeatures,
+    params: &SearchParams,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<SearchOutcome, SearchError> {
+    let prep = Prepared::new(index, query, params)?;
+    fast::run(index, &prep, progress)
+}
+
+/// The plain subsequence DP (every cell of every clip computed): the reference the fast search
+/// must agree with, and the benchmark baseline. Same arguments and results as [`search`].
+pub fn search_plain(
+    index: &FeatureIndex,
+    query: &ClipFeatures,
+    params: &SearchParams,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<SearchOutcome, SearchError> {
+    let prep = Prepared::new(index, query, params)?;
+    dp::run(index, &prep, progress)
+}
+
+/// A progress callback that never cancels.
+pub fn no_progress() -> impl FnMut(SearchProgress) -> ControlFlow<()> {
+    |_| ControlFlow::Continue(())
+}

@@ -1,0 +1,127 @@
+//! Shared by the search tests and the benchmark: a seeded RNG, the real-data library, and a
+//! plain reference DP written independently of the core's (spec §C, from the text).
+#![allow(dead_code)]
+
+use odori_core::import::{import_bytes, ImportOptions};
+use odori_core::search::{ClipFeatures, FeatureIndex, SearchParams, DISTANCE_ORDER, FRAME_FLOATS};
+
+/// SplitMix64: small, seeded, deterministic.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f32()
+    }
+    pub fn usize(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+    /// Roughly normal (sum of uniforms).
+    pub fn normal(&mut self) -> f32 {
+        (0..6).map(|_| self.f32()).sum::<f32>() - 3.0
+    }
+}
+
+/// Every real BVH clip, as (relative path, clip, map, humanoid status).
+pub fn real_clips() -> Vec<(String, odori_core::Clip, odori_core::HumanoidMap, odori_core::HumanoidStatus)> {
+    odori_tests::all_bvh()
+        .into_iter()
+        .map(|rel| {
+            let opts = ImportOptions { fps_override: odori_tests::fps_override_for(&rel), ..Default::default() };
+            let imp = import_bytes(&rel, &odori_tests::read(&rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
+            let clip = imp.clips.into_iter().next().unwrap_or_else(|| panic!("{rel}: no clip"));
+            (rel, clip, imp.humanoid, imp.status)
+        })
+        .collect()
+}
+
+/// The library of all real clips; clips the importer judges not humanoid are skipped by the
+/// index (listed in `skipped` with the reason).
+pub fn real_index() -> FeatureIndex {
+    let mut index = FeatureIndex::new();
+    for (rel, clip, map, status) in real_clips() {
+        let _ = index.add_clip(rel, &clip, &map, &status);
+    }
+    index
+}
+
+/// A reference match: (clip, start, end inclusive, distance).
+pub type RefMatch = (usize, usize, usize, f32);
+
+/// Spec §C from the text: g(i,j) = min{g(i−1,j)+d, g(i−1,j−1)+2d, g(i,j−1)+d} (first wins ties),
+/// g(1,j) = d(1,j), G carried along; score g/(I + span) with span in [ceil(I·lo), floor(I·hi)];
+/// best-first non-overlapping selection. Full matrices, nothing clever.
+pub fn reference_search(index: &FeatureIndex, query: &ClipFeatures, params: &SearchParams) -> Vec<RefMatch> {
+    let q = &query.features(params.origin).data;
+    let rows = q.len() / FRAME_FLOATS;
+    let min_span = ((rows as f32 * params.min_span_ratio).ceil() as usize).max(1);
+    let max_span = ((rows as f32 * params.max_span_ratio).floor() as usize).max(min_span);
+    let threshold = params.threshold.unwrap_or(f32::INFINITY);
+    let d = |a: &[f32], b: &[f32]| -> f32 {
+        let mut s = 0.0f32;
+        for c in DISTANCE_ORDER {
+            let w = params.weights[c.index()];
+            if w > 0.0 {
+                let k = c.index() * 3;
+                let e = ((a[k] - b[k]).powi(2) + (a[k + 1] - b[k + 1]).powi(2) + (a[k + 2] - b[k + 2]).powi(2)).sqrt();
+                s += w * e;
+            }
+        }
+        s
+    };
+    let mut cands: Vec<RefMatch> = Vec::new();
+    for (ci, clip) in index.clips.iter().enumerate() {
+        let t = &clip.features(params.origin).data;
+        let cols = t.len() / FRAME_FLOATS;
+        let mut g = vec![vec![0f32; cols]; rows];
+        let mut gs = vec![vec![0usize; cols]; rows];
+        for j in 0..cols {
+            let tj = &t[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
+            for i in 0..rows {
+                let dd = d(&q[i * FRAME_FLOATS..(i + 1) * FRAME_FLOATS], tj);
+                if i == 0 {
+                    g[0][j] = dd;
+                    gs[0][j] = j;
+                    continue;
+                }
+                let mut best = (g[i - 1][j] + dd, gs[i - 1][j]);
+                if j > 0 {
+                    for cand in [(g[i - 1][j - 1] + 2.0 * dd, gs[i - 1][j - 1]), (g[i][j - 1] + dd, gs[i][j - 1])] {
+                        if cand.0 < best.0 {
+                            best = cand;
+                        }
+                    }
+                }
+                g[i][j] = best.0;
+                gs[i][j] = best.1;
+            }
+            let start = gs[rows - 1][j];
+            let span = j - start + 1;
+            let score = g[rows - 1][j] / (rows + span) as f32;
+            if span >= min_span && span <= max_span && score <= threshold {
+                cands.push((ci, start, j, score));
+            }
+        }
+    }
+    cands.sort_by(|a, b| a.3.total_cmp(&b.3).then(a.0.cmp(&b.0)).then(a.2.cmp(&b.2)));
+    let mut out: Vec<RefMatch> = Vec::new();
+    for c in cands {
+        if out.len() >= params.max_results {
+            break;
+        }
+        if out.iter().all(|o| o.0 != c.0 || c.2 < o.1 || c.1 > o.2) {
+            out.push(c);
+        }
+    }
+    out
+}

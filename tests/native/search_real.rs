@@ -1,0 +1,284 @@
+//! Search by example on real mocap (issue 3 acceptance): invariance to speed, facing, position,
+//! body size and noise; the salsa partner report; the body-parts finding of seed 002 §4.3; and
+//! exactness of the fast search against the reference DP on real clips.
+
+#[path = "search_common.rs"]
+mod common;
+
+use std::sync::OnceLock;
+
+use common::{reference_search, Rng};
+use glam::{Quat, Vec3};
+use odori_core::humanoid::{canonical_positions, Canon, CANON_COUNT};
+use odori_core::normalize::Origin;
+use odori_core::search::{no_progress, search, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchParams, FRAME_FLOATS};
+
+struct Real {
+    index: FeatureIndex,
+    /// Canonical world positions per indexed clip (same order as `index.clips`).
+    positions: Vec<Vec<Vec3>>,
+}
+
+fn real() -> &'static Real {
+    static REAL: OnceLock<Real> = OnceLock::new();
+    REAL.get_or_init(|| {
+        let mut index = FeatureIndex::new();
+        let mut positions = Vec::new();
+        for (rel, clip, map, status) in common::real_clips() {
+            if index.add_clip(rel, &clip, &map, &status).is_ok() {
+                positions.push(canonical_positions(&index.resampled(&clip), &map));
+            }
+        }
+        assert!(index.clips.len() >= 10, "expected the CMU salsa, Indian and martial clips to be searchable: {:?}", index.skipped);
+        Real { index, positions }
+    })
+}
+
+/// Cuts `out_frames` frames from `src` (frames × 21 positions) starting at `start`, played with
+/// a speed that varies smoothly between 0.8× and 1.25×; then turns, shifts, scales and noises
+/// the result. Returns the positions and the source frames covered.
+fn transformed_query(rng: &mut Rng, src: &[Vec3], start: usize, out_frames: usize) -> (Vec<Vec3>, f32) {
+    let src_frames = src.len() / CANON_COUNT;
+    let (lo, hi) = (0.8f32.ln(), 1.25f32.ln());
+    let (omega, phase) = (rng.range(0.02, 0.08), rng.range(0.0, 6.28));
+    let yaw = rng.range(-std::f32::consts::PI, std::f32::consts::PI);
+    let rot = Quat::from_rotation_y(yaw);
+    let shift = Vec3::new(rng.range(-3.0, 3.0), 0.0, rng.range(-3.0, 3.0));
+    let scale = rng.range(0.85, 1.15);
+    let mut out = Vec::with_capacity(out_frames * CANON_COUNT);
+    let mut x = start as f32;
+    for k in 0..out_frames {
+        let (f0, a) = (x.floor() as usize, x.fract());
+        let f0 = f0.min(src_frames - 1);
+        let f1 = (f0 + 1).min(src_frames - 1);
+        for j in 0..CANON_COUNT {
+            let p = src[f0 * CANON_COUNT + j].lerp(src[f1 * CANON_COUNT + j], a);
+            let noise = Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 0.005;
+            out.push(rot * (p * scale) + shift + noise);
+        }
+        let speed = (lo + (hi - lo) * (0.5 + 0.5 * (omega * k as f32 + phase).sin())).exp();
+        x += speed;
+    }
+    (out, x - start as f32)
+}
+
+/// Top-1 hit rate of transformed queries for a preset.
+fn hit_rate(preset: BodyPreset, queries: &[(usize, usize, ClipFeatures)]) -> (usize, usize) {
+    let r = real();
+    let params = SearchParams { max_results: 1, ..SearchParams::preset(preset) };
+    let mut hits = 0;
+    for (clip, start, q) in queries {
+        let out = search(&r.index, q, &params, &mut no_progress()).expect("search");
+        let tol = (0.25 * r.index.clips[*clip].fps).round() as usize;
+        match out.matches.first() {
+            Some(m) if m.clip_index == *clip && m.start_frame.abs_diff(*start) <= tol => hits += 1,
+            m => println!(
+                "  miss ({preset:?}): cut at {} frame {start} ({} frames); best {:?}",
+                r.index.clips[*clip].name,
+                q.frame_count(),
+                m.map(|m| (&m.clip_name, m.start_frame, m.end_frame, m.distance))
+            ),
+        }
+    }
+    (hits, queries.len())
+}
+
+#[test]
+fn invariance_to_speed_facing_position_size_and_noise() {
+    let r = real();
+    let mut rng = Rng(0x1_2025_0003);
+    let mut queries = Vec::new();
+    while queries.len() < 50 {
+        let clip = rng.usize(r.index.clips.len());
+        let c = &r.index.clips[clip];
+        let fps = c.fps;
+        let out_frames = (rng.range(2.0, 4.0) * fps) as usize;
+        // Source frames needed at the slowest (1.25×) speed, plus a margin.
+        let need = (out_frames as f32 * 1.25) as usize + 2;
+        if c.frame_count() <= need + 1 {
+            continue;
+        }
+        let start = rng.usize(c.frame_count() - need);
+        let (pos, _) = transformed_query(&mut rng, &r.positions[clip], start, out_frames);
+        queries.push((clip, start, ClipFeatures::new("query", fps, MotionFeatures::from_positions(&pos))));
+    }
+    let mut rates = Vec::new();
+    for preset in [BodyPreset::WholeBody, BodyPreset::FeetOnly, BodyPreset::Arms] {
+        let (hits, n) = hit_rate(preset, &queries);
+        println!("invariance, {preset:?}: top-1 hit {hits}/{n} = {:.1}%", 100.0 * hits as f32 / n as f32);
+        rates.push((preset, hits as f32 / n as f32));
+    }
+    assert!(rates[0].1 >= 0.9, "whole-body top-1 hit rate {:.1}% is below the 90% goal", 100.0 * rates[0].1);
+}
+
+/// Left/right mirror of normalised hip-origin features: swap the sides, negate the lateral axis
+/// (+Z is the hips' right → left direction after normalisation); `flip_forward` also negates x.
+fn mirrored(f: &MotionFeatures, flip_forward: bool) -> MotionFeatures {
+    use Canon::*;
+    let pairs = [
+        (LeftShoulder, RightShoulder),
+        (LeftUpperArm, RightUpperArm),
+        (LeftForearm, RightForearm),
+        (LeftHand, RightHand),
+        (LeftUpperLeg, RightUpperLeg),
+        (LeftLowerLeg, RightLowerLeg),
+        (LeftFoot, RightFoot),
+        (LeftToe, RightToe),
+    ];
+    let mut data = f.data.clone();
+    for fr in data.chunks_exact_mut(FRAME_FLOATS) {
+        for (a, b) in pairs {
+            for k in 0..3 {
+                fr.swap(a.index() * 3 + k, b.index() * 3 + k);
+            }
+        }
+        for p in fr.chunks_exact_mut(3) {
+            p[2] = -p[2];
+            if flip_forward {
+                p[0] = -p[0];
+            }
+        }
+    }
+    MotionFeatures { origin: f.origin, data }
+}
+
+#[test]
+fn salsa_partners_report() {
+    let r = real();
+    let find = |name: &str| r.index.clips.iter().position(|c| c.name.contains(name)).unwrap_or_else(|| panic!("{name} not indexed"));
+    let pairs = [("salsa_01", "salsa_16"), ("salsa_16", "salsa_01"), ("salsa_10", "salsa_25"), ("salsa_25", "salsa_10")];
+    // Kept small: each variant is ~20 searches of the whole library in the dev profile.
+    let variants: [(&str, BodyPreset, u8); 3] = [
+        ("whole body", BodyPreset::WholeBody, 0),
+        ("whole body, query mirrored left/right and front/back", BodyPreset::WholeBody, 2),
+        ("feet only", BodyPreset::FeetOnly, 0),
+    ];
+    let mut totals = vec![(0usize, 0usize, 0usize); variants.len()];
+    // Searching the partner's clip alone: does the same stretch at least rank in its top 3?
+    let mut alone = (0usize, 0usize, 0usize);
+    for (from, to) in pairs {
+        let (a, b) = (find(from), find(to));
+        // The library without the query's own clip.
+        let mut lib = FeatureIndex::new();
+        let mut b_in_lib = 0;
+        for (k, c) in r.index.clips.iter().enumerate() {
+            if k != a {
+                if k == b {
+                    b_in_lib = lib.clips.len();
+                }
+                lib.add_features(c.clone());
+            }
+        }
+        let src = &r.index.clips[a];
+        let fps = src.fps;
+        let len = (3.0 * fps) as usize;
+        let step = (5.0 * fps) as usize;
+        let mut partner_only = FeatureIndex::new();
+        partner_only.add_features(r.index.clips[b].clone());
+        let params3 = SearchParams { max_results: 3, ..SearchParams::preset(BodyPreset::WholeBody) };
+        let mut start = 0;
+        while start + len <= src.frame_count().min(r.index.clips[b].frame_count()) {
+            let q = src.slice(start, start + len).expect("slice");
+            let out = search(&partner_only, &q, &params3, &mut no_progress()).expect("search");
+            alone.0 += out.matches.iter().any(|m| m.start_frame.abs_diff(start) as f32 <= 0.25 * fps) as usize;
+            alone.1 += out.matches.iter().any(|m| m.start_frame.abs_diff(start) as f32 <= 1.0 * fps) as usize;
+            alone.2 += 1;
+            start += step;
+        }
+        for (vi, (_, preset, mirror)) in variants.iter().enumerate() {
+            let params = SearchParams { max_results: 3, ..SearchParams::preset(*preset) };
+            let mut start = 0;
+            while start + len <= src.frame_count().min(r.index.clips[b].frame_count()) {
+                let q = src.slice(start, start + len).expect("slice");
+                let q = match mirror {
+                    0 => q,
+                    m => ClipFeatures::new("mirrored", fps, mirrored(q.features(Origin::Hips), *m == 2)),
+                };
+                let out = search(&lib, &q, &params, &mut no_progress()).expect("search");
+                let near = |tol_secs: f32| {
+                    out.matches.iter().any(|m| m.clip_index == b_in_lib && m.start_frame.abs_diff(start) as f32 <= tol_secs * fps)
+                };
+                totals[vi].0 += near(0.25) as usize;
+                totals[vi].1 += near(1.0) as usize;
+                totals[vi].2 += 1;
+                start += step;
+            }
+        }
+    }
+    println!(
+        "salsa partners, whole body, library = the partner's clip only: same stretch in top 3: {}/{} (within 0.25 s), {}/{} (within 1 s)",
+        alone.0, alone.2, alone.1, alone.2
+    );
+    for ((name, _, _), (h025, h1, n)) in variants.iter().zip(&totals) {
+        println!(
+            "salsa partners, {name}: other partner's same stretch in top 3: {h025}/{n} = {:.0}% (start within 0.25 s), {h1}/{n} = {:.0}% (within 1 s)",
+            100.0 * *h025 as f32 / *n as f32,
+            100.0 * *h1 as f32 / *n as f32
+        );
+        assert!(*n >= 16, "too few partner queries");
+    }
+}
+
+#[test]
+fn legs_from_one_motion_arms_from_another() {
+    let r = real();
+    let find = |name: &str| r.index.clips.iter().position(|c| c.name.contains(name)).unwrap_or_else(|| panic!("{name} not indexed"));
+    let (legs_clip, arms_clip) = (find("salsa_02"), find("indian_04"));
+    let len = 180;
+    let (legs_at, arms_at) = (900, 600);
+    let legs = r.index.clips[legs_clip].features(Origin::Hips);
+    let arms = r.index.clips[arms_clip].features(Origin::Hips);
+    let lower = BodyPreset::LowerBody.joints();
+    let mut data = Vec::with_capacity(len * FRAME_FLOATS);
+    for f in 0..len {
+        let (l, a) = (legs.frame(legs_at + f), arms.frame(arms_at + f));
+        for c in Canon::ALL {
+            let src = if lower.contains(&c) { l } else { a };
+            data.extend_from_slice(&src[c.index() * 3..c.index() * 3 + 3]);
+        }
+    }
+    let query = ClipFeatures::new("legs of salsa_02, arms of indian_04", 60.0, MotionFeatures { origin: Origin::Hips, data });
+    let is_legs_source = |m: &odori_core::search::SearchMatch| m.clip_index == legs_clip && m.start_frame.abs_diff(legs_at) <= 15;
+    let feet = search(&r.index, &query, &SearchParams::preset(BodyPreset::FeetOnly), &mut no_progress()).expect("search");
+    let whole = search(&r.index, &query, &SearchParams::preset(BodyPreset::WholeBody), &mut no_progress()).expect("search");
+    let show = |o: &odori_core::search::SearchOutcome| {
+        o.matches.iter().take(3).map(|m| format!("{} {}..={} d={:.3}", m.clip_name, m.start_frame, m.end_frame, m.distance)).collect::<Vec<_>>()
+    };
+    println!("body parts, feet only: {:?}", show(&feet));
+    println!("body parts, whole body: {:?}", show(&whole));
+    assert!(feet.matches.first().is_some_and(is_legs_source), "feet only should rank the leg source first: {:?}", show(&feet));
+    assert!(!whole.matches.first().is_some_and(is_legs_source), "whole body should not rank the leg source first: {:?}", show(&whole));
+}
+
+#[test]
+fn fast_equals_reference_on_real_clips() {
+    let r = real();
+    // A small library of real clips (the reference keeps whole matrices) and queries cut from
+    // them, transformed, with several presets.
+    let mut lib = FeatureIndex::new();
+    for c in r.index.clips.iter().take(4) {
+        lib.add_features(c.slice(0, c.frame_count().min(1500)).expect("slice"));
+    }
+    let mut rng = Rng(77);
+    for round in 0..8 {
+        let clip = round % lib.clips.len();
+        let src = &r.positions[clip];
+        let start = 100 + rng.usize(1000);
+        let frames = 60 + rng.usize(60);
+        let (pos, _) = transformed_query(&mut rng, src, start, frames);
+        let q = ClipFeatures::new("q", 60.0, MotionFeatures::from_positions(&pos));
+        let preset = [BodyPreset::WholeBody, BodyPreset::FeetOnly, BodyPreset::Arms, BodyPreset::LeftArm][round % 4];
+        let mut params = SearchParams { max_results: [1, 5, 20][round % 3], ..SearchParams::preset(preset) };
+        if round % 2 == 1 {
+            params.threshold = Some(0.5);
+        }
+        let want = reference_search(&lib, &q, &params);
+        let got = search(&lib, &q, &params, &mut no_progress()).expect("search");
+        let g: Vec<_> = got.matches.iter().map(|m| (m.clip_index, m.start_frame, m.end_frame)).collect();
+        let w: Vec<_> = want.iter().map(|m| (m.0, m.1, m.2)).collect();
+        assert_eq!(g, w, "round {round} {preset:?}");
+        for (m, x) in got.matches.iter().zip(&want) {
+            assert!((m.distance - x.3).abs() <= 1e-5 * x.3.max(1.0), "round {round}: {} vs {}", m.distance, x.3);
+        }
+    }
+}
