@@ -7,6 +7,8 @@ import { Messages } from "./ui/messages.js";
 import { SongPanel } from "./ui/song-panel.js";
 import { SongPlayer, decodeSong, bufferFromSamples } from "./audio/song-player.js";
 import { rmsEnvelope } from "./audio/rms.js";
+import { SearchClient } from "./search/client.js";
+import { SearchPanel } from "./ui/search-panel.js";
 
 const t0 = performance.now();
 const $ = (sel) => document.querySelector(sel);
@@ -33,17 +35,20 @@ async function main() {
   badge.classList.add(viewer.backend);
   document.body.dataset.backend = viewer.backend;
 
+  const searchClient = new SearchClient(library);
   const player = new Player({ viewer, library, canvas, scrub: $("#scrub"), label: $("#frame-label"), playButton: $("#play"), loop: $("#loop") });
   const panel = new LibraryPanel($("#library tbody"), library, {
-    onSelect: (id) => player.select(id),
+    onSelect: (id) => { player.select(id); if (searchPanel) searchPanel.clipChanged(); },
     onOverlay: (ids) => player.setOverlays(ids),
   });
+  let searchPanel = null;
   const loader = new FileLoader({
     library,
     messages,
     status: $("#status"),
     fpsInput: $("#fps-override"),
     onImported: (report) => {
+      for (const c of report.clips) searchClient.add(c.id);
       panel.refresh();
       const first = report.clips[0];
       if (first) {
@@ -59,7 +64,9 @@ async function main() {
     document.body.dataset.ready = "1";
   };
   // The app opens on the engine's own demo clip: something moves with no file.
+  searchPanel = new SearchPanel($("#search"), { client: searchClient, library, player, messages });
   const demo = library.addBuiltinDemo();
+  searchClient.add(demo.id);
   panel.refresh();
   panel.select(demo.id);
   const songPlayer = new SongPlayer();
@@ -72,7 +79,7 @@ async function main() {
   // first pose is on screen.
   loadDemoSong(songPanel, messages);
   new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); }).observe(canvas);
-  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, version: version() };
+  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, version: version() };
 }
 
 async function analyse(buffer) {

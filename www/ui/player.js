@@ -10,6 +10,7 @@ export class Player {
     this.last = null;
     this.onFirstFrame = null;
     this.songClock = null;
+    this.compare = null;
     this.onTick = null;
     this.drawnOnce = false;
     playButton.addEventListener("click", () => this.toggle());
@@ -27,14 +28,30 @@ export class Player {
     this.bindCamera();
   }
 
-  info() { return this.library.clip(this.clip); }
+  /** What the clock runs over: the selected clip, or a search comparison. */
+  info() {
+    if (this.compare) return { fps: 60, frames: Math.round(this.compare.duration * 60) + 1 };
+    return this.library.clip(this.clip);
+  }
 
   figures() {
+    if (this.compare) return this.compare.figures(this.time);
     const ids = [this.clip, ...this.overlays.filter((id) => id !== this.clip)];
     return ids.map((id) => ({ clip: id, timeSecs: this.time }));
   }
 
+  /** Plays a comparison: `{ duration, figures(t) }` (the search's overlay view). */
+  setCompare(spec) {
+    this.compare = spec;
+    this.time = 0;
+    this.scrub.max = String(Math.max(0, this.info().frames - 1));
+    this.viewer.frameFigures(this.library, this.figures());
+    this.play();
+    this.drawNow();
+  }
+
   select(id) {
+    this.compare = null;
     this.clip = id;
     this.time = 0;
     const c = this.info();

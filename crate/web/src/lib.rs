@@ -9,11 +9,13 @@
 mod error;
 mod library;
 mod music;
+mod search;
 mod viewer;
 
 pub use error::OdoriError;
 pub use library::Library;
 pub use music::{DemoSong, Song};
+pub use search::SearchIndex;
 pub use viewer::Viewer;
 
 use wasm_bindgen::prelude::*;

@@ -1,0 +1,223 @@
+//! Search by example (spec §B–C): a `SearchIndex` of normalised canonical features, built
+//! once per clip and searched with the exact fast subsequence DP. In the app it lives in a Web
+//! Worker (www/search-worker.js): the main thread sends each clip's canonical positions
+//! (`Library.searchFeatures`) and the worker searches off the UI thread with progress.
+
+use std::ops::ControlFlow;
+
+use js_sys::Float32Array;
+use odori_core::humanoid::{canonical_positions, Canon, CANON_COUNT};
+use odori_core::normalize::Origin;
+use odori_core::search::{self, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchParams, DEFAULT_INDEX_FPS};
+use odori_core::HumanoidStatus;
+use serde::{Deserialize, Serialize};
+use wasm_bindgen::prelude::*;
+
+use crate::error::{from_js, to_js, OdoriError};
+use crate::library::Library;
+
+fn search_err(e: search::SearchError) -> OdoriError {
+    let kind = match e {
+        search::SearchError::Cancelled { .. } => "cancelled",
+        _ => "search",
+    };
+    OdoriError::new(kind, e.to_string())
+}
+
+#[wasm_bindgen]
+impl Library {
+    /// Canonical joint positions of a humanoid clip resampled to the search rate (60 fps),
+    /// flat `frames × 21 × 3`, for `SearchIndex.addFeatures` (transferable to a worker).
+    /// Throws for a non-humanoid clip, naming why.
+    #[wasm_bindgen(js_name = searchFeatures)]
+    pub fn search_features(&self, id: u32) -> Result<Float32Array, OdoriError> {
+        let e = self.entry(id)?;
+        if let HumanoidStatus::NotHumanoid { reason } = &e.status {
+            return Err(OdoriError::new("not-humanoid", format!("clip \"{}\" cannot be searched: {reason}", e.clip.name)));
+        }
+        let index = FeatureIndex::new();
+        let clip = index.resampled(&e.clip);
+        let p = canonical_positions(&clip, &e.humanoid);
+        let flat: Vec<f32> = p.iter().flat_map(|v| v.to_array()).collect();
+        Ok(Float32Array::from(flat.as_slice()))
+    }
+}
+
+#[derive(Deserialize, Default)]
+#[serde(rename_all = "camelCase", default)]
+struct JsQuery {
+    clip_id: u32,
+    start_frame: usize,
+    end_frame: usize,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(rename_all = "camelCase", default)]
+struct JsParams {
+    preset: Option<BodyPreset>,
+    weights: Option<Vec<f32>>,
+    threshold: Option<f32>,
+    max_results: Option<usize>,
+    min_span_ratio: Option<f32>,
+    max_span_ratio: Option<f32>,
+}
+
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct JsMatch<'a> {
+    clip_id: u32,
+    #[serde(flatten)]
+    inner: &'a search::SearchMatch,
+}
+
+/// The search library, in one thread (a worker in the app).
+#[wasm_bindgen]
+pub struct SearchIndex {
+    index: FeatureIndex,
+    ids: Vec<u32>,
+}
+
+impl Default for SearchIndex {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+#[wasm_bindgen]
+impl SearchIndex {
+    #[wasm_bindgen(constructor)]
+    pub fn new() -> SearchIndex {
+        SearchIndex { index: FeatureIndex::new(), ids: Vec::new() }
+    }
+
+    /// Frame rate of every indexed clip's features (query and result frames count at it).
+    #[wasm_bindgen(getter)]
+    pub fn fps(&self) -> f32 {
+        DEFAULT_INDEX_FPS
+    }
+
+    /// Adds a clip from `Library.searchFeatures` under the library's clip id.
+    #[wasm_bindgen(js_name = addFeatures)]
+    pub fn add_features(&mut self, clip_id: u32, name: String, positions: Float32Array) -> Result<usize, OdoriError> {
+        let flat = positions.to_vec();
+        if flat.is_empty() || flat.len() % (CANON_COUNT * 3) != 0 {
+            return Err(OdoriError::new("bad-argument", format!("features of \"{name}\": {} values is not a whole number of 21-joint frames", flat.len())));
+        }
+        let pts: Vec<glam::Vec3> = flat.chunks_exact(3).map(|c| glam::Vec3::new(c[0], c[1], c[2])).collect();
+        self.remove(clip_id);
+        let k = self.index.add_features(ClipFeatures::new(name, DEFAULT_INDEX_FPS, MotionFeatures::from_positions(&pts)));
+        self.ids.push(clip_id);
+        Ok(k)
+    }
+
+    /// Adds a clip straight from a library in the same thread.
+    #[wasm_bindgen(js_name = addFromLibrary)]
+    pub fn add_from_library(&mut self, library: &Library, clip_id: u32) -> Result<usize, OdoriError> {
+        let f = library.search_features(clip_id)?;
+        let name = library.entry(clip_id)?.clip.name.clone();
+        self.add_features(clip_id, name, f)
+    }
+
+    /// Drops a clip; false when it was not indexed.
+    pub fn remove(&mut self, clip_id: u32) -> bool {
+        match self.ids.iter().position(|&i| i == clip_id) {
+            Some(k) => {
+                self.ids.remove(k);
+                self.index.clips.remove(k);
+                true
+            }
+            None => false,
+        }
+    }
+
+    #[wasm_bindgen(getter, js_name = clipCount)]
+    pub fn clip_count(&self) -> usize {
+        self.ids.len()
+    }
+
+    fn position(&self, clip_id: u32) -> Result<usize, OdoriError> {
+        self.ids
+            .iter()
+            .position(|&i| i == clip_id)
+            .ok_or_else(|| OdoriError::new("not-found", format!("clip {clip_id} is not in the search index (not humanoid, or not added)")))
+    }
+
+    /// Searches every indexed clip for the query (`{ clipId, startFrame, endFrame }`, frames
+    /// at `fps`, end exclusive) with `{ preset?, weights?, threshold?, maxResults?,
+    /// minSpanRatio?, maxSpanRatio? }`. `progress(framesDone, framesTotal)` is called between
+    /// chunks; returning `false` cancels (throws kind "cancelled"). Returns
+    /// `{ matches: [{ clipId, clipName, startFrame, endFrame, lengthFrames, startSecs, endSecs,
+    /// distance, path }], skipped, stats }`, best first, non-overlapping. The distance is the
+    /// DP cost divided by the path's total step weight (spec §C), and a match spans between
+    /// `minSpanRatio` (½) and `maxSpanRatio` (2) times the query's length.
+    pub fn search(
+        &self,
+        #[wasm_bindgen(unchecked_param_type = "SearchQuery")] query: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "SearchParamsJs | undefined")] params: JsValue,
+        progress: Option<js_sys::Function>,
+    ) -> Result<JsValue, OdoriError> {
+        let q: JsQuery = from_js(query, "query", &["clipId", "startFrame", "endFrame"])?;
+        let p: JsParams = from_js(params, "search params", &["preset", "weights", "threshold", "maxResults", "minSpanRatio", "maxSpanRatio"])?;
+        let mut sp = SearchParams::preset(p.preset.unwrap_or(BodyPreset::WholeBody));
+        if let Some(w) = p.weights {
+            if w.len() != CANON_COUNT {
+                return Err(OdoriError::new("bad-argument", format!("weights: {} values given, one per canonical joint (21) needed", w.len())));
+            }
+            sp.weights.copy_from_slice(&w);
+        }
+        sp.threshold = p.threshold;
+        if let Some(m) = p.max_results {
+            sp.max_results = m;
+        }
+        if let Some(r) = p.min_span_ratio {
+            sp.min_span_ratio = r;
+        }
+        if let Some(r) = p.max_span_ratio {
+            sp.max_span_ratio = r;
+        }
+        let k = self.position(q.clip_id)?;
+        let query = self.index.query_range(k, q.start_frame, q.end_frame).map_err(search_err)?;
+        let mut cb = |pr: search::SearchProgress| -> ControlFlow<()> {
+            match &progress {
+                Some(f) => {
+                    let r = f.call2(&JsValue::NULL, &JsValue::from(pr.frames_done as f64), &JsValue::from(pr.frames_total as f64));
+                    if matches!(r, Ok(v) if v.as_bool() == Some(false)) {
+                        ControlFlow::Break(())
+                    } else {
+                        ControlFlow::Continue(())
+                    }
+                }
+                None => ControlFlow::Continue(()),
+            }
+        };
+        let out = search::search(&self.index, &query, &sp, &mut cb).map_err(search_err)?;
+        let matches: Vec<JsMatch> = out.matches.iter().map(|m| JsMatch { clip_id: self.ids[m.clip_index], inner: m }).collect();
+        Ok(to_js(&serde_json::json!({ "matches": to_json(&matches), "skipped": to_json(&out.skipped), "stats": to_json(&out.stats) })))
+    }
+
+    /// x, y, z of one canonical joint ("rightHand", ...) over an indexed clip, normalised
+    /// (body heights; hip origin, or shoulder origin when `shoulders` is true), for plots.
+    #[wasm_bindgen(js_name = jointCurve, unchecked_return_type = "JointCurve")]
+    pub fn joint_curve(&self, clip_id: u32, joint: &str, shoulders: bool) -> Result<JsValue, OdoriError> {
+        let c = Canon::ALL
+            .into_iter()
+            .find(|c| c.name() == joint)
+            .ok_or_else(|| OdoriError::new("bad-argument", format!("'{joint}' is not a canonical joint name")))?;
+        let origin = if shoulders { Origin::Shoulders } else { Origin::Hips };
+        let k = self.position(clip_id)?;
+        Ok(to_js(&self.index.joint_curve(k, c, origin).map_err(search_err)?))
+    }
+}
+
+fn to_json<T: Serialize>(v: &T) -> serde_json::Value {
+    serde_json::to_value(v).unwrap_or(serde_json::Value::Null)
+}
+
+#[wasm_bindgen(typescript_custom_section)]
+const TS_SEARCH: &'static str = r#"
+export interface SearchQuery { clipId: number; startFrame: number; endFrame: number; }
+export type BodyPreset = "wholeBody" | "upperBody" | "lowerBody" | "arms" | "leftArm" | "rightArm" | "legs" | "feetOnly";
+export interface SearchParamsJs { preset?: BodyPreset; weights?: number[]; threshold?: number; maxResults?: number; minSpanRatio?: number; maxSpanRatio?: number; }
+export interface SearchMatch { clipId: number; clipIndex: number; clipName: string; startFrame: number; endFrame: number; lengthFrames: number; startSecs: number; endSecs: number; distance: number; cost: number; path: [number, number][]; }
+export interface JointCurve { joint: string; fps: number; x: number[]; y: number[]; z: number[]; }
+"#;
