@@ -5,6 +5,7 @@
 //! core are right-handed, Y up, in metres; angles are radians; time is in seconds or frames, and
 //! names say which.
 
+pub mod actions;
 pub mod bars;
 pub mod builtin;
 pub mod clip;
