@@ -13,6 +13,7 @@ pub mod humanoid;
 pub mod import;
 pub mod normalize;
 pub mod skeleton;
+pub mod text;
 
 pub use clip::{Clip, ClipError, TranslationTrack};
 pub use humanoid::{Canon, HumanoidMap, HumanoidStatus};
