@@ -8,7 +8,7 @@ mod figures;
 use odori_core::actions::{detect_contacts, ActionLibrary, BodyPart};
 use odori_core::humanoid::Canon;
 use odori_core::import::{import_bytes, ImportOptions};
-use odori_core::text::{animate_table, animate_text, parse, DiagnosticKind, JoinType, Lexicon, TextError};
+use odori_core::text::{animate_table, animate_text, animate_text_with_progress, parse, DiagnosticKind, JoinType, Lexicon, TextError};
 use odori_tests::read;
 
 fn lib() -> ActionLibrary {
@@ -179,6 +179,20 @@ fn bad_input_gives_clear_messages_and_partial_results() {
     a.clip.validate().unwrap();
     assert!(a.elements.windows(2).all(|w| w[1].join == JoinType::Composition || w[1].start_secs >= w[0].start_secs));
     assert!(a.diagnostics.iter().any(|d| d.kind == DiagnosticKind::MixedLanguages));
+    // Progress is reported and cancel stops early.
+    let mut calls = Vec::new();
+    animate_text_with_progress("走って、蹴る。喜ぶ。", &lib, &mut |d, t| {
+        calls.push((d, t));
+        true
+    })
+    .unwrap();
+    assert_eq!(calls.first(), Some(&(0, 3)));
+    assert_eq!(calls.last(), Some(&(3, 3)));
+    let r = animate_text_with_progress(&long, &lib, &mut |d, _| d < 5);
+    assert!(matches!(r, Err(TextError::Cancelled { done: 5, .. })), "{r:?}");
+    // A huge stated delay is capped.
+    let d = animate_text("走る。99999秒後に跳ぶ。", &lib).unwrap();
+    assert!(d.clip.duration_secs() < 60.0, "{}", d.clip.duration_secs());
     // Mixed with unknown words: the rest plays, the unknown one is located.
     let m = animate_text("太郎は走って, then juggles. 喜ぶ。", &lib).unwrap();
     assert_eq!(m.elements.iter().map(|e| e.motion.as_str()).collect::<Vec<_>>(), ["run", "rejoice"]);

@@ -36,21 +36,35 @@ pub struct TextAnimation {
 const JOIN_TAIL_SECS: f32 = 3.0;
 /// A cycle (walk, run) on its own plays at least this long, seconds.
 const CYCLE_MIN_SECS: f32 = 2.2;
+/// Longest stated delay honoured, seconds (「99999秒後に」 waits this long).
+pub const MAX_DELAY_SECS: f32 = 30.0;
 
 /// Text → animation: [`parse`] with the library's tags, then [`animate_table`].
 pub fn animate_text(text: &str, library: &ActionLibrary) -> Result<TextAnimation, TextError> {
+    animate_text_with_progress(text, library, &mut |_, _| true)
+}
+
+/// [`animate_text`] reporting progress: `progress(done, total)` is called after each group of
+/// the table is placed (total = number of groups); returning `false` cancels with
+/// [`TextError::Cancelled`]. For long texts in the browser.
+pub fn animate_text_with_progress(text: &str, library: &ActionLibrary, progress: &mut dyn FnMut(usize, usize) -> bool) -> Result<TextAnimation, TextError> {
     if text.trim().is_empty() {
         return Err(TextError::Empty);
     }
     let lex = Lexicon::for_library(library);
     let parsed = parse(text, &lex);
-    animate_table(&parsed.elements, library, parsed.diagnostics)
+    animate_table_with_progress(&parsed.elements, library, parsed.diagnostics, progress)
 }
 
 /// A time table → animation. Elements whose `clip` is set play that library entry (the UI's
 /// swap); others are looked up by motion tag (with "left"/"right" from the body part).
 /// `diagnostics` are passed through, with any new ones added.
-pub fn animate_table(elements: &[TimeTableElement], library: &ActionLibrary, mut diagnostics: Vec<Diagnostic>) -> Result<TextAnimation, TextError> {
+pub fn animate_table(elements: &[TimeTableElement], library: &ActionLibrary, diagnostics: Vec<Diagnostic>) -> Result<TextAnimation, TextError> {
+    animate_table_with_progress(elements, library, diagnostics, &mut |_, _| true)
+}
+
+/// [`animate_table`] with a progress / cancel callback (see [`animate_text_with_progress`]).
+pub fn animate_table_with_progress(elements: &[TimeTableElement], library: &ActionLibrary, mut diagnostics: Vec<Diagnostic>, progress: &mut dyn FnMut(usize, usize) -> bool) -> Result<TextAnimation, TextError> {
     if library.is_empty() {
         return Err(TextError::EmptyLibrary);
     }
@@ -114,7 +128,10 @@ pub fn animate_table(elements: &[TimeTableElement], library: &ActionLibrary, mut
     let mut joins = Vec::new();
     let mut compositions = Vec::new();
     let mut out: Option<Clip> = None;
-    for g in &groups {
+    for (done, g) in groups.iter().enumerate() {
+        if !progress(done, groups.len()) {
+            return Err(TextError::Cancelled { done, total: groups.len() });
+        }
         let base_el = g[0];
         let entry = &library.entries[table[base_el].clip.unwrap_or(0)];
         let overlay_secs: f32 = g[1..].iter().map(|&k| library.entries[table[k].clip.unwrap_or(0)].clip.duration_secs()).fold(0.0, f32::max);
@@ -157,17 +174,22 @@ pub fn animate_table(elements: &[TimeTableElement], library: &ActionLibrary, mut
                 out = Some(segment);
                 (0i64, 0usize)
             }
-            Some(prev) => {
+            Some(mut whole) => {
                 let kind = match table[base_el].join {
                     JoinType::Transition if table[base_el].delay_secs <= 0.0 => JoinKind::Transition,
                     _ => JoinKind::Connection,
                 };
-                let opts = JoinOptions { delay_secs: table[base_el].delay_secs.max(0.0), ..JoinOptions::default() };
+                let opts = JoinOptions { delay_secs: table[base_el].delay_secs.clamp(0.0, MAX_DELAY_SECS), ..JoinOptions::default() };
                 let tail_frames = ((JOIN_TAIL_SECS * fps) as usize).max(8);
-                let cut = prev.frame_count().saturating_sub(tail_frames);
-                let tail = prev.slice(cut, prev.frame_count(), prev.name.clone());
+                let cut = whole.frame_count().saturating_sub(tail_frames);
+                let tail = whole.slice(cut, whole.frame_count(), whole.name.clone());
                 let (joined, rep) = join_serial(&tail, &segment, kind, &opts).map_err(|source| TextError::Join { index: base_el, motion: table[base_el].motion.clone(), source })?;
-                let mut whole = prev.slice(0, cut, "text animation");
+                // Keep the frames before the tail as they are; the join replaces the tail.
+                let n = whole.joint_count();
+                whole.rotations.truncate(cut * n);
+                for t in &mut whole.translations {
+                    t.values.truncate(cut);
+                }
                 append(&mut whole, &joined);
                 let offset = cut as i64 + rep.b_frame_offset;
                 let start = cut + rep.b_start_frame;
@@ -203,6 +225,7 @@ pub fn animate_table(elements: &[TimeTableElement], library: &ActionLibrary, mut
             }
         }
     }
+    progress(groups.len(), groups.len());
     let mut clip = out.unwrap_or_else(|| library.entries[0].clip.clone());
     clip.name = "text animation".into();
     clip.source = "text".into();

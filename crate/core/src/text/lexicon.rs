@@ -66,6 +66,8 @@ pub struct Lexicon {
     pub en: Vec<EnglishForm>,
     /// The body part each motion mainly moves, for Composition.
     pub parts: std::collections::HashMap<String, BodyPart>,
+    /// Every surface form already added (Japanese and English), so a form names one motion.
+    seen: std::collections::HashSet<String>,
 }
 
 /// Motion tags the built-in library carries, with their Japanese verbs and English lemmas.
@@ -283,16 +285,14 @@ impl Lexicon {
     }
 
     fn knows(&self, word: &str) -> bool {
-        let w: Vec<char> = word.chars().collect();
-        self.ja.iter().any(|s| s.chars == w) || self.en.iter().any(|e| e.words.join(" ") == word.to_lowercase())
+        self.seen.contains(word) || self.seen.contains(&word.to_lowercase())
     }
 
     /// Adds a Japanese verb (all its forms).
     pub fn add_japanese(&mut self, word: &str, class: JaClass, motion: &str) {
         for (s, form) in conjugate(word, class) {
-            let chars: Vec<char> = s.chars().collect();
-            if !self.ja.iter().any(|x| x.chars == chars) {
-                self.ja.push(Surface { chars, motion: motion.to_string(), form });
+            if self.seen.insert(s.clone()) {
+                self.ja.push(Surface { chars: s.chars().collect(), motion: motion.to_string(), form });
             }
         }
     }
@@ -300,9 +300,8 @@ impl Lexicon {
     /// Adds an English lemma (all its inflections).
     pub fn add_english(&mut self, lemma: &str, motion: &str) {
         for (s, form) in inflect(lemma) {
-            let words: Vec<String> = s.split(' ').map(str::to_string).collect();
-            if !self.en.iter().any(|x| x.words == words) {
-                self.en.push(EnglishForm { words, motion: motion.to_string(), form });
+            if self.seen.insert(s.clone()) {
+                self.en.push(EnglishForm { words: s.split(' ').map(str::to_string).collect(), motion: motion.to_string(), form });
             }
         }
     }

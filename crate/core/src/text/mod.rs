@@ -19,7 +19,7 @@ use thiserror::Error;
 
 use crate::actions::{ActionError, BodyPart};
 
-pub use animate::{animate_table, animate_text, TextAnimation};
+pub use animate::{animate_table, animate_table_with_progress, animate_text, animate_text_with_progress, TextAnimation, MAX_DELAY_SECS};
 pub use lexicon::Lexicon;
 pub use parser::{parse, ParsedText, MAX_ELEMENTS, MAX_TEXT_CHARS};
 
@@ -119,6 +119,8 @@ pub enum TextError {
     NoActions { diagnostics: Vec<Diagnostic> },
     #[error("the action library is empty")]
     EmptyLibrary,
+    #[error("cancelled after {done} of {total} parts")]
+    Cancelled { done: usize, total: usize },
     #[error("element {index} ({motion}): {source}")]
     Join { index: usize, motion: String, source: ActionError },
 }
