@@ -477,9 +477,9 @@ fn wave(side: usize) -> Clip {
     // torso answers each swing.
     let up = |swing: f32| {
         let s = if side == 0 { 1.0 } else { -1.0 };
-        st.with_arm(side, idx::ABDUCT, 1.45)
+        st.with_arm(side, idx::ABDUCT, 1.4)
             .with_arm(side, idx::FLEX, 0.25)
-            .with_arm(side, idx::ELBOW, 1.25 + swing)
+            .with_arm(side, idx::ELBOW, 1.5 + swing)
             .with_arm(side, idx::ELBOW_PLANE, 1.45)
             .with_arm(side, idx::CLAV, 0.12)
             .with_arm(side, idx::WRIST, -0.3 * swing)
@@ -603,8 +603,8 @@ pub fn builtin_actions() -> Vec<Authored> {
 
     // Gutsy pose: right fist pulled down hard by the side, knees and chest crunch.
     let fist = |p: Pose, k: f32| {
-        p.with_arm(1, idx::FLEX, 0.55 - 0.45 * k)
-            .with_arm(1, idx::ELBOW, 1.9 + 0.4 * k)
+        p.with_arm(1, idx::FLEX, 0.4 - 0.35 * k)
+            .with_arm(1, idx::ELBOW, 2.2 + 0.3 * k)
             .with_arm(1, idx::ABDUCT, 0.35 - 0.2 * k)
             .with_arm(1, idx::ELBOW_PLANE, -0.2)
             .with_arm(1, idx::WRIST, 0.3)
