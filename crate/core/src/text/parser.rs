@@ -361,7 +361,9 @@ fn tokenize(cs: &[char], lex: &Lexicon) -> Vec<Token> {
             None => ja_word = Some((i, c.to_string())),
         }
         i += 1;
-        if matches!(c, 'は' | 'が' | 'を' | 'に' | 'へ') {
+        // (Not the が of ながら.)
+        let nagara = c == 'が' && cs.get(i) == Some(&'ら') && i >= 2 && cs[i - 2] == 'な';
+        if matches!(c, 'は' | 'が' | 'を' | 'に' | 'へ') && !nagara {
             flush(&mut out, &mut ja_word, i);
         }
         // An unknown conjugated verb ends its own clause: 踊って / 踊りながら.
@@ -677,4 +679,60 @@ pub fn builtin_parts() -> HashMap<String, BodyPart> {
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(text: &str) -> Vec<(String, JoinType, f32)> {
+        parse(text, &Lexicon::builtin()).elements.into_iter().map(|e| (e.motion, e.join, e.delay_secs)).collect()
+    }
+
+    fn unknown(text: &str) -> Vec<(String, usize)> {
+        parse(text, &Lexicon::builtin()).diagnostics.into_iter().filter(|d| d.kind == DiagnosticKind::UnknownVerb).map(|d| (d.text, d.span.start)).collect()
+    }
+
+    #[test]
+    fn empty_and_punctuation_only_give_nothing() {
+        for t in ["", "   ", "。。。", "、,.!?", "\n\n"] {
+            let p = parse(t, &Lexicon::builtin());
+            assert!(p.elements.is_empty() && p.diagnostics.is_empty(), "{t:?}: {p:?}");
+        }
+    }
+
+    #[test]
+    fn forms_decide_the_join() {
+        use JoinType::*;
+        assert_eq!(table("走ってからジャンプする。"), [("run".into(), Initial, 0.0), ("jump".into(), Connection, 0.0)]);
+        assert_eq!(table("花子は歩いている。"), [("walk".into(), Initial, 0.0)]);
+        assert_eq!(table("走り、蹴り、喜ぶ。").iter().map(|r| r.1).collect::<Vec<_>>(), [Initial, Transition, Transition]);
+        assert_eq!(table("走る。三秒後に座る。")[1], ("sit".into(), Connection, 3.0));
+        assert_eq!(table("走る。１０秒後に座る。")[1].2, 10.0);
+        assert_eq!(table("Run. After 1.5 seconds, sit down.")[1], ("sit".into(), Connection, 1.5));
+        assert_eq!(table("Sit down, wait 2 seconds and stand up.")[1], ("stand".into(), Connection, 2.0));
+        assert_eq!(table("歩く。同時に右手を振る。")[1].1, Composition);
+        assert_eq!(table("Taro walks. Meanwhile he waves.")[1].1, Composition);
+        assert_eq!(table("She walked slowly and then jumped.")[1], ("jump".into(), Transition, 0.0));
+    }
+
+    #[test]
+    fn unknown_verbs_are_located_and_do_not_become_actors() {
+        assert_eq!(unknown("太郎と花子は踊りながら歩く。"), [("踊りながら".to_string(), 6)]);
+        assert_eq!(unknown("踊る、走る、歌う。"), [("踊る".to_string(), 0), ("歌う".to_string(), 6)]);
+        assert_eq!(unknown("Taro sings, then runs."), [("sings".to_string(), 5)]);
+        let p = parse("太郎と花子は踊りながら歩く。", &Lexicon::builtin());
+        assert_eq!(p.elements[0].actor, "太郎と花子");
+    }
+
+    #[test]
+    fn limits_truncate_with_a_diagnostic() {
+        let long = "走る。".repeat(MAX_ELEMENTS + 5);
+        let p = parse(&long, &Lexicon::builtin());
+        assert_eq!(p.elements.len(), MAX_ELEMENTS);
+        assert!(p.diagnostics.iter().any(|d| d.kind == DiagnosticKind::Truncated));
+        let huge = "あ".repeat(MAX_TEXT_CHARS + 10);
+        let p = parse(&huge, &Lexicon::builtin());
+        assert!(p.diagnostics.iter().any(|d| d.kind == DiagnosticKind::Truncated));
+    }
 }
