@@ -218,8 +218,12 @@ pub fn compose(base: &Clip, overlay: &Clip, part: BodyPart, opts: &ComposeOption
     let stretch = (tb2 - tb) as f32 / (ta2 - ta).max(1) as f32;
     let blend = |i: usize, j: usize| -> f32 {
         let speed = va[i].length();
-        let d = if speed > 1e-4 { (pa[i] - pb[j]).length() / speed } else { opts.max_blend_secs };
-        d.clamp(opts.min_blend_secs, opts.max_blend_secs.max(opts.min_blend_secs))
+        let d = if speed > 1e-4 { (pa[i] - pb[j]).length() / speed } else { f32::INFINITY };
+        // Options may come from the UI: a non-finite bound falls back to the default.
+        let fin = |v: f32, dflt: f32| if v.is_finite() && v > 0.0 { v } else { dflt };
+        let lo = fin(opts.min_blend_secs, 0.1);
+        let hi = fin(opts.max_blend_secs, 0.8).max(lo);
+        if d.is_finite() { d.clamp(lo, hi) } else { hi }
     };
     let (d_in, d_out) = (blend(ta, tb), blend(ta2, tb2));
     let (fin, fout) = ((d_in * fps).max(1.0), (d_out * fps).max(1.0));
@@ -318,5 +322,19 @@ mod tests {
             }
         }
         assert!(rep.stretch > 0.5 && rep.stretch < 2.0, "stretch {}", rep.stretch);
+    }
+
+    #[test]
+    fn odd_options_do_not_panic() {
+        let lib = ActionLibrary::builtin();
+        let walk = lib.entries[lib.find("walk", &[]).unwrap()].clip_for(5.0);
+        let wave = &lib.entries[lib.find("wave", &["right"]).unwrap()].clip;
+        let opts = ComposeOptions { min_blend_secs: f32::NAN, max_blend_secs: -1.0, search_secs: f32::NAN, base_from_frame: 1_000_000, ..ComposeOptions::default() };
+        let (out, rep) = compose(&walk, wave, BodyPart::RightArm, &opts).unwrap();
+        out.validate().unwrap();
+        assert!(rep.start_blend_secs.is_finite());
+        let fixed = SwitchTimes { base_start_frame: 99_999, overlay_start_frame: 99_999, base_end_frame: 0, overlay_end_frame: 0 };
+        assert!(compose(&walk, wave, BodyPart::RightArm, &ComposeOptions { fixed: Some(fixed), ..ComposeOptions::default() }).is_ok());
+        assert!(matches!(compose(&walk.slice(0, 3, "short"), wave, BodyPart::RightArm, &opts), Err(ActionError::TooShort { .. })));
     }
 }
