@@ -511,7 +511,9 @@ pub fn builtin_actions() -> Vec<Authored> {
     out.push(Authored { clip: run, tags: tags(&["run", "走る", "locomotion", "cycle"]), part: None, cycle_advance: Some(run_adv) });
 
     // Kick with the right leg: wind up, swing through, follow through, set down.
-    let plant = |p: Pose| p.with_leg(0, idx::KNEE, 0.18).with_leg(0, idx::HIP_FLEX, 0.09);
+    fn plant(p: Pose) -> Pose {
+        p.with_leg(0, idx::KNEE, 0.18).with_leg(0, idx::HIP_FLEX, 0.09)
+    }
     let kick = keyed(
         "kick",
         vec![
@@ -527,7 +529,9 @@ pub fn builtin_actions() -> Vec<Authored> {
     out.push(Authored { clip: kick, tags: tags(&["kick", "蹴る", "leg"]), part: Some(crate::actions::BodyPart::RightLeg), cycle_advance: None });
 
     // Jump: crouch with arms back, take off, tuck, land, absorb, stand.
-    let crouch = |k: f32| st.with_leg(0, idx::HIP_FLEX, 0.8 * k).with_leg(1, idx::HIP_FLEX, 0.8 * k).with_leg(0, idx::KNEE, 1.3 * k).with_leg(1, idx::KNEE, 1.3 * k).with(idx::SPINE, 0.35 * k);
+    fn crouch(k: f32) -> Pose {
+        Pose::standing().with_leg(0, idx::HIP_FLEX, 0.8 * k).with_leg(1, idx::HIP_FLEX, 0.8 * k).with_leg(0, idx::KNEE, 1.3 * k).with_leg(1, idx::KNEE, 1.3 * k).with(idx::SPINE, 0.35 * k)
+    }
     let jump = keyed(
         "jump",
         vec![
@@ -550,20 +554,20 @@ pub fn builtin_actions() -> Vec<Authored> {
     out.push(Authored { clip: wave(0), tags: tags(&["wave", "left", "手を振る", "左手"]), part: Some(crate::actions::BodyPart::LeftArm), cycle_advance: None });
 
     // Clap: hands together in front of the chest three times.
-    let open = |p: Pose| {
+    fn open(p: Pose) -> Pose {
         let mut p = p;
         for s in 0..2 {
             p = p.with_arm(s, idx::FLEX, 0.75).with_arm(s, idx::ELBOW, 1.35).with_arm(s, idx::ELBOW_PLANE, 0.3).with_arm(s, idx::ABDUCT, 0.45);
         }
         p
-    };
-    let shut = |p: Pose| {
+    }
+    fn shut(p: Pose) -> Pose {
         let mut p = p;
         for s in 0..2 {
             p = p.with_arm(s, idx::FLEX, 0.95).with_arm(s, idx::ELBOW, 1.5).with_arm(s, idx::ELBOW_PLANE, -1.25).with_arm(s, idx::ABDUCT, 0.0);
         }
         p.with(idx::HEAD, 0.08)
-    };
+    }
     let mut keys = vec![(0.0, st), (0.35, open(st))];
     for k in 0..3 {
         let t0 = 0.35 + 0.42 * k as f32;
@@ -575,13 +579,13 @@ pub fn builtin_actions() -> Vec<Authored> {
     out.push(Authored { clip: keyed("clap", keys, &BOTH), tags: tags(&["clap", "拍手", "手を叩く"]), part: Some(crate::actions::BodyPart::BothArms), cycle_advance: None });
 
     // Rejoice: both arms thrown up, two little hops, arms shaking.
-    let arms_up = |p: Pose, shake: f32| {
+    fn arms_up(p: Pose, shake: f32) -> Pose {
         let mut p = p;
         for s in 0..2 {
             p = p.with_arm(s, idx::ABDUCT, 2.55 + shake).with_arm(s, idx::FLEX, 0.35).with_arm(s, idx::ELBOW, 0.3 - shake).with_arm(s, idx::ELBOW_PLANE, 1.2);
         }
         p.with(idx::HEAD, -0.25).with(idx::CHEST, -0.1)
-    };
+    }
     let rejoice = keyed(
         "rejoice",
         vec![
@@ -602,7 +606,7 @@ pub fn builtin_actions() -> Vec<Authored> {
     out.push(Authored { clip: rejoice, tags: tags(&["rejoice", "cheer", "celebrate", "喜ぶ", "happy"]), part: None, cycle_advance: None });
 
     // Gutsy pose: right fist pulled down hard by the side, knees and chest crunch.
-    let fist = |p: Pose, k: f32| {
+    fn fist(p: Pose, k: f32) -> Pose {
         p.with_arm(1, idx::FLEX, 0.4 - 0.35 * k)
             .with_arm(1, idx::ELBOW, 2.2 + 0.3 * k)
             .with_arm(1, idx::ABDUCT, 0.35 - 0.2 * k)
@@ -614,7 +618,7 @@ pub fn builtin_actions() -> Vec<Authored> {
             .with_leg(1, idx::KNEE, 0.04 + 0.3 * k)
             .with_leg(0, idx::HIP_FLEX, 0.02 + 0.15 * k)
             .with_leg(1, idx::HIP_FLEX, 0.02 + 0.15 * k)
-    };
+    }
     let guts = keyed("gutsy pose", vec![(0.0, st), (0.35, fist(st, 0.0)), (0.55, fist(st, 1.0)), (0.75, fist(st, 0.75)), (0.9, fist(st, 1.0)), (1.5, fist(st, 0.85)), (2.0, st)], &BOTH);
     out.push(Authored { clip: guts, tags: tags(&["gutsy pose", "fist pump", "ガッツポーズ", "celebrate"]), part: Some(crate::actions::BodyPart::RightArm), cycle_advance: None });
 
@@ -633,7 +637,9 @@ pub fn builtin_actions() -> Vec<Authored> {
     out.push(Authored { clip: turn, tags: tags(&["turn", "回る", "振り向く", "turn around"]), part: None, cycle_advance: None });
 
     // Bow: bend at the hips, hold, come back up.
-    let bent = |k: f32| st.with(idx::HIPS_PITCH, 0.35 * k).with(idx::SPINE, 0.3 * k).with(idx::CHEST, 0.2 * k).with(idx::HEAD, 0.15 * k).with_leg(0, idx::HIP_FLEX, 0.02 - 0.3 * k).with_leg(1, idx::HIP_FLEX, 0.02 - 0.3 * k);
+    fn bent(k: f32) -> Pose {
+        Pose::standing().with(idx::HIPS_PITCH, 0.35 * k).with(idx::SPINE, 0.3 * k).with(idx::CHEST, 0.2 * k).with(idx::HEAD, 0.15 * k).with_leg(0, idx::HIP_FLEX, 0.02 - 0.3 * k).with_leg(1, idx::HIP_FLEX, 0.02 - 0.3 * k)
+    }
     let bow = keyed("bow", vec![(0.0, st), (0.6, bent(1.0)), (1.2, bent(0.95)), (1.9, st)], &BOTH);
     out.push(Authored { clip: bow, tags: tags(&["bow", "お辞儀", "礼"]), part: None, cycle_advance: None });
 
@@ -722,5 +728,19 @@ mod tests {
         let jump = acts.iter().find(|a| a.clip.name == "jump").unwrap();
         let top = (0..jump.clip.frame_count()).map(|f| jump.clip.root_translation(f).y).fold(f32::MIN, f32::max);
         assert!(top > 1.0, "jump apex {top}");
+    }
+
+    #[test]
+    fn arm_only_actions_leave_the_legs_standing() {
+        // Guards the key poses: clapping, waving, pointing and nodding must not bend a knee.
+        let standing = Pose::standing().to_rotations();
+        for a in builtin_actions().iter().filter(|a| matches!(a.clip.name.as_str(), "clap" | "wave right hand" | "wave left hand" | "point" | "nod")) {
+            for f in 0..a.clip.frame_count() {
+                for c in [Canon::LeftLowerLeg, Canon::RightLowerLeg, Canon::LeftUpperLeg, Canon::RightUpperLeg] {
+                    let q = a.clip.frame_rotations(f)[c.index()];
+                    assert!(q.angle_between(standing[c.index()]) < 1e-4, "{} frame {f}: {c:?} moved", a.clip.name);
+                }
+            }
+        }
     }
 }
