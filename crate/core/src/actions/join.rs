@@ -474,7 +474,7 @@ const RELEASE_SECS: f32 = 0.3;
 /// Locks planted feet from `start`: during the window every planted foot stays where it
 /// landed; after it, feet still locked stay locked until they lift, then their leg angles
 /// blend back to the clip's own while the foot is in the air. Returns the frames with IK.
-fn lock_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, end: usize) -> usize {
+pub(crate) fn lock_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, end: usize) -> usize {
     let n = CANON_COUNT;
     let frames = out.frame_count().min(contacts.len());
     let sk = out.skeleton.clone();

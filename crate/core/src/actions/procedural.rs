@@ -313,6 +313,7 @@ pub fn build_clip(name: &str, frames: usize, pose_at: &dyn Fn(f32) -> Pose, cont
     let mut primary: Option<usize> = None;
     let mut prev = Vec3::ZERO;
     let mut vel = Vec3::ZERO;
+    let mut recent: Vec<Vec3> = Vec::with_capacity(7);
     for f in 0..total {
         let c = touching[f];
         for s in 0..2 {
@@ -327,22 +328,36 @@ pub fn build_clip(name: &str, frames: usize, pose_at: &dyn Fn(f32) -> Pose, cont
         if primary.is_some_and(|s| !c[s]) {
             primary = None;
         }
+        // The foot that just landed carries the body from now on (the other is about to
+        // push off and is held in place by IK below).
+        if let Some(s) = (0..2).find(|&s| c[s] && (f == 0 || !touching[f - 1][s])) {
+            if f > 0 || primary.is_none() {
+                primary = Some(s);
+            }
+        }
         if primary.is_none() {
             primary = (0..2).find(|&s| c[s]);
         }
-        let xz = match primary.and_then(|s| anchor[s].map(|a| (a, s))) {
+        let grounded = primary.and_then(|s| anchor[s].map(|a| (a, s)));
+        let xz = match grounded {
             Some((a, s)) => Vec3::new(a.x - ankle[f][s].x, 0.0, a.z - ankle[f][s].z),
             None => prev + vel,
         };
-        if f > 0 {
-            vel = xz - prev;
+        // In flight the body keeps the mean ground speed of its last tenth of a second on
+        // the floor (one frame's speed would carry the wobble of a push-off).
+        if f > 0 && grounded.is_some() {
+            recent.push(xz - prev);
+            if recent.len() > 6 {
+                recent.remove(0);
+            }
+            vel = recent.iter().copied().sum::<Vec3>() / recent.len() as f32;
         }
         prev = xz;
         root.push(Vec3::new(xz.x, y[f].unwrap_or(0.95) + SOLE_HEIGHT, xz.z));
     }
     let next = root.pop().unwrap_or(Vec3::ZERO);
     rotations.truncate(frames * CANON_COUNT);
-    let clip = Clip {
+    let mut clip = Clip {
         name: name.to_string(),
         source: "built-in".into(),
         fps,
@@ -350,6 +365,10 @@ pub fn build_clip(name: &str, frames: usize, pose_at: &dyn Fn(f32) -> Pose, cont
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: root }],
     };
+    // The root follows one planted foot; a second planted foot (double support) is held
+    // where it landed by two-bone IK and released smoothly once it lifts.
+    touching.truncate(frames);
+    crate::actions::join::lock_feet(&mut clip, &touching, 0, frames);
     (clip, next)
 }
 
@@ -599,7 +618,7 @@ pub fn builtin_actions() -> Vec<Authored> {
             (2.1, st),
         ],
         &|t| {
-            let air = (0.47..0.62).contains(&t) || (0.92..1.07).contains(&t);
+            let air = (0.45..0.65).contains(&t) || (0.9..1.1).contains(&t);
             [!air, !air]
         },
     );
