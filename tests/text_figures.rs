@@ -149,3 +149,29 @@ pub fn switch_times(lib: &ActionLibrary) -> Vec<(&'static str, CompositionReport
         ("fixed B: overlay's middle 80 %", run(Some(SwitchTimes { base_start_frame: 0, overlay_start_frame: nb / 10, base_end_frame: nb * 8 / 10, overlay_end_frame: nb * 9 / 10 }))),
     ]
 }
+
+/// Foot skate over a whole animation: for every run of frames where a foot is detected as
+/// planted (height and speed, spec §I), the largest horizontal drift from where it landed;
+/// `(max, mean over runs)` in cm.
+pub fn whole_skate_cm(clip: &Clip) -> (f32, f32) {
+    let c = odori_core::actions::detect_contacts(clip);
+    let mut runs = Vec::new();
+    let mut pos = Vec::new();
+    let mut anchor: [Option<(Vec3, f32)>; 2] = [None, None];
+    for f in 0..clip.frame_count() {
+        clip.world_positions_into(f, &mut pos);
+        for (s, foot) in [Canon::LeftFoot, Canon::RightFoot].into_iter().enumerate() {
+            let p = pos[foot.index()];
+            if c.frames[f][s] {
+                let (a, worst) = anchor[s].get_or_insert((p, 0.0));
+                *worst = worst.max(Vec3::new(p.x - a.x, 0.0, p.z - a.z).length());
+            } else if let Some((_, w)) = anchor[s].take() {
+                runs.push(w);
+            }
+        }
+    }
+    runs.extend(anchor.iter().flatten().map(|a| a.1));
+    let max = runs.iter().copied().fold(0.0, f32::max) * 100.0;
+    let mean = if runs.is_empty() { 0.0 } else { runs.iter().sum::<f32>() / runs.len() as f32 * 100.0 };
+    (max, mean)
+}

@@ -56,6 +56,13 @@ fn main() {
         println!("  {:<30} without locking {:6.2} cm   with locking {:6.3} cm   ({} frames held by IK)", s.label, s.without_lock.drift_without_lock_cm, s.with_lock.drift_with_lock_cm, s.with_lock.locked_frames);
     }
 
+    println!("== foot skate over whole animations (every detected planted run, not only the blends)");
+    for text in ["太郎は走って，ボールを蹴る．そして喜ぶ．", "歩いて、走って、歩く。", "歩きながら右手を振る", "Walk, then jump and cheer. After that, turn around and bow."] {
+        let a = animate_text(text, &lib).expect("animate");
+        let (max, mean) = figures::whole_skate_cm(&a.clip);
+        println!("  {:<60} max {:5.2} cm, mean {:5.2} cm per planted run", text, max, mean);
+    }
+
     println!("== sway transfer, 'walk while waving the right hand' (composed interval)");
     let s = figures::sway(&lib);
     println!("  hips: variance of deviation from plain walking {:.4} deg² with sway, {:.4} deg² without", s.hips_var_with, s.hips_var_without);

@@ -41,6 +41,10 @@ fn papers_sentence_animates_with_three_rows() {
     for j in &a.joins {
         assert!(j.drift_with_lock_cm < 2.0, "{j:?}");
     }
+    // Over the whole animation, every detected planted run (not only the blends).
+    let (max_cm, mean_cm) = figures::whole_skate_cm(&a.clip);
+    println!("paper's sentence, whole animation: planted-foot drift max {max_cm:.2} cm, mean {mean_cm:.2} cm");
+    assert!(max_cm < 4.0 && mean_cm < 1.0, "{max_cm} {mean_cm}");
     // The table serialises the way JavaScript gets it.
     let json = serde_json::to_value(&a.elements).unwrap();
     assert_eq!(json[1]["join"], "transition");
