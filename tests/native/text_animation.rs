@@ -183,6 +183,12 @@ fn bad_input_gives_clear_messages_and_partial_results() {
     a.clip.validate().unwrap();
     assert!(a.elements.windows(2).all(|w| w[1].join == JoinType::Composition || w[1].start_secs >= w[0].start_secs));
     assert!(a.diagnostics.iter().any(|d| d.kind == DiagnosticKind::MixedLanguages));
+    // A part motion that outlasts its one-shot base plays after it, said so.
+    let f = animate_text("Nod while waving the right hand.", &lib).unwrap();
+    let joins: Vec<JoinType> = f.elements.iter().map(|e| e.join).collect();
+    assert_eq!(joins, [JoinType::Initial, JoinType::Transition], "{:?}", f.elements);
+    assert!(f.diagnostics.iter().any(|d| d.kind == DiagnosticKind::JoinFallback));
+    assert!(f.elements[1].start_secs > 0.0 && f.elements[1].duration_secs > 0.5);
     // Progress is reported and cancel stops early.
     let mut calls = Vec::new();
     animate_text_with_progress("走って、蹴る。喜ぶ。", &lib, &mut |d, t| {

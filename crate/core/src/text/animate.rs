@@ -109,10 +109,32 @@ pub fn animate_table_with_progress(elements: &[TimeTableElement], library: &Acti
     if table.is_empty() {
         return Err(TextError::NoActions { diagnostics });
     }
-    // A Composition whose base was dropped becomes a serial element.
+    // A Composition needs a base that outlasts it: a cycle (repeated as needed) or a one-shot
+    // longer than the overlay. Otherwise the element plays after the previous one.
+    let mut base: Option<usize> = None;
     for k in 0..table.len() {
-        if table[k].join == JoinType::Composition && (k == 0 || table[..k].iter().all(|b| b.join == JoinType::Composition)) {
+        if table[k].join != JoinType::Composition {
+            base = Some(k);
+            continue;
+        }
+        let fits = base.is_some_and(|b| {
+            let be = &library.entries[table[b].clip.unwrap_or(0)];
+            let ov = &library.entries[table[k].clip.unwrap_or(0)];
+            be.cycle_advance.is_some() || be.clip.duration_secs() >= ov.clip.duration_secs() + 0.2
+        });
+        if !fits {
+            if let Some(b) = base {
+                diagnostics.push(Diagnostic {
+                    kind: DiagnosticKind::JoinFallback,
+                    text: table[k].verb.clone(),
+                    span: table[k].span,
+                    message: format!("'{}' lasts longer than '{}' it should run with; it plays after it instead", table[k].verb, table[b].verb),
+                });
+            }
             table[k].join = if k == 0 { JoinType::Initial } else { JoinType::Transition };
+            table[k].previous = k.checked_sub(1);
+            table[k].switched_part = None;
+            base = Some(k);
         }
     }
 
