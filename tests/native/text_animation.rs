@@ -132,6 +132,17 @@ fn person_tagged_clip_is_found_by_its_tags() {
     table[1].clip = Some(kick_alt);
     let swapped = animate_table(&table, &lib, Vec::new()).unwrap();
     assert_eq!(swapped.elements[1].clip, Some(kick_alt));
+    let builtin_kick = lib.entries.iter().position(|e| e.builtin && e.has_tag("kick")).unwrap();
+    assert_eq!(lib.alternatives(kick_alt, "kick"), [builtin_kick]);
+    // The table goes to JavaScript and comes back edited as JSON (camelCase).
+    let json = serde_json::to_string(&swapped.elements).unwrap();
+    assert!(json.contains("\"switchedPart\"") && json.contains("\"delaySecs\"") && json.contains("\"utf16Start\""));
+    let back: Vec<odori_core::text::TimeTableElement> = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, swapped.elements);
+    let again = animate_table(&back, &lib, Vec::new()).unwrap();
+    assert_eq!(again.clip.frame_count(), swapped.clip.frame_count());
+    let whole = serde_json::to_value(&again).unwrap();
+    assert!(whole["clip"]["rotations"].is_array() && whole["joins"][0]["driftWithLockCm"].is_number());
 }
 
 #[test]
