@@ -165,6 +165,9 @@ fn switch_frames(a: &Clip, b: &Clip, ca: &Contacts, cb: &Contacts, tail: usize, 
     best
 }
 
+/// Fewest frames between two paired keyframes of a cycle-aligned Transition.
+const MIN_KEY_GAP: usize = 4;
+
 /// Events of both feet within `[from, to]`.
 fn events_in(c: &Contacts, from: usize, to: usize) -> Vec<ContactEvent> {
     c.events().into_iter().filter(|e| e.frame >= from && e.frame <= to).collect()
@@ -219,6 +222,17 @@ fn cycle_knots(ca: &Contacts, cb: &Contacts, na: usize, nb: usize, search: usize
         }
         ka.push(next_a.frame);
         kb.push(next_b.frame);
+        // Keyframes closer than a few frames in either motion would make the warp race
+        // through an interval: drop such interior pairs.
+        let mut k = 1;
+        while k + 1 < ka.len() {
+            if ka[k] < ka[k - 1] + MIN_KEY_GAP || kb[k] < kb[k - 1] + MIN_KEY_GAP || ka[k + 1] < ka[k] + MIN_KEY_GAP || kb[k + 1] < kb[k] + MIN_KEY_GAP {
+                ka.remove(k);
+                kb.remove(k);
+            } else {
+                k += 1;
+            }
+        }
         return Some((ka, kb));
     }
     None
@@ -271,11 +285,16 @@ pub fn join_serial(a: &Clip, b: &Clip, kind: JoinKind, opts: &JoinOptions) -> Re
             window_start = plan.len();
             b_start = window_start;
             let intervals = ka.len() - 1;
+            // The weight follows output time over the expected length of the blend, so it
+            // rises smoothly whatever the keyframe spacing.
+            let expected: f32 = (0..intervals).map(|k| 0.5 * ((ka[k + 1] - ka[k]) + (kb[k + 1] - kb[k])) as f32).sum::<f32>().max(1.0);
             let mut s = 0.0f32; // knot coordinate: interval index + fraction
+            let mut elapsed = 0.0f32;
             while s < intervals as f32 {
                 let k = (s.floor() as usize).min(intervals - 1);
                 let frac = s - k as f32;
-                let w = smooth(s / intervals as f32);
+                let w = smooth(elapsed / expected);
+                elapsed += 1.0;
                 let da = (ka[k + 1] - ka[k]) as f32;
                 let db = (kb[k + 1] - kb[k]) as f32;
                 let fa = ka[k] as f32 + frac * da;
@@ -393,6 +412,12 @@ pub fn join_serial(a: &Clip, b: &Clip, kind: JoinKind, opts: &JoinOptions) -> Re
                 let rel_of = |s: usize| rel[Foot::BOTH[s].ankle().index()];
                 if anchor.is_some_and(|(s, _)| !pf.contact[s]) {
                     anchor = None;
+                }
+                // A foot that lands carries the body from now on; the other one, about to
+                // lift, is held by IK for its last frames on the floor.
+                let landed = (0..2).find(|&s| pf.contact[s] && k > window_start && !plan[k - 1].contact[s] && anchor.is_some_and(|(a, _)| a != s));
+                if let Some(s) = landed {
+                    anchor = Some((s, Vec3::new(estimate.x, 0.0, estimate.z) + rel_of(s)));
                 }
                 if anchor.is_none() {
                     anchor = (0..2).find(|&s| pf.contact[s]).map(|s| (s, Vec3::new(estimate.x, 0.0, estimate.z) + rel_of(s)));
@@ -563,7 +588,9 @@ mod tests {
         assert!(rep.drift_with_lock_cm < 2.0, "{rep:?}");
         assert!(rep.locked_frames > 0);
         // No teleporting root: at most a run's per-frame travel.
-        assert!(max_root_step(&out) < 0.12, "root step {}", max_root_step(&out));
+        let v = &out.translations[0].values;
+        let worst = (1..v.len()).max_by(|&a, &b| (v[a] - v[a - 1]).length().total_cmp(&(v[b] - v[b - 1]).length())).unwrap();
+        assert!(max_root_step(&out) < 0.08, "root step {} at frame {worst} ({rep:?}): {:?}", max_root_step(&out), &v[worst - 3..worst + 3]);
         let off = JoinOptions { foot_lock: false, ..JoinOptions::default() };
         let (_, rep2) = join_serial(&walk, &run, JoinKind::Transition, &off).unwrap();
         assert_eq!(rep2.locked_frames, 0);

@@ -249,8 +249,9 @@ fn with_secondary(time_secs: f32, pose_at: &dyn Fn(f32) -> Pose) -> Pose {
 /// ground position keeps the first-planted touching foot where it landed. When no foot
 /// touches, the root follows a ballistic parabola between take-off and landing and keeps its
 /// horizontal velocity. `frames` frames at [`ACTION_FPS`]; returns the clip and the root
-/// position one frame past the end (the advance of one cycle, for cyclic actions).
-pub fn build_clip(name: &str, frames: usize, pose_at: &dyn Fn(f32) -> Pose, contacts: &dyn Fn(f32) -> [bool; 2]) -> (Clip, Vec3) {
+/// position one frame past the end (the advance of one cycle, for cyclic actions). `cyclic`:
+/// the clip repeats, so smoothing wraps around.
+pub fn build_clip(name: &str, frames: usize, cyclic: bool, pose_at: &dyn Fn(f32) -> Pose, contacts: &dyn Fn(f32) -> [bool; 2]) -> (Clip, Vec3) {
     let skeleton = Arc::new(canonical_skeleton());
     let fps = ACTION_FPS;
     let total = frames + 1;
@@ -274,16 +275,12 @@ pub fn build_clip(name: &str, frames: usize, pose_at: &dyn Fn(f32) -> Pose, cont
         rotations.extend_from_slice(&r);
     }
     // Heights of the frames with a contact; parabolas in between.
+    // On the ground, the lowest sole of either foot sits on the floor: a swing foot coming
+    // down takes the weight smoothly instead of sinking through the floor before it lands.
     let mut y: Vec<Option<f32>> = (0..total)
         .map(|f| {
             let c = touching[f];
-            let mut low = f32::MAX;
-            for s in 0..2 {
-                if c[s] {
-                    low = low.min(sole[f][s]);
-                }
-            }
-            (low < f32::MAX).then_some(-low)
+            (c[0] || c[1]).then(|| -sole[f][0].min(sole[f][1]))
         })
         .collect();
     let mut f = 0;
@@ -307,6 +304,25 @@ pub fn build_clip(name: &str, frames: usize, pose_at: &dyn Fn(f32) -> Pose, cont
             *v = Some(y0 + (y1 - y0) * u + 0.5 * GRAVITY * a * b);
         }
     }
+    // A light smoothing of the height (±4 frames, wrapping for cycles) takes the kinks out
+    // of weight transfers; the feet move by millimetres.
+    let raw_y: Vec<f32> = y.iter().map(|v| v.unwrap_or(0.95)).collect();
+    let half = 4usize;
+    let y: Vec<Option<f32>> = (0..total)
+        .map(|f| {
+            let mut sum = 0.0;
+            let mut n = 0.0;
+            for d in 0..=2 * half {
+                let g = f as i64 + d as i64 - half as i64;
+                let g = if cyclic { g.rem_euclid(frames.max(1) as i64) as usize } else { g.clamp(0, total as i64 - 1) as usize };
+                // Symmetric triangle weights.
+                let w = (half + 1 - (d as i64 - half as i64).unsigned_abs() as usize) as f32;
+                sum += w * raw_y[g];
+                n += w;
+            }
+            Some(sum / n)
+        })
+        .collect();
     // Ground positions: keep the first-planted foot still.
     let mut root = Vec::with_capacity(total);
     let mut anchor: [Option<Vec3>; 2] = [None, None];
@@ -395,6 +411,10 @@ fn frames_for(duration_secs: f32) -> usize {
     (duration_secs * ACTION_FPS).round().max(2.0) as usize
 }
 
+/// Thigh and shin lengths of the canonical skeleton, metres.
+const THIGH: f32 = 0.42;
+const SHIN: f32 = 0.40;
+
 /// Gait parameters of a walk or run cycle.
 struct Gait {
     cycle_secs: f32,
@@ -413,8 +433,22 @@ fn gait_leg(g: &Gait, phase: f32) -> (f32, f32, f32, bool) {
     let p = phase.rem_euclid(1.0);
     if p < g.stance {
         let u = p / g.stance;
-        let flex = g.flex_fwd + (g.flex_back - g.flex_fwd) * u;
         let knee = 0.05 + g.knee_stance * (PI * u).sin();
+        // Hip flexion such that the ankle moves back under the hip at a constant speed: the
+        // body then travels at an even pace over a planted foot.
+        let reach = |flex: f32, knee: f32| THIGH * flex.sin() + SHIN * (flex - knee).sin();
+        let (z0, z1) = (reach(g.flex_fwd, 0.05), reach(g.flex_back, 0.05));
+        let want = z0 + (z1 - z0) * u;
+        let (mut lo, mut hi) = (g.flex_back - 0.3, g.flex_fwd + 0.3);
+        for _ in 0..30 {
+            let mid = 0.5 * (lo + hi);
+            if reach(mid, knee) > want {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let flex = 0.5 * (lo + hi);
         let ankle = 0.35 * smooth((u - 0.75) / 0.25) - 0.12 * (1.0 - smooth(u / 0.12));
         (flex, knee, ankle, true)
     } else {
@@ -462,7 +496,7 @@ fn gait_contacts(g: &Gait, time_secs: f32) -> [bool; 2] {
 }
 
 const WALK: Gait = Gait { cycle_secs: 1.1, stance: 0.6, flex_fwd: 0.36, flex_back: -0.26, knee_stance: 0.12, knee_swing: 0.95, arm_swing: 0.28, elbow: 0.25, lean: 0.03 };
-const RUN: Gait = Gait { cycle_secs: 0.7, stance: 0.38, flex_fwd: 0.55, flex_back: -0.42, knee_stance: 0.3, knee_swing: 1.75, arm_swing: 0.6, elbow: 1.45, lean: 0.14 };
+const RUN: Gait = Gait { cycle_secs: 0.7, stance: 0.38, flex_fwd: 0.42, flex_back: -0.5, knee_stance: 0.45, knee_swing: 1.75, arm_swing: 0.6, elbow: 1.45, lean: 0.14 };
 
 /// One built-in action: its clip, tags in both languages, the body part it mainly moves
 /// (its switched part in a Composition), and for cycles the root advance of one cycle.
@@ -480,14 +514,14 @@ fn tags(list: &[&str]) -> Vec<String> {
 fn keyed(name: &str, keys: Vec<(f32, Pose)>, contacts: &dyn Fn(f32) -> [bool; 2]) -> Clip {
     let kp = KeyPoses::new(keys);
     let frames = frames_for(kp.duration_secs());
-    build_clip(name, frames, &|t| kp.sample(t), contacts).0
+    build_clip(name, frames, false, &|t| kp.sample(t), contacts).0
 }
 
 const BOTH: fn(f32) -> [bool; 2] = |_| [true, true];
 
 fn gait(name: &str, g: &Gait) -> (Clip, Vec3) {
     let frames = frames_for(g.cycle_secs);
-    build_clip(name, frames, &|t| gait_pose(g, t), &|t| gait_contacts(g, t))
+    build_clip(name, frames, true, &|t| gait_pose(g, t), &|t| gait_contacts(g, t))
 }
 
 fn wave(side: usize) -> Clip {
