@@ -6,7 +6,7 @@
 //! interpolation, secondary motion and feet planted on the floor. Imported clips join the
 //! library with tags chosen by the person. The joins of spec §I live beside them: foot-ground
 //! contacts ([`contact`]), Connection and Transition with foot locking by two-bone IK
-//! ([`join`], [`ik`]), and Composition with switch-time search and sway transfer ([`compose`]).
+//! ([`join`], [`ik`]), and Composition with switch-time search and sway transfer ([`mod@compose`]).
 
 pub mod compose;
 pub mod contact;

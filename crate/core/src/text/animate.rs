@@ -3,7 +3,7 @@
 //!
 //! Each group — a base element and the Composition elements on it — becomes one segment: the
 //! base clip (a cycle is repeated to outlast its overlays) with each overlay's body part
-//! composed in (spec §I, [`crate::actions::compose`]). Segments are joined in order by
+//! composed in (spec §I, [`crate::actions::compose()`]). Segments are joined in order by
 //! Connection or Transition ([`crate::actions::join_serial`]), with any stated delay. Only the
 //! last few seconds of the animation so far take part in a join, so long texts stay linear in
 //! time.

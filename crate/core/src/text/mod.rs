@@ -9,6 +9,16 @@
 //! elements, joins serial ones (spec §I, [`crate::actions`]), and fills in each element's
 //! start time in the resulting clip. Words it does not know are reported with their position
 //! in the text; everything else still plays.
+//!
+//! For the web layer: build one [`ActionLibrary::builtin`](crate::actions::ActionLibrary::builtin)
+//! (add the person's clips with `add_clip(&clip, &tags, part)`), then call
+//! [`animate_text`] (or [`animate_text_with_progress`] for long texts) and hand the
+//! [`TextAnimation`] to JavaScript as it is: it serialises in camelCase (`elements[i].join` is
+//! `"initial" | "connection" | "transition" | "composition"`, `previous` a 0-based index or
+//! null, `span.utf16Start/utf16End` index the JavaScript string, `clip` the joined motion on
+//! the canonical skeleton). To swap an element's clip, set its `clip` to another entry carrying
+//! the same motion tag (`ActionLibrary::alternatives`) and pass the edited elements to
+//! [`animate_table`].
 
 pub mod animate;
 pub mod lexicon;
