@@ -187,7 +187,7 @@ fn cycle_knots(ca: &Contacts, cb: &Contacts, na: usize, nb: usize, search: usize
             continue;
         }
         // Motion 2: its first landing of the same foot (within the search window) and the next.
-        let Some((m, first_b)) = ev_b.iter().enumerate().find(|(_, x)| x.kind == ContactEventKind::Down && x.foot == e.foot) else { return None };
+        let (m, first_b) = ev_b.iter().enumerate().find(|(_, x)| x.kind == ContactEventKind::Down && x.foot == e.foot)?;
         if first_b.frame > search.max(1) * 2 {
             return None;
         }

@@ -307,8 +307,8 @@ impl Lexicon {
     }
 
     fn sort(&mut self) {
-        self.ja.sort_by(|a, b| b.chars.len().cmp(&a.chars.len()));
-        self.en.sort_by(|a, b| b.words.len().cmp(&a.words.len()));
+        self.ja.sort_by_key(|s| std::cmp::Reverse(s.chars.len()));
+        self.en.sort_by_key(|e| std::cmp::Reverse(e.words.len()));
     }
 }
 
