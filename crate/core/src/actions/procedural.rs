@@ -784,6 +784,21 @@ mod tests {
     }
 
     #[test]
+    fn gaits_travel_evenly_without_pops() {
+        for a in builtin_actions().iter().filter(|a| a.cycle_advance.is_some()) {
+            let adv = a.cycle_advance.unwrap();
+            let c = crate::actions::library::repeat_cycle(&a.clip, adv, 3.0);
+            let v = &c.translations[0].values;
+            let mean = Vec3::new(adv.x, 0.0, adv.z).length() / a.clip.frame_count() as f32;
+            for (f, w) in v.windows(2).enumerate() {
+                let step = Vec3::new(w[1].x - w[0].x, 0.0, w[1].z - w[0].z).length();
+                assert!((step - mean).abs() < 0.35 * mean, "{} frame {f}: ground step {step} vs mean {mean}", a.clip.name);
+                assert!((w[1].y - w[0].y).abs() < 0.01, "{} frame {f}: height jumps {}", a.clip.name, w[1].y - w[0].y);
+            }
+        }
+    }
+
+    #[test]
     fn arm_only_actions_leave_the_legs_standing() {
         // Guards the key poses: clapping, waving, pointing and nodding must not bend a knee.
         let standing = Pose::standing().to_rotations();
