@@ -211,6 +211,11 @@ fn bad_input_gives_clear_messages_and_partial_results() {
     assert_eq!(calls.last(), Some(&(3, 3)));
     let r = animate_text_with_progress(&long, &lib, &mut |d, _| d < 5);
     assert!(matches!(r, Err(TextError::Cancelled { done: 5, .. })), "{r:?}");
+    // A delay before the first action holds the first pose.
+    let first = animate_text("太郎は三秒後に座った。", &lib).unwrap();
+    assert!((first.elements[0].start_secs - 3.0).abs() < 1e-3, "{:?}", first.elements[0]);
+    assert_eq!(first.clip.frame_count(), 180 + lib.entries[lib.find("sit", &[]).unwrap()].clip.frame_count());
+    first.clip.validate().unwrap();
     // A huge stated delay is capped.
     let d = animate_text("走る。99999秒後に跳ぶ。", &lib).unwrap();
     assert!(d.clip.duration_secs() < 60.0, "{}", d.clip.duration_secs());

@@ -249,6 +249,33 @@ pub fn animate_table_with_progress(elements: &[TimeTableElement], library: &Acti
     }
     progress(groups.len(), groups.len());
     let mut clip = out.unwrap_or_else(|| library.entries[0].clip.clone());
+    // A delay before the first action ("三秒後に座る"): hold its first pose that long.
+    let lead_secs = table.first().map(|e| e.delay_secs).filter(|d| d.is_finite() && *d > 0.0).unwrap_or(0.0).min(MAX_DELAY_SECS);
+    let hold = (lead_secs * clip.fps).round() as usize;
+    if hold > 0 && clip.frame_count() > 0 {
+        let n = clip.joint_count();
+        let first: Vec<_> = clip.rotations[..n].to_vec();
+        let mut rotations = Vec::with_capacity(clip.rotations.len() + hold * n);
+        for _ in 0..hold {
+            rotations.extend_from_slice(&first);
+        }
+        rotations.extend_from_slice(&clip.rotations);
+        clip.rotations = rotations;
+        for t in &mut clip.translations {
+            let v0 = t.values[0];
+            t.values.splice(0..0, std::iter::repeat_n(v0, hold));
+        }
+        let secs = hold as f32 / clip.fps;
+        for e in &mut table {
+            e.start_secs += secs;
+        }
+        for j in &mut joins {
+            j.window_start_frame += hold;
+            j.window_end_frame += hold;
+            j.b_start_frame += hold;
+            j.b_frame_offset += hold as i64;
+        }
+    }
     clip.name = "text animation".into();
     clip.source = "text".into();
     Ok(TextAnimation { elements: table, diagnostics, clip, joins, compositions })
