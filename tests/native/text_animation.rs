@@ -134,6 +134,7 @@ fn person_tagged_clip_is_found_by_its_tags() {
     assert_eq!(swapped.elements[1].clip, Some(kick_alt));
     let builtin_kick = lib.entries.iter().position(|e| e.builtin && e.has_tag("kick")).unwrap();
     assert_eq!(lib.alternatives(kick_alt, "kick"), [builtin_kick]);
+    assert_eq!(swapped.elements[1].alternatives, [builtin_kick]);
     // The table goes to JavaScript and comes back edited as JSON (camelCase).
     let json = serde_json::to_string(&swapped.elements).unwrap();
     assert!(json.contains("\"switchedPart\"") && json.contains("\"delaySecs\"") && json.contains("\"utf16Start\""));

@@ -84,6 +84,7 @@ pub fn animate_table_with_progress(elements: &[TimeTableElement], library: &Acti
                 let mut e = e.clone();
                 e.clip = Some(c);
                 e.clip_name = library.entries[c].name.clone();
+                e.alternatives = library.alternatives(c, &e.motion);
                 e.previous = e.previous.and_then(|p| remap.get(p).copied().flatten()).or(table.len().checked_sub(1));
                 remap.push(Some(table.len()));
                 e.index = table.len();

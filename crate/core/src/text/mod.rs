@@ -85,6 +85,10 @@ pub struct TimeTableElement {
     pub clip: Option<usize>,
     /// That entry's name.
     pub clip_name: String,
+    /// Other library entries with the same motion tag, for the UI's swap menu (filled when
+    /// animated).
+    #[serde(default)]
+    pub alternatives: Vec<usize>,
     /// Start in the animation, seconds (filled when animated).
     pub start_secs: f32,
     /// How long it plays in the animation, seconds (filled when animated).

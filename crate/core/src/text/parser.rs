@@ -652,6 +652,7 @@ fn build_table(raw: Vec<RawElement>, lex: &Lexicon, span: &dyn Fn(usize, usize) 
             delay_secs: delay,
             clip: None,
             clip_name: String::new(),
+            alternatives: Vec::new(),
             start_secs: 0.0,
             duration_secs: 0.0,
         };
