@@ -290,6 +290,10 @@ impl Lexicon {
 
     /// Adds a Japanese verb (all its forms).
     pub fn add_japanese(&mut self, word: &str, class: JaClass, motion: &str) {
+        // 「〜する」 nouns also take the object particle: ジャンプをする, お辞儀をして.
+        if class == JaClass::Suru && !word.ends_with('を') {
+            self.add_japanese(&format!("{word}を"), class, motion);
+        }
         for (s, form) in conjugate(word, class) {
             if self.seen.insert(s.clone()) {
                 self.ja.push(Surface { chars: s.chars().collect(), motion: motion.to_string(), form });
@@ -348,5 +352,7 @@ mod tests {
         assert!(sit.contains(&"sitting down".to_string()) && sit.contains(&"sat down".to_string()));
         let lex = Lexicon::builtin();
         assert!(lex.en.iter().any(|e| e.words == ["kicked"] && e.motion == "kick"));
+        let jump: Vec<char> = "ジャンプをして".chars().collect();
+        assert!(lex.ja.iter().any(|s| s.chars == jump && s.motion == "jump" && s.form == VerbForm::Te));
     }
 }
