@@ -173,6 +173,33 @@ fn real_salsa_tagged_by_the_person_joins_built_in_actions() {
 }
 
 #[test]
+fn real_robot_wave_composes_onto_its_walk() {
+    let rel = "gltf/RobotExpressive.glb";
+    let imported = import_bytes(rel, &read(rel), &ImportOptions::default()).unwrap();
+    let clip = |n: &str| imported.clips.iter().find(|c| c.name == n).unwrap_or_else(|| panic!("{n} in {rel}"));
+    let mut lib = lib();
+    let walk = lib.add_clip(clip("Walking"), &["walk".into()], None).unwrap();
+    let wave = lib.add_clip(clip("Wave"), &["wave".into(), "right".into()], Some(BodyPart::RightArm)).unwrap();
+    assert!(lib.entries[walk].cycle_advance.is_some(), "the robot's walk loops");
+    let a = animate_text("歩きながら右手を振る", &lib).unwrap();
+    assert_eq!(a.elements.iter().map(|e| e.clip).collect::<Vec<_>>(), [Some(walk), Some(wave)]);
+    assert_eq!(a.elements[1].join, JoinType::Composition);
+    assert_eq!(a.compositions.len(), 1);
+    let r = &a.compositions[0];
+    println!("robot walk + wave: switch base {}..{} overlay {}..{}, gaps {:.1}/{:.1} cm, blends {:.2}/{:.2} s", r.times.base_start_frame, r.times.base_end_frame, r.times.overlay_start_frame, r.times.overlay_end_frame, r.start_gap_cm, r.end_gap_cm, r.start_blend_secs, r.end_blend_secs);
+    assert!(r.times.base_end_frame > r.times.base_start_frame + 30);
+    a.clip.validate().unwrap();
+    // The composed right arm is the robot's wave, the legs its walk.
+    let n = a.clip.joint_count();
+    let mid = (r.times.base_start_frame + r.times.base_end_frame) / 2;
+    let composed = &a.clip.rotations[mid * n..(mid + 1) * n];
+    let walk_clip = lib.entries[walk].clip_for(0.0).resampled(60.0);
+    let plain = &walk_clip.rotations[(mid % walk_clip.frame_count()) * n..(mid % walk_clip.frame_count() + 1) * n];
+    assert!(composed[Canon::LeftLowerLeg.index()].angle_between(plain[Canon::LeftLowerLeg.index()]) < 1e-3);
+    assert!(composed[Canon::RightUpperArm.index()].angle_between(plain[Canon::RightUpperArm.index()]) > 0.1);
+}
+
+#[test]
 fn bad_input_gives_clear_messages_and_partial_results() {
     let lib = lib();
     assert_eq!(animate_text("", &lib).unwrap_err(), TextError::Empty);

@@ -115,8 +115,9 @@ impl ActionLibrary {
             return Err(ActionError::NoTags { name: clip.name.clone() });
         }
         clip.validate().map_err(|e| ActionError::BadClip { name: clip.name.clone(), reason: e.to_string() })?;
-        let clip = retarget_to_canonical(clip)?;
-        self.entries.push(ActionEntry { name: clip.name.clone(), tags, part, cycle_advance: None, builtin: false, clip });
+        let mut clip = retarget_to_canonical(clip)?;
+        let cycle_advance = detect_cycle(&mut clip);
+        self.entries.push(ActionEntry { name: clip.name.clone(), tags, part, cycle_advance, builtin: false, clip });
         Ok(self.entries.len() - 1)
     }
 
@@ -151,6 +152,30 @@ impl ActionLibrary {
     pub fn alternatives(&self, index: usize, motion: &str) -> Vec<usize> {
         self.find_all(&[motion]).into_iter().filter(|&i| i != index).collect()
     }
+}
+
+/// Whether a clip loops (its last pose is its first, up to a small difference), and if so
+/// how far the root moves per loop. A last frame that repeats the first exactly (glTF loops
+/// often end on their start) is dropped so repeats do not stutter.
+pub fn detect_cycle(clip: &mut Clip) -> Option<Vec3> {
+    let n = clip.frame_count();
+    if n < 8 {
+        return None;
+    }
+    let (a, b) = (clip.frame_rotations(0), clip.frame_rotations(n - 1));
+    let joints = a.len().max(2);
+    let mean = a.iter().zip(b).skip(1).map(|(x, y)| x.angle_between(*y)).sum::<f32>() / (joints - 1) as f32;
+    if !(mean < 0.08) || a[0].angle_between(b[0]) > 0.15 {
+        return None;
+    }
+    let (r0, r1, rp) = (clip.root_translation(0), clip.root_translation(n - 1), clip.root_translation(n - 2));
+    if mean < 0.01 {
+        // Duplicate end frame: one loop is frames 0..n-1.
+        *clip = clip.slice(0, n - 1, clip.name.clone());
+        return Some(Vec3::new(r1.x - r0.x, 0.0, r1.z - r0.z));
+    }
+    let step = r1 - rp;
+    Some(Vec3::new(r1.x - r0.x + step.x, 0.0, r1.z - r0.z + step.z))
 }
 
 fn is_canonical(sk: &Skeleton) -> bool {
@@ -253,6 +278,10 @@ mod tests {
         let demo = crate::builtin::demo_clip();
         let i = lib.add_clip(&demo, &["Walk".into(), "dance".into()], None).unwrap();
         assert_eq!(lib.find("walk", &[]), Some(i));
+        // The demo dance loops seamlessly: it is recognised as a cycle.
+        assert!(lib.entries[i].cycle_advance.is_some());
+        let mut once = lib.entries[lib.find("kick", &[]).unwrap()].clip.slice(0, 40, "half a kick");
+        assert!(detect_cycle(&mut once).is_none());
         assert!(lib.add_clip(&demo, &[" ".into()], None).is_err());
         assert_eq!(lib.alternatives(i, "walk").len(), 1);
     }
