@@ -197,6 +197,16 @@ fn real_robot_wave_composes_onto_its_walk() {
     let plain = &walk_clip.rotations[(mid % walk_clip.frame_count()) * n..(mid % walk_clip.frame_count() + 1) * n];
     assert!(composed[Canon::LeftLowerLeg.index()].angle_between(plain[Canon::LeftLowerLeg.index()]) < 1e-3);
     assert!(composed[Canon::RightUpperArm.index()].angle_between(plain[Canon::RightUpperArm.index()]) > 0.1);
+    // The robot walks and runs on the spot; the library gives them their travel back, so
+    // its run → walk is a cycle-aligned Transition with the planted foot locked.
+    let run = lib.add_clip(clip("Running"), &["run".into()], None).unwrap();
+    assert!(lib.entries[walk].cycle_advance.is_some_and(|v| v.length() > 0.5), "{:?}", lib.entries[walk].cycle_advance);
+    assert!(lib.entries[run].cycle_advance.is_some_and(|v| v.length() > 0.3), "{:?}", lib.entries[run].cycle_advance);
+    let t = animate_text("走って、歩く", &lib).unwrap();
+    assert_eq!(t.elements.iter().map(|e| e.clip).collect::<Vec<_>>(), [Some(run), Some(walk)]);
+    let j = &t.joins[0];
+    println!("robot run → walk: cyclic {}, drift {:.2} cm unlocked, {:.3} cm locked", j.cyclic, j.drift_without_lock_cm, j.drift_with_lock_cm);
+    assert!(j.cyclic && j.drift_with_lock_cm < 2.0, "{j:?}");
 }
 
 #[test]

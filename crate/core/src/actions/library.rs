@@ -116,7 +116,12 @@ impl ActionLibrary {
         }
         clip.validate().map_err(|e| ActionError::BadClip { name: clip.name.clone(), reason: e.to_string() })?;
         let mut clip = retarget_to_canonical(clip)?;
-        let cycle_advance = detect_cycle(&mut clip);
+        let mut cycle_advance = detect_cycle(&mut clip);
+        if let Some(adv) = cycle_advance {
+            if let Some(moved) = walk_out_of_place(&mut clip, adv) {
+                cycle_advance = Some(moved);
+            }
+        }
         self.entries.push(ActionEntry { name: clip.name.clone(), tags, part, cycle_advance, builtin: false, clip });
         Ok(self.entries.len() - 1)
     }
@@ -176,6 +181,55 @@ pub fn detect_cycle(clip: &mut Clip) -> Option<Vec3> {
     }
     let step = r1 - rp;
     Some(Vec3::new(r1.x - r0.x + step.x, 0.0, r1.z - r0.z + step.z))
+}
+
+/// Locomotion recorded in place (a treadmill walk: the feet slide back, the root stays) is
+/// given the root motion it stands for: the lower foot is kept still on the ground and the
+/// root moves instead. Returns the new advance per loop, or `None` (clip untouched) when the
+/// clip already travels or its feet do not travel under it.
+pub fn walk_out_of_place(clip: &mut Clip, advance: Vec3) -> Option<Vec3> {
+    use crate::actions::contact::{sole_height, Foot};
+    let n = clip.frame_count();
+    if n < 8 || Vec3::new(advance.x, 0.0, advance.z).length() > 0.1 {
+        return None;
+    }
+    let all = clip.all_world_positions();
+    let joints = clip.joint_count();
+    let frame = |f: usize| &all[f * joints..(f + 1) * joints];
+    // Root displacement that keeps the lower foot still, frame to frame.
+    let floor = (0..n).map(|f| sole_height(frame(f), Foot::Left).min(sole_height(frame(f), Foot::Right))).fold(f32::MAX, f32::min);
+    let mut root = Vec::with_capacity(n);
+    let mut at = Vec3::ZERO;
+    let mut travelled = 0.0;
+    let mut last_step = Vec3::ZERO;
+    root.push(at);
+    for f in 1..n {
+        let (a, b) = (frame(f - 1), frame(f));
+        let low = if sole_height(b, Foot::Left) <= sole_height(b, Foot::Right) { Foot::Left } else { Foot::Right };
+        // A foot on the ground carries the body; in a flight the body keeps its speed.
+        let step = if sole_height(b, low) - floor < 0.04 {
+            let d = b[low.ankle().index()] - a[low.ankle().index()];
+            Vec3::new(-d.x, 0.0, -d.z)
+        } else {
+            last_step
+        };
+        last_step = step;
+        travelled += step.length();
+        at += step;
+        root.push(at);
+    }
+    // Only when the feet really travel under the body (not a dance on the spot).
+    if at.length() < 0.2 || at.length() < 0.35 * travelled {
+        return None;
+    }
+    let track = clip.translations.iter_mut().find(|t| t.joint == 0)?;
+    for (v, r) in track.values.iter_mut().zip(&root) {
+        v.x += r.x;
+        v.z += r.z;
+    }
+    // One more step closes the loop (the last frame to the first of the next loop).
+    let last = root[n - 1] - root[n - 2];
+    Some(at + last)
 }
 
 fn is_canonical(sk: &Skeleton) -> bool {
@@ -284,6 +338,25 @@ mod tests {
         assert!(detect_cycle(&mut once).is_none());
         assert!(lib.add_clip(&demo, &[" ".into()], None).is_err());
         assert_eq!(lib.alternatives(i, "walk").len(), 1);
+    }
+
+    #[test]
+    fn a_treadmill_walk_gets_its_travel_back() {
+        let lib = ActionLibrary::builtin();
+        let walk = &lib.entries[lib.find("walk", &[]).unwrap()];
+        let mut in_place = walk.clip.clone();
+        for v in &mut in_place.translations[0].values {
+            v.x = 0.0;
+            v.z = 0.0;
+        }
+        let adv = walk_out_of_place(&mut in_place, Vec3::ZERO).expect("feet travel under the body");
+        let want = walk.cycle_advance.unwrap();
+        assert!((adv - want).length() < 0.15 * want.length(), "{adv} vs {want}");
+        // A dance on the spot stays where it is.
+        let mut demo = crate::builtin::demo_clip();
+        let before = demo.translations[0].values.clone();
+        assert!(walk_out_of_place(&mut demo, Vec3::ZERO).is_none());
+        assert_eq!(demo.translations[0].values, before);
     }
 
     #[test]

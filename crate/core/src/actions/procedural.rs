@@ -248,8 +248,9 @@ fn with_secondary(time_secs: f32, pose_at: &dyn Fn(f32) -> Pose) -> Pose {
 /// the lowest sole of the touching feet at the floor ([`SOLE_HEIGHT`] for the toe joint); the
 /// ground position keeps the first-planted touching foot where it landed. When no foot
 /// touches, the root follows a ballistic parabola between take-off and landing and keeps its
-/// horizontal velocity. `frames` frames at [`ACTION_FPS`]; returns the clip and the root
-/// position one frame past the end (the advance of one cycle, for cyclic actions). `cyclic`:
+/// horizontal velocity. `frames` frames at [`ACTION_FPS`]; returns the clip and how far the
+/// root moves on the ground from the first frame to one frame past the end (the advance of
+/// one cycle, for cyclic actions). `cyclic`:
 /// the clip repeats, so smoothing wraps around.
 pub fn build_clip(name: &str, frames: usize, cyclic: bool, pose_at: &dyn Fn(f32) -> Pose, contacts: &dyn Fn(f32) -> [bool; 2]) -> (Clip, Vec3) {
     let skeleton = Arc::new(canonical_skeleton());
@@ -372,6 +373,7 @@ pub fn build_clip(name: &str, frames: usize, cyclic: bool, pose_at: &dyn Fn(f32)
         root.push(Vec3::new(xz.x, y[f].unwrap_or(0.95) + SOLE_HEIGHT, xz.z));
     }
     let next = root.pop().unwrap_or(Vec3::ZERO);
+    let clip_origin = root.first().copied().unwrap_or(Vec3::ZERO);
     rotations.truncate(frames * CANON_COUNT);
     let mut clip = Clip {
         name: name.to_string(),
@@ -385,7 +387,7 @@ pub fn build_clip(name: &str, frames: usize, cyclic: bool, pose_at: &dyn Fn(f32)
     // where it landed by two-bone IK and released smoothly once it lifts.
     touching.truncate(frames);
     crate::actions::join::lock_feet(&mut clip, &touching, 0, frames);
-    (clip, next)
+    (clip, Vec3::new(next.x - clip_origin.x, 0.0, next.z - clip_origin.z))
 }
 
 /// Joint positions of a pose with the root at the origin.
