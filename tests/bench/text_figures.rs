@@ -56,6 +56,17 @@ fn main() {
         println!("  {:<30} without locking {:6.2} cm   with locking {:6.3} cm   ({} frames held by IK)", s.label, s.without_lock.drift_without_lock_cm, s.with_lock.drift_with_lock_cm, s.with_lock.locked_frames);
     }
 
+    let rel = "gltf/RobotExpressive.glb";
+    let robot = import_bytes(rel, &odori_tests::read(rel), &ImportOptions::default()).expect("robot");
+    let pick = |n: &str| robot.clips.iter().find(|c| c.name == n).expect("robot clip");
+    let mut lib_robot = lib.clone();
+    let rw = lib_robot.add_clip(pick("Walking"), &["walk".into()], None).expect("tag");
+    let rr = lib_robot.add_clip(pick("Running"), &["run".into()], None).expect("tag");
+    let (robot_walk, robot_run) = (lib_robot.entries[rw].clip_for(3.0).resampled(60.0), lib_robot.entries[rr].clip_for(2.0).resampled(60.0));
+    for s in [figures::skate(&robot_walk, &robot_run, "robot walk → run (glTF, in place)"), figures::skate(&robot_run, &robot_walk, "robot run → walk (glTF, in place)")] {
+        println!("  {:<30} without locking {:6.2} cm   with locking {:6.3} cm   ({} frames held by IK, cycle-aligned {})", s.label, s.without_lock.drift_without_lock_cm, s.with_lock.drift_with_lock_cm, s.with_lock.locked_frames, s.with_lock.cyclic);
+    }
+
     println!("== foot skate over whole animations (every detected planted run, not only the blends)");
     for text in ["太郎は走って，ボールを蹴る．そして喜ぶ．", "歩いて、走って、歩く。", "歩きながら右手を振る", "Walk, then jump and cheer. After that, turn around and bow."] {
         let a = animate_text(text, &lib).expect("animate");
