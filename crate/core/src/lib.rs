@@ -5,6 +5,7 @@
 //! core are right-handed, Y up, in metres; angles are radians; time is in seconds or frames, and
 //! names say which.
 
+pub mod actions;
 pub mod bars;
 pub mod builtin;
 pub mod clip;
@@ -14,6 +15,7 @@ pub mod music;
 pub mod normalize;
 pub mod search;
 pub mod skeleton;
+pub mod text;
 
 pub use clip::{Clip, ClipError, TranslationTrack};
 pub use humanoid::{Canon, HumanoidMap, HumanoidStatus};
