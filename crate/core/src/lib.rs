@@ -10,6 +10,7 @@ pub mod builtin;
 pub mod clip;
 pub mod humanoid;
 pub mod import;
+pub mod library;
 pub mod normalize;
 pub mod skeleton;
 
