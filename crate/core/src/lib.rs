@@ -7,6 +7,7 @@
 
 pub mod bars;
 pub mod builtin;
+pub mod choreo;
 pub mod clip;
 pub mod humanoid;
 pub mod import;
