@@ -6,8 +6,9 @@
 //! Every clip is first put on the canonical skeleton at [`LIBRARY_FPS`], so segments from the
 //! built-in library and from imported glTF/BVH files compare, join and play as one dance.
 //! Beats come from the motion: the overall joint speed dips on every count, so the beat period
-//! is the strongest autocorrelation lag of the speed curve between 50 and 200 counts per
-//! minute, the phase is where the speed is lowest on that grid, and each beat snaps to the
+//! is the strongest autocorrelation peak of the speed curve (after the lobe around lag 0)
+//! between 30 and 200 per minute, folded by octaves into a choreographer's count of 60..=150
+//! per minute (fast footwork such as salsa's steps is counted in twos), the phase is where the speed is lowest on that grid, and each beat snaps to the
 //! nearest local minimum of the speed. A person may instead state the clip's tempo.
 
 use std::sync::{Arc, Mutex};
@@ -410,23 +411,14 @@ pub const LINKS: [(usize, usize); LINK_COUNT] = {
     out
 };
 
-/// Overall joint speed per frame of a canonical clip (Σ over joints of |ẋ|, m/s), lightly
-/// smoothed.
+/// Overall joint speed per frame of a canonical clip (Σ over joints of world |ẋ|, m/s: a
+/// planted step and the end of a gesture both dip), lightly smoothed.
 pub fn joint_speed(clip: &Clip) -> Vec<f32> {
     let pos = canonical_positions(clip, &HumanoidMap::from_skeleton(&clip.skeleton));
     let frames = pos.len() / CANON_COUNT;
     let mut s = vec![0.0f32; frames];
     for f in 1..frames {
-        s[f] = (0..CANON_COUNT)
-            .map(|j| {
-                // Relative to the hips, so travelling does not hide the body's own rhythm.
-                let a = pos[(f - 1) * CANON_COUNT + j] - pos[(f - 1) * CANON_COUNT];
-                let b = pos[f * CANON_COUNT + j] - pos[f * CANON_COUNT];
-                let hips = (pos[f * CANON_COUNT] - pos[(f - 1) * CANON_COUNT]).length();
-                (b - a).length() + if j == 0 { hips } else { 0.0 }
-            })
-            .sum::<f32>()
-            * clip.fps;
+        s[f] = (0..CANON_COUNT).map(|j| (pos[f * CANON_COUNT + j] - pos[(f - 1) * CANON_COUNT + j]).length()).sum::<f32>() * clip.fps;
     }
     if frames > 1 {
         s[0] = s[1];
@@ -443,12 +435,12 @@ pub fn joint_speed(clip: &Clip) -> Vec<f32> {
 pub fn detect_beats(speed: &[f32]) -> (Vec<f32>, f32) {
     let n = speed.len();
     let fps = LIBRARY_FPS;
-    let (min_lag, max_lag) = ((fps * 60.0 / 200.0).floor() as usize, (fps * 60.0 / 50.0).ceil() as usize);
-    if n < 2 * min_lag + 2 {
+    let (min_lag, max_lag) = ((fps * 60.0 / 200.0).floor() as usize, ((fps * 60.0 / 30.0).ceil() as usize).min(n / 2));
+    if max_lag < min_lag + 2 {
         return (Vec::new(), fps * 0.5);
     }
-    // Remove the slow trend (a 2-second moving mean).
-    let win = (2.0 * fps) as usize;
+    // Remove the slow trend (a 4-second moving mean).
+    let win = (4.0 * fps) as usize;
     let mut prefix = vec![0.0f64; n + 1];
     for i in 0..n {
         prefix[i + 1] = prefix[i] + speed[i] as f64;
@@ -468,25 +460,33 @@ pub fn detect_beats(speed: &[f32]) -> (Vec<f32>, f32) {
         let s: f32 = (0..n - lag).map(|i| x[i] * x[i + lag]).sum();
         s / energy * n as f32 / (n - lag) as f32
     };
-    let max_lag = max_lag.min(n / 2);
-    let mut best = (min_lag, f32::MIN);
-    let mut acs = vec![0.0f32; max_lag + 2];
-    for (lag, slot) in acs.iter_mut().enumerate().take(max_lag + 2).skip(min_lag.saturating_sub(1)) {
-        *slot = ac(lag);
+    let acs: Vec<f32> = (0..=max_lag + 1).map(ac).collect();
+    // Skip the lobe around lag 0: start after the first local minimum.
+    let mut start = 1;
+    while start < max_lag && acs[start + 1] < acs[start] {
+        start += 1;
     }
-    for lag in min_lag..=max_lag {
-        // Prefer dance-like counts (about 120 per minute) when peaks are close.
-        let bpm = fps * 60.0 / lag as f32;
-        let prior = (-0.5 * ((bpm / 120.0).log2() / 0.8).powi(2)).exp();
-        let score = acs[lag] * (0.7 + 0.3 * prior);
-        let is_peak = acs[lag] >= acs[lag - 1] && acs[lag] >= acs[lag + 1];
-        if is_peak && score > best.1 {
-            best = (lag, score);
-        }
+    // The shortest period whose peak is nearly as strong as the strongest (longer peaks are
+    // its multiples).
+    let peaks: Vec<usize> = (start.max(min_lag).max(1)..=max_lag).filter(|&l| acs[l] > 0.0 && acs[l] >= acs[l - 1] && acs[l] >= acs[l + 1]).collect();
+    let strongest = peaks.iter().map(|&l| acs[l]).fold(0.0f32, f32::max);
+    let mut best = (peaks.iter().copied().find(|&l| acs[l] >= 0.8 * strongest).unwrap_or(0), strongest);
+    if best.0 == 0 {
+        // No periodicity: a regular grid at 120 counts per minute.
+        best.0 = (fps * 0.5) as usize;
     }
-    let lag = best.0;
+    let mut lag = best.0;
+    // Fold into a choreographer's count (60..=150 per minute): fast footwork counts in twos,
+    // a slow sway in halves.
+    while fps * 60.0 / lag as f32 > 150.0 && 2 * lag <= max_lag {
+        lag *= 2;
+    }
+    while fps * 60.0 / (lag as f32) < 60.0 && lag >= 2 * min_lag {
+        lag /= 2;
+    }
+    let lag = lag.clamp(1, max_lag);
     // Parabolic refinement.
-    let (y0, y1, y2) = (acs[lag - 1], acs[lag], acs[(lag + 1).min(max_lag + 1)]);
+    let (y0, y1, y2) = (acs[lag - 1], acs[lag], acs[lag + 1]);
     let den = y0 - 2.0 * y1 + y2;
     let period = lag as f32 + if den.abs() > 1e-9 { (0.5 * (y0 - y2) / den).clamp(-0.5, 0.5) } else { 0.0 };
     let phase = best_phase(speed, period);
