@@ -18,9 +18,14 @@
 //! returns a minimum-cost path (ties broken towards lower segment indices).
 //!
 //! Speed: the M × M edge costs depend only on the library and are computed once per library
-//! (cached by [`super::SegmentLibrary::transition_table`]). Each open layer then relaxes rows in
-//! increasing order of the previous layer's cost and stops as soon as no remaining row can
-//! improve any column (prev[a] ≥ max_b (best[b] − min_a' C(a', b))), which is exact.
+//! (cached by [`super::SegmentLibrary::transition_table`]) over structure-of-arrays copies of
+//! the segment ends, in cache-sized blocks, so the inner loop vectorises; they are stored
+//! column by column (all predecessors of one segment contiguous). In each open layer a column
+//! first tries only its [`TOP_K`] cheapest edges and the previous layer's [`LOW_L`] cheapest
+//! nodes, and accepts their best when it is provably optimal: any other predecessor costs at
+//! least (the cheapest node outside that set) + (the cheapest edge outside that list).
+//! Otherwise the whole column is reduced with a vectorised minimum. Either way the result is
+//! exact.
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -41,25 +46,94 @@ pub fn link_weights() -> [f32; LINK_COUNT] {
     w.map(|x| x / sum)
 }
 
-/// The M × M edge costs C(a, b) (repetition penalty included), row-major by `a`.
+/// The M × M edge costs C(a, b) (repetition penalty included), stored column by column (all
+/// predecessors `a` of one `b` are contiguous), with each column's minimum.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TransitionTable {
     m: usize,
+    /// `costs[b * m + a]` = C(a, b).
     costs: Vec<f32>,
     col_min: Vec<f32>,
+    /// `rows[a * m + b]` = C(a, b): the same costs row by row, for the fast path.
+    rows: Vec<f32>,
+    /// Per column, the [`TOP_K`] cheapest predecessors in increasing cost (then index).
+    top: Vec<u32>,
+    /// Their costs, alongside.
+    top_cost: Vec<f32>,
+    /// Per column, the cheapest cost outside its top list (a lower bound for the rest).
+    rest_min: Vec<f32>,
     repeat_penalty: f32,
 }
 
+/// Predecessors kept per column for the fast path of the filling.
+pub const TOP_K: usize = 96;
+/// Cheapest nodes of the previous layer tried by every column on the fast path.
+pub const LOW_L: usize = 96;
+
+fn transpose(m: usize, costs: &[f32]) -> Vec<f32> {
+    let mut t = vec![0.0f32; m * m];
+    const TILE: usize = 64;
+    for b0 in (0..m).step_by(TILE) {
+        for a0 in (0..m).step_by(TILE) {
+            for b in b0..(b0 + TILE).min(m) {
+                for a in a0..(a0 + TILE).min(m) {
+                    t[a * m + b] = costs[b * m + a];
+                }
+            }
+        }
+    }
+    t
+}
+
+fn top_lists(m: usize, costs: &[f32]) -> (Vec<u32>, Vec<f32>) {
+    let k = TOP_K.min(m);
+    let mut top = Vec::with_capacity(m * k);
+    let mut rest = Vec::with_capacity(m);
+    let mut idx: Vec<u32> = Vec::with_capacity(m);
+    for col in costs.chunks_exact(m.max(1)) {
+        idx.clear();
+        idx.extend(0..m as u32);
+        let by = |x: &u32, y: &u32| col[*x as usize].total_cmp(&col[*y as usize]).then(x.cmp(y));
+        if k < m {
+            idx.select_nth_unstable_by(k, by);
+            rest.push(col[idx[k] as usize]);
+            // The rest's minimum is the k-th order statistic after selection.
+            let r = idx[k..].iter().map(|&a| col[a as usize]).fold(f32::INFINITY, f32::min);
+            if let Some(last) = rest.last_mut() {
+                *last = r;
+            }
+        } else {
+            rest.push(f32::INFINITY);
+        }
+        let head = &mut idx[..k];
+        head.sort_by(by);
+        top.extend_from_slice(head);
+    }
+    (top, rest)
+}
+
+fn top_costs(m: usize, costs: &[f32], top: &[u32]) -> Vec<f32> {
+    let k = TOP_K.min(m);
+    top.iter().enumerate().map(|(i, &a)| costs[(i / k.max(1)) * m + a as usize]).collect()
+}
+
 impl TransitionTable {
-    /// A table from given costs (row-major, `m * m`); for tests and other libraries. Non-finite
-    /// or negative costs are clamped to `0..=1e6`.
+    /// A table from given costs (row-major by `a`: `costs[a * m + b]` = C(a, b)); for tests and
+    /// other libraries. Non-finite or negative costs are clamped to `0..=1e6`.
     pub fn from_costs(m: usize, mut costs: Vec<f32>) -> TransitionTable {
         costs.resize(m * m, 1e6);
-        for c in costs.iter_mut() {
-            *c = if c.is_finite() { c.clamp(0.0, 1e6) } else { 1e6 };
+        let mut t = vec![0.0f32; m * m];
+        for a in 0..m {
+            for b in 0..m {
+                let c = costs[a * m + b];
+                t[b * m + a] = if c.is_finite() { c.clamp(0.0, 1e6) } else { 1e6 };
+            }
         }
-        let col_min = column_minima(m, &costs);
-        TransitionTable { m, costs, col_min, repeat_penalty: 0.0 }
+        let col_min = column_minima(m, &t);
+        let (top, rest_min) = top_lists(m, &t);
+        let top_cost = top_costs(m, &t, &top);
+        let rows = transpose(m, &t);
+        TransitionTable { m, costs: t, col_min, rows, top, top_cost, rest_min, repeat_penalty: 0.0 }
     }
 
     /// Spec §G's costs between every pair of the library's segments, plus `repeat_penalty` on
@@ -67,44 +141,73 @@ impl TransitionTable {
     pub fn from_library(lib: &SegmentLibrary, repeat_penalty: f32) -> TransitionTable {
         let m = lib.len();
         let beta = link_weights();
-        // Flat SoA copies of the join features.
         let ends = &lib.ends;
-        let unit = |v: glam::Vec3| v.normalize_or_zero();
-        let end_u: Vec<[glam::Vec3; LINK_COUNT]> = ends.iter().map(|e| e.end.map(unit)).collect();
-        let start_u: Vec<[glam::Vec3; LINK_COUNT]> = ends.iter().map(|e| e.start.map(unit)).collect();
-        let end_vu: Vec<[glam::Vec3; LINK_COUNT]> = ends.iter().map(|e| e.end_velocity.map(unit)).collect();
-        let start_vu: Vec<[glam::Vec3; LINK_COUNT]> = ends.iter().map(|e| e.start_velocity.map(unit)).collect();
-        let mut costs = vec![0.0f32; m * m];
-        for a in 0..m {
-            let ea = &ends[a];
-            let row = &mut costs[a * m..(a + 1) * m];
-            for (b, slot) in row.iter_mut().enumerate() {
-                let eb = &ends[b];
-                let mut s = 0.0f32;
+        // Structure-of-arrays copies of every segment's end (the `a` side), link-major, so the
+        // inner loop over `a` is contiguous and vectorises.
+        let soa = |f: &dyn Fn(&super::segment::JoinEnds, usize) -> glam::Vec3| -> [Vec<f32>; 3] {
+            let mut out = [vec![0.0f32; LINK_COUNT * m], vec![0.0f32; LINK_COUNT * m], vec![0.0f32; LINK_COUNT * m]];
+            for (a, e) in ends.iter().enumerate() {
                 for l in 0..LINK_COUNT {
-                    let pose = end_u[a][l].dot(start_u[b][l]);
-                    let d = eb.start[l] - ea.end[l];
-                    let len = d.length();
-                    let mv = if len < 1e-5 {
-                        2.0
-                    } else {
-                        let dn = d / len;
-                        dn.dot(end_vu[a][l]).max(0.0) + dn.dot(start_vu[b][l]).max(0.0)
-                    };
-                    s += beta[l] * (pose + mv);
+                    let v = f(e, l);
+                    out[0][l * m + a] = v.x;
+                    out[1][l * m + a] = v.y;
+                    out[2][l * m + a] = v.z;
                 }
-                *slot = 1.0 / s.max(MIN_S);
+            }
+            out
+        };
+        let end = soa(&|e, l| e.end[l]);
+        let end_u = soa(&|e, l| e.end[l].normalize_or_zero());
+        let end_vu = soa(&|e, l| e.end_velocity[l].normalize_or_zero());
+        let mut costs = vec![0.0f32; m * m];
+        // Blocks of predecessors small enough that their link data stays in cache while every
+        // successor column is filled.
+        const BLOCK: usize = 256;
+        let mut acc = [0.0f32; BLOCK];
+        for a0 in (0..m).step_by(BLOCK) {
+            let n = BLOCK.min(m - a0);
+            for (b, eb) in ends.iter().enumerate() {
+                let acc = &mut acc[..n];
+                acc.iter_mut().for_each(|x| *x = 0.0);
+                for l in 0..LINK_COUNT {
+                    let s = eb.start[l];
+                    let su = s.normalize_or_zero();
+                    let wu = eb.start_velocity[l].normalize_or_zero();
+                    let bl = beta[l];
+                    let r = l * m + a0..l * m + a0 + n;
+                    let (ex, ey, ez) = (&end[0][r.clone()], &end[1][r.clone()], &end[2][r.clone()]);
+                    let (ux, uy, uz) = (&end_u[0][r.clone()], &end_u[1][r.clone()], &end_u[2][r.clone()]);
+                    let (vx, vy, vz) = (&end_vu[0][r.clone()], &end_vu[1][r.clone()], &end_vu[2][r]);
+                    for a in 0..n {
+                        let pose = ux[a] * su.x + uy[a] * su.y + uz[a] * su.z;
+                        let (dx, dy, dz) = (s.x - ex[a], s.y - ey[a], s.z - ez[a]);
+                        let len2 = dx * dx + dy * dy + dz * dz;
+                        let dv = dx * vx[a] + dy * vy[a] + dz * vz[a];
+                        let dw = dx * wu.x + dy * wu.y + dz * wu.z;
+                        let moving = (dv.max(0.0) + dw.max(0.0)) / len2.max(1e-10).sqrt();
+                        // A link that does not move across the join continues perfectly (g = 1
+                        // twice).
+                        let mv = if len2 < 1e-10 { 2.0 } else { moving };
+                        acc[a] += bl * (pose + mv);
+                    }
+                }
+                for (slot, s) in costs[b * m + a0..b * m + a0 + n].iter_mut().zip(acc.iter()) {
+                    *slot = 1.0 / s.max(MIN_S);
+                }
             }
         }
         for (a, ov) in lib.overlaps.iter().enumerate() {
             for &b in ov {
                 if b < m {
-                    costs[a * m + b] += repeat_penalty;
+                    costs[b * m + a] += repeat_penalty;
                 }
             }
         }
         let col_min = column_minima(m, &costs);
-        TransitionTable { m, costs, col_min, repeat_penalty }
+        let (top, rest_min) = top_lists(m, &costs);
+        let top_cost = top_costs(m, &costs, &top);
+        let rows = transpose(m, &costs);
+        TransitionTable { m, costs, col_min, rows, top, top_cost, rest_min, repeat_penalty }
     }
 
     /// Number of segments.
@@ -119,7 +222,7 @@ impl TransitionTable {
     /// C(a, b); infinite when out of range.
     pub fn cost(&self, a: usize, b: usize) -> f32 {
         if a < self.m && b < self.m {
-            self.costs[a * self.m + b]
+            self.costs[b * self.m + a]
         } else {
             f32::INFINITY
         }
@@ -129,19 +232,14 @@ impl TransitionTable {
         self.repeat_penalty
     }
 
-    fn row(&self, a: usize) -> &[f32] {
-        &self.costs[a * self.m..(a + 1) * self.m]
+    /// All C(·, b), indexed by the predecessor.
+    fn column(&self, b: usize) -> &[f32] {
+        &self.costs[b * self.m..(b + 1) * self.m]
     }
 }
 
 fn column_minima(m: usize, costs: &[f32]) -> Vec<f32> {
-    let mut col = vec![f32::INFINITY; m];
-    for row in costs.chunks_exact(m.max(1)) {
-        for (c, v) in col.iter_mut().zip(row) {
-            *c = c.min(*v);
-        }
-    }
-    col
+    costs.chunks_exact(m.max(1)).map(|col| col.iter().cloned().fold(f32::INFINITY, f32::min)).collect()
 }
 
 /// One bar of the filling problem.
@@ -181,10 +279,49 @@ pub enum FillError {
     IntensityCount { given: usize, segments: usize },
 }
 
+/// min over `a` of `prev[a] + col[a]` and the first `a` reaching it.
+fn column_min(prev: &[f32], col: &[f32]) -> (f32, usize) {
+    let n = prev.len().min(col.len());
+    let (prev, col) = (&prev[..n], &col[..n]);
+    let mut lanes = [f32::INFINITY; 8];
+    let split = n - n % 8;
+    for (p8, c8) in prev[..split].chunks_exact(8).zip(col[..split].chunks_exact(8)) {
+        for i in 0..8 {
+            let v = p8[i] + c8[i];
+            lanes[i] = if v < lanes[i] { v } else { lanes[i] };
+        }
+    }
+    let mut min = lanes.iter().cloned().fold(f32::INFINITY, f32::min);
+    for a in split..n {
+        let v = prev[a] + col[a];
+        if v < min {
+            min = v;
+        }
+    }
+    let at = (0..n).find(|&a| prev[a] + col[a] == min).unwrap_or(0);
+    (min, at)
+}
+
+/// How much work a filling did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct FillStats {
+    /// Columns (open-bar nodes after an open bar) relaxed.
+    pub open_columns: usize,
+    /// Of those, columns whose top-[`TOP_K`] list could not prove the optimum and were scanned.
+    pub full_scans: usize,
+}
+
 /// A minimum-cost choice of one segment per layer. `segment_intensity[s]` is segment `s`'s
 /// intensity in 0..1. Returns the chosen segment per layer (pinned layers keep theirs) and the
 /// path's cost.
 pub fn fill(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], weights: &FillWeights) -> Result<(Vec<usize>, f32), FillError> {
+    fill_with_stats(table, layers, segment_intensity, weights).map(|(p, c, _)| (p, c))
+}
+
+/// [`fill`], also saying how much work it took.
+pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], weights: &FillWeights) -> Result<(Vec<usize>, f32, FillStats), FillError> {
+    let mut stats = FillStats::default();
     let m = table.len();
     if m == 0 {
         return Err(FillError::EmptyLibrary);
@@ -200,7 +337,7 @@ pub fn fill(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32]
         }
     }
     if layers.is_empty() {
-        return Ok((Vec::new(), 0.0));
+        return Ok((Vec::new(), 0.0, stats));
     }
     let music = |intensity: f32, b: usize| weights.music_weight * (intensity - segment_intensity[b]).abs();
     // Node costs of the current layer: either one fixed node or all m.
@@ -209,12 +346,12 @@ pub fn fill(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32]
         All(Vec<f32>),
     }
     let mut back: Vec<Vec<u32>> = Vec::with_capacity(layers.len());
+    let mut low: Vec<u32> = Vec::with_capacity(m);
     let mut cur = match layers[0] {
         Layer::Fixed { segment } => Nodes::One(segment, 0.0),
         Layer::Open { intensity } => Nodes::All((0..m).map(|b| music(intensity, b)).collect()),
     };
     back.push(Vec::new());
-    let mut order: Vec<u32> = Vec::with_capacity(m);
     for layer in &layers[1..] {
         match (*layer, &cur) {
             (Layer::Fixed { segment }, Nodes::One(a, c)) => {
@@ -223,9 +360,10 @@ pub fn fill(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32]
                 cur = Nodes::One(segment, v);
             }
             (Layer::Fixed { segment }, Nodes::All(prev)) => {
+                let col = table.column(segment);
                 let mut best = (f32::INFINITY, 0usize);
-                for (a, p) in prev.iter().enumerate() {
-                    let v = p + table.cost(a, segment);
+                for (a, (p, c)) in prev.iter().zip(col).enumerate() {
+                    let v = p + c;
                     if v < best.0 {
                         best = (v, a);
                     }
@@ -234,42 +372,64 @@ pub fn fill(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32]
                 cur = Nodes::One(segment, best.0);
             }
             (Layer::Open { intensity }, Nodes::One(a, c)) => {
-                let row = table.row(*a);
-                let next: Vec<f32> = (0..m).map(|b| c + row[b] + music(intensity, b)).collect();
+                let next: Vec<f32> = (0..m).map(|b| c + table.cost(*a, b) + music(intensity, b)).collect();
                 back.push(vec![*a as u32; m]);
                 cur = Nodes::All(next);
             }
             (Layer::Open { intensity }, Nodes::All(prev)) => {
-                let mut best = vec![f32::INFINITY; m];
+                // The previous layer's LOW_L cheapest nodes, and the cheapest cost outside them.
+                low.clear();
+                low.extend(0..m as u32);
+                let l = LOW_L.min(m);
+                let prev_rest = if l < m {
+                    low.select_nth_unstable_by(l, |x, y| prev[*x as usize].total_cmp(&prev[*y as usize]).then(x.cmp(y)));
+                    let r = low[l..].iter().map(|&a| prev[a as usize]).fold(f32::INFINITY, f32::min);
+                    low.truncate(l);
+                    r
+                } else {
+                    f32::INFINITY
+                };
+                let k = TOP_K.min(m);
+                // The cheapest nodes' rows, streamed (vectorised).
+                let mut next = vec![f32::INFINITY; m];
                 let mut arg = vec![0u32; m];
-                order.clear();
-                order.extend(0..m as u32);
-                order.sort_by(|&x, &y| prev[x as usize].total_cmp(&prev[y as usize]).then(x.cmp(&y)));
-                let mut threshold = f32::INFINITY;
-                for (k, &a) in order.iter().enumerate() {
+                low.sort_unstable();
+                for &a in low.iter() {
                     let pa = prev[a as usize];
-                    if pa >= threshold {
-                        break;
-                    }
-                    let row = table.row(a as usize);
-                    for b in 0..m {
-                        let v = pa + row[b];
-                        // Rows come in increasing prev order, so `<` keeps the first (lowest
-                        // prev, then lowest index) of equal costs; ties across rows with equal
-                        // prev resolve to the lower index because `order` is sorted by index.
-                        let better = v < best[b];
-                        best[b] = if better { v } else { best[b] };
-                        arg[b] = if better { a } else { arg[b] };
-                    }
-                    if k % 8 == 7 {
-                        threshold = best.iter().zip(&table.col_min).map(|(b, c)| b - c).fold(f32::MIN, f32::max);
+                    let row = &table.rows[a as usize * m..(a as usize + 1) * m];
+                    for ((n, g), &c) in next.iter_mut().zip(arg.iter_mut()).zip(row) {
+                        let v = pa + c;
+                        let better = v < *n;
+                        *n = if better { v } else { *n };
+                        *g = if better { a } else { *g };
                     }
                 }
-                for (b, v) in best.iter_mut().enumerate() {
-                    *v += music(intensity, b);
+                for b in 0..m {
+                    let (mut best, mut best_a) = (next[b], arg[b]);
+                    // Then the column's cheapest edges. Any other predecessor costs at least
+                    // prev_rest + rest_min[b], so the best found is exact when no worse.
+                    let (ti, tc) = (&table.top[b * k..(b + 1) * k], &table.top_cost[b * k..(b + 1) * k]);
+                    for (&a, &c) in ti.iter().zip(tc) {
+                        let v = prev[a as usize] + c;
+                        if v < best || (v == best && a < best_a) {
+                            best = v;
+                            best_a = a;
+                        }
+                    }
+                    if best > prev_rest + table.rest_min[b] {
+                        // Not provable from the list: the whole column, contiguous (vectorised
+                        // minimum, then the first predecessor reaching it).
+                        let (min, at) = column_min(prev, table.column(b));
+                        best = min;
+                        best_a = at as u32;
+                        stats.full_scans += 1;
+                    }
+                    next[b] = best + music(intensity, b);
+                    arg[b] = best_a;
                 }
+                stats.open_columns += m;
                 back.push(arg);
-                cur = Nodes::All(best);
+                cur = Nodes::All(next);
             }
         }
     }
@@ -298,7 +458,7 @@ pub fn fill(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32]
             node = if bt.len() == 1 { bt[0] as usize } else { bt.get(path[t]).copied().unwrap_or(0) as usize };
         }
     }
-    Ok((path, total))
+    Ok((path, total, stats))
 }
 
 /// The objective [`fill`] minimises, for any path (for checks and reports).

@@ -237,7 +237,8 @@ impl SegmentLibrary {
 
     fn push_clip(&mut self, lc: LibraryClip, hop: usize) -> usize {
         let clip_index = self.clips.len();
-        let positions = canonical_positions(&lc.clip, &HumanoidMap::from_skeleton(&lc.clip.skeleton));
+        // Library clips are on the canonical skeleton: the map is the identity.
+        let positions = canonical_positions(&lc.clip, &canonical_map());
         let frames = positions.len() / CANON_COUNT;
         let mut normed = positions.clone();
         let h = body_height(&positions);
@@ -379,6 +380,11 @@ impl SegmentLibrary {
     }
 }
 
+/// The identity map of the canonical skeleton.
+pub(crate) fn canonical_map() -> HumanoidMap {
+    HumanoidMap { joints: std::array::from_fn(Some) }
+}
+
 /// Unit link vectors, raw link vectors and velocities at a segment's first and last frames.
 fn join_ends(normed: &[Vec3], start: usize, end: usize) -> JoinEnds {
     let link = |f: usize, l: usize| -> Vec3 {
@@ -414,7 +420,7 @@ pub const LINKS: [(usize, usize); LINK_COUNT] = {
 /// Overall joint speed per frame of a canonical clip (Σ over joints of world |ẋ|, m/s: a
 /// planted step and the end of a gesture both dip), lightly smoothed.
 pub fn joint_speed(clip: &Clip) -> Vec<f32> {
-    let pos = canonical_positions(clip, &HumanoidMap::from_skeleton(&clip.skeleton));
+    let pos = canonical_positions(clip, &canonical_map());
     let frames = pos.len() / CANON_COUNT;
     let mut s = vec![0.0f32; frames];
     for f in 1..frames {
