@@ -110,7 +110,7 @@ pub fn top_eigen(matrix: &[f64], n: usize, k: usize) -> (Vec<f64>, Vec<f64>) {
             }
         }
     };
-    for _ in 0..14 {
+    for _ in 0..10 {
         mul(&v, &mut w);
         orthonormalize(&mut w, n, p, &axes);
         std::mem::swap(&mut v, &mut w);

@@ -237,8 +237,8 @@ impl SegmentLibrary {
 
     fn push_clip(&mut self, lc: LibraryClip, hop: usize) -> usize {
         let clip_index = self.clips.len();
-        // Library clips are on the canonical skeleton: the map is the identity.
-        let positions = canonical_positions(&lc.clip, &canonical_map());
+        // Library clips are on the canonical skeleton: world positions are the canonical ones.
+        let positions = canonical_world_positions(&lc.clip);
         let frames = positions.len() / CANON_COUNT;
         let mut normed = positions.clone();
         let h = body_height(&positions);
@@ -266,7 +266,8 @@ impl SegmentLibrary {
                 let intensity = w[si..ei].iter().sum::<f32>() / (ei - si) as f32;
                 let dims = SIGNATURE_JOINTS.len() * 3;
                 let mut feats = Vec::with_capacity((ei - si) * dims);
-                for f in si..ei {
+                // Every other frame (15 per second) is plenty for the principal axes.
+                for f in (si..ei).step_by(2) {
                     for c in SIGNATURE_JOINTS {
                         let p = normed[f * CANON_COUNT + c.index()];
                         feats.extend_from_slice(&[p.x, p.y, p.z]);
@@ -380,9 +381,35 @@ impl SegmentLibrary {
     }
 }
 
-/// The identity map of the canonical skeleton.
-pub(crate) fn canonical_map() -> HumanoidMap {
-    HumanoidMap { joints: std::array::from_fn(Some) }
+/// World positions of every frame of a clip on the canonical skeleton (frame-major), by an
+/// allocation-free forward kinematics.
+pub(crate) fn canonical_world_positions(clip: &Clip) -> Vec<Vec3> {
+    let frames = clip.frame_count();
+    let sk = &clip.skeleton;
+    if sk.len() != CANON_COUNT {
+        return canonical_positions(clip, &HumanoidMap::from_skeleton(sk));
+    }
+    let root = clip.translations.iter().find(|t| t.joint == 0).map(|t| t.values.as_slice());
+    let mut out = Vec::with_capacity(frames * CANON_COUNT);
+    let mut rot = [glam::Quat::IDENTITY; CANON_COUNT];
+    let mut pos = [Vec3::ZERO; CANON_COUNT];
+    for f in 0..frames {
+        let local = clip.frame_rotations(f);
+        for (i, j) in sk.joints.iter().enumerate() {
+            match j.parent {
+                Some(p) if p < i => {
+                    rot[i] = rot[p] * local[i];
+                    pos[i] = pos[p] + rot[p] * j.rest_offset;
+                }
+                _ => {
+                    rot[i] = local[i];
+                    pos[i] = root.and_then(|r| r.get(f).copied()).unwrap_or(j.rest_offset);
+                }
+            }
+        }
+        out.extend_from_slice(&pos);
+    }
+    out
 }
 
 /// Unit link vectors, raw link vectors and velocities at a segment's first and last frames.
@@ -420,7 +447,7 @@ pub const LINKS: [(usize, usize); LINK_COUNT] = {
 /// Overall joint speed per frame of a canonical clip (Σ over joints of world |ẋ|, m/s: a
 /// planted step and the end of a gesture both dip), lightly smoothed.
 pub fn joint_speed(clip: &Clip) -> Vec<f32> {
-    let pos = canonical_positions(clip, &canonical_map());
+    let pos = canonical_world_positions(clip);
     let frames = pos.len() / CANON_COUNT;
     let mut s = vec![0.0f32; frames];
     for f in 1..frames {

@@ -18,7 +18,7 @@ use std::sync::Arc;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::builtin::{canonical_skeleton, lowest_point};
+use crate::builtin::canonical_skeleton;
 use crate::clip::{Clip, TranslationTrack};
 use crate::humanoid::CANON_COUNT;
 use crate::skeleton::Skeleton;
@@ -91,9 +91,8 @@ pub fn build_move(info: &MoveInfo, skeleton: &Arc<Skeleton>) -> Clip {
         if info.mirrored {
             p = p.mirrored();
         }
-        let (local, mut r) = pose::solve(skeleton, &p, STANDING_HIPS_HEIGHT);
+        let (local, mut r, lowest) = pose::solve(skeleton, &p, STANDING_HIPS_HEIGHT);
         // Never below the floor (toe tips 2 cm above it when flat).
-        let lowest = r.y + lowest_point(skeleton, &local);
         if lowest < 0.015 {
             r.y += 0.015 - lowest;
         }
@@ -129,7 +128,7 @@ pub fn neutral_pose() -> (Vec<glam::Quat>, Vec3) {
         feet_yaw: 0.12,
         ..Default::default()
     };
-    let (local, root) = pose::solve(&sk, &p, STANDING_HIPS_HEIGHT);
+    let (local, root, _) = pose::solve(&sk, &p, STANDING_HIPS_HEIGHT);
     (local.to_vec(), root)
 }
 

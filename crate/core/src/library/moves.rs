@@ -369,9 +369,9 @@ pub(crate) fn pose_at(arms: Arms, energy: Energy, t: f32, legs: &[KeyPose]) -> K
     p.left_shrug = 0.12 * smooth01((l.y + 0.1) / 0.6);
     p.right_shrug = 0.12 * smooth01((r.y + 0.1) / 0.6);
     // The head steadies against the chest and nods a fraction after the bounce.
-    let later = super::pose::interpolate(legs, 0.5, (t - 0.15).max(0.0));
+    let later_drop = super::pose::interpolate_channel(legs, 0.5, (t - 0.15).max(0.0), |k| k.hips.y);
     p.head_roll = -0.5 * p.chest_roll - 0.3 * p.hips_roll;
-    p.head_pitch += -0.6 * later.hips.y - 0.3 * p.chest_pitch;
+    p.head_pitch += -0.6 * later_drop - 0.3 * p.chest_pitch;
     p.head_yaw = -0.4 * p.chest_yaw;
     p
 }

@@ -111,24 +111,38 @@ impl KeyPose {
     }
 }
 
-/// Catmull-Rom interpolation of key poses spaced evenly in time: `keys[k]` is at `k * spacing`;
-/// `t` in the same unit. Ends are clamped (the first and last keys repeat).
-pub fn interpolate(keys: &[KeyPose], spacing: f32, t: f32) -> KeyPose {
-    let Some(last) = keys.len().checked_sub(1) else {
-        return KeyPose::default();
-    };
+/// Catmull-Rom weights and key indices at `t` for keys spaced `spacing` apart (ends clamped).
+fn catmull_rom(len: usize, spacing: f32, t: f32) -> ([usize; 4], [f32; 4]) {
+    let last = len.saturating_sub(1);
     let x = (t / spacing).clamp(0.0, last as f32);
     let i = (x.floor() as usize).min(last.saturating_sub(1));
     let u = x - i as f32;
-    let k = |j: isize| keys[(j.clamp(0, last as isize)) as usize];
-    let (p0, p1, p2, p3) = (k(i as isize - 1), k(i as isize), k(i as isize + 1), k(i as isize + 2));
+    let k = |j: isize| j.clamp(0, last as isize) as usize;
     let u2 = u * u;
     let u3 = u2 * u;
-    let w0 = -0.5 * u3 + u2 - 0.5 * u;
-    let w1 = 1.5 * u3 - 2.5 * u2 + 1.0;
-    let w2 = -1.5 * u3 + 2.0 * u2 + 0.5 * u;
-    let w3 = 0.5 * u3 - 0.5 * u2;
-    p0.scaled(w0).add(&p1.scaled(w1)).add(&p2.scaled(w2)).add(&p3.scaled(w3))
+    (
+        [k(i as isize - 1), k(i as isize), k(i as isize + 1), k(i as isize + 2)],
+        [-0.5 * u3 + u2 - 0.5 * u, 1.5 * u3 - 2.5 * u2 + 1.0, -1.5 * u3 + 2.0 * u2 + 0.5 * u, 0.5 * u3 - 0.5 * u2],
+    )
+}
+
+/// Catmull-Rom interpolation of key poses spaced evenly in time: `keys[k]` is at `k * spacing`;
+/// `t` in the same unit. Ends are clamped (the first and last keys repeat).
+pub fn interpolate(keys: &[KeyPose], spacing: f32, t: f32) -> KeyPose {
+    if keys.is_empty() {
+        return KeyPose::default();
+    }
+    let (i, w) = catmull_rom(keys.len(), spacing, t);
+    keys[i[0]].scaled(w[0]).add(&keys[i[1]].scaled(w[1])).add(&keys[i[2]].scaled(w[2])).add(&keys[i[3]].scaled(w[3]))
+}
+
+/// One channel of [`interpolate`], cheaply.
+pub fn interpolate_channel(keys: &[KeyPose], spacing: f32, t: f32, channel: impl Fn(&KeyPose) -> f32) -> f32 {
+    if keys.is_empty() {
+        return 0.0;
+    }
+    let (i, w) = catmull_rom(keys.len(), spacing, t);
+    (0..4).map(|j| w[j] * channel(&keys[i[j]])).sum()
 }
 
 /// Middle joint of a two-bone chain from `root` reaching for `target`, bending towards `pole`.
@@ -154,8 +168,11 @@ fn arc(from: Vec3, to: Vec3) -> Quat {
     }
 }
 
-/// Local rotations and root translation of the canonical skeleton for one key pose.
-pub fn solve(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32) -> ([Quat; CANON_COUNT], Vec3) {
+/// Local rotations and root translation of the canonical skeleton for one key pose, and the
+/// height of the lowest foot joint (ankle or toe tip: the feet are always the lowest part of
+/// these poses).
+pub fn solve(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32) -> ([Quat; CANON_COUNT], Vec3, f32) {
+    let mut lowest = f32::MAX;
     use Canon::*;
     let off = |c: Canon| skeleton.joints.get(c.index()).map(|j| j.rest_offset).unwrap_or(Vec3::ZERO);
     let mut world = [Quat::IDENTITY; CANON_COUNT];
@@ -224,8 +241,30 @@ pub fn solve(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32) -> 
         local[foot.index()] = lq.inverse() * fq;
         world[foot.index()] = fq;
         local[toe.index()] = Quat::IDENTITY;
+        lowest = lowest.min(ank.y).min((ank + fq * off(toe)).y);
     }
-    (local, root)
+    (local, root, lowest)
+}
+
+/// Lowest joint height of a solved pose (root at `root`), without allocating.
+pub fn lowest_height(skeleton: &Skeleton, local: &[Quat; CANON_COUNT], root: Vec3) -> f32 {
+    let mut rot = [Quat::IDENTITY; CANON_COUNT];
+    let mut pos = [Vec3::ZERO; CANON_COUNT];
+    let mut low = f32::MAX;
+    for (i, j) in skeleton.joints.iter().enumerate().take(CANON_COUNT) {
+        match j.parent {
+            Some(p) if p < i => {
+                rot[i] = rot[p] * local[i];
+                pos[i] = pos[p] + rot[p] * j.rest_offset;
+            }
+            _ => {
+                rot[i] = local[i];
+                pos[i] = root;
+            }
+        }
+        low = low.min(pos[i].y);
+    }
+    low
 }
 
 #[cfg(test)]
@@ -244,7 +283,7 @@ mod tests {
             right_hand: Vec3::new(-0.1, 0.4, 0.1),
             ..Default::default()
         };
-        let (local, root) = solve(&sk, &pose, 0.93);
+        let (local, root, lowest) = solve(&sk, &pose, 0.93);
         // FK.
         let mut rot = [Quat::IDENTITY; CANON_COUNT];
         let mut pos = [Vec3::ZERO; CANON_COUNT];
@@ -266,8 +305,11 @@ mod tests {
         assert!((rf - Vec3::new(-0.15, ANKLE_HEIGHT, -0.05)).length() < 1e-3, "{rf}");
         // Knees bend forward.
         assert!(pos[Canon::LeftLowerLeg.index()].z > 0.0);
-        // Toes near the floor.
+        // Toes near the floor, and the reported lowest point is the true one.
         assert!(pos[Canon::LeftToe.index()].y.abs() < 0.05);
+        let true_low = pos.iter().map(|p| p.y).fold(f32::MAX, f32::min);
+        assert!((true_low - lowest).abs() < 1e-4, "{true_low} vs {lowest}");
+        assert!((lowest_height(&sk, &local, root) - lowest).abs() < 1e-4);
     }
 
     #[test]
