@@ -66,7 +66,7 @@ fn filling_equals_brute_force_on_small_random_instances() {
         let layers: Vec<Layer> = (0..bars)
             .map(|_| if rng.f32() < 0.3 { Layer::Fixed { segment: rng.below(m) } } else { Layer::Open { intensity: rng.f32() } })
             .collect();
-        let w = FillWeights { music_weight: 2.0 * rng.f32(), repeat_penalty: 0.0 };
+        let w = FillWeights { music_weight: 2.0 * rng.f32(), repeat_penalty: 3.0 * rng.f32(), repeat_window: 1 };
         let (path, cost) = fill(&table, &layers, &inten, &w).unwrap();
         let brute = brute_force(&table, &layers, &inten, &w);
         assert!((cost - brute).abs() < 1e-4, "case {case}: fill {cost} vs brute force {brute}");
@@ -96,7 +96,8 @@ fn filling_equals_brute_force_on_a_real_library_subset() {
         Layer::Open { intensity: 0.1 },
         Layer::Fixed { segment: 4 },
     ];
-    let w = FillWeights::default();
+    // Exact objective (window 1).
+    let w = FillWeights { repeat_window: 1, ..FillWeights::default() };
     let (_, cost) = fill(&table, &layers, &inten, &w).unwrap();
     let brute = brute_force(&table, &layers, &inten, &w);
     assert!((cost - brute).abs() < 1e-4, "fill {cost} vs brute force {brute}");
@@ -151,6 +152,14 @@ fn generated_joins_are_smoother_than_random_choices() {
     let report = doc.generate(&lib).unwrap();
     assert_eq!(report.filled, 28);
     let generated = doc.segments();
+    let mut distinct: Vec<usize> = generated.iter().flatten().copied().collect();
+    distinct.sort();
+    distinct.dedup();
+    let repeats_within_4 = (0..generated.len()).filter(|&i| (1..=4).any(|d| i >= d && generated[i] == generated[i - d])).count();
+    println!("generated: {} distinct segments in 32 bars; bars repeating a segment used in the 4 bars before: {repeats_within_4}", distinct.len());
+    println!("  {:?}", generated.iter().map(|s| s.unwrap_or(usize::MAX)).collect::<Vec<_>>());
+    let open_repeats = (0..generated.len()).filter(|&i| !pins.iter().any(|p| p.0 == i) && (2..=4).any(|d| i >= d && generated[i] == generated[i - d])).count();
+    assert_eq!(open_repeats, 0, "an open bar repeats a segment from 2..4 bars before");
     let mut rng = Rng(2026);
     let random: Vec<Option<usize>> =
         (0..bars.len()).map(|i| pins.iter().find(|p| p.0 == i).map(|p| p.1).or(Some(rng.below(lib.len())))).collect();

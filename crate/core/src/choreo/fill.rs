@@ -15,7 +15,12 @@
 //! intensity|` per open bar, and a repetition penalty `repeat_penalty` on an edge whose two
 //! segments share frames of the same clip (the same segment twice in a row included). Both
 //! keep the objective a sum over edges and nodes, so the dynamic programme below is exact: it
-//! returns a minimum-cost path (ties broken towards lower segment indices).
+//! returns a minimum-cost path (ties broken towards lower segment indices). Repeats further
+//! apart than one bar but within `repeat_window` bars (default 4: an A B A B alternation) are
+//! not a sum over edges; they are handled by repair passes: each open bar that repeats too soon
+//! gets `repeat_penalty` on that segment in that bar and the exact search runs again (at most
+//! [`REPAIR_PASSES`] times). The reported cost is the full objective, window included, of the
+//! path returned. With `repeat_window` ≤ 1 the result is exactly optimal.
 //!
 //! Speed: the M × M edge costs depend only on the library and are computed once per library
 //! (cached by [`super::SegmentLibrary::transition_table`]) over structure-of-arrays copies of
@@ -258,15 +263,23 @@ pub enum Layer {
 pub struct FillWeights {
     /// Weight of |bar intensity − segment intensity| per open bar (0 = the paper's method).
     pub music_weight: f32,
-    /// Added to an edge between segments sharing frames of one clip.
+    /// Added to an edge between segments sharing frames of one clip, and to an open bar that
+    /// repeats a segment used within `repeat_window` bars before it.
     pub repeat_penalty: f32,
+    /// Bars within which a repeated segment counts as "too soon" (1: only the bar right
+    /// before, which the exact search handles; larger windows add the repair passes described
+    /// in the module documentation).
+    pub repeat_window: usize,
 }
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0 }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4 }
     }
 }
+
+/// Repair passes for repeats beyond the bar before.
+pub const REPAIR_PASSES: usize = 6;
 
 #[derive(Debug, Error, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "camelCase")]
@@ -302,6 +315,14 @@ fn column_min(prev: &[f32], col: &[f32]) -> (f32, usize) {
     (min, at)
 }
 
+fn penalise(costs: &mut [f32], penalties: &[(usize, f32)]) {
+    for &(b, p) in penalties {
+        if let Some(c) = costs.get_mut(b) {
+            *c += p;
+        }
+    }
+}
+
 /// How much work a filling did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -310,6 +331,8 @@ pub struct FillStats {
     pub open_columns: usize,
     /// Of those, columns whose top-[`TOP_K`] list could not prove the optimum and were scanned.
     pub full_scans: usize,
+    /// Extra searches run to remove repeats within the window.
+    pub repair_passes: usize,
 }
 
 /// A minimum-cost choice of one segment per layer. `segment_intensity[s]` is segment `s`'s
@@ -321,6 +344,51 @@ pub fn fill(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32]
 
 /// [`fill`], also saying how much work it took.
 pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], weights: &FillWeights) -> Result<(Vec<usize>, f32, FillStats), FillError> {
+    let mut node_penalty: Vec<Vec<(usize, f32)>> = vec![Vec::new(); layers.len()];
+    let mut stats = FillStats::default();
+    let (mut path, _, s) = solve_layers(table, layers, segment_intensity, weights, &node_penalty)?;
+    stats.open_columns += s.open_columns;
+    stats.full_scans += s.full_scans;
+    if weights.repeat_window > 1 && weights.repeat_penalty > 0.0 {
+        for _ in 0..REPAIR_PASSES {
+            let mut changed = false;
+            for (t, l) in layers.iter().enumerate() {
+                if matches!(l, Layer::Open { .. }) && repeats_too_soon(&path, t, weights.repeat_window) {
+                    let seg = path[t];
+                    if !node_penalty[t].iter().any(|&(b, _)| b == seg) {
+                        node_penalty[t].push((seg, weights.repeat_penalty));
+                        changed = true;
+                    }
+                }
+            }
+            if !changed {
+                break;
+            }
+            let (p, _, s) = solve_layers(table, layers, segment_intensity, weights, &node_penalty)?;
+            stats.open_columns += s.open_columns;
+            stats.full_scans += s.full_scans;
+            stats.repair_passes += 1;
+            path = p;
+        }
+    }
+    let cost = path_cost(table, layers, segment_intensity, weights, &path);
+    Ok((path, cost, stats))
+}
+
+/// Whether bar `t` repeats a segment used in the `window - 1` bars before the bar right before
+/// it (the bar right before is the table's business).
+fn repeats_too_soon(path: &[usize], t: usize, window: usize) -> bool {
+    (2..=window).any(|d| t >= d && path[t - d] == path[t])
+}
+
+/// The exact layered shortest path with extra per-(layer, segment) node penalties.
+fn solve_layers(
+    table: &TransitionTable,
+    layers: &[Layer],
+    segment_intensity: &[f32],
+    weights: &FillWeights,
+    node_penalty: &[Vec<(usize, f32)>],
+) -> Result<(Vec<usize>, f32, FillStats), FillError> {
     let mut stats = FillStats::default();
     let m = table.len();
     if m == 0 {
@@ -349,10 +417,14 @@ pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intens
     let mut low: Vec<u32> = Vec::with_capacity(m);
     let mut cur = match layers[0] {
         Layer::Fixed { segment } => Nodes::One(segment, 0.0),
-        Layer::Open { intensity } => Nodes::All((0..m).map(|b| music(intensity, b)).collect()),
+        Layer::Open { intensity } => {
+            let mut v: Vec<f32> = (0..m).map(|b| music(intensity, b)).collect();
+            penalise(&mut v, &node_penalty[0]);
+            Nodes::All(v)
+        }
     };
     back.push(Vec::new());
-    for layer in &layers[1..] {
+    for (t, layer) in layers.iter().enumerate().skip(1) {
         match (*layer, &cur) {
             (Layer::Fixed { segment }, Nodes::One(a, c)) => {
                 let v = c + table.cost(*a, segment);
@@ -372,7 +444,8 @@ pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intens
                 cur = Nodes::One(segment, best.0);
             }
             (Layer::Open { intensity }, Nodes::One(a, c)) => {
-                let next: Vec<f32> = (0..m).map(|b| c + table.cost(*a, b) + music(intensity, b)).collect();
+                let mut next: Vec<f32> = (0..m).map(|b| c + table.cost(*a, b) + music(intensity, b)).collect();
+                penalise(&mut next, &node_penalty[t]);
                 back.push(vec![*a as u32; m]);
                 cur = Nodes::All(next);
             }
@@ -428,6 +501,7 @@ pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intens
                     arg[b] = best_a;
                 }
                 stats.open_columns += m;
+                penalise(&mut next, &node_penalty[t]);
                 back.push(arg);
                 cur = Nodes::All(next);
             }
@@ -471,6 +545,9 @@ pub fn path_cost(table: &TransitionTable, layers: &[Layer], segment_intensity: &
         }
         if t > 0 {
             c += table.cost(path[t - 1], s);
+        }
+        if weights.repeat_window > 1 && matches!(l, Layer::Open { .. }) && repeats_too_soon(path, t, weights.repeat_window) {
+            c += weights.repeat_penalty;
         }
     }
     c
