@@ -290,6 +290,10 @@ fn undo_and_redo_walk_every_edit() {
     history.push(doc.clone());
     doc.set_rho(0.8).unwrap();
     history.push(doc.clone());
+    doc.set_repeat_window(6).unwrap();
+    history.push(doc.clone());
+    doc.generate(&lib).unwrap();
+    history.push(doc.clone());
     doc.unpin(2).unwrap();
     history.push(doc.clone());
     doc.reset_search(2).unwrap();

@@ -6,7 +6,8 @@
 //! Commands: [`Choreography::candidates`] (open a bar's search: first round), [`search`]
 //! (like some of the shown candidates, next round, τ ← τ·19/20), [`reset_search`], [`set`]
 //! (pin a segment), [`unpin`], [`clear`], [`generate`] (fill every bar not pinned), settings
-//! ([`set_rho`], [`set_music_weight`], [`set_repeat_penalty`]), [`undo`] and [`redo`]. Every
+//! ([`set_rho`], [`set_music_weight`], [`set_repeat_penalty`], [`set_repeat_window`]), [`undo`]
+//! and [`redo`]. Every
 //! command that changes the document records the previous state for undo and clears redo.
 //!
 //! [`search`]: Choreography::search
@@ -18,6 +19,7 @@
 //! [`set_rho`]: Choreography::set_rho
 //! [`set_music_weight`]: Choreography::set_music_weight
 //! [`set_repeat_penalty`]: Choreography::set_repeat_penalty
+//! [`set_repeat_window`]: Choreography::set_repeat_window
 //! [`undo`]: Choreography::undo
 //! [`redo`]: Choreography::redo
 
@@ -331,6 +333,16 @@ impl Choreography {
         }
         self.record();
         self.doc.settings.fill.repeat_penalty = w;
+        Ok(())
+    }
+
+    /// Bars within which a repeated segment is penalised, in 1..=32.
+    pub fn set_repeat_window(&mut self, bars: usize) -> Result<(), ChoreoError> {
+        if !(1..=32).contains(&bars) {
+            return Err(ChoreoError::BadSetting { name: "repeatWindow".into(), range: "1..=32".into(), value: bars as f32 });
+        }
+        self.record();
+        self.doc.settings.fill.repeat_window = bars;
         Ok(())
     }
 
