@@ -187,6 +187,27 @@ fn generated_joins_are_smoother_than_random_choices() {
 }
 
 #[test]
+fn table_progress_reports_and_cancels() {
+    let lib = SegmentLibrary::builtin();
+    let mut seen = Vec::new();
+    let t = lib.transition_table_with_progress(1.5, &mut |p| {
+        seen.push(p);
+        true
+    });
+    assert!(t.is_some());
+    assert!(seen.windows(2).all(|w| w[0] < w[1]) && (seen.last().copied().unwrap() - 1.0).abs() < 1e-6, "{seen:?}");
+    let mut calls = 0;
+    let cancelled = lib.transition_table_with_progress(2.5, &mut |_| {
+        calls += 1;
+        false
+    });
+    assert!(cancelled.is_none());
+    assert_eq!(calls, 1);
+    // The cached table is the completed one.
+    assert_eq!(lib.transition_table(1.5).repeat_penalty(), 1.5);
+}
+
+#[test]
 fn bad_input_gives_clear_errors() {
     // A song shorter than one bar.
     let e = bars_from_tempo(1.2, 120.0, 4, 0.0, |_, _| 0.5).unwrap_err();

@@ -144,6 +144,15 @@ impl TransitionTable {
     /// Spec §G's costs between every pair of the library's segments, plus `repeat_penalty` on
     /// pairs that share clip frames.
     pub fn from_library(lib: &SegmentLibrary, repeat_penalty: f32) -> TransitionTable {
+        match Self::from_library_with_progress(lib, repeat_penalty, &mut |_| true) {
+            Some(t) => t,
+            None => TransitionTable::from_costs(0, Vec::new()),
+        }
+    }
+
+    /// [`TransitionTable::from_library`] reporting progress (0..1) after each block of
+    /// predecessors; the callback returns `false` to cancel (then `None`).
+    pub fn from_library_with_progress(lib: &SegmentLibrary, repeat_penalty: f32, progress: &mut dyn FnMut(f32) -> bool) -> Option<TransitionTable> {
         let m = lib.len();
         let beta = link_weights();
         let ends = &lib.ends;
@@ -200,6 +209,9 @@ impl TransitionTable {
                     *slot = 1.0 / s.max(MIN_S);
                 }
             }
+            if !progress((a0 + n) as f32 / m as f32) {
+                return None;
+            }
         }
         for (a, ov) in lib.overlaps.iter().enumerate() {
             for &b in ov {
@@ -212,7 +224,7 @@ impl TransitionTable {
         let (top, rest_min) = top_lists(m, &costs);
         let top_cost = top_costs(m, &costs, &top);
         let rows = transpose(m, &costs);
-        TransitionTable { m, costs, col_min, rows, top, top_cost, rest_min, repeat_penalty }
+        Some(TransitionTable { m, costs, col_min, rows, top, top_cost, rest_min, repeat_penalty })
     }
 
     /// Number of segments.

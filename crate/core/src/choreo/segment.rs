@@ -364,6 +364,24 @@ impl SegmentLibrary {
     }
 
     /// The transition table of spec §G for this library with the given repetition penalty
+    /// (built once per library and penalty, then shared), reporting progress (0..1); the
+    /// callback returns `false` to cancel (then `None`, and nothing is cached).
+    pub fn transition_table_with_progress(&self, repeat_penalty: f32, progress: &mut dyn FnMut(f32) -> bool) -> Option<Arc<TransitionTable>> {
+        if let Ok(guard) = self.table.lock() {
+            if let Some(t) = guard.as_ref() {
+                if t.repeat_penalty() == repeat_penalty {
+                    return Some(t.clone());
+                }
+            }
+        }
+        let t = Arc::new(TransitionTable::from_library_with_progress(self, repeat_penalty, progress)?);
+        if let Ok(mut guard) = self.table.lock() {
+            *guard = Some(t.clone());
+        }
+        Some(t)
+    }
+
+    /// The transition table of spec §G for this library with the given repetition penalty
     /// (built once per library and penalty, then shared).
     pub fn transition_table(&self, repeat_penalty: f32) -> Arc<TransitionTable> {
         let mut guard = match self.table.lock() {
