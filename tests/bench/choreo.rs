@@ -114,7 +114,7 @@ fn main() {
         })
         .collect();
     // The exact objective (repeat window 1) against the plain DP; then the default (window 4,
-    // with repair passes).
+    // its repeats charged along the chosen paths).
     let w = FillWeights { repeat_window: 1, ..FillWeights::default() };
     let mut fast = f64::MAX;
     let mut cost = 0.0;
@@ -154,8 +154,8 @@ fn main() {
     }
     let st: odori_core::choreo::FillStats = st;
     println!(
-        "fill with the default repeat window of {} bars: {with_repairs:.1} ms (best of 3), {} repair passes",
-        wd.repeat_window, st.repair_passes
+        "fill with the default repeat window of {} bars: {with_repairs:.1} ms (best of 3), {} nodes charged for a repeat",
+        wd.repeat_window, st.window_charges
     );
 
     // 5. A feedback round and a Search.

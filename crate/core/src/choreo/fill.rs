@@ -17,10 +17,12 @@
 //! keep the objective a sum over edges and nodes, so the dynamic programme below is exact: it
 //! returns a minimum-cost path (ties broken towards lower segment indices). Repeats further
 //! apart than one bar but within `repeat_window` bars (default 4: an A B A B alternation) are
-//! not a sum over edges; they are handled by repair passes: each open bar that repeats too soon
-//! gets `repeat_penalty` on that segment in that bar and the exact search runs again (at most
-//! [`REPAIR_PASSES`] times). The reported cost is the full objective, window included, of the
-//! path returned. With `repeat_window` ≤ 1 the result is exactly optimal.
+//! not a sum over edges. They are charged in the same pass along each node's chosen path: when
+//! a node's best predecessor path already used the same segment 2..=window bars earlier, the
+//! node pays `repeat_penalty` (the usual path-dependent extension of Viterbi; it steers away
+//! from repeats at no extra cost but is not guaranteed optimal for that term). The reported
+//! cost is the full objective, window included. With `repeat_window` ≤ 1 the result is exactly
+//! optimal.
 //!
 //! Speed: the M × M edge costs depend only on the library and are computed once per library
 //! (cached by [`super::SegmentLibrary::transition_table`]) over structure-of-arrays copies of
@@ -279,8 +281,8 @@ pub struct FillWeights {
     /// repeats a segment used within `repeat_window` bars before it.
     pub repeat_penalty: f32,
     /// Bars within which a repeated segment counts as "too soon" (1: only the bar right
-    /// before, which the exact search handles; larger windows add the repair passes described
-    /// in the module documentation).
+    /// before, which the exact search handles; larger windows are charged along the chosen
+    /// paths, see the module documentation).
     pub repeat_window: usize,
 }
 
@@ -290,8 +292,6 @@ impl Default for FillWeights {
     }
 }
 
-/// Repair passes for repeats beyond the bar before.
-pub const REPAIR_PASSES: usize = 6;
 
 #[derive(Debug, Error, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "camelCase")]
@@ -327,12 +327,27 @@ fn column_min(prev: &[f32], col: &[f32]) -> (f32, usize) {
     (min, at)
 }
 
-fn penalise(costs: &mut [f32], penalties: &[(usize, f32)]) {
-    for &(b, p) in penalties {
-        if let Some(c) = costs.get_mut(b) {
-            *c += p;
+/// Whether segment `b` in layer `t`, reached from node `pred` of layer `t - 1`, repeats a
+/// segment of that node's best path 2..=`window` layers back.
+fn repeats_on_path(back: &[Vec<u32>], t: usize, pred: usize, b: usize, window: usize) -> bool {
+    let (mut node, mut layer) = (pred, t.saturating_sub(1));
+    for _ in 2..=window {
+        if layer == 0 {
+            return false;
+        }
+        let Some(bt) = back.get(layer) else { return false };
+        node = if bt.len() == 1 { bt[0] as usize } else { bt.get(node).copied().unwrap_or(0) as usize };
+        layer -= 1;
+        if node == b {
+            return true;
         }
     }
+    false
+}
+
+/// Whether bar `t` of a path repeats a segment used 2..=`window` bars before it.
+fn repeats_too_soon(path: &[usize], t: usize, window: usize) -> bool {
+    (2..=window).any(|d| t >= d && path[t - d] == path[t])
 }
 
 /// How much work a filling did.
@@ -343,8 +358,8 @@ pub struct FillStats {
     pub open_columns: usize,
     /// Of those, columns whose top-[`TOP_K`] list could not prove the optimum and were scanned.
     pub full_scans: usize,
-    /// Extra searches run to remove repeats within the window.
-    pub repair_passes: usize,
+    /// Nodes charged for repeating a segment of their path within the window.
+    pub window_charges: usize,
 }
 
 /// A minimum-cost choice of one segment per layer. `segment_intensity[s]` is segment `s`'s
@@ -356,51 +371,6 @@ pub fn fill(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32]
 
 /// [`fill`], also saying how much work it took.
 pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], weights: &FillWeights) -> Result<(Vec<usize>, f32, FillStats), FillError> {
-    let mut node_penalty: Vec<Vec<(usize, f32)>> = vec![Vec::new(); layers.len()];
-    let mut stats = FillStats::default();
-    let (mut path, _, s) = solve_layers(table, layers, segment_intensity, weights, &node_penalty)?;
-    stats.open_columns += s.open_columns;
-    stats.full_scans += s.full_scans;
-    if weights.repeat_window > 1 && weights.repeat_penalty > 0.0 {
-        for _ in 0..REPAIR_PASSES {
-            let mut changed = false;
-            for (t, l) in layers.iter().enumerate() {
-                if matches!(l, Layer::Open { .. }) && repeats_too_soon(&path, t, weights.repeat_window) {
-                    let seg = path[t];
-                    if !node_penalty[t].iter().any(|&(b, _)| b == seg) {
-                        node_penalty[t].push((seg, weights.repeat_penalty));
-                        changed = true;
-                    }
-                }
-            }
-            if !changed {
-                break;
-            }
-            let (p, _, s) = solve_layers(table, layers, segment_intensity, weights, &node_penalty)?;
-            stats.open_columns += s.open_columns;
-            stats.full_scans += s.full_scans;
-            stats.repair_passes += 1;
-            path = p;
-        }
-    }
-    let cost = path_cost(table, layers, segment_intensity, weights, &path);
-    Ok((path, cost, stats))
-}
-
-/// Whether bar `t` repeats a segment used in the `window - 1` bars before the bar right before
-/// it (the bar right before is the table's business).
-fn repeats_too_soon(path: &[usize], t: usize, window: usize) -> bool {
-    (2..=window).any(|d| t >= d && path[t - d] == path[t])
-}
-
-/// The exact layered shortest path with extra per-(layer, segment) node penalties.
-fn solve_layers(
-    table: &TransitionTable,
-    layers: &[Layer],
-    segment_intensity: &[f32],
-    weights: &FillWeights,
-    node_penalty: &[Vec<(usize, f32)>],
-) -> Result<(Vec<usize>, f32, FillStats), FillError> {
     let mut stats = FillStats::default();
     let m = table.len();
     if m == 0 {
@@ -419,6 +389,7 @@ fn solve_layers(
     if layers.is_empty() {
         return Ok((Vec::new(), 0.0, stats));
     }
+    let window = if weights.repeat_penalty > 0.0 { weights.repeat_window } else { 0 };
     let music = |intensity: f32, b: usize| weights.music_weight * (intensity - segment_intensity[b]).abs();
     // Node costs of the current layer: either one fixed node or all m.
     enum Nodes {
@@ -430,9 +401,7 @@ fn solve_layers(
     let mut cur = match layers[0] {
         Layer::Fixed { segment } => Nodes::One(segment, 0.0),
         Layer::Open { intensity } => {
-            let mut v: Vec<f32> = (0..m).map(|b| music(intensity, b)).collect();
-            penalise(&mut v, &node_penalty[0]);
-            Nodes::All(v)
+            Nodes::All((0..m).map(|b| music(intensity, b)).collect())
         }
     };
     back.push(Vec::new());
@@ -457,7 +426,12 @@ fn solve_layers(
             }
             (Layer::Open { intensity }, Nodes::One(a, c)) => {
                 let mut next: Vec<f32> = (0..m).map(|b| c + table.cost(*a, b) + music(intensity, b)).collect();
-                penalise(&mut next, &node_penalty[t]);
+                for (b, v) in next.iter_mut().enumerate() {
+                    if repeats_on_path(&back, t, *a, b, window) {
+                        *v += weights.repeat_penalty;
+                        stats.window_charges += 1;
+                    }
+                }
                 back.push(vec![*a as u32; m]);
                 cur = Nodes::All(next);
             }
@@ -513,7 +487,12 @@ fn solve_layers(
                     arg[b] = best_a;
                 }
                 stats.open_columns += m;
-                penalise(&mut next, &node_penalty[t]);
+                for (b, v) in next.iter_mut().enumerate() {
+                    if repeats_on_path(&back, t, arg[b] as usize, b, window) {
+                        *v += weights.repeat_penalty;
+                        stats.window_charges += 1;
+                    }
+                }
                 back.push(arg);
                 cur = Nodes::All(next);
             }
@@ -522,8 +501,9 @@ fn solve_layers(
     // Backtrack.
     let n = layers.len();
     let mut path = vec![0usize; n];
-    let (mut node, total) = match &cur {
-        Nodes::One(s, c) => (*s, *c),
+    // The last layer's best node (its cost is recomputed below with the full objective).
+    let mut node = match &cur {
+        Nodes::One(s, _) => *s,
         Nodes::All(v) => {
             let mut best = (f32::INFINITY, 0usize);
             for (b, c) in v.iter().enumerate() {
@@ -531,7 +511,7 @@ fn solve_layers(
                     best = (*c, b);
                 }
             }
-            (best.1, best.0)
+            best.1
         }
     };
     for t in (0..n).rev() {
@@ -544,7 +524,8 @@ fn solve_layers(
             node = if bt.len() == 1 { bt[0] as usize } else { bt.get(path[t]).copied().unwrap_or(0) as usize };
         }
     }
-    Ok((path, total, stats))
+    let cost = path_cost(table, layers, segment_intensity, weights, &path);
+    Ok((path, cost, stats))
 }
 
 /// The objective [`fill`] minimises, for any path (for checks and reports).
