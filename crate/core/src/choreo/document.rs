@@ -420,3 +420,31 @@ impl Choreography {
         render(lib, &self.bars, &choices, options)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::choreo::grid::bars_from_tempo;
+
+    #[test]
+    fn round_trips_through_json_in_camel_case() {
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(8.5, 120.0, 4, 0.25, |_, _| 0.5).unwrap();
+        let mut doc = Choreography::new(bars).unwrap();
+        let round = doc.candidates(&lib, 1).unwrap();
+        doc.set(&lib, 1, round[0]).unwrap();
+        doc.generate(&lib).unwrap();
+        let json = serde_json::to_string(&doc).unwrap();
+        let back: Choreography = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, doc);
+        let view = serde_json::to_value(doc.view()).unwrap();
+        assert_eq!(view[1]["state"]["kind"], "pinned");
+        assert_eq!(view[0]["state"]["kind"], "generated");
+        assert!(view[1]["bar"]["startSecs"].is_number());
+        assert!(view[1]["shownCount"].is_number());
+        let seg = serde_json::to_value(&lib.segments()[0]).unwrap();
+        assert!(seg["intensity01"].is_number() && seg["startFrame"].is_number() && seg["tempoBpm"].is_number());
+        let settings = serde_json::to_value(doc.settings()).unwrap();
+        assert!(settings["fill"]["repeatWindow"].is_number());
+    }
+}
