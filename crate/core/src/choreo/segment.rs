@@ -61,7 +61,7 @@ pub fn intensity_weight(c: Canon) -> f32 {
 pub enum SegmentError {
     #[error("clip '{name}' is not humanoid ({reason}): segments need a standing two-legged body")]
     NotHumanoid { name: String, reason: String },
-    #[error("clip '{name}' is {duration_secs:.2} s long and holds only {beats} beats at {tempo_bpm:.0} BPM: a segment needs 4 counts (5 beats)")]
+    #[error("clip '{name}' is {duration_secs:.2} s long and holds only {beats} beat(s) at {tempo_bpm:.0} counts per minute: a segment needs 4 counts (5 beats)")]
     TooShort { name: String, duration_secs: f32, beats: usize, tempo_bpm: f32 },
     #[error("clip '{name}': stated tempo {tempo_bpm} BPM is outside 30..=300")]
     BadTempo { name: String, tempo_bpm: f32 },
