@@ -321,7 +321,12 @@ fn undo_and_redo_walk_every_edit() {
     history.push(doc.clone());
     doc.clear(5).unwrap();
     history.push(doc.clone());
-    let same = |a: &Choreography, b: &Choreography| a.states() == b.states() && a.view() == b.view() && a.settings() == b.settings();
+    // A corrected grid: 10 bars at 126 BPM; bar 2 keeps its search, new bars start empty.
+    doc.set_bars(bars_from_tempo(19.5, 126.0, 4, 0.1, |_, _| 0.4).unwrap()).unwrap();
+    assert_eq!(doc.bars().len(), 10);
+    assert_eq!(doc.states()[9], BarState::Empty);
+    history.push(doc.clone());
+    let same = |a: &Choreography, b: &Choreography| a.states() == b.states() && a.view() == b.view() && a.settings() == b.settings() && a.bars() == b.bars();
     for k in (0..history.len() - 1).rev() {
         assert!(doc.undo());
         assert!(same(&doc, &history[k]), "undo to step {k}");

@@ -16,6 +16,7 @@
 //! [`unpin`]: Choreography::unpin
 //! [`clear`]: Choreography::clear
 //! [`generate`]: Choreography::generate
+//! [`set_bars`]: Choreography::set_bars
 //! [`set_rho`]: Choreography::set_rho
 //! [`set_music_weight`]: Choreography::set_music_weight
 //! [`set_repeat_penalty`]: Choreography::set_repeat_penalty
@@ -77,6 +78,7 @@ impl Default for Settings {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 struct Doc {
+    bars: Vec<Bar>,
     states: Vec<BarState>,
     sessions: Vec<Option<FeedbackSession>>,
     settings: Settings,
@@ -133,11 +135,25 @@ pub struct GenerateReport {
     pub cost: f32,
 }
 
+/// Bars must exist, have positive length and come in order.
+fn check_bars(bars: &[Bar]) -> Result<(), ChoreoError> {
+    if bars.is_empty() {
+        return Err(ChoreoError::NoBars);
+    }
+    let mut prev_end = f32::MIN;
+    for b in bars {
+        if !(b.end_secs > b.start_secs && b.start_secs.is_finite() && b.end_secs.is_finite() && b.start_secs >= prev_end - 1e-3) {
+            return Err(ChoreoError::BadBar { index: b.index, start_secs: b.start_secs, end_secs: b.end_secs });
+        }
+        prev_end = b.end_secs;
+    }
+    Ok(())
+}
+
 /// A dance being composed to a song.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 pub struct Choreography {
-    bars: Vec<Bar>,
     doc: Doc,
     undo: Vec<Doc>,
     redo: Vec<Doc>,
@@ -147,22 +163,25 @@ impl Choreography {
     /// A choreography with every bar empty. Refuses a song without a bar, and bars out of
     /// order or of non-positive length.
     pub fn new(bars: Vec<Bar>) -> Result<Self, ChoreoError> {
-        if bars.is_empty() {
-            return Err(ChoreoError::NoBars);
-        }
-        let mut prev_end = f32::MIN;
-        for b in &bars {
-            if !(b.end_secs > b.start_secs && b.start_secs.is_finite() && b.end_secs.is_finite() && b.start_secs >= prev_end - 1e-3) {
-                return Err(ChoreoError::BadBar { index: b.index, start_secs: b.start_secs, end_secs: b.end_secs });
-            }
-            prev_end = b.end_secs;
-        }
+        check_bars(&bars)?;
         let n = bars.len();
-        Ok(Self { bars, doc: Doc { states: vec![BarState::Empty; n], sessions: vec![None; n], settings: Settings::default() }, undo: Vec::new(), redo: Vec::new() })
+        Ok(Self { doc: Doc { bars, states: vec![BarState::Empty; n], sessions: vec![None; n], settings: Settings::default() }, undo: Vec::new(), redo: Vec::new() })
+    }
+
+    /// Replaces the bar grid (after the person corrects the tempo or the first downbeat): bar
+    /// `i` keeps its state and search when it still exists; new bars start empty. Undoable.
+    pub fn set_bars(&mut self, bars: Vec<Bar>) -> Result<(), ChoreoError> {
+        check_bars(&bars)?;
+        self.record();
+        let n = bars.len();
+        self.doc.bars = bars;
+        self.doc.states.resize(n, BarState::Empty);
+        self.doc.sessions.resize(n, None);
+        Ok(())
     }
 
     pub fn bars(&self) -> &[Bar] {
-        &self.bars
+        &self.doc.bars
     }
 
     pub fn settings(&self) -> &Settings {
@@ -186,7 +205,8 @@ impl Choreography {
 
     /// What the timeline shows, one entry per bar.
     pub fn view(&self) -> Vec<BarView> {
-        self.bars
+        self.doc
+            .bars
             .iter()
             .zip(&self.doc.states)
             .zip(&self.doc.sessions)
@@ -203,10 +223,10 @@ impl Choreography {
     }
 
     fn check_bar(&self, bar: usize) -> Result<(), ChoreoError> {
-        if bar < self.bars.len() {
+        if bar < self.doc.bars.len() {
             Ok(())
         } else {
-            Err(ChoreoError::NoSuchBar { bar, bars: self.bars.len() })
+            Err(ChoreoError::NoSuchBar { bar, bars: self.doc.bars.len() })
         }
     }
 
@@ -237,7 +257,7 @@ impl Choreography {
             return Ok(s.round.clone());
         }
         self.record();
-        let (intensity, rho, count) = (self.bars[bar].intensity, self.doc.settings.rho, self.doc.settings.candidates_per_round);
+        let (intensity, rho, count) = (self.doc.bars[bar].intensity, self.doc.settings.rho, self.doc.settings.candidates_per_round);
         let mut s = FeedbackSession::new();
         let round = s.next_round(lib, intensity, rho, count).to_vec();
         self.doc.sessions[bar] = Some(s);
@@ -255,7 +275,7 @@ impl Choreography {
             return Err(ChoreoError::NotACandidate { bar, segment: bad });
         }
         self.record();
-        let (intensity, rho, count) = (self.bars[bar].intensity, self.doc.settings.rho, self.doc.settings.candidates_per_round);
+        let (intensity, rho, count) = (self.doc.bars[bar].intensity, self.doc.settings.rho, self.doc.settings.candidates_per_round);
         let Some(session) = self.doc.sessions[bar].as_mut() else {
             return Err(ChoreoError::NoSearch { bar });
         };
@@ -359,10 +379,11 @@ impl Choreography {
             }
         }
         let pinned = self.doc.states.iter().filter(|s| matches!(s, BarState::Pinned { .. })).count();
-        if pinned == self.bars.len() {
+        if pinned == self.doc.bars.len() {
             return Ok(GenerateReport { filled: 0, pinned, cost: 0.0 });
         }
         let layers: Vec<Layer> = self
+            .doc
             .bars
             .iter()
             .zip(&self.doc.states)
@@ -381,7 +402,7 @@ impl Choreography {
                 *state = BarState::Generated { segment: seg };
             }
         }
-        Ok(GenerateReport { filled: self.bars.len() - pinned, pinned, cost })
+        Ok(GenerateReport { filled: self.doc.bars.len() - pinned, pinned, cost })
     }
 
     /// Undoes the last edit; `false` when there is none.
@@ -417,7 +438,7 @@ impl Choreography {
     /// The whole dance as one canonical clip; frame 0 is song time 0.
     pub fn render(&self, lib: &SegmentLibrary, options: &RenderOptions) -> Clip {
         let choices: Vec<Option<usize>> = self.doc.states.iter().map(|s| s.segment().filter(|&i| i < lib.len())).collect();
-        render(lib, &self.bars, &choices, options)
+        render(lib, &self.doc.bars, &choices, options)
     }
 }
 
