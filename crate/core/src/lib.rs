@@ -8,9 +8,11 @@
 pub mod actions;
 pub mod bars;
 pub mod builtin;
+pub mod choreo;
 pub mod clip;
 pub mod humanoid;
 pub mod import;
+pub mod library;
 pub mod music;
 pub mod normalize;
 pub mod search;

@@ -1,0 +1,471 @@
+//! The editable choreography: the song's bars, each empty, pinned to a segment by the person or
+//! filled by the engine, each with its own relevance-feedback session, and every edit
+//! undoable. The web layer keeps no state of its own: it calls a command, then reads
+//! [`Choreography::view`] (and [`Choreography::render`] to play).
+//!
+//! Commands: [`Choreography::candidates`] (open a bar's search: first round), [`search`]
+//! (like some of the shown candidates, next round, τ ← τ·19/20), [`reset_search`], [`set`]
+//! (pin a segment), [`unpin`], [`clear`], [`generate`] (fill every bar not pinned), settings
+//! ([`set_rho`], [`set_music_weight`], [`set_repeat_penalty`], [`set_repeat_window`]), [`undo`]
+//! and [`redo`]. Every
+//! command that changes the document records the previous state for undo and clears redo.
+//!
+//! [`search`]: Choreography::search
+//! [`reset_search`]: Choreography::reset_search
+//! [`set`]: Choreography::set
+//! [`unpin`]: Choreography::unpin
+//! [`clear`]: Choreography::clear
+//! [`generate`]: Choreography::generate
+//! [`set_bars`]: Choreography::set_bars
+//! [`set_rho`]: Choreography::set_rho
+//! [`set_music_weight`]: Choreography::set_music_weight
+//! [`set_repeat_penalty`]: Choreography::set_repeat_penalty
+//! [`set_repeat_window`]: Choreography::set_repeat_window
+//! [`undo`]: Choreography::undo
+//! [`redo`]: Choreography::redo
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
+use super::fill::{fill, FillError, FillWeights, Layer};
+use super::render::{render, RenderOptions};
+use super::segment::SegmentLibrary;
+use crate::bars::Bar;
+use crate::clip::Clip;
+
+/// Most undo steps kept.
+pub const UNDO_LIMIT: usize = 500;
+
+/// What a bar holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "camelCase")]
+pub enum BarState {
+    #[default]
+    Empty,
+    /// Chosen by the person: generation never changes it.
+    Pinned { segment: usize },
+    /// Chosen by the engine: the next Generate may change it.
+    Generated { segment: usize },
+}
+
+impl BarState {
+    pub fn segment(&self) -> Option<usize> {
+        match *self {
+            BarState::Empty => None,
+            BarState::Pinned { segment } | BarState::Generated { segment } => Some(segment),
+        }
+    }
+}
+
+/// Knobs of the search and the filling.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase", default)]
+pub struct Settings {
+    /// ρ of eq. 1: weight of music relevance against diversity/preference (0..=1).
+    pub rho: f32,
+    pub fill: FillWeights,
+    /// Candidates per round.
+    pub candidates_per_round: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self { rho: 0.3, fill: FillWeights::default(), candidates_per_round: CANDIDATES_PER_ROUND }
+    }
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct Doc {
+    bars: Vec<Bar>,
+    states: Vec<BarState>,
+    sessions: Vec<Option<FeedbackSession>>,
+    settings: Settings,
+}
+
+/// Why a command was refused.
+#[derive(Debug, Error, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "camelCase")]
+pub enum ChoreoError {
+    #[error("the song has no complete bar: a choreography needs at least one bar")]
+    NoBars,
+    #[error("bar {index} runs from {start_secs} s to {end_secs} s: bars must have positive length and come in order")]
+    BadBar { index: usize, start_secs: f32, end_secs: f32 },
+    #[error("there is no bar {bar}: the song has {bars} bars")]
+    NoSuchBar { bar: usize, bars: usize },
+    #[error("there is no segment {segment}: the library has {segments}")]
+    NoSuchSegment { segment: usize, segments: usize },
+    #[error("segment {segment} was not among bar {bar}'s current candidates")]
+    NotACandidate { bar: usize, segment: usize },
+    #[error("bar {bar} has no search open: ask for its candidates first")]
+    NoSearch { bar: usize },
+    #[error("the segment library is empty: add the built-in moves or a humanoid clip first")]
+    EmptyLibrary,
+    #[error("{name} must be in {range}, got {value}")]
+    BadSetting { name: String, range: String, value: f32 },
+    #[error(transparent)]
+    Fill(#[from] FillError),
+}
+
+/// Everything the timeline shows about one bar.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct BarView {
+    pub bar: Bar,
+    pub state: BarState,
+    /// τ of the bar's search (1 when none is open).
+    pub tau: f32,
+    /// The current round's candidates (empty when no search is open).
+    pub candidates: Vec<usize>,
+    pub liked: Vec<usize>,
+    pub shown_count: usize,
+    pub rounds: usize,
+}
+
+/// What a Generate did.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct GenerateReport {
+    /// Bars the engine filled.
+    pub filled: usize,
+    /// Bars kept because they are pinned.
+    pub pinned: usize,
+    /// Cost of the chosen path (transitions + music + repetition).
+    pub cost: f32,
+}
+
+/// Bars must exist, have positive length and come in order.
+fn check_bars(bars: &[Bar]) -> Result<(), ChoreoError> {
+    if bars.is_empty() {
+        return Err(ChoreoError::NoBars);
+    }
+    let mut prev_end = f32::MIN;
+    for b in bars {
+        if !(b.end_secs > b.start_secs && b.start_secs.is_finite() && b.end_secs.is_finite() && b.start_secs >= prev_end - 1e-3) {
+            return Err(ChoreoError::BadBar { index: b.index, start_secs: b.start_secs, end_secs: b.end_secs });
+        }
+        prev_end = b.end_secs;
+    }
+    Ok(())
+}
+
+/// A dance being composed to a song.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Choreography {
+    doc: Doc,
+    undo: Vec<Doc>,
+    redo: Vec<Doc>,
+}
+
+impl Choreography {
+    /// A choreography with every bar empty. Refuses a song without a bar, and bars out of
+    /// order or of non-positive length.
+    pub fn new(bars: Vec<Bar>) -> Result<Self, ChoreoError> {
+        check_bars(&bars)?;
+        let n = bars.len();
+        Ok(Self { doc: Doc { bars, states: vec![BarState::Empty; n], sessions: vec![None; n], settings: Settings::default() }, undo: Vec::new(), redo: Vec::new() })
+    }
+
+    /// Replaces the bar grid (after the person corrects the tempo or the first downbeat): bar
+    /// `i` keeps its state and search when it still exists; new bars start empty. Undoable.
+    pub fn set_bars(&mut self, bars: Vec<Bar>) -> Result<(), ChoreoError> {
+        check_bars(&bars)?;
+        self.record();
+        let n = bars.len();
+        self.doc.bars = bars;
+        self.doc.states.resize(n, BarState::Empty);
+        self.doc.sessions.resize(n, None);
+        Ok(())
+    }
+
+    pub fn bars(&self) -> &[Bar] {
+        &self.doc.bars
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.doc.settings
+    }
+
+    /// Each bar's state.
+    pub fn states(&self) -> &[BarState] {
+        &self.doc.states
+    }
+
+    /// The segment in each bar, if any.
+    pub fn segments(&self) -> Vec<Option<usize>> {
+        self.doc.states.iter().map(BarState::segment).collect()
+    }
+
+    /// The bar's feedback session, if one is open.
+    pub fn session(&self, bar: usize) -> Option<&FeedbackSession> {
+        self.doc.sessions.get(bar).and_then(|s| s.as_ref())
+    }
+
+    /// What the timeline shows, one entry per bar.
+    pub fn view(&self) -> Vec<BarView> {
+        self.doc
+            .bars
+            .iter()
+            .zip(&self.doc.states)
+            .zip(&self.doc.sessions)
+            .map(|((bar, state), session)| BarView {
+                bar: *bar,
+                state: *state,
+                tau: session.as_ref().map_or(1.0, |s| s.tau),
+                candidates: session.as_ref().map_or_else(Vec::new, |s| s.round.clone()),
+                liked: session.as_ref().map_or_else(Vec::new, |s| s.liked.clone()),
+                shown_count: session.as_ref().map_or(0, |s| s.shown.len()),
+                rounds: session.as_ref().map_or(0, |s| s.rounds),
+            })
+            .collect()
+    }
+
+    fn check_bar(&self, bar: usize) -> Result<(), ChoreoError> {
+        if bar < self.doc.bars.len() {
+            Ok(())
+        } else {
+            Err(ChoreoError::NoSuchBar { bar, bars: self.doc.bars.len() })
+        }
+    }
+
+    fn check_segment(lib: &SegmentLibrary, segment: usize) -> Result<(), ChoreoError> {
+        if segment < lib.len() {
+            Ok(())
+        } else {
+            Err(ChoreoError::NoSuchSegment { segment, segments: lib.len() })
+        }
+    }
+
+    fn record(&mut self) {
+        self.undo.push(self.doc.clone());
+        if self.undo.len() > UNDO_LIMIT {
+            self.undo.remove(0);
+        }
+        self.redo.clear();
+    }
+
+    /// The bar's current candidates, opening its search (first round, τ = 1) when none is
+    /// open. Opening is an edit (undoable); asking again returns the same round.
+    pub fn candidates(&mut self, lib: &SegmentLibrary, bar: usize) -> Result<Vec<usize>, ChoreoError> {
+        self.check_bar(bar)?;
+        if lib.is_empty() {
+            return Err(ChoreoError::EmptyLibrary);
+        }
+        if let Some(s) = &self.doc.sessions[bar] {
+            return Ok(s.round.clone());
+        }
+        self.record();
+        let (intensity, rho, count) = (self.doc.bars[bar].intensity, self.doc.settings.rho, self.doc.settings.candidates_per_round);
+        let mut s = FeedbackSession::new();
+        let round = s.next_round(lib, intensity, rho, count).to_vec();
+        self.doc.sessions[bar] = Some(s);
+        Ok(round)
+    }
+
+    /// Search: the `liked` candidates (from the current round) join the bar's liked set, τ is
+    /// multiplied by 19/20 and a new round of unseen candidates is returned.
+    pub fn search(&mut self, lib: &SegmentLibrary, bar: usize, liked: &[usize]) -> Result<Vec<usize>, ChoreoError> {
+        self.check_bar(bar)?;
+        let Some(session) = &self.doc.sessions[bar] else {
+            return Err(ChoreoError::NoSearch { bar });
+        };
+        if let Some(&bad) = liked.iter().find(|l| !session.round.contains(l)) {
+            return Err(ChoreoError::NotACandidate { bar, segment: bad });
+        }
+        self.record();
+        let (intensity, rho, count) = (self.doc.bars[bar].intensity, self.doc.settings.rho, self.doc.settings.candidates_per_round);
+        let Some(session) = self.doc.sessions[bar].as_mut() else {
+            return Err(ChoreoError::NoSearch { bar });
+        };
+        Ok(session.search(lib, liked, intensity, rho, count).to_vec())
+    }
+
+    /// Forgets the bar's search (τ back to 1, nothing shown or liked). Returns whether there
+    /// was one.
+    pub fn reset_search(&mut self, bar: usize) -> Result<bool, ChoreoError> {
+        self.check_bar(bar)?;
+        if self.doc.sessions[bar].is_none() {
+            return Ok(false);
+        }
+        self.record();
+        self.doc.sessions[bar] = None;
+        Ok(true)
+    }
+
+    /// Set: pins `segment` to the bar.
+    pub fn set(&mut self, lib: &SegmentLibrary, bar: usize, segment: usize) -> Result<(), ChoreoError> {
+        self.check_bar(bar)?;
+        Self::check_segment(lib, segment)?;
+        if self.doc.states[bar] == (BarState::Pinned { segment }) {
+            return Ok(());
+        }
+        self.record();
+        self.doc.states[bar] = BarState::Pinned { segment };
+        Ok(())
+    }
+
+    /// Unpins a bar, keeping its segment as a generated one (the next Generate may change it).
+    pub fn unpin(&mut self, bar: usize) -> Result<(), ChoreoError> {
+        self.check_bar(bar)?;
+        if let BarState::Pinned { segment } = self.doc.states[bar] {
+            self.record();
+            self.doc.states[bar] = BarState::Generated { segment };
+        }
+        Ok(())
+    }
+
+    /// Empties a bar.
+    pub fn clear(&mut self, bar: usize) -> Result<(), ChoreoError> {
+        self.check_bar(bar)?;
+        if self.doc.states[bar] != BarState::Empty {
+            self.record();
+            self.doc.states[bar] = BarState::Empty;
+        }
+        Ok(())
+    }
+
+    /// ρ of eq. 1, in 0..=1 (applies to the next round).
+    pub fn set_rho(&mut self, rho: f32) -> Result<(), ChoreoError> {
+        if !(0.0..=1.0).contains(&rho) {
+            return Err(ChoreoError::BadSetting { name: "rho".into(), range: "0..=1".into(), value: rho });
+        }
+        self.record();
+        self.doc.settings.rho = rho;
+        Ok(())
+    }
+
+    /// Weight of the music term of the filling, in 0..=100.
+    pub fn set_music_weight(&mut self, w: f32) -> Result<(), ChoreoError> {
+        if !(0.0..=100.0).contains(&w) {
+            return Err(ChoreoError::BadSetting { name: "musicWeight".into(), range: "0..=100".into(), value: w });
+        }
+        self.record();
+        self.doc.settings.fill.music_weight = w;
+        Ok(())
+    }
+
+    /// Repetition penalty of the filling, in 0..=100.
+    pub fn set_repeat_penalty(&mut self, w: f32) -> Result<(), ChoreoError> {
+        if !(0.0..=100.0).contains(&w) {
+            return Err(ChoreoError::BadSetting { name: "repeatPenalty".into(), range: "0..=100".into(), value: w });
+        }
+        self.record();
+        self.doc.settings.fill.repeat_penalty = w;
+        Ok(())
+    }
+
+    /// Bars within which a repeated segment is penalised, in 1..=32.
+    pub fn set_repeat_window(&mut self, bars: usize) -> Result<(), ChoreoError> {
+        if !(1..=32).contains(&bars) {
+            return Err(ChoreoError::BadSetting { name: "repeatWindow".into(), range: "1..=32".into(), value: bars as f32 });
+        }
+        self.record();
+        self.doc.settings.fill.repeat_window = bars;
+        Ok(())
+    }
+
+    /// Generate: fills every bar that is not pinned with the minimum-cost path of spec §G.
+    /// Pinned bars never change. With every bar pinned nothing changes (and nothing is
+    /// recorded for undo).
+    pub fn generate(&mut self, lib: &SegmentLibrary) -> Result<GenerateReport, ChoreoError> {
+        if lib.is_empty() {
+            return Err(ChoreoError::EmptyLibrary);
+        }
+        for s in &self.doc.states {
+            if let BarState::Pinned { segment } = *s {
+                Self::check_segment(lib, segment)?;
+            }
+        }
+        let pinned = self.doc.states.iter().filter(|s| matches!(s, BarState::Pinned { .. })).count();
+        if pinned == self.doc.bars.len() {
+            return Ok(GenerateReport { filled: 0, pinned, cost: 0.0 });
+        }
+        let layers: Vec<Layer> = self
+            .doc
+            .bars
+            .iter()
+            .zip(&self.doc.states)
+            .map(|(b, s)| match *s {
+                BarState::Pinned { segment } => Layer::Fixed { segment },
+                _ => Layer::Open { intensity: b.intensity },
+            })
+            .collect();
+        let weights = self.doc.settings.fill;
+        let table = lib.transition_table(weights.repeat_penalty);
+        let intensity: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
+        let (path, cost) = fill(&table, &layers, &intensity, &weights)?;
+        self.record();
+        for (state, seg) in self.doc.states.iter_mut().zip(path) {
+            if !matches!(state, BarState::Pinned { .. }) {
+                *state = BarState::Generated { segment: seg };
+            }
+        }
+        Ok(GenerateReport { filled: self.doc.bars.len() - pinned, pinned, cost })
+    }
+
+    /// Undoes the last edit; `false` when there is none.
+    pub fn undo(&mut self) -> bool {
+        match self.undo.pop() {
+            Some(prev) => {
+                self.redo.push(std::mem::replace(&mut self.doc, prev));
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Redoes the last undone edit; `false` when there is none.
+    pub fn redo(&mut self) -> bool {
+        match self.redo.pop() {
+            Some(next) => {
+                self.undo.push(std::mem::replace(&mut self.doc, next));
+                true
+            }
+            None => false,
+        }
+    }
+
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+
+    /// The whole dance as one canonical clip; frame 0 is song time 0.
+    pub fn render(&self, lib: &SegmentLibrary, options: &RenderOptions) -> Clip {
+        let choices: Vec<Option<usize>> = self.doc.states.iter().map(|s| s.segment().filter(|&i| i < lib.len())).collect();
+        render(lib, &self.doc.bars, &choices, options)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::choreo::grid::bars_from_tempo;
+
+    #[test]
+    fn round_trips_through_json_in_camel_case() {
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(8.5, 120.0, 4, 0.25, |_, _| 0.5).unwrap();
+        let mut doc = Choreography::new(bars).unwrap();
+        let round = doc.candidates(&lib, 1).unwrap();
+        doc.set(&lib, 1, round[0]).unwrap();
+        doc.generate(&lib).unwrap();
+        let json = serde_json::to_string(&doc).unwrap();
+        let back: Choreography = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, doc);
+        let view = serde_json::to_value(doc.view()).unwrap();
+        assert_eq!(view[1]["state"]["kind"], "pinned");
+        assert_eq!(view[0]["state"]["kind"], "generated");
+        assert!(view[1]["bar"]["startSecs"].is_number());
+        assert!(view[1]["shownCount"].is_number());
+        let seg = serde_json::to_value(&lib.segments()[0]).unwrap();
+        assert!(seg["intensity01"].is_number() && seg["startFrame"].is_number() && seg["tempoBpm"].is_number());
+        let settings = serde_json::to_value(doc.settings()).unwrap();
+        assert!(settings["fill"]["repeatWindow"].is_number());
+    }
+}

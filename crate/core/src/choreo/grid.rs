@@ -1,0 +1,61 @@
+//! Bars from a stated tempo: the grid a choreography can be made on before (or without) the
+//! song analysis, e.g. for a song whose tempo the person knows.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::bars::Bar;
+
+#[derive(Debug, Error, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "camelCase")]
+pub enum GridError {
+    #[error("tempo {bpm} BPM is outside 30..=300")]
+    BadTempo { bpm: f32 },
+    #[error("the song is {duration_secs:.2} s long after the first downbeat at {first_downbeat_secs:.2} s, shorter than one bar of {bar_secs:.2} s: there is no bar to dance")]
+    ShorterThanABar { duration_secs: f32, first_downbeat_secs: f32, bar_secs: f32 },
+    #[error("beats per bar must be 1..=16, got {beats_per_bar}")]
+    BadBeatsPerBar { beats_per_bar: usize },
+}
+
+/// Whole bars of `beats_per_bar` beats at `bpm` from `first_downbeat_secs` to the end of a song
+/// of `duration_secs`. `intensity(start, end)` gives each bar's music intensity (0..1).
+pub fn bars_from_tempo(
+    duration_secs: f32,
+    bpm: f32,
+    beats_per_bar: usize,
+    first_downbeat_secs: f32,
+    intensity: impl Fn(f32, f32) -> f32,
+) -> Result<Vec<Bar>, GridError> {
+    if !(30.0..=300.0).contains(&bpm) {
+        return Err(GridError::BadTempo { bpm });
+    }
+    if !(1..=16).contains(&beats_per_bar) {
+        return Err(GridError::BadBeatsPerBar { beats_per_bar });
+    }
+    let bar_secs = beats_per_bar as f32 * 60.0 / bpm;
+    let first = first_downbeat_secs.max(0.0);
+    let count = if duration_secs.is_finite() { ((duration_secs - first) / bar_secs + 1e-4).floor() } else { 0.0 };
+    if count < 1.0 {
+        return Err(GridError::ShorterThanABar { duration_secs, first_downbeat_secs: first, bar_secs });
+    }
+    Ok((0..count as usize)
+        .map(|i| {
+            let start_secs = first + i as f32 * bar_secs;
+            let end_secs = start_secs + bar_secs;
+            Bar { index: i, start_secs, end_secs, intensity: intensity(start_secs, end_secs).clamp(0.0, 1.0) }
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn whole_bars_only() {
+        let bars = bars_from_tempo(10.0, 120.0, 4, 0.5, |_, _| 0.5).unwrap();
+        assert_eq!(bars.len(), 4);
+        assert!((bars[3].end_secs - 8.5).abs() < 1e-5);
+        assert!(matches!(bars_from_tempo(1.5, 120.0, 4, 0.0, |_, _| 0.5), Err(GridError::ShorterThanABar { .. })));
+    }
+}

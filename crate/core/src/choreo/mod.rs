@@ -1,0 +1,22 @@
+//! Choreography authoring (spec §E–G, paper 000): a song's bars, a library of 4-count
+//! segments cut from any humanoid clip at the motion's own beats, relevance-feedback candidate
+//! search per bar, automatic filling of the open bars by a shortest path, cubic joins, and the
+//! editable document with undo/redo that the web layer drives. Everything here is
+//! deterministic: the same library, bars and commands give the same dance.
+
+pub mod document;
+pub mod eigen;
+pub mod feedback;
+pub mod fill;
+pub mod grid;
+pub mod render;
+pub mod retarget;
+pub mod segment;
+
+pub use document::{BarState, BarView, ChoreoError, Choreography, GenerateReport, Settings};
+pub use eigen::Signature;
+pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, CANDIDATES_PER_ROUND, TAU_DECAY};
+pub use fill::{fill, fill_with_stats, path_cost, FillError, FillStats, FillWeights, Layer, TransitionTable};
+pub use grid::{bars_from_tempo, GridError};
+pub use render::{render, segment_clip, speed_jumps, RenderOptions};
+pub use segment::{ClipSummary, LibraryClip, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};

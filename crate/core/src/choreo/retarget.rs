@@ -1,0 +1,141 @@
+//! Any humanoid clip onto the canonical skeleton, so segments from every source play, compare
+//! and join as one dance. Directions, not lengths, are carried over: each canonical bone is
+//! turned to point where the source's bone points (the hips and chest take their full frame
+//! from the hip and shoulder lines), the root follows the source's hips scaled by body height,
+//! and the whole clip is lifted so its feet meet the floor.
+
+use std::sync::Arc;
+
+use glam::{Mat3, Quat, Vec3};
+
+use crate::builtin::canonical_skeleton;
+use crate::clip::{Clip, TranslationTrack};
+use crate::humanoid::{canonical_positions, Canon, HumanoidMap, CANON_COUNT};
+use crate::normalize::body_height;
+
+fn arc(from: Vec3, to: Vec3) -> Quat {
+    match (from.try_normalize(), to.try_normalize()) {
+        (Some(a), Some(b)) => Quat::from_rotation_arc(a, b),
+        _ => Quat::IDENTITY,
+    }
+}
+
+/// World rotation whose +X is along `left` and +Y along `up` (orthogonalised), or `None` when
+/// the two are degenerate.
+fn frame(left: Vec3, up: Vec3) -> Option<Quat> {
+    let x = left.try_normalize()?;
+    let y = (up - x * up.dot(x)).try_normalize()?;
+    let z = x.cross(y);
+    Some(Quat::from_mat3(&Mat3::from_cols(x, y, z)).normalize())
+}
+
+/// The clip on the canonical skeleton at `fps` (resampled first when the source differs).
+pub fn to_canonical(clip: &Clip, map: &HumanoidMap, fps: f32) -> Clip {
+    let src = if (clip.fps - fps).abs() > 1e-3 { clip.resampled(fps) } else { clip.clone() };
+    let pos = canonical_positions(&src, map);
+    let skeleton = Arc::new(canonical_skeleton());
+    let canon_height = body_height(&skeleton.rest_positions());
+    let src_height = body_height(&pos);
+    let scale = if src_height > 1e-6 { canon_height / src_height } else { 1.0 };
+    let frames = pos.len() / CANON_COUNT;
+    let off = |c: Canon| skeleton.joints[c.index()].rest_offset;
+    let mut rotations = Vec::with_capacity(frames * CANON_COUNT);
+    let mut root = Vec::with_capacity(frames);
+    let mut prev_world = [Quat::IDENTITY; CANON_COUNT];
+    use Canon::*;
+    for f in 0..frames {
+        let p = &pos[f * CANON_COUNT..(f + 1) * CANON_COUNT];
+        let at = |c: Canon| p[c.index()];
+        let mut world = [Quat::IDENTITY; CANON_COUNT];
+        let mut local = [Quat::IDENTITY; CANON_COUNT];
+        let hips_q = frame(at(LeftUpperLeg) - at(RightUpperLeg), at(Chest) - at(Hips)).unwrap_or(prev_world[Hips.index()]);
+        world[Hips.index()] = hips_q;
+        local[Hips.index()] = hips_q;
+        // A bone pointing at one child: swing the parent-carried rest direction onto it.
+        let swing = |c: Canon, child: Canon, parent_world: Quat| -> Quat {
+            let to = at(child) - at(c);
+            if to.length_squared() < 1e-12 {
+                parent_world
+            } else {
+                arc(parent_world * off(child), to) * parent_world
+            }
+        };
+        let set = |c: Canon, w: Quat, parent: Canon, world: &mut [Quat; CANON_COUNT], local: &mut [Quat; CANON_COUNT]| {
+            world[c.index()] = w;
+            local[c.index()] = world[parent.index()].inverse() * w;
+        };
+        let w = swing(Spine, Chest, hips_q);
+        set(Spine, w, Hips, &mut world, &mut local);
+        let chest_q = frame(at(LeftUpperArm) - at(RightUpperArm), at(Neck) - at(Chest)).unwrap_or(world[Spine.index()]);
+        set(Chest, chest_q, Spine, &mut world, &mut local);
+        let w = swing(Neck, Head, chest_q);
+        set(Neck, w, Chest, &mut world, &mut local);
+        set(Head, world[Neck.index()], Neck, &mut world, &mut local);
+        for (sh, ua, fa, hand) in [(LeftShoulder, LeftUpperArm, LeftForearm, LeftHand), (RightShoulder, RightUpperArm, RightForearm, RightHand)] {
+            let w = swing(sh, ua, chest_q);
+            set(sh, w, Chest, &mut world, &mut local);
+            let w = swing(ua, fa, world[sh.index()]);
+            set(ua, w, sh, &mut world, &mut local);
+            let w = swing(fa, hand, world[ua.index()]);
+            set(fa, w, ua, &mut world, &mut local);
+            set(hand, world[fa.index()], fa, &mut world, &mut local);
+        }
+        for (ul, ll, foot, toe) in [(LeftUpperLeg, LeftLowerLeg, LeftFoot, LeftToe), (RightUpperLeg, RightLowerLeg, RightFoot, RightToe)] {
+            let w = swing(ul, ll, hips_q);
+            set(ul, w, Hips, &mut world, &mut local);
+            let w = swing(ll, foot, world[ul.index()]);
+            set(ll, w, ul, &mut world, &mut local);
+            let w = swing(foot, toe, world[ll.index()]);
+            set(foot, w, ll, &mut world, &mut local);
+            set(toe, world[foot.index()], foot, &mut world, &mut local);
+        }
+        prev_world = world;
+        rotations.extend_from_slice(&local);
+        root.push(at(Hips) * scale);
+    }
+    let mut out = Clip {
+        name: src.name.clone(),
+        source: src.source.clone(),
+        fps,
+        skeleton,
+        rotations,
+        translations: vec![TranslationTrack { joint: 0, values: root }],
+    };
+    // Feet on the floor: the 5th percentile of each frame's lowest point goes to 2 cm.
+    let mut lows: Vec<f32> = Vec::with_capacity(frames);
+    let mut tmp = Vec::new();
+    for f in 0..frames {
+        out.world_positions_into(f, &mut tmp);
+        lows.push(tmp.iter().map(|v| v.y).fold(f32::MAX, f32::min));
+    }
+    lows.retain(|v| v.is_finite());
+    lows.sort_by(f32::total_cmp);
+    if let Some(&low) = lows.get(lows.len() / 20) {
+        let lift = 0.02 - low;
+        if let Some(t) = out.translations.first_mut() {
+            for v in t.values.iter_mut() {
+                v.y += lift;
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::builtin::demo_clip;
+    use crate::normalize::normalized;
+
+    #[test]
+    fn canonical_clip_round_trips_its_own_directions() {
+        let demo = demo_clip();
+        let map = HumanoidMap::from_skeleton(&demo.skeleton);
+        let c = to_canonical(&demo, &map, 30.0);
+        c.validate().unwrap();
+        let a = normalized(&canonical_positions(&demo.resampled(30.0), &map), crate::normalize::Origin::Hips);
+        let b = normalized(&canonical_positions(&c, &HumanoidMap::from_skeleton(&c.skeleton)), crate::normalize::Origin::Hips);
+        let err: f32 = a.iter().zip(&b).map(|(x, y)| (*x - *y).length()).sum::<f32>() / a.len() as f32;
+        assert!(err < 0.01, "mean normalised joint error {err}");
+    }
+}

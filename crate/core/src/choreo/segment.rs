@@ -1,0 +1,636 @@
+//! The segment library (spec §E): clips cut into 4-count segments at the motion's own beats,
+//! each with its source, frame range, tempo, motion intensity W (eq. 2), eigen signature
+//! (§F) and the start/end link vectors and velocities the filling's transition cost (§G)
+//! reads.
+//!
+//! Every clip is first put on the canonical skeleton at [`LIBRARY_FPS`], so segments from the
+//! built-in library and from imported glTF/BVH files compare, join and play as one dance.
+//! Beats come from the motion: the overall joint speed dips on every count, so the beat period
+//! is the strongest autocorrelation peak of the speed curve (after the lobe around lag 0)
+//! between 30 and 200 per minute, folded by octaves into a choreographer's count of 60..=150
+//! per minute (fast footwork such as salsa's steps is counted in twos), the phase is where the speed is lowest on that grid, and each beat snaps to the
+//! nearest local minimum of the speed. A person may instead state the clip's tempo.
+
+use std::sync::{Arc, Mutex};
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use super::eigen::Signature;
+use super::fill::TransitionTable;
+use super::retarget::to_canonical;
+use crate::clip::Clip;
+use crate::humanoid::{canonical_positions, Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
+use crate::library::{builtin_clips, builtin_moves, MoveInfo};
+use crate::normalize::{body_height, normalize_in_place, Origin};
+
+/// Frame rate every library clip is stored and analysed at.
+pub const LIBRARY_FPS: f32 = 30.0;
+/// Counts per segment (one bar).
+pub const SEGMENT_COUNTS: usize = 4;
+/// Eigen axes kept per signature.
+pub const SIGNATURE_AXES: usize = 5;
+/// Joints whose normalised positions make the signature's per-frame feature vector.
+pub const SIGNATURE_JOINTS: [Canon; 10] = [
+    Canon::Chest,
+    Canon::Head,
+    Canon::LeftForearm,
+    Canon::RightForearm,
+    Canon::LeftHand,
+    Canon::RightHand,
+    Canon::LeftLowerLeg,
+    Canon::RightLowerLeg,
+    Canon::LeftFoot,
+    Canon::RightFoot,
+];
+/// Number of canonical links (parent → child bones).
+pub const LINK_COUNT: usize = CANON_COUNT - 1;
+
+/// Per-joint weights α_i of the motion intensity (eq. 2): hands and feet count double.
+pub fn intensity_weight(c: Canon) -> f32 {
+    match c {
+        Canon::LeftHand | Canon::RightHand | Canon::LeftFoot | Canon::RightFoot => 2.0,
+        _ => 1.0,
+    }
+}
+
+/// Why a clip gave no segments.
+#[derive(Debug, Error, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "camelCase")]
+pub enum SegmentError {
+    #[error("clip '{name}' is not humanoid ({reason}): segments need a standing two-legged body")]
+    NotHumanoid { name: String, reason: String },
+    #[error("clip '{name}' is {duration_secs:.2} s long and holds only {beats} beat(s) at {tempo_bpm:.0} counts per minute: a segment needs 4 counts (5 beats)")]
+    TooShort { name: String, duration_secs: f32, beats: usize, tempo_bpm: f32 },
+    #[error("clip '{name}': stated tempo {tempo_bpm} BPM is outside 30..=300")]
+    BadTempo { name: String, tempo_bpm: f32 },
+    #[error("clip '{name}' is invalid: {message}")]
+    Invalid { name: String, message: String },
+}
+
+/// How to cut a clip.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase", default)]
+pub struct SegmentOptions {
+    /// The clip's tempo in counts per minute, when the person knows it; `None`: detect it from
+    /// the motion.
+    pub tempo_bpm: Option<f32>,
+    /// Time of a count in the clip, seconds (with `tempo_bpm`); `None`: the phase is detected.
+    pub first_beat_secs: Option<f32>,
+    /// Counts between the starts of consecutive segments (1..=4; default 2: segments overlap
+    /// by half a bar, giving the filling more ways to join).
+    pub hop_counts: usize,
+}
+
+impl Default for SegmentOptions {
+    fn default() -> Self {
+        Self { tempo_bpm: None, first_beat_secs: None, hop_counts: 2 }
+    }
+}
+
+/// A clip of the library on the canonical skeleton.
+#[derive(Clone, Debug)]
+pub struct LibraryClip {
+    pub clip: Clip,
+    /// The clip's counts, frames at [`LIBRARY_FPS`].
+    pub beat_frames: Vec<f32>,
+    pub tempo_bpm: f32,
+    /// The built-in move it renders, if any.
+    pub builtin: Option<MoveInfo>,
+}
+
+/// One 4-count segment.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Segment {
+    /// Index in the library.
+    pub index: usize,
+    /// Display name: the clip's and the counts it spans.
+    pub name: String,
+    /// Index of the library clip it was cut from.
+    pub clip: usize,
+    /// File (or "built-in") of that clip.
+    pub source: String,
+    /// Frames `start_frame..=end_frame` of the clip at [`LIBRARY_FPS`]: `end_frame` is the
+    /// first count of the next bar (played as the start of the following segment).
+    pub start_frame: f32,
+    pub end_frame: f32,
+    /// Tempo of the motion, counts per minute.
+    pub tempo_bpm: f32,
+    /// Mean motion intensity W (eq. 2): Σ α_i |ẋ_i| in metres per second.
+    pub intensity: f32,
+    /// W scaled to the library's range (5th to 95th percentile → 0..1, clamped).
+    pub intensity01: f32,
+    /// The built-in move, for built-in segments.
+    pub builtin: Option<MoveInfo>,
+}
+
+impl Segment {
+    pub fn duration_secs(&self) -> f32 {
+        (self.end_frame - self.start_frame) / LIBRARY_FPS
+    }
+}
+
+/// Link vectors and velocities at a segment's start and end (normalised body, spec §B).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct JoinEnds {
+    pub start: [Vec3; LINK_COUNT],
+    pub end: [Vec3; LINK_COUNT],
+    pub start_velocity: [Vec3; LINK_COUNT],
+    pub end_velocity: [Vec3; LINK_COUNT],
+}
+
+/// What adding a clip gave.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct ClipSummary {
+    pub clip: usize,
+    pub name: String,
+    pub tempo_bpm: f32,
+    /// Whether the tempo was detected from the motion (else stated).
+    pub tempo_detected: bool,
+    pub beats: usize,
+    pub segments: usize,
+}
+
+/// The segments every choreography chooses from.
+#[derive(Debug, Default)]
+pub struct SegmentLibrary {
+    clips: Vec<LibraryClip>,
+    segments: Vec<Segment>,
+    signatures: Vec<Signature>,
+    pub(crate) ends: Vec<JoinEnds>,
+    /// Clip-frame overlaps: for each segment, the segments sharing frames of its clip
+    /// (itself included). Following one with an overlapping one repeats the same motion.
+    pub(crate) overlaps: Vec<Vec<usize>>,
+    table: Mutex<Option<Arc<TransitionTable>>>,
+}
+
+impl SegmentLibrary {
+    /// An empty library.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The built-in library: one segment per built-in move.
+    pub fn builtin() -> Self {
+        let mut lib = Self::new();
+        lib.add_builtin();
+        lib
+    }
+
+    /// Adds every built-in move (one 4-count segment each).
+    pub fn add_builtin(&mut self) -> usize {
+        let before = self.segments.len();
+        for (clip, info) in builtin_clips().into_iter().zip(builtin_moves()) {
+            let frames = clip.frame_count();
+            let last = frames.saturating_sub(1) as f32;
+            let beats: Vec<f32> = (0..=SEGMENT_COUNTS).map(|k| last * k as f32 / SEGMENT_COUNTS as f32).collect();
+            let lc = LibraryClip { clip, beat_frames: beats, tempo_bpm: crate::library::BUILTIN_BPM, builtin: Some(info) };
+            self.push_clip(lc, SEGMENT_COUNTS);
+        }
+        self.rescale();
+        self.segments.len() - before
+    }
+
+    /// Adds an imported clip: refused when its skeleton is not humanoid or it holds fewer than
+    /// 4 counts.
+    pub fn add_clip(&mut self, clip: &Clip, map: &HumanoidMap, status: &HumanoidStatus, options: &SegmentOptions) -> Result<ClipSummary, SegmentError> {
+        let name = clip.name.clone();
+        if let HumanoidStatus::NotHumanoid { reason } = status {
+            return Err(SegmentError::NotHumanoid { name, reason: reason.clone() });
+        }
+        clip.validate().map_err(|e| SegmentError::Invalid { name: name.clone(), message: e.to_string() })?;
+        if let Some(t) = options.tempo_bpm {
+            if !(30.0..=300.0).contains(&t) {
+                return Err(SegmentError::BadTempo { name, tempo_bpm: t });
+            }
+        }
+        let canon = to_canonical(clip, map, LIBRARY_FPS);
+        let speed = joint_speed(&canon);
+        let (beats, tempo_bpm, detected) = match options.tempo_bpm {
+            Some(bpm) => {
+                let period = LIBRARY_FPS * 60.0 / bpm;
+                let phase = match options.first_beat_secs {
+                    Some(t) => (t * LIBRARY_FPS).rem_euclid(period),
+                    None => best_phase(&speed, period),
+                };
+                (grid(speed.len(), period, phase), bpm, false)
+            }
+            None => {
+                let (beats, period) = detect_beats(&speed);
+                (beats, LIBRARY_FPS * 60.0 / period.max(1e-3), true)
+            }
+        };
+        if beats.len() < SEGMENT_COUNTS + 1 {
+            return Err(SegmentError::TooShort { name, duration_secs: clip.duration_secs(), beats: beats.len(), tempo_bpm });
+        }
+        let hop = options.hop_counts.clamp(1, SEGMENT_COUNTS);
+        let beat_count = beats.len();
+        let lc = LibraryClip { clip: canon, beat_frames: beats, tempo_bpm, builtin: None };
+        let index = self.clips.len();
+        let added = self.push_clip(lc, hop);
+        self.rescale();
+        Ok(ClipSummary { clip: index, name, tempo_bpm, tempo_detected: detected, beats: beat_count, segments: added })
+    }
+
+    fn push_clip(&mut self, lc: LibraryClip, hop: usize) -> usize {
+        let clip_index = self.clips.len();
+        // Library clips are on the canonical skeleton: world positions are the canonical ones.
+        let positions = canonical_world_positions(&lc.clip);
+        let frames = positions.len() / CANON_COUNT;
+        let mut normed = positions.clone();
+        let h = body_height(&positions);
+        normalize_in_place(&mut normed, Origin::Hips, h);
+        // W per frame (eq. 2), metres per second.
+        let mut w = vec![0.0f32; frames];
+        for f in 0..frames {
+            let (a, b) = if f + 1 < frames { (f, f + 1) } else { (f.saturating_sub(1), f) };
+            if a == b {
+                continue;
+            }
+            w[f] = Canon::ALL
+                .iter()
+                .map(|&c| intensity_weight(c) * (positions[b * CANON_COUNT + c.index()] - positions[a * CANON_COUNT + c.index()]).length() * LIBRARY_FPS)
+                .sum();
+        }
+        let first_new = self.segments.len();
+        let beats = &lc.beat_frames;
+        let mut k = 0;
+        while k + SEGMENT_COUNTS < beats.len() {
+            let (s, e) = (beats[k], beats[k + SEGMENT_COUNTS]);
+            let (si, ei) = (s.round().max(0.0) as usize, (e.round() as usize).min(frames.saturating_sub(1)));
+            if ei > si + 2 {
+                let index = self.segments.len();
+                let intensity = w[si..ei].iter().sum::<f32>() / (ei - si) as f32;
+                let dims = SIGNATURE_JOINTS.len() * 3;
+                let mut feats = Vec::with_capacity((ei - si) * dims);
+                // Every other frame (15 per second) is plenty for the principal axes.
+                for f in (si..ei).step_by(2) {
+                    for c in SIGNATURE_JOINTS {
+                        let p = normed[f * CANON_COUNT + c.index()];
+                        feats.extend_from_slice(&[p.x, p.y, p.z]);
+                    }
+                }
+                self.signatures.push(Signature::of(&feats, dims, SIGNATURE_AXES));
+                self.ends.push(join_ends(&normed, si, ei));
+                let name = match &lc.builtin {
+                    Some(info) => info.name(),
+                    None => format!("{} · counts {}–{}", lc.clip.name, k + 1, k + SEGMENT_COUNTS),
+                };
+                self.segments.push(Segment {
+                    index,
+                    name,
+                    clip: clip_index,
+                    source: lc.clip.source.clone(),
+                    start_frame: si as f32,
+                    end_frame: ei as f32,
+                    tempo_bpm: SEGMENT_COUNTS as f32 * 60.0 / ((ei - si) as f32 / LIBRARY_FPS),
+                    intensity,
+                    intensity01: 0.0,
+                    builtin: lc.builtin,
+                });
+            }
+            k += hop;
+        }
+        // Overlaps within this clip.
+        for i in first_new..self.segments.len() {
+            let (a0, a1) = (self.segments[i].start_frame, self.segments[i].end_frame);
+            let ov = (first_new..self.segments.len())
+                .filter(|&j| {
+                    let (b0, b1) = (self.segments[j].start_frame, self.segments[j].end_frame);
+                    b0 < a1 && a0 < b1
+                })
+                .collect();
+            self.overlaps.push(ov);
+        }
+        self.clips.push(lc);
+        if let Ok(mut t) = self.table.lock() {
+            *t = None;
+        }
+        self.segments.len() - first_new
+    }
+
+    /// Rescales every segment's intensity to the library's range.
+    fn rescale(&mut self) {
+        let mut v: Vec<f32> = self.segments.iter().map(|s| s.intensity).collect();
+        if v.is_empty() {
+            return;
+        }
+        v.sort_by(f32::total_cmp);
+        let lo = v[v.len() * 5 / 100];
+        let hi = v[(v.len() * 95 / 100).min(v.len() - 1)];
+        for s in self.segments.iter_mut() {
+            s.intensity01 = if hi > lo + 1e-6 { ((s.intensity - lo) / (hi - lo)).clamp(0.0, 1.0) } else { 0.5 };
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.segments.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.segments.is_empty()
+    }
+
+    pub fn segments(&self) -> &[Segment] {
+        &self.segments
+    }
+
+    pub fn segment(&self, index: usize) -> Option<&Segment> {
+        self.segments.get(index)
+    }
+
+    pub fn clips(&self) -> &[LibraryClip] {
+        &self.clips
+    }
+
+    pub fn signature(&self, index: usize) -> Option<&Signature> {
+        self.signatures.get(index)
+    }
+
+    /// kWAS similarity of two segments (0 when either index is out of range).
+    pub fn similarity(&self, a: usize, b: usize) -> f32 {
+        match (self.signatures.get(a), self.signatures.get(b)) {
+            (Some(x), Some(y)) => x.similarity(y),
+            _ => 0.0,
+        }
+    }
+
+    /// D = 1 − Sim.
+    pub fn dissimilarity(&self, a: usize, b: usize) -> f32 {
+        1.0 - self.similarity(a, b)
+    }
+
+    /// The transition table of spec §G for this library with the given repetition penalty
+    /// (built once per library and penalty, then shared), reporting progress (0..1); the
+    /// callback returns `false` to cancel (then `None`, and nothing is cached).
+    pub fn transition_table_with_progress(&self, repeat_penalty: f32, progress: &mut dyn FnMut(f32) -> bool) -> Option<Arc<TransitionTable>> {
+        if let Ok(guard) = self.table.lock() {
+            if let Some(t) = guard.as_ref() {
+                if t.repeat_penalty() == repeat_penalty {
+                    return Some(t.clone());
+                }
+            }
+        }
+        let t = Arc::new(TransitionTable::from_library_with_progress(self, repeat_penalty, progress)?);
+        if let Ok(mut guard) = self.table.lock() {
+            *guard = Some(t.clone());
+        }
+        Some(t)
+    }
+
+    /// The transition table of spec §G for this library with the given repetition penalty
+    /// (built once per library and penalty, then shared).
+    pub fn transition_table(&self, repeat_penalty: f32) -> Arc<TransitionTable> {
+        let mut guard = match self.table.lock() {
+            Ok(g) => g,
+            Err(poisoned) => poisoned.into_inner(),
+        };
+        if let Some(t) = guard.as_ref() {
+            if t.repeat_penalty() == repeat_penalty {
+                return t.clone();
+            }
+        }
+        let t = Arc::new(TransitionTable::from_library(self, repeat_penalty));
+        *guard = Some(t.clone());
+        t
+    }
+}
+
+/// World positions of every frame of a clip on the canonical skeleton (frame-major), by an
+/// allocation-free forward kinematics.
+pub(crate) fn canonical_world_positions(clip: &Clip) -> Vec<Vec3> {
+    let frames = clip.frame_count();
+    let sk = &clip.skeleton;
+    if sk.len() != CANON_COUNT {
+        return canonical_positions(clip, &HumanoidMap::from_skeleton(sk));
+    }
+    let root = clip.translations.iter().find(|t| t.joint == 0).map(|t| t.values.as_slice());
+    let mut out = Vec::with_capacity(frames * CANON_COUNT);
+    let mut rot = [glam::Quat::IDENTITY; CANON_COUNT];
+    let mut pos = [Vec3::ZERO; CANON_COUNT];
+    for f in 0..frames {
+        let local = clip.frame_rotations(f);
+        for (i, j) in sk.joints.iter().enumerate() {
+            match j.parent {
+                Some(p) if p < i => {
+                    rot[i] = rot[p] * local[i];
+                    pos[i] = pos[p] + rot[p] * j.rest_offset;
+                }
+                _ => {
+                    rot[i] = local[i];
+                    pos[i] = root.and_then(|r| r.get(f).copied()).unwrap_or(j.rest_offset);
+                }
+            }
+        }
+        out.extend_from_slice(&pos);
+    }
+    out
+}
+
+/// Unit link vectors, raw link vectors and velocities at a segment's first and last frames.
+fn join_ends(normed: &[Vec3], start: usize, end: usize) -> JoinEnds {
+    let link = |f: usize, l: usize| -> Vec3 {
+        let (p, c) = LINKS[l];
+        normed[f * CANON_COUNT + c] - normed[f * CANON_COUNT + p]
+    };
+    let last = end.saturating_sub(1).max(start);
+    let mut e = JoinEnds::default();
+    for l in 0..LINK_COUNT {
+        e.start[l] = link(start, l);
+        e.end[l] = link(last, l);
+        e.start_velocity[l] = link((start + 1).min(last), l) - link(start, l);
+        e.end_velocity[l] = link(last, l) - link(last.saturating_sub(1).max(start), l);
+    }
+    e
+}
+
+/// (parent, child) canonical indices of every link, in [`Canon::links`] order.
+pub const LINKS: [(usize, usize); LINK_COUNT] = {
+    let mut out = [(0, 0); LINK_COUNT];
+    let all = [
+        (0, 1), (1, 2), (2, 3), (3, 4), (2, 5), (5, 6), (6, 7), (7, 8), (2, 9), (9, 10),
+        (10, 11), (11, 12), (0, 13), (13, 14), (14, 15), (15, 16), (0, 17), (17, 18), (18, 19), (19, 20),
+    ];
+    let mut i = 0;
+    while i < LINK_COUNT {
+        out[i] = all[i];
+        i += 1;
+    }
+    out
+};
+
+/// Overall joint speed per frame of a canonical clip (Σ over joints of world |ẋ|, m/s: a
+/// planted step and the end of a gesture both dip), lightly smoothed.
+pub fn joint_speed(clip: &Clip) -> Vec<f32> {
+    let pos = canonical_world_positions(clip);
+    let frames = pos.len() / CANON_COUNT;
+    let mut s = vec![0.0f32; frames];
+    for f in 1..frames {
+        s[f] = (0..CANON_COUNT).map(|j| (pos[f * CANON_COUNT + j] - pos[(f - 1) * CANON_COUNT + j]).length()).sum::<f32>() * clip.fps;
+    }
+    if frames > 1 {
+        s[0] = s[1];
+    }
+    // 3-tap smoothing.
+    let mut out = s.clone();
+    for f in 1..frames.saturating_sub(1) {
+        out[f] = 0.25 * s[f - 1] + 0.5 * s[f] + 0.25 * s[f + 1];
+    }
+    out
+}
+
+/// Beat period (frames) and beats (frames) from the joint-speed curve.
+pub fn detect_beats(speed: &[f32]) -> (Vec<f32>, f32) {
+    let n = speed.len();
+    let fps = LIBRARY_FPS;
+    let (min_lag, max_lag) = ((fps * 60.0 / 200.0).floor() as usize, ((fps * 60.0 / 30.0).ceil() as usize).min(n / 2));
+    if max_lag < min_lag + 2 {
+        return (Vec::new(), fps * 0.5);
+    }
+    // Remove the slow trend (a 4-second moving mean).
+    let win = (4.0 * fps) as usize;
+    let mut prefix = vec![0.0f64; n + 1];
+    for i in 0..n {
+        prefix[i + 1] = prefix[i] + speed[i] as f64;
+    }
+    let x: Vec<f32> = (0..n)
+        .map(|i| {
+            let a = i.saturating_sub(win / 2);
+            let b = (i + win / 2 + 1).min(n);
+            speed[i] - ((prefix[b] - prefix[a]) / (b - a) as f64) as f32
+        })
+        .collect();
+    let energy: f32 = x.iter().map(|v| v * v).sum::<f32>().max(1e-12);
+    let ac = |lag: usize| -> f32 {
+        if lag >= n {
+            return 0.0;
+        }
+        let s: f32 = (0..n - lag).map(|i| x[i] * x[i + lag]).sum();
+        s / energy * n as f32 / (n - lag) as f32
+    };
+    let acs: Vec<f32> = (0..=max_lag + 1).map(ac).collect();
+    // Skip the lobe around lag 0: start after the first local minimum.
+    let mut start = 1;
+    while start < max_lag && acs[start + 1] < acs[start] {
+        start += 1;
+    }
+    // The shortest period whose peak is nearly as strong as the strongest (longer peaks are
+    // its multiples).
+    let peaks: Vec<usize> = (start.max(min_lag).max(1)..=max_lag).filter(|&l| acs[l] > 0.0 && acs[l] >= acs[l - 1] && acs[l] >= acs[l + 1]).collect();
+    let strongest = peaks.iter().map(|&l| acs[l]).fold(0.0f32, f32::max);
+    let mut best = (peaks.iter().copied().find(|&l| acs[l] >= 0.8 * strongest).unwrap_or(0), strongest);
+    if best.0 == 0 {
+        // No periodicity: a regular grid at 120 counts per minute.
+        best.0 = (fps * 0.5) as usize;
+    }
+    let mut lag = best.0;
+    // Fold into a choreographer's count (60..=150 per minute): fast footwork counts in twos,
+    // a slow sway in halves.
+    while fps * 60.0 / lag as f32 > 150.0 && 2 * lag <= max_lag {
+        lag *= 2;
+    }
+    while fps * 60.0 / (lag as f32) < 60.0 && lag >= 2 * min_lag {
+        lag /= 2;
+    }
+    let lag = lag.clamp(1, max_lag);
+    // Parabolic refinement.
+    let (y0, y1, y2) = (acs[lag - 1], acs[lag], acs[lag + 1]);
+    let den = y0 - 2.0 * y1 + y2;
+    let period = lag as f32 + if den.abs() > 1e-9 { (0.5 * (y0 - y2) / den).clamp(-0.5, 0.5) } else { 0.0 };
+    let phase = best_phase(speed, period);
+    let grid_beats = grid(n, period, phase);
+    // Snap each beat to the nearest local minimum of the speed within a quarter period.
+    let reach = (period / 4.0).max(1.0) as isize;
+    let mut beats: Vec<f32> = Vec::with_capacity(grid_beats.len());
+    for g in grid_beats {
+        let c = g.round() as isize;
+        let mut best_f = c;
+        let mut best_v = f32::MAX;
+        for f in (c - reach).max(1)..=(c + reach).min(n as isize - 2) {
+            let fu = f as usize;
+            let v = speed[fu];
+            if v <= speed[fu - 1] && v <= speed[fu + 1] && v < best_v {
+                best_v = v;
+                best_f = f;
+            }
+        }
+        let b = best_f.clamp(0, n as isize - 1) as f32;
+        if beats.last().is_none_or(|&last| b > last + period * 0.5) {
+            beats.push(b);
+        }
+    }
+    (beats, period)
+}
+
+/// Phase (frames, in `0..period`) of a beat grid where the speed is lowest.
+fn best_phase(speed: &[f32], period: f32) -> f32 {
+    let steps = period.ceil().max(1.0) as usize;
+    let mut best = (0.0, f32::MAX);
+    for s in 0..steps {
+        let phase = s as f32;
+        let mut sum = 0.0;
+        let mut count = 0;
+        let mut t = phase;
+        while (t as usize) < speed.len() {
+            sum += speed[t.round() as usize % speed.len()];
+            count += 1;
+            t += period;
+        }
+        let mean = if count > 0 { sum / count as f32 } else { f32::MAX };
+        if mean < best.1 {
+            best = (phase, mean);
+        }
+    }
+    best.0
+}
+
+fn grid(frames: usize, period: f32, phase: f32) -> Vec<f32> {
+    let mut out = Vec::new();
+    if !(period > 0.5) {
+        return out;
+    }
+    let mut t = phase;
+    while t <= (frames.saturating_sub(1)) as f32 {
+        out.push(t);
+        t += period;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn links_match_the_canonical_tree() {
+        let from_tree: Vec<(usize, usize)> = Canon::links().map(|(p, c)| (p.index(), c.index())).collect();
+        assert_eq!(from_tree, LINKS.to_vec());
+    }
+
+    #[test]
+    fn detects_the_tempo_of_a_pulsing_speed_curve() {
+        // 110 counts per minute with dips on every count.
+        let period = LIBRARY_FPS * 60.0 / 110.0;
+        let speed: Vec<f32> = (0..600).map(|f| 2.0 - (f as f32 / period * std::f32::consts::TAU).cos() + 0.1 * ((f * 7 % 13) as f32 / 13.0)).collect();
+        let (beats, p) = detect_beats(&speed);
+        assert!((p - period).abs() < 0.5, "period {p} vs {period}");
+        assert!(beats.len() >= 30);
+        for b in &beats {
+            let phase = (b / period).fract();
+            assert!(phase < 0.12 || phase > 0.88, "beat at {b} is off the dips");
+        }
+    }
+
+    #[test]
+    fn builtin_library_has_one_segment_per_move() {
+        let lib = SegmentLibrary::builtin();
+        assert!(lib.len() >= 200);
+        let s = &lib.segments()[0];
+        assert!((s.tempo_bpm - 120.0).abs() < 1.0, "{}", s.tempo_bpm);
+        let (lo, hi) = lib.segments().iter().fold((f32::MAX, f32::MIN), |(a, b), s| (a.min(s.intensity), b.max(s.intensity)));
+        assert!(hi > lo * 1.5, "intensities {lo}..{hi}");
+    }
+}

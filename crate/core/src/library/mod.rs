@@ -1,0 +1,185 @@
+//! The built-in dance-move library: the engine's own starter set of 4-count moves on the
+//! canonical skeleton (no data from outside the project). Every combination of a step
+//! (step-touch, grapevine, box step, kick-ball-change, chassé, pivot turn, jump, bounce, hip
+//! sway, body roll) with an arm pattern (swing, waves, punches, claps, arm rolls, overhead
+//! reaches, arm wave), at three energy levels, leading with the right or (mirrored) the left:
+//! 420 moves. Each is one bar of 4 counts at 120 BPM, 30 fps, with one extra frame (the next
+//! bar's first pose) so segment ends have a velocity.
+//!
+//! Limbs are placed by two-bone IK on authored foot and hand targets ([`pose`]), so planted
+//! feet stay on the floor; the root height is then corrected so the lowest point of the body
+//! never goes below the floor ([`crate::builtin::lowest_point`]).
+
+pub mod moves;
+pub mod pose;
+
+use std::sync::Arc;
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::builtin::canonical_skeleton;
+use crate::clip::{Clip, TranslationTrack};
+use crate::humanoid::CANON_COUNT;
+use crate::skeleton::Skeleton;
+
+pub use moves::{Arms, Energy, Step};
+
+/// Tempo of every built-in move.
+pub const BUILTIN_BPM: f32 = 120.0;
+/// Frame rate of every built-in move.
+pub const BUILTIN_FPS: f32 = 30.0;
+/// Counts per built-in move (one bar).
+pub const COUNTS: usize = 4;
+/// Standing hips height of the built-in figure with soft knees, metres.
+pub const STANDING_HIPS_HEIGHT: f32 = 0.935;
+
+/// What a built-in move is made of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct MoveInfo {
+    pub step: Step,
+    pub arms: Arms,
+    pub energy: Energy,
+    /// Led by the figure's left side (the right-leading move mirrored).
+    pub mirrored: bool,
+}
+
+impl MoveInfo {
+    /// Display name, e.g. "grapevine + claps (high, left)".
+    pub fn name(&self) -> String {
+        format!(
+            "{} + {} ({}, {})",
+            self.step.name(),
+            self.arms.name(),
+            self.energy.name(),
+            if self.mirrored { "left" } else { "right" }
+        )
+    }
+}
+
+/// Every built-in move, in a fixed order (step, arms, energy, side).
+pub fn builtin_moves() -> Vec<MoveInfo> {
+    let mut out = Vec::with_capacity(420);
+    for step in Step::ALL {
+        for arms in Arms::ALL {
+            for energy in Energy::ALL {
+                for mirrored in [false, true] {
+                    out.push(MoveInfo { step, arms, energy, mirrored });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Frames of one built-in move (4 counts plus the closing frame).
+pub fn move_frame_count() -> usize {
+    (COUNTS as f32 * 60.0 / BUILTIN_BPM * BUILTIN_FPS).round() as usize + 1
+}
+
+/// Renders one built-in move as a clip on `skeleton` (the canonical skeleton).
+pub fn build_move(info: &MoveInfo, skeleton: &Arc<Skeleton>) -> Clip {
+    let frames = move_frame_count();
+    let legs = moves::leg_poses(info.step, info.energy);
+    let counts_per_frame = BUILTIN_BPM / 60.0 / BUILTIN_FPS;
+    let mut rotations = Vec::with_capacity(frames * CANON_COUNT);
+    let mut root = Vec::with_capacity(frames);
+    for f in 0..frames {
+        let t = f as f32 * counts_per_frame;
+        let mut p = moves::pose_at(info.arms, info.energy, t, &legs);
+        if info.mirrored {
+            p = p.mirrored();
+        }
+        let (local, mut r, lowest) = pose::solve(skeleton, &p, STANDING_HIPS_HEIGHT);
+        // Never below the floor (toe tips 2 cm above it when flat).
+        if lowest < 0.015 {
+            r.y += 0.015 - lowest;
+        }
+        rotations.extend_from_slice(&local);
+        root.push(r);
+    }
+    Clip {
+        name: info.name(),
+        source: "built-in".into(),
+        fps: BUILTIN_FPS,
+        skeleton: skeleton.clone(),
+        rotations,
+        translations: vec![TranslationTrack { joint: 0, values: root }],
+    }
+}
+
+/// The whole built-in library as clips, one per move, in [`builtin_moves`] order.
+pub fn builtin_clips() -> Vec<Clip> {
+    let skeleton = Arc::new(canonical_skeleton());
+    builtin_moves().iter().map(|m| build_move(m, &skeleton)).collect()
+}
+
+/// A neutral standing pose (arms relaxed by the sides) on the canonical skeleton: local
+/// rotations and root translation. Used for bars that hold no segment yet.
+pub fn neutral_pose() -> (Vec<glam::Quat>, Vec3) {
+    let sk = canonical_skeleton();
+    let p = pose::KeyPose {
+        hips: Vec3::new(0.0, -0.02, 0.0),
+        left_foot: Vec3::new(0.13, 0.0, 0.0),
+        right_foot: Vec3::new(-0.13, 0.0, 0.0),
+        left_hand: Vec3::new(0.08, -0.5, 0.06),
+        right_hand: Vec3::new(-0.08, -0.5, 0.06),
+        feet_yaw: 0.12,
+        ..Default::default()
+    };
+    let (local, root, _) = pose::solve(&sk, &p, STANDING_HIPS_HEIGHT);
+    (local.to_vec(), root)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::humanoid::Canon;
+
+    #[test]
+    fn at_least_two_hundred_distinct_moves() {
+        let moves = builtin_moves();
+        assert!(moves.len() >= 200);
+        let mut names: Vec<String> = moves.iter().map(|m| m.name()).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), moves.len());
+    }
+
+    #[test]
+    fn moves_stay_on_the_floor_and_plant_feet() {
+        let sk = Arc::new(canonical_skeleton());
+        for info in builtin_moves().iter().step_by(7) {
+            let c = build_move(info, &sk);
+            c.validate().unwrap();
+            let mut min_low = f32::MAX;
+            let mut max_low = f32::MIN;
+            for f in 0..c.frame_count() {
+                let p = c.world_positions(f);
+                let low = p.iter().map(|v| v.y).fold(f32::MAX, f32::min);
+                min_low = min_low.min(low);
+                max_low = max_low.max(low);
+                // The head stays above the hips: a dancer, not a tumble.
+                assert!(p[Canon::Head.index()].y > p[Canon::Hips.index()].y + 0.3, "{} frame {f}", c.name);
+            }
+            assert!(min_low > -0.01, "{}: below the floor by {min_low}", c.name);
+            if info.step != Step::Jump {
+                assert!(max_low < 0.06, "{}: lowest point rises to {max_low}: feet not on the floor", c.name);
+            }
+        }
+    }
+
+    #[test]
+    fn mirrored_moves_mirror() {
+        let sk = Arc::new(canonical_skeleton());
+        let a = build_move(&MoveInfo { step: Step::Grapevine, arms: Arms::Punches, energy: Energy::Medium, mirrored: false }, &sk);
+        let b = build_move(&MoveInfo { step: Step::Grapevine, arms: Arms::Punches, energy: Energy::Medium, mirrored: true }, &sk);
+        let f = 20;
+        let pa = a.world_positions(f);
+        let pb = b.world_positions(f);
+        let la = pa[Canon::LeftHand.index()];
+        let rb = pb[Canon::RightHand.index()];
+        assert!((la - Vec3::new(-rb.x, rb.y, rb.z)).length() < 0.02, "{la} vs {rb}");
+    }
+}

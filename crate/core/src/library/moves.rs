@@ -1,0 +1,415 @@
+//! The built-in moves: leg and hip patterns, arm patterns and their combinations, at three
+//! energy levels and mirrored, authored as key poses on the half count (legs) and quarter count
+//! (arms) and interpolated smoothly. Secondary motion is derived, not keyed: the hips follow the
+//! weight onto the supporting foot and drop on the free side, the chest counters the hips, the
+//! head steadies against the chest and nods a little after each bounce, the arms trail the body
+//! by a fraction of a count and the shoulders lift with the arms.
+
+use std::f32::consts::{FRAC_PI_2, PI, TAU};
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use super::pose::KeyPose;
+
+/// A leg, hip and torso pattern (the "step").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum Step {
+    StepTouch,
+    Grapevine,
+    BoxStep,
+    KickBallChange,
+    Chasse,
+    PivotTurn,
+    Jump,
+    Bounce,
+    HipSway,
+    BodyRoll,
+}
+
+impl Step {
+    pub const ALL: [Step; 10] = [
+        Step::StepTouch,
+        Step::Grapevine,
+        Step::BoxStep,
+        Step::KickBallChange,
+        Step::Chasse,
+        Step::PivotTurn,
+        Step::Jump,
+        Step::Bounce,
+        Step::HipSway,
+        Step::BodyRoll,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Step::StepTouch => "step-touch",
+            Step::Grapevine => "grapevine",
+            Step::BoxStep => "box step",
+            Step::KickBallChange => "kick-ball-change",
+            Step::Chasse => "chassé",
+            Step::PivotTurn => "pivot turn",
+            Step::Jump => "jump",
+            Step::Bounce => "bounce",
+            Step::HipSway => "hip sway",
+            Step::BodyRoll => "body roll",
+        }
+    }
+}
+
+/// An arm pattern.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum Arms {
+    Swing,
+    Waves,
+    Punches,
+    Claps,
+    ArmRolls,
+    OverheadReaches,
+    ArmWave,
+}
+
+impl Arms {
+    pub const ALL: [Arms; 7] = [Arms::Swing, Arms::Waves, Arms::Punches, Arms::Claps, Arms::ArmRolls, Arms::OverheadReaches, Arms::ArmWave];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Arms::Swing => "arm swing",
+            Arms::Waves => "waves",
+            Arms::Punches => "punches",
+            Arms::Claps => "claps",
+            Arms::ArmRolls => "arm rolls",
+            Arms::OverheadReaches => "overhead reaches",
+            Arms::ArmWave => "arm wave",
+        }
+    }
+}
+
+/// Energy level: how big, deep and sharp the move is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum Energy {
+    Low,
+    Medium,
+    High,
+}
+
+impl Energy {
+    pub const ALL: [Energy; 3] = [Energy::Low, Energy::Medium, Energy::High];
+
+    /// Amplitude factor.
+    pub fn amplitude(self) -> f32 {
+        match self {
+            Energy::Low => 0.6,
+            Energy::Medium => 1.0,
+            Energy::High => 1.35,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Energy::Low => "low",
+            Energy::Medium => "medium",
+            Energy::High => "high",
+        }
+    }
+}
+
+/// One leg key: ankle targets (x, lift, z), weight on the left foot (0..1), hips drop, hips yaw,
+/// and torso bends for the moves that key them.
+#[derive(Clone, Copy, Debug, Default)]
+struct LegKey {
+    l: Vec3,
+    r: Vec3,
+    w_left: f32,
+    drop: f32,
+    yaw: f32,
+    torso: [f32; 4], // hips pitch, spine pitch, chest pitch, hips x push
+}
+
+fn lk(l: [f32; 3], r: [f32; 3], w_left: f32, drop: f32) -> LegKey {
+    LegKey { l: Vec3::from(l), r: Vec3::from(r), w_left, drop, yaw: 0.0, torso: [0.0; 4] }
+}
+
+/// Half-count keys (9: counts 1, &, 2, &, 3, &, 4, &, next 1) of each step, for the figure's
+/// right side leading (mirroring gives the left-leading version).
+fn leg_keys(step: Step) -> Vec<LegKey> {
+    match step {
+        Step::StepTouch => vec![
+            lk([0.25, 0.0, 0.0], [-0.25, 0.0, 0.0], 0.3, -0.07),
+            lk([0.09, 0.07, 0.0], [-0.25, 0.0, 0.0], 0.0, -0.02),
+            lk([-0.07, 0.0, 0.03], [-0.25, 0.0, 0.0], 0.0, -0.08),
+            lk([0.09, 0.07, 0.0], [-0.25, 0.0, 0.0], 0.0, -0.02),
+            lk([0.25, 0.0, 0.0], [-0.25, 0.0, 0.0], 0.7, -0.07),
+            lk([0.25, 0.0, 0.0], [-0.09, 0.07, 0.0], 1.0, -0.02),
+            lk([0.25, 0.0, 0.0], [0.07, 0.0, 0.03], 1.0, -0.08),
+            lk([0.25, 0.0, 0.0], [-0.09, 0.07, 0.0], 1.0, -0.02),
+            lk([0.25, 0.0, 0.0], [-0.25, 0.0, 0.0], 0.3, -0.07),
+        ],
+        Step::Grapevine => vec![
+            lk([0.12, 0.0, 0.0], [-0.3, 0.0, 0.0], 0.3, -0.06),
+            lk([-0.1, 0.06, -0.1], [-0.3, 0.0, 0.0], 0.0, -0.02),
+            lk([-0.42, 0.0, -0.14], [-0.3, 0.0, 0.0], 0.7, -0.07),
+            lk([-0.42, 0.0, -0.14], [-0.56, 0.07, 0.0], 1.0, -0.02),
+            lk([-0.42, 0.0, -0.14], [-0.72, 0.0, 0.0], 0.3, -0.07),
+            lk([-0.5, 0.07, -0.02], [-0.72, 0.0, 0.0], 0.0, -0.02),
+            lk([-0.52, 0.0, 0.03], [-0.72, 0.0, 0.0], 0.0, -0.09),
+            lk([-0.5, 0.03, 0.02], [-0.72, 0.0, 0.0], 0.1, -0.03),
+            lk([-0.48, 0.0, 0.0], [-0.72, 0.0, 0.0], 0.4, -0.05),
+        ],
+        Step::BoxStep => {
+            let mut k = vec![
+                lk([0.12, 0.0, 0.0], [0.06, 0.0, 0.22], 0.3, -0.06),
+                lk([0.14, 0.06, -0.1], [0.06, 0.0, 0.22], 0.0, -0.02),
+                lk([0.16, 0.0, -0.2], [0.06, 0.0, 0.22], 0.7, -0.07),
+                lk([0.16, 0.0, -0.2], [-0.06, 0.06, -0.02], 1.0, -0.02),
+                lk([0.16, 0.0, -0.2], [-0.22, 0.0, -0.15], 0.3, -0.07),
+                lk([0.15, 0.06, -0.05], [-0.22, 0.0, -0.15], 0.0, -0.02),
+                lk([0.13, 0.0, 0.08], [-0.22, 0.0, -0.15], 0.6, -0.07),
+                lk([0.13, 0.0, 0.08], [-0.05, 0.06, 0.1], 1.0, -0.02),
+                lk([0.12, 0.0, 0.0], [0.06, 0.0, 0.22], 0.3, -0.06),
+            ];
+            for (key, yaw) in k.iter_mut().zip([-0.25, -0.15, 0.0, 0.1, 0.2, 0.1, 0.0, -0.15, -0.25]) {
+                key.yaw = yaw;
+            }
+            k
+        }
+        Step::KickBallChange => {
+            let kick = lk([0.12, 0.0, 0.0], [-0.1, 0.3, 0.45], 1.0, -0.02);
+            let ball = lk([0.12, 0.0, 0.0], [-0.14, 0.0, -0.12], 0.25, -0.05);
+            let change = lk([0.12, 0.0, 0.0], [-0.14, 0.0, -0.12], 0.85, -0.09);
+            let chamber = lk([0.12, 0.0, 0.0], [-0.12, 0.16, 0.12], 1.0, -0.04);
+            vec![kick, ball, change, chamber, kick, ball, change, chamber, kick]
+        }
+        Step::Chasse => vec![
+            lk([0.1, 0.0, 0.0], [-0.28, 0.0, 0.0], 0.3, -0.06),
+            lk([-0.1, 0.0, 0.0], [-0.28, 0.02, 0.0], 0.8, -0.03),
+            lk([-0.1, 0.0, 0.0], [-0.5, 0.0, 0.0], 0.2, -0.08),
+            lk([-0.22, 0.06, 0.0], [-0.5, 0.0, 0.0], 0.0, -0.02),
+            lk([-0.12, 0.0, 0.0], [-0.5, 0.0, 0.0], 0.7, -0.07),
+            lk([-0.12, 0.0, 0.0], [-0.3, 0.02, 0.0], 0.3, -0.03),
+            lk([0.1, 0.0, 0.0], [-0.3, 0.0, 0.0], 0.8, -0.08),
+            lk([0.1, 0.0, 0.0], [-0.2, 0.06, 0.0], 1.0, -0.02),
+            lk([0.1, 0.0, 0.0], [-0.28, 0.0, 0.0], 0.3, -0.06),
+        ],
+        Step::PivotTurn => {
+            let mut k = vec![
+                lk([0.1, 0.0, -0.05], [-0.1, 0.0, 0.2], 0.4, -0.06),
+                lk([0.1, 0.0, -0.05], [-0.1, 0.02, 0.2], 0.6, -0.02),
+                lk([0.1, 0.0, -0.05], [-0.1, 0.0, 0.2], 0.85, -0.05),
+                lk([0.1, 0.0, -0.05], [0.12, 0.06, -0.1], 1.0, -0.02),
+                lk([0.1, 0.0, -0.05], [0.2, 0.0, -0.3], 0.4, -0.06),
+                lk([0.1, 0.0, -0.05], [0.2, 0.02, -0.3], 0.6, -0.02),
+                lk([0.1, 0.0, -0.05], [0.2, 0.0, -0.3], 0.85, -0.05),
+                lk([0.1, 0.0, -0.05], [0.0, 0.06, 0.05], 1.0, -0.02),
+                lk([0.1, 0.0, -0.05], [-0.1, 0.0, 0.2], 0.4, -0.06),
+            ];
+            for (i, key) in k.iter_mut().enumerate() {
+                // Half a turn over counts 1-2, the other half over 3-4, to the left (yaw +).
+                let turn = match i {
+                    0 => 0.0,
+                    1 => 0.35,
+                    2 | 3 => 1.0,
+                    4 => 1.0,
+                    5 => 1.35,
+                    _ => 2.0,
+                };
+                key.yaw = turn * PI;
+            }
+            k
+        }
+        Step::Jump => vec![
+            lk([0.15, 0.0, 0.0], [-0.15, 0.0, 0.0], 0.5, -0.16),
+            lk([0.15, 0.0, 0.0], [-0.15, 0.0, 0.0], 0.5, -0.04),
+            lk([0.16, 0.12, 0.02], [-0.16, 0.12, 0.02], 0.5, 0.12),
+            lk([0.15, 0.0, 0.0], [-0.15, 0.0, 0.0], 0.5, -0.05),
+            lk([0.15, 0.0, 0.0], [-0.15, 0.0, 0.0], 0.5, -0.19),
+            lk([0.15, 0.0, 0.0], [-0.15, 0.0, 0.0], 0.5, -0.05),
+            lk([0.15, 0.0, 0.0], [-0.15, 0.0, 0.0], 0.45, -0.11),
+            lk([0.15, 0.0, 0.0], [-0.15, 0.0, 0.0], 0.5, -0.03),
+            lk([0.15, 0.0, 0.0], [-0.15, 0.0, 0.0], 0.5, -0.16),
+        ],
+        Step::Bounce => (0..9)
+            .map(|i| {
+                let on = i % 2 == 0;
+                let w = if (i / 2) % 2 == 0 { 0.42 } else { 0.58 };
+                lk([0.14, 0.0, 0.0], [-0.14, 0.0, 0.0], w, if on { -0.11 } else { -0.01 })
+            })
+            .collect(),
+        Step::HipSway => (0..9)
+            .map(|i| {
+                let w = 0.5 + 0.5 * (i as f32 * FRAC_PI_2 + FRAC_PI_2).sin();
+                let mut key = lk([0.17, 0.0, 0.0], [-0.17, 0.0, 0.0], w, if i % 2 == 0 { -0.07 } else { -0.04 });
+                key.torso[3] = (w - 0.5) * 0.1;
+                key
+            })
+            .collect(),
+        Step::BodyRoll => (0..9)
+            .map(|i| {
+                // Two rolls per bar: chest leads forward, then the spine, then the hips push
+                // through as the knees bend, and the body rises back.
+                let ph = i as f32 / 4.0 * TAU;
+                let mut key = lk([0.16, 0.0, 0.0], [-0.16, 0.0, 0.0], 0.5, -0.08 + 0.07 * (ph - 1.6).cos());
+                key.torso = [0.18 * (ph - 1.9).sin(), 0.2 * (ph - 0.9).sin(), 0.3 * ph.sin(), 0.0];
+                key.l.z = 0.02;
+                key
+            })
+            .collect(),
+    }
+}
+
+/// Left-hand target relative to the left shoulder (chest frame) and the right's, at time
+/// `t_counts` in 0..=4, with the chest twist the pattern asks for.
+fn arm_targets(arms: Arms, t: f32, amp: f32) -> (Vec3, Vec3, f32) {
+    let down_l = Vec3::new(0.07, -0.49, 0.08);
+    let down_r = Vec3::new(-0.07, -0.49, 0.08);
+    let count = t.floor();
+    let within = t - count;
+    let pulse = |x: f32| (x * PI).sin().max(0.0); // 0 → 1 → 0 over one count
+    let sharp = |x: f32| {
+        let y = (x * 2.0).min(1.0);
+        y * y * (3.0 - 2.0 * y) * (1.0 - smooth01((x - 0.55) / 0.45))
+    };
+    match arms {
+        Arms::Swing => {
+            let s = (t * PI).sin();
+            let l = down_l + Vec3::new(0.0, 0.05 * amp * s.abs(), 0.22 * amp * s);
+            let r = down_r + Vec3::new(0.0, 0.05 * amp * s.abs(), -0.22 * amp * s);
+            (l + Vec3::new(0.0, 0.08, 0.05), r + Vec3::new(0.0, 0.08, 0.05), 0.12 * amp * s)
+        }
+        Arms::Waves => {
+            let s = (t * FRAC_PI_2).sin();
+            let up = 0.3 + 0.15 * amp;
+            let l = Vec3::new(0.12 + 0.22 * amp * s, up + 0.05 * (t * PI).cos(), 0.08);
+            let r = Vec3::new(-0.12 + 0.22 * amp * s, up - 0.05 * (t * PI).cos(), 0.08);
+            (l, r, 0.0)
+        }
+        Arms::Punches => {
+            // Right punches on 1 and 3, left on 2 and 4; the other hand chambers at the chest.
+            let p = sharp(within);
+            let chamber_l = Vec3::new(-0.02, -0.25, 0.18);
+            let chamber_r = Vec3::new(0.02, -0.25, 0.18);
+            let height = -0.05 + 0.15 * (amp - 0.6);
+            let right_turn = (count as i32) % 2 == 0;
+            let (mut l, mut r) = (chamber_l, chamber_r);
+            if right_turn {
+                r = chamber_r.lerp(Vec3::new(0.1, height, 0.5), p);
+            } else {
+                l = chamber_l.lerp(Vec3::new(-0.1, height, 0.5), p);
+            }
+            (l, r, if right_turn { 0.25 * amp * p } else { -0.25 * amp * p })
+        }
+        Arms::Claps => {
+            // Open on the count, clap on the "and" (overhead on 4 when energetic).
+            let c = pulse(within);
+            let overhead = count >= 3.0 && amp > 1.1;
+            let (meet_y, meet_z) = if overhead { (0.45, 0.12) } else { (-0.18, 0.3) };
+            let open_l = Vec3::new(0.18, -0.25, 0.22);
+            let l = open_l.lerp(Vec3::new(-0.15, meet_y, meet_z), c);
+            let r = Vec3::new(-open_l.x, open_l.y, open_l.z).lerp(Vec3::new(0.15, meet_y, meet_z), c);
+            (l, r, 0.0)
+        }
+        Arms::ArmRolls => {
+            let th = t * TAU * if amp > 1.1 { 1.0 } else { 0.5 };
+            let rad = 0.06 + 0.03 * amp;
+            let base_y = -0.18 + if count >= 2.0 { 0.12 * amp } else { 0.0 };
+            let l = Vec3::new(-0.1 + rad * th.cos(), base_y + rad * th.sin(), 0.3);
+            let r = Vec3::new(0.1 + rad * (th + PI).cos(), base_y + rad * (th + PI).sin(), 0.28);
+            (l, r, 0.05 * th.sin())
+        }
+        Arms::OverheadReaches => {
+            // Right reaches on 1, left on 3, each held through the next count.
+            let reach = |start: f32| {
+                let x = t - start;
+                if !(0.0..2.0).contains(&x) {
+                    0.0
+                } else {
+                    smooth01(x / 0.6) * (1.0 - smooth01((x - 1.2) / 0.8))
+                }
+            };
+            let (rr, rl) = (reach(0.0), reach(2.0));
+            let up_r = Vec3::new(-0.12, 0.5, 0.1 + 0.05 * amp);
+            let up_l = Vec3::new(0.12, 0.5, 0.1 + 0.05 * amp);
+            let r = down_r.lerp(up_r, rr * (0.7 + 0.3 * amp.min(1.0)));
+            let l = down_l.lerp(up_l, rl * (0.7 + 0.3 * amp.min(1.0)));
+            (l, r, 0.15 * (rl - rr))
+        }
+        Arms::ArmWave => {
+            let ph = t * PI;
+            let a = 0.1 * amp;
+            let l = Vec3::new(0.4, -0.05 + a * ph.sin(), 0.15 + 0.05 * (ph * 0.5).cos());
+            let r = Vec3::new(-0.4, -0.05 + a * (ph - 1.2).sin(), 0.15 + 0.05 * (ph * 0.5).cos());
+            (l, r, 0.0)
+        }
+    }
+}
+
+fn smooth01(x: f32) -> f32 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+/// The key pose of a move at `t_counts` (0..=4): leg keys interpolated on the half count, arms
+/// evaluated with a small lag (follow-through), secondary motion added.
+pub(crate) fn pose_at(arms: Arms, energy: Energy, t: f32, legs: &[KeyPose]) -> KeyPose {
+    let amp = energy.amplitude();
+    let mut p = super::pose::interpolate(legs, 0.5, t);
+    // Arms trail the body a little (follow-through); rolls and claps keep strict time.
+    let lag = match arms {
+        Arms::Swing | Arms::Waves | Arms::ArmWave => 0.12,
+        _ => 0.04,
+    };
+    let (l, r, twist) = arm_targets(arms, (t - lag).max(0.0), amp);
+    p.left_hand = l;
+    p.right_hand = r;
+    p.chest_yaw += twist;
+    // Shoulders rise with the hands.
+    p.left_shrug = 0.12 * smooth01((l.y + 0.1) / 0.6);
+    p.right_shrug = 0.12 * smooth01((r.y + 0.1) / 0.6);
+    // The head steadies against the chest and nods a fraction after the bounce.
+    let later_drop = super::pose::interpolate_channel(legs, 0.5, (t - 0.15).max(0.0), |k| k.hips.y);
+    p.head_roll = -0.5 * p.chest_roll - 0.3 * p.hips_roll;
+    p.head_pitch += -0.6 * later_drop - 0.3 * p.chest_pitch;
+    p.head_yaw = -0.4 * p.chest_yaw;
+    p
+}
+
+/// Leg keys of a step turned into key poses with the weight shift and hip/chest reactions.
+pub(crate) fn leg_poses(step: Step, energy: Energy) -> Vec<KeyPose> {
+    let amp = energy.amplitude();
+    leg_keys(step)
+        .into_iter()
+        .map(|k| {
+            // Travel and lifts scale with energy (a little); depth of the knees too.
+            let scale_foot = |v: Vec3| Vec3::new(v.x * (0.85 + 0.15 * amp), v.y * amp, v.z * (0.85 + 0.15 * amp));
+            let (l, r) = (scale_foot(k.l), scale_foot(k.r));
+            let w = k.w_left.clamp(0.0, 1.0);
+            // Weight shift: the hips travel over the supporting foot.
+            let support = r.lerp(l, w);
+            let centre = (l + r) * 0.5;
+            let hips_xz = centre.lerp(support, 0.6);
+            let lean = (w - 0.5) * 2.0; // +1 all on the left
+            KeyPose {
+                hips: Vec3::new(hips_xz.x + k.torso[3] * amp, k.drop * amp, hips_xz.z),
+                hips_yaw: k.yaw,
+                hips_pitch: k.torso[0] * amp,
+                // The hip of the supporting side pushes out and up: the pelvis tilts towards the
+                // free side.
+                hips_roll: -0.09 * amp * lean,
+                spine_pitch: 0.04 + k.torso[1] * amp,
+                spine_roll: 0.05 * amp * lean,
+                chest_pitch: k.torso[2] * amp - 0.6 * k.drop * amp,
+                chest_roll: 0.04 * amp * lean,
+                chest_yaw: 0.0,
+                left_foot: l,
+                right_foot: r,
+                left_point: if l.y > 0.01 { 0.6 } else { (1.0 - w) * 0.45 },
+                right_point: if r.y > 0.01 { 0.6 } else { w * 0.45 },
+                feet_yaw: 0.12,
+                ..Default::default()
+            }
+        })
+        .collect()
+}
