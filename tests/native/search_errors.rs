@@ -14,7 +14,7 @@ use odori_core::search::{
 fn demo_index() -> FeatureIndex {
     let clip = demo_clip();
     let map = HumanoidMap::from_skeleton(&clip.skeleton);
-    let status = map.status(&clip.skeleton);
+    let status = map.status(&clip.skeleton, Some(&clip));
     let mut index = FeatureIndex::new();
     index.add_clip("demo", &clip, &map, &status).expect("the built-in demo clip is humanoid");
     index

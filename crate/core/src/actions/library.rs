@@ -244,7 +244,7 @@ pub fn retarget_to_canonical(clip: &Clip) -> Result<Clip, ActionError> {
         return Ok(clip.clone());
     }
     let map = HumanoidMap::from_skeleton(&clip.skeleton);
-    let status = map.status(&clip.skeleton);
+    let status = map.status(&clip.skeleton, Some(clip));
     if !status.is_humanoid() {
         return Err(ActionError::NotHumanoid { name: clip.name.clone(), reason: format!("{status:?}") });
     }
