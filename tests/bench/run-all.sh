@@ -1,0 +1,6 @@
+#!/usr/bin/env bash
+# Every benchmark: each prints its figures (and a ratio against a baseline measured in the
+# same run). Run through `./dev bench`.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+cargo bench -p odori-tests
