@@ -60,21 +60,7 @@ fn smooth(x: f32) -> f32 {
 
 /// Lowest joint height of a pose with the root at the origin.
 pub fn lowest_point(skeleton: &Skeleton, local: &[Quat]) -> f32 {
-    let mut rot: Vec<Quat> = Vec::with_capacity(local.len());
-    let mut pos: Vec<Vec3> = Vec::with_capacity(local.len());
-    for (i, j) in skeleton.joints.iter().enumerate() {
-        match j.parent {
-            None => {
-                rot.push(local[i]);
-                pos.push(Vec3::ZERO);
-            }
-            Some(p) => {
-                rot.push(rot[p] * local[i]);
-                pos.push(pos[p] + rot[p] * j.rest_offset);
-            }
-        }
-    }
-    pos.iter().map(|p| p.y).fold(f32::MAX, f32::min)
+    skeleton.posed_at_origin(local).iter().map(|p| p.y).fold(f32::MAX, f32::min)
 }
 
 /// A few bars of the built-in demo dance: step-touch side to side with a bounce on every

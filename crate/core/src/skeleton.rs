@@ -102,6 +102,15 @@ impl Skeleton {
         }
     }
 
+    /// World positions of a pose given only local rotations: rest offsets for every joint and
+    /// the root at the origin.
+    pub fn posed_at_origin(&self, local_rotations: &[Quat]) -> Vec<Vec3> {
+        let offsets: Vec<Vec3> = self.joints.iter().map(|j| if j.parent.is_some() { j.rest_offset } else { Vec3::ZERO }).collect();
+        let mut out = Vec::with_capacity(self.len());
+        self.forward_kinematics(local_rotations, &offsets, &mut out, None);
+        out
+    }
+
     /// Index pairs (parent, child) of every bone, for drawing.
     pub fn bones(&self) -> Vec<(usize, usize)> {
         self.joints

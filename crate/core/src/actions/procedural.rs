@@ -392,21 +392,7 @@ pub fn build_clip(name: &str, frames: usize, cyclic: bool, pose_at: &dyn Fn(f32)
 
 /// Joint positions of a pose with the root at the origin.
 fn relative_positions(skeleton: &Skeleton, local: &[Quat]) -> Vec<Vec3> {
-    let mut rot: Vec<Quat> = Vec::with_capacity(local.len());
-    let mut pos: Vec<Vec3> = Vec::with_capacity(local.len());
-    for (i, j) in skeleton.joints.iter().enumerate() {
-        match j.parent {
-            None => {
-                rot.push(local[i]);
-                pos.push(Vec3::ZERO);
-            }
-            Some(p) => {
-                rot.push(rot[p] * local[i]);
-                pos.push(pos[p] + rot[p] * j.rest_offset);
-            }
-        }
-    }
-    pos
+    skeleton.posed_at_origin(local)
 }
 
 fn frames_for(duration_secs: f32) -> usize {
