@@ -1,5 +1,5 @@
 // Odori app bootstrap: loads the wasm engine, opens the viewer, wires the UI modules.
-import init, { Library, Viewer, Song, DemoSong, version } from "./pkg/odori.js";
+import init, { Library, Viewer, Song, DemoSong, TextAnimator, version } from "./pkg/odori.js";
 import { LibraryPanel } from "./ui/library-panel.js";
 import { Player } from "./ui/player.js";
 import { FileLoader } from "./ui/files.js";
@@ -9,6 +9,7 @@ import { SongPlayer, decodeSong, bufferFromSamples } from "./audio/song-player.j
 import { rmsEnvelope } from "./audio/rms.js";
 import { SearchClient } from "./search/client.js";
 import { SearchPanel } from "./ui/search-panel.js";
+import { TextPanel } from "./ui/text-panel.js";
 
 const t0 = performance.now();
 const $ = (sel) => document.querySelector(sel);
@@ -65,6 +66,7 @@ async function main() {
   };
   // The app opens on the engine's own demo clip: something moves with no file.
   searchPanel = new SearchPanel($("#search"), { client: searchClient, library, player, messages });
+  const textPanel = new TextPanel($("#text"), { animator: new TextAnimator(), library, panel, messages });
   const demo = library.addBuiltinDemo();
   searchClient.add(demo.id);
   panel.refresh();
@@ -79,7 +81,7 @@ async function main() {
   // first pose is on screen.
   loadDemoSong(songPanel, messages);
   new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); }).observe(canvas);
-  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, version: version() };
+  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, text: textPanel, version: version() };
 }
 
 async function analyse(buffer) {

@@ -10,12 +10,14 @@ mod error;
 mod library;
 mod music;
 mod search;
+mod text;
 mod viewer;
 
 pub use error::OdoriError;
 pub use library::Library;
 pub use music::{DemoSong, Song};
 pub use search::SearchIndex;
+pub use text::TextAnimator;
 pub use viewer::Viewer;
 
 use wasm_bindgen::prelude::*;
@@ -49,7 +51,7 @@ export interface ClipInfo {
   name: string;
   /** The file the clip came from, or "built-in". */
   source: string;
-  format: "bvh" | "gltf" | "builtin";
+  format: "bvh" | "gltf" | "builtin" | "text";
   fps: number;
   frames: number;
   durationSecs: number;

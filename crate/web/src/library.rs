@@ -94,6 +94,21 @@ impl Library {
         id
     }
 
+    /// Adds a clip the engine made (text animation, a generated dance); with `replace`, it
+    /// takes that clip's place and id.
+    pub(crate) fn insert_clip(&mut self, clip: Clip, format: &'static str, replace: Option<u32>) -> u32 {
+        let map = HumanoidMap::from_skeleton(&clip.skeleton);
+        let status = map.status(&clip.skeleton, Some(&clip));
+        if let Some(old) = replace.and_then(|r| self.entries.iter().position(|e| e.id == r)) {
+            let id = self.entries[old].id;
+            let bones = clip.skeleton.bones();
+            let head = map.get(Canon::Head);
+            self.entries[old] = Entry { id, clip, format, humanoid: map, status, mesh: None, bones, head };
+            return id;
+        }
+        self.push(clip, format, map, status, None)
+    }
+
     pub(crate) fn entry(&self, id: u32) -> JsResult<&Entry> {
         self.entries.iter().find(|e| e.id == id).ok_or_else(|| OdoriError::new("not-found", format!("no clip with id {id} in the library")))
     }
