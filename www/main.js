@@ -66,7 +66,7 @@ async function main() {
   };
   // The app opens on the engine's own demo clip: something moves with no file.
   searchPanel = new SearchPanel($("#search"), { client: searchClient, library, player, messages });
-  const textPanel = new TextPanel($("#text"), { animator: new TextAnimator(), library, panel, messages });
+  const textPanel = new TextPanel($("#text"), { animator: new TextAnimator(), library, panel, messages, player });
   const demo = library.addBuiltinDemo();
   searchClient.add(demo.id);
   panel.refresh();

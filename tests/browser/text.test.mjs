@@ -3,7 +3,7 @@
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
-import { startServer, launch, openApp, canvasPixels, artifacts } from "./harness.mjs";
+import { startServer, launch, openApp, canvasPixels, artifacts, data } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -42,6 +42,19 @@ test("text: 太郎は走って，ボールを蹴る．そして喜ぶ． → run
     await page.waitForFunction(() => document.querySelectorAll("#text-table tbody tr").length === 3);
     const joins = await page.$$eval("#text-table tbody tr", (trs) => trs.map((tr) => tr.dataset.join));
     assert.deepEqual(joins, ["initial", "transition", "connection"]);
+
+    // A clip tagged by the person is called by its tag: import salsa, tag it, use the word.
+    await page.fill("#fps-override", "60");
+    await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_02.bvh"));
+    await page.waitForFunction(() => [...document.querySelectorAll("#library tbody tr")].some((tr) => tr.textContent.includes("salsa_02")));
+    await page.click("#library tbody tr:last-child td:first-child");
+    await page.fill("#text-tags", "salsa, サルサ");
+    await page.click("#text-tag");
+    await page.fill("#text-input", "サルサして、喜ぶ。");
+    await page.click("#text-go");
+    await page.waitForFunction(() => document.querySelectorAll("#text-table tbody tr").length === 2);
+    const clips = await page.$$eval("#text-table tbody tr select", (ss) => ss.map((s) => s.selectedOptions[0].textContent));
+    assert.equal(clips[0], "salsa_02", JSON.stringify(clips));
 
     // Only unknown words: a message, no crash.
     await page.fill("#text-input", "xyzzy plugh");

@@ -5,12 +5,13 @@
 const JOIN_COLOURS = { initial: "#9a9cab", connection: "#7fb6ff", transition: "#f2731a", composition: "#4fd18b" };
 
 export class TextPanel {
-  constructor(root, { animator, library, panel, messages }) {
-    Object.assign(this, { root, animator, library, panel, messages });
+  constructor(root, { animator, library, panel, messages, player }) {
+    Object.assign(this, { root, animator, library, panel, messages, player });
     this.$ = (s) => root.querySelector(s);
     this.clipId = null;
     this.elements = [];
     this.$("#text-go").addEventListener("click", () => this.run());
+    this.$("#text-tag").addEventListener("click", () => this.tagSelected());
     this.$("#text-input").addEventListener("keydown", (ev) => {
       if (ev.key === "Enter" && (ev.ctrlKey || ev.metaKey)) { ev.preventDefault(); this.run(); }
     });
@@ -21,6 +22,19 @@ export class TextPanel {
         this.show(this.animator.animateTable(this.library, this.elements, this.clipId ?? undefined));
       } catch (e) { this.messages.error(`Text: ${e.message}`); }
     });
+  }
+
+  /** Makes the selected library clip an action the text can call by these words. */
+  tagSelected() {
+    const tags = this.$("#text-tags").value.split(/[,、，]/).map((t) => t.trim()).filter(Boolean);
+    const id = this.player.clip;
+    if (!tags.length || id == null) { this.messages.error("Text: select a clip and type at least one tag"); return; }
+    const info = this.library.clip(id);
+    try {
+      this.animator.tagClip(this.library, id, tags);
+      this.messages.info(`${info.name} can now be called by: ${tags.join(", ")}`);
+      this.$("#text-tags").value = "";
+    } catch (e) { this.messages.error(`Text: ${info.name}: ${e.message}`); }
   }
 
   run() {
