@@ -1,5 +1,5 @@
 // Odori app bootstrap: loads the wasm engine, opens the viewer, wires the UI modules.
-import init, { Library, Viewer, Song, DemoSong, TextAnimator, version } from "./pkg/odori.js";
+import init, { Library, Viewer, Song, DemoSong, TextAnimator, Choreographer, version } from "./pkg/odori.js";
 import { LibraryPanel } from "./ui/library-panel.js";
 import { Player } from "./ui/player.js";
 import { FileLoader } from "./ui/files.js";
@@ -10,6 +10,7 @@ import { rmsEnvelope } from "./audio/rms.js";
 import { SearchClient } from "./search/client.js";
 import { SearchPanel } from "./ui/search-panel.js";
 import { TextPanel } from "./ui/text-panel.js";
+import { ChoreoPanel } from "./ui/choreo-panel.js";
 
 const t0 = performance.now();
 const $ = (sel) => document.querySelector(sel);
@@ -72,7 +73,8 @@ async function main() {
   panel.refresh();
   panel.select(demo.id);
   const songPlayer = new SongPlayer();
-  const songPanel = new SongPanel($("#song"), { player: songPlayer, messages });
+  const choreo = new ChoreoPanel($("#dance"), { choreographer: new Choreographer(), library, player, songPlayer, panel, messages });
+  const songPanel = new SongPanel($("#song"), { player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars) });
   player.songClock = songPlayer;
   player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
   player.start();
@@ -81,7 +83,7 @@ async function main() {
   // first pose is on screen.
   loadDemoSong(songPanel, messages);
   new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); }).observe(canvas);
-  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, text: textPanel, version: version() };
+  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, text: textPanel, choreo, version: version() };
 }
 
 async function analyse(buffer) {

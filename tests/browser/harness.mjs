@@ -12,7 +12,7 @@ export const artifacts = join(root, "tests", "artifacts");
 mkdirSync(artifacts, { recursive: true });
 if (!existsSync(data)) throw new Error(`../shared/data is missing: the browser tests open real files from it (${data})`);
 
-const BASE_FLAGS = ["--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-dev-shm-usage"];
+const BASE_FLAGS = ["--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-dev-shm-usage", "--autoplay-policy=no-user-gesture-required"];
 export const BACKENDS = {
   // WebGL2 needs no flag (SwiftShader through ANGLE); the page is told to use it.
   webgl2: { flags: [], query: "?backend=webgl2" },

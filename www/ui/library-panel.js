@@ -32,7 +32,8 @@ export class LibraryPanel {
   }
 
   refresh() {
-    const rows = this.library.clips().map((c) => {
+    // Candidate previews are working clips of the dance panel, not the person's library.
+    const rows = this.library.clips().filter((c) => c.source !== "candidate").map((c) => {
       const tr = document.createElement("tr");
       tr.dataset.id = c.id;
       const [hum, why] = humanoidText(c.humanoid);

@@ -115,8 +115,8 @@ export class Player {
         // A song is playing: its audio clock drives the figure (the clip loops under it).
         const c = this.info();
         const end = (c.frames - 1) / c.fps;
-        const t = this.songClock.position();
-        this.time = end > 0 ? t % end : 0;
+        const t = this.songClock.position() - (this.compare && this.compare.songStart != null ? this.compare.songStart : 0);
+        this.time = end > 0 ? ((t % end) + end) % end : 0;
         this.drawNow();
       } else if (this.playing && this.clip != null) {
         const dt = this.last == null ? 0 : (now - this.last) / 1000;

@@ -6,6 +6,7 @@
 //! imports, the `file`; no panic crosses into JS with a bad file (and if a bug panics, the
 //! panic hook prints it to the console).
 
+mod choreo;
 mod error;
 mod library;
 mod music;
@@ -13,6 +14,7 @@ mod search;
 mod text;
 mod viewer;
 
+pub use choreo::Choreographer;
 pub use error::OdoriError;
 pub use library::Library;
 pub use music::{DemoSong, Song};
@@ -51,7 +53,7 @@ export interface ClipInfo {
   name: string;
   /** The file the clip came from, or "built-in". */
   source: string;
-  format: "bvh" | "gltf" | "builtin" | "text";
+  format: "bvh" | "gltf" | "builtin" | "text" | "dance";
   fps: number;
   frames: number;
   durationSecs: number;

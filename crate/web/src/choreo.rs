@@ -1,0 +1,180 @@
+//! `Choreographer`: the dance being composed to a song's bars (spec §E–G): a segment library
+//! (the built-in moves plus the person's humanoid clips), relevance-feedback candidates per
+//! bar, pinning, automatic filling, undo/redo, and the whole dance rendered as one clip whose
+//! frame time is song time.
+
+use odori_core::bars::Bar;
+use odori_core::choreo::{segment_clip, Choreography, RenderOptions, SegmentLibrary, SegmentOptions};
+use wasm_bindgen::prelude::*;
+
+use crate::error::{to_js, OdoriError};
+use crate::library::Library;
+
+fn choreo_err(e: impl std::fmt::Display) -> OdoriError {
+    OdoriError::new("choreo", e.to_string())
+}
+
+/// A dance in progress.
+#[wasm_bindgen]
+pub struct Choreographer {
+    lib: SegmentLibrary,
+    doc: Option<Choreography>,
+}
+
+impl Default for Choreographer {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Choreographer {
+    fn doc(&mut self) -> Result<&mut Choreography, OdoriError> {
+        self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet: open a song (or use the demo song) first"))
+    }
+}
+
+#[wasm_bindgen]
+impl Choreographer {
+    /// Starts with the built-in move library (420 four-count moves) and no bars.
+    #[wasm_bindgen(constructor)]
+    pub fn new() -> Choreographer {
+        Choreographer { lib: SegmentLibrary::builtin(), doc: None }
+    }
+
+    /// Number of segments in the library.
+    #[wasm_bindgen(getter, js_name = segmentCount)]
+    pub fn segment_count(&self) -> usize {
+        self.lib.len()
+    }
+
+    /// The bars to dance to (`Bar[]` from a `SongGrid`). The first call starts the document;
+    /// later calls re-grid it, keeping each bar's state (undoable).
+    #[wasm_bindgen(js_name = setBars)]
+    pub fn set_bars(&mut self, #[wasm_bindgen(unchecked_param_type = "Bar[]")] bars: JsValue) -> Result<(), OdoriError> {
+        let bars: Vec<Bar> = serde_wasm_bindgen::from_value(bars).map_err(|e| OdoriError::new("bad-argument", format!("bars: {e}")))?;
+        match &mut self.doc {
+            Some(d) => d.set_bars(bars).map_err(choreo_err),
+            None => {
+                self.doc = Some(Choreography::new(bars).map_err(choreo_err)?);
+                Ok(())
+            }
+        }
+    }
+
+    /// Cuts a library clip into 4-count segments at its own beats (or at `tempoBpm` when the
+    /// person states it) and adds them. Returns a summary; throws for a non-humanoid clip or
+    /// one shorter than 4 counts.
+    #[wasm_bindgen(js_name = addClip)]
+    pub fn add_clip(&mut self, library: &Library, clip_id: u32, tempo_bpm: Option<f32>) -> Result<JsValue, OdoriError> {
+        let e = library.entry(clip_id)?;
+        let opts = SegmentOptions { tempo_bpm, ..Default::default() };
+        let summary = self.lib.add_clip(&e.clip, &e.humanoid, &e.status, &opts).map_err(|err| OdoriError::new("choreo", format!("{}: {err}", e.clip.name)))?;
+        Ok(to_js(&summary))
+    }
+
+    /// One segment's facts (`{ index, name, source, tempoBpm, intensity01, ... }`).
+    pub fn segment(&self, index: usize) -> JsValue {
+        self.lib.segment(index).map(to_js).unwrap_or(JsValue::UNDEFINED)
+    }
+
+    /// Each bar: `{ bar, state: { kind, segment? }, tau, candidates, liked, shownCount, rounds }`.
+    #[wasm_bindgen(unchecked_return_type = "BarView[]")]
+    pub fn view(&self) -> JsValue {
+        self.doc.as_ref().map(|d| to_js(&d.view())).unwrap_or_else(|| to_js(&Vec::<u8>::new()))
+    }
+
+    /// The bar's current 6 candidates (opens its search on first use).
+    pub fn candidates(&mut self, bar: usize) -> Result<Vec<u32>, OdoriError> {
+        let lib = &self.lib;
+        let d = self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
+        Ok(d.candidates(lib, bar).map_err(choreo_err)?.into_iter().map(|s| s as u32).collect())
+    }
+
+    /// Next round: like `liked` (from the current round), τ × 19/20, 6 new candidates.
+    pub fn search(&mut self, bar: usize, liked: Vec<u32>) -> Result<Vec<u32>, OdoriError> {
+        let liked: Vec<usize> = liked.into_iter().map(|x| x as usize).collect();
+        let lib = &self.lib;
+        let d = self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
+        Ok(d.search(lib, bar, &liked).map_err(choreo_err)?.into_iter().map(|s| s as u32).collect())
+    }
+
+    /// Pins a segment to a bar.
+    pub fn set(&mut self, bar: usize, segment: usize) -> Result<(), OdoriError> {
+        let lib = &self.lib;
+        let d = self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
+        d.set(lib, bar, segment).map_err(choreo_err)
+    }
+
+    /// Unpins a bar (its segment stays, as generated).
+    pub fn unpin(&mut self, bar: usize) -> Result<(), OdoriError> {
+        self.doc()?.unpin(bar).map_err(choreo_err)
+    }
+
+    /// Starts the bar's search over (τ back to 1, nothing shown).
+    #[wasm_bindgen(js_name = resetSearch)]
+    pub fn reset_search(&mut self, bar: usize) -> Result<bool, OdoriError> {
+        self.doc()?.reset_search(bar).map_err(choreo_err)
+    }
+
+    /// ρ of spec §F eq. 1 (0..1): music fit against diversity/preference.
+    #[wasm_bindgen(js_name = setRho)]
+    pub fn set_rho(&mut self, rho: f32) -> Result<(), OdoriError> {
+        self.doc()?.set_rho(rho).map_err(choreo_err)
+    }
+
+    /// Weight of the music term (bar intensity vs segment intensity) in the filling.
+    #[wasm_bindgen(js_name = setMusicWeight)]
+    pub fn set_music_weight(&mut self, w: f32) -> Result<(), OdoriError> {
+        self.doc()?.set_music_weight(w).map_err(choreo_err)
+    }
+
+    /// Fills every open bar (pinned bars stay): `{ filled, pinned, cost }`.
+    pub fn generate(&mut self) -> Result<JsValue, OdoriError> {
+        let lib = &self.lib;
+        let d = self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
+        Ok(to_js(&d.generate(lib).map_err(choreo_err)?))
+    }
+
+    pub fn undo(&mut self) -> bool {
+        self.doc.as_mut().is_some_and(|d| d.undo())
+    }
+
+    pub fn redo(&mut self) -> bool {
+        self.doc.as_mut().is_some_and(|d| d.redo())
+    }
+
+    #[wasm_bindgen(js_name = canUndo)]
+    pub fn can_undo(&self) -> bool {
+        self.doc.as_ref().is_some_and(|d| d.can_undo())
+    }
+
+    #[wasm_bindgen(js_name = canRedo)]
+    pub fn can_redo(&self) -> bool {
+        self.doc.as_ref().is_some_and(|d| d.can_redo())
+    }
+
+    /// Renders the whole dance into `library` (replacing clip `replace`): frame time = song
+    /// time, 5+5-frame cubic joins. Returns the clip id.
+    #[wasm_bindgen(js_name = renderDance)]
+    pub fn render_dance(&self, library: &mut Library, replace: Option<u32>) -> Result<u32, OdoriError> {
+        let d = self.doc.as_ref().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
+        let mut clip = d.render(&self.lib, &RenderOptions::default());
+        clip.name = "Dance".into();
+        clip.source = "choreography".into();
+        Ok(library.insert_clip(clip, "dance", replace))
+    }
+
+    /// One segment time-resampled to `durationSecs` (a candidate preview) into `library`.
+    #[wasm_bindgen(js_name = previewSegment)]
+    pub fn preview_segment(&self, library: &mut Library, segment: usize, duration_secs: f32, replace: Option<u32>) -> Result<u32, OdoriError> {
+        let mut clip = segment_clip(&self.lib, segment, duration_secs, 60.0)
+            .ok_or_else(|| OdoriError::new("not-found", format!("no segment {segment} in the library")))?;
+        clip.source = "candidate".into();
+        Ok(library.insert_clip(clip, "dance", replace))
+    }
+}
+
+#[wasm_bindgen(typescript_custom_section)]
+const TS_CHOREO: &'static str = r#"
+export interface BarView { bar: Bar; state: { kind: "empty" | "pinned" | "generated"; segment?: number }; tau: number; candidates: number[]; liked: number[]; shownCount: number; rounds: number; }
+"#;

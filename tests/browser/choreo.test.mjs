@@ -1,0 +1,111 @@
+// Composing a dance in the page with no file: select a bar, 6 candidates play side by side,
+// Set one, Search twice, Generate, play: the pinned bar keeps its segment, every bar is
+// filled and the figure moves through every bar, following the song's clock.
+import { test, before, after } from "node:test";
+import assert from "node:assert/strict";
+import { join } from "node:path";
+import { startServer, launch, openApp, canvasPixels, countAll, artifacts } from "./harness.mjs";
+
+let server;
+before(async () => { server = await startServer(); });
+after(() => server && server.stop());
+
+const hueCount = (img) => {
+  // Distinct saturated hues on screen (the six candidate colours differ in hue).
+  const bins = new Set();
+  for (let i = 0; i < img.rgba.length; i += 4) {
+    const [r, g, b] = [img.rgba[i], img.rgba[i + 1], img.rgba[i + 2]];
+    const mx = Math.max(r, g, b), mn = Math.min(r, g, b);
+    if (mx < 110 || mx - mn < 60) continue;
+    let h;
+    if (mx === r) h = ((g - b) / (mx - mn) + 6) % 6; else if (mx === g) h = (b - r) / (mx - mn) + 2; else h = (r - g) / (mx - mn) + 4;
+    bins.add(Math.floor(h * 4)); // 24 hue bins
+  }
+  return bins.size;
+};
+
+test("dance: candidates, Set, Search twice, Generate, play", async () => {
+  const { browser, page, logs } = await launch("webgl2");
+  try {
+    await openApp(page, server, "webgl2");
+    await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 60000 });
+    const nBars = Number(await page.evaluate(() => document.querySelector("#dance").dataset.bars));
+    const before = await canvasPixels(page);
+    await page.click('#dance-bars [data-bar="4"]');
+    await page.waitForFunction(() => document.querySelector("#dance").dataset.candidates === "6");
+    await page.evaluate(() => { const p = window.odori.player; p.pause(); p.time = 0.6; p.drawNow(); });
+    const six = await canvasPixels(page, "dance-01-candidates.png");
+    assert.ok(hueCount(six) >= hueCount(before) + 3, `candidate colours on screen: ${hueCount(six)} hue bins (before: ${hueCount(before)})`);
+    // Set candidate 2 on bar 5.
+    await page.click('#dance-candidates [data-k="1"]');
+    await page.click("#dance-set");
+    const pinned = await page.evaluate(() => window.odori.choreo.view[4].state);
+    assert.equal(pinned.kind, "pinned");
+    const seg = pinned.segment;
+    // Search twice on bar 3 (liking one candidate each round): τ falls, new candidates.
+    await page.click('#dance-bars [data-bar="2"]');
+    const first = await page.evaluate(() => window.odori.choreo.candidates.slice());
+    for (let round = 0; round < 2; round++) {
+      await page.click('#dance-candidates [data-k="0"]');
+      await page.click("#dance-search");
+    }
+    const v2 = await page.evaluate(() => window.odori.choreo.view[2]);
+    assert.ok(Math.abs(v2.tau - 0.95 * 0.95) < 1e-4, `τ after two searches: ${v2.tau}`);
+    const third = await page.evaluate(() => window.odori.choreo.candidates.slice());
+    assert.ok(third.every((s) => !first.includes(s)), "shown candidates never come back");
+    // Generate: every bar filled, the pinned bar unchanged.
+    await page.click("#dance-generate");
+    const view = await page.evaluate(() => window.odori.choreo.view);
+    assert.equal(view.length, nBars);
+    assert.ok(view.every((v) => v.state.kind !== "empty"), "an empty bar after Generate");
+    assert.deepEqual(view[4].state, { kind: "pinned", segment: seg });
+    // The dance moves through every bar: each bar's middle pose differs from the next one's.
+    const still = await page.evaluate(() => {
+      const { choreo, library } = window.odori;
+      choreo.renderDance();
+      const id = choreo.danceId;
+      const mids = choreo.view.map((v) => (v.bar.startSecs + v.bar.endSecs) / 2);
+      const poses = mids.map((t) => library.jointPositions(id, t));
+      const moving = [];
+      // Largest pose change from the bar's first eighth over eight moments of the bar (a
+      // 2-count move repeats itself within a bar, so two moments are not enough).
+      choreo.view.forEach((v) => {
+        const at = (f) => library.jointPositions(id, v.bar.startSecs + f * (v.bar.endSecs - v.bar.startSecs));
+        const a = at(0.0625);
+        let most = 0;
+        for (let s = 1; s < 8; s++) {
+          const b = at(0.0625 + s / 8);
+          let d = 0;
+          for (let k = 0; k < a.length; k++) d += Math.abs(a[k] - b[k]);
+          most = Math.max(most, d);
+        }
+        moving.push(most);
+      });
+      return { moving, n: poses.length };
+    });
+    const idle = still.moving.map((d, i) => [i + 1, d]).filter(([, d]) => d < 0.05);
+    assert.deepEqual(idle, [], "bars where the figure does not move");
+    // Play the dance with the music: the figure follows the song's clock.
+    await page.click('#dance-bars [data-bar="0"]');
+    await page.click("#dance-play");
+    await page.waitForTimeout(1500);
+    const st = await page.evaluate(() => ({ song: window.odori.songPlayer.position(), playing: window.odori.songPlayer.playing, time: window.odori.player.time, clip: window.odori.player.clip, dance: window.odori.choreo.danceId }));
+    assert.ok(st.playing, "the song plays");
+    assert.equal(st.clip, st.dance);
+    assert.ok(st.song > 0.5 && Math.abs(st.time - st.song) < 0.25, `figure time ${st.time} vs song ${st.song}`);
+    await page.screenshot({ path: join(artifacts, "dance-02-playing.png") });
+    // Undo steps back through the edits (opening bar 1's candidates, then Generate): the
+    // bars are empty again but for the pinned one; redo brings the dance back.
+    const empties = () => page.evaluate(() => window.odori.choreo.view.filter((v) => v.state.kind === "empty").length);
+    let steps = 0;
+    while ((await empties()) < nBars - 1 && steps < 3) { await page.click("#dance-undo"); steps++; }
+    assert.equal(await empties(), nBars - 1, `after ${steps} undos`);
+    assert.deepEqual(await page.evaluate(() => window.odori.choreo.view[4].state), { kind: "pinned", segment: seg });
+    await page.click("#dance-redo");
+    assert.equal(await empties(), 0, "redo brings Generate back");
+    assert.deepEqual(logs.filter((l) => l.startsWith("[pageerror]")), []);
+    void countAll;
+  } finally {
+    await browser.close();
+  }
+});

@@ -1,0 +1,188 @@
+// Composing a dance (paper 000): the song's bars in a row (pinned, generated, empty), a bar's
+// 6 candidates playing side by side in sync with that bar of the music, Set / Search /
+// Generate, τ and ρ, undo/redo, and the whole dance played with the music.
+const CHIP_COLOURS = ["#f9b25a", "#5cd3ea", "#c79cf5", "#b5e96b", "#f38aa9", "#9dc2fb"];
+const SPACING = 1.3;
+
+export class ChoreoPanel {
+  constructor(root, { choreographer, library, player, songPlayer, panel, messages }) {
+    Object.assign(this, { root, choreographer, library, player, songPlayer, panel, messages });
+    this.$ = (s) => root.querySelector(s);
+    this.bar = null;            // selected bar index
+    this.candidates = [];       // segment ids shown
+    this.previewIds = [];       // library clip ids of the 6 previews (reused)
+    this.ticked = new Set();    // indices into candidates
+    this.danceId = null;
+    this.bind();
+  }
+
+  bind() {
+    const $ = this.$;
+    $("#dance-generate").addEventListener("click", () => this.generate());
+    $("#dance-play").addEventListener("click", () => this.playDance());
+    $("#dance-undo").addEventListener("click", () => this.undo());
+    $("#dance-redo").addEventListener("click", () => this.redo());
+    $("#dance-search").addEventListener("click", () => this.search());
+    $("#dance-set").addEventListener("click", () => this.set());
+    $("#dance-reset").addEventListener("click", () => this.act(() => this.choreographer.resetSearch(this.bar), true));
+    $("#dance-rho").addEventListener("change", (ev) => this.act(() => this.choreographer.setRho(Number(ev.target.value))));
+    $("#dance-music").addEventListener("change", (ev) => this.act(() => this.choreographer.setMusicWeight(Number(ev.target.value))));
+    $("#dance-bars").addEventListener("click", (ev) => {
+      const b = ev.target.closest("[data-bar]");
+      if (b) this.selectBar(Number(b.dataset.bar));
+    });
+    $("#dance-candidates").addEventListener("click", (ev) => {
+      const c = ev.target.closest("[data-k]");
+      if (!c) return;
+      const k = Number(c.dataset.k);
+      if (this.ticked.has(k)) this.ticked.delete(k); else this.ticked.add(k);
+      this.renderCandidates();
+    });
+    window.addEventListener("keydown", (ev) => {
+      if (ev.target.matches("input, textarea, select")) return;
+      const k = ev.key.toLowerCase();
+      if ((ev.ctrlKey || ev.metaKey) && k === "z") { ev.preventDefault(); ev.shiftKey ? this.redo() : this.undo(); }
+      else if ((ev.ctrlKey || ev.metaKey) && k === "y") { ev.preventDefault(); this.redo(); }
+      else if (ev.ctrlKey || ev.metaKey || ev.altKey) return;
+      else if (k === "[") this.step(-1);
+      else if (k === "]") this.step(1);
+      else if (k === "s") this.set();
+      else if (k === "f") this.search();
+      else if (k === "g") this.generate();
+      else if (k === "p") this.playDance();
+    });
+  }
+
+  act(fn, reselect = false) {
+    try {
+      const r = fn();
+      this.refresh();
+      if (reselect && this.bar != null) this.selectBar(this.bar);
+      return r;
+    } catch (e) {
+      this.messages.error(`Dance: ${e.message}`);
+      return undefined;
+    }
+  }
+
+  /** New bars from the song grid. */
+  setBars(bars) {
+    try {
+      this.choreographer.setBars(bars);
+      if (this.bar != null && this.bar >= bars.length) this.bar = null;
+      this.refresh();
+    } catch (e) { this.messages.error(`Dance: ${e.message}`); }
+  }
+
+  refresh() {
+    const view = this.choreographer.view();
+    this.view = view;
+    const total = view.length ? view[view.length - 1].bar.endSecs : 1;
+    const cells = view.map((v, i) => {
+      const b = document.createElement("button");
+      b.type = "button";
+      b.dataset.bar = i;
+      b.className = `bar ${v.state.kind}${i === this.bar ? " selected" : ""}`;
+      b.style.flexGrow = String(v.bar.endSecs - v.bar.startSecs);
+      b.title = `Bar ${i + 1}: ${v.state.kind}${v.state.segment != null ? ` (${this.choreographer.segment(v.state.segment).name})` : ""}, music intensity ${v.bar.intensity.toFixed(2)}`;
+      b.textContent = String(i + 1);
+      b.style.setProperty("--intensity", v.bar.intensity.toFixed(2));
+      return b;
+    });
+    this.$("#dance-bars").replaceChildren(...cells);
+    this.root.dataset.bars = String(view.length);
+    this.$("#dance-undo").disabled = !this.choreographer.canUndo();
+    this.$("#dance-redo").disabled = !this.choreographer.canRedo();
+    const v = this.bar != null ? view[this.bar] : null;
+    this.$("#dance-tau").textContent = v ? `τ ${v.tau.toFixed(3)} · round ${v.rounds}` : "τ –";
+    this.$("#dance-bar-label").textContent = v ? `Bar ${this.bar + 1}` : "Bar –";
+    void total;
+  }
+
+  step(d) {
+    if (!this.view || !this.view.length) return;
+    const next = this.bar == null ? 0 : Math.max(0, Math.min(this.view.length - 1, this.bar + d));
+    this.selectBar(next);
+  }
+
+  selectBar(i) {
+    this.bar = i;
+    this.ticked.clear();
+    const cands = this.act(() => this.choreographer.candidates(i));
+    if (!cands) return;
+    this.showCandidates([...cands]);
+    this.songPlayer.seek(this.view[i].bar.startSecs);
+  }
+
+  showCandidates(cands) {
+    this.candidates = cands;
+    const bar = this.view[this.bar].bar;
+    const dur = bar.endSecs - bar.startSecs;
+    this.previewIds = cands.map((seg, k) => this.choreographer.previewSegment(this.library, seg, dur, this.previewIds[k] ?? undefined));
+    const ids = this.previewIds;
+    this.player.setCompare({
+      duration: dur,
+      songStart: bar.startSecs,
+      figures: (t) => ids.map((clip, k) => ({ clip, timeSecs: t, offset: [(k - (ids.length - 1) / 2) * SPACING, 0, 0] })),
+    });
+    this.renderCandidates();
+    this.refresh();
+  }
+
+  renderCandidates() {
+    const chips = this.candidates.map((seg, k) => {
+      const b = document.createElement("button");
+      b.type = "button";
+      b.dataset.k = k;
+      b.className = `chip${this.ticked.has(k) ? " ticked" : ""}`;
+      b.style.setProperty("--chip", CHIP_COLOURS[k % CHIP_COLOURS.length]);
+      const s = this.choreographer.segment(seg);
+      b.textContent = `${k + 1} ${s.name}`;
+      b.title = `${s.name} — from ${s.source}, intensity ${s.intensity01.toFixed(2)}; click to tick (liked / to set)`;
+      return b;
+    });
+    this.$("#dance-candidates").replaceChildren(...chips);
+    this.root.dataset.candidates = String(this.candidates.length);
+  }
+
+  search() {
+    if (this.bar == null) return;
+    const liked = [...this.ticked].map((k) => this.candidates[k]);
+    const next = this.act(() => this.choreographer.search(this.bar, Uint32Array.from(liked)));
+    if (next) { this.ticked.clear(); this.showCandidates([...next]); }
+  }
+
+  set() {
+    if (this.bar == null || !this.ticked.size) { this.messages.error("Dance: tick a candidate to set it on the bar"); return; }
+    const seg = this.candidates[[...this.ticked][0]];
+    this.act(() => this.choreographer.set(this.bar, seg));
+    this.renderDance();
+  }
+
+  generate() {
+    const r = this.act(() => this.choreographer.generate());
+    if (r) {
+      this.messages.info(`Dance: filled ${r.filled} bars (${r.pinned} pinned kept)`);
+      this.renderDance();
+    }
+  }
+
+  undo() { if (this.act(() => this.choreographer.undo())) this.renderDance(); }
+  redo() { if (this.act(() => this.choreographer.redo())) this.renderDance(); }
+
+  renderDance() {
+    try {
+      this.danceId = this.choreographer.renderDance(this.library, this.danceId ?? undefined);
+      this.panel.refresh();
+    } catch (e) { this.messages.error(`Dance: ${e.message}`); }
+  }
+
+  /** The whole dance with the music, from the selected bar. */
+  playDance() {
+    this.renderDance();
+    if (this.danceId == null) return;
+    this.panel.select(this.danceId);
+    const from = this.bar != null ? this.view[this.bar].bar.startSecs : 0;
+    this.songPlayer.play(from);
+  }
+}
