@@ -44,13 +44,17 @@ async function main() {
     onOverlay: (ids) => player.setOverlays(ids),
   });
   let searchPanel = null;
+  let choreo = null;
   const loader = new FileLoader({
     library,
     messages,
     status: $("#status"),
     fpsInput: $("#fps-override"),
     onImported: (report) => {
-      for (const c of report.clips) searchClient.add(c.id);
+      for (const c of report.clips) {
+        searchClient.add(c.id);
+        if (choreo) choreo.addClip(c);
+      }
       panel.refresh();
       const first = report.clips[0];
       if (first) {
@@ -73,7 +77,7 @@ async function main() {
   panel.refresh();
   panel.select(demo.id);
   const songPlayer = new SongPlayer();
-  const choreo = new ChoreoPanel($("#dance"), { choreographer: new Choreographer(), library, player, songPlayer, panel, messages });
+  choreo = new ChoreoPanel($("#dance"), { choreographer: new Choreographer(), library, player, songPlayer, panel, messages });
   const songPanel = new SongPanel($("#song"), { player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars) });
   player.songClock = songPlayer;
   player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };

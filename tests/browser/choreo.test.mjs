@@ -4,7 +4,7 @@
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
-import { startServer, launch, openApp, canvasPixels, countAll, artifacts } from "./harness.mjs";
+import { startServer, launch, openApp, canvasPixels, countAll, artifacts, data } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -30,6 +30,12 @@ test("dance: candidates, Set, Search twice, Generate, play", async () => {
     await openApp(page, server, "webgl2");
     await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 60000 });
     const nBars = Number(await page.evaluate(() => document.querySelector("#dance").dataset.bars));
+    // An imported humanoid clip joins the segment library, cut at its own beats.
+    const builtinSegments = await page.evaluate(() => window.odori.choreo.choreographer.segmentCount);
+    await page.fill("#fps-override", "60");
+    await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_02.bvh"));
+    await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /dance segments/.test(li.textContent)), null, { timeout: 30000 });
+    assert.ok(await page.evaluate(() => window.odori.choreo.choreographer.segmentCount) > builtinSegments);
     const before = await canvasPixels(page);
     await page.click('#dance-bars [data-bar="4"]');
     await page.waitForFunction(() => document.querySelector("#dance").dataset.candidates === "6");

@@ -65,6 +65,17 @@ export class ChoreoPanel {
     }
   }
 
+  /** Cuts an imported humanoid clip into 4-count segments at its own beats; says why not. */
+  addClip(info) {
+    if (info.humanoid.kind === "notHumanoid") return;
+    try {
+      const s = this.choreographer.addClip(this.library, info.id);
+      this.messages.info(`${info.name}: ${s.segments} dance segments at ${s.tempoBpm.toFixed(0)} counts/min`);
+    } catch (e) {
+      this.messages.warning(`Dance: ${e.message}`);
+    }
+  }
+
   /** New bars from the song grid. */
   setBars(bars) {
     try {
