@@ -4,3 +4,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 cargo bench -p odori-tests
+# The search in wasm in headless Chromium (needs pkg/, which ./dev bench builds).
+cargo build -q -p xtask
+node tests/bench/search-browser.mjs

@@ -282,12 +282,14 @@ fn parse_figures(figures: JsValue) -> JsResult<Vec<FigureSpec>> {
     serde_wasm_bindgen::from_value(figures).map_err(|e| OdoriError::new("bad-argument", format!("figures: {e}")))
 }
 
-/// Bone thickness proportional to the figure's size (a 1.7 m body gets about 2 cm).
+/// Bone thickness proportional to the figure's size (a 1.7 m body gets about 2 cm): the
+/// pose's vertical extent, or a fifth of its summed bone lengths when it lies flat.
 fn stick_radius(pos: &[Vec3], bones: &[(usize, usize)]) -> f32 {
-    let total: f32 = bones.iter().map(|&(a, b)| (pos[a] - pos[b]).length()).sum();
-    // A humanoid's bones add up to roughly 4–6 body heights... per joint count varies; use
-    // the pose's vertical extent instead when available.
     let (lo, hi) = pos.iter().fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p.y), h.max(p.y)));
-    let height = if hi > lo { hi - lo } else { total / 5.0 };
+    let height = if hi - lo > 1e-3 {
+        hi - lo
+    } else {
+        bones.iter().map(|&(a, b)| (pos[a] - pos[b]).length()).sum::<f32>() / 5.0
+    };
     (height * 0.011).clamp(0.004, 0.2)
 }
