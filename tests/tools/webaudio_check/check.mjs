@@ -21,6 +21,9 @@ const server = createServer((req, res) => {
   if (req.url === "/") {
     res.setHeader("content-type", "text/html");
     res.end(readFileSync(join(here, "page.html")));
+  } else if (req.url === "/rms.js") {
+    res.setHeader("content-type", "text/javascript");
+    res.end(readFileSync(join(here, "../../../www/audio/rms.js")));
   } else if (req.url === "/audio") {
     res.end(readFileSync(join(dataDir, rel)));
   } else {
@@ -32,6 +35,7 @@ const port = server.address().port;
 const browser = await chromium.launch({ executablePath: process.env.CHROMIUM || "/usr/bin/chromium", args: ["--no-sandbox"] });
 const page = await browser.newPage();
 await page.goto(`http://127.0.0.1:${port}/`);
+await page.waitForFunction(() => window.ready === true);
 const web = await page.evaluate(() => envelopeOf("/audio", 44100));
 const version = browser.version();
 await browser.close();
