@@ -138,6 +138,11 @@ function fitCanvas(canvas) {
   if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
 }
 
+// Offline use: a service worker keeps the app (and the engine) cached.
+if ("serviceWorker" in navigator && location.protocol !== "file:") {
+  navigator.serviceWorker.register("./sw.js").catch((e) => console.warn("offline cache unavailable:", e.message));
+}
+
 main().catch((e) => {
   console.error(e);
   const s = document.querySelector("#status");

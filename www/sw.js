@@ -1,0 +1,37 @@
+// Offline: the app keeps working with no network. Network first (so a new build is always
+// picked up when online), the cache when the network fails. Everything the app needs to
+// start is cached at install; anything else it fetches is cached as it goes.
+const CACHE = "odori-v1";
+const SHELL = [
+  "./", "./index.html", "./style.css", "./favicon.svg", "./main.js", "./search-worker.js",
+  "./ui/messages.js", "./ui/library-panel.js", "./ui/player.js", "./ui/files.js", "./ui/song-panel.js",
+  "./ui/search-panel.js", "./ui/text-panel.js", "./ui/choreo-panel.js",
+  "./audio/rms.js", "./audio/song-player.js", "./search/client.js",
+  "./pkg/odori.js", "./pkg/odori_bg.wasm",
+];
+
+self.addEventListener("install", (ev) => {
+  ev.waitUntil(caches.open(CACHE).then((c) => c.addAll(SHELL)).then(() => self.skipWaiting()));
+});
+
+self.addEventListener("activate", (ev) => {
+  ev.waitUntil(
+    caches.keys().then((keys) => Promise.all(keys.filter((k) => k !== CACHE).map((k) => caches.delete(k)))).then(() => self.clients.claim()),
+  );
+});
+
+self.addEventListener("fetch", (ev) => {
+  const req = ev.request;
+  if (req.method !== "GET" || new URL(req.url).origin !== self.location.origin) return;
+  ev.respondWith(
+    fetch(req)
+      .then((res) => {
+        if (res.ok) {
+          const copy = res.clone();
+          caches.open(CACHE).then((c) => c.put(req, copy));
+        }
+        return res;
+      })
+      .catch(() => caches.match(req, { ignoreSearch: true }).then((hit) => hit || Response.error())),
+  );
+});
