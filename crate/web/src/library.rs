@@ -14,7 +14,6 @@ pub(crate) struct Entry {
     pub id: u32,
     pub clip: Clip,
     pub format: &'static str,
-    #[allow(dead_code)] // kept for the search and choreography bindings
     pub humanoid: HumanoidMap,
     pub status: HumanoidStatus,
     /// Shared by every clip of one glTF file; the id lets the viewer upload it once.

@@ -8,7 +8,7 @@
 //!   127.0.0.1, printing the URL.
 //! - `check-core-deps`: fails when the core's dependency tree contains a web crate.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufRead, BufReader, Write};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{exit, Command};
@@ -77,6 +77,23 @@ fn has_target_std(rustc: &str, target: &str) -> bool {
     std::fs::read_dir(&dir).map(|d| d.flatten().any(|e| e.file_name().to_string_lossy().starts_with("libstd-"))).unwrap_or(false)
 }
 
+/// The file name cargo gives the crate's cdylib: its `[lib] name`, read from `cargo metadata`.
+fn cdylib_name(root: &Path, krate: &str) -> String {
+    let meta = output(Command::new("cargo").current_dir(root).args(["metadata", "--no-deps", "--format-version", "1"]))
+        .unwrap_or_else(|| fail("cargo metadata failed"));
+    let meta: serde_json::Value = serde_json::from_str(&meta).unwrap_or_else(|e| fail(format!("cargo metadata: {e}")));
+    meta["packages"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter(|p| p["name"] == krate)
+        .flat_map(|p| p["targets"].as_array().into_iter().flatten())
+        .find(|t| t["kind"].as_array().is_some_and(|k| k.iter().any(|k| k == "cdylib")))
+        .and_then(|t| t["name"].as_str())
+        .map(|n| n.replace('-', "_"))
+        .unwrap_or_else(|| fail(format!("package {krate} has no cdylib target")))
+}
+
 fn build_web(dev: bool) {
     let root = root();
     let settings: Settings = toml::from_str(&std::fs::read_to_string(root.join("wasm-pack.toml")).expect("wasm-pack.toml"))
@@ -104,7 +121,7 @@ fn build_web(dev: bool) {
     cargo.current_dir(&root).args(["build", "--target", target, "-p", &settings.package.krate, "--profile", &profile.cargo_profile]);
     run(&mut cargo);
     let dir_name = if profile.cargo_profile == "dev" { "debug" } else { &profile.cargo_profile };
-    let wasm_in = root.join("target").join(target).join(dir_name).join(format!("{}.wasm", settings.package.krate.replace("odori-web", "odori").replace('-', "_")));
+    let wasm_in = root.join("target").join(target).join(dir_name).join(format!("{}.wasm", cdylib_name(&root, &settings.package.krate)));
     if !wasm_in.exists() {
         fail(format!("expected {} after the cargo build", wasm_in.display()));
     }
@@ -211,7 +228,6 @@ fn respond(mut stream: TcpStream, www: &Path, pkg: &Path) {
         let _ = stream.write_all(&body);
     }
     let _ = stream.flush();
-    let _ = reader.read(&mut [0u8; 0]);
 }
 
 fn percent_decode(s: &str) -> String {

@@ -55,6 +55,35 @@ impl Columns {
     pub(crate) fn new(rows: usize) -> Columns {
         Columns { prev_g: vec![0.0; rows], prev_s: vec![0; rows], cur_g: vec![0.0; rows], cur_s: vec![0; rows] }
     }
+
+    /// Fills the current column `j` by the spec §C recurrence (weights 1/2/1, start pointer
+    /// carried along the chosen predecessor; ties keep the vertical, then the diagonal step).
+    /// Without `has_prev`, `j` is a first column: only vertical steps.
+    #[inline]
+    fn column(&mut self, prep: &Prepared, target: &[f32], j: usize, has_prev: bool) {
+        let t = &target[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
+        self.cur_g[0] = frame_distance(prep.q(0), t, &prep.joints);
+        self.cur_s[0] = j;
+        for i in 1..prep.query_frames {
+            let d = frame_distance(prep.q(i), t, &prep.joints);
+            let mut v = self.cur_g[i - 1] + d;
+            let mut s = self.cur_s[i - 1];
+            if has_prev {
+                let dg = self.prev_g[i - 1] + 2.0 * d;
+                if dg < v {
+                    v = dg;
+                    s = self.prev_s[i - 1];
+                }
+                let h = self.prev_g[i] + d;
+                if h < v {
+                    v = h;
+                    s = self.prev_s[i];
+                }
+            }
+            self.cur_g[i] = v;
+            self.cur_s[i] = s;
+        }
+    }
 }
 
 /// The plain DP over target columns `range` of clip `clip`, pushing every candidate end with an
@@ -73,29 +102,7 @@ pub(crate) fn columns(
     let rows = prep.query_frames;
     let first = range.start;
     for j in range {
-        let t = &target[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
-        st.cur_g[0] = frame_distance(prep.q(0), t, &prep.joints);
-        st.cur_s[0] = j;
-        let has_prev = resume || j > first;
-        for i in 1..rows {
-            let d = frame_distance(prep.q(i), t, &prep.joints);
-            let mut v = st.cur_g[i - 1] + d;
-            let mut s = st.cur_s[i - 1];
-            if has_prev {
-                let dg = st.prev_g[i - 1] + 2.0 * d;
-                if dg < v {
-                    v = dg;
-                    s = st.prev_s[i - 1];
-                }
-                let h = st.prev_g[i] + d;
-                if h < v {
-                    v = h;
-                    s = st.prev_s[i];
-                }
-            }
-            st.cur_g[i] = v;
-            st.cur_s[i] = s;
-        }
+        st.column(prep, target, j, resume || j > first);
         let (g, start) = (st.cur_g[rows - 1], st.cur_s[rows - 1]);
         let span = j + 1 - start;
         if span >= prep.min_span && span <= prep.max_span {
@@ -115,28 +122,7 @@ pub(crate) fn columns(
 pub(crate) fn end_cell(prep: &Prepared, target: &[f32], from: usize, end: usize, st: &mut Columns) -> (f32, usize) {
     let rows = prep.query_frames;
     for j in from..=end {
-        let t = &target[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
-        st.cur_g[0] = frame_distance(prep.q(0), t, &prep.joints);
-        st.cur_s[0] = j;
-        for i in 1..rows {
-            let d = frame_distance(prep.q(i), t, &prep.joints);
-            let mut v = st.cur_g[i - 1] + d;
-            let mut s = st.cur_s[i - 1];
-            if j > from {
-                let dg = st.prev_g[i - 1] + 2.0 * d;
-                if dg < v {
-                    v = dg;
-                    s = st.prev_s[i - 1];
-                }
-                let h = st.prev_g[i] + d;
-                if h < v {
-                    v = h;
-                    s = st.prev_s[i];
-                }
-            }
-            st.cur_g[i] = v;
-            st.cur_s[i] = s;
-        }
+        st.column(prep, target, j, j > from);
         std::mem::swap(&mut st.prev_g, &mut st.cur_g);
         std::mem::swap(&mut st.prev_s, &mut st.cur_s);
     }
