@@ -60,25 +60,17 @@ pub type RefMatch = (usize, usize, usize, f32);
 
 /// Spec §C from the text: g(i,j) = min{g(i−1,j)+d, g(i−1,j−1)+2d, g(i,j−1)+d} (first wins ties),
 /// g(1,j) = d(1,j), G carried along; score g/(I + span) with span in [ceil(I·lo), floor(I·hi)];
-/// best-first non-overlapping selection. Full matrices, nothing clever.
+/// candidates best first; each taken one's start re-chosen for its end by brute force (a DP
+/// from every admissible start on its own, the one with the least score wins, ties to the
+/// later start); kept if it overlaps no kept match; the kept ones sorted by their scores.
+/// Full matrices, nothing clever.
 pub fn reference_search(index: &FeatureIndex, query: &ClipFeatures, params: &SearchParams) -> Vec<RefMatch> {
     let q = &query.features(params.origin).data;
     let rows = q.len() / FRAME_FLOATS;
     let min_span = ((rows as f32 * params.min_span_ratio).ceil() as usize).max(1);
     let max_span = ((rows as f32 * params.max_span_ratio).floor() as usize).max(min_span);
     let threshold = params.threshold.unwrap_or(f32::INFINITY);
-    let d = |a: &[f32], b: &[f32]| -> f32 {
-        let mut s = 0.0f32;
-        for c in DISTANCE_ORDER {
-            let w = params.weights[c.index()];
-            if w > 0.0 {
-                let k = c.index() * 3;
-                let e = ((a[k] - b[k]).powi(2) + (a[k + 1] - b[k + 1]).powi(2) + (a[k + 2] - b[k + 2]).powi(2)).sqrt();
-                s += w * e;
-            }
-        }
-        s
-    };
+    let d = |a: &[f32], b: &[f32]| -> f32 { ref_distance(params, a, b) };
     let mut cands: Vec<RefMatch> = Vec::new();
     for (ci, clip) in index.clips.iter().enumerate() {
         let t = &clip.features(params.origin).data;
@@ -119,9 +111,64 @@ pub fn reference_search(index: &FeatureIndex, query: &ClipFeatures, params: &Sea
         if out.len() >= params.max_results {
             break;
         }
-        if out.iter().all(|o| o.0 != c.0 || c.2 < o.1 || c.1 > o.2) {
-            out.push(c);
+        let t = &index.clips[c.0].features(params.origin).data;
+        let m = best_start(params, q, t, c.0, c.2, min_span, max_span);
+        if out.iter().all(|o| o.0 != m.0 || m.2 < o.1 || m.1 > o.2) {
+            out.push(m);
         }
     }
+    out.sort_by(|a, b| a.3.total_cmp(&b.3).then(a.0.cmp(&b.0)).then(a.2.cmp(&b.2)));
     out
+}
+
+/// The frame distance of spec §C, summed in the core's joint order.
+pub fn ref_distance(params: &SearchParams, a: &[f32], b: &[f32]) -> f32 {
+    let mut s = 0.0f32;
+    for c in DISTANCE_ORDER {
+        let w = params.weights[c.index()];
+        if w > 0.0 {
+            let k = c.index() * 3;
+            let e = ((a[k] - b[k]).powi(2) + (a[k + 1] - b[k + 1]).powi(2) + (a[k + 2] - b[k + 2]).powi(2)).sqrt();
+            s += w * e;
+        }
+    }
+    s
+}
+
+/// For the match ending at `end`: the forward DP run from each admissible start `s` alone
+/// (row 0 entered only at column s), the start with the least `g / (I + span)`.
+fn best_start(params: &SearchParams, q: &[f32], t: &[f32], clip: usize, end: usize, min_span: usize, max_span: usize) -> RefMatch {
+    let rows = q.len() / FRAME_FLOATS;
+    let lo = (end + 1).saturating_sub(max_span);
+    let dm: Vec<Vec<f32>> = (0..rows)
+        .map(|i| (lo..=end).map(|j| ref_distance(params, &q[i * FRAME_FLOATS..(i + 1) * FRAME_FLOATS], &t[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS])).collect())
+        .collect();
+    let mut best: RefMatch = (clip, end, end, f32::INFINITY);
+    for s in (lo..=end).rev() {
+        let span = end + 1 - s;
+        if span < min_span || span > max_span {
+            continue;
+        }
+        let (c0, n) = (s - lo, end + 1 - s);
+        let mut g = vec![vec![f32::INFINITY; n]; rows];
+        for c in 0..n {
+            for i in 0..rows {
+                let dd = dm[i][c0 + c];
+                g[i][c] = if i == 0 {
+                    if c == 0 { dd } else { f32::INFINITY }
+                } else {
+                    let mut v = g[i - 1][c] + dd;
+                    if c > 0 {
+                        v = v.min(g[i - 1][c - 1] + 2.0 * dd).min(g[i][c - 1] + dd);
+                    }
+                    v
+                };
+            }
+        }
+        let score = g[rows - 1][n - 1] / (rows + span) as f32;
+        if score < best.3 {
+            best = (clip, s, end, score);
+        }
+    }
+    best
 }

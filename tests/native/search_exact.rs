@@ -47,7 +47,7 @@ fn warped_query(rng: &mut Rng, src: &[f32], start: usize, frames: usize) -> Vec<
     out
 }
 
-fn assert_same(what: &str, fast: &SearchOutcome, reference: &[common::RefMatch]) {
+fn assert_same(what: &str, fast: &SearchOutcome, reference: &[common::RefMatch], (query, index, params): (&ClipFeatures, &FeatureIndex, &SearchParams)) {
     let got: Vec<(usize, usize, usize)> = fast.matches.iter().map(|m| (m.clip_index, m.start_frame, m.end_frame)).collect();
     let want: Vec<(usize, usize, usize)> = reference.iter().map(|r| (r.0, r.1, r.2)).collect();
     assert_eq!(got, want, "{what}: matches differ");
@@ -61,6 +61,23 @@ fn assert_same(what: &str, fast: &SearchOutcome, reference: &[common::RefMatch])
         for w in m.path.windows(2) {
             let (di, dj) = (w[1][0] - w[0][0], w[1][1] - w[0][1]);
             assert!(di <= 1 && dj <= 1 && di + dj >= 1, "{what}: bad step {w:?}");
+        }
+        // The path's own cost (step weights 1/2/1) is the match's cost and distance.
+        {
+            let (q, t) = (&query.features(params.origin).data, &index.clips[m.clip_index].features(params.origin).data);
+            let d = |p: [u32; 2]| {
+                let (i, j) = (p[0] as usize, p[1] as usize);
+                common::ref_distance(params, &q[i * FRAME_FLOATS..(i + 1) * FRAME_FLOATS], &t[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS])
+            };
+            let mut cost = d(m.path[0]);
+            for w in m.path.windows(2) {
+                let diag = w[1][0] != w[0][0] && w[1][1] != w[0][1];
+                cost += if diag { 2.0 } else { 1.0 } * d(w[1]);
+            }
+            assert_eq!(last[0] as usize + 1, q.len() / FRAME_FLOATS, "{what}: path ends on the last query frame");
+            assert!((cost - m.cost).abs() <= 1e-4 * m.cost.max(1.0), "{what}: path cost {cost} vs match cost {}", m.cost);
+            let norm = cost / (q.len() / FRAME_FLOATS + m.length_frames) as f32;
+            assert!((norm - m.distance).abs() <= 1e-4 * m.distance.max(1.0), "{what}: path distance {norm} vs {}", m.distance);
         }
     }
 }
@@ -132,8 +149,8 @@ fn fast_equals_reference_on_random_motion() {
         let fast = search(&index, &query, &params, &mut no_progress()).unwrap();
         let plain = search_plain(&index, &query, &params, &mut no_progress()).unwrap();
         let what = format!("round {round} ({rows} frames, {params:?})");
-        assert_same(&format!("fast, {what}"), &fast, &reference);
-        assert_same(&format!("plain, {what}"), &plain, &reference);
+        assert_same(&format!("fast, {what}"), &fast, &reference, (&query, &index, &params));
+        assert_same(&format!("plain, {what}"), &plain, &reference, (&query, &index, &params));
         if round % 4 != 3 {
             assert!(!reference.is_empty(), "{what}: a query cut from the library should match");
         }

@@ -149,7 +149,9 @@ impl SearchIndex {
     /// `{ matches: [{ clipId, clipName, startFrame, endFrame, lengthFrames, startSecs, endSecs,
     /// distance, path }], skipped, stats }`, best first, non-overlapping. The distance is the
     /// DP cost divided by the path's total step weight (spec §C), and a match spans between
-    /// `minSpanRatio` (½) and `maxSpanRatio` (2) times the query's length.
+    /// `minSpanRatio` (½) and `maxSpanRatio` (2) times the query's length. Ends are found and
+    /// ranked by the DP of spec §C; each match then starts where its distance is least for its
+    /// end (the same recurrence run backwards), and `path` is that warping path.
     pub fn search(
         &self,
         #[wasm_bindgen(unchecked_param_type = "SearchQuery")] query: JsValue,

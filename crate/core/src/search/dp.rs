@@ -4,7 +4,7 @@
 use std::ops::ControlFlow;
 
 use super::features::{FeatureIndex, FRAME_FLOATS};
-use super::results::{finish, select, Candidate, SearchOutcome, SearchStats};
+use super::results::{finish, refine, select_matches, Candidate, SearchOutcome, SearchStats};
 use super::{frame_distance, Prepared, SearchError, SearchProgress};
 
 /// Columns between progress reports.
@@ -39,8 +39,8 @@ pub(crate) fn run(
         }
         done += cols;
     }
-    let selected = select(&mut pool, prep.max_results);
-    Ok(finish(index, prep, &selected, stats))
+    let selected = select_matches(&mut pool, prep.max_results, &mut |c| refine(prep, &index.clips[c.clip].features(prep.origin).data, c.clip, c.end));
+    Ok(finish(index, selected, stats))
 }
 
 /// Two DP columns (value and start pointer per query frame).

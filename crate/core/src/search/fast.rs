@@ -48,20 +48,22 @@
 //!
 //! *The k-th best bound:* τ starts at the threshold, or lower at a guess from probing the few
 //! places with the lowest bounds first (`probe`), and after each block of columns drops to
-//! the distance of the k-th match the best-first non-overlapping selection takes from the
-//! candidates found so far. τ only decreases, so every candidate with distance ≤ the final τ is
-//! found. The selection of a candidate depends only on better candidates, so if the candidates
-//! ≤ final τ already yield k checked matches, they are exactly the plain DP's first k. If not
-//! (a later, better candidate knocked earlier ones out by overlapping them, the guess was too
-//! low, or a candidate failed its check), the scan is repeated with τ fixed at the threshold,
-//! which is the plain DP's own rule. Float sums in the bounds get a
+//! the distance of the k-th candidate a best-first selection takes from the candidates found
+//! so far (by their forward spans: an estimate). τ only decreases, so every candidate with
+//! distance ≤ the final τ is found. The final selection of a candidate (checked, its start
+//! re-chosen, see `results::select_matches`) depends only on better candidates, so if the
+//! candidates ≤ final τ already yield k matches, they are exactly the plain DP's first k. If
+//! not (a later, better candidate knocked earlier ones out by overlapping them, re-chosen
+//! starts overlapped where forward spans did not, the guess was too low, or a candidate failed
+//! its check), the scan is repeated with τ fixed at the threshold, which is the plain DP's own
+//! rule. Float sums in the bounds get a
 //! relative margin of 1e-4 so rounding never prunes a reportable cell.
 
 use std::ops::ControlFlow;
 
 use super::features::{FeatureIndex, FRAME_FLOATS};
 use crate::humanoid::CANON_COUNT;
-use super::results::{finish, select, select_checked, Candidate, SearchOutcome, SearchStats};
+use super::results::{finish, refine, select, select_matches, Candidate, SearchOutcome, SearchStats};
 use super::{frame_distance_abandon, Prepared, SearchError, SearchProgress};
 
 /// Frames per precomputed target box.
@@ -87,20 +89,24 @@ pub(crate) fn run(
     stats.distances_computed += probed;
     let mut st = super::dp::Columns::new(prep.query_frames);
     let mut checked = 0u64;
-    let mut genuine = |c: &Candidate| {
+    let mut take = |c: &Candidate| {
         let (ok, cells) = is_genuine(index, prep, c, &mut st);
         checked += cells;
-        ok
+        if !ok {
+            return None;
+        }
+        checked += (prep.query_frames * prep.max_span.min(c.end + 1)) as u64;
+        refine(prep, &index.clips[c.clip].features(prep.origin).data, c.clip, c.end)
     };
-    let mut selected = select_checked(&mut pool, prep.max_results, &mut genuine);
+    let mut selected = select_matches(&mut pool, prep.max_results, &mut take);
     if selected.len() < prep.max_results && tau < prep.threshold {
         let (mut pool2, stats2, _) = scan(index, prep, &bounds, &all, f32::INFINITY, false, progress)?;
-        selected = select_checked(&mut pool2, prep.max_results, &mut genuine);
+        selected = select_matches(&mut pool2, prep.max_results, &mut take);
         stats.distances_computed += stats2.distances_computed;
         stats.rescanned = true;
     }
     stats.distances_computed += checked;
-    Ok(finish(index, prep, &selected, stats))
+    Ok(finish(index, selected, stats))
 }
 
 /// Whether the full DP's path ending at the candidate's end is the one the pruned scan found.

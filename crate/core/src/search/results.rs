@@ -1,6 +1,6 @@
-//! Search results: candidate match ends, the best-first non-overlapping selection, and the
-//! warping path of each selected match (recomputed on its span, so the scan itself keeps only
-//! two DP columns).
+//! Search results: candidate match ends, the best-first non-overlapping selection, and each
+//! selected match's start, distance and warping path, re-chosen for its end by a backward DP
+//! over its admissible spans (so the scan itself keeps only two DP columns).
 
 use std::cmp::Ordering;
 
@@ -26,9 +26,9 @@ fn order(a: &Candidate, b: &Candidate) -> Ordering {
     a.score.total_cmp(&b.score).then(a.clip.cmp(&b.clip)).then(a.end.cmp(&b.end))
 }
 
-/// Best first, skipping any candidate whose span overlaps one already taken in the same clip,
-/// up to `max_results`. A candidate's fate depends only on the better ones, so the selection
-/// among all candidates at or below some score is decided by those candidates alone.
+/// Best first, skipping any candidate whose forward span overlaps one already taken in the same
+/// clip, up to `max_results`: the cheap estimate of [`select_matches`] (which spans the
+/// re-chosen starts) that the fast search uses to lower its bound as it goes.
 pub(crate) fn select(pool: &mut [Candidate], max_results: usize) -> Vec<Candidate> {
     pool.sort_by(order);
     let mut taken: Vec<Candidate> = Vec::new();
@@ -43,19 +43,47 @@ pub(crate) fn select(pool: &mut [Candidate], max_results: usize) -> Vec<Candidat
     taken
 }
 
-/// [`select`], but a candidate that would be taken is first checked by `genuine` and dropped
-/// if it fails (the fast search's check that the full DP chose that very path).
-pub(crate) fn select_checked(pool: &mut [Candidate], max_results: usize, genuine: &mut dyn FnMut(&Candidate) -> bool) -> Vec<Candidate> {
+/// A selected match: the DP's candidate end, with the start, cost, distance and path that
+/// [`refine`] re-chose for that end.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Refined {
+    pub clip: usize,
+    pub start: usize,
+    pub end: usize,
+    /// Raw cost of the re-chosen path.
+    pub cost: f32,
+    /// `cost / (I + span)`.
+    pub score: f32,
+    pub path: Vec<[u32; 2]>,
+}
+
+/// The final selection. Candidates are taken best first by the forward DP's distance (the rule
+/// of spec §C); `take` turns a candidate into its match ([`refine`]; the fast search first
+/// checks the candidate is the full DP's own, and returns `None` if not), which is kept when
+/// its span overlaps no match already kept in the same clip, up to `max_results`. A
+/// candidate's fate depends only on the better candidates. The matches come back best first by
+/// their own (re-chosen) distance.
+pub(crate) fn select_matches(
+    pool: &mut [Candidate],
+    max_results: usize,
+    take: &mut dyn FnMut(&Candidate) -> Option<Refined>,
+) -> Vec<Refined> {
     pool.sort_by(order);
-    let mut taken: Vec<Candidate> = Vec::new();
+    let mut taken: Vec<Refined> = Vec::new();
     for c in pool.iter() {
         if taken.len() >= max_results {
             break;
         }
-        if taken.iter().all(|t| t.clip != c.clip || c.end < t.start || c.start > t.end) && genuine(c) {
-            taken.push(*c);
+        // A match always contains its end frame: an end inside a kept match cannot be kept.
+        if taken.iter().any(|t| t.clip == c.clip && c.end >= t.start && c.end <= t.end) {
+            continue;
+        }
+        let Some(m) = take(c) else { continue };
+        if taken.iter().all(|t| t.clip != m.clip || m.end < t.start || m.start > t.end) {
+            taken.push(m);
         }
     }
+    taken.sort_by(|a, b| a.score.total_cmp(&b.score).then(a.clip.cmp(&b.clip)).then(a.end.cmp(&b.end)));
     taken
 }
 
@@ -77,10 +105,10 @@ pub struct SearchMatch {
     pub start_secs: f32,
     /// `(endFrame + 1) / fps`.
     pub end_secs: f32,
-    /// Normalised distance: `g(I, end) / (I + lengthFrames)`, the weighted mean frame
+    /// Normalised distance: the path's cost `/ (I + lengthFrames)`, the weighted mean frame
     /// distance along the warping path (body heights × summed joint weights).
     pub distance: f32,
-    /// Raw accumulated DP cost `g(I, end)`.
+    /// Raw accumulated cost of the warping path (step weights 1/2/1).
     pub cost: f32,
     /// The warping path from (query frame 0, `startFrame`) to (last query frame, `endFrame`):
     /// `[queryFrame, libraryFrame]` pairs, both non-decreasing, each step moving one or both
@@ -114,80 +142,117 @@ pub struct SearchOutcome {
     pub stats: SearchStats,
 }
 
-/// Turns selected candidates into matches with their warping paths.
-pub(crate) fn finish(index: &FeatureIndex, prep: &Prepared, selected: &[Candidate], stats: SearchStats) -> SearchOutcome {
+/// Turns selected matches into the answer.
+pub(crate) fn finish(index: &FeatureIndex, selected: Vec<Refined>, stats: SearchStats) -> SearchOutcome {
     let matches = selected
-        .iter()
-        .map(|c| {
-            let clip = &index.clips[c.clip];
-            let target = &clip.features(prep.origin).data;
+        .into_iter()
+        .map(|m| {
+            let clip = &index.clips[m.clip];
             let fps = if clip.fps > 0.0 { clip.fps } else { 1.0 };
             SearchMatch {
-                clip_index: c.clip,
+                clip_index: m.clip,
                 clip_name: clip.name.clone(),
-                start_frame: c.start,
-                end_frame: c.end,
-                length_frames: c.end + 1 - c.start,
-                start_secs: c.start as f32 / fps,
-                end_secs: (c.end + 1) as f32 / fps,
-                distance: c.score,
-                cost: c.cost,
-                path: warping_path(prep, target, c.start, c.end),
+                start_frame: m.start,
+                end_frame: m.end,
+                length_frames: m.end + 1 - m.start,
+                start_secs: m.start as f32 / fps,
+                end_secs: (m.end + 1) as f32 / fps,
+                distance: m.score,
+                cost: m.cost,
+                path: m.path,
             }
         })
         .collect();
     SearchOutcome { matches, skipped: index.skipped.clone(), stats }
 }
 
-/// The DP path ending at (last query frame, `end`), recomputed on columns `start..=end` with a
-/// traceback table. It is the path the full scan chose: every cell on that path has all of its
-/// own best path inside these columns, so its value and its choice (same order of ties) are the
-/// same here, while other cells can only get dearer by losing columns before `start`.
-fn warping_path(prep: &Prepared, target: &[f32], start: usize, end: usize) -> Vec<[u32; 2]> {
+/// The start re-chosen for a match's end (see the module docs of `search`): the DP of spec §C
+/// run backwards from (last query frame, `end`) over the columns an admissible span can reach
+/// gives, for every start `s`, the least cost `c(s)` of a path from (0, `s`) to that end (the
+/// same paths and step weights as the forward DP, including its rule that row 0 is only ever
+/// entered as a new start); the start with the least normalised distance `c(s) / (I + span)`
+/// among the admissible spans is taken (ties to the later start), with its path.
+/// `None` only if no admissible start has a finite cost.
+pub(crate) fn refine(prep: &Prepared, target: &[f32], clip: usize, end: usize) -> Option<Refined> {
     let rows = prep.query_frames;
-    let cols = end + 1 - start;
-    // 0 = start, 1 = vertical, 2 = diagonal, 3 = horizontal.
+    let lo = (end + 1).saturating_sub(prep.max_span);
+    let cols = end + 1 - lo;
+    // step[i * cols + c]: 1 = down (i+1, j), 2 = diagonal (i+1, j+1), 3 = right (i, j+1), 0 = none.
     let mut step = vec![0u8; rows * cols];
-    let mut prev = vec![0f32; rows];
-    let mut cur = vec![0f32; rows];
-    for c in 0..cols {
-        let t = &target[(start + c) * FRAME_FLOATS..(start + c + 1) * FRAME_FLOATS];
-        cur[0] = frame_distance(prep.q(0), t, &prep.joints);
-        for i in 1..rows {
-            let d = frame_distance(prep.q(i), t, &prep.joints);
-            let mut v = cur[i - 1] + d;
-            let mut s = 1u8;
-            if c > 0 {
-                let dg = prev[i - 1] + 2.0 * d;
-                if dg < v {
-                    v = dg;
-                    s = 2;
+    let mut h_next = vec![f32::INFINITY; rows]; // column j + 1
+    let mut d_next = vec![0f32; rows];
+    let mut h = vec![f32::INFINITY; rows];
+    let mut d = vec![0f32; rows];
+    let mut c0 = vec![f32::INFINITY; cols]; // c(s) for s = lo + c
+    for c in (0..cols).rev() {
+        let j = lo + c;
+        let t = &target[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
+        for i in 0..rows {
+            d[i] = frame_distance(prep.q(i), t, &prep.joints);
+        }
+        for i in (0..rows).rev() {
+            if i == rows - 1 && c == cols - 1 {
+                h[i] = 0.0;
+                continue;
+            }
+            let mut best = f32::INFINITY;
+            let mut s = 0u8;
+            if i + 1 < rows {
+                let v = h[i + 1] + d[i + 1];
+                if v < best {
+                    best = v;
+                    s = 1;
                 }
-                let h = prev[i] + d;
-                if h < v {
-                    v = h;
+                if c + 1 < cols {
+                    let v = h_next[i + 1] + 2.0 * d_next[i + 1];
+                    if v < best {
+                        best = v;
+                        s = 2;
+                    }
+                }
+            }
+            if i > 0 && c + 1 < cols {
+                let v = h_next[i] + d_next[i];
+                if v < best {
+                    best = v;
                     s = 3;
                 }
             }
-            cur[i] = v;
+            h[i] = best;
             step[i * cols + c] = s;
         }
-        std::mem::swap(&mut prev, &mut cur);
+        c0[c] = d[0] + h[0];
+        std::mem::swap(&mut h, &mut h_next);
+        std::mem::swap(&mut d, &mut d_next);
     }
-    let (mut i, mut c) = (rows - 1, cols - 1);
-    let mut path = vec![[i as u32, (start + c) as u32]];
-    loop {
-        match step[i * cols + c] {
-            1 => i -= 1,
-            2 => {
-                i -= 1;
-                c -= 1;
-            }
-            3 => c -= 1,
-            _ => break,
+    let mut best = (f32::INFINITY, f32::INFINITY, end);
+    for c in (0..cols).rev() {
+        let span = cols - c;
+        if span < prep.min_span || span > prep.max_span || !c0[c].is_finite() {
+            continue;
         }
-        path.push([i as u32, (start + c) as u32]);
+        let score = c0[c] / (rows + span) as f32;
+        if score < best.0 {
+            best = (score, c0[c], lo + c);
+        }
     }
-    path.reverse();
-    path
+    let (score, cost, start) = best;
+    if !score.is_finite() {
+        return None;
+    }
+    let (mut i, mut c) = (0usize, start - lo);
+    let mut path = vec![[0u32, start as u32]];
+    while !(i == rows - 1 && c == cols - 1) {
+        match step[i * cols + c] {
+            1 => i += 1,
+            2 => {
+                i += 1;
+                c += 1;
+            }
+            3 => c += 1,
+            _ => unreachable!("every cell with a finite cost has a next step"),
+        }
+        path.push([i as u32, (lo + c) as u32]);
+    }
+    Some(Refined { clip, start, end, cost, score, path })
 }
