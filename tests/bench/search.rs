@@ -120,7 +120,12 @@ fn main() {
     runs.push(("mirrored query (no copy in library), whole body, top 1, no threshold".into(), with(BodyPreset::WholeBody, 1, None), &mirrored));
     runs.push(("mirrored query (no copy in library), whole body, top 10, no threshold".into(), with(BodyPreset::WholeBody, 10, None), &mirrored));
     runs.push(("mirrored query (no copy in library), whole body, top 10, threshold 0.05/joint".into(), with(BodyPreset::WholeBody, 10, Some(0.05)), &mirrored));
+    // ODORI_BENCH_ONLY=text runs only the cases whose name contains it (for profiling).
+    let only = std::env::var("ODORI_BENCH_ONLY").ok();
     for (name, params, query) in &runs {
+        if only.as_ref().is_some_and(|o| !name.contains(o.as_str())) {
+            continue;
+        }
         let query: &ClipFeatures = query;
         let t = Instant::now();
         let plain = search_plain(&index, &query, params, &mut no_progress()).expect("plain search");

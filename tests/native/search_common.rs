@@ -61,8 +61,9 @@ pub type RefMatch = (usize, usize, usize, f32);
 /// Spec §C from the text: g(i,j) = min{g(i−1,j)+d, g(i−1,j−1)+2d, g(i,j−1)+d} (first wins ties),
 /// g(1,j) = d(1,j), G carried along; score g/(I + span) with span in [ceil(I·lo), floor(I·hi)];
 /// candidates best first; each taken one's start re-chosen for its end by brute force (a DP
-/// from every admissible start on its own, the one with the least score wins, ties to the
-/// later start); kept if it overlaps no kept match; the kept ones sorted by their scores.
+/// from every admissible start up to its own on its own, the one with the least score wins,
+/// ties to the later start); kept if it overlaps no kept match; the kept ones sorted by their
+/// scores.
 /// Full matrices, nothing clever.
 pub fn reference_search(index: &FeatureIndex, query: &ClipFeatures, params: &SearchParams) -> Vec<RefMatch> {
     let q = &query.features(params.origin).data;
@@ -112,7 +113,7 @@ pub fn reference_search(index: &FeatureIndex, query: &ClipFeatures, params: &Sea
             break;
         }
         let t = &index.clips[c.0].features(params.origin).data;
-        let m = best_start(params, q, t, c.0, c.2, min_span, max_span);
+        let m = best_start(params, q, t, c, min_span, max_span);
         if out.iter().all(|o| o.0 != m.0 || m.2 < o.1 || m.1 > o.2) {
             out.push(m);
         }
@@ -121,23 +122,27 @@ pub fn reference_search(index: &FeatureIndex, query: &ClipFeatures, params: &Sea
     out
 }
 
-/// The frame distance of spec §C, summed in the core's joint order.
+/// The frame distance of spec §C, summed as the core sums it: joints in `DISTANCE_ORDER`,
+/// four at a time, each four as `(a + c) + (b + d)`, the fours in order.
 pub fn ref_distance(params: &SearchParams, a: &[f32], b: &[f32]) -> f32 {
     let mut s = 0.0f32;
-    for c in DISTANCE_ORDER {
-        let w = params.weights[c.index()];
-        if w > 0.0 {
+    for four in DISTANCE_ORDER.chunks(4) {
+        let mut r = [0f32; 4];
+        for (l, c) in four.iter().enumerate() {
+            let w = params.weights[c.index()];
             let k = c.index() * 3;
             let e = ((a[k] - b[k]).powi(2) + (a[k + 1] - b[k + 1]).powi(2) + (a[k + 2] - b[k + 2]).powi(2)).sqrt();
-            s += w * e;
+            r[l] = w * e;
         }
+        s += (r[0] + r[2]) + (r[1] + r[3]);
     }
     s
 }
 
-/// For the match ending at `end`: the forward DP run from each admissible start `s` alone
-/// (row 0 entered only at column s), the start with the least `g / (I + span)`.
-fn best_start(params: &SearchParams, q: &[f32], t: &[f32], clip: usize, end: usize, min_span: usize, max_span: usize) -> RefMatch {
+/// For candidate `(clip, start, end, _)`: the forward DP run from each admissible start
+/// `s ≤ start` alone (row 0 entered only at column s), the one with the least `g / (I + span)`.
+fn best_start(params: &SearchParams, q: &[f32], t: &[f32], cand: RefMatch, min_span: usize, max_span: usize) -> RefMatch {
+    let (clip, latest, end) = (cand.0, cand.1, cand.2);
     let rows = q.len() / FRAME_FLOATS;
     let lo = (end + 1).saturating_sub(max_span);
     let dm: Vec<Vec<f32>> = (0..rows)
@@ -146,7 +151,7 @@ fn best_start(params: &SearchParams, q: &[f32], t: &[f32], clip: usize, end: usi
     let mut best: RefMatch = (clip, end, end, f32::INFINITY);
     for s in (lo..=end).rev() {
         let span = end + 1 - s;
-        if span < min_span || span > max_span {
+        if span < min_span || span > max_span || s > latest {
             continue;
         }
         let (c0, n) = (s - lo, end + 1 - s);

@@ -3,9 +3,9 @@
 
 use std::ops::ControlFlow;
 
-use super::features::{FeatureIndex, FRAME_FLOATS};
+use super::features::FeatureIndex;
 use super::results::{finish, refine, select_matches, Candidate, SearchOutcome, SearchStats};
-use super::{frame_distance, Prepared, SearchError, SearchProgress};
+use super::{Prepared, SearchError, SearchProgress, LANE_FLOATS};
 
 /// Columns between progress reports.
 pub(crate) const PROGRESS_COLUMNS: usize = 8192;
@@ -15,6 +15,18 @@ pub(crate) fn run(
     prep: &Prepared,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<SearchOutcome, SearchError> {
+    let (mut pool, stats) = candidates(index, prep, progress)?;
+    let selected = select_matches(&mut pool, prep.max_results, &mut |c| refine(prep, index.clips[c.clip].lanes(prep.origin), c));
+    Ok(finish(index, selected, stats))
+}
+
+/// Every candidate end of every clip (admissible span, distance within the threshold): all
+/// cells computed.
+pub(crate) fn candidates(
+    index: &FeatureIndex,
+    prep: &Prepared,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<(Vec<Candidate>, SearchStats), SearchError> {
     let total = index.total_frames();
     let mut done = 0usize;
     let mut pool = Vec::new();
@@ -22,8 +34,8 @@ pub(crate) fn run(
     let mut cols_state = Columns::new(rows);
     let mut stats = SearchStats { frames_searched: total, cells_total: (total as u64) * rows as u64, ..Default::default() };
     for (ci, clip) in index.clips.iter().enumerate() {
-        let target = &clip.features(prep.origin).data;
-        let cols = target.len() / FRAME_FLOATS;
+        let target = clip.lanes(prep.origin);
+        let cols = target.len() / LANE_FLOATS;
         if cols < prep.min_span {
             done += cols;
             continue;
@@ -39,8 +51,7 @@ pub(crate) fn run(
         }
         done += cols;
     }
-    let selected = select_matches(&mut pool, prep.max_results, &mut |c| refine(prep, &index.clips[c.clip].features(prep.origin).data, c.clip, c.end));
-    Ok(finish(index, selected, stats))
+    Ok((pool, stats))
 }
 
 /// Two DP columns (value and start pointer per query frame).
@@ -61,11 +72,11 @@ impl Columns {
     /// Without `has_prev`, `j` is a first column: only vertical steps.
     #[inline]
     fn column(&mut self, prep: &Prepared, target: &[f32], j: usize, has_prev: bool) {
-        let t = &target[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
-        self.cur_g[0] = frame_distance(prep.q(0), t, &prep.joints);
+        let t = &target[j * LANE_FLOATS..(j + 1) * LANE_FLOATS];
+        self.cur_g[0] = prep.d(0, t);
         self.cur_s[0] = j;
         for i in 1..prep.query_frames {
-            let d = frame_distance(prep.q(i), t, &prep.joints);
+            let d = prep.d(i, t);
             let mut v = self.cur_g[i - 1] + d;
             let mut s = self.cur_s[i - 1];
             if has_prev {

@@ -41,8 +41,9 @@
 //! from below; `r_i = Σ_k w_k dist(query_k(i), box of target joint k over the columns the block's
 //! paths can reach)` bounds row i from below. Both need only boxes, never a frame pair.
 //!
-//! *Early abandoning:* a cell's frame distance is summed joint by joint (in the same order as
-//! the plain DP, so a completed sum is bit-for-bit the same) and abandoned once it exceeds the
+//! *Early abandoning:* a cell's frame distance is summed four joints at a time (in the same
+//! order as the plain DP, so a completed sum is bit-for-bit the same) and abandoned once it
+//! exceeds the
 //! largest value any incoming edge could survive with (LB_Kim-like: the partial sum of a few
 //! joints is itself a lower bound of the distance).
 //!
@@ -55,16 +56,19 @@
 //! candidates ≤ final τ already yield k matches, they are exactly the plain DP's first k. If
 //! not (a later, better candidate knocked earlier ones out by overlapping them, re-chosen
 //! starts overlapped where forward spans did not, the guess was too low, or a candidate failed
-//! its check), the scan is repeated with τ fixed at the threshold, which is the plain DP's own
-//! rule. Float sums in the bounds get a
-//! relative margin of 1e-4 so rounding never prunes a reportable cell.
+//! its check), the scan is repeated with τ fixed a quarter higher, which finds every candidate
+//! up to that bound and is judged the same way; failing that, with τ fixed at the threshold,
+//! the plain DP's own rule (with no threshold, the plain DP's scan itself). And where pruning
+//! does not pay (after an eighth of the library more than 90 % of the cells were computed), the
+//! search switches to the plain DP, whose answer is the definition. Float sums in the
+//! bounds get a relative margin of 1e-4 so rounding never prunes a reportable cell.
 
 use std::ops::ControlFlow;
 
-use super::features::{FeatureIndex, FRAME_FLOATS};
-use crate::humanoid::CANON_COUNT;
+use super::features::FeatureIndex;
+use super::lanes::{box_box, point_box, push_box, BOX_FLOATS};
 use super::results::{finish, refine, select, select_matches, Candidate, SearchOutcome, SearchStats};
-use super::{frame_distance_abandon, Prepared, SearchError, SearchProgress};
+use super::{Prepared, SearchError, SearchProgress, LANE_FLOATS};
 
 /// Frames per precomputed target box.
 const CHUNK: usize = super::features::BOX_CHUNK_FRAMES;
@@ -85,7 +89,14 @@ pub(crate) fn run(
     let (seed, probed) = if prep.max_results > PROBE_MAX_RESULTS { (f32::INFINITY, 0) } else { probe(index, prep, &bounds) };
     let all: Vec<(usize, usize, usize)> =
         index.clips.iter().enumerate().map(|(ci, c)| (ci, 0, c.frame_count())).filter(|s| s.2 >= prep.min_span).collect();
-    let (mut pool, mut stats, tau) = scan(index, prep, &bounds, &all, seed, true, progress)?;
+    let (mut pool, mut stats, tau, gave_up) = scan(index, prep, &bounds, &all, seed, true, true, progress)?;
+    if gave_up {
+        let (mut pool, plain) = super::dp::candidates(index, prep, progress)?;
+        stats.distances_computed += probed + plain.distances_computed;
+        stats.rescanned = true;
+        let selected = select_matches(&mut pool, prep.max_results, &mut |c| refine(prep, index.clips[c.clip].lanes(prep.origin), c));
+        return Ok(finish(index, selected, stats));
+    }
     stats.distances_computed += probed;
     let mut st = super::dp::Columns::new(prep.query_frames);
     let mut checked = 0u64;
@@ -96,14 +107,26 @@ pub(crate) fn run(
             return None;
         }
         checked += (prep.query_frames * prep.max_span.min(c.end + 1)) as u64;
-        refine(prep, &index.clips[c.clip].features(prep.origin).data, c.clip, c.end)
+        refine(prep, index.clips[c.clip].lanes(prep.origin), c)
     };
     let mut selected = select_matches(&mut pool, prep.max_results, &mut take);
-    if selected.len() < prep.max_results && tau < prep.threshold {
-        let (mut pool2, stats2, _) = scan(index, prep, &bounds, &all, f32::INFINITY, false, progress)?;
-        selected = select_matches(&mut pool2, prep.max_results, &mut take);
-        stats.distances_computed += stats2.distances_computed;
+    // Too few matches at or below τ (see the module docs): scan again with a fixed, higher
+    // bound — first a quarter above τ, then the threshold itself (the plain DP's own rule).
+    // Without a threshold that last scan prunes nothing, so it is the plain DP's scan, whose
+    // candidates need no check.
+    let mut bound = tau;
+    while selected.len() < prep.max_results && bound < prep.threshold {
+        bound = if stats.rescanned { prep.threshold } else { (bound * 1.25).min(prep.threshold) };
         stats.rescanned = true;
+        if bound.is_finite() {
+            let (mut pool2, stats2, _, _) = scan(index, prep, &bounds, &all, bound, false, false, progress)?;
+            stats.distances_computed += stats2.distances_computed;
+            selected = select_matches(&mut pool2, prep.max_results, &mut take);
+        } else {
+            let (mut pool2, stats2) = super::dp::candidates(index, prep, progress)?;
+            stats.distances_computed += stats2.distances_computed;
+            selected = select_matches(&mut pool2, prep.max_results, &mut |c| refine(prep, index.clips[c.clip].lanes(prep.origin), c));
+        }
     }
     stats.distances_computed += checked;
     Ok(finish(index, selected, stats))
@@ -127,18 +150,13 @@ pub(crate) fn run(
 /// cells computed.
 fn is_genuine(index: &FeatureIndex, prep: &Prepared, c: &Candidate, st: &mut super::dp::Columns) -> (bool, u64) {
     let clip = &index.clips[c.clip];
-    let target = &clip.features(prep.origin).data;
+    let target = clip.lanes(prep.origin);
     let all_boxes = clip.chunk_boxes(prep.origin);
     // Column bound of a chunk: the nearest query frame to the chunk's joint boxes (tighter than
     // the scan's chunk-to-chunk bound, and computed only for the chunks a check walks over).
-    let mut tbox = Vec::with_capacity(prep.joints.len() * 6);
-    let mut chunk_bound = |t: usize| -> f32 {
-        let Some(ch) = all_boxes.get(t * CANON_COUNT * 6..(t + 1) * CANON_COUNT * 6) else { return 0.0 };
-        tbox.clear();
-        for &(k, _) in &prep.joints {
-            tbox.extend_from_slice(&ch[k * 2..k * 2 + 6]);
-        }
-        (0..prep.query_frames).map(|i| box_bound(prep.q(i), &tbox, &prep.joints)).fold(f32::INFINITY, f32::min)
+    let chunk_bound = |t: usize| -> f32 {
+        let Some(ch) = all_boxes.get(t * BOX_FLOATS..(t + 1) * BOX_FLOATS) else { return 0.0 };
+        (0..prep.query_frames).map(|i| point_box(prep.ql(i), ch, &prep.groups)).fold(f32::INFINITY, f32::min)
     };
     let mut cells = 0u64;
     // Margin: a lower-bound sum must clear the cost despite rounding.
@@ -180,57 +198,6 @@ fn is_genuine(index: &FeatureIndex, prep: &Prepared, c: &Candidate, st: &mut sup
     (g == c.cost && start == c.start, cells)
 }
 
-/// `Σ_k w_k dist(frame_k, box_k)`: a lower bound of the frame distance to any frame whose
-/// joints all lie in their boxes.
-#[inline]
-fn box_bound(frame: &[f32], bx: &[f32], joints: &[(usize, f32)]) -> f32 {
-    let mut s = 0.0f32;
-    for (b, &(k, w)) in bx.chunks_exact(6).zip(joints) {
-        let mut e = 0.0f32;
-        for a in 0..3 {
-            let x = frame[k + a];
-            let o = (b[a] - x).max(x - b[3 + a]).max(0.0);
-            e += o * o;
-        }
-        s += w * e.sqrt();
-    }
-    s
-}
-
-/// Bounding box (min xyz, max xyz) of each weighted joint over frames, `joints.len() * 6`.
-fn boxes(data: &[f32], joints: &[(usize, f32)], out: &mut Vec<f32>) {
-    out.clear();
-    out.resize(joints.len() * 6, 0.0);
-    for b in out.chunks_exact_mut(6) {
-        b[..3].fill(f32::INFINITY);
-        b[3..].fill(f32::NEG_INFINITY);
-    }
-    for f in data.chunks_exact(FRAME_FLOATS) {
-        for (b, &(k, _)) in out.chunks_exact_mut(6).zip(joints) {
-            for a in 0..3 {
-                b[a] = b[a].min(f[k + a]);
-                b[3 + a] = b[3 + a].max(f[k + a]);
-            }
-        }
-    }
-}
-
-/// `Σ_k w_k dist(box a_k, box b_k)`: a lower bound of the frame distance between any frame
-/// inside boxes `a` and any frame inside boxes `b`.
-#[inline]
-fn box_box(a: &[f32], b: &[f32], joints: &[(usize, f32)]) -> f32 {
-    let mut s = 0.0f32;
-    for ((x, y), &(_, w)) in a.chunks_exact(6).zip(b.chunks_exact(6)).zip(joints) {
-        let mut e = 0.0f32;
-        for k in 0..3 {
-            let o = (x[k] - y[3 + k]).max(y[k] - x[3 + k]).max(0.0);
-            e += o * o;
-        }
-        s += w * e.sqrt();
-    }
-    s
-}
-
 /// Lower-bound tables of one clip: `dist[t * nq + q]` is the box-to-box bound between target
 /// chunk t and query chunk q; `lbc[t]` the column bound of every column of chunk t (its
 /// nearest query chunk).
@@ -260,13 +227,10 @@ struct Bounds {
 
 impl Bounds {
     fn new(index: &FeatureIndex, prep: &Prepared) -> Bounds {
-        let joints = &prep.joints;
-        let nj = joints.len();
+        let groups = &prep.groups;
         let mut qboxes: Vec<f32> = Vec::new();
-        let mut tmp = Vec::new();
-        for ch in prep.query.chunks(QCHUNK * FRAME_FLOATS) {
-            boxes(ch, joints, &mut tmp);
-            qboxes.extend_from_slice(&tmp);
+        for ch in prep.query_lanes.chunks(QCHUNK * LANE_FLOATS) {
+            push_box(ch, &mut qboxes);
         }
         let nq = prep.query_frames.div_ceil(QCHUNK);
         let clips = index
@@ -274,16 +238,12 @@ impl Bounds {
             .iter()
             .map(|clip| {
                 let all = clip.chunk_boxes(prep.origin);
-                let mut dist = Vec::new();
-                let mut lbc = Vec::new();
-                for ch in all.chunks_exact(CANON_COUNT * 6) {
-                    tmp.clear();
-                    for &(k, _) in joints {
-                        tmp.extend_from_slice(&ch[k * 2..k * 2 + 6]);
-                    }
+                let mut dist = Vec::with_capacity(all.len() / BOX_FLOATS * nq);
+                let mut lbc = Vec::with_capacity(all.len() / BOX_FLOATS);
+                for ch in all.chunks_exact(BOX_FLOATS) {
                     let mut best = f32::INFINITY;
-                    for q in qboxes.chunks_exact(nj * 6) {
-                        let d = box_box(q, &tmp, joints);
+                    for q in qboxes.chunks_exact(BOX_FLOATS) {
+                        let d = box_box(q, ch, groups);
                         dist.push(d);
                         best = best.min(d);
                     }
@@ -336,14 +296,20 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
         segments.push((ci, b0.saturating_sub(q / 2), (b0 + BLOCK + 2 * q).min(cols)));
     }
     // The fast scan itself, on those places only, lowering its bound as it goes.
-    let Ok((mut pool, stats, _)) = scan(index, prep, bounds, &segments, f32::INFINITY, true, &mut |_| ControlFlow::Continue(())) else {
+    let Ok((mut pool, stats, _, _)) = scan(index, prep, bounds, &segments, f32::INFINITY, true, false, &mut |_| ControlFlow::Continue(())) else {
         return (f32::INFINITY, 0);
     };
     let sel = select(&mut pool, k);
     (sel.get(k - 1).map_or(f32::INFINITY, |c| c.score), stats.distances_computed)
 }
 
-type ScanResult = (Vec<Candidate>, SearchStats, f32);
+/// (candidates, work, final τ, whether the scan gave up because pruning did not pay).
+type ScanResult = (Vec<Candidate>, SearchStats, f32, bool);
+
+/// A scan allowed to give up does so once it has covered an eighth of the library and computed
+/// more than this share of those cells: pruning is not paying for its bookkeeping, and the
+/// plain DP's tighter loop is faster.
+const GIVE_UP_SHARE: f64 = 0.9;
 
 fn scan(
     index: &FeatureIndex,
@@ -352,10 +318,10 @@ fn scan(
     segments: &[(usize, usize, usize)],
     seed: f32,
     lower: bool,
+    may_give_up: bool,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<ScanResult, SearchError> {
     let rows = prep.query_frames;
-    let joints = &prep.joints;
     let total: usize = segments.iter().map(|s| s.2 - s.1).sum();
     let mut stats = SearchStats { frames_searched: total, cells_total: total as u64 * rows as u64, ..Default::default() };
     let nq = bounds.nq;
@@ -373,8 +339,8 @@ fn scan(
     let mut fneg: Vec<f32> = Vec::new();
 
     for &(ci, from, to) in segments {
-        let target = &index.clips[ci].features(prep.origin).data;
-        let cols = target.len() / FRAME_FLOATS;
+        let target = index.clips[ci].lanes(prep.origin);
+        let cols = target.len() / LANE_FLOATS;
         let cb = &bounds.clips[ci];
         let (mut plo, mut phi) = (NONE, NONE);
         for b0 in (from..to).step_by(BLOCK) {
@@ -406,7 +372,7 @@ fn scan(
                 }
             }
             for j in b0..b1 {
-                let t = &target[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
+                let t = &target[j * LANE_FLOATS..(j + 1) * LANE_FLOATS];
                 // F(j) = Σ_{j < j'' < j + maxSpan} min(0, c_j'' − τ) (≤ 0).
                 let f_j = if prune {
                     let hi = (j + prep.max_span - 1).min(cols - 1);
@@ -420,7 +386,7 @@ fn scan(
                     let dmax = if prune { tp * (rows + 1) as f32 - rrest[0] - f_j } else { f32::INFINITY };
                     if dmax >= 0.0 {
                         stats.distances_computed += 1;
-                        let d = frame_distance_abandon(prep.q(0), t, joints, dmax);
+                        let d = prep.d_abandon(0, t, dmax);
                         if d <= dmax {
                             cg[0] = d;
                             cs[0] = j;
@@ -470,7 +436,7 @@ fn scan(
                     let mut live = false;
                     if n > 0 && dmax >= 0.0 {
                         stats.distances_computed += 1;
-                        let d = frame_distance_abandon(prep.q(i), t, joints, dmax);
+                        let d = prep.d_abandon(i, t, dmax);
                         if d <= dmax {
                             let mut best = f32::INFINITY;
                             let mut start = 0;
@@ -524,9 +490,13 @@ fn scan(
                 }
                 pool_seen = pool.len();
             }
+            let covered = done + b1 - from;
+            if may_give_up && covered * 8 >= total && stats.distances_computed as f64 > GIVE_UP_SHARE * (covered * rows) as f64 {
+                return Ok((pool, stats, tau, true));
+            }
         }
         done += to - from;
     }
     pool.retain(|c| c.score <= tau);
-    Ok((pool, stats, tau))
+    Ok((pool, stats, tau, false))
 }

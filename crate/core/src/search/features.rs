@@ -102,8 +102,11 @@ pub struct ClipFeatures {
     hips: MotionFeatures,
     shoulders: OnceLock<MotionFeatures>,
     /// Per origin (hips, shoulders): bounding boxes of every joint over each run of
-    /// [`BOX_CHUNK_FRAMES`] frames, `[min x, min y, min z, max x, max y, max z]` per joint.
+    /// [`BOX_CHUNK_FRAMES`] frames, in the lane layout.
     boxes: [OnceLock<Vec<f32>>; 2],
+    /// Per origin: the frames in the distance's lane layout (see `search::lanes`), built on
+    /// first use.
+    lanes: [OnceLock<Vec<f32>>; 2],
 }
 
 /// Frames per precomputed joint bounding box (used by the fast search's lower bounds).
@@ -121,7 +124,13 @@ impl Clone for ClipFeatures {
                 let _ = dst.set(b.clone());
             }
         }
-        ClipFeatures { name: self.name.clone(), fps: self.fps, hips: self.hips.clone(), shoulders, boxes }
+        let lanes = [OnceLock::new(), OnceLock::new()];
+        for (dst, src) in lanes.iter().zip(&self.lanes) {
+            if let Some(b) = src.get() {
+                let _ = dst.set(b.clone());
+            }
+        }
+        ClipFeatures { name: self.name.clone(), fps: self.fps, hips: self.hips.clone(), shoulders, boxes, lanes }
     }
 }
 
@@ -129,7 +138,14 @@ impl ClipFeatures {
     /// Wraps hip-origin features.
     pub fn new(name: impl Into<String>, fps: f32, hips: MotionFeatures) -> ClipFeatures {
         let hips = if hips.origin == Origin::Hips { hips } else { MotionFeatures { origin: Origin::Hips, data: hips.data } };
-        ClipFeatures { name: name.into(), fps, hips, shoulders: OnceLock::new(), boxes: [OnceLock::new(), OnceLock::new()] }
+        ClipFeatures {
+            name: name.into(),
+            fps,
+            hips,
+            shoulders: OnceLock::new(),
+            boxes: [OnceLock::new(), OnceLock::new()],
+            lanes: [OnceLock::new(), OnceLock::new()],
+        }
     }
 
     /// Features of a humanoid clip: canonical positions (missing joints filled from their
@@ -161,32 +177,24 @@ impl ClipFeatures {
         }
     }
 
-    /// Joint bounding boxes per [`BOX_CHUNK_FRAMES`] frames for an origin, built on first use:
-    /// chunk-major, `CANON_COUNT * 6` floats per chunk.
-    pub fn chunk_boxes(&self, origin: Origin) -> &[f32] {
+    /// The frames with the given origin in the frame distance's lane layout
+    /// (`super::lanes::LANE_FLOATS` per frame), built on first use.
+    pub(crate) fn lanes(&self, origin: Origin) -> &[f32] {
+        let slot = match origin {
+            Origin::Hips => &self.lanes[0],
+            Origin::Shoulders => &self.lanes[1],
+        };
+        slot.get_or_init(|| super::lanes::to_lanes(&self.features(origin).data))
+    }
+
+    /// Joint bounding boxes per [`BOX_CHUNK_FRAMES`] frames for an origin, in the lane layout
+    /// (`super::lanes::BOX_FLOATS` per chunk), built on first use.
+    pub(crate) fn chunk_boxes(&self, origin: Origin) -> &[f32] {
         let slot = match origin {
             Origin::Hips => &self.boxes[0],
             Origin::Shoulders => &self.boxes[1],
         };
-        slot.get_or_init(|| {
-            let data = &self.features(origin).data;
-            let mut out = Vec::with_capacity(data.len().div_ceil(BOX_CHUNK_FRAMES * FRAME_FLOATS) * CANON_COUNT * 6);
-            for chunk in data.chunks(BOX_CHUNK_FRAMES * FRAME_FLOATS) {
-                let base = out.len();
-                for _ in 0..CANON_COUNT {
-                    out.extend_from_slice(&[f32::INFINITY, f32::INFINITY, f32::INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY]);
-                }
-                for frame in chunk.chunks_exact(FRAME_FLOATS) {
-                    for (b, p) in out[base..].chunks_exact_mut(6).zip(frame.chunks_exact(3)) {
-                        for a in 0..3 {
-                            b[a] = b[a].min(p[a]);
-                            b[3 + a] = b[3 + a].max(p[a]);
-                        }
-                    }
-                }
-            }
-            out
-        })
+        slot.get_or_init(|| super::lanes::chunk_boxes(self.lanes(origin), BOX_CHUNK_FRAMES))
     }
 
     /// Frames `start_frame..end_frame` as a new motion (a query cut from a library clip keeps
@@ -353,18 +361,16 @@ mod tests {
 
     #[test]
     fn chunk_boxes_contain_every_frame_and_curves_read_back() {
+        use super::super::lanes::{point_box, weighted_groups, BOX_FLOATS, LANE_FLOATS};
         let clip = demo_clip();
         let map = HumanoidMap::from_skeleton(&clip.skeleton);
         let f = ClipFeatures::from_clip("demo", &clip, &map);
         let boxes = f.chunk_boxes(Origin::Hips);
-        let data = &f.features(Origin::Hips).data;
-        for (n, frame) in data.chunks_exact(FRAME_FLOATS).enumerate() {
-            let b = &boxes[(n / BOX_CHUNK_FRAMES) * CANON_COUNT * 6..];
-            for (j, p) in frame.chunks_exact(3).enumerate() {
-                for a in 0..3 {
-                    assert!(b[j * 6 + a] <= p[a] && p[a] <= b[j * 6 + 3 + a]);
-                }
-            }
+        let lanes = f.lanes(Origin::Hips);
+        assert_eq!(boxes.len(), f.frame_count().div_ceil(BOX_CHUNK_FRAMES) * BOX_FLOATS);
+        let groups = weighted_groups(&[1.0; CANON_COUNT]);
+        for (n, frame) in lanes.chunks_exact(LANE_FLOATS).enumerate() {
+            assert_eq!(point_box(frame, &boxes[(n / BOX_CHUNK_FRAMES) * BOX_FLOATS..], &groups), 0.0, "frame {n} outside its box");
         }
         let c = f.joint_curve(Canon::RightHand, Origin::Hips);
         assert_eq!(c.x.len(), f.frame_count());

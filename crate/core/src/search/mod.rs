@@ -19,8 +19,9 @@
 //! that opening onto a few frames and starts late (measured on real mocap: 0.3–0.9 s late in
 //! 8 of 50 warped queries). The same recurrence run backwards from the end gives the least cost
 //! `c(s)` of a path from every start `s` to that end; the match takes the start with the least
-//! distance `c(s) / (I + span)` among the admissible spans, and that path. Its distance is never
-//! above the candidate's (the forward path is one of those compared). The matches are listed
+//! distance `c(s) / (I + span)` among the admissible spans starting no later than the
+//! candidate (a later start can only be worse), and that path. So a match contains its
+//! candidate's span, and its distance is never above the candidate's. The matches are listed
 //! best first by these distances, and each carries its warping path.
 //!
 //! [`search`] is the fast exact search (lower bounds and early abandoning, see `fast.rs`);
@@ -30,6 +31,7 @@
 mod dp;
 mod fast;
 mod features;
+mod lanes;
 mod presets;
 mod results;
 
@@ -46,8 +48,9 @@ pub use presets::BodyPreset;
 pub use results::{SearchMatch, SearchOutcome, SearchStats};
 
 /// Order in which a frame distance sums its joints: extremities first, so that early
-/// abandoning (which stops summing once the partial sum is too large) stops soon. Both
-/// searches sum in this order, so their distances are bit-for-bit the same.
+/// abandoning (which stops summing once the partial sum is too large) stops soon. The joints
+/// are summed four at a time in this order (see `lanes.rs`), the same way in both searches, so
+/// their distances are bit-for-bit the same.
 pub const DISTANCE_ORDER: [Canon; CANON_COUNT] = {
     use Canon::*;
     [
@@ -170,23 +173,22 @@ pub struct SearchProgress {
 }
 
 /// The query and parameters reduced to what the DP loops read.
-pub(crate) struct Prepared<'a> {
-    /// Query features, `frames * FRAME_FLOATS`.
-    pub query: &'a [f32],
+pub(crate) struct Prepared {
     pub query_frames: usize,
-    /// (float offset in a frame, weight) of each joint with a non-zero weight, in
-    /// [`DISTANCE_ORDER`].
-    pub joints: Vec<(usize, f32)>,
     pub min_span: usize,
     pub max_span: usize,
     /// `threshold`, or +∞.
     pub threshold: f32,
     pub max_results: usize,
     pub origin: Origin,
+    /// The weighted joint groups of the lane layout.
+    pub groups: Vec<(usize, [f32; lanes::LANES])>,
+    /// Query frames in the lane layout.
+    pub query_lanes: Vec<f32>,
 }
 
-impl<'a> Prepared<'a> {
-    fn new(index: &FeatureIndex, query: &'a ClipFeatures, params: &SearchParams) -> Result<Prepared<'a>, SearchError> {
+impl Prepared {
+    fn new(index: &FeatureIndex, query: &ClipFeatures, params: &SearchParams) -> Result<Prepared, SearchError> {
         params.validate()?;
         let query_frames = query.frame_count();
         if query_frames == 0 {
@@ -199,16 +201,11 @@ impl<'a> Prepared<'a> {
         if query_frames > longest {
             return Err(SearchError::QueryTooLong { query_frames, longest_frames: longest });
         }
-        let joints = DISTANCE_ORDER
-            .iter()
-            .map(|c| (c.index() * 3, params.weights[c.index()]))
-            .filter(|(_, w)| *w > 0.0)
-            .collect();
         let (min_span, max_span) = params.span_bounds(query_frames);
         Ok(Prepared {
-            query: &query.features(params.origin).data,
+            groups: lanes::weighted_groups(&params.weights),
+            query_lanes: query.lanes(params.origin).to_vec(),
             query_frames,
-            joints,
             min_span,
             max_span,
             threshold: params.threshold.unwrap_or(f32::INFINITY),
@@ -217,39 +214,26 @@ impl<'a> Prepared<'a> {
         })
     }
 
-    /// Query frame `i`.
+    /// Query frame `i` in the lane layout.
     #[inline]
-    pub fn q(&self, i: usize) -> &[f32] {
-        &self.query[i * FRAME_FLOATS..(i + 1) * FRAME_FLOATS]
+    pub fn ql(&self, i: usize) -> &[f32] {
+        &self.query_lanes[i * LANE_FLOATS..(i + 1) * LANE_FLOATS]
+    }
+
+    /// Frame distance between query frame `i` and a lane-layout library frame.
+    #[inline]
+    pub fn d(&self, i: usize, t: &[f32]) -> f32 {
+        lanes::distance(self.ql(i), t, &self.groups)
+    }
+
+    /// [`Prepared::d`], abandoned once above `limit` (see [`lanes::distance_abandon`]).
+    #[inline]
+    pub fn d_abandon(&self, i: usize, t: &[f32], limit: f32) -> f32 {
+        lanes::distance_abandon(self.ql(i), t, &self.groups, limit)
     }
 }
 
-/// Frame distance `Σ_k w_k ‖a_k − b_k‖` over the weighted joints, summed in their order.
-#[inline]
-pub(crate) fn frame_distance(a: &[f32], b: &[f32], joints: &[(usize, f32)]) -> f32 {
-    let mut s = 0.0f32;
-    for &(k, w) in joints {
-        let (dx, dy, dz) = (a[k] - b[k], a[k + 1] - b[k + 1], a[k + 2] - b[k + 2]);
-        s += w * (dx * dx + dy * dy + dz * dz).sqrt();
-    }
-    s
-}
-
-/// [`frame_distance`], abandoned as soon as the partial sum exceeds `limit` (then some value
-/// `> limit` is returned). When it is not abandoned the result is bit-for-bit
-/// [`frame_distance`]: the same operations in the same order.
-#[inline]
-pub(crate) fn frame_distance_abandon(a: &[f32], b: &[f32], joints: &[(usize, f32)], limit: f32) -> f32 {
-    let mut s = 0.0f32;
-    for &(k, w) in joints {
-        let (dx, dy, dz) = (a[k] - b[k], a[k + 1] - b[k + 1], a[k + 2] - b[k + 2]);
-        s += w * (dx * dx + dy * dy + dz * dz).sqrt();
-        if s > limit {
-            return s;
-        }
-    }
-    s
-}
+pub(crate) use lanes::LANE_FLOATS;
 
 /// The fast exact search over every clip of the library. `progress` is called between chunks
 /// of work; returning `ControlFlow::Break(())` cancels the search ([`SearchError::Cancelled`]).

@@ -6,8 +6,8 @@ use std::cmp::Ordering;
 
 use serde::{Deserialize, Serialize};
 
-use super::features::{FeatureIndex, SkippedClip, FRAME_FLOATS};
-use super::{frame_distance, Prepared};
+use super::features::{FeatureIndex, SkippedClip};
+use super::{Prepared, LANE_FLOATS};
 
 /// A match end found by the DP: the path ending at `end_frame` of clip `clip`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,11 +74,13 @@ pub(crate) fn select_matches(
         if taken.len() >= max_results {
             break;
         }
-        // A match always contains its end frame: an end inside a kept match cannot be kept.
-        if taken.iter().any(|t| t.clip == c.clip && c.end >= t.start && c.end <= t.end) {
+        // The re-chosen start is never after the candidate's own, so a candidate overlapping a
+        // kept match cannot be kept (and need not be checked or refined).
+        if taken.iter().any(|t| t.clip == c.clip && c.end >= t.start && c.start <= t.end) {
             continue;
         }
         let Some(m) = take(c) else { continue };
+        if std::env::var("ODORI_DEBUG").is_ok() { eprintln!("refined {:?} -> {}..={} {}", c, m.start, m.end, m.score); }
         if taken.iter().all(|t| t.clip != m.clip || m.end < t.start || m.start > t.end) {
             taken.push(m);
         }
@@ -166,14 +168,18 @@ pub(crate) fn finish(index: &FeatureIndex, selected: Vec<Refined>, stats: Search
     SearchOutcome { matches, skipped: index.skipped.clone(), stats }
 }
 
-/// The start re-chosen for a match's end (see the module docs of `search`): the DP of spec §C
-/// run backwards from (last query frame, `end`) over the columns an admissible span can reach
-/// gives, for every start `s`, the least cost `c(s)` of a path from (0, `s`) to that end (the
-/// same paths and step weights as the forward DP, including its rule that row 0 is only ever
-/// entered as a new start); the start with the least normalised distance `c(s) / (I + span)`
-/// among the admissible spans is taken (ties to the later start), with its path.
-/// `None` only if no admissible start has a finite cost.
-pub(crate) fn refine(prep: &Prepared, target: &[f32], clip: usize, end: usize) -> Option<Refined> {
+/// The start re-chosen for the end of candidate `c` (see the module docs of `search`): the DP
+/// of spec §C run backwards from (last query frame, `c.end`) over the columns an admissible
+/// span can reach gives, for every start `s`, the least cost `c(s)` of a path from (0, `s`) to
+/// that end (the same paths and step weights as the forward DP, including its rule that row 0
+/// is only ever entered as a new start); the start with the least normalised distance
+/// `c(s) / (I + span)` among the admissible spans is taken (ties to the later start), with its
+/// path. Only starts up to the candidate's own are compared: a later start costs at least the
+/// forward DP's least cost `g(I, end)` over a shorter span, so its distance is always larger;
+/// leaving them out makes that hold despite rounding, so a match always contains its
+/// candidate's span. `None` only if no admissible start has a finite cost.
+pub(crate) fn refine(prep: &Prepared, target: &[f32], cand: &Candidate) -> Option<Refined> {
+    let (clip, end) = (cand.clip, cand.end);
     let rows = prep.query_frames;
     let lo = (end + 1).saturating_sub(prep.max_span);
     let cols = end + 1 - lo;
@@ -186,9 +192,9 @@ pub(crate) fn refine(prep: &Prepared, target: &[f32], clip: usize, end: usize) -
     let mut c0 = vec![f32::INFINITY; cols]; // c(s) for s = lo + c
     for c in (0..cols).rev() {
         let j = lo + c;
-        let t = &target[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
-        for i in 0..rows {
-            d[i] = frame_distance(prep.q(i), t, &prep.joints);
+        let t = &target[j * LANE_FLOATS..(j + 1) * LANE_FLOATS];
+        for (i, di) in d.iter_mut().enumerate() {
+            *di = prep.d(i, t);
         }
         for i in (0..rows).rev() {
             if i == rows - 1 && c == cols - 1 {
@@ -225,10 +231,11 @@ pub(crate) fn refine(prep: &Prepared, target: &[f32], clip: usize, end: usize) -
         std::mem::swap(&mut h, &mut h_next);
         std::mem::swap(&mut d, &mut d_next);
     }
+    let latest = cand.start;
     let mut best = (f32::INFINITY, f32::INFINITY, end);
     for c in (0..cols).rev() {
         let span = cols - c;
-        if span < prep.min_span || span > prep.max_span || !c0[c].is_finite() {
+        if span < prep.min_span || span > prep.max_span || lo + c > latest || !c0[c].is_finite() {
             continue;
         }
         let score = c0[c] / (rows + span) as f32;
