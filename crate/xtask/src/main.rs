@@ -39,6 +39,9 @@ struct PackageSettings {
 struct ToolchainSettings {
     wasm_bindgen: String,
     target: String,
+    /// Extra rustc flags for the wasm target only (not for build scripts on the host).
+    #[serde(default)]
+    rustflags: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -119,6 +122,10 @@ fn build_web(dev: bool) {
         fail("no Rust toolchain with a wasm32 std: run ./dev setup (installs rustc-web, cargo-web, rust-web-src, lld-19)");
     }
     cargo.current_dir(&root).args(["build", "--target", target, "-p", &settings.package.krate, "--profile", &profile.cargo_profile]);
+    if !settings.toolchain.rustflags.is_empty() {
+        let var = format!("CARGO_TARGET_{}_RUSTFLAGS", target.to_uppercase().replace(['-', '.'], "_"));
+        cargo.env(var, settings.toolchain.rustflags.join(" "));
+    }
     run(&mut cargo);
     let dir_name = if profile.cargo_profile == "dev" { "debug" } else { &profile.cargo_profile };
     let wasm_in = root.join("target").join(target).join(dir_name).join(format!("{}.wasm", cdylib_name(&root, &settings.package.krate)));
