@@ -12,6 +12,7 @@ pub mod grid;
 pub mod render;
 pub mod retarget;
 pub mod segment;
+pub mod table;
 
 pub use document::{BarState, BarView, ChoreoError, Choreography, GenerateReport, Settings};
 pub use eigen::Signature;
@@ -19,4 +20,5 @@ pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, CANDIDATES_PER_
 pub use fill::{fill, fill_with_stats, path_cost, FillError, FillStats, FillWeights, Layer, TransitionTable};
 pub use grid::{bars_from_tempo, GridError};
 pub use render::{render, segment_clip, speed_jumps, RenderOptions};
+pub use table::{TableBuilder, TableProgress};
 pub use segment::{ClipSummary, LibraryClip, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};

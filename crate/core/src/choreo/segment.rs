@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::eigen::Signature;
-use super::fill::TransitionTable;
+use super::table::{TableBuilder, TransitionTable};
 use super::retarget::to_canonical;
 use crate::clip::Clip;
 use crate::humanoid::{canonical_positions, Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
@@ -124,6 +124,10 @@ pub struct Segment {
     pub intensity01: f32,
     /// The built-in move, for built-in segments.
     pub builtin: Option<MoveInfo>,
+    /// Kept only for the bars that already hold it (an older cut of a clip the person re-cut
+    /// at a stated tempo): never offered as a candidate nor chosen to fill an open bar.
+    #[serde(default)]
+    pub retired: bool,
 }
 
 impl Segment {
@@ -165,6 +169,8 @@ pub struct SegmentLibrary {
     /// (itself included). Following one with an overlapping one repeats the same motion.
     pub(crate) overlaps: Vec<Vec<usize>>,
     table: Mutex<Option<Arc<TransitionTable>>>,
+    /// Bumped by every change of the segments, so a table built elsewhere can be checked.
+    revision: u64,
 }
 
 impl SegmentLibrary {
@@ -290,6 +296,7 @@ impl SegmentLibrary {
                     intensity,
                     intensity01: 0.0,
                     builtin: lc.builtin,
+                    retired: false,
                 });
             }
             k += hop;
@@ -306,10 +313,47 @@ impl SegmentLibrary {
             self.overlaps.push(ov);
         }
         self.clips.push(lc);
+        self.changed();
+        self.segments.len() - first_new
+    }
+
+    /// Drops the cached table and bumps the revision.
+    fn changed(&mut self) {
+        self.revision += 1;
         if let Ok(mut t) = self.table.lock() {
             *t = None;
         }
-        self.segments.len() - first_new
+    }
+
+    /// Changes with every change of the segments.
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// A builder of this library's transition table, to run in slices (see
+    /// [`TableBuilder`]); hand its result to [`SegmentLibrary::install_table`].
+    pub fn table_builder(&self, repeat_penalty: f32) -> TableBuilder {
+        TableBuilder::new(self, repeat_penalty)
+    }
+
+    /// Caches a table built by [`SegmentLibrary::table_builder`]; refused (`false`) when the
+    /// library changed since.
+    pub fn install_table(&self, table: TransitionTable) -> bool {
+        if table.revision() != self.revision || table.len() != self.len() {
+            return false;
+        }
+        let mut guard = match self.table.lock() {
+            Ok(g) => g,
+            Err(poisoned) => poisoned.into_inner(),
+        };
+        *guard = Some(Arc::new(table));
+        true
+    }
+
+    /// The cached table, when there is one for this repetition penalty.
+    pub fn cached_table(&self, repeat_penalty: f32) -> Option<Arc<TransitionTable>> {
+        let guard = self.table.lock().ok()?;
+        guard.as_ref().filter(|t| t.repeat_penalty() == repeat_penalty).cloned()
     }
 
     /// Rescales every segment's intensity to the library's range.
