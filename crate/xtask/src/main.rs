@@ -39,6 +39,9 @@ struct PackageSettings {
 struct ToolchainSettings {
     wasm_bindgen: String,
     target: String,
+    /// RUSTFLAGS of the wasm build (e.g. `-C target-feature=+simd128`).
+    #[serde(default)]
+    rustflags: String,
 }
 
 #[derive(Deserialize)]
@@ -117,6 +120,9 @@ fn build_web(dev: bool) {
             .env("CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_LINKER", "wasm-ld-19");
     } else {
         fail("no Rust toolchain with a wasm32 std: run ./dev setup (installs rustc-web, cargo-web, rust-web-src, lld-19)");
+    }
+    if !settings.toolchain.rustflags.is_empty() {
+        cargo.env("RUSTFLAGS", &settings.toolchain.rustflags);
     }
     cargo.current_dir(&root).args(["build", "--target", target, "-p", &settings.package.krate, "--profile", &profile.cargo_profile]);
     run(&mut cargo);
