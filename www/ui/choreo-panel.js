@@ -3,6 +3,8 @@
 // Generate, τ and ρ, undo/redo, and the whole dance played with the music.
 const CHIP_COLOURS = ["#f9b25a", "#5cd3ea", "#c79cf5", "#b5e96b", "#f38aa9", "#9dc2fb"];
 const SPACING = 1.3;
+/** Target time of one slice of the join-table build, so frames keep coming. */
+const SLICE_MS = 8;
 
 export class ChoreoPanel {
   constructor(root, { choreographer, library, player, songPlayer, panel, messages }) {
@@ -13,7 +15,44 @@ export class ChoreoPanel {
     this.previewIds = [];       // library clip ids of the 6 previews (reused)
     this.ticked = new Set();    // indices into candidates
     this.danceId = null;
+    this.preparing = null;      // the running join-table build (a promise)
     this.bind();
+    this.prepareJoins();
+  }
+
+  /**
+   * Builds the filling's join costs (every pair of segments, spec §G) a slice at a time
+   * between frames, so the page stays responsive; shows progress. Resolves when ready. Runs
+   * again whenever the library changes; Generate waits for it.
+   */
+  prepareJoins() {
+    if (this.preparing) return this.preparing;
+    const label = this.$("#dance-joins");
+    this.preparing = (async () => {
+      let columns = 16;
+      const stats = { slices: 0, longestMs: 0, totalMs: 0, segments: 0 };
+      for (;;) {
+        const t = performance.now();
+        const p = this.choreographer.prepareTable(columns);
+        const dt = performance.now() - t;
+        stats.slices++;
+        stats.totalMs += dt;
+        stats.longestMs = Math.max(stats.longestMs, dt);
+        if (p >= 1) break;
+        this.root.dataset.joins = "preparing";
+        label.textContent = `Preparing joins ${Math.floor(p * 100)}%`;
+        // Aim each slice at SLICE_MS, whatever the machine.
+        columns = Math.max(1, Math.min(4096, Math.round(columns * SLICE_MS / Math.max(dt, 0.25))));
+        await new Promise((r) => setTimeout(r, 0));
+      }
+      this.root.dataset.joins = "ready";
+      label.textContent = "";
+      stats.segments = this.choreographer.segmentCount;
+      this.lastPrepare = stats;
+    })().catch((e) => {
+      this.messages.error(`Dance: ${e.message}`);
+    }).finally(() => { this.preparing = null; });
+    return this.preparing;
   }
 
   bind() {
@@ -71,6 +110,7 @@ export class ChoreoPanel {
     try {
       const s = this.choreographer.addClip(this.library, info.id);
       this.messages.info(`${info.name}: ${s.segments} dance segments at ${s.tempoBpm.toFixed(0)} counts/min`);
+      this.prepareJoins();
     } catch (e) {
       this.messages.warning(`Dance: ${e.message}`);
     }
@@ -170,11 +210,21 @@ export class ChoreoPanel {
     this.renderDance();
   }
 
-  generate() {
-    const r = this.act(() => this.choreographer.generate());
-    if (r) {
-      this.messages.info(`Dance: filled ${r.filled} bars (${r.pinned} pinned kept)`);
-      this.renderDance();
+  /** Fills the open bars, once the join costs are ready. */
+  async generate() {
+    if (this.generating) return;
+    this.generating = true;
+    this.root.dataset.busy = "generate";
+    try {
+      await this.prepareJoins();
+      const r = this.act(() => this.choreographer.generate());
+      if (r) {
+        this.messages.info(`Dance: filled ${r.filled} bars (${r.pinned} pinned kept)`);
+        this.renderDance();
+      }
+    } finally {
+      this.generating = false;
+      delete this.root.dataset.busy;
     }
   }
 

@@ -4,7 +4,7 @@
 //! frame time is song time.
 
 use odori_core::bars::Bar;
-use odori_core::choreo::{segment_clip, Choreography, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::choreo::{segment_clip, Choreography, FillWeights, RenderOptions, SegmentLibrary, SegmentOptions, TableBuilder};
 use wasm_bindgen::prelude::*;
 
 use crate::error::{to_js, OdoriError};
@@ -19,6 +19,8 @@ fn choreo_err(e: impl std::fmt::Display) -> OdoriError {
 pub struct Choreographer {
     lib: SegmentLibrary,
     doc: Option<Choreography>,
+    /// The filling's transition table being built in slices (see `prepareTable`).
+    builder: Option<TableBuilder>,
 }
 
 impl Default for Choreographer {
@@ -28,6 +30,11 @@ impl Default for Choreographer {
 }
 
 impl Choreographer {
+    /// The repetition penalty the next Generate uses (the table depends on it).
+    fn repeat_penalty(&self) -> f32 {
+        self.doc.as_ref().map_or(FillWeights::default().repeat_penalty, |d| d.settings().fill.repeat_penalty)
+    }
+
     fn doc(&mut self) -> Result<&mut Choreography, OdoriError> {
         self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet: open a song (or use the demo song) first"))
     }
@@ -38,7 +45,40 @@ impl Choreographer {
     /// Starts with the built-in move library (420 four-count moves) and no bars.
     #[wasm_bindgen(constructor)]
     pub fn new() -> Choreographer {
-        Choreographer { lib: SegmentLibrary::builtin(), doc: None }
+        Choreographer { lib: SegmentLibrary::builtin(), doc: None, builder: None }
+    }
+
+    /// Builds the filling's transition table (spec §G costs between every pair of segments)
+    /// in slices of up to `columns` segments, so the page stays responsive: call it between
+    /// frames until it returns 1. Returns the fraction done. `generate` builds whatever is
+    /// left in one go, so calling this is optional; it is needed again after the library
+    /// changes.
+    #[wasm_bindgen(js_name = prepareTable)]
+    pub fn prepare_table(&mut self, columns: u32) -> f32 {
+        let penalty = self.repeat_penalty();
+        if self.lib.cached_table(penalty).is_some() {
+            self.builder = None;
+            return 1.0;
+        }
+        let stale = self.builder.as_ref().is_none_or(|b| b.revision() != self.lib.revision() || b.repeat_penalty() != penalty);
+        if stale {
+            self.builder = Some(self.lib.table_builder(penalty));
+        }
+        let Some(builder) = self.builder.as_mut() else { return 0.0 };
+        let progress = builder.step(columns.max(1) as usize);
+        if !progress.is_done() {
+            return progress.fraction().min(0.999);
+        }
+        if let Some(table) = self.builder.take().and_then(TableBuilder::finish) {
+            self.lib.install_table(table);
+        }
+        1.0
+    }
+
+    /// Whether the transition table is ready (Generate then takes milliseconds).
+    #[wasm_bindgen(getter, js_name = tableReady)]
+    pub fn table_ready(&self) -> bool {
+        self.lib.cached_table(self.repeat_penalty()).is_some()
     }
 
     /// Number of segments in the library.
