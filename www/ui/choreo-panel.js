@@ -58,6 +58,9 @@ export class ChoreoPanel {
   bind() {
     const $ = this.$;
     $("#dance-generate").addEventListener("click", () => this.generate());
+    $("#dance-recut").addEventListener("click", () => this.recut());
+    $("#dance-clip").addEventListener("change", () => this.showClip());
+    $("#dance-clip-bpm").addEventListener("keydown", (ev) => { if (ev.key === "Enter") this.recut(); });
     $("#dance-play").addEventListener("click", () => this.playDance());
     $("#dance-undo").addEventListener("click", () => this.undo());
     $("#dance-redo").addEventListener("click", () => this.redo());
@@ -110,10 +113,74 @@ export class ChoreoPanel {
     try {
       const s = this.choreographer.addClip(this.library, info.id);
       this.messages.info(`${info.name}: ${s.segments} dance segments at ${s.tempoBpm.toFixed(0)} counts/min`);
+      this.refreshClips(info.id);
       this.prepareJoins();
     } catch (e) {
       this.messages.warning(`Dance: ${e.message}`);
     }
+  }
+
+  /** The clip-tempo row: every imported clip in the dance library, with its cut. */
+  refreshClips(select) {
+    const clips = this.choreographer.cutClips();
+    const sel = this.$("#dance-clip");
+    const keep = select ?? (sel.value === "" ? undefined : Number(sel.value));
+    sel.replaceChildren(...clips.map((c) => {
+      const o = document.createElement("option");
+      o.value = String(c.id);
+      o.textContent = c.name;
+      return o;
+    }));
+    if (keep != null && clips.some((c) => c.id === keep)) sel.value = String(keep);
+    this.$("#dance-clip-row").hidden = clips.length === 0;
+    this.clips = clips;
+    this.showClip();
+  }
+
+  showClip() {
+    const c = (this.clips ?? []).find((x) => String(x.id) === this.$("#dance-clip").value);
+    const bpm = this.$("#dance-clip-bpm");
+    if (!c) { this.$("#dance-clip-info").textContent = ""; return; }
+    bpm.value = c.tempoDetected ? "" : String(Math.round(c.tempoBpm * 10) / 10);
+    bpm.placeholder = c.tempoDetected ? `auto (${c.tempoBpm.toFixed(0)})` : "auto";
+    this.$("#dance-clip-info").textContent =
+      `${c.segments} segments at ${c.tempoBpm.toFixed(1)} counts/min (${c.tempoDetected ? "found in the motion" : "stated"})`;
+  }
+
+  /** Re-cuts the chosen clip at the stated tempo (or its detected beats); says what happened to bars that used the earlier cut. */
+  recut() {
+    const id = Number(this.$("#dance-clip").value);
+    const c = (this.clips ?? []).find((x) => x.id === id);
+    if (!c) return;
+    const text = this.$("#dance-clip-bpm").value.trim();
+    const bpm = text === "" ? undefined : Number(text);
+    if (bpm !== undefined && !(bpm >= 30 && bpm <= 300)) {
+      this.messages.error(`Dance: ${c.name}: a clip's tempo must be 30 to 300 counts per minute (got “${text}”)`);
+      return;
+    }
+    let r;
+    try {
+      r = this.choreographer.recutClip(id, bpm);
+    } catch (e) {
+      this.messages.error(`Dance: ${e.message}`);
+      return;
+    }
+    const how = bpm === undefined ? `at its own beats (${r.clip.tempoBpm.toFixed(0)} counts/min)` : `at ${r.clip.tempoBpm} counts/min`;
+    this.messages.info(`${c.name}: re-cut ${how}: ${r.clip.segments} segments; ${r.removed} of the earlier cut removed`);
+    const bars = (list) => list.map((b) => b + 1).join(", ");
+    if (r.pinnedBars.length) {
+      this.messages.warning(`Dance: bar${r.pinnedBars.length > 1 ? "s" : ""} ${bars(r.pinnedBars)} keep${r.pinnedBars.length > 1 ? "" : "s"} the pinned move from ${c.name}'s earlier cut (it is not offered again)`);
+    }
+    if (r.generatedBars.length) {
+      this.messages.info(`Dance: bar${r.generatedBars.length > 1 ? "s" : ""} ${bars(r.generatedBars)} keep${r.generatedBars.length > 1 ? "" : "s"} a move from the earlier cut until you Generate again`);
+    }
+    this.root.dataset.recuts = String(Number(this.root.dataset.recuts ?? 0) + 1);
+    this.refreshClips(id);
+    this.refresh();
+    // Segment numbers changed: show the selected bar's candidates and the dance afresh.
+    if (this.bar != null) this.selectBar(this.bar);
+    if (this.danceId != null) this.renderDance();
+    this.prepareJoins();
   }
 
   /** New bars from the song grid. */

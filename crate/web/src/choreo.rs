@@ -4,7 +4,8 @@
 //! frame time is song time.
 
 use odori_core::bars::Bar;
-use odori_core::choreo::{segment_clip, Choreography, FillWeights, RenderOptions, SegmentLibrary, SegmentOptions, TableBuilder};
+use odori_core::choreo::{recut_clip, segment_clip, Choreography, ClipSummary, FillWeights, RenderOptions, SegmentLibrary, SegmentOptions, TableBuilder};
+use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
 use crate::error::{to_js, OdoriError};
@@ -21,6 +22,19 @@ pub struct Choreographer {
     doc: Option<Choreography>,
     /// The filling's transition table being built in slices (see `prepareTable`).
     builder: Option<TableBuilder>,
+    /// The imported clips cut into segments, by library clip id.
+    cut: Vec<CutClip>,
+}
+
+/// An imported clip in the segment library (`cutClips()`).
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+struct CutClip {
+    /// Its id in the `Library`.
+    id: u32,
+    /// What cutting it gave (`clip`: the segment library's clip index).
+    #[serde(flatten)]
+    summary: ClipSummary,
 }
 
 impl Default for Choreographer {
@@ -45,7 +59,7 @@ impl Choreographer {
     /// Starts with the built-in move library (420 four-count moves) and no bars.
     #[wasm_bindgen(constructor)]
     pub fn new() -> Choreographer {
-        Choreographer { lib: SegmentLibrary::builtin(), doc: None, builder: None }
+        Choreographer { lib: SegmentLibrary::builtin(), doc: None, builder: None, cut: Vec::new() }
     }
 
     /// Builds the filling's transition table (spec §G costs between every pair of segments)
@@ -108,8 +122,39 @@ impl Choreographer {
     pub fn add_clip(&mut self, library: &Library, clip_id: u32, tempo_bpm: Option<f32>) -> Result<JsValue, OdoriError> {
         let e = library.entry(clip_id)?;
         let opts = SegmentOptions { tempo_bpm, ..Default::default() };
+        if self.cut.iter().any(|c| c.id == clip_id) {
+            return Err(OdoriError::new("choreo", format!("{} is already in the dance library: re-cut it to change its tempo", e.clip.name)));
+        }
         let summary = self.lib.add_clip(&e.clip, &e.humanoid, &e.status, &opts).map_err(|err| OdoriError::new("choreo", format!("{}: {err}", e.clip.name)))?;
+        self.cut.push(CutClip { id: clip_id, summary: summary.clone() });
         Ok(to_js(&summary))
+    }
+
+    /// The imported clips in the dance library: `{ id, clip, name, tempoBpm, tempoDetected,
+    /// beats, segments }[]` (`id`: the `Library` clip id).
+    #[wasm_bindgen(js_name = cutClips)]
+    pub fn cut_clips(&self) -> JsValue {
+        to_js(&self.cut)
+    }
+
+    /// Re-cuts an imported clip into 4-count segments at `tempoBpm` counts per minute (the
+    /// person knows the clip's tempo), or at its detected beats again when `tempoBpm` is
+    /// undefined. Nothing of the dance is lost: bars holding a segment of the earlier cut keep
+    /// that motion (the earlier segment stays, never offered again), other clips' bars are
+    /// untouched, undo/redo still work. Returns `{ clip: summary, removed, kept, pinnedBars,
+    /// generatedBars }` (bars 0-based); throws for an unknown clip, a tempo outside 30..=300
+    /// or one at which the clip holds no 4 counts (then nothing changes).
+    #[wasm_bindgen(js_name = recutClip)]
+    pub fn recut_clip(&mut self, clip_id: u32, tempo_bpm: Option<f32>) -> Result<JsValue, OdoriError> {
+        let Some(at) = self.cut.iter().position(|c| c.id == clip_id) else {
+            return Err(OdoriError::new("not-found", format!("clip {clip_id} is not in the dance library (only humanoid clips are)")));
+        };
+        let clip = self.cut[at].summary.clip;
+        let opts = SegmentOptions { tempo_bpm, ..Default::default() };
+        let report = recut_clip(&mut self.lib, self.doc.as_mut(), clip, &opts).map_err(choreo_err)?;
+        self.builder = None;
+        self.cut[at].summary = report.clip.clone();
+        Ok(to_js(&report))
     }
 
     /// One segment's facts (`{ index, name, source, tempoBpm, intensity01, ... }`).
