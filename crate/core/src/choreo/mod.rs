@@ -10,7 +10,6 @@ pub mod feedback;
 pub mod fill;
 pub mod grid;
 pub mod render;
-pub mod retarget;
 pub mod segment;
 pub mod table;
 

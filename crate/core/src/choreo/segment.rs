@@ -19,7 +19,7 @@ use thiserror::Error;
 
 use super::eigen::Signature;
 use super::table::{TableBuilder, TransitionTable};
-use super::retarget::to_canonical;
+use crate::retarget::to_canonical;
 use crate::clip::Clip;
 use crate::humanoid::{canonical_positions, Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
 use crate::library::{builtin_clips, builtin_moves, MoveInfo};
