@@ -77,3 +77,16 @@ pub fn builtin_medley_library() -> odori_core::choreo::SegmentLibrary {
     lib.add_clip(&medley, &map, &odori_core::HumanoidStatus::Complete, &opts).expect("the medley of built-in moves cuts into segments");
     lib
 }
+
+/// The filling problem both choreography benches time (native and wasm): 90 open bars whose
+/// music intensity swells and falls, between two pinned bars, over `segments` segments.
+pub fn bench_layers(segments: usize) -> Vec<odori_core::choreo::Layer> {
+    use odori_core::choreo::Layer;
+    (0..92)
+        .map(|i| match i {
+            0 => Layer::Fixed { segment: 17 % segments.max(1) },
+            91 => Layer::Fixed { segment: 1234 % segments.max(1) },
+            _ => Layer::Open { intensity: 0.5 + 0.45 * (i as f32 / 7.0).sin() },
+        })
+        .collect()
+}

@@ -132,13 +132,7 @@ fn main() {
 
     // 4. Fill 90 open bars.
     let inten: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
-    let layers: Vec<Layer> = (0..92)
-        .map(|i| match i {
-            0 => Layer::Fixed { segment: 17 },
-            91 => Layer::Fixed { segment: 1234 % m },
-            _ => Layer::Open { intensity: 0.5 + 0.45 * (i as f32 / 7.0).sin() },
-        })
-        .collect();
+    let layers = odori_tests::bench_layers(m);
     // The exact objective (repeat window 1) against the plain DP; then the default (window 4,
     // its repeats charged along the chosen paths).
     let w = FillWeights { repeat_window: 1, ..FillWeights::default() };

@@ -89,13 +89,7 @@ fn fill90_with(w: FillWeights) -> f32 {
         let Some(t) = TABLE.with(|x| x.borrow().clone()) else { return -1.0 };
         let m = t.len();
         let inten: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
-        let layers: Vec<Layer> = (0..92)
-            .map(|i| match i {
-                0 => Layer::Fixed { segment: 17 },
-                91 => Layer::Fixed { segment: 1234 % m },
-                _ => Layer::Open { intensity: 0.5 + 0.45 * (i as f32 / 7.0).sin() },
-            })
-            .collect();
+        let layers = odori_tests::bench_layers(m);
         fill(&t, &layers, &inten, &w).map_or(-1.0, |r| r.1)
     })
 }

@@ -545,20 +545,10 @@ pub(crate) fn canonical_world_positions(clip: &Clip) -> Vec<Vec3> {
     let mut out = Vec::with_capacity(frames * CANON_COUNT);
     let mut rot = [glam::Quat::IDENTITY; CANON_COUNT];
     let mut pos = [Vec3::ZERO; CANON_COUNT];
+    let rest_root = sk.joints.first().map_or(Vec3::ZERO, |j| j.rest_offset);
     for f in 0..frames {
-        let local = clip.frame_rotations(f);
-        for (i, j) in sk.joints.iter().enumerate() {
-            match j.parent {
-                Some(p) if p < i => {
-                    rot[i] = rot[p] * local[i];
-                    pos[i] = pos[p] + rot[p] * j.rest_offset;
-                }
-                _ => {
-                    rot[i] = local[i];
-                    pos[i] = root.and_then(|r| r.get(f).copied()).unwrap_or(j.rest_offset);
-                }
-            }
-        }
+        let at = root.and_then(|r| r.get(f).copied()).unwrap_or(rest_root);
+        sk.pose_into(clip.frame_rotations(f), at, &mut rot, &mut pos);
         out.extend_from_slice(&pos);
     }
     out

@@ -185,24 +185,17 @@ fn root_and_hips(pose: &KeyPose, standing_hips_height: f32) -> (Vec3, Quat) {
     (root, Quat::from_euler(EulerRot::YXZ, pose.hips_yaw, pose.hips_pitch, -pose.hips_roll))
 }
 
-/// The joints [`solve_legs`] sets, in [`LegSolution::local`] order.
-const LEG_JOINTS: [Canon; 8] = [
-    Canon::LeftUpperLeg,
-    Canon::LeftLowerLeg,
-    Canon::LeftFoot,
-    Canon::LeftToe,
-    Canon::RightUpperLeg,
-    Canon::RightLowerLeg,
-    Canon::RightFoot,
-    Canon::RightToe,
-];
+/// The joints [`solve_legs`] sets are the last eight canonical joints, left upper leg to right
+/// toe, in [`LegSolution::local`] order.
+const FIRST_LEG: usize = Canon::LeftUpperLeg as usize;
+const _: () = assert!(CANON_COUNT - FIRST_LEG == 8 && Canon::RightToe as usize == CANON_COUNT - 1);
 
 /// The legs of a solved pose. They depend only on the hips and the feet of the key pose
 /// (position, turn and tilt of the hips, foot targets, pointing, turn-out), so poses that
 /// differ only above the hips (the built-in moves' arm patterns) share them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LegSolution {
-    /// Local rotations of the [`LEG_JOINTS`].
+    /// Local rotations of the leg joints (left upper leg, lower leg, foot, toe, then right).
     pub local: [Quat; 8],
     /// Height of the lowest foot joint (ankle or toe tip).
     pub lowest: f32,
@@ -211,9 +204,7 @@ pub struct LegSolution {
 impl LegSolution {
     /// Writes the leg joints' local rotations into a full pose.
     pub fn write_into(&self, local: &mut [Quat; CANON_COUNT]) {
-        for (c, q) in LEG_JOINTS.iter().zip(self.local) {
-            local[c.index()] = q;
-        }
+        local[FIRST_LEG..].copy_from_slice(&self.local);
     }
 }
 
@@ -303,21 +294,8 @@ pub fn solve_legs(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32
 pub fn lowest_height(skeleton: &Skeleton, local: &[Quat; CANON_COUNT], root: Vec3) -> f32 {
     let mut rot = [Quat::IDENTITY; CANON_COUNT];
     let mut pos = [Vec3::ZERO; CANON_COUNT];
-    let mut low = f32::MAX;
-    for (i, j) in skeleton.joints.iter().enumerate().take(CANON_COUNT) {
-        match j.parent {
-            Some(p) if p < i => {
-                rot[i] = rot[p] * local[i];
-                pos[i] = pos[p] + rot[p] * j.rest_offset;
-            }
-            _ => {
-                rot[i] = local[i];
-                pos[i] = root;
-            }
-        }
-        low = low.min(pos[i].y);
-    }
-    low
+    skeleton.pose_into(local, root, &mut rot, &mut pos);
+    pos[..skeleton.len().min(CANON_COUNT)].iter().map(|p| p.y).fold(f32::MAX, f32::min)
 }
 
 #[cfg(test)]
