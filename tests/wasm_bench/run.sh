@@ -7,16 +7,16 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-# The web build's rustflags, from wasm-pack.toml (one place for them).
-web_flags=$(sed -n 's/^rustflags *= *"\(.*\)".*/\1/p' "$root/wasm-pack.toml" | head -1)
+# The web build's rustflags, from wasm-pack.toml (one place for them): ["-C", "x"] -> -C x.
+web_flags=$(sed -n 's/^rustflags *= *\[\(.*\)\].*/\1/p' "$root/wasm-pack.toml" | head -1 | sed 's/"//g; s/, */ /g')
 
 build() { # target-dir rustflags
   local dir=$1 flags=$2
   if [ -n "$(rustc --print target-libdir --target wasm32-unknown-unknown 2>/dev/null)" ] \
      && ls "$(rustc --print target-libdir --target wasm32-unknown-unknown)"/libstd-* >/dev/null 2>&1; then
-    RUSTFLAGS="$flags" cargo build -q --release --target wasm32-unknown-unknown --manifest-path "$here/Cargo.toml" --target-dir "$dir"
+    CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUSTFLAGS="$flags" cargo build -q --release --target wasm32-unknown-unknown --manifest-path "$here/Cargo.toml" --target-dir "$dir"
   else
-    RUSTFLAGS="$flags" RUSTC=/usr/bin/rustc RUSTDOC=/usr/bin/rustdoc RUSTC_BOOTSTRAP=1 CARGO_UNSTABLE_BUILD_STD=std,panic_abort \
+    CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUSTFLAGS="$flags" RUSTC=/usr/bin/rustc RUSTDOC=/usr/bin/rustdoc RUSTC_BOOTSTRAP=1 CARGO_UNSTABLE_BUILD_STD=std,panic_abort \
       CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_LINKER=wasm-ld-19 \
       /usr/bin/cargo build -q --release --target wasm32-unknown-unknown --manifest-path "$here/Cargo.toml" --target-dir "$dir"
   fi

@@ -39,9 +39,9 @@ struct PackageSettings {
 struct ToolchainSettings {
     wasm_bindgen: String,
     target: String,
-    /// RUSTFLAGS of the wasm build (e.g. `-C target-feature=+simd128`).
+    /// Extra rustc flags for the wasm target only (not for build scripts on the host).
     #[serde(default)]
-    rustflags: String,
+    rustflags: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -121,10 +121,11 @@ fn build_web(dev: bool) {
     } else {
         fail("no Rust toolchain with a wasm32 std: run ./dev setup (installs rustc-web, cargo-web, rust-web-src, lld-19)");
     }
-    if !settings.toolchain.rustflags.is_empty() {
-        cargo.env("RUSTFLAGS", &settings.toolchain.rustflags);
-    }
     cargo.current_dir(&root).args(["build", "--target", target, "-p", &settings.package.krate, "--profile", &profile.cargo_profile]);
+    if !settings.toolchain.rustflags.is_empty() {
+        let var = format!("CARGO_TARGET_{}_RUSTFLAGS", target.to_uppercase().replace(['-', '.'], "_"));
+        cargo.env(var, settings.toolchain.rustflags.join(" "));
+    }
     run(&mut cargo);
     let dir_name = if profile.cargo_profile == "dev" { "debug" } else { &profile.cargo_profile };
     let wasm_in = root.join("target").join(target).join(dir_name).join(format!("{}.wasm", cdylib_name(&root, &settings.package.krate)));
