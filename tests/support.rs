@@ -47,3 +47,46 @@ pub fn all_bvh() -> Vec<String> {
 pub fn fps_override_for(rel: &str) -> Option<f32> {
     rel.contains("cmu-salsa").then_some(60.0)
 }
+
+/// The ≥ 2,000-segment library the choreography benches time both natively and in wasm
+/// (tests/bench/choreo.rs, tests/wasm_bench), built without file access: the built-in moves
+/// plus every built-in move concatenated into one 420-bar clip, cut at every count at its
+/// stated 120 counts per minute.
+pub fn builtin_medley_library() -> odori_core::choreo::SegmentLibrary {
+    use odori_core::choreo::{SegmentLibrary, SegmentOptions};
+    use odori_core::clip::{Clip, TranslationTrack};
+    let mut lib = SegmentLibrary::builtin();
+    let clips = odori_core::library::builtin_clips();
+    let sk = clips[0].skeleton.clone();
+    let (mut rotations, mut root) = (Vec::new(), Vec::new());
+    for c in &clips {
+        let n = c.frame_count() - 1;
+        rotations.extend_from_slice(&c.rotations[..n * sk.len()]);
+        root.extend_from_slice(&c.translations[0].values[..n]);
+    }
+    let medley = Clip {
+        name: "medley".into(),
+        source: "built-in".into(),
+        fps: 30.0,
+        skeleton: sk.clone(),
+        rotations,
+        translations: vec![TranslationTrack { joint: 0, values: root }],
+    };
+    let map = odori_core::humanoid::HumanoidMap::from_skeleton(&sk);
+    let opts = SegmentOptions { tempo_bpm: Some(odori_core::library::BUILTIN_BPM), first_beat_secs: Some(0.0), hop_counts: 1 };
+    lib.add_clip(&medley, &map, &odori_core::HumanoidStatus::Complete, &opts).expect("the medley of built-in moves cuts into segments");
+    lib
+}
+
+/// The filling problem both choreography benches time (native and wasm): 90 open bars whose
+/// music intensity swells and falls, between two pinned bars, over `segments` segments.
+pub fn bench_layers(segments: usize) -> Vec<odori_core::choreo::Layer> {
+    use odori_core::choreo::Layer;
+    (0..92)
+        .map(|i| match i {
+            0 => Layer::Fixed { segment: 17 % segments.max(1) },
+            91 => Layer::Fixed { segment: 1234 % segments.max(1) },
+            _ => Layer::Open { intensity: 0.5 + 0.45 * (i as f32 / 7.0).sin() },
+        })
+        .collect()
+}

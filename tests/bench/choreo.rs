@@ -99,20 +99,40 @@ fn main() {
     let m = lib.len();
     assert!(m >= 2000, "only {m} segments");
 
-    // 3. Transition table.
+    // 3. Transition table: in one go (cached), and its phases through the slicing builder.
     let t = Instant::now();
     let table = lib.transition_table(FillWeights::default().repeat_penalty);
     println!("transition table: {m} x {m} spec §G costs in {:.0} ms (once per library, cached)", ms(t));
+    let mut builder = lib.table_builder(FillWeights::default().repeat_penalty);
+    let t = Instant::now();
+    builder.step(m);
+    let pairs_ms = ms(t);
+    let t = Instant::now();
+    builder.step(m);
+    let top_ms = ms(t);
+    let t = Instant::now();
+    let p = builder.step(m);
+    let rows_ms = ms(t);
+    assert!(p.is_done());
+    assert!(builder.finish().as_ref() == Some(&*table), "sliced build differs");
+    println!("  phases: pair costs {pairs_ms:.0} ms ({:.2} ns per link and pair), top-{} lists {top_ms:.0} ms, row-major copy {rows_ms:.0} ms",
+        pairs_ms * 1e6 / (m * m * 20) as f64, odori_core::choreo::fill::TOP_K);
+
+    // The same ≥ 2,000-segment library the wasm bench times (tests/wasm_bench), for a direct
+    // comparison.
+    let medley = odori_tests::builtin_medley_library();
+    let mut best = f64::MAX;
+    for _ in 0..3 {
+        let t = Instant::now();
+        let t2 = TransitionTable::from_library(&medley, 3.0);
+        best = best.min(ms(t));
+        assert_eq!(t2.len(), medley.len());
+    }
+    println!("transition table of the wasm bench's library (built-in + medley): {0} x {0} in {best:.0} ms (best of 3)", medley.len());
 
     // 4. Fill 90 open bars.
     let inten: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
-    let layers: Vec<Layer> = (0..92)
-        .map(|i| match i {
-            0 => Layer::Fixed { segment: 17 },
-            91 => Layer::Fixed { segment: 1234 % m },
-            _ => Layer::Open { intensity: 0.5 + 0.45 * (i as f32 / 7.0).sin() },
-        })
-        .collect();
+    let layers = odori_tests::bench_layers(m);
     // The exact objective (repeat window 1) against the plain DP; then the default (window 4,
     // its repeats charged along the chosen paths).
     let w = FillWeights { repeat_window: 1, ..FillWeights::default() };

@@ -46,7 +46,7 @@ fn main() {
     let combined_secs = median_secs(101, || grid.corrected(&combined).expect("correction"));
 
     let demo_secs = median_secs(3, || odori_core::music::demo_song(44100.0).expect("demo"));
-    // The wasm bench's input (tests/tools/wasm_bench): the demo song's envelope looped to 180 s.
+    // The wasm bench's input (tests/wasm_bench): the demo song's envelope looped to 180 s.
     let demo = odori_core::music::demo_song(44100.0).expect("demo");
     let demo_env = envelope(&[&demo.samples], demo.sample_rate_hz).expect("demo envelope");
     let frames = (180.0 / demo_env.hop_secs).round() as usize;

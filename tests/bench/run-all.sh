@@ -4,6 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 cargo bench -p odori-tests
+# The core in wasm under Node (song analysis, choreography), built with the web build's flags.
+bash tests/wasm_bench/run.sh
 # The search in wasm in headless Chromium (needs pkg/, which ./dev bench builds).
 cargo build -q -p xtask
 node tests/bench/search-browser.mjs

@@ -36,6 +36,11 @@ test("dance: candidates, Set, Search twice, Generate, play", async () => {
     await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_02.bvh"));
     await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /dance segments/.test(li.textContent)), null, { timeout: 30000 });
     assert.ok(await page.evaluate(() => window.odori.choreo.choreographer.segmentCount) > builtinSegments);
+    // The join costs for the grown library are built a slice at a time between frames.
+    await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready" && window.odori.choreo.lastPrepare?.segments > 420, null, { timeout: 30000 });
+    const prep = await page.evaluate(() => window.odori.choreo.lastPrepare);
+    assert.ok(prep.slices >= 2, `join table built in ${prep.slices} slice(s)`);
+    console.log(`join table for ${prep.segments} segments: ${prep.slices} slices, ${prep.totalMs.toFixed(0)} ms in all, longest ${prep.longestMs.toFixed(1)} ms`);
     const before = await canvasPixels(page);
     await page.click('#dance-bars [data-bar="4"]');
     await page.waitForFunction(() => document.querySelector("#dance").dataset.candidates === "6");
@@ -61,6 +66,7 @@ test("dance: candidates, Set, Search twice, Generate, play", async () => {
     assert.ok(third.every((s) => !first.includes(s)), "shown candidates never come back");
     // Generate: every bar filled, the pinned bar unchanged.
     await page.click("#dance-generate");
+    await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 30000 });
     const view = await page.evaluate(() => window.odori.choreo.view);
     assert.equal(view.length, nBars);
     assert.ok(view.every((v) => v.state.kind !== "empty"), "an empty bar after Generate");

@@ -2,78 +2,40 @@
 //! ../shared/data/mocap (and the RobotExpressive glTF) together with the built-in one, and a
 //! dance generated for a real song from ../shared/data/music.
 //!
-//! The song's bars come from a stated tempo (129.2 BPM for Vibe Ace, the cross-check estimate
-//! printed in music/SOURCE.txt; first downbeat at 0 s) because the song-analysis module is
-//! being written in parallel; each bar's intensity is the mean RMS over it scaled to the
-//! song's range (spec §D), from the decoded audio.
+//! The song's bars come from the core's own analysis of the decoded song (spec §D: tempo,
+//! beats, downbeats, bars, each bar's intensity the mean loudness over it scaled to the
+//! song's range), exactly as the app gets them; the audio is decoded and enveloped as in the
+//! music tests (`music_audio.rs`).
 
 use std::time::Instant;
 
 use odori_core::bars::Bar;
 use odori_core::choreo::render::join_frames;
 use odori_core::choreo::{
-    bars_from_tempo, mean_pairwise_dissimilarity, speed_jumps, Choreography, FeedbackSession, RenderOptions, SegmentLibrary, SegmentOptions,
+    mean_pairwise_dissimilarity, speed_jumps, Choreography, FeedbackSession, RenderOptions, SegmentLibrary, SegmentOptions,
 };
 use odori_core::import::import_bytes;
+use odori_core::music::{analyze, AnalysisOptions};
 use odori_core::ImportOptions;
 use odori_tests::{all_bvh, fps_override_for, read};
 
-use symphonia::core::audio::SampleBuffer;
-use symphonia::core::codecs::DecoderOptions;
-use symphonia::core::formats::FormatOptions;
-use symphonia::core::io::MediaSourceStream;
-use symphonia::core::meta::MetadataOptions;
-use symphonia::core::probe::Hint;
+#[path = "music_audio.rs"]
+mod music_audio;
 
-/// Mono RMS per 50 ms window, and the window length in seconds.
-fn rms_envelope(rel: &str) -> (Vec<f32>, f32) {
-    let bytes = read(rel);
-    let mss = MediaSourceStream::new(Box::new(std::io::Cursor::new(bytes)), Default::default());
-    let mut hint = Hint::new();
-    hint.with_extension("ogg");
-    let probed = symphonia::default::get_probe().format(&hint, mss, &FormatOptions::default(), &MetadataOptions::default()).expect("probe ogg");
-    let mut format = probed.format;
-    let track = format.default_track().expect("audio track").clone();
-    let rate = track.codec_params.sample_rate.expect("sample rate") as f32;
-    let mut decoder = symphonia::default::get_codecs().make(&track.codec_params, &DecoderOptions::default()).expect("decoder");
-    let hop = (rate * 0.05) as usize;
-    let (mut env, mut acc, mut n) = (Vec::new(), 0.0f64, 0usize);
-    while let Ok(packet) = format.next_packet() {
-        if packet.track_id() != track.id {
-            continue;
-        }
-        let Ok(decoded) = decoder.decode(&packet) else { continue };
-        let spec = *decoded.spec();
-        let ch = spec.channels.count().max(1);
-        let mut buf = SampleBuffer::<f32>::new(decoded.capacity() as u64, spec);
-        buf.copy_interleaved_ref(decoded);
-        for frame in buf.samples().chunks_exact(ch) {
-            let m = frame.iter().sum::<f32>() / ch as f32;
-            acc += (m * m) as f64;
-            n += 1;
-            if n == hop {
-                env.push((acc / n as f64).sqrt() as f32);
-                acc = 0.0;
-                n = 0;
-            }
-        }
-    }
-    (env, 0.05)
-}
-
-fn song_bars(rel: &str, bpm: f32) -> Vec<Bar> {
-    let (env, win) = rms_envelope(rel);
-    let duration = env.len() as f32 * win;
-    let mean = |s: f32, e: f32| {
-        let (a, b) = ((s / win) as usize, ((e / win) as usize).min(env.len()));
-        env[a.min(b)..b].iter().sum::<f32>() / (b - a.min(b)).max(1) as f32
-    };
-    let raw = bars_from_tempo(duration, bpm, 4, 0.0, |s, e| mean(s, e)).expect("bars");
-    // Scale to the song's range (spec §D).
-    let (lo, hi) = raw.iter().fold((f32::MAX, f32::MIN), |(a, b), x| (a.min(x.intensity), b.max(x.intensity)));
-    let bars: Vec<Bar> = bars_from_tempo(duration, bpm, 4, 0.0, |s, e| if hi > lo { (mean(s, e) - lo) / (hi - lo) } else { 0.5 }).unwrap();
-    println!("song {rel}: {duration:.1} s, {} bars at {bpm} BPM (stated), bar intensity {:.2}..{:.2} after scaling", bars.len(), 0.0, 1.0);
-    bars
+/// The song's bars from the core's analysis of the real recording.
+fn song_bars(rel: &str) -> Vec<Bar> {
+    let audio = music_audio::decode_data(rel);
+    let env = audio.envelope().unwrap_or_else(|e| panic!("{rel}: {e}"));
+    let grid = analyze(&env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    let (lo, hi) = grid.bars.iter().fold((f32::MAX, f32::MIN), |(a, b), x| (a.min(x.intensity), b.max(x.intensity)));
+    println!(
+        "song {rel}: {:.1} s analysed by the core: {:.1} BPM, first downbeat {:.2} s, {} bars, bar intensity {lo:.2}..{hi:.2}",
+        grid.duration_secs,
+        grid.bpm,
+        grid.first_downbeat_secs,
+        grid.bars.len()
+    );
+    grid.bars
 }
 
 fn real_library() -> (SegmentLibrary, usize) {
@@ -138,8 +100,9 @@ fn real_library_and_real_song() {
     for c in lib.clips().iter().filter(|c| c.clip.source.contains("salsa")) {
         assert!((60.0..=200.0).contains(&c.tempo_bpm), "{}: {} counts/min", c.clip.source, c.tempo_bpm);
     }
-    let bars = song_bars("music/Kevin_MacLeod_-_Vibe_Ace.hq.ogg", 129.2);
-    assert!(bars.len() >= 30);
+    let bars = song_bars("music/Kevin_MacLeod_-_Vibe_Ace.hq.ogg");
+    assert!(bars.len() >= 30, "only {} bars", bars.len());
+    assert!(bars.iter().any(|b| b.intensity < 0.3) && bars.iter().any(|b| b.intensity > 0.7), "bar intensities are not scaled to the song's range");
     // Pin three bars to real salsa/indian segments, generate the rest.
     let real: Vec<usize> = lib.segments().iter().filter(|s| s.builtin.is_none()).map(|s| s.index).collect();
     let pins = [(0usize, real[3]), (10, real[real.len() / 2]), (20, real[real.len() - 5])];

@@ -1,18 +1,47 @@
-import { readFileSync } from 'fs';
-const bytes = readFileSync(process.env.WASM ?? "/tmp/choreo_wasm_bench/target/wasm32-unknown-unknown/release/choreo_wasm_bench.wasm");
+// Times the wasm build of odori-core under Node (built by run.sh): song analysis, then the
+// choreography core. Usage: node run.mjs path/to/odori_wasm_bench.wasm [label]
+import { readFileSync } from "node:fs";
+import { performance } from "node:perf_hooks";
+
+const bytes = readFileSync(process.argv[2]);
+const label = process.argv[3] ?? "wasm";
 const { instance } = await WebAssembly.instantiate(bytes, {});
-const e = instance.exports;
+const x = instance.exports;
 const time = (f) => { const t = performance.now(); const r = f(); return [performance.now() - t, r]; };
-let best = 1e9;
-for (let i = 0; i < 3; i++) { const [ms] = time(e.build_builtin); best = Math.min(best, ms); }
-console.log(`wasm: built-in library ${e.build_builtin()} segments in ${best.toFixed(1)} ms (best of 3)`);
-const [sms, m] = time(e.setup);
-console.log(`wasm: library of ${m} segments built in ${sms.toFixed(0)} ms`);
-const [tms] = time(e.table);
-console.log(`wasm: transition table ${m} x ${m} in ${tms.toFixed(0)} ms`);
-let fb = 1e9, cost = 0;
-for (let i = 0; i < 5; i++) { const [ms, c] = time(e.fill90); fb = Math.min(fb, ms); cost = c; }
-console.log(`wasm: fill 90 open bars from ${m} segments (exact, repeat window 1) in ${fb.toFixed(1)} ms (best of 5), cost ${cost.toFixed(3)}`);
-fb = 1e9;
-for (let i = 0; i < 3; i++) { const [ms, c] = time(e.fill90_default); fb = Math.min(fb, ms); cost = c; }
-console.log(`wasm: fill 90 open bars, default repeat window 4: ${fb.toFixed(1)} ms (best of 3), cost ${cost.toFixed(3)}`);
+const median = (f, n) => { const ts = []; let r; for (let i = 0; i < n; i++) { const [t, v] = time(f); ts.push(t); r = v; } ts.sort((a, b) => a - b); return [ts[n >> 1], r]; };
+const best = (f, n) => { let b = Infinity, r; for (let i = 0; i < n; i++) { const [t, v] = time(f); if (t < b) b = t; r = v; } return [b, r]; };
+const say = (s) => console.log(`${label}: ${s}`);
+
+// Song analysis (issue 4).
+const [prepMs, frames] = time(() => x.prepare());
+say(`(node ${process.version}) input = demo song envelope looped to 180 s, ${frames} frames (prepared in ${prepMs.toFixed(0)} ms)`);
+const [renderMs] = median(() => x.render_demo(), 3);
+say(`demo song render (70 s at 44.1 kHz):              ${renderMs.toFixed(1)} ms`);
+const [envMs] = median(() => x.demo_envelope(), 3);
+say(`demo song render + envelope (Rust RMS fallback):  ${envMs.toFixed(1)} ms`);
+const [analysisMs, bpm] = median(() => x.analyze_once(), 21);
+say(`core analysis, envelope -> grid (3-minute song):  ${analysisMs.toFixed(2)} ms  (${bpm.toFixed(2)} BPM)`);
+
+// Choreography (issue 5).
+const [builtinMs, builtin] = best(() => x.build_builtin(), 5);
+say(`built-in library: ${builtin} segments in ${builtinMs.toFixed(1)} ms (best of 5)`);
+const [setupMs, m] = time(() => x.setup());
+say(`library of ${m} segments (built-in + medley of every move, cut at every count) built in ${setupMs.toFixed(0)} ms`);
+const [tableMs] = best(() => x.table(), 3);
+say(`transition table ${m} x ${m} in one go: ${tableMs.toFixed(0)} ms (best of 3)`);
+// As the app builds it: slices of columns between frames.
+for (const columns of [32, 128]) {
+  x.table_begin();
+  let slices = 0, worst = 0, total = 0, p = 0;
+  while (p < 1) {
+    const [ms, q] = time(() => x.table_step(columns));
+    p = q; slices++; total += ms; worst = Math.max(worst, ms);
+  }
+  const same = x.table_finish_matches() === 1;
+  say(`  in slices of ${columns} columns: ${slices} slices, ${total.toFixed(0)} ms in all, longest slice ${worst.toFixed(1)} ms; ${same ? "same table" : "DIFFERENT TABLE"}`);
+  if (!same) process.exitCode = 1;
+}
+let [fillMs, cost] = best(() => x.fill90(), 5);
+say(`fill 90 open bars from ${m} segments (exact, repeat window 1) in ${fillMs.toFixed(1)} ms (best of 5), cost ${cost.toFixed(3)}`);
+[fillMs, cost] = best(() => x.fill90_default(), 3);
+say(`fill 90 open bars, default repeat window 4: ${fillMs.toFixed(1)} ms (best of 3), cost ${cost.toFixed(3)}`);

@@ -3,6 +3,8 @@
 // Generate, τ and ρ, undo/redo, and the whole dance played with the music.
 const CHIP_COLOURS = ["#f9b25a", "#5cd3ea", "#c79cf5", "#b5e96b", "#f38aa9", "#9dc2fb"];
 const SPACING = 1.3;
+/** Target time of one slice of the join-table build, so frames keep coming. */
+const SLICE_MS = 8;
 
 export class ChoreoPanel {
   constructor(root, { choreographer, library, player, songPlayer, panel, messages }) {
@@ -13,12 +15,52 @@ export class ChoreoPanel {
     this.previewIds = [];       // library clip ids of the 6 previews (reused)
     this.ticked = new Set();    // indices into candidates
     this.danceId = null;
+    this.preparing = null;      // the running join-table build (a promise)
     this.bind();
+    this.prepareJoins();
+  }
+
+  /**
+   * Builds the filling's join costs (every pair of segments, spec §G) a slice at a time
+   * between frames, so the page stays responsive; shows progress. Resolves when ready. Runs
+   * again whenever the library changes; Generate waits for it.
+   */
+  prepareJoins() {
+    if (this.preparing) return this.preparing;
+    const label = this.$("#dance-joins");
+    this.preparing = (async () => {
+      let columns = 16;
+      const stats = { slices: 0, longestMs: 0, totalMs: 0, segments: 0 };
+      for (;;) {
+        const t = performance.now();
+        const p = this.choreographer.prepareTable(columns);
+        const dt = performance.now() - t;
+        stats.slices++;
+        stats.totalMs += dt;
+        stats.longestMs = Math.max(stats.longestMs, dt);
+        if (p >= 1) break;
+        this.root.dataset.joins = "preparing";
+        label.textContent = `Preparing joins ${Math.floor(p * 100)}%`;
+        // Aim each slice at SLICE_MS, whatever the machine.
+        columns = Math.max(1, Math.min(4096, Math.round(columns * SLICE_MS / Math.max(dt, 0.25))));
+        await new Promise((r) => setTimeout(r, 0));
+      }
+      this.root.dataset.joins = "ready";
+      label.textContent = "";
+      stats.segments = this.choreographer.segmentCount;
+      this.lastPrepare = stats;
+    })().catch((e) => {
+      this.messages.error(`Dance: ${e.message}`);
+    }).finally(() => { this.preparing = null; });
+    return this.preparing;
   }
 
   bind() {
     const $ = this.$;
     $("#dance-generate").addEventListener("click", () => this.generate());
+    $("#dance-recut").addEventListener("click", () => this.recut());
+    $("#dance-clip").addEventListener("change", () => this.showClip());
+    $("#dance-clip-bpm").addEventListener("keydown", (ev) => { if (ev.key === "Enter") this.recut(); });
     $("#dance-play").addEventListener("click", () => this.playDance());
     $("#dance-undo").addEventListener("click", () => this.undo());
     $("#dance-redo").addEventListener("click", () => this.redo());
@@ -71,9 +113,74 @@ export class ChoreoPanel {
     try {
       const s = this.choreographer.addClip(this.library, info.id);
       this.messages.info(`${info.name}: ${s.segments} dance segments at ${s.tempoBpm.toFixed(0)} counts/min`);
+      this.refreshClips(info.id);
+      this.prepareJoins();
     } catch (e) {
       this.messages.warning(`Dance: ${e.message}`);
     }
+  }
+
+  /** The clip-tempo row: every imported clip in the dance library, with its cut. */
+  refreshClips(select) {
+    const clips = this.choreographer.cutClips();
+    const sel = this.$("#dance-clip");
+    const keep = select ?? (sel.value === "" ? undefined : Number(sel.value));
+    sel.replaceChildren(...clips.map((c) => {
+      const o = document.createElement("option");
+      o.value = String(c.id);
+      o.textContent = c.name;
+      return o;
+    }));
+    if (keep != null && clips.some((c) => c.id === keep)) sel.value = String(keep);
+    this.$("#dance-clip-row").hidden = clips.length === 0;
+    this.clips = clips;
+    this.showClip();
+  }
+
+  showClip() {
+    const c = (this.clips ?? []).find((x) => String(x.id) === this.$("#dance-clip").value);
+    const bpm = this.$("#dance-clip-bpm");
+    if (!c) { this.$("#dance-clip-info").textContent = ""; return; }
+    bpm.value = c.tempoDetected ? "" : String(Math.round(c.tempoBpm * 10) / 10);
+    bpm.placeholder = c.tempoDetected ? `auto (${c.tempoBpm.toFixed(0)})` : "auto";
+    this.$("#dance-clip-info").textContent =
+      `${c.segments} segments at ${c.tempoBpm.toFixed(1)} counts/min (${c.tempoDetected ? "found in the motion" : "stated"})`;
+  }
+
+  /** Re-cuts the chosen clip at the stated tempo (or its detected beats); says what happened to bars that used the earlier cut. */
+  recut() {
+    const id = Number(this.$("#dance-clip").value);
+    const c = (this.clips ?? []).find((x) => x.id === id);
+    if (!c) return;
+    const text = this.$("#dance-clip-bpm").value.trim();
+    const bpm = text === "" ? undefined : Number(text);
+    if (bpm !== undefined && !(bpm >= 30 && bpm <= 300)) {
+      this.messages.error(`Dance: ${c.name}: a clip's tempo must be 30 to 300 counts per minute (got “${text}”)`);
+      return;
+    }
+    let r;
+    try {
+      r = this.choreographer.recutClip(id, bpm);
+    } catch (e) {
+      this.messages.error(`Dance: ${e.message}`);
+      return;
+    }
+    const how = bpm === undefined ? `at its own beats (${r.clip.tempoBpm.toFixed(0)} counts/min)` : `at ${r.clip.tempoBpm} counts/min`;
+    this.messages.info(`${c.name}: re-cut ${how}: ${r.clip.segments} segments; ${r.removed} of the earlier cut removed`);
+    const bars = (list) => list.map((b) => b + 1).join(", ");
+    if (r.pinnedBars.length) {
+      this.messages.warning(`Dance: bar${r.pinnedBars.length > 1 ? "s" : ""} ${bars(r.pinnedBars)} keep${r.pinnedBars.length > 1 ? "" : "s"} the pinned move from ${c.name}'s earlier cut (it is not offered again)`);
+    }
+    if (r.generatedBars.length) {
+      this.messages.info(`Dance: bar${r.generatedBars.length > 1 ? "s" : ""} ${bars(r.generatedBars)} keep${r.generatedBars.length > 1 ? "" : "s"} a move from the earlier cut until you Generate again`);
+    }
+    this.root.dataset.recuts = String(Number(this.root.dataset.recuts ?? 0) + 1);
+    this.refreshClips(id);
+    this.refresh();
+    // Segment numbers changed: show the selected bar's candidates and the dance afresh.
+    if (this.bar != null) this.selectBar(this.bar);
+    if (this.danceId != null) this.renderDance();
+    this.prepareJoins();
   }
 
   /** New bars from the song grid. */
@@ -170,11 +277,21 @@ export class ChoreoPanel {
     this.renderDance();
   }
 
-  generate() {
-    const r = this.act(() => this.choreographer.generate());
-    if (r) {
-      this.messages.info(`Dance: filled ${r.filled} bars (${r.pinned} pinned kept)`);
-      this.renderDance();
+  /** Fills the open bars, once the join costs are ready. */
+  async generate() {
+    if (this.generating) return;
+    this.generating = true;
+    this.root.dataset.busy = "generate";
+    try {
+      await this.prepareJoins();
+      const r = this.act(() => this.choreographer.generate());
+      if (r) {
+        this.messages.info(`Dance: filled ${r.filled} bars (${r.pinned} pinned kept)`);
+        this.renderDance();
+      }
+    } finally {
+      this.generating = false;
+      delete this.root.dataset.busy;
     }
   }
 

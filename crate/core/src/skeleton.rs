@@ -102,6 +102,26 @@ impl Skeleton {
         }
     }
 
+    /// Forward kinematics of one pose without allocating (for hot loops): each joint stands
+    /// at its parent's position plus its rest offset turned by the parent's world rotation;
+    /// a joint without a parent (or listed before it) stands at `root`. Writes the world
+    /// rotations and positions of the first `min(joints, local, rot, pos)` joints.
+    pub fn pose_into(&self, local: &[Quat], root: Vec3, rot: &mut [Quat], pos: &mut [Vec3]) {
+        let n = self.len().min(local.len()).min(rot.len()).min(pos.len());
+        for (i, j) in self.joints.iter().enumerate().take(n) {
+            match j.parent {
+                Some(p) if p < i => {
+                    rot[i] = rot[p] * local[i];
+                    pos[i] = pos[p] + rot[p] * j.rest_offset;
+                }
+                _ => {
+                    rot[i] = local[i];
+                    pos[i] = root;
+                }
+            }
+        }
+    }
+
     /// World positions of a pose given only local rotations: rest offsets for every joint and
     /// the root at the origin.
     pub fn posed_at_origin(&self, local_rotations: &[Quat]) -> Vec<Vec3> {

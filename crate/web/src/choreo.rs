@@ -4,7 +4,8 @@
 //! frame time is song time.
 
 use odori_core::bars::Bar;
-use odori_core::choreo::{segment_clip, Choreography, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::choreo::{recut_clip, segment_clip, Choreography, ClipSummary, FillWeights, RenderOptions, SegmentLibrary, SegmentOptions, TableBuilder};
+use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
 use crate::error::{to_js, OdoriError};
@@ -19,6 +20,21 @@ fn choreo_err(e: impl std::fmt::Display) -> OdoriError {
 pub struct Choreographer {
     lib: SegmentLibrary,
     doc: Option<Choreography>,
+    /// The filling's transition table being built in slices (see `prepareTable`).
+    builder: Option<TableBuilder>,
+    /// The imported clips cut into segments, by library clip id.
+    cut: Vec<CutClip>,
+}
+
+/// An imported clip in the segment library (`cutClips()`).
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+struct CutClip {
+    /// Its id in the `Library`.
+    id: u32,
+    /// What cutting it gave (`clip`: the segment library's clip index).
+    #[serde(flatten)]
+    summary: ClipSummary,
 }
 
 impl Default for Choreographer {
@@ -28,6 +44,11 @@ impl Default for Choreographer {
 }
 
 impl Choreographer {
+    /// The repetition penalty the next Generate uses (the table depends on it).
+    fn repeat_penalty(&self) -> f32 {
+        self.doc.as_ref().map_or(FillWeights::default().repeat_penalty, |d| d.settings().fill.repeat_penalty)
+    }
+
     fn doc(&mut self) -> Result<&mut Choreography, OdoriError> {
         self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet: open a song (or use the demo song) first"))
     }
@@ -38,7 +59,40 @@ impl Choreographer {
     /// Starts with the built-in move library (420 four-count moves) and no bars.
     #[wasm_bindgen(constructor)]
     pub fn new() -> Choreographer {
-        Choreographer { lib: SegmentLibrary::builtin(), doc: None }
+        Choreographer { lib: SegmentLibrary::builtin(), doc: None, builder: None, cut: Vec::new() }
+    }
+
+    /// Builds the filling's transition table (spec §G costs between every pair of segments)
+    /// in slices of up to `columns` segments, so the page stays responsive: call it between
+    /// frames until it returns 1. Returns the fraction done. `generate` builds whatever is
+    /// left in one go, so calling this is optional; it is needed again after the library
+    /// changes.
+    #[wasm_bindgen(js_name = prepareTable)]
+    pub fn prepare_table(&mut self, columns: u32) -> f32 {
+        let penalty = self.repeat_penalty();
+        if self.lib.cached_table(penalty).is_some() {
+            self.builder = None;
+            return 1.0;
+        }
+        let stale = self.builder.as_ref().is_none_or(|b| b.revision() != self.lib.revision() || b.repeat_penalty() != penalty);
+        if stale {
+            self.builder = Some(self.lib.table_builder(penalty));
+        }
+        let Some(builder) = self.builder.as_mut() else { return 0.0 };
+        let progress = builder.step(columns.max(1) as usize);
+        if !progress.is_done() {
+            return progress.fraction().min(0.999);
+        }
+        if let Some(table) = self.builder.take().and_then(TableBuilder::finish) {
+            self.lib.install_table(table);
+        }
+        1.0
+    }
+
+    /// Whether the transition table is ready (Generate then takes milliseconds).
+    #[wasm_bindgen(getter, js_name = tableReady)]
+    pub fn table_ready(&self) -> bool {
+        self.lib.cached_table(self.repeat_penalty()).is_some()
     }
 
     /// Number of segments in the library.
@@ -68,8 +122,39 @@ impl Choreographer {
     pub fn add_clip(&mut self, library: &Library, clip_id: u32, tempo_bpm: Option<f32>) -> Result<JsValue, OdoriError> {
         let e = library.entry(clip_id)?;
         let opts = SegmentOptions { tempo_bpm, ..Default::default() };
+        if self.cut.iter().any(|c| c.id == clip_id) {
+            return Err(OdoriError::new("choreo", format!("{} is already in the dance library: re-cut it to change its tempo", e.clip.name)));
+        }
         let summary = self.lib.add_clip(&e.clip, &e.humanoid, &e.status, &opts).map_err(|err| OdoriError::new("choreo", format!("{}: {err}", e.clip.name)))?;
+        self.cut.push(CutClip { id: clip_id, summary: summary.clone() });
         Ok(to_js(&summary))
+    }
+
+    /// The imported clips in the dance library: `{ id, clip, name, tempoBpm, tempoDetected,
+    /// beats, segments }[]` (`id`: the `Library` clip id).
+    #[wasm_bindgen(js_name = cutClips)]
+    pub fn cut_clips(&self) -> JsValue {
+        to_js(&self.cut)
+    }
+
+    /// Re-cuts an imported clip into 4-count segments at `tempoBpm` counts per minute (the
+    /// person knows the clip's tempo), or at its detected beats again when `tempoBpm` is
+    /// undefined. Nothing of the dance is lost: bars holding a segment of the earlier cut keep
+    /// that motion (the earlier segment stays, never offered again), other clips' bars are
+    /// untouched, undo/redo still work. Returns `{ clip: summary, removed, kept, pinnedBars,
+    /// generatedBars }` (bars 0-based); throws for an unknown clip, a tempo outside 30..=300
+    /// or one at which the clip holds no 4 counts (then nothing changes).
+    #[wasm_bindgen(js_name = recutClip)]
+    pub fn recut_clip(&mut self, clip_id: u32, tempo_bpm: Option<f32>) -> Result<JsValue, OdoriError> {
+        let Some(at) = self.cut.iter().position(|c| c.id == clip_id) else {
+            return Err(OdoriError::new("not-found", format!("clip {clip_id} is not in the dance library (only humanoid clips are)")));
+        };
+        let clip = self.cut[at].summary.clip;
+        let opts = SegmentOptions { tempo_bpm, ..Default::default() };
+        let report = recut_clip(&mut self.lib, self.doc.as_mut(), clip, &opts).map_err(choreo_err)?;
+        self.builder = None;
+        self.cut[at].summary = report.clip.clone();
+        Ok(to_js(&report))
     }
 
     /// One segment's facts (`{ index, name, source, tempoBpm, intensity01, ... }`).

@@ -2,22 +2,16 @@
 //!
 //! Every clip in the library lives on the canonical skeleton, so any two can be joined and
 //! composed. Built-in actions are authored there; an imported clip is retargeted onto it when
-//! it is added ([`ActionLibrary::add_clip`]): the canonical joints' world positions are
-//! read through the humanoid map, and each canonical bone is turned to point where the
-//! source's bone points (the hips and chest take their frame from the legs and shoulders).
-//! Twist about a bone's own axis is not carried over; stick figures and joins do not need it.
+//! it is added ([`ActionLibrary::add_clip`]) by the engine's retargeting ([`crate::retarget`]).
 
-use std::sync::Arc;
-
-use glam::{Mat3, Quat, Vec3};
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::actions::procedural::{builtin_actions, SOLE_HEIGHT};
+use crate::actions::procedural::builtin_actions;
 use crate::actions::{ActionError, BodyPart};
-use crate::builtin::canonical_skeleton;
-use crate::clip::{Clip, TranslationTrack};
-use crate::humanoid::{canonical_positions, Canon, HumanoidMap, CANON_COUNT};
-use crate::skeleton::Skeleton;
+use crate::clip::Clip;
+use crate::humanoid::HumanoidMap;
+use crate::retarget::{is_canonical, to_canonical};
 
 /// One clip of the library.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -232,13 +226,9 @@ pub fn walk_out_of_place(clip: &mut Clip, advance: Vec3) -> Option<Vec3> {
     Some(at + last)
 }
 
-fn is_canonical(sk: &Skeleton) -> bool {
-    sk.len() == CANON_COUNT && Canon::ALL.iter().zip(&sk.joints).all(|(c, j)| j.name == c.name() && j.parent == c.parent().map(Canon::index))
-}
-
 /// A clip on the canonical skeleton: unchanged when it already is; otherwise retargeted by
-/// bone directions (see the module notes), scaled to the canonical body's leg length and put
-/// on the floor.
+/// bone directions ([`crate::retarget::to_canonical`], the engine's one retargeting) at its own
+/// frame rate. Refused when the skeleton is not humanoid.
 pub fn retarget_to_canonical(clip: &Clip) -> Result<Clip, ActionError> {
     if is_canonical(&clip.skeleton) {
         return Ok(clip.clone());
@@ -248,71 +238,14 @@ pub fn retarget_to_canonical(clip: &Clip) -> Result<Clip, ActionError> {
     if !status.is_humanoid() {
         return Err(ActionError::NotHumanoid { name: clip.name.clone(), reason: format!("{status:?}") });
     }
-    let pos = canonical_positions(clip, &map);
-    let frames = clip.frame_count();
-    let sk = canonical_skeleton();
-    let rest = sk.rest_positions();
-    use Canon::*;
-    // Scale: canonical leg length over the source's (hips to foot, first frame).
-    let leg = |p: &[Vec3]| (p[LeftUpperLeg.index()] - p[LeftLowerLeg.index()]).length() + (p[LeftLowerLeg.index()] - p[LeftFoot.index()]).length();
-    let src_leg = leg(&pos[..CANON_COUNT]).max(1e-4);
-    let scale = leg(&rest) / src_leg;
-    let mut rotations = Vec::with_capacity(frames * CANON_COUNT);
-    let mut root = Vec::with_capacity(frames);
-    for f in 0..frames {
-        let p = &pos[f * CANON_COUNT..(f + 1) * CANON_COUNT];
-        let mut world = [Quat::IDENTITY; CANON_COUNT];
-        let frame_of = |x: Vec3, y: Vec3| -> Quat {
-            let y = y.normalize_or(Vec3::Y);
-            let z = x.cross(y).normalize_or(Vec3::Z);
-            let x = y.cross(z);
-            Quat::from_mat3(&Mat3::from_cols(x, y, z))
-        };
-        world[Hips.index()] = frame_of(p[LeftUpperLeg.index()] - p[RightUpperLeg.index()], p[Spine.index()] - p[Hips.index()]);
-        for c in Canon::ALL.into_iter().skip(1) {
-            let parent = c.parent().unwrap_or(Hips);
-            let pw = world[parent.index()];
-            world[c.index()] = match c {
-                Chest => frame_of(p[LeftShoulder.index()] - p[RightShoulder.index()], p[Neck.index()] - p[Chest.index()]),
-                Head | LeftHand | RightHand | LeftToe | RightToe => pw,
-                _ => {
-                    // The canonical child of this joint along the chain.
-                    let child = Canon::ALL.into_iter().find(|k| k.parent() == Some(c) && !matches!(k, LeftShoulder | RightShoulder));
-                    match child {
-                        Some(k) => {
-                            let want = (p[k.index()] - p[c.index()]).normalize_or_zero();
-                            let have = (pw * sk.joints[k.index()].rest_offset).normalize_or_zero();
-                            if want == Vec3::ZERO || have == Vec3::ZERO { pw } else { Quat::from_rotation_arc(have, want) * pw }
-                        }
-                        None => pw,
-                    }
-                }
-            };
-        }
-        for c in Canon::ALL {
-            let local = match c.parent() {
-                None => world[c.index()],
-                Some(pa) => world[pa.index()].inverse() * world[c.index()],
-            };
-            rotations.push(local.normalize());
-        }
-        root.push(p[Hips.index()] * scale);
-    }
-    // Floor: the lowest toe over the clip at sole height.
-    let mut c = Clip { name: clip.name.clone(), source: clip.source.clone(), fps: clip.fps, skeleton: Arc::new(sk), rotations, translations: vec![TranslationTrack { joint: 0, values: root }] };
-    let all = c.all_world_positions();
-    let mut lows: Vec<f32> = all.chunks(CANON_COUNT).map(|p| p[LeftToe.index()].y.min(p[RightToe.index()].y)).collect();
-    lows.sort_by(f32::total_cmp);
-    let floor = lows.get(lows.len() / 50).copied().unwrap_or(0.0);
-    for v in &mut c.translations[0].values {
-        v.y += SOLE_HEIGHT - floor;
-    }
-    Ok(c)
+    Ok(to_canonical(clip, &map, clip.fps))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::humanoid::Canon;
+    use std::sync::Arc;
 
     #[test]
     fn builtin_has_every_action_the_parser_needs() {

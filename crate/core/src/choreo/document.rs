@@ -24,13 +24,15 @@
 //! [`undo`]: Choreography::undo
 //! [`redo`]: Choreography::redo
 
+use std::collections::BTreeSet;
+
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
 use super::fill::{fill, FillError, FillWeights, Layer};
 use super::render::{render, RenderOptions};
-use super::segment::SegmentLibrary;
+use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
 use crate::bars::Bar;
 use crate::clip::Clip;
 
@@ -135,6 +137,46 @@ pub struct GenerateReport {
     pub cost: f32,
 }
 
+/// What re-cutting a clip meant for the dance (see [`recut_clip`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct RecutReport {
+    /// The new cut.
+    pub clip: ClipSummary,
+    /// Segments of the earlier cut removed from the library.
+    pub removed: usize,
+    /// Segments of the earlier cut kept because the dance (or its undo history) uses them.
+    pub kept: usize,
+    /// Bars pinned to a segment of the earlier cut: they keep that motion.
+    pub pinned_bars: Vec<usize>,
+    /// Bars the engine filled with a segment of the earlier cut: they keep it until the next
+    /// Generate, which fills them from the new cut.
+    pub generated_bars: Vec<usize>,
+}
+
+/// Re-cuts library clip `clip` into 4-count segments with new options (a tempo the person
+/// states for it, or `tempo_bpm: None` to detect its beats again) without losing anything of
+/// the dance: segments of the earlier cut that any bar holds — now or anywhere in the undo and
+/// redo history — or that a bar's search liked stay in the library as retired (they play as
+/// before but are never offered or chosen again), the rest go, and the document's segment
+/// numbers follow the library's. On error nothing changes.
+pub fn recut_clip(lib: &mut SegmentLibrary, doc: Option<&mut Choreography>, clip: usize, options: &SegmentOptions) -> Result<RecutReport, SegmentError> {
+    let in_use = doc.as_ref().map(|d| d.segments_in_use()).unwrap_or_default();
+    let recut = lib.recut_clip(clip, options, &|i| in_use.contains(&i))?;
+    let (mut pinned_bars, mut generated_bars) = (Vec::new(), Vec::new());
+    if let Some(doc) = doc {
+        doc.remap_segments(&recut.remap);
+        for (bar, state) in doc.states().iter().enumerate() {
+            match *state {
+                BarState::Pinned { segment } if recut.kept.contains(&segment) => pinned_bars.push(bar),
+                BarState::Generated { segment } if recut.kept.contains(&segment) => generated_bars.push(bar),
+                _ => {}
+            }
+        }
+    }
+    Ok(RecutReport { clip: recut.summary, removed: recut.removed, kept: recut.kept.len(), pinned_bars, generated_bars })
+}
+
 /// Bars must exist, have positive length and come in order.
 fn check_bars(bars: &[Bar]) -> Result<(), ChoreoError> {
     if bars.is_empty() {
@@ -196,6 +238,40 @@ impl Choreography {
     /// The segment in each bar, if any.
     pub fn segments(&self) -> Vec<Option<usize>> {
         self.doc.states.iter().map(BarState::segment).collect()
+    }
+
+    /// Every segment the document refers to, now or in its undo/redo history: the bars'
+    /// segments and the candidates a search liked.
+    pub fn segments_in_use(&self) -> BTreeSet<usize> {
+        let mut out = BTreeSet::new();
+        for d in std::iter::once(&self.doc).chain(&self.undo).chain(&self.redo) {
+            out.extend(d.states.iter().filter_map(BarState::segment));
+            out.extend(d.sessions.iter().flatten().flat_map(|s| s.liked.iter().copied()));
+        }
+        out
+    }
+
+    /// Renumbers segments after the library dropped some (`remap[old]` = new index, `None`:
+    /// gone), in the document and its whole undo/redo history. A bar whose segment is gone
+    /// becomes empty (it cannot happen after [`recut_clip`], which keeps every segment in
+    /// use); searches forget shown candidates that are gone. Not an edit: nothing is recorded.
+    pub fn remap_segments(&mut self, remap: &[Option<usize>]) {
+        let map = |s: usize| remap.get(s).copied().flatten();
+        let map_list = |v: &mut Vec<usize>| *v = v.iter().filter_map(|&s| map(s)).collect();
+        for d in std::iter::once(&mut self.doc).chain(self.undo.iter_mut()).chain(self.redo.iter_mut()) {
+            for st in d.states.iter_mut() {
+                *st = match *st {
+                    BarState::Empty => BarState::Empty,
+                    BarState::Pinned { segment } => map(segment).map_or(BarState::Empty, |segment| BarState::Pinned { segment }),
+                    BarState::Generated { segment } => map(segment).map_or(BarState::Empty, |segment| BarState::Generated { segment }),
+                };
+            }
+            for s in d.sessions.iter_mut().flatten() {
+                map_list(&mut s.shown);
+                map_list(&mut s.liked);
+                map_list(&mut s.round);
+            }
+        }
     }
 
     /// The bar's feedback session, if one is open.

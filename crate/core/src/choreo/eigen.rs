@@ -101,12 +101,18 @@ pub fn top_eigen(matrix: &[f64], n: usize, k: usize) -> (Vec<f64>, Vec<f64>) {
         v[j * n + ax] = 1.0;
     }
     let mut w = vec![0.0f64; p * n];
+    // W = A V, column by column as a sum of A's columns (A is symmetric, so its rows): the
+    // inner loop is an axpy over contiguous memory, which vectorises (a dot product's
+    // reduction would not).
     let mul = |v: &[f64], w: &mut [f64]| {
-        for j in 0..p {
-            let col = &v[j * n..(j + 1) * n];
-            for i in 0..n {
-                let row = &matrix[i * n..(i + 1) * n];
-                w[j * n + i] = row.iter().zip(col).map(|(a, b)| a * b).sum();
+        for (vj, wj) in v.chunks_exact(n).zip(w.chunks_exact_mut(n)) {
+            wj.fill(0.0);
+            for (&c, row) in vj.iter().zip(matrix.chunks_exact(n)) {
+                if c != 0.0 {
+                    for (o, &a) in wj.iter_mut().zip(row) {
+                        *o += c * a;
+                    }
+                }
             }
         }
     };
@@ -120,7 +126,7 @@ pub fn top_eigen(matrix: &[f64], n: usize, k: usize) -> (Vec<f64>, Vec<f64>) {
     let mut h = vec![0.0f64; p * p];
     for a in 0..p {
         for b in 0..p {
-            h[a * p + b] = (0..n).map(|i| v[a * n + i] * w[b * n + i]).sum();
+            h[a * p + b] = dot(&v[a * n..(a + 1) * n], &w[b * n..(b + 1) * n]);
         }
     }
     for a in 0..p {
@@ -145,26 +151,41 @@ pub fn top_eigen(matrix: &[f64], n: usize, k: usize) -> (Vec<f64>, Vec<f64>) {
 fn orthonormalize(w: &mut [f64], n: usize, p: usize, axes: &[usize]) {
     let mut spare = axes.iter().copied().skip(p).chain(axes.iter().copied());
     for j in 0..p {
+        let (done, rest) = w.split_at_mut(j * n);
+        let wj = &mut rest[..n];
         for _attempt in 0..3 {
-            for q in 0..j {
-                let dot: f64 = (0..n).map(|i| w[j * n + i] * w[q * n + i]).sum();
-                for i in 0..n {
-                    w[j * n + i] -= dot * w[q * n + i];
+            for wq in done.chunks_exact(n) {
+                let d = dot(wj, wq);
+                for (x, &q) in wj.iter_mut().zip(wq) {
+                    *x -= d * q;
                 }
             }
-            let norm: f64 = (0..n).map(|i| w[j * n + i] * w[j * n + i]).sum::<f64>().sqrt();
+            let norm = dot(wj, wj).sqrt();
             if norm > 1e-150 {
-                for i in 0..n {
-                    w[j * n + i] /= norm;
-                }
+                let inv = 1.0 / norm;
+                wj.iter_mut().for_each(|x| *x *= inv);
                 break;
             }
             let ax = spare.next().unwrap_or(0);
-            for i in 0..n {
-                w[j * n + i] = if i == ax { 1.0 } else { 0.0 };
+            for (i, x) in wj.iter_mut().enumerate() {
+                *x = if i == ax { 1.0 } else { 0.0 };
             }
         }
     }
+}
+
+/// Dot product with four running sums (so it vectorises without reassociating one sum).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let (ac, bc) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ar, br) = (ac.remainder(), bc.remainder());
+    for (x, y) in ac.zip(bc) {
+        for k in 0..4 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    let tail: f64 = ar.iter().zip(br).map(|(x, y)| x * y).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 fn identity(n: usize) -> Vec<f64> {
@@ -203,14 +224,15 @@ impl Signature {
         }
         let mut cov = vec![0.0f64; dims * dims];
         let mut row = vec![0.0f64; dims];
-        for f in 0..frames {
-            for d in 0..dims {
-                row[d] = features[f * dims + d] as f64 - mean[d];
+        for frame in features.chunks_exact(dims.max(1)).take(frames) {
+            for ((r, &x), &m) in row.iter_mut().zip(frame).zip(&mean) {
+                *r = x as f64 - m;
             }
+            // Upper triangle, row by row (an axpy each: vectorises).
             for i in 0..dims {
                 let ri = row[i];
-                for j in i..dims {
-                    cov[i * dims + j] += ri * row[j];
+                for (c, &rj) in cov[i * dims + i..(i + 1) * dims].iter_mut().zip(&row[i..]) {
+                    *c += ri * rj;
                 }
             }
         }

@@ -57,7 +57,8 @@ impl FeedbackSession {
         let m = lib.len();
         let rho = if rho.is_finite() { rho.clamp(0.0, 1.0) } else { 0.5 };
         let tau = self.tau;
-        let mut is_shown = vec![false; m];
+        // Segments kept only for the bars that hold them (an earlier cut) are never offered.
+        let mut is_shown: Vec<bool> = lib.segments().iter().map(|s| s.retired).collect();
         for &s in &self.shown {
             if s < m {
                 is_shown[s] = true;

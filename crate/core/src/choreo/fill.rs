@@ -2,14 +2,7 @@
 //! bar, one node per segment in an open bar and the single pinned segment in a pinned bar.
 //!
 //! The edge cost from segment A to segment B is C = 1 / S with S = S_pose + S_move exactly as
-//! spec §G, over the 20 canonical links with weights β_l (summing to 1):
-//! - S_pose = Σ β_l · h(v_l(i_A)) · h(v_l(j_B)),
-//! - S_move = Σ β_l · g[h(v_l(j_B) − v_l(i_A)) · h(v̇_l(i_A))] + Σ β_l · g[h(v_l(j_B) − v_l(i_A)) · h(v̇_l(j_B))],
-//!
-//! with i_A the last frame A plays, j_B the first frame of B, link vectors from the normalised
-//! body (spec §B), h normalisation to unit length and g[x] = max(x, 0). Where the spec leaves
-//! it open: S is floored at 0.02 (so C ≤ 50), and a link that does not move across the join
-//! (|v_l(j_B) − v_l(i_A)| < 1e-5) continues perfectly, g = 1 on both sides.
+//! spec §G (see [`super::table`], which builds the M × M table of them).
 //!
 //! The product adds two terms: a music term `music_weight · |bar intensity − segment
 //! intensity|` per open bar, and a repetition penalty `repeat_penalty` on an edge whose two
@@ -25,9 +18,8 @@
 //! optimal.
 //!
 //! Speed: the M × M edge costs depend only on the library and are computed once per library
-//! (cached by [`super::SegmentLibrary::transition_table`]) over structure-of-arrays copies of
-//! the segment ends, in cache-sized blocks, so the inner loop vectorises; they are stored
-//! column by column (all predecessors of one segment contiguous). In each open layer a column
+//! ([`super::table`]; cached by [`super::SegmentLibrary::transition_table`]). In each open
+//! layer a column
 //! first tries only its [`TOP_K`] cheapest edges and the previous layer's [`LOW_L`] cheapest
 //! nodes, and accepts their best when it is provably optimal: any other predecessor costs at
 //! least (the cheapest node outside that set) + (the cheapest edge outside that list).
@@ -37,229 +29,10 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::segment::{SegmentLibrary, LINK_COUNT};
+pub use super::table::{link_weights, TransitionTable, MIN_S, TOP_K};
 
-/// Floor on S, so C = 1/S stays finite.
-pub const MIN_S: f32 = 0.02;
-
-/// Per-link weights β_l, summing to 1: limbs' end links weigh a little more than the spine.
-pub fn link_weights() -> [f32; LINK_COUNT] {
-    let mut w = [1.0f32; LINK_COUNT];
-    // Forearm→hand and lower leg→foot links carry the visible motion.
-    for l in [6, 7, 10, 11, 13, 14, 17, 18] {
-        w[l] = 1.5;
-    }
-    let sum: f32 = w.iter().sum();
-    w.map(|x| x / sum)
-}
-
-/// The M × M edge costs C(a, b) (repetition penalty included), stored column by column (all
-/// predecessors `a` of one `b` are contiguous), with each column's minimum.
-#[derive(Clone, Debug, PartialEq)]
-pub struct TransitionTable {
-    m: usize,
-    /// `costs[b * m + a]` = C(a, b).
-    costs: Vec<f32>,
-    col_min: Vec<f32>,
-    /// `rows[a * m + b]` = C(a, b): the same costs row by row, for the fast path.
-    rows: Vec<f32>,
-    /// Per column, the [`TOP_K`] cheapest predecessors in increasing cost (then index).
-    top: Vec<u32>,
-    /// Their costs, alongside.
-    top_cost: Vec<f32>,
-    /// Per column, the cheapest cost outside its top list (a lower bound for the rest).
-    rest_min: Vec<f32>,
-    repeat_penalty: f32,
-}
-
-/// Predecessors kept per column for the fast path of the filling.
-pub const TOP_K: usize = 96;
 /// Cheapest nodes of the previous layer tried by every column on the fast path.
 pub const LOW_L: usize = 96;
-
-fn transpose(m: usize, costs: &[f32]) -> Vec<f32> {
-    let mut t = vec![0.0f32; m * m];
-    const TILE: usize = 64;
-    for b0 in (0..m).step_by(TILE) {
-        for a0 in (0..m).step_by(TILE) {
-            for b in b0..(b0 + TILE).min(m) {
-                for a in a0..(a0 + TILE).min(m) {
-                    t[a * m + b] = costs[b * m + a];
-                }
-            }
-        }
-    }
-    t
-}
-
-fn top_lists(m: usize, costs: &[f32]) -> (Vec<u32>, Vec<f32>) {
-    let k = TOP_K.min(m);
-    let mut top = Vec::with_capacity(m * k);
-    let mut rest = Vec::with_capacity(m);
-    let mut idx: Vec<u32> = Vec::with_capacity(m);
-    for col in costs.chunks_exact(m.max(1)) {
-        idx.clear();
-        idx.extend(0..m as u32);
-        let by = |x: &u32, y: &u32| col[*x as usize].total_cmp(&col[*y as usize]).then(x.cmp(y));
-        if k < m {
-            idx.select_nth_unstable_by(k, by);
-            rest.push(col[idx[k] as usize]);
-            // The rest's minimum is the k-th order statistic after selection.
-            let r = idx[k..].iter().map(|&a| col[a as usize]).fold(f32::INFINITY, f32::min);
-            if let Some(last) = rest.last_mut() {
-                *last = r;
-            }
-        } else {
-            rest.push(f32::INFINITY);
-        }
-        let head = &mut idx[..k];
-        head.sort_by(by);
-        top.extend_from_slice(head);
-    }
-    (top, rest)
-}
-
-fn top_costs(m: usize, costs: &[f32], top: &[u32]) -> Vec<f32> {
-    let k = TOP_K.min(m);
-    top.iter().enumerate().map(|(i, &a)| costs[(i / k.max(1)) * m + a as usize]).collect()
-}
-
-impl TransitionTable {
-    /// A table from given costs (row-major by `a`: `costs[a * m + b]` = C(a, b)); for tests and
-    /// other libraries. Non-finite or negative costs are clamped to `0..=1e6`.
-    pub fn from_costs(m: usize, mut costs: Vec<f32>) -> TransitionTable {
-        costs.resize(m * m, 1e6);
-        let mut t = vec![0.0f32; m * m];
-        for a in 0..m {
-            for b in 0..m {
-                let c = costs[a * m + b];
-                t[b * m + a] = if c.is_finite() { c.clamp(0.0, 1e6) } else { 1e6 };
-            }
-        }
-        let col_min = column_minima(m, &t);
-        let (top, rest_min) = top_lists(m, &t);
-        let top_cost = top_costs(m, &t, &top);
-        let rows = transpose(m, &t);
-        TransitionTable { m, costs: t, col_min, rows, top, top_cost, rest_min, repeat_penalty: 0.0 }
-    }
-
-    /// Spec §G's costs between every pair of the library's segments, plus `repeat_penalty` on
-    /// pairs that share clip frames.
-    pub fn from_library(lib: &SegmentLibrary, repeat_penalty: f32) -> TransitionTable {
-        match Self::from_library_with_progress(lib, repeat_penalty, &mut |_| true) {
-            Some(t) => t,
-            None => TransitionTable::from_costs(0, Vec::new()),
-        }
-    }
-
-    /// [`TransitionTable::from_library`] reporting progress (0..1) after each block of
-    /// predecessors; the callback returns `false` to cancel (then `None`).
-    pub fn from_library_with_progress(lib: &SegmentLibrary, repeat_penalty: f32, progress: &mut dyn FnMut(f32) -> bool) -> Option<TransitionTable> {
-        let m = lib.len();
-        let beta = link_weights();
-        let ends = &lib.ends;
-        // Structure-of-arrays copies of every segment's end (the `a` side), link-major, so the
-        // inner loop over `a` is contiguous and vectorises.
-        let soa = |f: &dyn Fn(&super::segment::JoinEnds, usize) -> glam::Vec3| -> [Vec<f32>; 3] {
-            let mut out = [vec![0.0f32; LINK_COUNT * m], vec![0.0f32; LINK_COUNT * m], vec![0.0f32; LINK_COUNT * m]];
-            for (a, e) in ends.iter().enumerate() {
-                for l in 0..LINK_COUNT {
-                    let v = f(e, l);
-                    out[0][l * m + a] = v.x;
-                    out[1][l * m + a] = v.y;
-                    out[2][l * m + a] = v.z;
-                }
-            }
-            out
-        };
-        let end = soa(&|e, l| e.end[l]);
-        let end_u = soa(&|e, l| e.end[l].normalize_or_zero());
-        let end_vu = soa(&|e, l| e.end_velocity[l].normalize_or_zero());
-        let mut costs = vec![0.0f32; m * m];
-        // Blocks of predecessors small enough that their link data stays in cache while every
-        // successor column is filled.
-        const BLOCK: usize = 256;
-        let mut acc = [0.0f32; BLOCK];
-        for a0 in (0..m).step_by(BLOCK) {
-            let n = BLOCK.min(m - a0);
-            for (b, eb) in ends.iter().enumerate() {
-                let acc = &mut acc[..n];
-                acc.iter_mut().for_each(|x| *x = 0.0);
-                for l in 0..LINK_COUNT {
-                    let s = eb.start[l];
-                    let su = s.normalize_or_zero();
-                    let wu = eb.start_velocity[l].normalize_or_zero();
-                    let bl = beta[l];
-                    let r = l * m + a0..l * m + a0 + n;
-                    let (ex, ey, ez) = (&end[0][r.clone()], &end[1][r.clone()], &end[2][r.clone()]);
-                    let (ux, uy, uz) = (&end_u[0][r.clone()], &end_u[1][r.clone()], &end_u[2][r.clone()]);
-                    let (vx, vy, vz) = (&end_vu[0][r.clone()], &end_vu[1][r.clone()], &end_vu[2][r]);
-                    for a in 0..n {
-                        let pose = ux[a] * su.x + uy[a] * su.y + uz[a] * su.z;
-                        let (dx, dy, dz) = (s.x - ex[a], s.y - ey[a], s.z - ez[a]);
-                        let len2 = dx * dx + dy * dy + dz * dz;
-                        let dv = dx * vx[a] + dy * vy[a] + dz * vz[a];
-                        let dw = dx * wu.x + dy * wu.y + dz * wu.z;
-                        let moving = (dv.max(0.0) + dw.max(0.0)) / len2.max(1e-10).sqrt();
-                        // A link that does not move across the join continues perfectly (g = 1
-                        // twice).
-                        let mv = if len2 < 1e-10 { 2.0 } else { moving };
-                        acc[a] += bl * (pose + mv);
-                    }
-                }
-                for (slot, s) in costs[b * m + a0..b * m + a0 + n].iter_mut().zip(acc.iter()) {
-                    *slot = 1.0 / s.max(MIN_S);
-                }
-            }
-            if !progress((a0 + n) as f32 / m as f32) {
-                return None;
-            }
-        }
-        for (a, ov) in lib.overlaps.iter().enumerate() {
-            for &b in ov {
-                if b < m {
-                    costs[b * m + a] += repeat_penalty;
-                }
-            }
-        }
-        let col_min = column_minima(m, &costs);
-        let (top, rest_min) = top_lists(m, &costs);
-        let top_cost = top_costs(m, &costs, &top);
-        let rows = transpose(m, &costs);
-        Some(TransitionTable { m, costs, col_min, rows, top, top_cost, rest_min, repeat_penalty })
-    }
-
-    /// Number of segments.
-    pub fn len(&self) -> usize {
-        self.m
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.m == 0
-    }
-
-    /// C(a, b); infinite when out of range.
-    pub fn cost(&self, a: usize, b: usize) -> f32 {
-        if a < self.m && b < self.m {
-            self.costs[b * self.m + a]
-        } else {
-            f32::INFINITY
-        }
-    }
-
-    pub fn repeat_penalty(&self) -> f32 {
-        self.repeat_penalty
-    }
-
-    /// All C(·, b), indexed by the predecessor.
-    fn column(&self, b: usize) -> &[f32] {
-        &self.costs[b * self.m..(b + 1) * self.m]
-    }
-}
-
-fn column_minima(m: usize, costs: &[f32]) -> Vec<f32> {
-    costs.chunks_exact(m.max(1)).map(|col| col.iter().cloned().fold(f32::INFINITY, f32::min)).collect()
-}
 
 /// One bar of the filling problem.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -389,8 +162,16 @@ pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intens
     if layers.is_empty() {
         return Ok((Vec::new(), 0.0, stats));
     }
+    if layers.iter().any(|l| matches!(l, Layer::Open { .. })) && !(0..m).any(|s| table.is_available(s)) {
+        return Err(FillError::EmptyLibrary);
+    }
     let window = if weights.repeat_penalty > 0.0 { weights.repeat_window } else { 0 };
-    let music = |intensity: f32, b: usize| weights.music_weight * (intensity - segment_intensity[b]).abs();
+    // A segment kept only for the bars that hold it (an old cut of a re-cut clip) never fills
+    // an open bar.
+    let music = |intensity: f32, b: usize| {
+        let unavailable = if table.is_available(b) { 0.0 } else { f32::INFINITY };
+        weights.music_weight * (intensity - segment_intensity[b]).abs() + unavailable
+    };
     // Node costs of the current layer: either one fixed node or all m.
     enum Nodes {
         One(usize, f32),
@@ -535,6 +316,9 @@ pub fn path_cost(table: &TransitionTable, layers: &[Layer], segment_intensity: &
         let Some(&s) = path.get(t) else { return f32::INFINITY };
         if let Layer::Open { intensity } = l {
             c += weights.music_weight * (intensity - segment_intensity.get(s).copied().unwrap_or(f32::INFINITY)).abs();
+            if !table.is_available(s) {
+                return f32::INFINITY;
+            }
         }
         if t > 0 {
             c += table.cost(path[t - 1], s);

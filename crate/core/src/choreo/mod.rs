@@ -10,13 +10,14 @@ pub mod feedback;
 pub mod fill;
 pub mod grid;
 pub mod render;
-pub mod retarget;
 pub mod segment;
+pub mod table;
 
-pub use document::{BarState, BarView, ChoreoError, Choreography, GenerateReport, Settings};
+pub use document::{recut_clip, BarState, BarView, ChoreoError, Choreography, GenerateReport, RecutReport, Settings};
 pub use eigen::Signature;
 pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, CANDIDATES_PER_ROUND, TAU_DECAY};
 pub use fill::{fill, fill_with_stats, path_cost, FillError, FillStats, FillWeights, Layer, TransitionTable};
 pub use grid::{bars_from_tempo, GridError};
 pub use render::{render, segment_clip, speed_jumps, RenderOptions};
-pub use segment::{ClipSummary, LibraryClip, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};
+pub use table::{TableBuilder, TableProgress};
+pub use segment::{ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};

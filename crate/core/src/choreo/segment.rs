@@ -18,8 +18,8 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::eigen::Signature;
-use super::fill::TransitionTable;
-use super::retarget::to_canonical;
+use super::table::{TableBuilder, TransitionTable};
+use crate::retarget::to_canonical;
 use crate::clip::Clip;
 use crate::humanoid::{canonical_positions, Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
 use crate::library::{builtin_clips, builtin_moves, MoveInfo};
@@ -67,6 +67,10 @@ pub enum SegmentError {
     BadTempo { name: String, tempo_bpm: f32 },
     #[error("clip '{name}' is invalid: {message}")]
     Invalid { name: String, message: String },
+    #[error("there is no clip {clip} in the segment library (it has {clips})")]
+    NoSuchClip { clip: usize, clips: usize },
+    #[error("'{name}' is a built-in move: it is one bar at 120 counts per minute and cannot be re-cut")]
+    BuiltinClip { name: String },
 }
 
 /// How to cut a clip.
@@ -124,6 +128,10 @@ pub struct Segment {
     pub intensity01: f32,
     /// The built-in move, for built-in segments.
     pub builtin: Option<MoveInfo>,
+    /// Kept only for the bars that already hold it (an older cut of a clip the person re-cut
+    /// at a stated tempo): never offered as a candidate nor chosen to fill an open bar.
+    #[serde(default)]
+    pub retired: bool,
 }
 
 impl Segment {
@@ -154,6 +162,21 @@ pub struct ClipSummary {
     pub segments: usize,
 }
 
+/// What re-cutting a clip did (see [`SegmentLibrary::recut_clip`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Recut {
+    /// The new cut.
+    pub summary: ClipSummary,
+    /// For every segment index before the re-cut, its index after (`None`: removed).
+    pub remap: Vec<Option<usize>>,
+    /// Segments of the earlier cut kept (as retired) because something still uses them, by
+    /// their new index.
+    pub kept: Vec<usize>,
+    /// Segments of the earlier cut removed.
+    pub removed: usize,
+}
+
 /// The segments every choreography chooses from.
 #[derive(Debug, Default)]
 pub struct SegmentLibrary {
@@ -165,6 +188,8 @@ pub struct SegmentLibrary {
     /// (itself included). Following one with an overlapping one repeats the same motion.
     pub(crate) overlaps: Vec<Vec<usize>>,
     table: Mutex<Option<Arc<TransitionTable>>>,
+    /// Bumped by every change of the segments, so a table built elsewhere can be checked.
+    revision: u64,
 }
 
 impl SegmentLibrary {
@@ -208,21 +233,7 @@ impl SegmentLibrary {
             }
         }
         let canon = to_canonical(clip, map, LIBRARY_FPS);
-        let speed = joint_speed(&canon);
-        let (beats, tempo_bpm, detected) = match options.tempo_bpm {
-            Some(bpm) => {
-                let period = LIBRARY_FPS * 60.0 / bpm;
-                let phase = match options.first_beat_secs {
-                    Some(t) => (t * LIBRARY_FPS).rem_euclid(period),
-                    None => best_phase(&speed, period),
-                };
-                (grid(speed.len(), period, phase), bpm, false)
-            }
-            None => {
-                let (beats, period) = detect_beats(&speed);
-                (beats, LIBRARY_FPS * 60.0 / period.max(1e-3), true)
-            }
-        };
+        let (beats, tempo_bpm, detected) = cut_beats(&canon, options);
         if beats.len() < SEGMENT_COUNTS + 1 {
             return Err(SegmentError::TooShort { name, duration_secs: clip.duration_secs(), beats: beats.len(), tempo_bpm });
         }
@@ -237,6 +248,16 @@ impl SegmentLibrary {
 
     fn push_clip(&mut self, lc: LibraryClip, hop: usize) -> usize {
         let clip_index = self.clips.len();
+        self.clips.push(lc);
+        let added = self.cut_segments(clip_index, hop);
+        self.changed();
+        added
+    }
+
+    /// Appends the segments of clip `clip_index` at its beats (every `hop` counts), and sets
+    /// the overlaps among all its segments.
+    fn cut_segments(&mut self, clip_index: usize, hop: usize) -> usize {
+        let Some(lc) = self.clips.get(clip_index) else { return 0 };
         // Library clips are on the canonical skeleton: world positions are the canonical ones.
         let positions = canonical_world_positions(&lc.clip);
         let frames = positions.len() / CANON_COUNT;
@@ -290,26 +311,139 @@ impl SegmentLibrary {
                     intensity,
                     intensity01: 0.0,
                     builtin: lc.builtin,
+                    retired: false,
                 });
+                self.overlaps.push(Vec::new());
             }
             k += hop;
         }
-        // Overlaps within this clip.
-        for i in first_new..self.segments.len() {
+        self.set_overlaps(clip_index);
+        self.segments.len() - first_new
+    }
+
+    /// Overlaps among all the segments of clip `clip` (the new ones and any of its earlier
+    /// cut kept by a re-cut).
+    fn set_overlaps(&mut self, clip: usize) {
+        let of_clip: Vec<usize> = (0..self.segments.len()).filter(|&i| self.segments[i].clip == clip).collect();
+        for &i in &of_clip {
             let (a0, a1) = (self.segments[i].start_frame, self.segments[i].end_frame);
-            let ov = (first_new..self.segments.len())
+            let ov = of_clip
+                .iter()
+                .copied()
                 .filter(|&j| {
                     let (b0, b1) = (self.segments[j].start_frame, self.segments[j].end_frame);
                     b0 < a1 && a0 < b1
                 })
                 .collect();
-            self.overlaps.push(ov);
+            self.overlaps[i] = ov;
         }
-        self.clips.push(lc);
+    }
+
+    /// Re-cuts clip `clip` with new options (a tempo the person states, or `None` to detect it
+    /// again): its earlier segments are removed, except those `keep` asks for (segments a
+    /// choreography still uses), which stay as retired (never offered nor chosen again; see
+    /// [`Segment::retired`]), and the new ones are appended. Segment indices change: `remap`
+    /// of the result maps every old index to its new one. On error nothing changes.
+    pub fn recut_clip(&mut self, clip: usize, options: &SegmentOptions, keep: &dyn Fn(usize) -> bool) -> Result<Recut, SegmentError> {
+        let lc = self.clips.get(clip).ok_or(SegmentError::NoSuchClip { clip, clips: self.clips.len() })?;
+        let name = lc.clip.name.clone();
+        if lc.builtin.is_some() {
+            return Err(SegmentError::BuiltinClip { name });
+        }
+        if let Some(t) = options.tempo_bpm {
+            if !(30.0..=300.0).contains(&t) {
+                return Err(SegmentError::BadTempo { name, tempo_bpm: t });
+            }
+        }
+        let (beats, tempo_bpm, detected) = cut_beats(&lc.clip, options);
+        if beats.len() < SEGMENT_COUNTS + 1 {
+            return Err(SegmentError::TooShort { name, duration_secs: lc.clip.duration_secs(), beats: beats.len(), tempo_bpm });
+        }
+        let old_tempo = lc.tempo_bpm;
+        let (remap, kept, removed) = self.drop_segments(&|i, s| s.clip != clip || keep(i));
+        for &k in &kept {
+            let s = &mut self.segments[k];
+            if s.clip == clip && !s.retired {
+                s.retired = true;
+                s.name = format!("{} (earlier cut, {:.0} counts/min)", s.name, old_tempo);
+            }
+        }
+        let kept: Vec<usize> = kept.into_iter().filter(|&k| self.segments[k].clip == clip).collect();
+        let beat_count = beats.len();
+        self.clips[clip].beat_frames = beats;
+        self.clips[clip].tempo_bpm = tempo_bpm;
+        let added = self.cut_segments(clip, options.hop_counts.clamp(1, SEGMENT_COUNTS));
+        self.rescale();
+        self.changed();
+        let summary = ClipSummary { clip, name, tempo_bpm, tempo_detected: detected, beats: beat_count, segments: added };
+        Ok(Recut { summary, remap, kept, removed })
+    }
+
+    /// Keeps the segments `retain` accepts (by old index), compacting every per-segment list.
+    /// Returns the old → new index map, the kept indices (new) and how many went.
+    fn drop_segments(&mut self, retain: &dyn Fn(usize, &Segment) -> bool) -> (Vec<Option<usize>>, Vec<usize>, usize) {
+        let mut remap = Vec::with_capacity(self.segments.len());
+        let mut next = 0;
+        for (i, s) in self.segments.iter().enumerate() {
+            if retain(i, s) {
+                remap.push(Some(next));
+                next += 1;
+            } else {
+                remap.push(None);
+            }
+        }
+        let removed = self.segments.len() - next;
+        let mask: Vec<bool> = remap.iter().map(Option::is_some).collect();
+        retain_by_mask(&mut self.segments, &mask);
+        retain_by_mask(&mut self.signatures, &mask);
+        retain_by_mask(&mut self.ends, &mask);
+        retain_by_mask(&mut self.overlaps, &mask);
+        for (i, s) in self.segments.iter_mut().enumerate() {
+            s.index = i;
+        }
+        for ov in self.overlaps.iter_mut() {
+            *ov = ov.iter().filter_map(|&j| remap.get(j).copied().flatten()).collect();
+        }
+        (remap, (0..next).collect(), removed)
+    }
+
+    /// Drops the cached table and bumps the revision.
+    fn changed(&mut self) {
+        self.revision += 1;
         if let Ok(mut t) = self.table.lock() {
             *t = None;
         }
-        self.segments.len() - first_new
+    }
+
+    /// Changes with every change of the segments.
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// A builder of this library's transition table, to run in slices (see
+    /// [`TableBuilder`]); hand its result to [`SegmentLibrary::install_table`].
+    pub fn table_builder(&self, repeat_penalty: f32) -> TableBuilder {
+        TableBuilder::new(self, repeat_penalty)
+    }
+
+    /// Caches a table built by [`SegmentLibrary::table_builder`]; refused (`false`) when the
+    /// library changed since.
+    pub fn install_table(&self, table: TransitionTable) -> bool {
+        if table.revision() != self.revision || table.len() != self.len() {
+            return false;
+        }
+        let mut guard = match self.table.lock() {
+            Ok(g) => g,
+            Err(poisoned) => poisoned.into_inner(),
+        };
+        *guard = Some(Arc::new(table));
+        true
+    }
+
+    /// The cached table, when there is one for this repetition penalty.
+    pub fn cached_table(&self, repeat_penalty: f32) -> Option<Arc<TransitionTable>> {
+        let guard = self.table.lock().ok()?;
+        guard.as_ref().filter(|t| t.repeat_penalty() == repeat_penalty).cloned()
     }
 
     /// Rescales every segment's intensity to the library's range.
@@ -411,20 +545,10 @@ pub(crate) fn canonical_world_positions(clip: &Clip) -> Vec<Vec3> {
     let mut out = Vec::with_capacity(frames * CANON_COUNT);
     let mut rot = [glam::Quat::IDENTITY; CANON_COUNT];
     let mut pos = [Vec3::ZERO; CANON_COUNT];
+    let rest_root = sk.joints.first().map_or(Vec3::ZERO, |j| j.rest_offset);
     for f in 0..frames {
-        let local = clip.frame_rotations(f);
-        for (i, j) in sk.joints.iter().enumerate() {
-            match j.parent {
-                Some(p) if p < i => {
-                    rot[i] = rot[p] * local[i];
-                    pos[i] = pos[p] + rot[p] * j.rest_offset;
-                }
-                _ => {
-                    rot[i] = local[i];
-                    pos[i] = root.and_then(|r| r.get(f).copied()).unwrap_or(j.rest_offset);
-                }
-            }
-        }
+        let at = root.and_then(|r| r.get(f).copied()).unwrap_or(rest_root);
+        sk.pose_into(clip.frame_rotations(f), at, &mut rot, &mut pos);
         out.extend_from_slice(&pos);
     }
     out
@@ -563,6 +687,35 @@ pub fn detect_beats(speed: &[f32]) -> (Vec<f32>, f32) {
         }
     }
     (beats, period)
+}
+
+/// Keeps the items whose `mask` entry is true.
+fn retain_by_mask<T>(v: &mut Vec<T>, mask: &[bool]) {
+    let mut i = 0;
+    v.retain(|_| {
+        i += 1;
+        mask.get(i - 1).copied().unwrap_or(false)
+    });
+}
+
+/// A canonical clip's counts (frames at [`LIBRARY_FPS`]), tempo (counts per minute) and
+/// whether it was detected (else stated in `options`).
+fn cut_beats(canon: &Clip, options: &SegmentOptions) -> (Vec<f32>, f32, bool) {
+    let speed = joint_speed(canon);
+    match options.tempo_bpm {
+        Some(bpm) => {
+            let period = LIBRARY_FPS * 60.0 / bpm;
+            let phase = match options.first_beat_secs {
+                Some(t) => (t * LIBRARY_FPS).rem_euclid(period),
+                None => best_phase(&speed, period),
+            };
+            (grid(speed.len(), period, phase), bpm, false)
+        }
+        None => {
+            let (beats, period) = detect_beats(&speed);
+            (beats, LIBRARY_FPS * 60.0 / period.max(1e-3), true)
+        }
+    }
 }
 
 /// Phase (frames, in `0..period`) of a beat grid where the speed is lowest.

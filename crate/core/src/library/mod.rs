@@ -80,21 +80,47 @@ pub fn move_frame_count() -> usize {
 
 /// Renders one built-in move as a clip on `skeleton` (the canonical skeleton).
 pub fn build_move(info: &MoveInfo, skeleton: &Arc<Skeleton>) -> Clip {
-    let frames = move_frame_count();
     let legs = moves::leg_poses(info.step, info.energy);
-    let counts_per_frame = BUILTIN_BPM / 60.0 / BUILTIN_FPS;
+    let track = leg_track(&legs, info.mirrored, skeleton);
+    build_move_on_legs(info, skeleton, &legs, &track)
+}
+
+/// Time of frame `f` of a built-in move, in counts.
+fn frame_counts(f: usize) -> f32 {
+    f as f32 * (BUILTIN_BPM / 60.0 / BUILTIN_FPS)
+}
+
+/// The solved legs of a step's key poses (at one energy, on one side), frame by frame: the
+/// same for every arm pattern, so [`builtin_clips`] solves them once per step, energy and
+/// side instead of once per move.
+fn leg_track(legs: &[pose::KeyPose], mirrored: bool, skeleton: &Skeleton) -> Vec<pose::LegSolution> {
+    (0..move_frame_count())
+        .map(|f| {
+            // The legs' fields of `moves::pose_at`: the leg keys interpolated (arms change
+            // nothing below the hips).
+            let p = pose::interpolate(legs, 0.5, frame_counts(f));
+            let p = if mirrored { p.mirrored() } else { p };
+            pose::solve_legs(skeleton, &p, STANDING_HIPS_HEIGHT)
+        })
+        .collect()
+}
+
+/// [`build_move`] on legs already solved by [`leg_track`] for the move's step, energy and side.
+fn build_move_on_legs(info: &MoveInfo, skeleton: &Arc<Skeleton>, legs: &[pose::KeyPose], track: &[pose::LegSolution]) -> Clip {
+    let frames = move_frame_count();
     let mut rotations = Vec::with_capacity(frames * CANON_COUNT);
     let mut root = Vec::with_capacity(frames);
-    for f in 0..frames {
-        let t = f as f32 * counts_per_frame;
-        let mut p = moves::pose_at(info.arms, info.energy, t, &legs);
+    for (f, leg) in track.iter().enumerate().take(frames) {
+        let mut p = moves::pose_at(info.arms, info.energy, frame_counts(f), legs);
         if info.mirrored {
             p = p.mirrored();
         }
-        let (local, mut r, lowest) = pose::solve(skeleton, &p, STANDING_HIPS_HEIGHT);
+        let mut local = [glam::Quat::IDENTITY; CANON_COUNT];
+        let mut r = pose::solve_upper(skeleton, &p, STANDING_HIPS_HEIGHT, &mut local);
+        leg.write_into(&mut local);
         // Never below the floor (toe tips 2 cm above it when flat).
-        if lowest < 0.015 {
-            r.y += 0.015 - lowest;
+        if leg.lowest < 0.015 {
+            r.y += 0.015 - leg.lowest;
         }
         rotations.extend_from_slice(&local);
         root.push(r);
@@ -112,7 +138,26 @@ pub fn build_move(info: &MoveInfo, skeleton: &Arc<Skeleton>) -> Clip {
 /// The whole built-in library as clips, one per move, in [`builtin_moves`] order.
 pub fn builtin_clips() -> Vec<Clip> {
     let skeleton = Arc::new(canonical_skeleton());
-    builtin_moves().iter().map(|m| build_move(m, &skeleton)).collect()
+    let mut tracks: Vec<(Step, Energy, Vec<pose::KeyPose>, [Vec<pose::LegSolution>; 2])> = Vec::new();
+    builtin_moves()
+        .iter()
+        .map(|m| {
+            let cached = tracks.iter().position(|(s, e, _, _)| *s == m.step && *e == m.energy);
+            let i = match cached {
+                Some(i) => i,
+                None => {
+                    // Moves come step by step: the previous step's tracks are done with.
+                    tracks.retain(|(s, _, _, _)| *s == m.step);
+                    let keys = moves::leg_poses(m.step, m.energy);
+                    let sides = [leg_track(&keys, false, &skeleton), leg_track(&keys, true, &skeleton)];
+                    tracks.push((m.step, m.energy, keys, sides));
+                    tracks.len() - 1
+                }
+            };
+            let (_, _, keys, sides) = &tracks[i];
+            build_move_on_legs(m, &skeleton, keys, &sides[usize::from(m.mirrored)])
+        })
+        .collect()
 }
 
 /// A neutral standing pose (arms relaxed by the sides) on the canonical skeleton: local
@@ -167,6 +212,33 @@ mod tests {
             if info.step != Step::Jump {
                 assert!(max_low < 0.06, "{}: lowest point rises to {max_low}: feet not on the floor", c.name);
             }
+        }
+    }
+
+    #[test]
+    fn shared_legs_give_the_same_moves_as_solving_every_pose_whole() {
+        let sk = Arc::new(canonical_skeleton());
+        let clips = builtin_clips();
+        let moves = builtin_moves();
+        assert_eq!(clips.len(), moves.len());
+        for (i, info) in moves.iter().enumerate().step_by(11) {
+            // Every frame's whole key pose solved at once, as a move is defined.
+            let keys = moves::leg_poses(info.step, info.energy);
+            let mut rotations = Vec::new();
+            let mut root = Vec::new();
+            for f in 0..move_frame_count() {
+                let p = moves::pose_at(info.arms, info.energy, frame_counts(f), &keys);
+                let p = if info.mirrored { p.mirrored() } else { p };
+                let (local, mut r, lowest) = pose::solve(&sk, &p, STANDING_HIPS_HEIGHT);
+                if lowest < 0.015 {
+                    r.y += 0.015 - lowest;
+                }
+                rotations.extend_from_slice(&local);
+                root.push(r);
+            }
+            assert_eq!(clips[i].rotations, rotations, "{}", clips[i].name);
+            assert_eq!(clips[i].translations[0].values, root, "{}", clips[i].name);
+            assert_eq!(clips[i].rotations, build_move(info, &sk).rotations);
         }
     }
 

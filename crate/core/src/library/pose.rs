@@ -172,23 +172,59 @@ fn arc(from: Vec3, to: Vec3) -> Quat {
 /// height of the lowest foot joint (ankle or toe tip: the feet are always the lowest part of
 /// these poses).
 pub fn solve(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32) -> ([Quat; CANON_COUNT], Vec3, f32) {
-    let mut lowest = f32::MAX;
+    let mut local = [Quat::IDENTITY; CANON_COUNT];
+    let root = solve_upper(skeleton, pose, standing_hips_height, &mut local);
+    let legs = solve_legs(skeleton, pose, standing_hips_height);
+    legs.write_into(&mut local);
+    (local, root, legs.lowest)
+}
+
+/// Root position and hips rotation of a key pose.
+fn root_and_hips(pose: &KeyPose, standing_hips_height: f32) -> (Vec3, Quat) {
+    let root = Vec3::new(pose.hips.x, standing_hips_height + pose.hips.y, pose.hips.z);
+    (root, Quat::from_euler(EulerRot::YXZ, pose.hips_yaw, pose.hips_pitch, -pose.hips_roll))
+}
+
+/// The joints [`solve_legs`] sets are the last eight canonical joints, left upper leg to right
+/// toe, in [`LegSolution::local`] order.
+const FIRST_LEG: usize = Canon::LeftUpperLeg as usize;
+const _: () = assert!(CANON_COUNT - FIRST_LEG == 8 && Canon::RightToe as usize == CANON_COUNT - 1);
+
+/// The legs of a solved pose. They depend only on the hips and the feet of the key pose
+/// (position, turn and tilt of the hips, foot targets, pointing, turn-out), so poses that
+/// differ only above the hips (the built-in moves' arm patterns) share them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LegSolution {
+    /// Local rotations of the leg joints (left upper leg, lower leg, foot, toe, then right).
+    pub local: [Quat; 8],
+    /// Height of the lowest foot joint (ankle or toe tip).
+    pub lowest: f32,
+}
+
+impl LegSolution {
+    /// Writes the leg joints' local rotations into a full pose.
+    pub fn write_into(&self, local: &mut [Quat; CANON_COUNT]) {
+        local[FIRST_LEG..].copy_from_slice(&self.local);
+    }
+}
+
+/// Hips, spine, chest, neck, head and arms of a key pose: writes their local rotations (the
+/// hips' included) and returns the root position.
+pub fn solve_upper(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32, local: &mut [Quat; CANON_COUNT]) -> Vec3 {
     use Canon::*;
     let off = |c: Canon| skeleton.joints.get(c.index()).map(|j| j.rest_offset).unwrap_or(Vec3::ZERO);
     let mut world = [Quat::IDENTITY; CANON_COUNT];
-    let mut local = [Quat::IDENTITY; CANON_COUNT];
-    let root = Vec3::new(pose.hips.x, standing_hips_height + pose.hips.y, pose.hips.z);
-    let hips_q = Quat::from_euler(EulerRot::YXZ, pose.hips_yaw, pose.hips_pitch, -pose.hips_roll);
+    let (root, hips_q) = root_and_hips(pose, standing_hips_height);
     local[Hips.index()] = hips_q;
     world[Hips.index()] = hips_q;
     let set = |c: Canon, parent: Canon, l: Quat, world: &mut [Quat; CANON_COUNT], local: &mut [Quat; CANON_COUNT]| {
         local[c.index()] = l;
         world[c.index()] = world[parent.index()] * l;
     };
-    set(Spine, Hips, Quat::from_euler(EulerRot::YXZ, pose.chest_yaw * 0.4, pose.spine_pitch, -pose.spine_roll), &mut world, &mut local);
-    set(Chest, Spine, Quat::from_euler(EulerRot::YXZ, pose.chest_yaw * 0.6, pose.chest_pitch, -pose.chest_roll), &mut world, &mut local);
-    set(Neck, Chest, Quat::from_euler(EulerRot::YXZ, pose.head_yaw * 0.4, pose.head_pitch * 0.4, -pose.head_roll * 0.4), &mut world, &mut local);
-    set(Head, Neck, Quat::from_euler(EulerRot::YXZ, pose.head_yaw * 0.6, pose.head_pitch * 0.6, -pose.head_roll * 0.6), &mut world, &mut local);
+    set(Spine, Hips, Quat::from_euler(EulerRot::YXZ, pose.chest_yaw * 0.4, pose.spine_pitch, -pose.spine_roll), &mut world, local);
+    set(Chest, Spine, Quat::from_euler(EulerRot::YXZ, pose.chest_yaw * 0.6, pose.chest_pitch, -pose.chest_roll), &mut world, local);
+    set(Neck, Chest, Quat::from_euler(EulerRot::YXZ, pose.head_yaw * 0.4, pose.head_pitch * 0.4, -pose.head_roll * 0.4), &mut world, local);
+    set(Head, Neck, Quat::from_euler(EulerRot::YXZ, pose.head_yaw * 0.6, pose.head_pitch * 0.6, -pose.head_roll * 0.6), &mut world, local);
     // World positions of the chain we need.
     let spine_p = root + world[Hips.index()] * off(Spine);
     let chest_p = spine_p + world[Spine.index()] * off(Chest);
@@ -197,7 +233,7 @@ pub fn solve(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32) -> 
         (LeftShoulder, LeftUpperArm, LeftForearm, LeftHand, pose.left_hand, pose.left_shrug, 1.0f32),
         (RightShoulder, RightUpperArm, RightForearm, RightHand, pose.right_hand, pose.right_shrug, -1.0),
     ] {
-        set(sh, Chest, Quat::from_rotation_z(s * shrug), &mut world, &mut local);
+        set(sh, Chest, Quat::from_rotation_z(s * shrug), &mut world, local);
         let sh_p = chest_p + world[Chest.index()] * off(sh);
         let ua_p = sh_p + world[sh.index()] * off(ua);
         let chest = world[Chest.index()];
@@ -215,11 +251,22 @@ pub fn solve(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32) -> 
         local[hand.index()] = Quat::IDENTITY;
         world[hand.index()] = fq;
     }
-    // Legs.
-    for (ul, ll, foot, toe, target, point, s) in [
+    root
+}
+
+/// The legs of a key pose by two-bone IK onto the foot targets (see [`LegSolution`]).
+pub fn solve_legs(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32) -> LegSolution {
+    use Canon::*;
+    let off = |c: Canon| skeleton.joints.get(c.index()).map(|j| j.rest_offset).unwrap_or(Vec3::ZERO);
+    let (root, hips_q) = root_and_hips(pose, standing_hips_height);
+    let mut out = LegSolution { local: [Quat::IDENTITY; 8], lowest: f32::MAX };
+    for (side, (ul, ll, foot, toe, target, point, s)) in [
         (LeftUpperLeg, LeftLowerLeg, LeftFoot, LeftToe, pose.left_foot, pose.left_point, 1.0f32),
         (RightUpperLeg, RightLowerLeg, RightFoot, RightToe, pose.right_foot, pose.right_point, -1.0),
-    ] {
+    ]
+    .into_iter()
+    .enumerate()
+    {
         let hip_p = root + hips_q * off(ul);
         let ankle = Vec3::new(target.x, ANKLE_HEIGHT + target.y.max(0.0), target.z);
         let l1 = off(ll).length();
@@ -228,43 +275,27 @@ pub fn solve(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32) -> 
         let pole = facing * Vec3::new(s * 0.15, 0.0, 1.0);
         let (knee, ank) = two_bone(hip_p, ankle, l1, l2, pole);
         let uq = arc(hips_q * off(ll), knee - hip_p) * hips_q;
-        local[ul.index()] = hips_q.inverse() * uq;
-        world[ul.index()] = uq;
         let lq = arc(uq * off(foot), ank - knee) * uq;
-        local[ll.index()] = uq.inverse() * lq;
-        world[ll.index()] = lq;
         // Foot flat (toe along the facing on the floor) or pointed (toe along the shin).
         let flat = facing * off(toe);
         let shin = (ank - knee).normalize_or_zero() * off(toe).length();
         let toe_dir = flat.lerp(shin, point.clamp(0.0, 1.0) * 0.8);
         let fq = arc(lq * off(toe), toe_dir) * lq;
-        local[foot.index()] = lq.inverse() * fq;
-        world[foot.index()] = fq;
-        local[toe.index()] = Quat::IDENTITY;
-        lowest = lowest.min(ank.y).min((ank + fq * off(toe)).y);
+        out.local[side * 4] = hips_q.inverse() * uq;
+        out.local[side * 4 + 1] = uq.inverse() * lq;
+        out.local[side * 4 + 2] = lq.inverse() * fq;
+        out.local[side * 4 + 3] = Quat::IDENTITY;
+        out.lowest = out.lowest.min(ank.y).min((ank + fq * off(toe)).y);
     }
-    (local, root, lowest)
+    out
 }
 
 /// Lowest joint height of a solved pose (root at `root`), without allocating.
 pub fn lowest_height(skeleton: &Skeleton, local: &[Quat; CANON_COUNT], root: Vec3) -> f32 {
     let mut rot = [Quat::IDENTITY; CANON_COUNT];
     let mut pos = [Vec3::ZERO; CANON_COUNT];
-    let mut low = f32::MAX;
-    for (i, j) in skeleton.joints.iter().enumerate().take(CANON_COUNT) {
-        match j.parent {
-            Some(p) if p < i => {
-                rot[i] = rot[p] * local[i];
-                pos[i] = pos[p] + rot[p] * j.rest_offset;
-            }
-            _ => {
-                rot[i] = local[i];
-                pos[i] = root;
-            }
-        }
-        low = low.min(pos[i].y);
-    }
-    low
+    skeleton.pose_into(local, root, &mut rot, &mut pos);
+    pos[..skeleton.len().min(CANON_COUNT)].iter().map(|p| p.y).fold(f32::MAX, f32::min)
 }
 
 #[cfg(test)]

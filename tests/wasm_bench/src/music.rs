@@ -1,5 +1,4 @@
-//! Raw wasm exports (no bindgen) for timing the core's song analysis under a JavaScript engine.
-//! The input is the product's own demo song, rendered and enveloped inside wasm, its envelope
+//! Song analysis in wasm. The input is the product's own demo song, rendered and enveloped inside wasm, its envelope
 //! looped to 180 s: a 3-minute song. The native bench (`tests/bench/music_analysis.rs`) times
 //! the same input, so the two figures compare directly.
 

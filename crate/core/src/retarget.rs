@@ -1,8 +1,11 @@
-//! Any humanoid clip onto the canonical skeleton, so segments from every source play, compare
-//! and join as one dance. Directions, not lengths, are carried over: each canonical bone is
-//! turned to point where the source's bone points (the hips and chest take their full frame
-//! from the hip and shoulder lines), the root follows the source's hips scaled by body height,
-//! and the whole clip is lifted so its feet meet the floor.
+//! Any humanoid clip onto the canonical skeleton (the one retargeting of the engine: the
+//! choreography's segment library and the text actions' library both use it), so clips from
+//! every source play, compare, join and compose as one. Directions, not lengths, are carried
+//! over: each canonical bone is turned to point where the source's bone points (the hips and
+//! chest take their full frame from the hip and shoulder lines), the root follows the source's
+//! hips scaled by body height, and the whole clip is lifted so its feet meet the floor. Twist
+//! about a bone's own axis is not carried over; stick figures, joins and IK do not need it. A
+//! clip already on the canonical skeleton is only resampled.
 
 use std::sync::Arc;
 
@@ -11,7 +14,9 @@ use glam::{Mat3, Quat, Vec3};
 use crate::builtin::canonical_skeleton;
 use crate::clip::{Clip, TranslationTrack};
 use crate::humanoid::{canonical_positions, Canon, HumanoidMap, CANON_COUNT};
+use crate::actions::procedural::SOLE_HEIGHT;
 use crate::normalize::body_height;
+use crate::skeleton::Skeleton;
 
 fn arc(from: Vec3, to: Vec3) -> Quat {
     match (from.try_normalize(), to.try_normalize()) {
@@ -29,9 +34,17 @@ fn frame(left: Vec3, up: Vec3) -> Option<Quat> {
     Some(Quat::from_mat3(&Mat3::from_cols(x, y, z)).normalize())
 }
 
+/// Whether a skeleton is the canonical one (same joints, names and parents, in order).
+pub fn is_canonical(sk: &Skeleton) -> bool {
+    sk.len() == CANON_COUNT && Canon::ALL.iter().zip(&sk.joints).all(|(c, j)| j.name == c.name() && j.parent == c.parent().map(Canon::index))
+}
+
 /// The clip on the canonical skeleton at `fps` (resampled first when the source differs).
 pub fn to_canonical(clip: &Clip, map: &HumanoidMap, fps: f32) -> Clip {
     let src = if (clip.fps - fps).abs() > 1e-3 { clip.resampled(fps) } else { clip.clone() };
+    if is_canonical(&src.skeleton) {
+        return src;
+    }
     let pos = canonical_positions(&src, map);
     let skeleton = Arc::new(canonical_skeleton());
     let canon_height = body_height(&skeleton.rest_positions());
@@ -62,7 +75,8 @@ pub fn to_canonical(clip: &Clip, map: &HumanoidMap, fps: f32) -> Clip {
         };
         let set = |c: Canon, w: Quat, parent: Canon, world: &mut [Quat; CANON_COUNT], local: &mut [Quat; CANON_COUNT]| {
             world[c.index()] = w;
-            local[c.index()] = world[parent.index()].inverse() * w;
+            // Unit quaternions exactly (products drift by an ulp or two per joint).
+            local[c.index()] = (world[parent.index()].inverse() * w).normalize();
         };
         let w = swing(Spine, Chest, hips_q);
         set(Spine, w, Hips, &mut world, &mut local);
@@ -101,17 +115,12 @@ pub fn to_canonical(clip: &Clip, map: &HumanoidMap, fps: f32) -> Clip {
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: root }],
     };
-    // Feet on the floor: the 5th percentile of each frame's lowest point goes to 2 cm.
-    let mut lows: Vec<f32> = Vec::with_capacity(frames);
-    let mut tmp = Vec::new();
-    for f in 0..frames {
-        out.world_positions_into(f, &mut tmp);
-        lows.push(tmp.iter().map(|v| v.y).fold(f32::MAX, f32::min));
-    }
-    lows.retain(|v| v.is_finite());
+    // Feet on the floor: the toes' lowest 2 % (a planted step) at sole height.
+    let all = out.all_world_positions();
+    let mut lows: Vec<f32> = all.chunks(CANON_COUNT).map(|p| p[LeftToe.index()].y.min(p[RightToe.index()].y)).filter(|v| v.is_finite()).collect();
     lows.sort_by(f32::total_cmp);
-    if let Some(&low) = lows.get(lows.len() / 20) {
-        let lift = 0.02 - low;
+    if let Some(&low) = lows.get(lows.len() / 50) {
+        let lift = SOLE_HEIGHT - low;
         if let Some(t) = out.translations.first_mut() {
             for v in t.values.iter_mut() {
                 v.y += lift;

@@ -1,0 +1,95 @@
+//! The choreography core in wasm (issue 5's benchmark): the built-in library, the ≥ 2,000
+//! segment library of `odori_tests::builtin_medley_library` (no file access in wasm), the
+//! transition table in one go and in slices through its builder (as the app builds it), and
+//! filling 90 open bars.
+
+use std::cell::RefCell;
+use std::sync::Arc;
+
+use odori_core::choreo::*;
+
+thread_local! {
+    static LIB: RefCell<Option<SegmentLibrary>> = const { RefCell::new(None) };
+    static TABLE: RefCell<Option<Arc<TransitionTable>>> = const { RefCell::new(None) };
+    static BUILDER: RefCell<Option<TableBuilder>> = const { RefCell::new(None) };
+}
+
+const REPEAT_PENALTY: f32 = 3.0;
+
+/// Builds the built-in library once; returns its segment count.
+#[no_mangle]
+pub extern "C" fn build_builtin() -> u32 {
+    SegmentLibrary::builtin().len() as u32
+}
+
+/// Builds the ≥ 2,000-segment library; returns its segment count.
+#[no_mangle]
+pub extern "C" fn setup() -> u32 {
+    let lib = odori_tests::builtin_medley_library();
+    let m = lib.len() as u32;
+    LIB.with(|l| *l.borrow_mut() = Some(lib));
+    m
+}
+
+/// The transition table in one go (not cached between calls: a fresh library copy is not
+/// needed, the table is rebuilt by [`TransitionTable::from_library`]). Returns its size.
+#[no_mangle]
+pub extern "C" fn table() -> u32 {
+    LIB.with(|l| {
+        let lib = l.borrow();
+        let Some(lib) = lib.as_ref() else { return 0 };
+        let t = Arc::new(TransitionTable::from_library(lib, REPEAT_PENALTY));
+        let n = t.len() as u32;
+        TABLE.with(|x| *x.borrow_mut() = Some(t));
+        n
+    })
+}
+
+/// Starts a sliced build of the table.
+#[no_mangle]
+pub extern "C" fn table_begin() -> u32 {
+    LIB.with(|l| {
+        let lib = l.borrow();
+        let Some(lib) = lib.as_ref() else { return 0 };
+        BUILDER.with(|b| *b.borrow_mut() = Some(lib.table_builder(REPEAT_PENALTY)));
+        lib.len() as u32
+    })
+}
+
+/// One slice of up to `columns` columns; returns the fraction done (-1 without a builder).
+#[no_mangle]
+pub extern "C" fn table_step(columns: u32) -> f32 {
+    BUILDER.with(|b| b.borrow_mut().as_mut().map_or(-1.0, |b| b.step(columns as usize).fraction()))
+}
+
+/// Whether the sliced build equals the one-go table.
+#[no_mangle]
+pub extern "C" fn table_finish_matches() -> u32 {
+    let built = BUILDER.with(|b| b.borrow_mut().take()).and_then(TableBuilder::finish);
+    TABLE.with(|t| match (built, t.borrow().as_ref()) {
+        (Some(a), Some(b)) => u32::from(a == **b),
+        _ => 0,
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn fill90() -> f32 {
+    fill90_with(FillWeights { repeat_window: 1, ..FillWeights::default() })
+}
+
+#[no_mangle]
+pub extern "C" fn fill90_default() -> f32 {
+    fill90_with(FillWeights::default())
+}
+
+fn fill90_with(w: FillWeights) -> f32 {
+    LIB.with(|l| {
+        let lib = l.borrow();
+        let Some(lib) = lib.as_ref() else { return -1.0 };
+        let Some(t) = TABLE.with(|x| x.borrow().clone()) else { return -1.0 };
+        let m = t.len();
+        let inten: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
+        let layers = odori_tests::bench_layers(m);
+        fill(&t, &layers, &inten, &w).map_or(-1.0, |r| r.1)
+    })
+}
