@@ -86,7 +86,9 @@ async function main() {
   // The built-in demo song, analysed like any file (WebAudio envelope → core), after the
   // first pose is on screen.
   loadDemoSong(songPanel, messages);
-  new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); }).observe(canvas);
+  // A new canvas size clears the canvas: draw again at once (a paused figure would
+  // otherwise vanish until the next edit).
+  new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); player.drawNow(); }).observe(canvas);
   window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, text: textPanel, choreo, version: version() };
 }
 

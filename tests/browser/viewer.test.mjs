@@ -68,6 +68,13 @@ for (const backend of ["webgl2", "webgpu"]) {
       }
       assert.ok(changed > 500, `only ${changed} pixels changed between two frames`);
 
+      // Paused, the canvas changes size (the page's layout moved): the figure is drawn again.
+      await page.evaluate(() => { const v = document.querySelector("#view"); v.style.flex = "none"; v.style.height = `${v.clientHeight - 37}px`; });
+      await page.waitForTimeout(300);
+      const resized = await canvasPixels(page, `${backend}-03b-resized-paused.png`);
+      assert.ok(countAll(resized, isOrange) > 300, "the paused figure vanished when the canvas was resized");
+      await page.evaluate(() => { const v = document.querySelector("#view"); v.style.flex = ""; v.style.height = ""; });
+
       // Playing advances the frame counter.
       const f0 = await page.evaluate(() => { window.odori.player.play(); return Number(document.querySelector("#scrub").value); });
       await page.waitForTimeout(700);
