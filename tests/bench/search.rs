@@ -90,31 +90,7 @@ fn main() {
     cases.push(("arms, top 10, threshold 0.05/joint".into(), with(BodyPreset::Arms, 10, Some(0.05))));
     // A query with no copy in the library: the same stretch mirrored left/right (sides swapped,
     // lateral axis negated), so the library holds only other, similar motion.
-    let mirrored = {
-        use odori_core::humanoid::Canon::*;
-        let pairs = [
-            (LeftShoulder, RightShoulder),
-            (LeftUpperArm, RightUpperArm),
-            (LeftForearm, RightForearm),
-            (LeftHand, RightHand),
-            (LeftUpperLeg, RightUpperLeg),
-            (LeftLowerLeg, RightLowerLeg),
-            (LeftFoot, RightFoot),
-            (LeftToe, RightToe),
-        ];
-        let mut m = q.clone();
-        for fr in m.chunks_exact_mut(FRAME_FLOATS) {
-            for (a, b) in pairs {
-                for k in 0..3 {
-                    fr.swap(a.index() * 3 + k, b.index() * 3 + k);
-                }
-            }
-            for p in fr.chunks_exact_mut(3) {
-                p[2] = -p[2];
-            }
-        }
-        ClipFeatures::new("mirrored query", 60.0, MotionFeatures { origin: Origin::Hips, data: m })
-    };
+    let mirrored = ClipFeatures::new("mirrored query", 60.0, common::mirrored(&MotionFeatures { origin: Origin::Hips, data: q.clone() }, false));
     let mut timings = Vec::new();
     let mut runs: Vec<(String, SearchParams, &ClipFeatures)> = cases.into_iter().map(|(n, p)| (n, p, &query)).collect();
     runs.push(("mirrored query (no copy in library), whole body, top 1, no threshold".into(), with(BodyPreset::WholeBody, 1, None), &mirrored));

@@ -1,9 +1,10 @@
-//! Shared by the search tests and the benchmark: a seeded RNG, the real-data library, and a
-//! plain reference DP written independently of the core's (spec §C, from the text).
+//! Shared by the search tests and the benchmark: a seeded RNG, the real-data library, a
+//! left/right mirror of features, and a plain reference DP written independently of the
+//! core's (spec §C, from the text).
 #![allow(dead_code)]
 
 use odori_core::import::{import_bytes, ImportOptions};
-use odori_core::search::{ClipFeatures, FeatureIndex, SearchParams, DISTANCE_ORDER, FRAME_FLOATS};
+use odori_core::search::{ClipFeatures, FeatureIndex, MotionFeatures, SearchParams, DISTANCE_ORDER, FRAME_FLOATS};
 
 /// SplitMix64: small, seeded, deterministic.
 pub struct Rng(pub u64);
@@ -176,4 +177,35 @@ fn best_start(params: &SearchParams, q: &[f32], t: &[f32], cand: RefMatch, min_s
         }
     }
     best
+}
+
+/// Left/right mirror of normalised hip-origin features: swap the sides, negate the lateral axis
+/// (+Z is the hips' right → left direction after normalisation); `flip_forward` also negates x.
+pub fn mirrored(f: &MotionFeatures, flip_forward: bool) -> MotionFeatures {
+    use odori_core::humanoid::Canon::*;
+    let pairs = [
+        (LeftShoulder, RightShoulder),
+        (LeftUpperArm, RightUpperArm),
+        (LeftForearm, RightForearm),
+        (LeftHand, RightHand),
+        (LeftUpperLeg, RightUpperLeg),
+        (LeftLowerLeg, RightLowerLeg),
+        (LeftFoot, RightFoot),
+        (LeftToe, RightToe),
+    ];
+    let mut data = f.data.clone();
+    for fr in data.chunks_exact_mut(FRAME_FLOATS) {
+        for (a, b) in pairs {
+            for k in 0..3 {
+                fr.swap(a.index() * 3 + k, b.index() * 3 + k);
+            }
+        }
+        for p in fr.chunks_exact_mut(3) {
+            p[2] = -p[2];
+            if flip_forward {
+                p[0] = -p[0];
+            }
+        }
+    }
+    MotionFeatures { origin: f.origin, data }
 }

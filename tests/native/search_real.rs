@@ -7,7 +7,7 @@ mod common;
 
 use std::sync::OnceLock;
 
-use common::{reference_search, Rng};
+use common::{mirrored, reference_search, Rng};
 use glam::{Quat, Vec3};
 use odori_core::humanoid::{canonical_positions, Canon, CANON_COUNT};
 use odori_core::normalize::Origin;
@@ -113,37 +113,6 @@ fn invariance_to_speed_facing_position_size_and_noise() {
     for (preset, rate) in rates {
         assert!(rate >= 0.9, "{preset:?}: top-1 hit rate {:.1}% is below the 90% goal", 100.0 * rate);
     }
-}
-
-/// Left/right mirror of normalised hip-origin features: swap the sides, negate the lateral axis
-/// (+Z is the hips' right → left direction after normalisation); `flip_forward` also negates x.
-fn mirrored(f: &MotionFeatures, flip_forward: bool) -> MotionFeatures {
-    use Canon::*;
-    let pairs = [
-        (LeftShoulder, RightShoulder),
-        (LeftUpperArm, RightUpperArm),
-        (LeftForearm, RightForearm),
-        (LeftHand, RightHand),
-        (LeftUpperLeg, RightUpperLeg),
-        (LeftLowerLeg, RightLowerLeg),
-        (LeftFoot, RightFoot),
-        (LeftToe, RightToe),
-    ];
-    let mut data = f.data.clone();
-    for fr in data.chunks_exact_mut(FRAME_FLOATS) {
-        for (a, b) in pairs {
-            for k in 0..3 {
-                fr.swap(a.index() * 3 + k, b.index() * 3 + k);
-            }
-        }
-        for p in fr.chunks_exact_mut(3) {
-            p[2] = -p[2];
-            if flip_forward {
-                p[0] = -p[0];
-            }
-        }
-    }
-    MotionFeatures { origin: f.origin, data }
 }
 
 #[test]

@@ -4,7 +4,7 @@
 use std::ops::ControlFlow;
 
 use super::features::FeatureIndex;
-use super::results::{finish, refine, select_matches, Candidate, SearchOutcome, SearchStats};
+use super::results::{finish, refine, select_matches, Candidate, Refined, SearchOutcome, SearchStats};
 use super::{Prepared, SearchError, SearchProgress, LANE_FLOATS};
 
 /// Columns between progress reports.
@@ -15,9 +15,20 @@ pub(crate) fn run(
     prep: &Prepared,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<SearchOutcome, SearchError> {
-    let (mut pool, stats) = candidates(index, prep, progress)?;
-    let selected = select_matches(&mut pool, prep.max_results, &mut |c| refine(prep, index.clips[c.clip].lanes(prep.origin), c));
+    let (selected, stats) = selection(index, prep, progress)?;
     Ok(finish(index, selected, stats))
+}
+
+/// The plain DP's answer before it is dressed as an outcome: every candidate, then the
+/// selection (each taken candidate's start re-chosen).
+pub(crate) fn selection(
+    index: &FeatureIndex,
+    prep: &Prepared,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<(Vec<Refined>, SearchStats), SearchError> {
+    let (mut pool, stats) = candidates(index, prep, progress)?;
+    let selected = select_matches(&mut pool, prep.max_results, &mut |c| refine(index, prep, c));
+    Ok((selected, stats))
 }
 
 /// Every candidate end of every clip (admissible span, distance within the threshold): all

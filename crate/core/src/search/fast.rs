@@ -91,10 +91,9 @@ pub(crate) fn run(
         index.clips.iter().enumerate().map(|(ci, c)| (ci, 0, c.frame_count())).filter(|s| s.2 >= prep.min_span).collect();
     let (mut pool, mut stats, tau, gave_up) = scan(index, prep, &bounds, &all, seed, true, true, progress)?;
     if gave_up {
-        let (mut pool, plain) = super::dp::candidates(index, prep, progress)?;
+        let (selected, plain) = super::dp::selection(index, prep, progress)?;
         stats.distances_computed += probed + plain.distances_computed;
         stats.rescanned = true;
-        let selected = select_matches(&mut pool, prep.max_results, &mut |c| refine(prep, index.clips[c.clip].lanes(prep.origin), c));
         return Ok(finish(index, selected, stats));
     }
     stats.distances_computed += probed;
@@ -107,7 +106,7 @@ pub(crate) fn run(
             return None;
         }
         checked += (prep.query_frames * prep.max_span.min(c.end + 1)) as u64;
-        refine(prep, index.clips[c.clip].lanes(prep.origin), c)
+        refine(index, prep, c)
     };
     let mut selected = select_matches(&mut pool, prep.max_results, &mut take);
     // Too few matches at or below τ (see the module docs): scan again with a fixed, higher
@@ -123,9 +122,9 @@ pub(crate) fn run(
             stats.distances_computed += stats2.distances_computed;
             selected = select_matches(&mut pool2, prep.max_results, &mut take);
         } else {
-            let (mut pool2, stats2) = super::dp::candidates(index, prep, progress)?;
+            let (plain, stats2) = super::dp::selection(index, prep, progress)?;
             stats.distances_computed += stats2.distances_computed;
-            selected = select_matches(&mut pool2, prep.max_results, &mut |c| refine(prep, index.clips[c.clip].lanes(prep.origin), c));
+            selected = plain;
         }
     }
     stats.distances_computed += checked;

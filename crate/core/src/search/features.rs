@@ -93,7 +93,7 @@ fn flatten(p: &[Vec3]) -> Vec<f32> {
 
 /// One motion ready for searching, as a library clip or as a query: its hip-origin features
 /// and, built on first use, the shoulder-origin ones.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct ClipFeatures {
     /// Display name (file and clip name).
     pub name: String,
@@ -111,28 +111,6 @@ pub struct ClipFeatures {
 
 /// Frames per precomputed joint bounding box (used by the fast search's lower bounds).
 pub const BOX_CHUNK_FRAMES: usize = 16;
-
-impl Clone for ClipFeatures {
-    fn clone(&self) -> Self {
-        let shoulders = OnceLock::new();
-        if let Some(s) = self.shoulders.get() {
-            let _ = shoulders.set(s.clone());
-        }
-        let boxes = [OnceLock::new(), OnceLock::new()];
-        for (dst, src) in boxes.iter().zip(&self.boxes) {
-            if let Some(b) = src.get() {
-                let _ = dst.set(b.clone());
-            }
-        }
-        let lanes = [OnceLock::new(), OnceLock::new()];
-        for (dst, src) in lanes.iter().zip(&self.lanes) {
-            if let Some(b) = src.get() {
-                let _ = dst.set(b.clone());
-            }
-        }
-        ClipFeatures { name: self.name.clone(), fps: self.fps, hips: self.hips.clone(), shoulders, boxes, lanes }
-    }
-}
 
 impl ClipFeatures {
     /// Wraps hip-origin features.

@@ -173,7 +173,7 @@ pub struct SearchProgress {
 }
 
 /// The query and parameters reduced to what the DP loops read.
-pub(crate) struct Prepared {
+pub(crate) struct Prepared<'q> {
     pub query_frames: usize,
     pub min_span: usize,
     pub max_span: usize,
@@ -184,11 +184,11 @@ pub(crate) struct Prepared {
     /// The weighted joint groups of the lane layout.
     pub groups: Vec<(usize, [f32; lanes::LANES])>,
     /// Query frames in the lane layout.
-    pub query_lanes: Vec<f32>,
+    pub query_lanes: &'q [f32],
 }
 
-impl Prepared {
-    fn new(index: &FeatureIndex, query: &ClipFeatures, params: &SearchParams) -> Result<Prepared, SearchError> {
+impl<'q> Prepared<'q> {
+    fn new(index: &FeatureIndex, query: &'q ClipFeatures, params: &SearchParams) -> Result<Prepared<'q>, SearchError> {
         params.validate()?;
         let query_frames = query.frame_count();
         if query_frames == 0 {
@@ -204,7 +204,7 @@ impl Prepared {
         let (min_span, max_span) = params.span_bounds(query_frames);
         Ok(Prepared {
             groups: lanes::weighted_groups(&params.weights),
-            query_lanes: query.lanes(params.origin).to_vec(),
+            query_lanes: query.lanes(params.origin),
             query_frames,
             min_span,
             max_span,

@@ -128,7 +128,8 @@ pub struct SearchStats {
     pub cells_total: u64,
     /// Frame distances actually started (each may have been abandoned part-way).
     pub distances_computed: u64,
-    /// Whether the fast search had to rescan without its k-th-best bound (see `fast.rs`).
+    /// Whether the fast search had to scan again with a higher fixed bound, or fell back to the
+    /// plain DP (see `fast.rs`).
     pub rescanned: bool,
 }
 
@@ -178,8 +179,9 @@ pub(crate) fn finish(index: &FeatureIndex, selected: Vec<Refined>, stats: Search
 /// forward DP's least cost `g(I, end)` over a shorter span, so its distance is always larger;
 /// leaving them out makes that hold despite rounding, so a match always contains its
 /// candidate's span. `None` only if no admissible start has a finite cost.
-pub(crate) fn refine(prep: &Prepared, target: &[f32], cand: &Candidate) -> Option<Refined> {
+pub(crate) fn refine(index: &FeatureIndex, prep: &Prepared, cand: &Candidate) -> Option<Refined> {
     let (clip, end) = (cand.clip, cand.end);
+    let target = index.clips[clip].lanes(prep.origin);
     let rows = prep.query_frames;
     let lo = (end + 1).saturating_sub(prep.max_span);
     let cols = end + 1 - lo;
