@@ -7,6 +7,7 @@ use glam::{Mat4, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::motion;
 use crate::skeleton::Skeleton;
 
 /// A per-frame local translation of one joint (the root's always; others where the source
@@ -109,28 +110,28 @@ impl Clip {
         self.local_translation(0, frame)
     }
 
-    /// World position of every joint at `frame`, into `out` (resized).
-    pub fn world_positions_into(&self, frame: usize, out: &mut Vec<Vec3>) {
-        let n = self.skeleton.len();
+    /// Local translations of every joint at `frame` (tracks where present, rest offsets
+    /// elsewhere), into `out` (resized).
+    pub fn local_translations_into(&self, frame: usize, out: &mut Vec<Vec3>) {
         out.clear();
-        out.reserve(n);
-        let mut rots: Vec<Quat> = Vec::with_capacity(n);
-        let local = self.frame_rotations(frame);
-        for (i, j) in self.skeleton.joints.iter().enumerate() {
-            let t = self.local_translation(i, frame);
-            match j.parent {
-                None => {
-                    rots.push(local[i]);
-                    out.push(t);
-                }
-                Some(p) => {
-                    let pr = rots[p];
-                    rots.push(pr * local[i]);
-                    let pp = out[p];
-                    out.push(pp + pr * t);
-                }
+        out.extend(self.skeleton.joints.iter().map(|j| j.rest_offset));
+        for t in &self.translations {
+            if let (Some(slot), Some(v)) = (out.get_mut(t.joint), t.values.get(frame)) {
+                *slot = *v;
             }
         }
+    }
+
+    /// World position of every joint at `frame`, into `out` (resized); the motion kernel's
+    /// forward kinematics.
+    pub fn world_positions_into(&self, frame: usize, out: &mut Vec<Vec3>) {
+        let n = self.skeleton.len();
+        let mut trans = Vec::with_capacity(n);
+        self.local_translations_into(frame, &mut trans);
+        let mut rots = vec![Quat::IDENTITY; n];
+        out.clear();
+        out.resize(n, Vec3::ZERO);
+        motion::local_to_world(&self.skeleton, self.frame_rotations(frame), &trans, &mut rots, out);
     }
 
     pub fn world_positions(&self, frame: usize) -> Vec<Vec3> {

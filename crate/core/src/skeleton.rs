@@ -62,22 +62,7 @@ impl Skeleton {
 
     /// World positions of the rest pose.
     pub fn rest_positions(&self) -> Vec<Vec3> {
-        let mut rot = Vec::with_capacity(self.len());
-        let mut pos: Vec<Vec3> = Vec::with_capacity(self.len());
-        for j in &self.joints {
-            match j.parent {
-                None => {
-                    rot.push(j.rest_rotation);
-                    pos.push(j.rest_offset);
-                }
-                Some(p) => {
-                    let (pr, pp) = (rot[p], pos[p]);
-                    rot.push(pr * j.rest_rotation);
-                    pos.push(pp + pr * j.rest_offset);
-                }
-            }
-        }
-        pos
+        crate::motion::rest_world(self).1
     }
 
     /// Forward kinematics of one pose given local rotations and translations (one per joint):

@@ -10,6 +10,7 @@
 //! feet stay on the floor; the root height is then corrected so the lowest point of the body
 //! never goes below the floor ([`crate::builtin::lowest_point`]).
 
+pub mod body;
 pub mod moves;
 pub mod pose;
 

@@ -1,0 +1,101 @@
+//! The motion kernel: the one forward kinematics of the engine (local rotations and
+//! translations to world rotations and positions, into buffers the caller owns), rest-pose
+//! transforms, and the quaternion hygiene every writer of keyframes needs (unit length, sign
+//! continuity). New code (export, the built-in body, retargeting) uses only this; older
+//! modules that still carry their own loop are listed in `notes` of the export work and move
+//! here one at a time (see `Skeleton::forward_kinematics`, `Clip::world_positions_into`,
+//! which already call it).
+
+use glam::{Mat4, Quat, Vec3};
+
+use crate::skeleton::Skeleton;
+
+/// Forward kinematics of one pose, parents before children, without allocating.
+///
+/// `local_rotations[i]` and `local_translations[i]` are joint `i`'s rotation and translation
+/// in its parent's frame; a root's are in world space. Writes `world_rotations` and
+/// `world_positions` for the first `min` of all lengths and the skeleton's joint count, and
+/// returns that count. A joint whose parent is not before it is treated as a root (the
+/// skeleton's own invariant says this never happens; the guard keeps a bad one from panicking).
+pub fn local_to_world(
+    skeleton: &Skeleton,
+    local_rotations: &[Quat],
+    local_translations: &[Vec3],
+    world_rotations: &mut [Quat],
+    world_positions: &mut [Vec3],
+) -> usize {
+    let n = skeleton.len().min(local_rotations.len()).min(local_translations.len()).min(world_rotations.len()).min(world_positions.len());
+    for (i, j) in skeleton.joints.iter().enumerate().take(n) {
+        match j.parent {
+            Some(p) if p < i => {
+                let pr = world_rotations[p];
+                world_rotations[i] = pr * local_rotations[i];
+                world_positions[i] = world_positions[p] + pr * local_translations[i];
+            }
+            _ => {
+                world_rotations[i] = local_rotations[i];
+                world_positions[i] = local_translations[i];
+            }
+        }
+    }
+    n
+}
+
+/// World rotations and positions of the skeleton's rest pose (rest rotations and offsets).
+pub fn rest_world(skeleton: &Skeleton) -> (Vec<Quat>, Vec<Vec3>) {
+    let local_r: Vec<Quat> = skeleton.joints.iter().map(|j| j.rest_rotation).collect();
+    let local_t: Vec<Vec3> = skeleton.joints.iter().map(|j| j.rest_offset).collect();
+    let mut rot = vec![Quat::IDENTITY; skeleton.len()];
+    let mut pos = vec![Vec3::ZERO; skeleton.len()];
+    local_to_world(skeleton, &local_r, &local_t, &mut rot, &mut pos);
+    (rot, pos)
+}
+
+/// The rigid world matrix of a joint and its exact inverse (built from the rotation and
+/// translation, so the last row is exactly 0 0 0 1, as glTF's inverse bind matrices must be).
+pub fn rigid(rotation: Quat, position: Vec3) -> (Mat4, Mat4) {
+    let inv_r = rotation.inverse();
+    (Mat4::from_rotation_translation(rotation, position), Mat4::from_rotation_translation(inv_r, -(inv_r * position)))
+}
+
+/// `q` or `-q`, whichever is nearer `previous` (the same rotation; keyframe interpolation
+/// between neighbours of opposite sign would take the long way round).
+pub fn sign_continuous(previous: Quat, q: Quat) -> Quat {
+    if previous.dot(q) < 0.0 {
+        -q
+    } else {
+        q
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::builtin::canonical_skeleton;
+
+    #[test]
+    fn rest_world_matches_skeleton_rest_positions() {
+        let sk = canonical_skeleton();
+        let (_, pos) = rest_world(&sk);
+        for (a, b) in pos.iter().zip(sk.rest_positions()) {
+            assert!((*a - b).length() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn rigid_inverse_is_exact_affine() {
+        let q = Quat::from_euler(glam::EulerRot::ZXY, 0.3, -1.1, 2.0);
+        let (m, inv) = rigid(q, Vec3::new(0.1, 1.2, -0.4));
+        assert!((m * inv).abs_diff_eq(Mat4::IDENTITY, 1e-5));
+        assert_eq!(inv.row(3), glam::Vec4::W);
+    }
+
+    #[test]
+    fn sign_continuity_keeps_the_short_way() {
+        let a = Quat::from_rotation_y(0.1);
+        let b = -Quat::from_rotation_y(0.2);
+        let c = sign_continuous(a, b);
+        assert!(a.dot(c) > 0.0);
+        assert!(c.angle_between(b) < 1e-5);
+    }
+}
