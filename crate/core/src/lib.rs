@@ -8,6 +8,7 @@
 pub mod actions;
 pub mod bars;
 pub mod builtin;
+pub mod character;
 pub mod choreo;
 pub mod clip;
 pub mod export;

@@ -68,6 +68,40 @@ pub fn sign_continuous(previous: Quat, q: Quat) -> Quat {
     }
 }
 
+/// The floor under a joint over a clip: the 1st percentile of its heights (spec §J), so a few
+/// noisy frames below the real floor do not set it. `None` for no finite height.
+pub fn floor_height(heights_m: &[f32]) -> Option<f32> {
+    let mut h: Vec<f32> = heights_m.iter().copied().filter(|v| v.is_finite()).collect();
+    if h.is_empty() {
+        return None;
+    }
+    h.sort_by(f32::total_cmp);
+    Some(h[(h.len() - 1) / 100])
+}
+
+/// Foot skate (spec §J): horizontal speed of a joint, cm/s, on the frames where it is within
+/// 5 cm of its floor. `track` is the joint's world position per frame. Returns every such
+/// speed (between frame f−1 and f, counted when frame f is near the floor).
+pub fn skate_speeds_cm_s(track: &[Vec3], fps: f32) -> Vec<f32> {
+    let heights: Vec<f32> = track.iter().map(|p| p.y).collect();
+    let Some(floor) = floor_height(&heights) else { return Vec::new() };
+    track
+        .windows(2)
+        .filter(|w| w[1].y - floor < 0.05)
+        .map(|w| Vec3::new(w[1].x - w[0].x, 0.0, w[1].z - w[0].z).length() * fps * 100.0)
+        .collect()
+}
+
+/// Mean and 95th percentile of a list (0, 0 when empty).
+pub fn mean_p95(values: &[f32]) -> (f32, f32) {
+    if values.is_empty() {
+        return (0.0, 0.0);
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f32::total_cmp);
+    (v.iter().sum::<f32>() / v.len() as f32, v[((v.len() - 1) as f32 * 0.95).round() as usize])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -88,6 +122,16 @@ mod tests {
         let (m, inv) = rigid(q, Vec3::new(0.1, 1.2, -0.4));
         assert!((m * inv).abs_diff_eq(Mat4::IDENTITY, 1e-5));
         assert_eq!(inv.row(3), glam::Vec4::W);
+    }
+
+    #[test]
+    fn skate_counts_only_frames_near_the_floor() {
+        // A foot sliding 1 cm per frame on the floor at 30 fps, then lifted 20 cm and moving.
+        let mut track: Vec<Vec3> = (0..10).map(|f| Vec3::new(f as f32 * 0.01, 0.0, 0.0)).collect();
+        track.extend((0..10).map(|f| Vec3::new(1.0 + f as f32 * 0.1, 0.2, 0.0)));
+        let s = skate_speeds_cm_s(&track, 30.0);
+        assert_eq!(s.len(), 9);
+        assert!(s.iter().all(|v| (v - 30.0).abs() < 1e-3), "{s:?}");
     }
 
     #[test]

@@ -1,0 +1,481 @@
+//! Retargeting onto a character (spec §L): a humanoid clip played by an imported skinned
+//! character (Xbot's `mixamorig:` rig, RobotExpressive, VRM bone names), twist included.
+//!
+//! The motion is carried as each canonical bone's rotation away from its reference pose, in
+//! world axes (D = G · R⁻¹, G the bone's world rotation, R its reference world rotation);
+//! the character's mapped bone then gets world rotation D · R_character and its local rotation
+//! follows from its own parent's pose. This is the spec's conjugation N = W · L⁻¹ · Local · W⁻¹,
+//! Local' = L' · W'⁻¹ · N · W' composed down each chain: a full rotation, so forearm and hand
+//! roll reach the skin (the direction-only transfer of `retarget.rs` loses it).
+//! - Reference pose: both rigs in T-pose. The canonical skeleton's rest is one; the
+//!   character's rest bones are each swung once onto the canonical rest direction of the same
+//!   bone, which turns an A-pose (or bent elbows, or splayed legs) into the T-pose while
+//!   keeping each bone's roll.
+//! - A canonical bone the character lacks (no chest, no shoulders) has no joint to set: the
+//!   world rotation of the next mapped bone down the chain already includes it (folded).
+//!   Character joints no canonical bone maps to (extra spine joints, fingers, twist helpers)
+//!   keep their rest rotation and follow their parent.
+//! - Root: the hips follow the source's hips scaled by the ratio of hip heights.
+//! - Not done here: holding planted feet with two-bone IK; the benchmark measures the foot
+//!   skate this leaves (`tests/bench/retarget.rs`).
+
+use std::sync::Arc;
+
+use glam::{Quat, Vec3};
+use thiserror::Error;
+
+use crate::builtin::canonical_skeleton;
+use crate::clip::{Clip, TranslationTrack};
+use crate::humanoid::{Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
+use crate::import::{Imported, SkinnedMesh};
+use crate::motion;
+use crate::retarget::{is_canonical, to_canonical};
+use crate::skeleton::Skeleton;
+
+/// Why a character cannot play humanoid motion, naming what is missing.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum CharacterError {
+    #[error("{file}: the character has no skinned mesh to put the motion on (a skeleton or animation file only)")]
+    NoSkin { file: String },
+    #[error("{file}: not a humanoid character: {reason}")]
+    NotHumanoid { file: String, reason: String },
+    #[error("{file}: the rig lacks limbs a dance needs: {}", missing.join(", "))]
+    MissingLimbs { file: String, missing: Vec<String> },
+    #[error("the motion '{clip}' is not humanoid: {reason}")]
+    SourceNotHumanoid { clip: String, reason: String },
+}
+
+impl CharacterError {
+    pub fn kind(&self) -> &'static str {
+        match self {
+            CharacterError::NoSkin { .. } => "character-no-skin",
+            CharacterError::NotHumanoid { .. } => "character-not-humanoid",
+            CharacterError::MissingLimbs { .. } => "character-missing-limbs",
+            CharacterError::SourceNotHumanoid { .. } => "motion-not-humanoid",
+        }
+    }
+}
+
+/// Canonical bones a character must have to dance (the rest may fold).
+const REQUIRED: [Canon; 15] = [
+    Canon::Hips,
+    Canon::Head,
+    Canon::LeftUpperArm,
+    Canon::LeftForearm,
+    Canon::LeftHand,
+    Canon::RightUpperArm,
+    Canon::RightForearm,
+    Canon::RightHand,
+    Canon::LeftUpperLeg,
+    Canon::LeftLowerLeg,
+    Canon::LeftFoot,
+    Canon::RightUpperLeg,
+    Canon::RightLowerLeg,
+    Canon::RightFoot,
+    Canon::Spine,
+];
+
+/// The bone whose direction orients canonical joint `c` in the reference pose: (from, to).
+/// Ends of chains (hands, head, toes) take their parent bone's direction.
+fn direction_bone(c: Canon) -> (Canon, Canon) {
+    use Canon::*;
+    match c {
+        Hips => (Hips, Spine),
+        Spine => (Spine, Chest),
+        Chest => (Chest, Neck),
+        Neck | Head => (Neck, Head),
+        LeftShoulder => (LeftShoulder, LeftUpperArm),
+        LeftUpperArm => (LeftUpperArm, LeftForearm),
+        LeftForearm | LeftHand => (LeftForearm, LeftHand),
+        RightShoulder => (RightShoulder, RightUpperArm),
+        RightUpperArm => (RightUpperArm, RightForearm),
+        RightForearm | RightHand => (RightForearm, RightHand),
+        LeftUpperLeg => (LeftUpperLeg, LeftLowerLeg),
+        LeftLowerLeg => (LeftLowerLeg, LeftFoot),
+        LeftFoot | LeftToe => (LeftFoot, LeftToe),
+        RightUpperLeg => (RightUpperLeg, RightLowerLeg),
+        RightLowerLeg => (RightLowerLeg, RightFoot),
+        RightFoot | RightToe => (RightFoot, RightToe),
+    }
+}
+
+/// How each bone's rotation is carried over.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Transfer {
+    /// Full rotation by rest-pose conjugation (twist kept): the product's method.
+    #[default]
+    Conjugate,
+    /// Only the bone's direction (the shortest swing from the reference onto the source's
+    /// direction; twist lost): the control the benchmark compares against.
+    DirectionOnly,
+}
+
+/// The spec §L checks of a retargeted clip against its source, on the canonical joints.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RetargetReport {
+    /// Angle between source and character bone directions over every mapped canonical bone
+    /// (each joint's own bone, e.g. upper arm → forearm) and frame, radians: median and 95th
+    /// percentile.
+    pub direction_median_rad: f32,
+    pub direction_p95_rad: f32,
+    /// Roll about the forearm and hand bones (the angle between the source's and the
+    /// character's perpendicular axis, in the plane across the bone), radians: median, p95.
+    pub twist_median_rad: f32,
+    pub twist_p95_rad: f32,
+    /// Foot skate (spec §J: ankles and toes within 5 cm of their floor), cm/s: mean, p95.
+    pub source_skate_mean_cm_s: f32,
+    pub source_skate_p95_cm_s: f32,
+    pub skate_mean_cm_s: f32,
+    pub skate_p95_cm_s: f32,
+}
+
+/// The canonical joint below `c` on its chain toward the head or the hands (for a bone whose
+/// canonical child the rig lacks: a spine without a chest points at the neck).
+fn next_down(c: Canon) -> Option<Canon> {
+    use Canon::*;
+    Some(match c {
+        Spine => Chest,
+        Chest => Neck,
+        Neck => Head,
+        LeftShoulder => LeftUpperArm,
+        RightShoulder => RightUpperArm,
+        _ => return None,
+    })
+}
+
+/// A character ready to play canonical motion: its rig, mesh, mapping and reference pose.
+#[derive(Clone, Debug)]
+pub struct Character {
+    pub name: String,
+    pub skeleton: Arc<Skeleton>,
+    pub mesh: SkinnedMesh,
+    pub map: HumanoidMap,
+    /// Reference (T-pose) world rotation per canonical joint, for mapped joints.
+    reference: [Quat; CANON_COUNT],
+    /// Height of the hips above the ankles (foot joints) at rest, metres.
+    hip_height_m: f32,
+    /// How far the character's upper arms were swung to reach the T-pose, radians (0 for a
+    /// T-pose rig, about 0.7–0.8 for an A-pose one): reported, not used.
+    pub arm_swing_rad: f32,
+}
+
+impl Character {
+    /// Checks that an imported file can play humanoid motion and builds its reference pose.
+    pub fn from_imported(file: &str, im: &Imported) -> Result<Character, CharacterError> {
+        let mesh = im.mesh.clone().ok_or_else(|| CharacterError::NoSkin { file: file.to_string() })?;
+        if let HumanoidStatus::NotHumanoid { reason } = &im.status {
+            return Err(CharacterError::NotHumanoid { file: file.to_string(), reason: reason.clone() });
+        }
+        let missing: Vec<String> = REQUIRED.iter().filter(|c| im.humanoid.get(**c).is_none()).map(|c| c.name().to_string()).collect();
+        if !missing.is_empty() {
+            return Err(CharacterError::MissingLimbs { file: file.to_string(), missing });
+        }
+        Ok(Self::build(file, im.skeleton.clone(), mesh, im.humanoid.clone()))
+    }
+
+    fn build(name: &str, skeleton: Arc<Skeleton>, mesh: SkinnedMesh, map: HumanoidMap) -> Character {
+        let (rest_rot, rest_pos) = motion::rest_world(&skeleton);
+        let canon = canonical_skeleton();
+        let canon_pos = canon.rest_positions();
+        let mut reference = [Quat::IDENTITY; CANON_COUNT];
+        let mut arm_swing_rad = 0.0f32;
+        for c in Canon::ALL {
+            let Some(j) = map.get(c) else { continue };
+            let (a, mut b) = direction_bone(c);
+            while map.get(b).is_none() {
+                match next_down(b) {
+                    Some(d) => b = d,
+                    None => break,
+                }
+            }
+            let swing = match (map.get(a), map.get(b)) {
+                (Some(ja), Some(jb)) => {
+                    let have = rest_pos[jb] - rest_pos[ja];
+                    let want = canon_pos[b.index()] - canon_pos[a.index()];
+                    match (have.try_normalize(), want.try_normalize()) {
+                        (Some(h), Some(w)) => Quat::from_rotation_arc(h, w),
+                        _ => Quat::IDENTITY,
+                    }
+                }
+                _ => Quat::IDENTITY,
+            };
+            if matches!(c, Canon::LeftUpperArm | Canon::RightUpperArm) {
+                arm_swing_rad = arm_swing_rad.max(swing.angle_between(Quat::IDENTITY));
+            }
+            reference[c.index()] = (swing * rest_rot[j]).normalize();
+        }
+        let feet_y = [Canon::LeftFoot, Canon::RightFoot]
+            .iter()
+            .filter_map(|c| map.get(*c))
+            .map(|j| rest_pos[j].y)
+            .fold(f32::INFINITY, f32::min);
+        let hips_y = map.get(Canon::Hips).map(|j| rest_pos[j].y).unwrap_or(1.0);
+        let hip_height_m = if feet_y.is_finite() { (hips_y - feet_y).max(1e-3) } else { hips_y.max(1e-3) };
+        Character { name: name.to_string(), skeleton, mesh, map, reference, hip_height_m, arm_swing_rad }
+    }
+
+    /// Height of the hips above the lower ankle (foot joint) in the rest pose, metres.
+    pub fn hip_height_m(&self) -> f32 {
+        self.hip_height_m
+    }
+
+    /// The motion of `clip` (any humanoid clip; `clip_map` its mapping) played by this
+    /// character, at the clip's frame rate, as a clip on the character's skeleton.
+    pub fn retarget(&self, clip: &Clip, clip_map: &HumanoidMap) -> Result<Clip, CharacterError> {
+        self.retarget_with(clip, clip_map, Transfer::Conjugate)
+    }
+
+    /// [`Character::retarget`] with a choice of transfer (the direction-only one is the
+    /// benchmark's control).
+    pub fn retarget_with(&self, clip: &Clip, clip_map: &HumanoidMap, transfer: Transfer) -> Result<Clip, CharacterError> {
+        let status = clip_map.status(&clip.skeleton, Some(clip));
+        if let HumanoidStatus::NotHumanoid { reason } = status {
+            return Err(CharacterError::SourceNotHumanoid { clip: clip.name.clone(), reason });
+        }
+        let src = if is_canonical(&clip.skeleton) { clip.clone() } else { to_canonical(clip, clip_map, clip.fps) };
+        // The canonical rest is the T-pose with identity rest rotations: a source bone's world
+        // rotation is already its rotation away from the reference.
+        let canon = &src.skeleton;
+        let canon_rest = canon.rest_positions();
+        let canon_feet = canon_rest[Canon::LeftFoot.index()].y.min(canon_rest[Canon::RightFoot.index()].y);
+        let src_hip_height = (canon_rest[Canon::Hips.index()].y - canon_feet).max(1e-3);
+        let scale = self.hip_height_m / src_hip_height;
+        let (char_rest_rot, char_rest_pos) = motion::rest_world(&self.skeleton);
+        let feet_rest_y = [Canon::LeftFoot, Canon::RightFoot].iter().filter_map(|c| self.map.get(*c)).map(|j| char_rest_pos[j].y).fold(f32::INFINITY, f32::min);
+        let feet_rest_y = if feet_rest_y.is_finite() { feet_rest_y } else { 0.0 };
+
+        let n = self.skeleton.len();
+        let frames = src.frame_count();
+        let hips = self.map.get(Canon::Hips).unwrap_or(0);
+        let mut canon_of = vec![None; n];
+        for c in Canon::ALL {
+            if let Some(j) = self.map.get(c) {
+                canon_of[j] = Some(c);
+            }
+        }
+        // Joints a rig hangs outside their limb (RobotExpressive's feet are children of an
+        // IK "Bone" at the root, not of the shins): each is placed where its canonical
+        // parent's bone ends, with a translation of its own, after everything else is posed.
+        let is_ancestor = |a: usize, mut b: usize| {
+            while let Some(q) = self.skeleton.joints[b].parent {
+                if q == a {
+                    return true;
+                }
+                b = q;
+            }
+            false
+        };
+        let mut detached: Vec<Option<(usize, Vec3)>> = vec![None; n];
+        for c in Canon::ALL {
+            let (Some(i), Some(pc)) = (self.map.get(c), c.parent()) else { continue };
+            let mut up = Some(pc);
+            while let Some(u) = up.filter(|u| self.map.get(*u).is_none()) {
+                up = u.parent();
+            }
+            if let Some(jp) = up.and_then(|u| self.map.get(u)) {
+                if i != jp && !is_ancestor(jp, i) {
+                    detached[i] = Some((jp, char_rest_rot[jp].inverse() * (char_rest_pos[i] - char_rest_pos[jp])));
+                }
+            }
+        }
+        let mut in_detached = vec![false; n];
+        for (i, j) in self.skeleton.joints.iter().enumerate() {
+            in_detached[i] = detached[i].is_some() || j.parent.is_some_and(|q| q < i && in_detached[q]);
+        }
+        let order: Vec<usize> = (0..n).filter(|&i| !in_detached[i]).chain((0..n).filter(|&i| in_detached[i])).collect();
+        let mut track_joints = vec![hips];
+        track_joints.extend((0..n).filter(|&i| detached[i].is_some() && i != hips));
+        let mut tracks: Vec<TranslationTrack> = track_joints.iter().map(|&j| TranslationTrack { joint: j, values: Vec::with_capacity(frames) }).collect();
+        let mut track_of = vec![usize::MAX; n];
+        for (k, &j) in track_joints.iter().enumerate() {
+            track_of[j] = k;
+        }
+
+        let mut rotations = Vec::with_capacity(frames * n);
+        let (mut src_rot, mut src_pos) = (vec![Quat::IDENTITY; CANON_COUNT], vec![Vec3::ZERO; CANON_COUNT]);
+        let mut src_t = Vec::with_capacity(CANON_COUNT);
+        let mut g = vec![Quat::IDENTITY; n];
+        let mut p = vec![Vec3::ZERO; n];
+        let mut local = vec![Quat::IDENTITY; n];
+        for f in 0..frames {
+            src.local_translations_into(f, &mut src_t);
+            motion::local_to_world(canon, src.frame_rotations(f), &src_t, &mut src_rot, &mut src_pos);
+            // Hips target: the source's hips, its height above the source's feet at rest scaled
+            // to the character's, horizontal motion scaled alike.
+            let sh = src_pos[Canon::Hips.index()];
+            let target = Vec3::new(sh.x * scale, feet_rest_y + (sh.y - canon_feet) * scale, sh.z * scale);
+            for &i in &order {
+                let j = &self.skeleton.joints[i];
+                let parent = j.parent.filter(|&q| q < i);
+                let (pg, pp) = parent.map(|q| (g[q], p[q])).unwrap_or((Quat::IDENTITY, Vec3::ZERO));
+                local[i] = match canon_of[i] {
+                    Some(c) => {
+                        let world = match transfer {
+                            Transfer::Conjugate => src_rot[c.index()] * self.reference[c.index()],
+                            Transfer::DirectionOnly => {
+                                // Swing the reference so the bone points where the source's does.
+                                let (a, b) = direction_bone(c);
+                                let rest_dir = canon_rest[b.index()] - canon_rest[a.index()];
+                                let from = rest_dir.try_normalize();
+                                let to = (src_rot[c.index()] * rest_dir).try_normalize();
+                                let swing = match (from, to) {
+                                    (Some(f), Some(t)) => Quat::from_rotation_arc(f, t),
+                                    _ => Quat::IDENTITY,
+                                };
+                                swing * self.reference[c.index()]
+                            }
+                        };
+                        (pg.inverse() * world).normalize()
+                    }
+                    None => j.rest_rotation,
+                };
+                g[i] = pg * local[i];
+                let t = if i == hips {
+                    pg.inverse() * (target - pp)
+                } else if let Some((jp, rel)) = detached[i] {
+                    pg.inverse() * (p[jp] + g[jp] * rel - pp)
+                } else {
+                    j.rest_offset
+                };
+                if track_of[i] != usize::MAX {
+                    tracks[track_of[i]].values.push(t);
+                }
+                p[i] = pp + pg * t;
+            }
+            rotations.extend_from_slice(&local);
+        }
+        Ok(Clip {
+            name: format!("{} on {}", src.name, self.name),
+            source: src.source.clone(),
+            fps: src.fps,
+            skeleton: self.skeleton.clone(),
+            rotations,
+            translations: tracks,
+        })
+    }
+}
+
+/// Compares a retargeted clip with its canonical source (same frame count and rate).
+pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, out: &Clip) -> RetargetReport {
+    let src = if is_canonical(&source.skeleton) { source.clone() } else { to_canonical(source, source_map, source.fps) };
+    let frames = src.frame_count().min(out.frame_count());
+    let canon = canonical_skeleton();
+    let canon_rest = canon.rest_positions();
+    let n = out.skeleton.len();
+    let (mut sr, mut sp) = (vec![Quat::IDENTITY; CANON_COUNT], vec![Vec3::ZERO; CANON_COUNT]);
+    let (mut cr, mut cp) = (vec![Quat::IDENTITY; n], vec![Vec3::ZERO; n]);
+    let (mut st, mut ct) = (Vec::new(), Vec::new());
+    let bones: std::collections::BTreeSet<(Canon, Canon)> = Canon::ALL.into_iter().map(direction_bone).collect();
+    let mut dir_err = Vec::new();
+    let mut twist_err = Vec::new();
+    let feet = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
+    let mut src_tracks: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); 4];
+    let mut out_tracks: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); 4];
+    let scale = character.hip_height_m / (canon_rest[Canon::Hips.index()].y - canon_rest[Canon::LeftFoot.index()].y).max(1e-3);
+    for f in 0..frames {
+        src.local_translations_into(f, &mut st);
+        motion::local_to_world(&src.skeleton, src.frame_rotations(f), &st, &mut sr, &mut sp);
+        out.local_translations_into(f, &mut ct);
+        motion::local_to_world(&out.skeleton, out.frame_rotations(f), &ct, &mut cr, &mut cp);
+        // Each canonical joint's own bone (the one it turns); branch links such as hips→thigh
+        // or chest→shoulder are the rig's proportions, not motion, and are not compared.
+        for &(s, c) in &bones {
+            let (Some(js), Some(jc)) = (character.map.get(s), character.map.get(c)) else { continue };
+            if let (Some(a), Some(b)) = ((sp[c.index()] - sp[s.index()]).try_normalize(), (cp[jc] - cp[js]).try_normalize()) {
+                dir_err.push(a.dot(b).clamp(-1.0, 1.0).acos());
+            }
+        }
+        for c in [Canon::LeftForearm, Canon::RightForearm, Canon::LeftHand, Canon::RightHand] {
+            let Some(j) = character.map.get(c) else { continue };
+            let (a, b) = direction_bone(c);
+            let Some(axis) = (sr[c.index()] * (canon_rest[b.index()] - canon_rest[a.index()])).try_normalize() else { continue };
+            // The bone's forward (+Z at the reference pose) in each, projected across the bone.
+            let d_src = sr[c.index()];
+            let d_out = cr[j] * character.reference[c.index()].inverse();
+            let across = |v: Vec3| (v - axis * v.dot(axis)).try_normalize();
+            if let (Some(u), Some(w)) = (across(d_src * Vec3::Z), across(d_out * Vec3::Z)) {
+                twist_err.push(u.dot(w).clamp(-1.0, 1.0).acos());
+            }
+        }
+        for (k, c) in feet.iter().enumerate() {
+            src_tracks[k].push(sp[c.index()] * scale);
+            if let Some(j) = character.map.get(*c) {
+                out_tracks[k].push(cp[j]);
+            }
+        }
+    }
+    let median_p95 = |v: &mut Vec<f32>| -> (f32, f32) {
+        if v.is_empty() {
+            return (0.0, 0.0);
+        }
+        v.sort_by(f32::total_cmp);
+        (v[v.len() / 2], v[((v.len() - 1) as f32 * 0.95).round() as usize])
+    };
+    let (direction_median_rad, direction_p95_rad) = median_p95(&mut dir_err);
+    let (twist_median_rad, twist_p95_rad) = median_p95(&mut twist_err);
+    let skate = |tracks: &[Vec<Vec3>], fps: f32| -> (f32, f32) {
+        let all: Vec<f32> = tracks.iter().flat_map(|t| motion::skate_speeds_cm_s(t, fps)).collect();
+        motion::mean_p95(&all)
+    };
+    // The source's skate is measured at the character's size (its positions scaled by the
+    // ratio of hip heights), so the two figures compare.
+    let (source_skate_mean_cm_s, source_skate_p95_cm_s) = skate(&src_tracks, src.fps);
+    let (skate_mean_cm_s, skate_p95_cm_s) = skate(&out_tracks, out.fps);
+    RetargetReport {
+        direction_median_rad,
+        direction_p95_rad,
+        twist_median_rad,
+        twist_p95_rad,
+        source_skate_mean_cm_s,
+        source_skate_p95_cm_s,
+        skate_mean_cm_s,
+        skate_p95_cm_s,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::builtin::demo_clip;
+    use crate::library::body::builtin_body;
+
+    #[test]
+    fn canonical_character_plays_canonical_motion_unchanged() {
+        let demo = demo_clip();
+        let sk = demo.skeleton.clone();
+        let map = HumanoidMap::from_skeleton(&sk);
+        let ch = Character::build("body", sk.clone(), builtin_body(&sk), map.clone());
+        assert!(ch.arm_swing_rad < 1e-3);
+        let out = ch.retarget(&demo, &map).unwrap();
+        for f in [0, 50, 120] {
+            let (a, b) = (demo.world_positions(f), out.world_positions(f));
+            for (x, y) in a.iter().zip(&b) {
+                assert!((*x - *y).length() < 1e-4, "frame {f}: {x} vs {y}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_pose_rig_is_swung_to_t_pose_and_keeps_directions() {
+        // The canonical rig with its upper arms lowered 45° at rest (an A-pose) and a
+        // twisted forearm rest: the motion's directions must still come through.
+        let demo = demo_clip();
+        let mut sk = (*demo.skeleton).clone();
+        sk.joints[Canon::LeftUpperArm.index()].rest_rotation = Quat::from_rotation_z(-0.8);
+        sk.joints[Canon::RightUpperArm.index()].rest_rotation = Quat::from_rotation_z(0.8);
+        sk.joints[Canon::LeftForearm.index()].rest_rotation = Quat::from_rotation_x(0.5);
+        let sk = Arc::new(sk);
+        let map = HumanoidMap::from_skeleton(&sk);
+        let ch = Character::build("a-pose", sk.clone(), builtin_body(&sk), map);
+        assert!((ch.arm_swing_rad - 0.8).abs() < 1e-3, "{}", ch.arm_swing_rad);
+        let out = ch.retarget(&demo, &HumanoidMap::from_skeleton(&demo.skeleton)).unwrap();
+        for f in [0, 50, 120] {
+            let (a, b) = (demo.world_positions(f), out.world_positions(f));
+            for (s, c) in Canon::links() {
+                let da = (a[c.index()] - a[s.index()]).normalize();
+                let db = (b[c.index()] - b[s.index()]).normalize();
+                assert!(da.dot(db) > 0.9999, "frame {f} bone {}→{}: {da} vs {db}", s.name(), c.name());
+            }
+        }
+    }
+}

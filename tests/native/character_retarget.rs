@@ -1,0 +1,103 @@
+//! Retargeting onto real characters (spec §L): the built-in dance and the CMU salsa played by
+//! Xbot (Mixamo `mixamorig:` rig) and RobotExpressive, checked by the product's own measures
+//! (bone directions, forearm/hand roll against the direction-only control, foot skate), then
+//! exported on the character's own mesh and skin and re-imported; and the bad characters
+//! (not humanoid, no skin, limbs missing) refused with messages naming what is wrong.
+
+use odori_core::builtin::demo_clip;
+use odori_core::character::{report, Character, CharacterError, Transfer};
+use odori_core::export::gltf::{glb, GlbOptions};
+use odori_core::humanoid::{Canon, HumanoidMap};
+use odori_core::import::{import_bytes, ImportOptions, Imported};
+use odori_core::Clip;
+use odori_tests::{fps_override_for, read};
+
+fn character(file: &str) -> (Imported, Character) {
+    let im = import_bytes(file, &read(file), &ImportOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let ch = Character::from_imported(file, &im).unwrap_or_else(|e| panic!("{e}"));
+    (im, ch)
+}
+
+fn salsa() -> (Clip, HumanoidMap) {
+    let rel = "mocap/cmu-salsa/salsa_01.bvh";
+    let im = import_bytes(rel, &read(rel), &ImportOptions { fps_override: fps_override_for(rel), ..Default::default() }).unwrap();
+    // 20 s is plenty for the checks and keeps the test quick.
+    let clip = im.clips[0].slice(0, 1200, "salsa_01 (20 s)");
+    (clip, im.humanoid)
+}
+
+#[test]
+fn characters_follow_the_source_twist_included() {
+    let demo = demo_clip();
+    let demo_map = HumanoidMap::from_skeleton(&demo.skeleton);
+    let (salsa, salsa_map) = salsa();
+    for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
+        let (_, ch) = character(file);
+        for (clip, map) in [(&demo, &demo_map), (&salsa, &salsa_map)] {
+            let out = ch.retarget(clip, map).unwrap();
+            out.validate().unwrap();
+            assert_eq!(out.frame_count(), clip.frame_count());
+            let r = report(clip, map, &ch, &out);
+            let control = report(clip, map, &ch, &ch.retarget_with(clip, map, Transfer::DirectionOnly).unwrap());
+            println!(
+                "{file} ← '{}': direction median {:.2}° p95 {:.2}°; twist median {:.2}° p95 {:.2}° (direction-only control: {:.2}° / {:.2}°); skate {:.2} cm/s (source {:.2})",
+                clip.name,
+                r.direction_median_rad.to_degrees(),
+                r.direction_p95_rad.to_degrees(),
+                r.twist_median_rad.to_degrees(),
+                r.twist_p95_rad.to_degrees(),
+                control.twist_median_rad.to_degrees(),
+                control.twist_p95_rad.to_degrees(),
+                r.skate_mean_cm_s,
+                r.source_skate_mean_cm_s
+            );
+            assert!(r.direction_median_rad.to_degrees() < 2.0 && r.direction_p95_rad.to_degrees() < 6.0, "{file}: {r:?}");
+            assert!(r.twist_p95_rad.to_degrees() < 2.0, "{file}: twist {r:?}");
+            // Foot skate is printed, not asserted: planted feet are not yet held by IK (see
+            // tests/bench/retarget.rs for the figures against the source).
+            // The control loses roll: conjugation must be clearly better where the source rolls.
+            assert!(control.twist_p95_rad > r.twist_p95_rad + 0.05, "{file}: control {control:?} vs {r:?}");
+        }
+    }
+}
+
+#[test]
+fn retargeted_dance_exports_on_the_characters_own_mesh() {
+    let demo = demo_clip();
+    let map = HumanoidMap::from_skeleton(&demo.skeleton);
+    for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
+        let (im, ch) = character(file);
+        let out = ch.retarget(&demo, &map).unwrap();
+        let bytes = glb(&out.skeleton, &[&out], &GlbOptions { mesh: im.mesh.as_ref() }).unwrap();
+        let back = import_bytes("dance.glb", &bytes, &ImportOptions { gltf_fps: out.fps, ..Default::default() }).unwrap();
+        assert!(back.mesh.is_some() && back.status.is_humanoid(), "{file}: {:?}", back.status);
+        let b = &back.clips[0];
+        assert_eq!(b.frame_count(), out.frame_count());
+        let (pa, pb) = (out.world_positions(100), b.world_positions(100));
+        for (i, j) in out.skeleton.joints.iter().enumerate() {
+            let k = b.skeleton.find(&j.name).unwrap();
+            assert!((pa[i] - pb[k]).length() < 2e-3, "{file} joint {}: {} vs {}", j.name, pa[i], pb[k]);
+        }
+    }
+}
+
+#[test]
+fn bad_characters_are_refused_naming_what_is_missing() {
+    let fox = import_bytes("Fox.glb", &read("gltf/Fox.glb"), &ImportOptions::default()).unwrap();
+    let e = Character::from_imported("Fox.glb", &fox).unwrap_err();
+    assert!(matches!(e, CharacterError::NotHumanoid { .. }), "{e}");
+    assert!(e.to_string().contains("Fox.glb"), "{e}");
+
+    let rel = "mocap/cmu-salsa/salsa_01.bvh";
+    let bvh = import_bytes(rel, &read(rel), &ImportOptions::default()).unwrap();
+    let e = Character::from_imported(rel, &bvh).unwrap_err();
+    assert_eq!(e, CharacterError::NoSkin { file: rel.to_string() });
+
+    let mut xbot = import_bytes("Xbot.glb", &read("gltf/Xbot.glb"), &ImportOptions::default()).unwrap();
+    xbot.humanoid.joints[Canon::LeftHand.index()] = None;
+    xbot.humanoid.joints[Canon::RightLowerLeg.index()] = None;
+    let e = Character::from_imported("Xbot.glb", &xbot).unwrap_err();
+    assert_eq!(e, CharacterError::MissingLimbs { file: "Xbot.glb".into(), missing: vec!["leftHand".into(), "rightLowerLeg".into()] });
+    assert!(e.to_string().contains("leftHand, rightLowerLeg"), "{e}");
+}
+
