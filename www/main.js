@@ -11,6 +11,7 @@ import { SearchClient } from "./search/client.js";
 import { SearchPanel } from "./ui/search-panel.js";
 import { TextPanel } from "./ui/text-panel.js";
 import { ChoreoPanel } from "./ui/choreo-panel.js";
+import { ExportPanel } from "./ui/export-panel.js";
 
 const t0 = performance.now();
 const $ = (sel) => document.querySelector(sel);
@@ -63,6 +64,10 @@ async function main() {
     },
   });
   loader.bindInput($("#file-input"));
+  const exporter = new ExportPanel({
+    button: $("#export"), format: $("#export-format"), character: $("#character"), putOn: $("#put-on"), library, player, messages,
+    onAdded: (info) => { searchClient.add(info.id); panel.refresh(); panel.select(info.id); },
+  });
   loader.bindDrop(document.body, $("#drop"));
 
   player.onFirstFrame = () => {
@@ -89,7 +94,7 @@ async function main() {
   // A new canvas size clears the canvas: draw again at once (a paused figure would
   // otherwise vanish until the next edit).
   new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); player.drawNow(); }).observe(canvas);
-  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, text: textPanel, choreo, version: version() };
+  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, text: textPanel, choreo, exporter, version: version() };
 }
 
 async function analyse(buffer) {

@@ -24,12 +24,18 @@ const read = (rel) => new Uint8Array(readFileSync(join(data, rel)));
 /** The cases: [label, library, clip id]. */
 function cases() {
   const lib = new Library();
-  const out = [["built-in dance on the built-in body", lib, lib.addBuiltinDemo().id]];
+  const demo = lib.addBuiltinDemo().id;
+  const out = [["built-in dance on the built-in body", lib, demo]];
   for (const file of ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"]) {
     const report = lib.importFile(file, read(file));
     // The longest animation of each character (Xbot's are short poses; RobotExpressive's Dance).
     const clip = report.clips.reduce((a, b) => (b.frames > a.frames ? b : a));
     out.push([`${file} '${clip.name}'`, lib, clip.id]);
+    // The built-in dance retargeted onto the character, exported on its own mesh and skin.
+    const on = lib.putOnCharacter(demo, clip.id);
+    assert.equal(on.format, "character");
+    assert.ok(on.hasMesh, `${file}: the retargeted clip is drawn skinned`);
+    out.push([`built-in dance on ${file}`, lib, on.id]);
   }
   return out;
 }
@@ -139,6 +145,14 @@ test("bad export requests throw typed OdoriErrors and change nothing", () => {
   assert.throws(() => lib.exportGlb(xbot.id, { character: "builtin" }), (e) => e.kind === "export-needs-canonical" && /canonical/.test(e.message));
   assert.throws(() => lib.exportGlb(xbot.id, { charakter: "none" }), (e) => e.kind === "bad-argument" && /charakter/.test(e.message));
   assert.throws(() => lib.exportBvh(xbot.id, { startSecs: 5, endSecs: 1 }), (e) => e.kind === "bad-argument");
+  const demoId = lib.addBuiltinDemo().id;
+  const fox = lib.importFile("Fox.glb", read("gltf/Fox.glb")).clips[0];
+  const n = lib.size;
+  assert.throws(() => lib.putOnCharacter(demoId, demoId), (e) => e.kind === "character-no-skin");
+  assert.throws(() => lib.putOnCharacter(demoId, fox.id), (e) => e.kind === "character-not-humanoid" && /Fox/.test(e.message));
+  assert.equal(lib.size, n, "a refused character adds nothing");
+  lib.remove(demoId);
+  lib.remove(fox.id);
   assert.equal(lib.size, before);
   // A range of the clip exports only those frames.
   const demo = lib.addBuiltinDemo();

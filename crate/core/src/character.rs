@@ -114,8 +114,8 @@ pub enum Transfer {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RetargetReport {
     /// Angle between source and character bone directions over every mapped canonical bone
-    /// (each joint's own bone, e.g. upper arm → forearm) and frame, radians: median and 95th
-    /// percentile.
+    /// (each joint's own bone, e.g. upper arm → forearm; not the feet, which keep each rig's
+    /// rest slope) and frame, radians: median and 95th percentile.
     pub direction_median_rad: f32,
     pub direction_p95_rad: f32,
     /// Roll about the forearm and hand bones (the angle between the source's and the
@@ -127,6 +127,23 @@ pub struct RetargetReport {
     pub source_skate_p95_cm_s: f32,
     pub skate_mean_cm_s: f32,
     pub skate_p95_cm_s: f32,
+}
+
+/// Mean height of the two hip (thigh) joints above their ankles, metres (at least 1 mm).
+fn hip_height(map: &HumanoidMap, rest_pos: &[Vec3]) -> f32 {
+    let mut sum = 0.0;
+    let mut n = 0;
+    for (ul, foot) in [(Canon::LeftUpperLeg, Canon::LeftFoot), (Canon::RightUpperLeg, Canon::RightFoot)] {
+        if let (Some(a), Some(b)) = (map.get(ul), map.get(foot)) {
+            sum += rest_pos[a].y - rest_pos[b].y;
+            n += 1;
+        }
+    }
+    if n == 0 {
+        1.0
+    } else {
+        (sum / n as f32).max(1e-3)
+    }
 }
 
 /// The canonical joint below `c` on its chain toward the head or the hands (for a bone whose
@@ -152,8 +169,12 @@ pub struct Character {
     pub map: HumanoidMap,
     /// Reference (T-pose) world rotation per canonical joint, for mapped joints.
     reference: [Quat; CANON_COUNT],
-    /// Height of the hips above the ankles (foot joints) at rest, metres.
+    /// Height of the hip joints (thighs) above the ankles at rest, metres: the leg length
+    /// that scales the root's motion (a rig whose hips joint sits high in the body, as
+    /// RobotExpressive's `Body` does, is not taken for long-legged).
     hip_height_m: f32,
+    /// Rest world position of the hips joint.
+    hips_rest: Vec3,
     /// How far the character's upper arms were swung to reach the T-pose, radians (0 for a
     /// T-pose rig, about 0.7–0.8 for an A-pose one): reported, not used.
     pub arm_swing_rad: f32,
@@ -162,15 +183,26 @@ pub struct Character {
 impl Character {
     /// Checks that an imported file can play humanoid motion and builds its reference pose.
     pub fn from_imported(file: &str, im: &Imported) -> Result<Character, CharacterError> {
-        let mesh = im.mesh.clone().ok_or_else(|| CharacterError::NoSkin { file: file.to_string() })?;
-        if let HumanoidStatus::NotHumanoid { reason } = &im.status {
+        Self::from_parts(file, im.skeleton.clone(), im.mesh.as_ref(), &im.humanoid, &im.status)
+    }
+
+    /// The same checks from the pieces a library keeps of an imported file.
+    pub fn from_parts(
+        file: &str,
+        skeleton: Arc<Skeleton>,
+        mesh: Option<&SkinnedMesh>,
+        map: &HumanoidMap,
+        status: &HumanoidStatus,
+    ) -> Result<Character, CharacterError> {
+        let mesh = mesh.cloned().ok_or_else(|| CharacterError::NoSkin { file: file.to_string() })?;
+        if let HumanoidStatus::NotHumanoid { reason } = status {
             return Err(CharacterError::NotHumanoid { file: file.to_string(), reason: reason.clone() });
         }
-        let missing: Vec<String> = REQUIRED.iter().filter(|c| im.humanoid.get(**c).is_none()).map(|c| c.name().to_string()).collect();
+        let missing: Vec<String> = REQUIRED.iter().filter(|c| map.get(**c).is_none()).map(|c| c.name().to_string()).collect();
         if !missing.is_empty() {
             return Err(CharacterError::MissingLimbs { file: file.to_string(), missing });
         }
-        Ok(Self::build(file, im.skeleton.clone(), mesh, im.humanoid.clone()))
+        Ok(Self::build(file, skeleton, mesh, map.clone()))
     }
 
     fn build(name: &str, skeleton: Arc<Skeleton>, mesh: SkinnedMesh, map: HumanoidMap) -> Character {
@@ -188,7 +220,12 @@ impl Character {
                     None => break,
                 }
             }
+            // Feet keep the rig's rest orientation: a rig stands with its feet flat on the
+            // floor at rest, as the canonical one does, whatever way its foot bone points
+            // (RobotExpressive's runs flat along a long foot, the canonical one slopes to the toe).
+            let flat_foot = matches!(c, Canon::LeftFoot | Canon::RightFoot | Canon::LeftToe | Canon::RightToe);
             let swing = match (map.get(a), map.get(b)) {
+                _ if flat_foot => Quat::IDENTITY,
                 (Some(ja), Some(jb)) => {
                     let have = rest_pos[jb] - rest_pos[ja];
                     let want = canon_pos[b.index()] - canon_pos[a.index()];
@@ -204,17 +241,12 @@ impl Character {
             }
             reference[c.index()] = (swing * rest_rot[j]).normalize();
         }
-        let feet_y = [Canon::LeftFoot, Canon::RightFoot]
-            .iter()
-            .filter_map(|c| map.get(*c))
-            .map(|j| rest_pos[j].y)
-            .fold(f32::INFINITY, f32::min);
-        let hips_y = map.get(Canon::Hips).map(|j| rest_pos[j].y).unwrap_or(1.0);
-        let hip_height_m = if feet_y.is_finite() { (hips_y - feet_y).max(1e-3) } else { hips_y.max(1e-3) };
-        Character { name: name.to_string(), skeleton, mesh, map, reference, hip_height_m, arm_swing_rad }
+        let hip_height_m = hip_height(&map, &rest_pos);
+        let hips_rest = map.get(Canon::Hips).map(|j| rest_pos[j]).unwrap_or(Vec3::ZERO);
+        Character { name: name.to_string(), skeleton, mesh, map, reference, hip_height_m, hips_rest, arm_swing_rad }
     }
 
-    /// Height of the hips above the lower ankle (foot joint) in the rest pose, metres.
+    /// Height of the hip (thigh) joints above the ankles in the rest pose, metres.
     pub fn hip_height_m(&self) -> f32 {
         self.hip_height_m
     }
@@ -237,13 +269,10 @@ impl Character {
         // rotation is already its rotation away from the reference.
         let canon = &src.skeleton;
         let canon_rest = canon.rest_positions();
-        let canon_feet = canon_rest[Canon::LeftFoot.index()].y.min(canon_rest[Canon::RightFoot.index()].y);
-        let src_hip_height = (canon_rest[Canon::Hips.index()].y - canon_feet).max(1e-3);
-        let scale = self.hip_height_m / src_hip_height;
+        let canon_map = HumanoidMap::from_skeleton(canon);
+        let scale = self.hip_height_m / hip_height(&canon_map, &canon_rest);
+        let canon_hips = canon_rest[Canon::Hips.index()];
         let (char_rest_rot, char_rest_pos) = motion::rest_world(&self.skeleton);
-        let feet_rest_y = [Canon::LeftFoot, Canon::RightFoot].iter().filter_map(|c| self.map.get(*c)).map(|j| char_rest_pos[j].y).fold(f32::INFINITY, f32::min);
-        let feet_rest_y = if feet_rest_y.is_finite() { feet_rest_y } else { 0.0 };
-
         let n = self.skeleton.len();
         let frames = src.frame_count();
         let hips = self.map.get(Canon::Hips).unwrap_or(0);
@@ -300,10 +329,9 @@ impl Character {
         for f in 0..frames {
             src.local_translations_into(f, &mut src_t);
             motion::local_to_world(canon, src.frame_rotations(f), &src_t, &mut src_rot, &mut src_pos);
-            // Hips target: the source's hips, its height above the source's feet at rest scaled
-            // to the character's, horizontal motion scaled alike.
-            let sh = src_pos[Canon::Hips.index()];
-            let target = Vec3::new(sh.x * scale, feet_rest_y + (sh.y - canon_feet) * scale, sh.z * scale);
+            // Hips target: the character's rest hips moved as the source's hips move from
+            // theirs, scaled by the ratio of hip heights (leg lengths).
+            let target = self.hips_rest + (src_pos[Canon::Hips.index()] - canon_hips) * scale;
             for &i in &order {
                 let j = &self.skeleton.joints[i];
                 let parent = j.parent.filter(|&q| q < i);
@@ -365,13 +393,15 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
     let (mut sr, mut sp) = (vec![Quat::IDENTITY; CANON_COUNT], vec![Vec3::ZERO; CANON_COUNT]);
     let (mut cr, mut cp) = (vec![Quat::IDENTITY; n], vec![Vec3::ZERO; n]);
     let (mut st, mut ct) = (Vec::new(), Vec::new());
-    let bones: std::collections::BTreeSet<(Canon, Canon)> = Canon::ALL.into_iter().map(direction_bone).collect();
+    // Foot bones keep each rig's own rest slope (see `Character::build`): not compared.
+    let bones: std::collections::BTreeSet<(Canon, Canon)> =
+        Canon::ALL.into_iter().map(direction_bone).filter(|(a, _)| !matches!(a, Canon::LeftFoot | Canon::RightFoot)).collect();
     let mut dir_err = Vec::new();
     let mut twist_err = Vec::new();
     let feet = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
     let mut src_tracks: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); 4];
     let mut out_tracks: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); 4];
-    let scale = character.hip_height_m / (canon_rest[Canon::Hips.index()].y - canon_rest[Canon::LeftFoot.index()].y).max(1e-3);
+    let scale = character.hip_height_m / hip_height(&HumanoidMap::from_skeleton(&canon), &canon_rest);
     for f in 0..frames {
         src.local_translations_into(f, &mut st);
         motion::local_to_world(&src.skeleton, src.frame_rotations(f), &st, &mut sr, &mut sp);

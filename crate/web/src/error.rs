@@ -1,5 +1,6 @@
 //! The one place Rust errors become JavaScript errors.
 
+use odori_core::export::ExportError;
 use odori_core::import::ImportError;
 use wasm_bindgen::prelude::*;
 
@@ -27,6 +28,12 @@ impl From<ImportError> for OdoriError {
             | ImportError::Invalid { file, .. } => file.clone(),
         };
         OdoriError { kind: e.kind(), message: e.to_string(), file: Some(file) }
+    }
+}
+
+impl From<ExportError> for OdoriError {
+    fn from(e: ExportError) -> Self {
+        OdoriError::new(e.kind(), e.to_string())
     }
 }
 

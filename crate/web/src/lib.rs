@@ -8,6 +8,7 @@
 
 mod choreo;
 mod error;
+mod export;
 mod library;
 mod music;
 mod search;
@@ -53,7 +54,7 @@ export interface ClipInfo {
   name: string;
   /** The file the clip came from, or "built-in". */
   source: string;
-  format: "bvh" | "gltf" | "builtin" | "text" | "dance";
+  format: "bvh" | "gltf" | "builtin" | "text" | "dance" | "character";
   fps: number;
   frames: number;
   durationSecs: number;
@@ -87,6 +88,13 @@ export interface FigureSpec {
   offset?: [number, number, number];
   /** "auto": the skinned character when the clip has one, else a stick figure. */
   style?: "auto" | "stick" | "mesh";
+}
+export interface ExportOptions {
+  /** GLB only. "auto": the clip's own character, else the built-in body for canonical clips; "builtin"; "none": skeleton only. */
+  character?: "auto" | "builtin" | "none";
+  /** Export only this stretch of the clip, seconds. */
+  startSecs?: number;
+  endSecs?: number;
 }
 export interface ViewerOptions {
   /** "auto" (WebGPU if available, else WebGL2), "webgpu" or "webgl2". */

@@ -54,6 +54,10 @@ struct JsImportOptions {
     gltf_fps: Option<f32>,
 }
 
+pub(crate) fn info_of(e: &Entry) -> impl Serialize + '_ {
+    info(e)
+}
+
 fn info(e: &Entry) -> ClipInfo<'_> {
     ClipInfo {
         id: e.id,
@@ -84,7 +88,7 @@ impl Default for Library {
 }
 
 impl Library {
-    fn push(&mut self, clip: Clip, format: &'static str, humanoid: HumanoidMap, status: HumanoidStatus, mesh: Option<(u32, Rc<SkinnedMesh>)>) -> u32 {
+    pub(crate) fn push(&mut self, clip: Clip, format: &'static str, humanoid: HumanoidMap, status: HumanoidStatus, mesh: Option<(u32, Rc<SkinnedMesh>)>) -> u32 {
         let id = self.next_id;
         self.next_id += 1;
         let bones = clip.skeleton.bones();

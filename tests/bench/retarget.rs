@@ -1,0 +1,72 @@
+//! Retargeting figures (spec §L checks), printed: real clips (CMU salsa, every 20th built-in
+//! move) onto Xbot and RobotExpressive, by the product's conjugation and by the direction-only
+//! control. Per case: bone direction error (median, p95), forearm/hand twist error (median,
+//! p95) for both, foot skate of the character vs the source (mean cm/s; the acceptance item
+//! is character ≤ source + 1 cm/s), and the time to retarget per 1000 frames.
+//! `cargo bench -p odori-tests --bench retarget`.
+
+use std::time::Instant;
+
+use odori_core::character::{report, Character, Transfer};
+use odori_core::humanoid::HumanoidMap;
+use odori_core::import::{import_bytes, ImportOptions};
+use odori_core::Clip;
+use odori_tests::{fps_override_for, read};
+
+fn main() {
+    let mut sources: Vec<(Clip, HumanoidMap)> = Vec::new();
+    for rel in ["mocap/cmu-salsa/salsa_01.bvh", "mocap/cmu-salsa/salsa_02.bvh"] {
+        let im = import_bytes(rel, &read(rel), &ImportOptions { fps_override: fps_override_for(rel), ..Default::default() }).unwrap_or_else(|e| panic!("{e}"));
+        sources.push((im.clips[0].clone(), im.humanoid));
+    }
+    let moves = odori_core::library::builtin_clips();
+    let move_count = moves.iter().step_by(20).count();
+    for m in moves.into_iter().step_by(20) {
+        let map = HumanoidMap::from_skeleton(&m.skeleton);
+        sources.push((m, map));
+    }
+    println!("retarget: {} sources (2 CMU salsa, {move_count} built-in moves)", sources.len());
+    println!("{:<22} {:<34} {:>7} {:>7} | {:>7} {:>7} | {:>8} {:>8} | {:>7} {:>7} {:>7} | {:>8}", "character", "source", "dir.med", "dir.p95", "tw.med", "tw.p95", "ctl.med", "ctl.p95", "skate", "src", "Δ cm/s", "ms/1k f");
+    for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
+        let im = import_bytes(file, &read(file), &ImportOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        let ch = Character::from_imported(file, &im).unwrap_or_else(|e| panic!("{e}"));
+        let mut worse = 0;
+        let mut deltas = Vec::new();
+        for (clip, map) in &sources {
+            let t0 = Instant::now();
+            let out = ch.retarget(clip, map).unwrap();
+            let ms = t0.elapsed().as_secs_f64() * 1000.0 * 1000.0 / clip.frame_count() as f64;
+            let r = report(clip, map, &ch, &out);
+            let c = report(clip, map, &ch, &ch.retarget_with(clip, map, Transfer::DirectionOnly).unwrap());
+            let delta = r.skate_mean_cm_s - r.source_skate_mean_cm_s;
+            deltas.push(delta);
+            if delta > 1.0 {
+                worse += 1;
+            }
+            let name: String = clip.name.chars().take(34).collect();
+            println!(
+                "{:<22} {:<34} {:>6.2}° {:>6.2}° | {:>6.2}° {:>6.2}° | {:>7.2}° {:>7.2}° | {:>7.2} {:>7.2} {:>+7.2} | {:>8.2}",
+                file.trim_start_matches("gltf/"),
+                name,
+                r.direction_median_rad.to_degrees(),
+                r.direction_p95_rad.to_degrees(),
+                r.twist_median_rad.to_degrees(),
+                r.twist_p95_rad.to_degrees(),
+                c.twist_median_rad.to_degrees(),
+                c.twist_p95_rad.to_degrees(),
+                r.skate_mean_cm_s,
+                r.source_skate_mean_cm_s,
+                delta,
+                ms
+            );
+        }
+        deltas.sort_by(f32::total_cmp);
+        println!(
+            "{file}: A-pose swing {:.1}°, hip height {:.3} m; skate worse than source + 1 cm/s in {worse} of {} cases (median Δ {:+.2} cm/s)",
+            ch.arm_swing_rad.to_degrees(),
+            ch.hip_height_m(),
+            deltas.len(),
+            deltas[deltas.len() / 2]
+        );
+    }
+}
