@@ -399,8 +399,8 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
     let mut dir_err = Vec::new();
     let mut twist_err = Vec::new();
     let feet = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
-    let mut src_tracks: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); 4];
-    let mut out_tracks: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); 4];
+    let mut src_tracks: Vec<Vec<Vec3>> = (0..4).map(|_| Vec::with_capacity(frames)).collect();
+    let mut out_tracks: Vec<Vec<Vec3>> = (0..4).map(|_| Vec::with_capacity(frames)).collect();
     let scale = character.hip_height_m / hip_height(&HumanoidMap::from_skeleton(&canon), &canon_rest);
     for f in 0..frames {
         src.local_translations_into(f, &mut st);

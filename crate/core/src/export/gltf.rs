@@ -49,7 +49,7 @@ enum Kind {
 
 impl Bin {
     fn view(&mut self, data: &[u8], target: Option<json::buffer::Target>) -> json::Index<json::buffer::View> {
-        while self.bytes.len() % 4 != 0 {
+        while !self.bytes.len().is_multiple_of(4) {
             self.bytes.push(0);
         }
         let offset = self.bytes.len();
@@ -381,7 +381,7 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
         root.animations.push(json::Animation { extensions: None, extras: Default::default(), channels, name: Some(clip.name.clone()), samplers });
     }
 
-    while bin.bytes.len() % 4 != 0 {
+    while !bin.bytes.len().is_multiple_of(4) {
         bin.bytes.push(0);
     }
     root.buffers.push(json::Buffer { byte_length: USize64::from(bin.bytes.len()), name: None, uri: None, extensions: None, extras: Default::default() });
