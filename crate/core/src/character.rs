@@ -16,8 +16,10 @@
 //!   Character joints no canonical bone maps to (extra spine joints, fingers, twist helpers)
 //!   keep their rest rotation and follow their parent.
 //! - Root: the hips follow the source's hips scaled by the ratio of hip heights.
-//! - Not done here: holding planted feet with two-bone IK; the benchmark measures the foot
-//!   skate this leaves (`tests/bench/retarget.rs`).
+//! - Not done here: holding planted feet with two-bone IK (`motion::two_bone`). Tracking the
+//!   source's scaled ankle with it was tried and made RobotExpressive's skate worse (its
+//!   thigh:shin proportions put the targets out of reach); the benchmark prints the foot skate
+//!   this leaves against the source's (`tests/bench/retarget.rs`).
 
 use std::sync::Arc;
 

@@ -145,20 +145,8 @@ pub fn interpolate_channel(keys: &[KeyPose], spacing: f32, t: f32, channel: impl
     (0..4).map(|j| w[j] * channel(&keys[i[j]])).sum()
 }
 
-/// Middle joint of a two-bone chain from `root` reaching for `target`, bending towards `pole`.
-/// The target is pulled in when out of reach.
-pub fn two_bone(root: Vec3, target: Vec3, l1: f32, l2: f32, pole: Vec3) -> (Vec3, Vec3) {
-    let to = target - root;
-    let d_raw = to.length();
-    let d = d_raw.clamp((l1 - l2).abs() + 1e-3, l1 + l2 - 1e-4);
-    let dir = if d_raw > 1e-6 { to / d_raw } else { Vec3::NEG_Y };
-    let end = root + dir * d;
-    // Law of cosines: distance along dir to the middle joint's projection, and its offset.
-    let a = (l1 * l1 - l2 * l2 + d * d) / (2.0 * d);
-    let h = (l1 * l1 - a * a).max(0.0).sqrt();
-    let side = (pole - dir * pole.dot(dir)).try_normalize().unwrap_or_else(|| dir.any_orthonormal_vector());
-    (root + dir * a + side * h, end)
-}
+/// Two-bone IK lives in the motion kernel.
+pub use crate::motion::two_bone;
 
 /// Rotation taking `from` to `to` (both any length).
 fn arc(from: Vec3, to: Vec3) -> Quat {

@@ -68,6 +68,22 @@ pub fn sign_continuous(previous: Quat, q: Quat) -> Quat {
     }
 }
 
+/// Two-bone IK: the middle joint (knee, elbow) and the end (ankle, wrist) of a chain from
+/// `root` with bone lengths `l1`, `l2` reaching for `target`, bending towards `pole`. A target
+/// out of reach is pulled in along the line from the root.
+pub fn two_bone(root: Vec3, target: Vec3, l1: f32, l2: f32, pole: Vec3) -> (Vec3, Vec3) {
+    let to = target - root;
+    let d_raw = to.length();
+    let d = d_raw.clamp((l1 - l2).abs() + 1e-3, l1 + l2 - 1e-4);
+    let dir = if d_raw > 1e-6 { to / d_raw } else { Vec3::NEG_Y };
+    let end = root + dir * d;
+    // Law of cosines: distance along dir to the middle joint's projection, and its offset.
+    let a = (l1 * l1 - l2 * l2 + d * d) / (2.0 * d);
+    let h = (l1 * l1 - a * a).max(0.0).sqrt();
+    let side = (pole - dir * pole.dot(dir)).try_normalize().unwrap_or_else(|| dir.any_orthonormal_vector());
+    (root + dir * a + side * h, end)
+}
+
 /// The floor under a joint over a clip: the 1st percentile of its heights (spec §J), so a few
 /// noisy frames below the real floor do not set it. `None` for no finite height.
 pub fn floor_height(heights_m: &[f32]) -> Option<f32> {
