@@ -12,6 +12,8 @@
 //! - the share of bars filled from imported clips.
 //!
 //! Then the cut tempo of the two pairs of salsa partners (same take, same music).
+//! `ODORI_BEAT_WEIGHT=x` sets the filling's beat weight (default: the product's; 0: off, the
+//! filling before the beat term).
 //! Prints figures; asserts nothing. `cargo bench -p odori-tests --bench choreo_quality`
 //! (release), or `cargo test -p odori-tests --bench choreo_quality` for a quicker build.
 
@@ -59,6 +61,17 @@ fn main() {
     let builtin = lib.segments().iter().filter(|s| s.builtin.is_some()).count();
     println!("library: {} segments ({builtin} built-in, {} imported) in {:.1} s", lib.len(), lib.len() - builtin, t.elapsed().as_secs_f64());
 
+    for (label, bi) in [("built-in", true), ("imported", false)] {
+        let v: Vec<&odori_core::choreo::Segment> = lib.segments().iter().filter(|s| s.builtin.is_some() == bi).collect();
+        let n = v.len().max(1) as f32;
+        println!(
+            "  {label} segments: intensity W mean {:.2} m/s, scaled 0..1 mean {:.2} ({:.0} % at 1.0), beat fit mean {:.2}",
+            v.iter().map(|s| s.intensity).sum::<f32>() / n,
+            v.iter().map(|s| s.intensity01).sum::<f32>() / n,
+            100.0 * v.iter().filter(|s| s.intensity01 >= 0.999).count() as f32 / n,
+            v.iter().map(|s| s.beat_fit).sum::<f32>() / n
+        );
+    }
     // Source clips: what the dances are made of.
     let (mut skate_imp, mut skate_bi, mut pfc_imp, mut kbps_imp) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for c in lib.clips() {
@@ -81,6 +94,22 @@ fn main() {
         mean(&skate_bi)
     );
 
+    // Each segment alone over one 2 s bar (120 BPM): do its inner counts (beats 2, 3, 4 of the
+    // bar) fall on kinetic beats once it is stretched linearly to the bar?
+    for (label, builtin_only) in [("built-in", true), ("imported", false)] {
+        let (mut on, mut off, mut n) = (0.0, 0.0, 0);
+        for s in lib.segments().iter().filter(|s| s.builtin.is_some() == builtin_only) {
+            let Some(clip) = odori_core::choreo::segment_clip(&lib, s.index, 2.0, 30.0) else { continue };
+            let Ok(m) = QualityMotion::from_clip(&clip) else { continue };
+            let k = odori_core::choreo::quality::kinetic_beats_secs(&m);
+            let a = odori_core::choreo::quality::beat_alignment(&[0.0, 0.5, 1.0, 1.5, 2.0], &k, 0.25, 1.75);
+            on += a.bas_music;
+            off += a.bas_music_shifted;
+            n += 1;
+        }
+        println!("{label} segments alone on a 120 BPM bar: inner counts BAS-music {:.3}, half-shifted {:.3} ({n} segments)", on / n as f32, off / n as f32);
+    }
+
     let mut songs: Vec<&str> = music_audio::FULL_TRACKS.to_vec();
     songs.push(music_audio::TRUMPET);
     songs.push(music_audio::DRUMS);
@@ -95,6 +124,9 @@ fn main() {
         let bars = grid.bars.clone();
         let beats = grid.beat_times_secs.clone();
         let mut doc = Choreography::new(bars.clone()).expect("bars");
+        if let Some(w) = std::env::var("ODORI_BEAT_WEIGHT").ok().and_then(|v| v.parse().ok()) {
+            doc.set_beat_weight(w).expect("beat weight");
+        }
         doc.generate(&lib).expect("generate");
         let chosen = doc.segments();
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();

@@ -4,8 +4,10 @@
 //! The edge cost from segment A to segment B is C = 1 / S with S = S_pose + S_move exactly as
 //! spec §G (see [`super::table`], which builds the M × M table of them).
 //!
-//! The product adds two terms: a music term `music_weight · |bar intensity − segment
-//! intensity|` per open bar, and a repetition penalty `repeat_penalty` on an edge whose two
+//! The product adds three terms: a music term `music_weight · |bar intensity − segment
+//! intensity|` per open bar, a beat term `beat_weight · (1 − beat fit)` per open bar (a segment
+//! whose counts fall on its kinetic beats turns on the song's beats once warped onto the bar,
+//! spec §E/§J; [`fill_with_beats`]), and a repetition penalty `repeat_penalty` on an edge whose two
 //! segments share frames of the same clip (the same segment twice in a row included). Both
 //! keep the objective a sum over edges and nodes, so the dynamic programme below is exact: it
 //! returns a minimum-cost path (ties broken towards lower segment indices). Repeats further
@@ -57,11 +59,15 @@ pub struct FillWeights {
     /// before, which the exact search handles; larger windows are charged along the chosen
     /// paths, see the module documentation).
     pub repeat_window: usize,
+    /// Weight of the beat term per open bar: `beat_weight · (1 − beat fit)` of the segment
+    /// (how well its counts fall on its kinetic beats, [`super::Segment::beat_fit`]), so the
+    /// filled dance turns on the song's beats, not between them. 0 turns it off.
+    pub beat_weight: f32,
 }
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4 }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3 }
     }
 }
 
@@ -75,6 +81,8 @@ pub enum FillError {
     UnknownSegment { bar: usize, segment: usize, segments: usize },
     #[error("segment intensities: {given} given for {segments} segments")]
     IntensityCount { given: usize, segments: usize },
+    #[error("segment beat fits: {given} given for {segments} segments")]
+    BeatFitCount { given: usize, segments: usize },
 }
 
 /// min over `a` of `prev[a] + col[a]` and the first `a` reaching it.
@@ -142,8 +150,20 @@ pub fn fill(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32]
     fill_with_stats(table, layers, segment_intensity, weights).map(|(p, c, _)| (p, c))
 }
 
-/// [`fill`], also saying how much work it took.
+/// [`fill`], also saying how much work it took (no beat term: no beat fits given).
 pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], weights: &FillWeights) -> Result<(Vec<usize>, f32, FillStats), FillError> {
+    fill_with_beats(table, layers, segment_intensity, &[], weights)
+}
+
+/// [`fill`] with the beat term: `segment_beat_fit[s]` (0..1) is segment `s`'s
+/// [`super::Segment::beat_fit`]; empty: no beat term.
+pub fn fill_with_beats(
+    table: &TransitionTable,
+    layers: &[Layer],
+    segment_intensity: &[f32],
+    segment_beat_fit: &[f32],
+    weights: &FillWeights,
+) -> Result<(Vec<usize>, f32, FillStats), FillError> {
     let mut stats = FillStats::default();
     let m = table.len();
     if m == 0 {
@@ -152,6 +172,10 @@ pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intens
     if segment_intensity.len() != m {
         return Err(FillError::IntensityCount { given: segment_intensity.len(), segments: m });
     }
+    if !segment_beat_fit.is_empty() && segment_beat_fit.len() != m {
+        return Err(FillError::BeatFitCount { given: segment_beat_fit.len(), segments: m });
+    }
+    let beat_miss = |b: usize| segment_beat_fit.get(b).map_or(0.0, |f| weights.beat_weight * (1.0 - f));
     for (bar, l) in layers.iter().enumerate() {
         if let Layer::Fixed { segment } = *l {
             if segment >= m {
@@ -170,7 +194,7 @@ pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intens
     // an open bar.
     let music = |intensity: f32, b: usize| {
         let unavailable = if table.is_available(b) { 0.0 } else { f32::INFINITY };
-        weights.music_weight * (intensity - segment_intensity[b]).abs() + unavailable
+        weights.music_weight * (intensity - segment_intensity[b]).abs() + beat_miss(b) + unavailable
     };
     // Node costs of the current layer: either one fixed node or all m.
     enum Nodes {
@@ -305,17 +329,23 @@ pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intens
             node = if bt.len() == 1 { bt[0] as usize } else { bt.get(path[t]).copied().unwrap_or(0) as usize };
         }
     }
-    let cost = path_cost(table, layers, segment_intensity, weights, &path);
+    let cost = path_cost_with_beats(table, layers, segment_intensity, segment_beat_fit, weights, &path);
     Ok((path, cost, stats))
 }
 
 /// The objective [`fill`] minimises, for any path (for checks and reports).
 pub fn path_cost(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], weights: &FillWeights, path: &[usize]) -> f32 {
+    path_cost_with_beats(table, layers, segment_intensity, &[], weights, path)
+}
+
+/// The objective [`fill_with_beats`] minimises, for any path.
+pub fn path_cost_with_beats(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], segment_beat_fit: &[f32], weights: &FillWeights, path: &[usize]) -> f32 {
     let mut c = 0.0;
     for (t, l) in layers.iter().enumerate() {
         let Some(&s) = path.get(t) else { return f32::INFINITY };
         if let Layer::Open { intensity } = l {
             c += weights.music_weight * (intensity - segment_intensity.get(s).copied().unwrap_or(f32::INFINITY)).abs();
+            c += segment_beat_fit.get(s).map_or(0.0, |f| weights.beat_weight * (1.0 - f));
             if !table.is_available(s) {
                 return f32::INFINITY;
             }
