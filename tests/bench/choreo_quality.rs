@@ -14,6 +14,7 @@
 //! Then the cut tempo of the two pairs of salsa partners (same take, same music).
 //! `ODORI_BEAT_WEIGHT=x` sets the filling's beat weight (default: the product's; 0: off, the
 //! filling before the beat term).
+//! `ODORI_OWN_MOVES=x` sets the preference for imported moves (0: none).
 //! Prints figures; asserts nothing. `cargo bench -p odori-tests --bench choreo_quality`
 //! (release), or `cargo test -p odori-tests --bench choreo_quality` for a quicker build.
 
@@ -126,6 +127,9 @@ fn main() {
         let mut doc = Choreography::new(bars.clone()).expect("bars");
         if let Some(w) = std::env::var("ODORI_BEAT_WEIGHT").ok().and_then(|v| v.parse().ok()) {
             doc.set_beat_weight(w).expect("beat weight");
+        }
+        if let Some(w) = std::env::var("ODORI_OWN_MOVES").ok().and_then(|v| v.parse().ok()) {
+            doc.set_own_moves_preference(w).expect("own-moves preference");
         }
         doc.generate(&lib).expect("generate");
         let chosen = doc.segments();
