@@ -83,7 +83,7 @@ async function main() {
   panel.select(demo.id);
   const songPlayer = new SongPlayer();
   choreo = new ChoreoPanel($("#dance"), { choreographer: new Choreographer(), library, player, songPlayer, panel, messages });
-  const songPanel = new SongPanel($("#song"), { player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars) });
+  const songPanel = new SongPanel($("#song"), { player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars, grid.beatTimesSecs) });
   player.songClock = songPlayer;
   player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
   player.start();

@@ -71,6 +71,17 @@ test("dance: candidates, Set, Search twice, Generate, play", async () => {
     assert.equal(view.length, nBars);
     assert.ok(view.every((v) => v.state.kind !== "empty"), "an empty bar after Generate");
     assert.deepEqual(view[4].state, { kind: "pinned", segment: seg });
+    // The bar row reads out each bar's quality (spec §J) and the whole dance's.
+    const readout = await page.evaluate(() => ({
+      titles: [...document.querySelectorAll("#dance-bars .bar")].map((b) => b.title),
+      row: document.querySelector("#dance-bars").title,
+      q: window.odori.choreo.quality,
+    }));
+    assert.ok(readout.titles.every((t) => /beat alignment \d/.test(t) && /foot skate/.test(t)), readout.titles[0]);
+    assert.ok(readout.titles.slice(1).every((t) => /join jump/.test(t)), readout.titles[1]);
+    assert.match(readout.row, /Whole dance: beat alignment/);
+    assert.equal(readout.q.bars.length, nBars);
+    assert.ok(readout.q.beats.musicBeatsPerSec > 1, "the song's beats reach the readout");
     // The dance moves through every bar: each bar's middle pose differs from the next one's.
     const still = await page.evaluate(() => {
       const { choreo, library } = window.odori;

@@ -66,7 +66,7 @@ fn filling_equals_brute_force_on_small_random_instances() {
         let layers: Vec<Layer> = (0..bars)
             .map(|_| if rng.f32() < 0.3 { Layer::Fixed { segment: rng.below(m) } } else { Layer::Open { intensity: rng.f32() } })
             .collect();
-        let w = FillWeights { music_weight: 2.0 * rng.f32(), repeat_penalty: 3.0 * rng.f32(), repeat_window: 1 };
+        let w = FillWeights { music_weight: 2.0 * rng.f32(), repeat_penalty: 3.0 * rng.f32(), repeat_window: 1, ..FillWeights::default() };
         let (path, cost) = fill(&table, &layers, &inten, &w).unwrap();
         let brute = brute_force(&table, &layers, &inten, &w);
         assert!((cost - brute).abs() < 1e-4, "case {case}: fill {cost} vs brute force {brute}");
@@ -145,6 +145,8 @@ fn generated_joins_are_smoother_than_random_choices() {
     let lib = SegmentLibrary::builtin();
     let bars = song(32);
     let mut doc = Choreography::new(bars.clone()).unwrap();
+    // The transition cost's own effect: without the beat term (checked with it below).
+    doc.set_beat_weight(0.0).unwrap();
     let pins = [(0usize, 5usize), (8, 120), (16, 260), (24, 333)];
     for (bar, seg) in pins {
         doc.set(&lib, bar, seg).unwrap();
@@ -180,6 +182,17 @@ fn generated_joins_are_smoother_than_random_choices() {
     assert!(gen_raw.1 < 0.7 * rand_raw.1, "generated p95 jump {} not clearly below random {}", gen_raw.1, rand_raw.1);
     assert!(gen_joined.0 < rand_joined.0);
     assert!(gen_joined.0 <= gen_raw.0 + 1e-3, "the Hermite joins must not make joins rougher");
+    // With the default beat term (spec §G + §J: dances that turn on the beat), the joins the
+    // person sees (Hermite on) stay about as smooth as without it and clearly smoother than random.
+    let mut beat = Choreography::new(bars.clone()).unwrap();
+    for (bar, seg) in pins {
+        beat.set(&lib, bar, seg).unwrap();
+    }
+    beat.generate(&lib).unwrap();
+    let ((bm, bp), _) = join_report(&lib, &bars, &beat.segments(), 5);
+    println!("  with the beat term, joins on: at joins mean {bm:.3} p95 {bp:.3}");
+    assert!(bm <= 1.25 * gen_joined.0 && bp <= 1.25 * gen_joined.1, "beat term made joins rougher: mean {bm} p95 {bp} vs {gen_joined:?}");
+    assert!(bm < 0.75 * rand_joined.0, "with the beat term, joins ({bm}) not clearly smoother than random ({})", rand_joined.0);
     // Pinned bars unchanged.
     for (bar, seg) in pins {
         assert_eq!(doc.states()[bar], BarState::Pinned { segment: seg });

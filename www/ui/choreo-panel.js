@@ -183,9 +183,10 @@ export class ChoreoPanel {
     this.prepareJoins();
   }
 
-  /** New bars from the song grid. */
-  setBars(bars) {
+  /** New bars (and the song's beats, for the quality readout) from the song grid. */
+  setBars(bars, beatTimesSecs) {
     try {
+      this.beats = beatTimesSecs ? new Float32Array(beatTimesSecs) : undefined;
       this.choreographer.setBars(bars);
       if (this.bar != null && this.bar >= bars.length) this.bar = null;
       this.refresh();
@@ -196,6 +197,12 @@ export class ChoreoPanel {
     const view = this.choreographer.view();
     this.view = view;
     const total = view.length ? view[view.length - 1].bar.endSecs : 1;
+    // Spec §J readout on the bar row: where the dance is weak (off the beat, or a rough join).
+    let q = null;
+    if (view.some((v) => v.state.kind !== "empty")) {
+      try { q = this.choreographer.quality(this.beats); } catch (e) { this.messages.warning(`Dance quality: ${e.message}`); }
+    }
+    this.quality = q;
     const cells = view.map((v, i) => {
       const b = document.createElement("button");
       b.type = "button";
@@ -205,9 +212,22 @@ export class ChoreoPanel {
       b.title = `Bar ${i + 1}: ${v.state.kind}${v.state.segment != null ? ` (${this.choreographer.segment(v.state.segment).name})` : ""}, music intensity ${v.bar.intensity.toFixed(2)}`;
       b.textContent = String(i + 1);
       b.style.setProperty("--intensity", v.bar.intensity.toFixed(2));
+      const bq = q && v.state.kind !== "empty" ? q.bars[i] : null;
+      if (bq) {
+        const j = bq.joinJump == null ? "" : `, join jump ${bq.joinJump.toFixed(2)}`;
+        b.title += `\nbeat alignment ${bq.beats.basMusic.toFixed(2)} (half a beat off: ${bq.beats.basMusicShifted.toFixed(2)}), foot skate ${bq.footSkate.meanCmPerS.toFixed(0)} cm/s${j}`;
+        // Weak: no clearer on the beats than off them, or a join rougher than the moves' sharpest moments.
+        if (bq.beats.basMusic < bq.beats.basMusicShifted + 0.1 || (bq.joinJump ?? 0) > 1.5) {
+          b.dataset.weak = "1";
+          b.style.boxShadow = "inset 0 -3px 0 #d9534f";
+        }
+      }
       return b;
     });
     this.$("#dance-bars").replaceChildren(...cells);
+    this.$("#dance-bars").title = q
+      ? `Whole dance: beat alignment ${q.beats.basMusic.toFixed(2)} (half a beat off: ${q.beats.basMusicShifted.toFixed(2)}), ${q.beats.kineticBeatsPerSec.toFixed(1)} moves/s on ${q.beats.musicBeatsPerSec.toFixed(1)} beats/s, foot skate ${q.footSkate.meanCmPerS.toFixed(0)} cm/s, join jump mean ${q.joinJumpMean.toFixed(2)} max ${q.joinJumpMax.toFixed(2)}; bars underlined in red are weak`
+      : "";
     this.root.dataset.bars = String(view.length);
     this.$("#dance-undo").disabled = !this.choreographer.canUndo();
     this.$("#dance-redo").disabled = !this.choreographer.canRedo();

@@ -213,6 +213,37 @@ impl Choreographer {
         self.doc()?.set_music_weight(w).map_err(choreo_err)
     }
 
+    /// Weight of the beat term in the filling (segments whose counts fall on their kinetic
+    /// beats; 0 turns it off; default 0.3).
+    #[wasm_bindgen(js_name = setBeatWeight)]
+    pub fn set_beat_weight(&mut self, w: f32) -> Result<(), OdoriError> {
+        self.doc()?.set_beat_weight(w).map_err(choreo_err)
+    }
+
+    /// Preference of the filling for the person's imported moves that fit the beat over
+    /// built-in ones (0: none; default 0.03).
+    #[wasm_bindgen(js_name = setOwnMovesPreference)]
+    pub fn set_own_moves_preference(&mut self, w: f32) -> Result<(), OdoriError> {
+        self.doc()?.set_own_moves_preference(w).map_err(choreo_err)
+    }
+
+    /// Quality of the dance as it stands (spec §J), per bar and whole: `{ beats: { basMusic,
+    /// basMusicShifted, basMotion, basMotionShifted, kineticBeatsPerSec, musicBeatsPerSec },
+    /// footSkate: { meanCmPerS, p95CmPerS, contacts }, pfc, joinJumpMean, joinJumpMax, bars:
+    /// [{ bar, beats, footSkate, joinJump }] }`. `beatTimesSecs`: the song's beats (the grid's
+    /// `beatTimesSecs`); omitted: each bar's four quarters.
+    pub fn quality(&self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
+        let d = self.doc.as_ref().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
+        let bars = d.bars();
+        let beats = beat_times_secs.unwrap_or_else(|| {
+            bars.iter().flat_map(|b| (0..4).map(move |k| b.start_secs + b.duration_secs() * k as f32 / 4.0)).collect()
+        });
+        // As the person sees it (the joined 60 fps dance); the measures resample to 30 fps.
+        let clip = d.render(&self.lib, &RenderOptions::default());
+        let q = odori_core::choreo::dance_quality(&clip, bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
+        Ok(to_js(&q))
+    }
+
     /// Fills every open bar (pinned bars stay): `{ filled, pinned, cost }`.
     pub fn generate(&mut self) -> Result<JsValue, OdoriError> {
         let lib = &self.lib;

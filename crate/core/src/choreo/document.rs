@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
-use super::fill::{fill, FillError, FillWeights, Layer};
+use super::fill::{fill_with_node_costs, node_costs, FillError, FillWeights, Layer};
 use super::render::{render, RenderOptions};
 use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
 use crate::bars::Bar;
@@ -422,6 +422,27 @@ impl Choreography {
         Ok(())
     }
 
+    /// Weight of the beat term of the filling (spec §G, [`FillWeights::beat_weight`]), in 0..=100.
+    pub fn set_beat_weight(&mut self, w: f32) -> Result<(), ChoreoError> {
+        if !(0.0..=100.0).contains(&w) {
+            return Err(ChoreoError::BadSetting { name: "beatWeight".into(), range: "0..=100".into(), value: w });
+        }
+        self.record();
+        self.doc.settings.fill.beat_weight = w;
+        Ok(())
+    }
+
+    /// The filling's preference for the person's imported moves over built-in ones
+    /// ([`FillWeights::own_moves_preference`]), in 0..=100.
+    pub fn set_own_moves_preference(&mut self, w: f32) -> Result<(), ChoreoError> {
+        if !(0.0..=100.0).contains(&w) {
+            return Err(ChoreoError::BadSetting { name: "ownMovesPreference".into(), range: "0..=100".into(), value: w });
+        }
+        self.record();
+        self.doc.settings.fill.own_moves_preference = w;
+        Ok(())
+    }
+
     /// Repetition penalty of the filling, in 0..=100.
     pub fn set_repeat_penalty(&mut self, w: f32) -> Result<(), ChoreoError> {
         if !(0.0..=100.0).contains(&w) {
@@ -471,7 +492,10 @@ impl Choreography {
         let weights = self.doc.settings.fill;
         let table = lib.transition_table(weights.repeat_penalty);
         let intensity: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
-        let (path, cost) = fill(&table, &layers, &intensity, &weights)?;
+        let beat_fit: Vec<f32> = lib.segments().iter().map(|s| s.beat_fit).collect();
+        let builtin: Vec<bool> = lib.segments().iter().map(|s| s.builtin.is_some()).collect();
+        let node_cost = node_costs(&weights, &beat_fit, &builtin);
+        let (path, cost, _) = fill_with_node_costs(&table, &layers, &intensity, &node_cost, &weights)?;
         self.record();
         for (state, seg) in self.doc.states.iter_mut().zip(path) {
             if !matches!(state, BarState::Pinned { .. }) {

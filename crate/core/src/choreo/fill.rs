@@ -4,8 +4,11 @@
 //! The edge cost from segment A to segment B is C = 1 / S with S = S_pose + S_move exactly as
 //! spec §G (see [`super::table`], which builds the M × M table of them).
 //!
-//! The product adds two terms: a music term `music_weight · |bar intensity − segment
-//! intensity|` per open bar, and a repetition penalty `repeat_penalty` on an edge whose two
+//! The product adds four terms: a music term `music_weight · |bar intensity − segment
+//! intensity|` per open bar, a beat term `beat_weight · (1 − beat fit)` per open bar (a segment
+//! whose counts fall on its kinetic beats turns on the song's beats once warped onto the bar,
+//! spec §E/§J), the person's-own-moves preference (`own_moves_preference` per open bar filled
+//! by a built-in move when imported moves exist; [`node_costs`], [`fill_with_node_costs`]), and a repetition penalty `repeat_penalty` on an edge whose two
 //! segments share frames of the same clip (the same segment twice in a row included). Both
 //! keep the objective a sum over edges and nodes, so the dynamic programme below is exact: it
 //! returns a minimum-cost path (ties broken towards lower segment indices). Repeats further
@@ -57,11 +60,24 @@ pub struct FillWeights {
     /// before, which the exact search handles; larger windows are charged along the chosen
     /// paths, see the module documentation).
     pub repeat_window: usize,
+    /// Weight of the beat term per open bar: `beat_weight · (1 − beat fit)` of the segment
+    /// (how well its counts fall on its kinetic beats, [`super::Segment::beat_fit`]), so the
+    /// filled dance turns on the song's beats, not between them. 0 turns it off.
+    pub beat_weight: f32,
+    /// The person's own moves first: added per open bar filled by a built-in move when the
+    /// library holds imported moves. Built-in moves all start and end near one neutral stance,
+    /// so they join one another almost perfectly and, without this, win every transition
+    /// against mocap that starts and ends anywhere; with it, a built-in move is chosen only
+    /// where it is better than every imported move that fits the beat by more than this (see
+    /// [`node_costs`]). 0: no preference. The default, 0.03, is the largest measured in `benches/choreo_quality`
+    /// that keeps every real song's beat alignment ≥ random + 0.05: larger values fill more bars
+    /// with the person's mocap, whose counts and joins are rougher than the built-in moves'.
+    pub own_moves_preference: f32,
 }
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4 }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03 }
     }
 }
 
@@ -75,6 +91,8 @@ pub enum FillError {
     UnknownSegment { bar: usize, segment: usize, segments: usize },
     #[error("segment intensities: {given} given for {segments} segments")]
     IntensityCount { given: usize, segments: usize },
+    #[error("segment node costs: {given} given for {segments} segments")]
+    NodeCostCount { given: usize, segments: usize },
 }
 
 /// min over `a` of `prev[a] + col[a]` and the first `a` reaching it.
@@ -142,8 +160,42 @@ pub fn fill(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32]
     fill_with_stats(table, layers, segment_intensity, weights).map(|(p, c, _)| (p, c))
 }
 
-/// [`fill`], also saying how much work it took.
+/// [`fill`], also saying how much work it took (no per-segment node costs).
 pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], weights: &FillWeights) -> Result<(Vec<usize>, f32, FillStats), FillError> {
+    fill_with_node_costs(table, layers, segment_intensity, &[], weights)
+}
+
+/// Beat fit ([`super::Segment::beat_fit`]) from which an imported move counts as fitting the
+/// music and gets the own-moves preference: BAS on its counts ≥ BAS on its half-counts + 0.5.
+pub const OWN_MOVE_MIN_FIT: f32 = 0.75;
+
+/// The per-open-bar cost of each segment beyond the music term: the beat term
+/// `beat_weight · (1 − beat_fit[s])` plus, when any segment is imported, `own_moves_preference`
+/// for every segment that is not an imported move fitting the beat (fit ≥ [`OWN_MOVE_MIN_FIT`]);
+/// see [`FillWeights`]. What [`fill_with_node_costs`] takes.
+pub fn node_costs(weights: &FillWeights, beat_fit: &[f32], builtin: &[bool]) -> Vec<f32> {
+    let any_imported = builtin.iter().any(|b| !b);
+    (0..beat_fit.len().max(builtin.len()))
+        .map(|s| {
+            let beat = beat_fit.get(s).map_or(0.0, |f| weights.beat_weight * (1.0 - f.clamp(0.0, 1.0)));
+            // An imported move "fits" when it clearly turns on its counts (BAS on the counts at
+            // least 0.5 above BAS on the half-counts); only those are preferred.
+            let fits = beat_fit.get(s).is_some_and(|&f| f >= OWN_MOVE_MIN_FIT);
+            let own = if any_imported && (builtin.get(s).copied().unwrap_or(false) || !fits) { weights.own_moves_preference } else { 0.0 };
+            beat + own
+        })
+        .collect()
+}
+
+/// [`fill`] with a cost per segment added in every open bar it fills (`node_cost[s]`, e.g.
+/// from [`node_costs`]); empty: none.
+pub fn fill_with_node_costs(
+    table: &TransitionTable,
+    layers: &[Layer],
+    segment_intensity: &[f32],
+    node_cost: &[f32],
+    weights: &FillWeights,
+) -> Result<(Vec<usize>, f32, FillStats), FillError> {
     let mut stats = FillStats::default();
     let m = table.len();
     if m == 0 {
@@ -152,6 +204,10 @@ pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intens
     if segment_intensity.len() != m {
         return Err(FillError::IntensityCount { given: segment_intensity.len(), segments: m });
     }
+    if !node_cost.is_empty() && node_cost.len() != m {
+        return Err(FillError::NodeCostCount { given: node_cost.len(), segments: m });
+    }
+    let extra = |b: usize| node_cost.get(b).copied().unwrap_or(0.0);
     for (bar, l) in layers.iter().enumerate() {
         if let Layer::Fixed { segment } = *l {
             if segment >= m {
@@ -170,7 +226,7 @@ pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intens
     // an open bar.
     let music = |intensity: f32, b: usize| {
         let unavailable = if table.is_available(b) { 0.0 } else { f32::INFINITY };
-        weights.music_weight * (intensity - segment_intensity[b]).abs() + unavailable
+        weights.music_weight * (intensity - segment_intensity[b]).abs() + extra(b) + unavailable
     };
     // Node costs of the current layer: either one fixed node or all m.
     enum Nodes {
@@ -305,17 +361,23 @@ pub fn fill_with_stats(table: &TransitionTable, layers: &[Layer], segment_intens
             node = if bt.len() == 1 { bt[0] as usize } else { bt.get(path[t]).copied().unwrap_or(0) as usize };
         }
     }
-    let cost = path_cost(table, layers, segment_intensity, weights, &path);
+    let cost = path_cost_with_node_costs(table, layers, segment_intensity, node_cost, weights, &path);
     Ok((path, cost, stats))
 }
 
 /// The objective [`fill`] minimises, for any path (for checks and reports).
 pub fn path_cost(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], weights: &FillWeights, path: &[usize]) -> f32 {
+    path_cost_with_node_costs(table, layers, segment_intensity, &[], weights, path)
+}
+
+/// The objective [`fill_with_node_costs`] minimises, for any path.
+pub fn path_cost_with_node_costs(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], node_cost: &[f32], weights: &FillWeights, path: &[usize]) -> f32 {
     let mut c = 0.0;
     for (t, l) in layers.iter().enumerate() {
         let Some(&s) = path.get(t) else { return f32::INFINITY };
         if let Layer::Open { intensity } = l {
             c += weights.music_weight * (intensity - segment_intensity.get(s).copied().unwrap_or(f32::INFINITY)).abs();
+            c += node_cost.get(s).copied().unwrap_or(0.0);
             if !table.is_available(s) {
                 return f32::INFINITY;
             }
@@ -328,4 +390,23 @@ pub fn path_cost(table: &TransitionTable, layers: &[Layer], segment_intensity: &
         }
     }
     c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn node_costs_charge_misses_and_prefer_fitting_own_moves() {
+        let w = FillWeights { beat_weight: 0.5, own_moves_preference: 0.1, ..FillWeights::default() };
+        // Built-in on the beat, built-in off it, imported on it, imported off it.
+        let c = node_costs(&w, &[1.0, 0.0, 0.9, 0.5], &[true, true, false, false]);
+        let want = [0.1, 0.6, 0.05, 0.35];
+        for (got, want) in c.iter().zip(want) {
+            assert!((got - want).abs() < 1e-6, "{c:?}");
+        }
+        // With no imported moves there is nothing to prefer.
+        let only = node_costs(&w, &[1.0, 0.0], &[true, true]);
+        assert!((only[0] - 0.0).abs() < 1e-6 && (only[1] - 0.5).abs() < 1e-6, "{only:?}");
+    }
 }

@@ -1,6 +1,6 @@
 //! Choreography authoring (spec §E–G, paper 000): a song's bars, a library of 4-count
 //! segments cut from any humanoid clip at the motion's own beats, relevance-feedback candidate
-//! search per bar, automatic filling of the open bars by a shortest path, cubic joins, and the
+//! search per bar, automatic filling of the open bars by a shortest path, cubic joins, the quality measures of §J, and the
 //! editable document with undo/redo that the web layer drives. Everything here is
 //! deterministic: the same library, bars and commands give the same dance.
 
@@ -9,6 +9,7 @@ pub mod eigen;
 pub mod feedback;
 pub mod fill;
 pub mod grid;
+pub mod quality;
 pub mod render;
 pub mod segment;
 pub mod table;
@@ -16,8 +17,9 @@ pub mod table;
 pub use document::{recut_clip, BarState, BarView, ChoreoError, Choreography, GenerateReport, RecutReport, Settings};
 pub use eigen::Signature;
 pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, CANDIDATES_PER_ROUND, TAU_DECAY};
-pub use fill::{fill, fill_with_stats, path_cost, FillError, FillStats, FillWeights, Layer, TransitionTable};
+pub use fill::{fill, fill_with_node_costs, fill_with_stats, node_costs, path_cost, path_cost_with_node_costs, FillError, FillStats, FillWeights, Layer, TransitionTable};
 pub use grid::{bars_from_tempo, GridError};
+pub use quality::{dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
 pub use render::{render, segment_clip, speed_jumps, RenderOptions};
 pub use table::{TableBuilder, TableProgress};
 pub use segment::{ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};

@@ -1,5 +1,6 @@
-//! The dance as one canonical clip, in sync with the song: each bar's segment is resampled in
-//! time to the bar's length, placed so it starts where (and facing the way) the previous one
+//! The dance as one canonical clip, in sync with the song: each bar's segment is warped in
+//! time onto the bar, piecewise-linearly between its counts so count k plays at k/4 of the bar
+//! (the bar's beats, spec §E), placed so it starts where (and facing the way) the previous one
 //! ended, and consecutive segments are joined by rewriting the last 5 frames of the earlier and
 //! the first 5 of the later one with a cubic Hermite curve between the untouched poses on
 //! either side (positions and velocities matched), so no time is added and every bar stays on
@@ -43,7 +44,8 @@ fn yaw_of(q: Quat) -> f32 {
 fn sample_segment(lib: &SegmentLibrary, seg: usize, u: f32, rot: &mut Vec<Quat>, trans: &mut Vec<Vec3>) -> Option<(Vec3, Quat)> {
     let s = lib.segment(seg)?;
     let lc = lib.clips().get(s.clip)?;
-    let frame = s.start_frame + u.clamp(0.0, 1.0) * (s.end_frame - s.start_frame);
+    // Piecewise-linear between the segment's counts, so each count lands on the bar's beat.
+    let frame = s.frame_at(u);
     lc.clip.sample_into(frame / LIBRARY_FPS, rot, trans);
     let root_t = trans.first().copied().unwrap_or(Vec3::ZERO);
     let root_q = rot.first().copied().unwrap_or(Quat::IDENTITY);

@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::eigen::Signature;
+use super::quality::{bas_music, kinetic_beats_secs, QualityMotion};
 use super::table::{TableBuilder, TransitionTable};
 use crate::retarget::to_canonical;
 use crate::clip::Clip;
@@ -128,6 +129,17 @@ pub struct Segment {
     pub intensity01: f32,
     /// The built-in move, for built-in segments.
     pub builtin: Option<MoveInfo>,
+    /// The frames of its 5 counts (the 4 it spans and the next bar's first), each where the
+    /// motion has it (its kinetic beat): `count_frames[0] == start_frame`, `[4] == end_frame`.
+    /// Filling a bar warps time piecewise-linearly between them so every count lands on the
+    /// song's beat (spec §E). Empty in documents saved before counts were kept: linear then.
+    #[serde(default)]
+    pub count_frames: Vec<f32>,
+    /// How well its counts fall on its kinetic beats once warped onto a bar (spec §J), 0..1:
+    /// (BAS on the counts − BAS on the half-counts + 1) / 2 over the inner counts. The filling's
+    /// beat term prefers high values.
+    #[serde(default)]
+    pub beat_fit: f32,
     /// Kept only for the bars that already hold it (an older cut of a clip the person re-cut
     /// at a stated tempo): never offered as a candidate nor chosen to fill an open bar.
     #[serde(default)]
@@ -137,6 +149,29 @@ pub struct Segment {
 impl Segment {
     pub fn duration_secs(&self) -> f32 {
         (self.end_frame - self.start_frame) / LIBRARY_FPS
+    }
+
+    /// The clip frame shown at `u` (0..=1) of the bar it fills: piecewise-linear between its
+    /// counts, count k at u = k/4 (linear from start to end when the counts are unknown).
+    pub fn frame_at(&self, u: f32) -> f32 {
+        let u = u.clamp(0.0, 1.0);
+        let c = &self.count_frames;
+        if c.len() != SEGMENT_COUNTS + 1 || c.windows(2).any(|w| !(w[1] > w[0])) {
+            return self.start_frame + u * (self.end_frame - self.start_frame);
+        }
+        let x = u * SEGMENT_COUNTS as f32;
+        let k = (x.floor() as usize).min(SEGMENT_COUNTS - 1);
+        c[k] + (x - k as f32) * (c[k + 1] - c[k])
+    }
+
+    /// Where in 0..=1 of the bar clip frame `frame` plays (the inverse of [`Segment::frame_at`]).
+    pub fn bar_position(&self, frame: f32) -> f32 {
+        let c = &self.count_frames;
+        if c.len() != SEGMENT_COUNTS + 1 || c.windows(2).any(|w| !(w[1] > w[0])) {
+            return ((frame - self.start_frame) / (self.end_frame - self.start_frame).max(1e-6)).clamp(0.0, 1.0);
+        }
+        let k = (0..SEGMENT_COUNTS).rfind(|&k| frame >= c[k]).unwrap_or(0);
+        ((k as f32 + ((frame - c[k]) / (c[k + 1] - c[k])).clamp(0.0, 1.0)) / SEGMENT_COUNTS as f32).clamp(0.0, 1.0)
     }
 }
 
@@ -276,6 +311,11 @@ impl SegmentLibrary {
                 .map(|&c| intensity_weight(c) * (positions[b * CANON_COUNT + c.index()] - positions[a * CANON_COUNT + c.index()]).length() * LIBRARY_FPS)
                 .sum();
         }
+        // Kinetic beats (spec §J) of the whole clip, for each segment's beat fit.
+        let kinetic: Vec<f32> = match QualityMotion::from_positions(&positions, lc.clip.fps) {
+            Ok(m) => kinetic_beats_secs(&m).into_iter().map(|t| t * lc.clip.fps).collect(),
+            Err(_) => Vec::new(),
+        };
         let first_new = self.segments.len();
         let beats = &lc.beat_frames;
         let mut k = 0;
@@ -300,9 +340,18 @@ impl SegmentLibrary {
                     Some(info) => info.name(),
                     None => format!("{} · counts {}–{}", lc.clip.name, k + 1, k + SEGMENT_COUNTS),
                 };
+                let mut count_frames: Vec<f32> = beats[k..=k + SEGMENT_COUNTS].to_vec();
+                count_frames[0] = si as f32;
+                count_frames[SEGMENT_COUNTS] = ei as f32;
+                if count_frames.windows(2).any(|w| !(w[1] > w[0])) {
+                    count_frames = (0..=SEGMENT_COUNTS).map(|j| si as f32 + (ei - si) as f32 * j as f32 / SEGMENT_COUNTS as f32).collect();
+                }
+                let beat_fit = beat_fit(&count_frames, &kinetic);
                 self.segments.push(Segment {
                     index,
                     name,
+                    count_frames,
+                    beat_fit,
                     clip: clip_index,
                     source: lc.clip.source.clone(),
                     start_frame: si as f32,
@@ -689,6 +738,33 @@ pub fn detect_beats(speed: &[f32]) -> (Vec<f32>, f32) {
     (beats, period)
 }
 
+/// Nominal bar length the beat fit is judged on, seconds (4 counts at 120 per minute).
+const FIT_BAR_SECS: f32 = 2.0;
+
+/// Beat fit of a segment with counts `count_frames` in a clip whose kinetic beats are
+/// `kinetic_frames` (both clip frames): its kinetic beats warped onto a bar of
+/// [`FIT_BAR_SECS`] as the renderer warps them, then (BAS-music on the 3 inner counts − BAS on
+/// the 4 half-counts + 1) / 2. 1: turns on every count and never between; 0.5: no preference.
+pub fn beat_fit(count_frames: &[f32], kinetic_frames: &[f32]) -> f32 {
+    if count_frames.len() != SEGMENT_COUNTS + 1 {
+        return 0.5;
+    }
+    let (c0, c4) = (count_frames[0], count_frames[SEGMENT_COUNTS]);
+    let warp = |f: f32| -> f32 {
+        let k = (0..SEGMENT_COUNTS).rfind(|&k| f >= count_frames[k]).unwrap_or(0);
+        let span = (count_frames[k + 1] - count_frames[k]).max(1e-6);
+        (k as f32 + (f - count_frames[k]) / span) / SEGMENT_COUNTS as f32 * FIT_BAR_SECS
+    };
+    let mut kin: Vec<f32> = kinetic_frames.iter().copied().filter(|&f| f >= c0 && f <= c4).map(warp).collect();
+    kin.sort_by(f32::total_cmp);
+    let step = FIT_BAR_SECS / SEGMENT_COUNTS as f32;
+    let counts: Vec<f32> = (1..SEGMENT_COUNTS).map(|k| k as f32 * step).collect();
+    let halves: Vec<f32> = (0..SEGMENT_COUNTS).map(|k| (k as f32 + 0.5) * step).collect();
+    let on = bas_music(&counts, &kin).unwrap_or(0.0);
+    let off = bas_music(&halves, &kin).unwrap_or(0.0);
+    ((on - off + 1.0) * 0.5).clamp(0.0, 1.0)
+}
+
 /// Keeps the items whose `mask` entry is true.
 fn retain_by_mask<T>(v: &mut Vec<T>, mask: &[bool]) {
     let mut i = 0;
@@ -775,6 +851,56 @@ mod tests {
             let phase = (b / period).fract();
             assert!(phase < 0.12 || phase > 0.88, "beat at {b} is off the dips");
         }
+    }
+
+    fn seg_with_counts(counts: Vec<f32>) -> Segment {
+        Segment {
+            index: 0,
+            name: "s".into(),
+            clip: 0,
+            source: "test".into(),
+            start_frame: counts[0],
+            end_frame: counts[4],
+            count_frames: counts,
+            beat_fit: 0.5,
+            tempo_bpm: 120.0,
+            intensity: 1.0,
+            intensity01: 0.5,
+            builtin: None,
+            retired: false,
+        }
+    }
+
+    #[test]
+    fn each_count_lands_on_its_quarter_of_the_bar() {
+        // Uneven counts: the second count comes early, the third late.
+        let s = seg_with_counts(vec![10.0, 20.0, 40.0, 48.0, 60.0]);
+        for (k, c) in [10.0f32, 20.0, 40.0, 48.0, 60.0].iter().enumerate() {
+            assert!((s.frame_at(k as f32 / 4.0) - c).abs() < 1e-4, "count {k}");
+            assert!((s.bar_position(*c) - k as f32 / 4.0).abs() < 1e-4, "count {k}");
+        }
+        // Linear between counts.
+        assert!((s.frame_at(0.375) - 30.0).abs() < 1e-4);
+        // Without counts (an older document), linear over the segment.
+        let mut old = s.clone();
+        old.count_frames.clear();
+        assert!((old.frame_at(0.25) - 22.5).abs() < 1e-4);
+    }
+
+    #[test]
+    fn beat_fit_prefers_turns_on_the_counts() {
+        let counts = [0.0f32, 12.0, 27.0, 39.0, 54.0];
+        // Kinetic beats exactly on the counts (uneven as they are): the warp puts them on the
+        // bar's quarters.
+        let on = beat_fit(&counts, &counts);
+        // Kinetic beats halfway between counts.
+        let between: Vec<f32> = counts.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+        let off = beat_fit(&counts, &between);
+        assert!(on > 0.95, "{on}");
+        assert!(off < 0.05, "{off}");
+        // Turning on counts and between: no preference.
+        let both: Vec<f32> = counts.iter().chain(&between).copied().collect();
+        assert!((beat_fit(&counts, &both) - 0.5).abs() < 0.05);
     }
 
     #[test]

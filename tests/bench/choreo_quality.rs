@@ -1,0 +1,193 @@
+//! How well generated dances follow the music (spec §J), on every song in ../shared/data/music
+//! and the drum take in ../shared/data/beats, with the core's own grid and real dance clips
+//! imported into the library as the app has them (built-in moves + the CMU salsa and Indian
+//! clips, cut at their detected tempo). For each song it prints, against controls measured in
+//! the same run:
+//! - BAS-music and BAS-motion of the generated dance (default settings), of dances of random
+//!   segments on the same bars (mean of 5 draws), and of the generated dance scored against
+//!   the half-beat-shifted beats;
+//! - kinetic beats per second against the song's beat rate;
+//! - foot skate (mean, p95 cm/s) and PFC against the source clips';
+//! - join jump (mean, max);
+//! - the share of bars filled from imported clips.
+//!
+//! Then the cut tempo of the two pairs of salsa partners (same take, same music).
+//! `ODORI_BEAT_WEIGHT=x` sets the filling's beat weight (default: the product's; 0: off, the
+//! filling before the beat term).
+//! `ODORI_OWN_MOVES=x` sets the preference for imported moves (0: none).
+//! Prints figures; asserts nothing. `cargo bench -p odori-tests --bench choreo_quality`
+//! (release), or `cargo test -p odori-tests --bench choreo_quality` for a quicker build.
+
+#[path = "../native/music_audio.rs"]
+mod music_audio;
+
+use std::time::Instant;
+
+use odori_core::bars::Bar;
+use odori_core::choreo::quality::{dance_quality, motion_quality, DanceQuality, QualityMotion};
+use odori_core::choreo::{Choreography, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::import::import_bytes;
+use odori_core::music::{analyze, AnalysisOptions};
+use odori_core::ImportOptions;
+use odori_tests::{all_bvh, fps_override_for, read};
+
+/// Random dances per song.
+const RANDOM_DRAWS: usize = 5;
+
+/// The library as the app has it after the person opens the dance clips: built-in moves plus
+/// every salsa and Indian BVH, cut at the detected tempo (the app's default).
+fn library() -> SegmentLibrary {
+    let mut lib = SegmentLibrary::builtin();
+    for rel in all_bvh().into_iter().filter(|r| r.contains("cmu-salsa") || r.contains("cmu-indian")) {
+        let opts = ImportOptions { fps_override: fps_override_for(&rel), ..Default::default() };
+        let imp = import_bytes(&rel, &read(&rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        for clip in &imp.clips {
+            match lib.add_clip(clip, &imp.humanoid, &imp.status, &SegmentOptions::default()) {
+                Ok(s) => println!("  imported {rel}: {:.1} s, {:.1} counts/min, {} segments", clip.duration_secs(), s.tempo_bpm, s.segments),
+                Err(e) => println!("  imported {rel}: refused: {e}"),
+            }
+        }
+    }
+    lib
+}
+
+fn quality(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], choices: &[Option<usize>]) -> DanceQuality {
+    let clip = odori_core::choreo::render(lib, bars, choices, &RenderOptions::default());
+    dance_quality(&clip, bars, beats).expect("dance quality")
+}
+
+fn main() {
+    let t = Instant::now();
+    let lib = library();
+    let builtin = lib.segments().iter().filter(|s| s.builtin.is_some()).count();
+    println!("library: {} segments ({builtin} built-in, {} imported) in {:.1} s", lib.len(), lib.len() - builtin, t.elapsed().as_secs_f64());
+
+    for (label, bi) in [("built-in", true), ("imported", false)] {
+        let v: Vec<&odori_core::choreo::Segment> = lib.segments().iter().filter(|s| s.builtin.is_some() == bi).collect();
+        let n = v.len().max(1) as f32;
+        println!(
+            "  {label} segments: intensity W mean {:.2} m/s, scaled 0..1 mean {:.2} ({:.0} % at 1.0), beat fit mean {:.2}",
+            v.iter().map(|s| s.intensity).sum::<f32>() / n,
+            v.iter().map(|s| s.intensity01).sum::<f32>() / n,
+            100.0 * v.iter().filter(|s| s.intensity01 >= 0.999).count() as f32 / n,
+            v.iter().map(|s| s.beat_fit).sum::<f32>() / n
+        );
+    }
+    // Source clips: what the dances are made of.
+    let (mut skate_imp, mut skate_bi, mut pfc_imp, mut kbps_imp) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for c in lib.clips() {
+        let Ok(m) = QualityMotion::from_clip(&c.clip) else { continue };
+        let q = motion_quality(&m);
+        if c.builtin.is_some() {
+            skate_bi.push(q.foot_skate.mean_cm_per_s);
+        } else {
+            skate_imp.push(q.foot_skate.mean_cm_per_s);
+            pfc_imp.push(q.pfc);
+            kbps_imp.push(q.kinetic_beats_per_sec);
+        }
+    }
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len().max(1) as f32;
+    println!(
+        "source clips: imported foot skate mean {:.1} cm/s, PFC {:.2}, kinetic beats {:.2}/s; built-in moves foot skate mean {:.1} cm/s",
+        mean(&skate_imp),
+        mean(&pfc_imp),
+        mean(&kbps_imp),
+        mean(&skate_bi)
+    );
+
+    // Each segment alone over one 2 s bar (120 BPM): do its inner counts (beats 2, 3, 4 of the
+    // bar) fall on kinetic beats once it is stretched linearly to the bar?
+    for (label, builtin_only) in [("built-in", true), ("imported", false)] {
+        let (mut on, mut off, mut n) = (0.0, 0.0, 0);
+        for s in lib.segments().iter().filter(|s| s.builtin.is_some() == builtin_only) {
+            let Some(clip) = odori_core::choreo::segment_clip(&lib, s.index, 2.0, 30.0) else { continue };
+            let Ok(m) = QualityMotion::from_clip(&clip) else { continue };
+            let k = odori_core::choreo::quality::kinetic_beats_secs(&m);
+            let a = odori_core::choreo::quality::beat_alignment(&[0.0, 0.5, 1.0, 1.5, 2.0], &k, 0.25, 1.75);
+            on += a.bas_music;
+            off += a.bas_music_shifted;
+            n += 1;
+        }
+        println!("{label} segments alone on a 120 BPM bar: inner counts BAS-music {:.3}, half-shifted {:.3} ({n} segments)", on / n as f32, off / n as f32);
+    }
+
+    let mut songs: Vec<&str> = music_audio::FULL_TRACKS.to_vec();
+    songs.push(music_audio::TRUMPET);
+    songs.push(music_audio::DRUMS);
+    println!(
+        "\n{:<44} {:>5} {:>5} | {:>11} {:>11} {:>11} | {:>9} {:>9} | {:>5} {:>5} | {:>9} {:>5} | {:>9} {:>9} | {:>8}",
+        "song", "bars", "b/s", "BASm gen", "BASm rand", "BASm shift", "BASk gen", "BASk rnd", "kb/s", "rnd", "skate", "PFC", "jump mean", "jump max", "imported"
+    );
+    for rel in songs {
+        let audio = music_audio::decode_data(rel);
+        let env = audio.envelope().unwrap_or_else(|e| panic!("{rel}: {e}"));
+        let grid = analyze(&env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        let bars = grid.bars.clone();
+        let beats = grid.beat_times_secs.clone();
+        let mut doc = Choreography::new(bars.clone()).expect("bars");
+        if let Some(w) = std::env::var("ODORI_BEAT_WEIGHT").ok().and_then(|v| v.parse().ok()) {
+            doc.set_beat_weight(w).expect("beat weight");
+        }
+        if let Some(w) = std::env::var("ODORI_OWN_MOVES").ok().and_then(|v| v.parse().ok()) {
+            doc.set_own_moves_preference(w).expect("own-moves preference");
+        }
+        doc.generate(&lib).expect("generate");
+        let chosen = doc.segments();
+        let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
+        let gen = quality(&lib, &bars, &beats, &chosen);
+        // Random segments on the same bars (a fixed LCG: the same draws every run).
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired).map(|s| s.index).collect();
+        let mut rnd = Vec::new();
+        for _ in 0..RANDOM_DRAWS {
+            let ch: Vec<Option<usize>> = (0..bars.len())
+                .map(|_| {
+                    x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    Some(live[(x >> 33) as usize % live.len()])
+                })
+                .collect();
+            rnd.push(quality(&lib, &bars, &beats, &ch));
+        }
+        let rm = |f: &dyn Fn(&DanceQuality) -> f32| rnd.iter().map(f).sum::<f32>() / rnd.len() as f32;
+        let name = rel.rsplit('/').next().unwrap_or(rel);
+        let name = &name[..name.len().min(44)];
+        println!(
+            "{name:<44} {:>5} {:>5.2} | {:>11.3} {:>11.3} {:>11.3} | {:>9.3} {:>9.3} | {:>5.2} {:>5.2} | {:>4.1}/{:<4.1} {:>5.2} | {:>4.2}/{:<4.2} {:>9.2} | {:>3}/{:<3} {:.0}%",
+            bars.len(),
+            gen.beats.music_beats_per_sec,
+            gen.beats.bas_music,
+            rm(&|q| q.beats.bas_music),
+            gen.beats.bas_music_shifted,
+            gen.beats.bas_motion,
+            rm(&|q| q.beats.bas_motion),
+            gen.beats.kinetic_beats_per_sec,
+            rm(&|q| q.beats.kinetic_beats_per_sec),
+            gen.foot_skate.mean_cm_per_s,
+            gen.foot_skate.p95_cm_per_s,
+            gen.pfc,
+            gen.join_jump_mean,
+            rm(&|q| q.join_jump_mean),
+            gen.join_jump_max,
+            imported,
+            bars.len(),
+            100.0 * imported as f32 / bars.len().max(1) as f32
+        );
+        println!(
+            "{:<44}   margins: gen − random {:+.3} (goal ≥ +0.05), gen − shifted {:+.3} (goal ≥ +0.10); kinetic/song beat rate {:.2} (goal 0.75..1.25 or 0.375..0.625)",
+            "",
+            gen.beats.bas_music - rm(&|q| q.beats.bas_music),
+            gen.beats.bas_music - gen.beats.bas_music_shifted,
+            gen.beats.kinetic_beats_per_sec / gen.beats.music_beats_per_sec.max(1e-6)
+        );
+    }
+
+    println!("\nsalsa partners (same take): cut tempo, counts per minute");
+    let tempo_of = |name: &str| lib.clips().iter().find(|c| c.clip.source.contains(name)).map(|c| c.tempo_bpm);
+    for (a, b) in [("salsa_01", "salsa_16"), ("salsa_10", "salsa_25")] {
+        match (tempo_of(a), tempo_of(b)) {
+            (Some(x), Some(y)) => println!("  {a} {x:.1} vs {b} {y:.1}: differ by {:.1} % (goal ≤ 3 %)", 100.0 * (x - y).abs() / x.min(y)),
+            _ => println!("  {a}/{b}: not both in the library"),
+        }
+    }
+    println!("total {:.1} s", t.elapsed().as_secs_f64());
+}

@@ -1,0 +1,45 @@
+// The dance quality readout (spec §J) from Node, as an npm user gets it: a dance generated on the
+// demo song with a real salsa clip in the library, measured per bar and whole; bad beats are a
+// typed error.
+import { test } from "node:test";
+import assert from "node:assert/strict";
+import { readFileSync, existsSync } from "node:fs";
+import { fileURLToPath } from "node:url";
+import { dirname, join } from "node:path";
+
+const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
+const data = join(root, "..", "shared", "data");
+if (!existsSync(data)) throw new Error(`../shared/data is missing: these tests read the shared real data beside the repository (${data})`);
+const pkg = await import(join(root, "pkg", "odori.js"));
+pkg.initSync({ module: readFileSync(join(root, "pkg", "odori_bg.wasm")) });
+const { Library, Song, DemoSong, Choreographer } = pkg;
+
+test("quality of a generated dance: beat alignment above its half-shifted control, per bar and whole", () => {
+  const lib = new Library();
+  const salsa = lib.importFile("salsa_01.bvh", new Uint8Array(readFileSync(join(data, "mocap/cmu-salsa/salsa_01.bvh"))), { fpsOverride: 60 }).clips[0];
+  const demo = DemoSong.render(44100);
+  const song = Song.fromSamples([demo.samples], demo.sampleRateHz);
+  const grid = song.grid();
+  const ch = new Choreographer();
+  ch.setBars(grid.bars);
+  ch.addClip(lib, salsa.id);
+  while (ch.prepareTable(256) < 1) { /* slices of the join table */ }
+  ch.generate();
+  const q = ch.quality(new Float32Array(grid.beatTimesSecs));
+  assert.equal(q.bars.length, grid.bars.length);
+  assert.ok(q.bars[0].joinJump == null, "the first bar has no join");
+  assert.ok(q.bars.slice(1).every((b) => Number.isFinite(b.joinJump)), "every bar after the first has a join jump");
+  assert.ok(q.beats.basMusic >= q.beats.basMusicShifted + 0.1, `BAS-music ${q.beats.basMusic} vs half-shifted ${q.beats.basMusicShifted}`);
+  assert.ok(q.beats.kineticBeatsPerSec > 0.5 && q.beats.musicBeatsPerSec > 1, JSON.stringify(q.beats));
+  assert.ok(Number.isFinite(q.footSkate.meanCmPerS) && q.footSkate.contacts > 0, JSON.stringify(q.footSkate));
+  assert.ok(q.joinJumpMean <= q.joinJumpMax && Number.isFinite(q.pfc));
+  // Without beats the bars' quarters are used.
+  const own = ch.quality();
+  assert.ok(own.beats.basMusic > 0 && own.bars.length === q.bars.length);
+  // Beats out of order are refused with the offending one named.
+  assert.throws(() => ch.quality(new Float32Array([1, 0.5])), (e) => e.name === "OdoriError" && e.kind === "bad-argument" && /beat 1/.test(e.message));
+  // The filling's new settings are checked.
+  ch.setBeatWeight(0.5);
+  ch.setOwnMovesPreference(0);
+  assert.throws(() => ch.setBeatWeight(-1), (e) => e.name === "OdoriError" && /beatWeight/.test(e.message));
+});
