@@ -17,11 +17,12 @@ const $ = (sel) => document.querySelector(sel);
 
 async function main() {
   await init();
-  const messages = new Messages($("#messages"));
+  const messages = new Messages($("#messages"), $("#toasts"));
   const library = new Library();
   const canvas = $("#view");
   const params = new URLSearchParams(location.search);
   const backend = params.get("backend") || "auto";
+  bindPage(messages);
   fitCanvas(canvas);
   let viewer;
   try {
@@ -37,14 +38,22 @@ async function main() {
   badge.classList.add(viewer.backend);
   document.body.dataset.backend = viewer.backend;
 
-  const searchClient = new SearchClient(library);
+  // Panels created after the first pose fill these in; the handlers below check for them.
+  let searchClient = null, searchPanel = null, textPanel = null, choreo = null;
   const player = new Player({ viewer, library, canvas, scrub: $("#scrub"), label: $("#frame-label"), playButton: $("#play"), loop: $("#loop") });
   const panel = new LibraryPanel($("#library tbody"), library, {
     onSelect: (id) => { player.select(id); if (searchPanel) searchPanel.clipChanged(); },
     onOverlay: (ids) => player.setOverlays(ids),
+    onRemove: (id) => {
+      const info = library.clip(id);
+      if (searchClient) searchClient.remove(id);
+      if (choreo && choreo.danceId === id) choreo.danceId = null;
+      if (textPanel && textPanel.clipId === id) textPanel.clipId = null;
+      library.remove(id);
+      if (player.clip === id) player.clear();
+      messages.info(`${info.name} removed from the library${choreo && choreo.clips?.some((c) => c.id === id) ? " (its dance moves stay in the dance library)" : ""}`);
+    },
   });
-  let searchPanel = null;
-  let choreo = null;
   const loader = new FileLoader({
     library,
     messages,
@@ -52,7 +61,7 @@ async function main() {
     fpsInput: $("#fps-override"),
     onImported: (report) => {
       for (const c of report.clips) {
-        searchClient.add(c.id);
+        if (searchClient) searchClient.add(c.id);
         if (choreo) choreo.addClip(c);
       }
       panel.refresh();
@@ -65,31 +74,85 @@ async function main() {
   loader.bindInput($("#file-input"));
   loader.bindDrop(document.body, $("#drop"));
 
-  player.onFirstFrame = () => {
-    window.odoriTimings = { firstPoseMs: performance.now() - t0 };
-    document.body.dataset.ready = "1";
-  };
-  // The app opens on the engine's own demo clip: something moves with no file.
-  searchPanel = new SearchPanel($("#search"), { client: searchClient, library, player, messages });
-  const textPanel = new TextPanel($("#text"), { animator: new TextAnimator(), library, panel, messages, player });
+  // The app opens on the engine's own demo clip: something moves with no file. Only what the
+  // first pose needs runs before it; the rest waits for it (see `afterFirstPose`).
+  const firstPose = new Promise((resolve) => {
+    player.onFirstFrame = () => {
+      window.odoriTimings = { firstPoseMs: performance.now() - t0, firstPoseSinceNavigationMs: performance.now() };
+      document.body.dataset.posed = "1";
+      resolve();
+    };
+  });
   const demo = library.addBuiltinDemo();
-  searchClient.add(demo.id);
   panel.refresh();
   panel.select(demo.id);
   const songPlayer = new SongPlayer();
+  player.attachSong(songPlayer);
+  player.start();
+  // A new canvas size clears the canvas: frame and draw again at once (a paused figure would
+  // otherwise vanish until the next edit, and the framing is made for the view's shape).
+  new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); player.reframe(); player.drawNow(); }).observe(canvas);
+  const odori = { library, viewer, player, panel, loader, messages, songPlayer, version: version() };
+  window.odori = odori;
+
+  await firstPose;
+  // Each step in its own task, so the page answers input between them.
+  await nextTask();
+  searchClient = new SearchClient(library);
+  searchClient.add(demo.id);
+  searchPanel = new SearchPanel($("#search"), { client: searchClient, library, player, messages });
+  await nextTask();
+  textPanel = new TextPanel($("#text"), { animator: new TextAnimator(), library, panel, messages, player });
+  await nextTask();
   choreo = new ChoreoPanel($("#dance"), { choreographer: new Choreographer(), library, player, songPlayer, panel, messages });
   const songPanel = new SongPanel($("#song"), { player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars) });
-  player.songClock = songPlayer;
+  songPanel.attachTransport(player);
   player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
-  player.start();
   bindSongInput($("#song-input"), songPanel, messages);
-  // The built-in demo song, analysed like any file (WebAudio envelope → core), after the
-  // first pose is on screen.
+  Object.assign(odori, { song: songPanel, search: searchPanel, searchClient, text: textPanel, choreo });
+  document.body.dataset.ready = "1";
+  // The built-in demo song, analysed like any file (WebAudio envelope → core).
+  await nextTask();
   loadDemoSong(songPanel, messages);
-  // A new canvas size clears the canvas: draw again at once (a paused figure would
-  // otherwise vanish until the next edit).
-  new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); player.drawNow(); }).observe(canvas);
-  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, text: textPanel, choreo, version: version() };
+}
+
+/** Resolves in a new task (after pending input and a chance to paint). */
+function nextTask() {
+  return new Promise((r) => setTimeout(r, 0));
+}
+
+/** Tabs on narrow screens, the first-run hint and the keyboard sheet (`?`). */
+function bindPage(messages) {
+  const tabs = [...document.querySelectorAll(".tabs [role=tab]")];
+  const show = (tab) => {
+    for (const t of tabs) {
+      const on = t === tab;
+      t.setAttribute("aria-selected", String(on));
+      t.tabIndex = on ? 0 : -1;
+      document.getElementById(t.getAttribute("aria-controls")).classList.toggle("active", on);
+    }
+  };
+  for (const t of tabs) t.addEventListener("click", () => show(t));
+  show(tabs[0]);
+  // A message names where it happened; on a narrow screen the log is one tap away.
+  void messages;
+
+  const hint = $("#hint");
+  let seen = false;
+  try { seen = localStorage.getItem("odori.hintSeen") === "1"; } catch { /* storage off: show it */ }
+  hint.hidden = seen;
+  $("#hint-close").addEventListener("click", () => {
+    hint.hidden = true;
+    try { localStorage.setItem("odori.hintSeen", "1"); } catch { /* storage off */ }
+  });
+
+  const keys = $("#keys");
+  $("#help").addEventListener("click", () => keys.showModal());
+  window.addEventListener("keydown", (ev) => {
+    if (ev.key !== "?" || ev.target.closest("input, textarea, select, [contenteditable]")) return;
+    ev.preventDefault();
+    if (keys.open) keys.close(); else keys.showModal();
+  });
 }
 
 async function analyse(buffer) {
