@@ -160,11 +160,32 @@ async function analyse(buffer) {
   return Song.fromEnvelope(env.hopSecs, env.bands);
 }
 
+/** The demo song's samples, synthesised in a worker (the main thread stays free). */
+function renderDemoSong(sampleRateHz) {
+  return new Promise((resolve, reject) => {
+    let worker;
+    try {
+      worker = new Worker(new URL("./demo-song-worker.js", import.meta.url), { type: "module" });
+    } catch {
+      // No module workers: make it here.
+      const demo = DemoSong.render(sampleRateHz);
+      resolve({ samples: demo.samples, sampleRateHz: demo.sampleRateHz });
+      demo.free();
+      return;
+    }
+    worker.onmessage = (ev) => {
+      worker.terminate();
+      if (ev.data.error) reject(new Error(ev.data.error)); else resolve(ev.data);
+    };
+    worker.onerror = (ev) => { worker.terminate(); reject(new Error(ev.message || "the demo song worker failed")); };
+    worker.postMessage({ sampleRateHz });
+  });
+}
+
 async function loadDemoSong(songPanel, messages) {
   try {
-    const demo = DemoSong.render(44100);
+    const demo = await renderDemoSong(44100);
     const buffer = bufferFromSamples(demo.samples, demo.sampleRateHz);
-    demo.free();
     songPanel.load(await analyse(buffer), "Demo song (built-in)", buffer);
     document.body.dataset.song = "demo";
   } catch (e) {
