@@ -20,4 +20,4 @@ pub use fill::{fill, fill_with_stats, path_cost, FillError, FillStats, FillWeigh
 pub use grid::{bars_from_tempo, GridError};
 pub use render::{render, segment_clip, speed_jumps, RenderOptions};
 pub use table::{TableBuilder, TableProgress};
-pub use segment::{ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};
+pub use segment::{BuiltinLoader, ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};
