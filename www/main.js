@@ -40,6 +40,7 @@ async function main() {
 
   // Panels created after the first pose fill these in; the handlers below check for them.
   let searchClient = null, searchPanel = null, textPanel = null, choreo = null;
+  const waitingForDance = [], waitingForSearch = [];
   const player = new Player({ viewer, library, canvas, scrub: $("#scrub"), label: $("#frame-label"), playButton: $("#play"), loop: $("#loop") });
   const panel = new LibraryPanel($("#library tbody"), library, {
     onSelect: (id) => { player.select(id); if (searchPanel) searchPanel.clipChanged(); },
@@ -61,8 +62,8 @@ async function main() {
     fpsInput: $("#fps-override"),
     onImported: (report) => {
       for (const c of report.clips) {
-        if (searchClient) searchClient.add(c.id);
-        if (choreo) choreo.addClip(c);
+        if (searchClient) searchClient.add(c.id); else waitingForSearch.push(c.id);
+        if (choreo) choreo.addClip(c); else waitingForDance.push(c);
       }
       panel.refresh();
       const first = report.clips[0];
@@ -100,11 +101,17 @@ async function main() {
   await nextTask();
   searchClient = new SearchClient(library);
   searchClient.add(demo.id);
+  for (const id of waitingForSearch.splice(0)) searchClient.add(id);
   searchPanel = new SearchPanel($("#search"), { client: searchClient, library, player, messages });
   await nextTask();
   textPanel = new TextPanel($("#text"), { animator: new TextAnimator(), library, panel, messages, player });
   await nextTask();
-  choreo = new ChoreoPanel($("#dance"), { choreographer: new Choreographer(), library, player, songPlayer, panel, messages });
+  // The 420 built-in moves, a slice per task (building them at once blocked the page for
+  // 1–2 s on this kind of machine).
+  const choreographer = await loadMoves($("#status"));
+  choreo = new ChoreoPanel($("#dance"), { choreographer, library, player, songPlayer, panel, messages });
+  // Files opened while the moves were being made join the dance library now.
+  for (const c of waitingForDance.splice(0)) choreo.addClip(c);
   const songPanel = new SongPanel($("#song"), { player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars) });
   songPanel.attachTransport(player);
   player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
@@ -114,6 +121,24 @@ async function main() {
   // The built-in demo song, analysed like any file (WebAudio envelope → core).
   await nextTask();
   loadDemoSong(songPanel, messages);
+}
+
+/** A Choreographer with its built-in moves added in slices of about SLICE_MS each. */
+async function loadMoves(status) {
+  const SLICE_MS = 30;
+  const choreographer = Choreographer.loading();
+  let count = 8;
+  for (;;) {
+    const t = performance.now();
+    const p = choreographer.loadBuiltin(count);
+    const dt = performance.now() - t;
+    if (p >= 1) break;
+    status.textContent = `Preparing dance moves ${Math.floor(p * 100)} %`;
+    count = Math.max(1, Math.min(420, Math.round(count * SLICE_MS / Math.max(dt, 1))));
+    await nextTask();
+  }
+  status.textContent = "";
+  return choreographer;
 }
 
 /** Resolves in a new task (after pending input and a chance to paint). */

@@ -333,12 +333,16 @@ for (const backend of Object.keys(BACKENDS)) {
       await page.addInitScript(() => {
         window.__longTasks = [];
         new PerformanceObserver((list) => { for (const e of list.getEntries()) window.__longTasks.push({ start: e.startTime, ms: e.duration }); }).observe({ type: "longtask", buffered: true });
+        // Whether the start-up indicator shows as soon as the page is parsed (before the engine).
+        document.addEventListener("DOMContentLoaded", () => {
+          const s = document.querySelector("#startup");
+          window.__startupShown = !!s && !window.odoriTimings && getComputedStyle(s).display !== "none";
+        });
       });
       await page.goto(server.url + BACKENDS[backend].query, { waitUntil: "domcontentloaded" });
-      // The start-up indicator is there before the engine is.
-      const shown = await page.evaluate(() => { const s = document.querySelector("#startup"); return !!s && (!window.odoriTimings) && getComputedStyle(s).display !== "none"; });
       await page.waitForFunction(() => window.odoriTimings, null, { timeout: 60000 });
       await page.waitForFunction(() => document.body.dataset.ready === "1", null, { timeout: 60000 });
+      const shown = await page.evaluate(() => window.__startupShown);
       const f = await page.evaluate(() => {
         const pose = window.odoriTimings.firstPoseSinceNavigationMs;
         const before = window.__longTasks.filter((t) => t.start < pose);
