@@ -103,6 +103,7 @@ async function main() {
   searchClient.add(demo.id);
   for (const id of waitingForSearch.splice(0)) searchClient.add(id);
   searchPanel = new SearchPanel($("#search"), { client: searchClient, library, player, messages });
+  searchPanel.clipChanged(); // the clip was selected before the panel existed
   await nextTask();
   textPanel = new TextPanel($("#text"), { animator: new TextAnimator(), library, panel, messages, player });
   await nextTask();
