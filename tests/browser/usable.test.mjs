@@ -347,9 +347,11 @@ for (const backend of Object.keys(BACKENDS)) {
         const pose = window.odoriTimings.firstPoseSinceNavigationMs;
         const before = window.__longTasks.filter((t) => t.start < pose);
         const after = window.__longTasks.filter((t) => t.start >= pose);
-        return { pose, longestBefore: Math.max(0, ...before.map((t) => t.ms)), longBefore: before.length, longestAfter: Math.max(0, ...after.map((t) => t.ms)), ready: performance.now() };
+        const marks = Object.fromEntries(performance.getEntriesByType("mark").filter((m) => m.name.startsWith("odori:")).map((m) => [m.name.slice(6), Math.round(m.startTime)]));
+        return { pose, longestBefore: Math.max(0, ...before.map((t) => t.ms)), longBefore: before.length, longestAfter: Math.max(0, ...after.map((t) => t.ms)), ready: performance.now(), marks, tasks: before.map((t) => [Math.round(t.start), Math.round(t.ms)]) };
       });
       console.log(`# start-up ${backend}: first drawn pose ${f.pose.toFixed(0)} ms after navigation (goal < 1000); longest main-thread task before it ${f.longestBefore.toFixed(0)} ms (goal ≤ 200; ${f.longBefore} tasks over 50 ms); longest task after it until the panels were ready ${f.longestAfter.toFixed(0)} ms`);
+      console.log(`# start-up ${backend}: marks (ms since navigation) ${JSON.stringify(f.marks)}; long tasks before the pose [start, ms] ${JSON.stringify(f.tasks)}`);
       writeFileSync(join(artifacts, `usable-${backend}-startup.json`), JSON.stringify(f, null, 2));
       assert.ok(shown, "no start-up indicator while the engine loads");
       assert.ok(await page.evaluate(() => getComputedStyle(document.querySelector("#startup")).display === "none"), "the start-up indicator stayed");
