@@ -17,12 +17,19 @@ const t0 = performance.now();
 const $ = (sel) => document.querySelector(sel);
 
 async function main() {
+  // Marks for the start-up figures (the browser test prints where the time goes).
+  performance.mark("odori:script");
   await init();
-  const messages = new Messages($("#messages"));
+  performance.mark("odori:engine");
+  // Separate tasks for the engine, the graphics device and the first pose: none of them
+  // then holds the main thread for the sum of all three.
+  await nextTask();
+  const messages = new Messages($("#messages"), $("#toasts"));
   const library = new Library();
   const canvas = $("#view");
   const params = new URLSearchParams(location.search);
   const backend = params.get("backend") || "auto";
+  bindPage(messages);
   fitCanvas(canvas);
   let viewer;
   try {
@@ -33,19 +40,30 @@ async function main() {
     document.body.dataset.ready = "error";
     throw e;
   }
+  performance.mark("odori:viewer");
+  await nextTask();
   const badge = $("#backend");
   badge.textContent = viewer.backend === "webgpu" ? "WebGPU" : "WebGL2";
   badge.classList.add(viewer.backend);
   document.body.dataset.backend = viewer.backend;
 
-  const searchClient = new SearchClient(library);
+  // Panels created after the first pose fill these in; the handlers below check for them.
+  let searchClient = null, searchPanel = null, textPanel = null, choreo = null;
+  const waitingForDance = [], waitingForSearch = [];
   const player = new Player({ viewer, library, canvas, scrub: $("#scrub"), label: $("#frame-label"), playButton: $("#play"), loop: $("#loop") });
   const panel = new LibraryPanel($("#library tbody"), library, {
     onSelect: (id) => { player.select(id); if (searchPanel) searchPanel.clipChanged(); },
     onOverlay: (ids) => player.setOverlays(ids),
+    onRemove: (id) => {
+      const info = library.clip(id);
+      if (searchClient) searchClient.remove(id);
+      if (choreo && choreo.danceId === id) choreo.danceId = null;
+      if (textPanel && textPanel.clipId === id) textPanel.clipId = null;
+      library.remove(id);
+      if (player.clip === id) player.clear();
+      messages.info(`${info.name} removed from the library${choreo && choreo.clips?.some((c) => c.id === id) ? " (its dance moves stay in the dance library)" : ""}`);
+    },
   });
-  let searchPanel = null;
-  let choreo = null;
   const loader = new FileLoader({
     library,
     messages,
@@ -53,8 +71,8 @@ async function main() {
     fpsInput: $("#fps-override"),
     onImported: (report) => {
       for (const c of report.clips) {
-        searchClient.add(c.id);
-        if (choreo) choreo.addClip(c);
+        if (searchClient) searchClient.add(c.id); else waitingForSearch.push(c.id);
+        if (choreo) choreo.addClip(c); else waitingForDance.push(c);
       }
       panel.refresh();
       const first = report.clips[0];
@@ -66,35 +84,115 @@ async function main() {
   loader.bindInput($("#file-input"));
   const exporter = new ExportPanel({
     button: $("#export"), format: $("#export-format"), character: $("#character"), putOn: $("#put-on"), library, player, messages,
-    onAdded: (info) => { searchClient.add(info.id); panel.refresh(); panel.select(info.id); },
+    onAdded: (info) => { if (searchClient) searchClient.add(info.id); else waitingForSearch.push(info.id); panel.refresh(); panel.select(info.id); },
   });
   loader.bindDrop(document.body, $("#drop"));
 
-  player.onFirstFrame = () => {
-    window.odoriTimings = { firstPoseMs: performance.now() - t0 };
-    document.body.dataset.ready = "1";
-  };
-  // The app opens on the engine's own demo clip: something moves with no file.
-  searchPanel = new SearchPanel($("#search"), { client: searchClient, library, player, messages });
-  const textPanel = new TextPanel($("#text"), { animator: new TextAnimator(), library, panel, messages, player });
+  // The app opens on the engine's own demo clip: something moves with no file. Only what the
+  // first pose needs runs before it; the rest waits for it (see `afterFirstPose`).
+  const firstPose = new Promise((resolve) => {
+    player.onFirstFrame = () => {
+      window.odoriTimings = { firstPoseMs: performance.now() - t0, firstPoseSinceNavigationMs: performance.now() };
+      document.body.dataset.posed = "1";
+      performance.mark("odori:first-pose");
+      resolve();
+    };
+  });
   const demo = library.addBuiltinDemo();
-  searchClient.add(demo.id);
   panel.refresh();
   panel.select(demo.id);
   const songPlayer = new SongPlayer();
-  choreo = new ChoreoPanel($("#dance"), { choreographer: new Choreographer(), library, player, songPlayer, panel, messages });
-  const songPanel = new SongPanel($("#song"), { player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars, grid.beatTimesSecs) });
-  player.songClock = songPlayer;
-  player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
+  player.attachSong(songPlayer);
   player.start();
+  // A new canvas size clears the canvas: frame and draw again at once (a paused figure would
+  // otherwise vanish until the next edit, and the framing is made for the view's shape).
+  new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); player.reframe(); player.drawNow(); }).observe(canvas);
+  const odori = { library, viewer, player, panel, loader, messages, songPlayer, exporter, version: version() };
+  window.odori = odori;
+
+  await firstPose;
+  // Each step in its own task, so the page answers input between them.
+  await nextTask();
+  searchClient = new SearchClient(library);
+  searchClient.add(demo.id);
+  for (const id of waitingForSearch.splice(0)) searchClient.add(id);
+  searchPanel = new SearchPanel($("#search"), { client: searchClient, library, player, messages });
+  searchPanel.clipChanged(); // the clip was selected before the panel existed
+  await nextTask();
+  textPanel = new TextPanel($("#text"), { animator: new TextAnimator(), library, panel, messages, player });
+  await nextTask();
+  // The 420 built-in moves, a slice per task (building them at once blocked the page for
+  // 1–2 s on this kind of machine).
+  const choreographer = await loadMoves($("#status"));
+  choreo = new ChoreoPanel($("#dance"), { choreographer, library, player, songPlayer, panel, messages });
+  // Files opened while the moves were being made join the dance library now.
+  for (const c of waitingForDance.splice(0)) choreo.addClip(c);
+  const songPanel = new SongPanel($("#song"), { player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars, grid.beatTimesSecs) });
+  songPanel.attachTransport(player);
+  player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
   bindSongInput($("#song-input"), songPanel, messages);
-  // The built-in demo song, analysed like any file (WebAudio envelope → core), after the
-  // first pose is on screen.
+  Object.assign(odori, { song: songPanel, search: searchPanel, searchClient, text: textPanel, choreo });
+  document.body.dataset.ready = "1";
+  // The built-in demo song, analysed like any file (WebAudio envelope → core).
+  await nextTask();
   loadDemoSong(songPanel, messages);
-  // A new canvas size clears the canvas: draw again at once (a paused figure would
-  // otherwise vanish until the next edit).
-  new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); player.drawNow(); }).observe(canvas);
-  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, text: textPanel, choreo, exporter, version: version() };
+}
+
+/** A Choreographer with its built-in moves added in slices of about SLICE_MS each. */
+async function loadMoves(status) {
+  const SLICE_MS = 30;
+  const choreographer = Choreographer.loading();
+  let count = 8;
+  for (;;) {
+    const t = performance.now();
+    const p = choreographer.loadBuiltin(count);
+    const dt = performance.now() - t;
+    if (p >= 1) break;
+    status.textContent = `Preparing dance moves ${Math.floor(p * 100)} %`;
+    count = Math.max(1, Math.min(420, Math.round(count * SLICE_MS / Math.max(dt, 1))));
+    await nextTask();
+  }
+  status.textContent = "";
+  return choreographer;
+}
+
+/** Resolves in a new task (after pending input and a chance to paint). */
+function nextTask() {
+  return new Promise((r) => setTimeout(r, 0));
+}
+
+/** Tabs on narrow screens, the first-run hint and the keyboard sheet (`?`). */
+function bindPage(messages) {
+  const tabs = [...document.querySelectorAll(".tabs [role=tab]")];
+  const show = (tab) => {
+    for (const t of tabs) {
+      const on = t === tab;
+      t.setAttribute("aria-selected", String(on));
+      t.tabIndex = on ? 0 : -1;
+      document.getElementById(t.getAttribute("aria-controls")).classList.toggle("active", on);
+    }
+  };
+  for (const t of tabs) t.addEventListener("click", () => show(t));
+  show(tabs[0]);
+  // A message names where it happened; on a narrow screen the log is one tap away.
+  void messages;
+
+  const hint = $("#hint");
+  let seen = false;
+  try { seen = localStorage.getItem("odori.hintSeen") === "1"; } catch { /* storage off: show it */ }
+  hint.hidden = seen;
+  $("#hint-close").addEventListener("click", () => {
+    hint.hidden = true;
+    try { localStorage.setItem("odori.hintSeen", "1"); } catch { /* storage off */ }
+  });
+
+  const keys = $("#keys");
+  $("#help").addEventListener("click", () => keys.showModal());
+  window.addEventListener("keydown", (ev) => {
+    if (ev.key !== "?" || ev.target.closest("input, textarea, select, [contenteditable]")) return;
+    ev.preventDefault();
+    if (keys.open) keys.close(); else keys.showModal();
+  });
 }
 
 async function analyse(buffer) {
@@ -102,11 +200,32 @@ async function analyse(buffer) {
   return Song.fromEnvelope(env.hopSecs, env.bands);
 }
 
+/** The demo song's samples, synthesised in a worker (the main thread stays free). */
+function renderDemoSong(sampleRateHz) {
+  return new Promise((resolve, reject) => {
+    let worker;
+    try {
+      worker = new Worker(new URL("./demo-song-worker.js", import.meta.url), { type: "module" });
+    } catch {
+      // No module workers: make it here.
+      const demo = DemoSong.render(sampleRateHz);
+      resolve({ samples: demo.samples, sampleRateHz: demo.sampleRateHz });
+      demo.free();
+      return;
+    }
+    worker.onmessage = (ev) => {
+      worker.terminate();
+      if (ev.data.error) reject(new Error(ev.data.error)); else resolve(ev.data);
+    };
+    worker.onerror = (ev) => { worker.terminate(); reject(new Error(ev.message || "the demo song worker failed")); };
+    worker.postMessage({ sampleRateHz });
+  });
+}
+
 async function loadDemoSong(songPanel, messages) {
   try {
-    const demo = DemoSong.render(44100);
+    const demo = await renderDemoSong(44100);
     const buffer = bufferFromSamples(demo.samples, demo.sampleRateHz);
-    demo.free();
     songPanel.load(await analyse(buffer), "Demo song (built-in)", buffer);
     document.body.dataset.song = "demo";
   } catch (e) {

@@ -33,6 +33,7 @@ export class SongPlayer {
     this.timer = null;
     this.nextBeat = 0;
     this.onEnded = null;
+    this.generation = 0;  // bumped by every play/stop: a play that was overtaken while the context resumed does not start
   }
 
   context() {
@@ -64,8 +65,12 @@ export class SongPlayer {
   async play(fromSecs = this.pausedAt) {
     if (!this.buffer) return;
     const ctx = this.context();
+    const generation = ++this.generation;
     if (ctx.state === "suspended") await ctx.resume();
+    // Paused (or played again) while the audio context woke up: the later call wins.
+    if (generation !== this.generation) return;
     this.stop(false);
+    this.generation = generation;
     const src = new AudioBufferSourceNode(ctx, { buffer: this.buffer });
     src.connect(ctx.destination);
     const when = ctx.currentTime + 0.05;
@@ -86,6 +91,7 @@ export class SongPlayer {
   }
 
   stop(remember = true) {
+    this.generation++;
     if (this.source) {
       if (remember) this.pausedAt = this.position();
       const s = this.source;

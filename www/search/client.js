@@ -38,6 +38,11 @@ export class SearchClient {
     return { ok: true };
   }
 
+  /** Forgets a clip removed from the library. */
+  remove(id) {
+    if (this.features.delete(id)) this.worker.postMessage({ type: "remove", id });
+  }
+
   request(msg, onProgress) {
     const token = ++this.token;
     return new Promise((resolve, reject) => {

@@ -66,6 +66,7 @@ export class ChoreoPanel {
     $("#dance-redo").addEventListener("click", () => this.redo());
     $("#dance-search").addEventListener("click", () => this.search());
     $("#dance-set").addEventListener("click", () => this.set());
+    $("#dance-unpin").addEventListener("click", () => this.unpin());
     $("#dance-reset").addEventListener("click", () => this.act(() => this.choreographer.resetSearch(this.bar), true));
     $("#dance-rho").addEventListener("change", (ev) => this.act(() => this.choreographer.setRho(Number(ev.target.value))));
     $("#dance-music").addEventListener("change", (ev) => this.act(() => this.choreographer.setMusicWeight(Number(ev.target.value))));
@@ -232,8 +233,9 @@ export class ChoreoPanel {
     this.$("#dance-undo").disabled = !this.choreographer.canUndo();
     this.$("#dance-redo").disabled = !this.choreographer.canRedo();
     const v = this.bar != null ? view[this.bar] : null;
-    this.$("#dance-tau").textContent = v ? `τ ${v.tau.toFixed(3)} · round ${v.rounds}` : "τ –";
+    this.$("#dance-tau").textContent = v ? `variety τ ${v.tau.toFixed(3)} · round ${v.rounds}` : "variety τ –";
     this.$("#dance-bar-label").textContent = v ? `Bar ${this.bar + 1}` : "Bar –";
+    this.$("#dance-unpin").disabled = !(v && v.state.kind === "pinned");
     void total;
   }
 
@@ -315,8 +317,30 @@ export class ChoreoPanel {
     }
   }
 
-  undo() { if (this.act(() => this.choreographer.undo())) this.renderDance(); }
-  redo() { if (this.act(() => this.choreographer.redo())) this.renderDance(); }
+  /** Unpins the selected bar: it keeps its move as a generated one until the next Generate. */
+  unpin() {
+    if (this.bar == null) return;
+    this.act(() => this.choreographer.unpin(this.bar));
+    this.renderDance();
+  }
+
+  undo() { if (this.act(() => this.choreographer.undo())) this.afterHistory(); }
+  redo() { if (this.act(() => this.choreographer.redo())) this.afterHistory(); }
+
+  /**
+   * After undo/redo the selected bar's search may differ (or be closed: looking at a bar is
+   * not an edit, so an earlier state may not have it open). Open it again, quietly, and show
+   * its candidates if they changed.
+   */
+  afterHistory() {
+    this.renderDance();
+    if (this.bar == null || !this.view || this.bar >= this.view.length) return;
+    const cands = this.act(() => this.choreographer.candidates(this.bar));
+    if (cands && (cands.length !== this.candidates.length || [...cands].some((c, k) => c !== this.candidates[k]))) {
+      this.ticked.clear();
+      this.showCandidates([...cands]);
+    }
+  }
 
   renderDance() {
     try {
@@ -331,6 +355,7 @@ export class ChoreoPanel {
     if (this.danceId == null) return;
     this.panel.select(this.danceId);
     const from = this.bar != null ? this.view[this.bar].bar.startSecs : 0;
-    this.songPlayer.play(from);
+    // Through the one transport: Pause (or space) then stops the music and the figure together.
+    this.player.playSong(from);
   }
 }

@@ -1,5 +1,8 @@
 // Opening motion files by picker or drag and drop. Reading shows progress; a bad file gets
-// a message naming the file and the problem, and the library keeps what it had.
+// a message naming the file and the problem, and the library keeps what it had. Import
+// options (the BVH fps override) belong to one import: they are read when the files are
+// chosen, said in the message of each file they changed, and then cleared, so a later file
+// is never played at a rate meant for another.
 const ACCEPT = /\.(bvh|glb|gltf)$/i;
 
 export class FileLoader {
@@ -29,7 +32,10 @@ export class FileLoader {
   }
 
   openAll(files) {
-    for (const f of files) this.queue = this.queue.then(() => this.open(f));
+    const fps = Number(this.fpsInput.value);
+    const options = { fpsOverride: fps > 0 ? fps : undefined };
+    if (files.length) this.fpsInput.value = "";
+    for (const f of files) this.queue = this.queue.then(() => this.open(f, options));
     return this.queue;
   }
 
@@ -63,7 +69,7 @@ export class FileLoader {
     }
   }
 
-  async open(file) {
+  async open(file, { fpsOverride } = {}) {
     if (!ACCEPT.test(file.name)) {
       this.messages.error(`${file.name}: not a motion file Odori reads (BVH, glTF or GLB)`);
       return null;
@@ -72,12 +78,13 @@ export class FileLoader {
       const bytes = await this.read(file);
       this.progress(`Parsing ${file.name}…`);
       await new Promise((r) => requestAnimationFrame(() => setTimeout(r, 0)));
-      const fps = Number(this.fpsInput.value);
-      const options = fps > 0 && /\.bvh$/i.test(file.name) ? { fpsOverride: fps } : {};
+      const bvh = /\.bvh$/i.test(file.name);
+      const options = fpsOverride && bvh ? { fpsOverride } : {};
       const report = this.library.importFile(file.name, bytes, options);
       for (const w of report.warnings) this.messages.warning(`${file.name}: ${w}`);
       const n = report.clips.length;
-      this.messages.info(`${file.name}: ${n} clip${n === 1 ? "" : "s"} added`);
+      const how = options.fpsOverride ? ` (played at ${options.fpsOverride} fps, as stated for this import)` : "";
+      this.messages.info(`${file.name}: ${n} clip${n === 1 ? "" : "s"} added${how}`);
       this.status.textContent = "";
       this.onImported(report);
       return report;

@@ -1,5 +1,8 @@
-// The library table: one row per clip with its facts; click selects, the checkbox overlays.
+// The library table: one row per clip with its facts; click selects, the checkbox overlays,
+// × removes. Fixed columns so it always fits its panel (long names end in an ellipsis).
 const fmt = (x, d = 2) => Number(x).toFixed(d);
+/** A frame rate the same way everywhere: at most two decimals, no trailing zeros (60, 29.97). */
+export const fmtFps = (fps) => String(Number(Number(fps).toFixed(2)));
 
 function humanoidText(h) {
   switch (h.kind) {
@@ -10,16 +13,18 @@ function humanoidText(h) {
 }
 
 export class LibraryPanel {
-  constructor(tbody, library, { onSelect, onOverlay }) {
+  constructor(tbody, library, { onSelect, onOverlay, onRemove }) {
     this.tbody = tbody;
     this.library = library;
     this.onSelect = onSelect;
     this.onOverlay = onOverlay;
+    this.onRemove = onRemove;
     this.selected = null;
     this.overlays = new Set();
     tbody.addEventListener("click", (ev) => {
       const tr = ev.target.closest("tr");
       if (!tr || ev.target.matches("input")) return;
+      if (ev.target.closest("button.remove")) { this.remove(Number(tr.dataset.id)); return; }
       this.select(Number(tr.dataset.id));
     });
     tbody.addEventListener("change", (ev) => {
@@ -37,14 +42,17 @@ export class LibraryPanel {
       const tr = document.createElement("tr");
       tr.dataset.id = c.id;
       const [hum, why] = humanoidText(c.humanoid);
-      const cells = [c.name, c.source, fmt(c.fps, c.fps % 1 ? 2 : 0), c.frames, fmt(c.durationSecs), c.joints];
-      for (const v of cells) {
+      const cells = [[c.name, "name"], [c.source, "source"], [fmtFps(c.fps), "num"], [c.frames, "num"], [fmt(c.durationSecs), "num"], [c.joints, "num"]];
+      for (const [v, cls] of cells) {
         const td = document.createElement("td");
         td.textContent = v;
+        td.className = cls;
         tr.append(td);
       }
-      tr.children[1].className = "source";
+      tr.children[0].title = `${c.name} — ${c.source}`;
       tr.children[1].title = c.source;
+      tr.children[3].className = "num frames";
+      tr.children[4].title = `${c.frames} frames`;
       const h = document.createElement("td");
       h.textContent = hum;
       h.title = why;
@@ -57,10 +65,34 @@ export class LibraryPanel {
       box.setAttribute("aria-label", `Overlay ${c.name}`);
       o.append(box);
       tr.append(o);
+      const r = document.createElement("td");
+      const del = document.createElement("button");
+      del.type = "button";
+      del.className = "remove";
+      del.textContent = "×";
+      del.title = `Remove ${c.name} from the library`;
+      del.setAttribute("aria-label", `Remove ${c.name}`);
+      r.append(del);
+      tr.append(r);
       if (c.id === this.selected) tr.classList.add("selected");
       return tr;
     });
     this.tbody.replaceChildren(...rows);
+  }
+
+  /** Removes a clip; the selection moves to a neighbour. */
+  remove(id) {
+    const ids = [...this.tbody.children].map((tr) => Number(tr.dataset.id));
+    const at = ids.indexOf(id);
+    this.overlays.delete(id);
+    if (this.onRemove) this.onRemove(id);
+    this.refresh();
+    if (this.selected === id) {
+      const rest = ids.filter((x) => x !== id);
+      this.selected = null;
+      if (rest.length) this.select(rest[Math.min(at, rest.length - 1)]);
+    }
+    this.onOverlay([...this.overlays]);
   }
 
   select(id) {

@@ -1,5 +1,8 @@
 // Playback: a clock in seconds drives the viewer; play, pause, scrub by frame, loop; the
 // selected clip plus any overlaid ones, each in its own colour; orbit by drag, zoom by wheel.
+// This is the app's one transport: `playing` (and `withSong`) are the single source of truth
+// for the figure, the dance and the song. While the song sounds its audio clock drives the
+// figure; Pause (button or space) stops both, Play resumes both; the buttons only show state.
 export class Player {
   constructor({ viewer, library, canvas, scrub, label, playButton, loop }) {
     Object.assign(this, { viewer, library, canvas, scrub, label, playButton, loop });
@@ -13,6 +16,8 @@ export class Player {
     this.compare = null;
     this.onTick = null;
     this.drawnOnce = false;
+    this.withSong = false;      // does Play also play the song?
+    this.listeners = [];        // called with the transport state after every change
     playButton.addEventListener("click", () => this.toggle());
     scrub.addEventListener("input", () => {
       this.pause();
@@ -20,7 +25,10 @@ export class Player {
       this.drawNow();
     });
     window.addEventListener("keydown", (ev) => {
-      if (ev.target.matches("input[type=number], input[type=text], textarea")) return;
+      // A focused control owns its keys: space on a button presses that button (Tap, Loop…),
+      // arrows move a slider; only keys aimed at the page drive the transport.
+      if (ev.target.closest && ev.target.closest("input, textarea, select, button, summary, a[href], [contenteditable], dialog")) return;
+      if (ev.ctrlKey || ev.metaKey || ev.altKey) return;
       if (ev.code === "Space") { ev.preventDefault(); this.toggle(); }
       if (ev.code === "ArrowRight") { this.step(1); }
       if (ev.code === "ArrowLeft") { this.step(-1); }
@@ -46,6 +54,8 @@ export class Player {
     this.time = 0;
     this.scrub.max = String(Math.max(0, this.info().frames - 1));
     this.viewer.frameFigures(this.library, this.figures());
+    // Candidates loop on their own clock, or on the song's when it already sounds.
+    if (!(this.songClock && this.songClock.playing)) this.withSong = false;
     this.play();
     this.drawNow();
   }
@@ -60,15 +70,83 @@ export class Player {
     this.drawNow();
   }
 
+  /** Frames the figures again (the view changed shape). */
+  reframe() {
+    if (this.clip != null) this.viewer.frameFigures(this.library, this.figures());
+  }
+
+  /** Nothing selected (the last clip was removed): an empty stage. */
+  clear() {
+    this.compare = null;
+    this.clip = null;
+    this.overlays = [];
+    this.time = 0;
+    this.scrub.max = "0";
+    this.label.textContent = "0 / 0";
+    this.viewer.draw(this.library, []);
+  }
+
   setOverlays(ids) {
     this.overlays = ids;
+    if (this.clip == null) return;
     this.viewer.frameFigures(this.library, this.figures());
     this.drawNow();
   }
 
+  /** The song player whose clock drives the figure while it sounds. */
+  attachSong(songPlayer) {
+    this.songClock = songPlayer;
+    // The song ran out: the transport stops (the figure does not run on alone).
+    songPlayer.onEnded = () => { this.playing = false; this.render(); };
+  }
+
+  /** Called with `{ playing, withSong, songPlaying }` after every change. */
+  onChange(fn) { this.listeners.push(fn); fn(this.state()); }
+
+  state() {
+    return { playing: this.playing, withSong: this.withSong, songPlaying: this.playing && this.withSong };
+  }
+
+  render() {
+    this.playButton.textContent = this.playing ? "Pause" : "Play";
+    this.playButton.dataset.state = this.playing ? "playing" : "paused";
+    const st = this.state();
+    for (const fn of this.listeners) fn(st);
+  }
+
   toggle() { this.playing ? this.pause() : this.play(); }
-  play() { this.playing = true; this.playButton.textContent = "Pause"; this.last = null; }
-  pause() { this.playing = false; this.playButton.textContent = "Play"; }
+
+  /** Plays the figure, and the song with it when the transport is in song mode. */
+  play() {
+    this.playing = true;
+    this.last = null;
+    const song = this.songClock;
+    if (this.withSong && song && song.buffer && !song.playing) song.play();
+    this.render();
+  }
+
+  /** Pauses the figure and the song together. */
+  pause() {
+    this.playing = false;
+    if (this.songClock && this.songClock.playing) this.songClock.stop();
+    this.render();
+  }
+
+  /** Plays figure and song together, from `fromSecs` of the song (default: where it is). */
+  playSong(fromSecs) {
+    if (!this.songClock || !this.songClock.buffer) return;
+    this.withSong = true;
+    this.playing = true;
+    this.last = null;
+    this.songClock.play(fromSecs ?? this.songClock.position());
+    this.render();
+  }
+
+  /** The song button: pauses everything while the song sounds, else plays with the song. */
+  toggleSong() {
+    if (this.playing && this.withSong) { this.pause(); this.withSong = false; this.render(); }
+    else this.playSong();
+  }
 
   step(frames) {
     this.pause();

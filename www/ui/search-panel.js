@@ -138,7 +138,7 @@ export class SearchPanel {
     });
     this.$("#search-results tbody").replaceChildren(...rows);
     const skipped = out.skipped.length ? `; skipped: ${out.skipped.map((s) => `${s.name} (${s.reason})`).join(", ")}` : "";
-    this.$("#search-summary").textContent = `${out.matches.length} matches in ${ms.toFixed(0)} ms over ${out.stats.framesSearched} frames${skipped}`;
+    this.$("#search-summary").textContent = `${out.matches.length} ${out.matches.length === 1 ? "match" : "matches"} in ${ms.toFixed(0)} ms over ${out.stats.framesSearched} frames${skipped}`;
   }
 
   hipsAt(id, frame) {
@@ -204,8 +204,11 @@ export class SearchPanel {
         }
         g.stroke();
       });
+      // Each title stays inside its own half (long clip names overlapped the other's).
+      g.save(); g.beginPath(); g.rect(p.x0, 0, half, h); g.clip();
       g.fillStyle = "#e6e6ea"; g.font = "11px system-ui";
-      g.fillText(`${p.title} — ${joint} (x red, y green, z blue)`, p.x0 + 4, 12);
+      g.fillText(p.x0 === 0 ? `${p.title} — ${joint} (x red, y green, z blue)` : p.title, p.x0 + 4, 12);
+      g.restore();
     }
     this.root.dataset.plotted = joint;
   }

@@ -1,6 +1,9 @@
 // The song strip: loudness over time with beat and bar lines, the playhead, and the grid
 // corrections (BPM, tap tempo, nudge, downbeat, beats per bar, reset) that re-derive the
 // bars at once. Shift-click on the strip puts a downbeat there; a plain click seeks.
+/** Taps further apart than this start a new count. */
+const TAP_GAP_SECS = 2.5;
+
 export class SongPanel {
   constructor(root, { player, onGrid, messages }) {
     this.root = root;
@@ -34,7 +37,16 @@ export class SongPanel {
       if (ev.shiftKey) this.correct({ firstDownbeatSecs: t });
       else this.player.seek(t);
     });
-    this.player.onEnded = () => { this.$("#song-play").textContent = "Play song"; };
+  }
+
+  /** The app's one transport (the Player): the song button asks it, and shows its state. */
+  attachTransport(transport) {
+    this.transport = transport;
+    transport.onChange((st) => {
+      const b = this.$("#song-play");
+      b.textContent = st.songPlaying ? "Pause song" : "Play song";
+      b.setAttribute("aria-pressed", String(st.songPlaying));
+    });
   }
 
   load(song, name, buffer) {
@@ -46,10 +58,13 @@ export class SongPanel {
 
   tap() {
     const now = performance.now() / 1000;
-    if (this.taps.length && now - this.taps[this.taps.length - 1] > 2.5) this.taps = [];
+    if (this.taps.length && now - this.taps[this.taps.length - 1] > TAP_GAP_SECS) this.taps = [];
     this.taps.push(now);
     this.$("#song-tap").textContent = `Tap (${this.taps.length})`;
     if (this.taps.length >= 4) this.correct({ tapTimesSecs: this.taps.slice(-16) });
+    // A pause longer than a beat could be ends the tapping: the counter goes back to plain Tap.
+    clearTimeout(this.tapTimer);
+    this.tapTimer = setTimeout(() => { this.taps = []; this.$("#song-tap").textContent = "Tap"; }, TAP_GAP_SECS * 1000);
   }
 
   correct(correction) {
@@ -74,8 +89,8 @@ export class SongPanel {
   }
 
   toggle() {
-    if (this.player.playing) { this.player.stop(); this.$("#song-play").textContent = "Play song"; }
-    else { this.player.play(); this.$("#song-play").textContent = "Stop song"; }
+    if (this.transport) { this.transport.toggleSong(); return; }
+    if (this.player.playing) this.player.stop(); else this.player.play();
   }
 
   draw() {

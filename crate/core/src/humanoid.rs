@@ -457,7 +457,8 @@ impl HumanoidMap {
         let essential: Vec<&str> = missing.iter().filter(|c| c.essential()).map(|c| c.name()).collect();
         if !essential.is_empty() {
             return HumanoidStatus::NotHumanoid {
-                reason: format!("no humanoid {} found among its {} joints", essential.join(", "), sk.len()),
+                // The same count the library shows for the clip (end sites are not joints).
+                reason: format!("no humanoid {} found among its {} joints", essential.join(", "), sk.animated_joint_count()),
             };
         }
         let mut poses = vec![sk.rest_positions()];

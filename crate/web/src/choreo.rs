@@ -4,7 +4,7 @@
 //! frame time is song time.
 
 use odori_core::bars::Bar;
-use odori_core::choreo::{recut_clip, segment_clip, Choreography, ClipSummary, FillWeights, RenderOptions, SegmentLibrary, SegmentOptions, TableBuilder};
+use odori_core::choreo::{recut_clip, segment_clip, BuiltinLoader, Choreography, ClipSummary, FillWeights, RenderOptions, SegmentLibrary, SegmentOptions, TableBuilder};
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
@@ -24,6 +24,8 @@ pub struct Choreographer {
     builder: Option<TableBuilder>,
     /// The imported clips cut into segments, by library clip id.
     cut: Vec<CutClip>,
+    /// Built-in moves still to add (see `loading` / `loadBuiltin`).
+    loader: Option<BuiltinLoader>,
 }
 
 /// An imported clip in the segment library (`cutClips()`).
@@ -59,7 +61,27 @@ impl Choreographer {
     /// Starts with the built-in move library (420 four-count moves) and no bars.
     #[wasm_bindgen(constructor)]
     pub fn new() -> Choreographer {
-        Choreographer { lib: SegmentLibrary::builtin(), doc: None, builder: None, cut: Vec::new() }
+        Choreographer { lib: SegmentLibrary::builtin(), doc: None, builder: None, cut: Vec::new(), loader: None }
+    }
+
+    /// A choreographer whose built-in moves are still to be added, a slice at a time with
+    /// `loadBuiltin`, so a page need not block for the whole library at start.
+    pub fn loading() -> Choreographer {
+        Choreographer { lib: SegmentLibrary::new(), doc: None, builder: None, cut: Vec::new(), loader: Some(BuiltinLoader::new()) }
+    }
+
+    /// Adds up to `count` more built-in moves; returns the fraction added (1: all, the
+    /// library is the same as `new()`'s). Call between frames until it returns 1, before
+    /// anything else.
+    #[wasm_bindgen(js_name = loadBuiltin)]
+    pub fn load_builtin(&mut self, count: u32) -> f32 {
+        let Some(loader) = self.loader.as_mut() else { return 1.0 };
+        let p = self.lib.load_builtin(loader, count as usize);
+        if p >= 1.0 {
+            self.loader = None;
+            self.builder = None;
+        }
+        p
     }
 
     /// Builds the filling's transition table (spec §G costs between every pair of segments)

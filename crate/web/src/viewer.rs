@@ -51,6 +51,9 @@ pub struct Viewer {
     rot: Vec<Quat>,
     trans: Vec<Vec3>,
     mats: Vec<Mat4>,
+    /// Following travelling figures: the camera's height above the ground while its target
+    /// tracks the figures' centre on the ground plane each frame (see `frameFigures`).
+    follow_y: Option<f32>,
 }
 
 fn gpu_err(msg: impl Into<String>) -> OdoriError {
@@ -139,6 +142,7 @@ impl Viewer {
             rot: Vec::new(),
             trans: Vec::new(),
             mats: Vec::new(),
+            follow_y: None,
         })
     }
 
@@ -180,7 +184,10 @@ impl Viewer {
         Some(vec![(ndc.x * 0.5 + 0.5) * self.config.width as f32, (0.5 - ndc.y * 0.5) * self.config.height as f32])
     }
 
-    /// Points the camera so every figure of `figures` is in view.
+    /// Points the camera so the figures of `figures` fill the view. Figures that stay in place
+    /// are framed over their whole clip; figures that travel (a text animation running across
+    /// the floor) would be drawn tiny that way, so the camera is sized to the largest moment
+    /// (all figures at one time) and follows their centre as they move.
     #[wasm_bindgen(js_name = frameFigures)]
     pub fn frame_figures(
         &mut self,
@@ -188,23 +195,43 @@ impl Viewer {
         #[wasm_bindgen(unchecked_param_type = "FigureSpec[]")] figures: JsValue,
     ) -> Result<(), OdoriError> {
         let specs = parse_figures(figures)?;
-        let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        const SAMPLES: usize = 9;
+        let empty = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        // The whole path, and each moment (every figure at the same fraction of its clip).
+        let (mut lo, mut hi) = empty;
+        let mut moments = [empty; SAMPLES];
         for s in &specs {
             let e = library.entry(s.clip)?;
             let off = Vec3::from(s.offset.unwrap_or([0.0; 3]));
-            // Over the whole clip, so the figure stays in view while it travels.
             let frames = e.clip.frame_count();
-            for k in 0..=8 {
-                let t = (k as f32 / 8.0) * (frames.saturating_sub(1)) as f32 / e.clip.fps;
+            for (k, m) in moments.iter_mut().enumerate() {
+                let t = (k as f32 / (SAMPLES - 1) as f32) * (frames.saturating_sub(1)) as f32 / e.clip.fps;
                 for p in pose_at(&e.clip, t) {
                     lo = lo.min(p + off);
                     hi = hi.max(p + off);
+                    m.0 = m.0.min(p + off);
+                    m.1 = m.1.max(p + off);
                 }
             }
         }
-        if lo.x <= hi.x {
-            lo.y = lo.y.min(0.0);
-            self.camera.frame(lo, hi);
+        if lo.x > hi.x {
+            return Ok(());
+        }
+        lo.y = lo.y.min(0.0);
+        let aspect = self.config.width as f32 / self.config.height.max(1) as f32;
+        // The biggest moment, as a box about the origin's vertical (x, z centred later).
+        let half = moments.iter().filter(|m| m.0.x <= m.1.x).map(|m| (m.1 - m.0) * 0.5).fold(Vec3::ZERO, Vec3::max);
+        let path = (hi - lo) * 0.5;
+        // Travel: the path is much wider (on the ground) than any moment.
+        let travels = path.x.max(path.z) > 1.6 * half.x.max(half.z) + 0.5;
+        if travels {
+            let y_mid = (lo.y + hi.y) * 0.5;
+            let (mlo, mhi) = (Vec3::new(-half.x, lo.y, -half.z), Vec3::new(half.x, hi.y, half.z));
+            self.camera.fit(mlo, mhi, aspect);
+            self.follow_y = Some(y_mid);
+        } else {
+            self.camera.fit(lo, hi, aspect);
+            self.follow_y = None;
         }
         Ok(())
     }
@@ -219,6 +246,8 @@ impl Viewer {
         // Poses first (positions for sticks, palettes for meshes).
         let mut sticks: Vec<(Vec<Vec3>, &Entry, [f32; 4])> = Vec::new();
         let mut palettes: Vec<(MeshHandle, Vec<Mat4>)> = Vec::new();
+        // Where the figures are now (for a camera following travelling figures).
+        let (mut now_lo, mut now_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         for (i, s) in specs.iter().enumerate() {
             let e = library.entry(s.clip)?;
             let off = Vec3::from(s.offset.unwrap_or([0.0; 3]));
@@ -230,6 +259,10 @@ impl Viewer {
             e.clip.sample_into(s.time_secs, &mut self.rot, &mut self.trans);
             let mut pos = Vec::new();
             e.clip.skeleton.forward_kinematics(&self.rot, &self.trans, &mut pos, Some(&mut self.mats));
+            for p in &pos {
+                now_lo = now_lo.min(*p + off);
+                now_hi = now_hi.max(*p + off);
+            }
             let handle = match (&e.mesh, style) {
                 (Some((mesh_id, mesh)), "auto" | "mesh") => *self
                     .meshes
@@ -262,6 +295,13 @@ impl Viewer {
             })
             .collect();
         let meshes: Vec<MeshDraw> = palettes.iter().map(|(h, p)| MeshDraw { mesh: *h, palette: p }).collect();
+        if let Some(y) = self.follow_y {
+            // Track the travelling figures on the ground plane.
+            if now_lo.x <= now_hi.x {
+                let c = (now_lo + now_hi) * 0.5;
+                self.camera.target = Vec3::new(c.x, y, c.z);
+            }
+        }
 
         let frame = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,

@@ -9,6 +9,8 @@
 //! ([`set_rho`], [`set_music_weight`], [`set_repeat_penalty`], [`set_repeat_window`]), [`undo`]
 //! and [`redo`]. Every
 //! command that changes the document records the previous state for undo and clears redo.
+//! Looking is not an edit: opening a bar's first round of candidates records nothing (it is
+//! deterministic, so it opens the same again after an undo), nor does a grid that did not change.
 //!
 //! [`search`]: Choreography::search
 //! [`reset_search`]: Choreography::reset_search
@@ -214,6 +216,9 @@ impl Choreography {
     /// `i` keeps its state and search when it still exists; new bars start empty. Undoable.
     pub fn set_bars(&mut self, bars: Vec<Bar>) -> Result<(), ChoreoError> {
         check_bars(&bars)?;
+        if bars == self.doc.bars {
+            return Ok(());
+        }
         self.record();
         let n = bars.len();
         self.doc.bars = bars;
@@ -323,7 +328,8 @@ impl Choreography {
     }
 
     /// The bar's current candidates, opening its search (first round, τ = 1) when none is
-    /// open. Opening is an edit (undoable); asking again returns the same round.
+    /// open. Opening is not an edit (no undo step: a person who only looked at a bar expects
+    /// Undo to take back their last edit); asking again returns the same round.
     pub fn candidates(&mut self, lib: &SegmentLibrary, bar: usize) -> Result<Vec<usize>, ChoreoError> {
         self.check_bar(bar)?;
         if lib.is_empty() {
@@ -332,7 +338,6 @@ impl Choreography {
         if let Some(s) = &self.doc.sessions[bar] {
             return Ok(s.round.clone());
         }
-        self.record();
         let (intensity, rho, count) = (self.doc.bars[bar].intensity, self.doc.settings.rho, self.doc.settings.candidates_per_round);
         let mut s = FeedbackSession::new();
         let round = s.next_round(lib, intensity, rho, count).to_vec();

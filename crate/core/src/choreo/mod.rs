@@ -22,4 +22,4 @@ pub use grid::{bars_from_tempo, GridError};
 pub use quality::{dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
 pub use render::{render, segment_clip, speed_jumps, RenderOptions};
 pub use table::{TableBuilder, TableProgress};
-pub use segment::{ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};
+pub use segment::{BuiltinLoader, ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};

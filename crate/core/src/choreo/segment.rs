@@ -23,7 +23,7 @@ use super::table::{TableBuilder, TransitionTable};
 use crate::retarget::to_canonical;
 use crate::clip::Clip;
 use crate::humanoid::{canonical_positions, Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
-use crate::library::{builtin_clips, builtin_moves, MoveInfo};
+use crate::library::{builtin_clips_lazily, builtin_moves, MoveInfo};
 use crate::normalize::{body_height, normalize_in_place, Origin};
 
 /// Frame rate every library clip is stored and analysed at.
@@ -227,6 +227,31 @@ pub struct SegmentLibrary {
     revision: u64,
 }
 
+/// The built-in moves still to add to a library (see [`SegmentLibrary::load_builtin`]).
+pub struct BuiltinLoader {
+    clips: Box<dyn Iterator<Item = (Clip, MoveInfo)>>,
+    done: usize,
+    total: usize,
+}
+
+impl BuiltinLoader {
+    pub fn new() -> Self {
+        BuiltinLoader { clips: Box::new(builtin_clips_lazily()), done: 0, total: builtin_moves().len() }
+    }
+}
+
+impl Default for BuiltinLoader {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl std::fmt::Debug for BuiltinLoader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "BuiltinLoader({}/{})", self.done, self.total)
+    }
+}
+
 impl SegmentLibrary {
     /// An empty library.
     pub fn new() -> Self {
@@ -243,15 +268,32 @@ impl SegmentLibrary {
     /// Adds every built-in move (one 4-count segment each).
     pub fn add_builtin(&mut self) -> usize {
         let before = self.segments.len();
-        for (clip, info) in builtin_clips().into_iter().zip(builtin_moves()) {
+        let mut loader = BuiltinLoader::new();
+        while self.load_builtin(&mut loader, usize::MAX) < 1.0 {}
+        self.segments.len() - before
+    }
+
+    /// Adds up to `count` more built-in moves from `loader`; returns the fraction of them
+    /// added so far (1 when all are in: the intensities are then rescaled, as
+    /// [`SegmentLibrary::add_builtin`] does). Same library as `add_builtin`, built in slices.
+    pub fn load_builtin(&mut self, loader: &mut BuiltinLoader, count: usize) -> f32 {
+        if loader.done >= loader.total {
+            return 1.0;
+        }
+        for _ in 0..count.max(1) {
+            let Some((clip, info)) = loader.clips.next() else { break };
             let frames = clip.frame_count();
             let last = frames.saturating_sub(1) as f32;
             let beats: Vec<f32> = (0..=SEGMENT_COUNTS).map(|k| last * k as f32 / SEGMENT_COUNTS as f32).collect();
             let lc = LibraryClip { clip, beat_frames: beats, tempo_bpm: crate::library::BUILTIN_BPM, builtin: Some(info) };
             self.push_clip(lc, SEGMENT_COUNTS);
+            loader.done += 1;
         }
-        self.rescale();
-        self.segments.len() - before
+        if loader.done >= loader.total {
+            self.rescale();
+            return 1.0;
+        }
+        loader.done as f32 / loader.total as f32
     }
 
     /// Adds an imported clip: refused when its skeleton is not humanoid or it holds fewer than
@@ -901,6 +943,32 @@ mod tests {
         // Turning on counts and between: no preference.
         let both: Vec<f32> = counts.iter().chain(&between).copied().collect();
         assert!((beat_fit(&counts, &both) - 0.5).abs() < 0.05);
+    }
+
+    #[test]
+    fn builtin_library_loaded_in_slices_is_the_same_library() {
+        let whole = SegmentLibrary::builtin();
+        let mut sliced = SegmentLibrary::new();
+        let mut loader = BuiltinLoader::new();
+        let mut steps = 0;
+        let mut last = 0.0;
+        loop {
+            let p = sliced.load_builtin(&mut loader, 37);
+            assert!(p > last || p == 1.0, "progress {p} after {last}");
+            last = p;
+            steps += 1;
+            if p >= 1.0 {
+                break;
+            }
+        }
+        assert!(steps > 5, "{steps} slices");
+        assert_eq!(sliced.len(), whole.len());
+        for (a, b) in sliced.segments().iter().zip(whole.segments()) {
+            assert_eq!((a.name.as_str(), a.intensity.to_bits(), a.intensity01.to_bits()), (b.name.as_str(), b.intensity.to_bits(), b.intensity01.to_bits()));
+        }
+        // Asking again once done adds nothing.
+        assert_eq!(sliced.load_builtin(&mut loader, 10), 1.0);
+        assert_eq!(sliced.len(), whole.len());
     }
 
     #[test]

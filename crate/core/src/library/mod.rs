@@ -138,11 +138,18 @@ fn build_move_on_legs(info: &MoveInfo, skeleton: &Arc<Skeleton>, legs: &[pose::K
 
 /// The whole built-in library as clips, one per move, in [`builtin_moves`] order.
 pub fn builtin_clips() -> Vec<Clip> {
+    builtin_clips_lazily().map(|(clip, _)| clip).collect()
+}
+
+/// The built-in moves one at a time, each with its clip, in [`builtin_moves`] order: the same
+/// clips as [`builtin_clips`], made as they are asked for, so a caller can spread the work
+/// (the page builds the library a slice per task instead of blocking for a second or more).
+pub fn builtin_clips_lazily() -> impl Iterator<Item = (Clip, MoveInfo)> {
     let skeleton = Arc::new(canonical_skeleton());
     let mut tracks: Vec<(Step, Energy, Vec<pose::KeyPose>, [Vec<pose::LegSolution>; 2])> = Vec::new();
     builtin_moves()
-        .iter()
-        .map(|m| {
+        .into_iter()
+        .map(move |m| {
             let cached = tracks.iter().position(|(s, e, _, _)| *s == m.step && *e == m.energy);
             let i = match cached {
                 Some(i) => i,
@@ -156,9 +163,8 @@ pub fn builtin_clips() -> Vec<Clip> {
                 }
             };
             let (_, _, keys, sides) = &tracks[i];
-            build_move_on_legs(m, &skeleton, keys, &sides[usize::from(m.mirrored)])
+            (build_move_on_legs(&m, &skeleton, keys, &sides[usize::from(m.mirrored)]), m)
         })
-        .collect()
 }
 
 /// A neutral standing pose (arms relaxed by the sides) on the canonical skeleton: local

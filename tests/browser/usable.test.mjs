@@ -1,0 +1,363 @@
+// The app as a person meets it (issue #13), on both graphics back ends: one transport for
+// song, dance and clip (Pause really pauses both; space leaves focused controls alone), undo
+// steps only for edits, messages shown where the action happened (errors stay until
+// dismissed, and are still logged), a library table that fits its panel with clickable
+// Overlay boxes and a remove button, import options for one import only, consistent fps and
+// joint counts, unpin, the small ones (Tap counter, tempo placeholder), the keyboard sheet and
+// first-run hint, the layout at phone and laptop sizes (touch targets, overflow, view size,
+// screenshots), an axe-core accessibility check, and the start-up figures.
+import { test, before, after } from "node:test";
+import assert from "node:assert/strict";
+import { join } from "node:path";
+import { writeFileSync } from "node:fs";
+import { chromium } from "playwright-core";
+import { startServer, launch, openApp, artifacts, data, root, BACKENDS } from "./harness.mjs";
+
+let server;
+before(async () => { server = await startServer(); });
+after(() => server && server.stop());
+
+const SALSA_01 = join(data, "mocap/cmu-salsa/salsa_01.bvh");
+const SALSA_02 = join(data, "mocap/cmu-salsa/salsa_02.bvh");
+const ROBOT = join(data, "gltf/RobotExpressive.glb");
+const ARM_BVH = `HIERARCHY
+ROOT base
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT arm
+  {
+    OFFSET 0 10 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    End Site
+    {
+      OFFSET 0 10 0
+    }
+  }
+}
+MOTION
+Frames: 3
+Frame Time: 0.0333333
+0 0 0 0 0 0 0 0 0
+0 0 0 0 10 0 0 5 0
+0 0 0 0 20 0 0 10 0
+`;
+const AXE = join(root, "node_modules/axe-core/axe.min.js");
+
+const state = (page) => page.evaluate(() => ({
+  playing: window.odori.player.playing,
+  song: window.odori.songPlayer.playing,
+  time: window.odori.player.time,
+  songPos: window.odori.songPlayer.position(),
+  play: document.querySelector("#play").textContent,
+  songButton: document.querySelector("#song-play").textContent,
+}));
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+const messagesCount = (page, re) => page.evaluate((src) => [...document.querySelectorAll("#messages li")].filter((li) => new RegExp(src).test(li.textContent)).length, re.source);
+
+for (const backend of Object.keys(BACKENDS)) {
+  test(`${backend}: one transport, undo only for edits, visible messages, library`, async (t) => {
+    const { browser, page, logs } = await launch(backend);
+    try {
+      await openApp(page, server, backend);
+      await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8 && document.body.dataset.song === "demo", null, { timeout: 60000 });
+
+      await t.test("Pause during Play dance pauses the music and the figure; space resumes both", async () => {
+        await page.click("#dance-play");
+        await page.waitForFunction(() => window.odori.songPlayer.playing, null, { timeout: 10000 });
+        let s = await state(page);
+        assert.equal(s.play, "Pause");
+        assert.equal(s.songButton, "Pause song", "the song button shows that the song plays");
+        await page.click("#play");
+        s = await state(page);
+        assert.equal(s.playing, false);
+        assert.equal(s.song, false, "Pause left the music playing");
+        await sleep(400);
+        const later = await state(page);
+        assert.equal(later.time, s.time, "the figure moved while paused");
+        assert.equal(later.songPos, s.songPos, "the song moved while paused");
+        assert.equal(later.songButton, "Play song");
+        // Space on the page (nothing focused) resumes figure and song together.
+        await page.evaluate(() => document.activeElement && document.activeElement.blur());
+        await page.keyboard.press("Space");
+        await page.waitForFunction(() => window.odori.songPlayer.playing, null, { timeout: 10000 });
+        assert.equal((await state(page)).playing, true);
+        // The song button stops both, not just the music.
+        await page.click("#song-play");
+        s = await state(page);
+        assert.equal(s.song, false);
+        assert.equal(s.playing, false, "the song button stopped the music but not the figure");
+      });
+
+      await t.test("space on a focused button or checkbox only presses that control", async () => {
+        const before = await state(page);
+        await page.focus("#song-tap");
+        await page.keyboard.press("Space");
+        assert.equal(await page.textContent("#song-tap"), "Tap (1)");
+        assert.equal((await state(page)).playing, before.playing, "space on Tap toggled playback");
+        const loop = await page.isChecked("#loop");
+        await page.focus("#loop");
+        await page.keyboard.press("Space");
+        assert.equal(await page.isChecked("#loop"), !loop);
+        assert.equal((await state(page)).playing, before.playing, "space on Loop toggled playback");
+        await page.focus("#loop");
+        await page.keyboard.press("Space");
+        // The Tap counter goes back to plain Tap after a pause.
+        await page.waitForFunction(() => document.querySelector("#song-tap").textContent === "Tap", null, { timeout: 5000 });
+      });
+
+      await t.test("undo after Generate takes back the Generate, whatever bars were looked at since", async () => {
+        await page.click("#dance-generate");
+        await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind === "generated"), null, { timeout: 60000 });
+        // The info is shown where the person is looking, and logged.
+        const toast = page.locator(".toast", { hasText: /filled \d+ bars/ });
+        await toast.waitFor({ state: "visible", timeout: 5000 });
+        assert.ok(await toast.isVisible());
+        assert.ok(await messagesCount(page, /filled \d+ bars/) >= 1);
+        await page.click('#dance-bars [data-bar="2"]');
+        await page.click('#dance-bars [data-bar="5"]');
+        await page.waitForFunction(() => document.querySelector("#dance").dataset.candidates === "6");
+        await page.click("#dance-undo");
+        const kinds = await page.evaluate(() => window.odori.choreo.view.map((v) => v.state.kind));
+        assert.ok(kinds.every((k) => k === "empty"), `after one undo: ${kinds.join(",")}`);
+        // Redo brings it back; the selected bar still shows its candidates and Search works.
+        await page.click("#dance-redo");
+        assert.ok(await page.evaluate(() => window.odori.choreo.view.every((v) => v.state.kind === "generated")));
+        await page.click('#dance-candidates [data-k="0"]');
+        await page.click("#dance-search");
+        assert.equal(await page.evaluate(() => window.odori.choreo.view[5].rounds), 2);
+      });
+
+      await t.test("a pinned bar can be unpinned", async () => {
+        await page.click('#dance-bars [data-bar="3"]');
+        assert.equal(await page.isDisabled("#dance-unpin"), true);
+        await page.click('#dance-candidates [data-k="1"]');
+        await page.click("#dance-set");
+        assert.equal(await page.evaluate(() => window.odori.choreo.view[3].state.kind), "pinned");
+        assert.equal(await page.isDisabled("#dance-unpin"), false);
+        await page.click("#dance-unpin");
+        const st = await page.evaluate(() => window.odori.choreo.view[3].state);
+        assert.equal(st.kind, "generated", "the bar keeps its move, unpinned");
+        await page.click("#dance-undo");
+        assert.equal(await page.evaluate(() => window.odori.choreo.view[3].state.kind), "pinned", "unpin is an undoable edit");
+      });
+
+      await t.test("a broken file shows an error at once that stays until dismissed", async () => {
+        await page.setInputFiles("#file-input", { name: "broken.bvh", mimeType: "text/plain", buffer: Buffer.from("HIERARCHY\nROOT hip\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition\n") });
+        const toast = page.locator(".toast.error", { hasText: "broken.bvh" });
+        await toast.waitFor({ state: "visible", timeout: 10000 });
+        const box = await toast.boundingBox();
+        const vp = page.viewportSize();
+        assert.ok(box.y >= 0 && box.y + box.height <= vp.height && box.x >= 0 && box.x + box.width <= vp.width, `the error is off screen: ${JSON.stringify(box)}`);
+        assert.ok(await messagesCount(page, /^broken\.bvh:\d+:\d+/) >= 1, "the error is logged too");
+        await sleep(6000); // longer than any information toast lasts
+        assert.ok(await toast.isVisible(), "the error went away by itself");
+        await toast.getByRole("button", { name: "Dismiss" }).click();
+        assert.equal(await toast.count(), 0);
+      });
+
+      await t.test("the BVH fps override is for one import only; fps and joints read the same everywhere", async () => {
+        await page.fill("#fps-override", "60");
+        await page.setInputFiles("#file-input", SALSA_01);
+        await page.waitForFunction(() => [...document.querySelectorAll("#library tbody tr")].some((tr) => tr.children[0].textContent === "salsa_01"), null, { timeout: 30000 });
+        assert.equal(await page.inputValue("#fps-override"), "", "the override stayed for later files");
+        await page.setInputFiles("#file-input", SALSA_02);
+        await page.waitForFunction(() => [...document.querySelectorAll("#library tbody tr")].some((tr) => tr.children[0].textContent === "salsa_02"), null, { timeout: 30000 });
+        const fps = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll("#library tbody tr")].map((tr) => [tr.children[0].textContent, tr.children[2].textContent])));
+        assert.equal(fps.salsa_01, "60");
+        assert.equal(fps.salsa_02, "120", "a later file was played at the earlier file's override");
+        for (const [name, f] of Object.entries(fps)) assert.match(f, /^\d+(\.\d?[1-9])?$/, `${name}: fps shown as ${f}`);
+        // A clip that is not humanoid (a two-bone arm with an end site, at 30 fps): its message
+        // counts the joints the table shows, and its frame rate reads 30.
+        await page.setInputFiles("#file-input", { name: "arm.bvh", mimeType: "text/plain", buffer: Buffer.from(ARM_BVH) });
+        await page.waitForFunction(() => [...document.querySelectorAll("#library tbody tr")].some((tr) => tr.children[1].textContent === "arm.bvh"), null, { timeout: 30000 });
+        const arm = await page.evaluate(() => [...document.querySelectorAll("#library tbody tr")].filter((tr) => tr.children[1].textContent === "arm.bvh").map((tr) => ({ fps: tr.children[2].textContent, joints: tr.children[5].textContent, why: tr.children[6].title }))[0]);
+        const m = arm.why.match(/among its (\d+) joints/);
+        assert.ok(m, `humanoid message: ${arm.why}`);
+        assert.equal(m[1], arm.joints, `joints ${arm.joints} vs humanoid message “${arm.why}”`);
+        assert.equal(arm.fps, "30");
+      });
+
+      await t.test("after opening a GLB the table fits its panel, Overlay is clickable, a clip can be removed", async () => {
+        await page.setInputFiles("#file-input", ROBOT);
+        await page.waitForFunction(() => [...document.querySelectorAll("#library tbody tr")].some((tr) => /RobotExpressive/.test(tr.children[1].textContent)), null, { timeout: 30000 });
+        const fit = await page.evaluate(() => {
+          const side = document.querySelector("#library-panel");
+          const table = document.querySelector("#library");
+          return { table: table.getBoundingClientRect().right, panel: side.getBoundingClientRect().right, scroll: table.scrollWidth, width: table.clientWidth };
+        });
+        assert.ok(fit.table <= fit.panel + 0.5 && fit.scroll <= fit.width + 1, `table wider than its panel: ${JSON.stringify(fit)}`);
+        const rows = page.locator("#library tbody tr", { hasText: "RobotExpressive" });
+        const n = await rows.count();
+        assert.ok(n > 3);
+        const box = rows.nth(2).locator("input[type=checkbox]");
+        await box.scrollIntoViewIfNeeded();
+        const hit = await box.evaluate((el) => { const r = el.getBoundingClientRect(); return document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2) === el; });
+        assert.ok(hit, "the Overlay box is covered or cut off");
+        await box.click();
+        const id = Number(await rows.nth(2).getAttribute("data-id"));
+        assert.ok((await page.evaluate(() => window.odori.player.overlays)).includes(id));
+        // Remove it: gone from the table and the library, the overlay with it.
+        const size = await page.evaluate(() => window.odori.library.clips().length);
+        await rows.nth(2).getByRole("button", { name: /^Remove / }).click();
+        assert.equal(await page.evaluate(() => window.odori.library.clips().length), size - 1);
+        assert.equal(await page.locator(`#library tbody tr[data-id="${id}"]`).count(), 0);
+        assert.ok(!(await page.evaluate(() => window.odori.player.overlays)).includes(id));
+        // Removing the selected clip selects a neighbour and the view keeps drawing.
+        const sel = await page.evaluate(() => window.odori.player.clip);
+        await page.locator(`#library tbody tr[data-id="${sel}"]`).getByRole("button", { name: /^Remove / }).click();
+        const next = await page.evaluate(() => window.odori.player.clip);
+        assert.ok(next != null && next !== sel);
+      });
+
+      await t.test("the clip tempo placeholder is not cut off", async () => {
+        await page.waitForSelector("#dance-clip-row:not([hidden])");
+        const m = await page.evaluate(() => {
+          const el = document.querySelector("#dance-clip-bpm");
+          const cs = getComputedStyle(el);
+          const g = document.createElement("canvas").getContext("2d");
+          g.font = `${cs.fontSize} ${cs.fontFamily}`;
+          return { text: el.placeholder, need: g.measureText(el.placeholder).width, have: el.clientWidth - parseFloat(cs.paddingLeft) - parseFloat(cs.paddingRight) };
+        });
+        assert.ok(m.need <= m.have, `placeholder “${m.text}” needs ${m.need.toFixed(0)} px, has ${m.have.toFixed(0)}`);
+      });
+
+      await t.test("? opens the keyboard sheet, which explains τ and ρ", async () => {
+        await page.evaluate(() => document.activeElement && document.activeElement.blur());
+        await page.keyboard.press("?");
+        const dlg = page.locator("dialog#keys");
+        assert.ok(await dlg.evaluate((d) => d.open));
+        assert.match(await dlg.textContent(), /Variety τ.*Music fit ρ/s);
+        await page.keyboard.press("Escape");
+        assert.ok(!(await dlg.evaluate((d) => d.open)));
+      });
+
+      const errors = logs.filter((l) => l.startsWith("[pageerror]"));
+      assert.deepEqual(errors, [], "page errors");
+    } catch (e) {
+      await page.screenshot({ path: join(artifacts, `usable-${backend}-failure.png`) }).catch(() => {});
+      console.log(logs.join("\n"));
+      throw e;
+    } finally {
+      await browser.close();
+    }
+  });
+}
+
+/** Every visible control: tag, label, size, and whether a tap at its centre reaches it. */
+function controlsReport() {
+  const out = [];
+  // Closed sections open with a tap on their summary: look inside them too.
+  for (const d of document.querySelectorAll("details")) d.open = true;
+  for (const el of document.querySelectorAll("button, select, textarea, input, summary, label.button")) {
+    if (el.closest("[hidden], dialog:not([open])") || (el.matches("input") && el.hidden)) continue;
+    const cs = getComputedStyle(el);
+    if (cs.display === "none" || cs.visibility === "hidden") continue;
+    el.scrollIntoView({ block: "center", inline: "center" });
+    const r = el.getBoundingClientRect();
+    if (r.width === 0 && r.height === 0) continue;
+    const at = document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2);
+    // A tap reaches the control itself, something inside it, or the label that wraps it.
+    const reach = at != null && (at === el || el.contains(at) || (at.closest("label") && at.closest("label").contains(el)) || (el.closest("label") && el.closest("label") === at.closest("label")));
+    out.push({ what: `${el.tagName.toLowerCase()}#${el.id || ""}${el.type ? `[${el.type}]` : ""} ${(el.getAttribute("aria-label") || el.textContent || "").trim().slice(0, 24)}`, height: r.height, reach });
+  }
+  return out;
+}
+
+for (const [name, size, mobile] of [["phone", { width: 390, height: 844 }, true], ["laptop", { width: 1280, height: 800 }, false]]) {
+  test(`layout at ${size.width}×${size.height} on touch (${name}): reachable 32 px controls, no overflow, view ≥ 40 %, axe`, async () => {
+    const browser = await chromium.launch({ executablePath: "/usr/bin/chromium", args: ["--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-dev-shm-usage"], headless: true });
+    try {
+      const ctx = await browser.newContext({ viewport: size, hasTouch: true, isMobile: mobile });
+      const page = await ctx.newPage();
+      const logs = [];
+      page.on("pageerror", (e) => logs.push(e.message));
+      await openApp(page, server, "webgl2");
+      await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 60000 });
+      assert.ok(await page.evaluate(() => matchMedia("(pointer: coarse)").matches), "touch emulation: pointer is not coarse");
+      // The first-run hint greets a new person.
+      assert.ok(await page.isVisible("#hint"), "no first-run hint");
+      await page.screenshot({ path: join(artifacts, `usable-${name}-first-run.png`) });
+      await page.click("#hint-close");
+      await page.click('#dance-bars [data-bar="1"]');
+      await page.waitForFunction(() => document.querySelector("#dance").dataset.candidates === "6");
+
+      const fig = await page.evaluate(() => {
+        const v = document.querySelector("#view").getBoundingClientRect();
+        return { view: (v.width * v.height) / (innerWidth * innerHeight), scroll: document.scrollingElement.scrollWidth, width: innerWidth };
+      });
+      assert.ok(fig.scroll <= fig.width, `horizontal overflow: ${fig.scroll} > ${fig.width}`);
+      assert.ok(fig.view >= 0.4, `the 3D view is ${(fig.view * 100).toFixed(0)} % of the viewport`);
+      await page.screenshot({ path: join(artifacts, `usable-${name}.png`) });
+
+      // Every control in every panel (tabs on a phone) is reachable and at least 32 px tall.
+      const tabs = await page.locator(".tabs [role=tab]").all();
+      const panels = (await tabs[0].isVisible()) ? tabs : [null];
+      let all = [];
+      for (const tab of panels) {
+        if (tab) await tab.click();
+        all = all.concat(await page.evaluate(controlsReport));
+        if (tab) await page.screenshot({ path: join(artifacts, `usable-${name}-${(await tab.textContent()).toLowerCase()}.png`), fullPage: true });
+      }
+      const small = all.filter((c) => c.height < 32);
+      const unreachable = all.filter((c) => !c.reach);
+      console.log(`# ${name}: ${all.length} controls, ${small.length} under 32 px, ${unreachable.length} unreachable; view ${(fig.view * 100).toFixed(0)} % of the viewport`);
+      assert.deepEqual(small.map((c) => `${c.what} ${c.height.toFixed(0)}px`), []);
+      assert.deepEqual(unreachable.map((c) => c.what), []);
+      // Bars at the end of the song are reachable too.
+      const last = page.locator("#dance-bars [data-bar]").last();
+      await last.click();
+      assert.equal(await page.evaluate(() => window.odori.choreo.bar), (await page.locator("#dance-bars [data-bar]").count()) - 1);
+
+      // Accessibility: axe-core in the page, no serious or critical violations.
+      await page.addScriptTag({ path: AXE });
+      const axe = await page.evaluate(async () => {
+        const r = await window.axe.run(document, { resultTypes: ["violations"] });
+        return r.violations.map((v) => ({ id: v.id, impact: v.impact, nodes: v.nodes.length, help: v.help, targets: v.nodes.slice(0, 3).map((n) => n.target.join(" ")) }));
+      });
+      for (const v of axe) console.log(`# axe ${name}: ${v.impact} ${v.id} (${v.nodes}): ${v.help} ${v.targets.join(" | ")}`);
+      const bad = axe.filter((v) => v.impact === "serious" || v.impact === "critical");
+      assert.deepEqual(bad, [], "serious or critical accessibility violations");
+      assert.deepEqual(logs, []);
+    } finally {
+      await browser.close();
+    }
+  });
+}
+
+for (const backend of Object.keys(BACKENDS)) {
+  test(`${backend}: start-up figures (navigation → first drawn pose, longest main-thread task before it)`, async () => {
+    const { browser, page } = await launch(backend);
+    try {
+      // Long tasks from the very start of the page, before any of its scripts.
+      await page.addInitScript(() => {
+        window.__longTasks = [];
+        new PerformanceObserver((list) => { for (const e of list.getEntries()) window.__longTasks.push({ start: e.startTime, ms: e.duration }); }).observe({ type: "longtask", buffered: true });
+        // Whether the start-up indicator shows as soon as the page is parsed (before the engine).
+        document.addEventListener("DOMContentLoaded", () => {
+          const s = document.querySelector("#startup");
+          window.__startupShown = !!s && !window.odoriTimings && getComputedStyle(s).display !== "none";
+        });
+      });
+      await page.goto(server.url + BACKENDS[backend].query, { waitUntil: "domcontentloaded" });
+      await page.waitForFunction(() => window.odoriTimings, null, { timeout: 60000 });
+      await page.waitForFunction(() => document.body.dataset.ready === "1", null, { timeout: 60000 });
+      const shown = await page.evaluate(() => window.__startupShown);
+      const f = await page.evaluate(() => {
+        const pose = window.odoriTimings.firstPoseSinceNavigationMs;
+        const before = window.__longTasks.filter((t) => t.start < pose);
+        const after = window.__longTasks.filter((t) => t.start >= pose);
+        const marks = Object.fromEntries(performance.getEntriesByType("mark").filter((m) => m.name.startsWith("odori:")).map((m) => [m.name.slice(6), Math.round(m.startTime)]));
+        return { pose, longestBefore: Math.max(0, ...before.map((t) => t.ms)), longBefore: before.length, longestAfter: Math.max(0, ...after.map((t) => t.ms)), ready: performance.now(), marks, tasks: before.map((t) => [Math.round(t.start), Math.round(t.ms)]) };
+      });
+      console.log(`# start-up ${backend}: first drawn pose ${f.pose.toFixed(0)} ms after navigation (goal < 1000); longest main-thread task before it ${f.longestBefore.toFixed(0)} ms (goal ≤ 200; ${f.longBefore} tasks over 50 ms); longest task after it until the panels were ready ${f.longestAfter.toFixed(0)} ms`);
+      console.log(`# start-up ${backend}: marks (ms since navigation) ${JSON.stringify(f.marks)}; long tasks before the pose [start, ms] ${JSON.stringify(f.tasks)}`);
+      writeFileSync(join(artifacts, `usable-${backend}-startup.json`), JSON.stringify(f, null, 2));
+      assert.ok(shown, "no start-up indicator while the engine loads");
+      assert.ok(await page.evaluate(() => getComputedStyle(document.querySelector("#startup")).display === "none"), "the start-up indicator stayed");
+      assert.ok(Number.isFinite(f.pose) && f.pose > 0);
+    } finally {
+      await browser.close();
+    }
+  });
+}
