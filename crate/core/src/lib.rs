@@ -15,6 +15,7 @@ pub mod import;
 pub mod library;
 pub mod music;
 pub mod normalize;
+pub mod project;
 pub mod retarget;
 pub mod search;
 pub mod skeleton;
