@@ -1,6 +1,7 @@
 //! The one place Rust errors become JavaScript errors.
 
 use odori_core::import::ImportError;
+use odori_core::project::{FileError, ProjectError};
 use wasm_bindgen::prelude::*;
 
 /// Builds the `OdoriError` thrown to JS.
@@ -27,6 +28,21 @@ impl From<ImportError> for OdoriError {
             | ImportError::Invalid { file, .. } => file.clone(),
         };
         OdoriError { kind: e.kind(), message: e.to_string(), file: Some(file) }
+    }
+}
+
+impl From<ProjectError> for OdoriError {
+    fn from(e: ProjectError) -> Self {
+        match e {
+            ProjectError::Import(e) => e.into(),
+            other => OdoriError::new(other.kind(), other.to_string()),
+        }
+    }
+}
+
+impl From<FileError> for OdoriError {
+    fn from(e: FileError) -> Self {
+        OdoriError::new(e.kind(), e.to_string())
     }
 }
 

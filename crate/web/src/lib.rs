@@ -10,6 +10,7 @@ mod choreo;
 mod error;
 mod library;
 mod music;
+mod project;
 mod search;
 mod text;
 mod viewer;
@@ -18,6 +19,7 @@ pub use choreo::Choreographer;
 pub use error::OdoriError;
 pub use library::Library;
 pub use music::{DemoSong, Song};
+pub use project::Project;
 pub use search::SearchIndex;
 pub use text::TextAnimator;
 pub use viewer::Viewer;
@@ -40,7 +42,9 @@ const TS_TYPES: &'static str = r#"
 /** What an Odori call throws: an Error with name "OdoriError", a machine-readable kind and, for imports, the file. */
 export interface OdoriError extends Error {
   name: "OdoriError";
-  /** "empty" | "unknown-format" | "bvh" | "gltf" | "unsupported" | "invalid" | "not-found" | "bad-argument" | "gpu" */
+  /** "empty" | "unknown-format" | "bvh" | "gltf" | "unsupported" | "invalid" | "not-found" | "bad-argument" | "gpu"
+   *  | project edits: "music" | "choreo" | "no-song" | "not-humanoid" | "missing-blob"
+   *  | .odori files: "not-odori" | "truncated" | "corrupt" | "newer-version" | "too-old" | "write" */
   kind: string;
   file?: string;
 }

@@ -51,6 +51,8 @@ pub enum FileError {
     NoManifest,
     #[error("manifest.json is malformed at line {line}, column {column}: {message}")]
     BadManifest { line: usize, column: usize, message: String },
+    #[error("manifest.json does not describe a project: {message}")]
+    BadProject { message: String },
     #[error("not an .odori file: its manifest says format {format:?}")]
     WrongFormat { format: String },
     #[error("the file was made by a newer version of Odori (schema {found}; this version reads up to {supported}): update Odori to open it")]
@@ -70,7 +72,7 @@ impl FileError {
             FileError::Empty => "empty",
             FileError::NotOdori { .. } | FileError::NoManifest | FileError::WrongFormat { .. } => "not-odori",
             FileError::Truncated { .. } => "truncated",
-            FileError::Corrupt { .. } | FileError::BlobMismatch { .. } | FileError::BadManifest { .. } => "corrupt",
+            FileError::Corrupt { .. } | FileError::BlobMismatch { .. } | FileError::BadManifest { .. } | FileError::BadProject { .. } => "corrupt",
             FileError::NewerVersion { .. } => "newer-version",
             FileError::TooOld { .. } => "too-old",
             FileError::Write { .. } => "write",
@@ -238,7 +240,7 @@ pub fn from_manifest(manifest: &[u8], blob: impl Fn(&BlobHash) -> Option<Arc<[u8
     }
     let migrated_from = (found < CURRENT_SCHEMA_VERSION).then_some(found);
     migrate(&mut value, found)?;
-    let m: Manifest = serde_json::from_value(value).map_err(|e| FileError::BadManifest { line: 0, column: 0, message: e.to_string() })?;
+    let m: Manifest = serde_json::from_value(value).map_err(|e| FileError::BadProject { message: e.to_string() })?;
     let mut store = BlobStore::default();
     let mut missing = Vec::new();
     for d in std::iter::once(&m.project).chain(&m.undo).chain(&m.redo) {
