@@ -54,3 +54,51 @@ fn golden_v1_opens_with_everything_in_it() {
     let again = project::open(&project::save(&p).unwrap()).unwrap().project;
     assert!(again == p);
 }
+
+/// The error kinds the `.d.ts` lists (crate/web/src/lib.rs) cover every kind the project and
+/// file errors (and the importer's, which a project edit passes on) can have.
+#[test]
+fn dts_error_kinds_cover_the_core_kinds() {
+    use odori_core::import::ImportError;
+    use odori_core::music::MusicError;
+    use odori_core::project::{FileError, ProjectError};
+    let lib_rs = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../crate/web/src/lib.rs")).expect("crate/web/src/lib.rs");
+    let start = lib_rs.find("export interface OdoriError").expect("the OdoriError interface");
+    let dts = &lib_rs[start..start + lib_rs[start..].find('}').unwrap()];
+    let f = || "f".to_string();
+    let file_errors = [
+        FileError::Empty,
+        FileError::NotOdori { start: f() },
+        FileError::Truncated { size_bytes: 1, message: f() },
+        FileError::Corrupt { entry: f(), message: f() },
+        FileError::NoManifest,
+        FileError::BadManifest { line: 1, column: 1, message: f() },
+        FileError::BadProject { message: f() },
+        FileError::WrongFormat { format: f() },
+        FileError::NewerVersion { found: 2, supported: 1 },
+        FileError::TooOld { found: 0, oldest: 1 },
+        FileError::BlobMismatch { name: f(), actual: f() },
+        FileError::Write { message: f() },
+    ];
+    let project_errors = [
+        ProjectError::Import(ImportError::Empty { file: f() }),
+        ProjectError::Import(ImportError::UnknownFormat { file: f(), start: f() }),
+        ProjectError::Import(ImportError::Bvh { file: f(), line: 1, column: 1, message: f() }),
+        ProjectError::Import(ImportError::Gltf { file: f(), message: f() }),
+        ProjectError::Import(ImportError::Unsupported { file: f(), message: f() }),
+        ProjectError::Import(ImportError::Invalid { file: f(), message: f() }),
+        ProjectError::Music(MusicError::TooFewTaps { taps: 1, min: 4 }),
+        ProjectError::Choreo(odori_core::choreo::ChoreoError::NoBars),
+        ProjectError::NoSong,
+        ProjectError::NoSuchSource { source_id: 1 },
+        ProjectError::NoSuchClip { source_id: 1, file_name: f(), clip: 1, clips: 0 },
+        ProjectError::NotDanceable { file_name: f(), clip: 0, reason: f() },
+        ProjectError::UnknownMove { key: f() },
+        ProjectError::Incomplete { count: 1, first: f() },
+        ProjectError::BadEnvelope { message: f() },
+    ];
+    let kinds: Vec<&str> = file_errors.iter().map(FileError::kind).chain(project_errors.iter().map(ProjectError::kind)).collect();
+    for k in kinds {
+        assert!(dts.contains(&format!("\"{k}\"")), "error kind {k:?} is missing from the OdoriError kinds in the .d.ts");
+    }
+}
