@@ -410,7 +410,8 @@ impl Project {
 
     /// Imports a motion file (BVH, glTF, GLB): refused with the importer's error when the
     /// bytes are not a readable file. Its humanoid clips join the dance library, cut at their
-    /// detected tempo. Undoable.
+    /// detected tempo; the report gives each clip's cut (or why it is not in the library).
+    /// Undoable.
     pub fn add_source(&mut self, file_name: &str, bytes: &[u8], options: ImportOptions) -> Result<SourceReport, ProjectError> {
         let imported = self.derived.import(&BlobHash::of(bytes), file_name, bytes, &options)?;
         let id = SourceId(self.doc.next_source);
@@ -421,6 +422,9 @@ impl Project {
         doc.next_source += 1;
         doc.sources.push(Source { id, file_name: file_name.to_string(), blob, options, cut_tempos_bpm: Vec::new() });
         self.commit(doc);
+        // Report each clip as the dance library has it now (its cut, or why it is refused).
+        let d = self.derived();
+        let clips = clips.into_iter().map(|c| d.clip(c.clip).cloned().unwrap_or(c)).collect();
         Ok(SourceReport { id, clips, warnings })
     }
 
