@@ -77,7 +77,7 @@ fn random_edit(p: &mut Project, rng: &mut Rng, log: &mut Vec<String>) {
     let result: Result<(), ProjectError> = match op {
         0 if salsa_clip(p).is_none() => p.add_source("salsa_10.bvh", bvh(), ImportOptions { fps_override: Some(60.0), ..Default::default() }).map(|_| ()),
         1 if !p.doc().sources.iter().any(|s| s.file_name.ends_with(".glb")) => p.add_source("RobotExpressive.glb", glb(), ImportOptions::default()).map(|_| ()),
-        0 | 1 | 2 => p.candidates(bar).map(|_| ()),
+        0..=2 => p.candidates(bar).map(|_| ()),
         3 => {
             let round = p.doc().dance.bars[bar].search.as_ref().map(|s| s.round.clone()).unwrap_or_default();
             let liked: Vec<MoveKey> = round.into_iter().filter(|_| rng.below(2) == 0).collect();
