@@ -5,12 +5,12 @@
 //! depends on changes, so the state after any sequence of edits is the state a fresh session
 //! builds from the same document: that is what makes a saved project reopen identically.
 
-use std::collections::{BTreeMap, HashMap, HashSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::{decode_envelope, BarDoc, BarKind, BlobHash, BlobStore, ClipRef, DanceDoc, MoveKey, ProjectDoc, ProjectError, SearchDoc, SongDoc, SourceId};
+use super::{decode_envelope, BarDoc, BarKind, BlobHash, BlobStore, ClipRef, DanceDoc, MoveKey, ProjectDoc, ProjectError, SearchDoc, SongDoc, Source, SourceId};
 use crate::choreo::{BarState, Choreography, ClipSummary, FeedbackSession, SegmentLibrary, SegmentOptions};
 use crate::humanoid::HumanoidStatus;
 use crate::import::{import_bytes, ImportError, ImportOptions, Imported};
@@ -74,7 +74,9 @@ pub(crate) fn song_grid(song: &SongDoc, blobs: &BlobStore) -> Result<SongGrid, P
 pub struct Derived {
     /// Imported files by (hash, file name, options).
     imports: HashMap<String, Arc<Imported>>,
-    lib_spec: Option<String>,
+    /// What the library was built from: one entry per source, and the earlier cuts kept.
+    lib_sources: Vec<String>,
+    lib_tail: Option<String>,
     lib: SegmentLibrary,
     /// The key of every segment of `lib`, by segment number.
     keys: Vec<MoveKey>,
@@ -107,12 +109,15 @@ impl Derived {
         // Earlier cuts a kept move (a bar's move or a liked one, now or in the history) still
         // comes from, per clip, in the order they first appear.
         let mut referenced: HashSet<String> = HashSet::new();
-        let mut old_cuts: BTreeMap<ClipRef, Vec<Option<f32>>> = BTreeMap::new();
+        let mut cut_refs: Vec<(ClipRef, String)> = Vec::new();
+        let mut cuts_seen: BTreeMap<ClipRef, Vec<Option<f32>>> = BTreeMap::new();
         for d in undo.iter().chain(std::iter::once(doc)).chain(redo.iter().rev()) {
             for k in d.kept_keys() {
-                if referenced.insert(k.id()) {
+                let id = k.id();
+                if referenced.insert(id.clone()) {
                     if let MoveKey::Cut { clip, cut_tempo_bpm, .. } = k {
-                        let list = old_cuts.entry(*clip).or_default();
+                        cut_refs.push((*clip, id));
+                        let list = cuts_seen.entry(*clip).or_default();
                         if !list.contains(cut_tempo_bpm) {
                             list.push(*cut_tempo_bpm);
                         }
@@ -120,18 +125,43 @@ impl Derived {
                 }
             }
         }
-        let sources: Vec<_> = doc.sources.iter().map(|s| (s.id, &s.blob, blobs.contains(&s.blob), &s.file_name, &s.options, &s.cut_tempos_bpm)).collect();
-        let spec = serde_json::to_string(&(sources, &old_cuts)).unwrap_or_default();
-        if self.lib_spec.as_deref() == Some(spec.as_str()) {
+        // Only cuts other than a clip's current one change the library (and, for those clips,
+        // which moves a re-cut keeps): pinning a move of a current cut rebuilds nothing.
+        let current = |c: &ClipRef| doc.source(c.source).map(|s| s.cut_tempo_bpm(c.clip));
+        let earlier: BTreeMap<ClipRef, Vec<Option<f32>>> = cuts_seen
+            .iter()
+            .filter_map(|(c, v)| {
+                let now = current(c);
+                let v: Vec<Option<f32>> = v.iter().copied().filter(|t| now != Some(*t)).collect();
+                (!v.is_empty()).then_some((*c, v))
+            })
+            .collect();
+        let keep_refs: BTreeSet<&String> = cut_refs.iter().filter(|(c, _)| earlier.contains_key(c)).map(|(_, id)| id).collect();
+        let tail = serde_json::to_string(&(&earlier, &keep_refs)).unwrap_or_default();
+        let sources: Vec<String> = doc
+            .sources
+            .iter()
+            .map(|s| serde_json::to_string(&(s.id, &s.blob, blobs.contains(&s.blob), &s.file_name, &s.options, &s.cut_tempos_bpm)).unwrap_or_default())
+            .collect();
+        let same_tail = self.lib_tail.as_deref() == Some(tail.as_str());
+        if same_tail && self.lib_sources == sources {
             return;
         }
-        self.rebuild_library(doc, blobs, &referenced, &old_cuts);
-        self.lib_spec = Some(spec);
+        // Sources only added (the common edit: an import): cut just the new ones, which gives
+        // the library a full rebuild in the same order would.
+        let from = if same_tail && sources.starts_with(&self.lib_sources) { self.lib_sources.len() } else { 0 };
+        self.rebuild_library(doc, blobs, &referenced, &earlier, from);
+        self.lib_sources = sources;
+        self.lib_tail = Some(tail);
     }
 
-    fn rebuild_library(&mut self, doc: &ProjectDoc, blobs: &BlobStore, referenced: &HashSet<String>, old_cuts: &BTreeMap<ClipRef, Vec<Option<f32>>>) {
-        let mut lib = SegmentLibrary::builtin();
-        let mut keys: Vec<MoveKey> = lib
+    fn rebuild_library(&mut self, doc: &ProjectDoc, blobs: &BlobStore, referenced: &HashSet<String>, old_cuts: &BTreeMap<ClipRef, Vec<Option<f32>>>, from_source: usize) {
+        if from_source > 0 {
+            let (lib, keys, clips) = (std::mem::take(&mut self.lib), std::mem::take(&mut self.keys), std::mem::take(&mut self.clips));
+            return self.cut_sources(&doc.sources[from_source..], blobs, referenced, old_cuts, lib, keys, clips);
+        }
+        let lib = SegmentLibrary::builtin();
+        let keys: Vec<MoveKey> = lib
             .segments()
             .iter()
             .map(|s| match s.builtin {
@@ -140,8 +170,13 @@ impl Derived {
                 None => MoveKey::Cut { clip: ClipRef { source: SourceId(u32::MAX), clip: s.index as u32 }, cut_tempo_bpm: None, first_count: 0 },
             })
             .collect();
-        let mut clips = Vec::new();
-        for src in &doc.sources {
+        self.cut_sources(&doc.sources, blobs, referenced, old_cuts, lib, keys, Vec::new());
+    }
+
+    /// Adds the clips of `sources` to a library (see [`Derived::update`]) and installs it.
+    #[allow(clippy::too_many_arguments)]
+    fn cut_sources(&mut self, sources: &[Source], blobs: &BlobStore, referenced: &HashSet<String>, old_cuts: &BTreeMap<ClipRef, Vec<Option<f32>>>, mut lib: SegmentLibrary, mut keys: Vec<MoveKey>, mut clips: Vec<ClipInfo>) {
+        for src in sources {
             let Some(bytes) = blobs.get(&src.blob).cloned() else { continue };
             let Ok(imported) = self.import(&src.blob, &src.file_name, &bytes, &src.options) else { continue };
             let mut infos = clip_infos(src.id, &imported);
