@@ -78,7 +78,7 @@ const SNAPSHOT = `(p) => {
 
 const b64 = (rel) => readFileSync(join(data, rel)).toString("base64");
 
-for (const backend of ["webgl2", "webgpu"]) {
+for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
   test(`autosave (${backend}): reload, killed browser, Save as in a fresh profile, quota, two tabs`, async () => {
     const profile = mkdtempSync(join(tmpdir(), "odori-profile-"));
     const fresh = mkdtempSync(join(tmpdir(), "odori-fresh-"));
@@ -119,6 +119,7 @@ for (const backend of ["webgl2", "webgpu"]) {
           await ps.flush();
         }
         const perEditMs = ps.stats.mainThreadMs.slice(1);
+        if (window.t.messages.length) throw new Error(`autosave reported: ${JSON.stringify(window.t.messages)}`);
         window.t.p = p;
         const snapshot = eval(snap)(p);
         p.undo();
@@ -137,6 +138,7 @@ for (const backend of ["webgl2", "webgpu"]) {
       const back = await run.page.evaluate(async ({ snap }) => {
         const { pkg, ps } = window.t;
         const id = await ps.lastId();
+        if (!id) throw new Error(`no last project: localStorage ${localStorage.getItem("odori.lastProject")}, stored ${JSON.stringify(await ps.recent())}`);
         const { project, missing } = await ps.load(pkg.Project, id);
         await ps.attach(project, id);
         window.t.p = project;

@@ -77,10 +77,16 @@ export class ProjectStore {
     return all.sort((a, b) => b.updatedAt - a.updatedAt).map(({ id, name, updatedAt }) => ({ id, name, updatedAt }));
   }
 
-  /** The id of the project open last in this browser, if it is still stored. */
+  /**
+   * The id of the project open last in this browser, if it is still stored. localStorage is
+   * written to disk lazily (a killed browser can lose it), so the project saved last in
+   * IndexedDB (which commits each write) answers when it has nothing.
+   */
   async lastId() {
     const id = localStorage.getItem(LAST_KEY);
-    return id && (await this.db.get("projects", id)) ? id : null;
+    if (id && (await this.db.get("projects", id))) return id;
+    const recent = await this.recent();
+    return recent.length ? recent[0].id : null;
   }
 
   /**
