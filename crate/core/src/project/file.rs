@@ -167,7 +167,8 @@ pub fn open(bytes: &[u8]) -> Result<Opened, FileError> {
     for i in 0..zip.len() {
         let mut entry = zip.by_index(i).map_err(|e| zip_error(bytes.len(), &format!("entry {i}"), e))?;
         let name = entry.name().to_string();
-        let mut data = Vec::with_capacity(entry.size().min(1 << 30) as usize);
+        // The size is the archive's claim: only a hint, capped so a lying header cannot reserve gigabytes.
+        let mut data = Vec::with_capacity(entry.size().min(1 << 26) as usize);
         entry.read_to_end(&mut data).map_err(|e| read_error(bytes.len(), &name, e))?;
         if name == MANIFEST {
             manifest = Some(data);
