@@ -18,6 +18,7 @@ pub mod library;
 pub mod motion;
 pub mod music;
 pub mod normalize;
+pub mod project;
 pub mod retarget;
 pub mod search;
 pub mod skeleton;

@@ -2,6 +2,7 @@
 
 use odori_core::export::ExportError;
 use odori_core::import::ImportError;
+use odori_core::project::{FileError, ProjectError};
 use wasm_bindgen::prelude::*;
 
 /// Builds the `OdoriError` thrown to JS.
@@ -33,6 +34,21 @@ impl From<ImportError> for OdoriError {
 
 impl From<ExportError> for OdoriError {
     fn from(e: ExportError) -> Self {
+        OdoriError::new(e.kind(), e.to_string())
+    }
+}
+
+impl From<ProjectError> for OdoriError {
+    fn from(e: ProjectError) -> Self {
+        match e {
+            ProjectError::Import(e) => e.into(),
+            other => OdoriError::new(other.kind(), other.to_string()),
+        }
+    }
+}
+
+impl From<FileError> for OdoriError {
+    fn from(e: FileError) -> Self {
         OdoriError::new(e.kind(), e.to_string())
     }
 }

@@ -11,6 +11,7 @@ mod error;
 mod export;
 mod library;
 mod music;
+mod project;
 mod search;
 mod text;
 mod viewer;
@@ -19,6 +20,7 @@ pub use choreo::Choreographer;
 pub use error::OdoriError;
 pub use library::Library;
 pub use music::{DemoSong, Song};
+pub use project::Project;
 pub use search::SearchIndex;
 pub use text::TextAnimator;
 pub use viewer::Viewer;
@@ -41,7 +43,9 @@ const TS_TYPES: &'static str = r#"
 /** What an Odori call throws: an Error with name "OdoriError", a machine-readable kind and, for imports, the file. */
 export interface OdoriError extends Error {
   name: "OdoriError";
-  /** "empty" | "unknown-format" | "bvh" | "gltf" | "unsupported" | "invalid" | "not-found" | "bad-argument" | "gpu" */
+  /** "empty" | "unknown-format" | "bvh" | "gltf" | "unsupported" | "invalid" | "not-found" | "bad-argument" | "gpu"
+   *  | project edits: "music" | "choreo" | "no-song" | "not-humanoid" | "missing-blob"
+   *  | .odori files: "not-odori" | "truncated" | "corrupt" | "newer-version" | "too-old" | "write" */
   kind: string;
   file?: string;
 }

@@ -184,6 +184,15 @@ fn build_web(dev: bool) {
     });
     std::fs::write(out_dir.join("package.json"), serde_json::to_string_pretty(&pkg).unwrap() + "\n").expect("write package.json");
     eprintln!("xtask: pkg/ ready: {} raw {} bytes, after wasm-opt {} bytes", wasm_out.display(), raw, opt);
+
+    // 5. The app's one npm runtime module, vendored so the page (static files, no bundler)
+    //    loads it offline: idb, the IndexedDB wrapper autosave uses (www/project/store.js).
+    let idb = root.join("node_modules/idb/build/index.js");
+    if !idb.exists() {
+        fail("node_modules/idb is missing: run npm ci (./dev setup does)");
+    }
+    std::fs::create_dir_all(root.join("www/vendor")).expect("create www/vendor/");
+    std::fs::copy(&idb, root.join("www/vendor/idb.js")).expect("copy idb into www/vendor/");
 }
 
 fn content_type(path: &Path) -> &'static str {

@@ -212,6 +212,22 @@ impl Choreography {
         Ok(Self { doc: Doc { bars, states: vec![BarState::Empty; n], sessions: vec![None; n], settings: Settings::default() }, undo: Vec::new(), redo: Vec::new() })
     }
 
+    /// A choreography in a given state, with no undo history: how a document that keeps its
+    /// own history (the project, spec §K) hands its dance to the commands here. Bars are
+    /// checked as in [`Choreography::new`]; states and sessions are padded or cut to the bars.
+    pub fn from_parts(bars: Vec<Bar>, mut states: Vec<BarState>, mut sessions: Vec<Option<FeedbackSession>>, settings: Settings) -> Result<Self, ChoreoError> {
+        check_bars(&bars)?;
+        let n = bars.len();
+        states.resize(n, BarState::Empty);
+        sessions.resize(n, None);
+        Ok(Self { doc: Doc { bars, states, sessions, settings }, undo: Vec::new(), redo: Vec::new() })
+    }
+
+    /// Every bar's feedback session (`None`: no search open).
+    pub fn sessions(&self) -> &[Option<FeedbackSession>] {
+        &self.doc.sessions
+    }
+
     /// Replaces the bar grid (after the person corrects the tempo or the first downbeat): bar
     /// `i` keeps its state and search when it still exists; new bars start empty. Undoable.
     pub fn set_bars(&mut self, bars: Vec<Bar>) -> Result<(), ChoreoError> {

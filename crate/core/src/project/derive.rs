@@ -1,0 +1,323 @@
+//! What a project derives from its document: the imported clips, the segment library (the
+//! built-in moves plus every humanoid clip cut at its tempo — and, for moves the dance or its
+//! history still holds, the earlier cuts they came from), the map between [`MoveKey`]s and the
+//! library's segment numbers, and the song's grid. Rebuilt from scratch whenever what it
+//! depends on changes, so the state after any sequence of edits is the state a fresh session
+//! builds from the same document: that is what makes a saved project reopen identically.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use super::{decode_envelope, BarDoc, BarKind, BlobHash, BlobStore, ClipRef, DanceDoc, MoveKey, ProjectDoc, ProjectError, SearchDoc, SongDoc, Source, SourceId};
+use crate::choreo::{BarState, Choreography, ClipSummary, FeedbackSession, SegmentLibrary, SegmentOptions};
+use crate::humanoid::HumanoidStatus;
+use crate::import::{import_bytes, ImportError, ImportOptions, Imported};
+use crate::music::{analyze, SongGrid};
+
+/// One clip of a source, as the library panel shows it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct ClipInfo {
+    pub clip: ClipRef,
+    pub name: String,
+    pub file_name: String,
+    pub fps: f32,
+    pub frames: usize,
+    pub duration_secs: f32,
+    pub joints: usize,
+    pub humanoid: HumanoidStatus,
+    /// Its current cut in the segment library (`clip`: the library's clip number).
+    pub cut: Option<ClipSummary>,
+    /// Why it is not in the dance library (not humanoid, too short at its tempo, ...).
+    pub refused: Option<String>,
+}
+
+/// The clips of an imported file, before any cut.
+pub(crate) fn clip_infos(id: SourceId, imported: &Imported) -> Vec<ClipInfo> {
+    imported
+        .clips
+        .iter()
+        .enumerate()
+        .map(|(j, c)| ClipInfo {
+            clip: ClipRef { source: id, clip: j as u32 },
+            name: c.name.clone(),
+            file_name: c.source.clone(),
+            fps: c.fps,
+            frames: c.frame_count(),
+            duration_secs: c.duration_secs(),
+            joints: c.skeleton.joints.len(),
+            humanoid: imported.status.clone(),
+            cut: None,
+            refused: match &imported.status {
+                HumanoidStatus::NotHumanoid { reason } => Some(format!("not humanoid: {reason}")),
+                _ => None,
+            },
+        })
+        .collect()
+}
+
+/// The song's grid: the analysis of its envelope with every correction applied in order.
+pub(crate) fn song_grid(song: &SongDoc, blobs: &BlobStore) -> Result<SongGrid, ProjectError> {
+    let bytes = blobs.get(&song.envelope).ok_or_else(|| ProjectError::BadEnvelope { message: format!("the envelope of {} ({}) is missing", song.file_name, song.envelope) })?;
+    let env = decode_envelope(bytes)?;
+    let mut grid = analyze(&env, &song.options)?;
+    for c in &song.corrections {
+        grid = grid.corrected(c)?;
+    }
+    Ok(grid)
+}
+
+/// State derived from a project's document (see the module doc).
+#[derive(Debug, Default)]
+pub struct Derived {
+    /// Imported files by (hash, file name, options).
+    imports: HashMap<String, Arc<Imported>>,
+    /// What the library was built from: one entry per source, and the earlier cuts kept.
+    lib_sources: Vec<String>,
+    lib_tail: Option<String>,
+    lib: SegmentLibrary,
+    /// The key of every segment of `lib`, by segment number.
+    keys: Vec<MoveKey>,
+    index: HashMap<String, usize>,
+    clips: Vec<ClipInfo>,
+    grid_spec: Option<String>,
+    grid: Option<Result<SongGrid, ProjectError>>,
+}
+
+impl Derived {
+    /// Imports a file (or returns the copy imported before).
+    pub(crate) fn import(&mut self, hash: &BlobHash, file_name: &str, bytes: &[u8], options: &ImportOptions) -> Result<Arc<Imported>, ImportError> {
+        let key = format!("{hash}|{file_name}|{}", serde_json::to_string(options).unwrap_or_default());
+        if let Some(i) = self.imports.get(&key) {
+            return Ok(i.clone());
+        }
+        let imported = Arc::new(import_bytes(file_name, bytes, options)?);
+        self.imports.insert(key, imported.clone());
+        Ok(imported)
+    }
+
+    /// Brings everything up to date with the document (and the history, whose moves keep
+    /// their earlier cuts in the library).
+    pub(crate) fn update(&mut self, doc: &ProjectDoc, undo: &[ProjectDoc], redo: &[ProjectDoc], blobs: &BlobStore) {
+        let grid_spec = serde_json::to_string(&doc.song).unwrap_or_default();
+        if self.grid_spec.as_deref() != Some(grid_spec.as_str()) {
+            self.grid = doc.song.as_ref().map(|s| song_grid(s, blobs));
+            self.grid_spec = Some(grid_spec);
+        }
+        // Earlier cuts a kept move (a bar's move or a liked one, now or in the history) still
+        // comes from, per clip, in the order they first appear.
+        let mut referenced: HashSet<String> = HashSet::new();
+        let mut cut_refs: Vec<(ClipRef, String)> = Vec::new();
+        let mut cuts_seen: BTreeMap<ClipRef, Vec<Option<f32>>> = BTreeMap::new();
+        for d in undo.iter().chain(std::iter::once(doc)).chain(redo.iter().rev()) {
+            for k in d.kept_keys() {
+                let id = k.id();
+                if referenced.insert(id.clone()) {
+                    if let MoveKey::Cut { clip, cut_tempo_bpm, .. } = k {
+                        cut_refs.push((*clip, id));
+                        let list = cuts_seen.entry(*clip).or_default();
+                        if !list.contains(cut_tempo_bpm) {
+                            list.push(*cut_tempo_bpm);
+                        }
+                    }
+                }
+            }
+        }
+        // Only cuts other than a clip's current one change the library (and, for those clips,
+        // which moves a re-cut keeps): pinning a move of a current cut rebuilds nothing.
+        let current = |c: &ClipRef| doc.source(c.source).map(|s| s.cut_tempo_bpm(c.clip));
+        let earlier: BTreeMap<ClipRef, Vec<Option<f32>>> = cuts_seen
+            .iter()
+            .filter_map(|(c, v)| {
+                let now = current(c);
+                let v: Vec<Option<f32>> = v.iter().copied().filter(|t| now != Some(*t)).collect();
+                (!v.is_empty()).then_some((*c, v))
+            })
+            .collect();
+        let keep_refs: BTreeSet<&String> = cut_refs.iter().filter(|(c, _)| earlier.contains_key(c)).map(|(_, id)| id).collect();
+        let tail = serde_json::to_string(&(&earlier, &keep_refs)).unwrap_or_default();
+        let sources: Vec<String> = doc
+            .sources
+            .iter()
+            .map(|s| serde_json::to_string(&(s.id, &s.blob, blobs.contains(&s.blob), &s.file_name, &s.options, &s.cut_tempos_bpm)).unwrap_or_default())
+            .collect();
+        let same_tail = self.lib_tail.as_deref() == Some(tail.as_str());
+        if same_tail && self.lib_sources == sources {
+            return;
+        }
+        // Sources only added (the common edit: an import): cut just the new ones, which gives
+        // the library a full rebuild in the same order would.
+        let from = if same_tail && sources.starts_with(&self.lib_sources) { self.lib_sources.len() } else { 0 };
+        self.rebuild_library(doc, blobs, &referenced, &earlier, from);
+        self.lib_sources = sources;
+        self.lib_tail = Some(tail);
+    }
+
+    fn rebuild_library(&mut self, doc: &ProjectDoc, blobs: &BlobStore, referenced: &HashSet<String>, old_cuts: &BTreeMap<ClipRef, Vec<Option<f32>>>, from_source: usize) {
+        if from_source > 0 {
+            let (lib, keys, clips) = (std::mem::take(&mut self.lib), std::mem::take(&mut self.keys), std::mem::take(&mut self.clips));
+            return self.cut_sources(&doc.sources[from_source..], blobs, referenced, old_cuts, lib, keys, clips);
+        }
+        let lib = SegmentLibrary::builtin();
+        let keys: Vec<MoveKey> = lib
+            .segments()
+            .iter()
+            .map(|s| match s.builtin {
+                Some(m) => MoveKey::Builtin { r#move: m },
+                // Unreachable: the built-in library holds only built-in moves.
+                None => MoveKey::Cut { clip: ClipRef { source: SourceId(u32::MAX), clip: s.index as u32 }, cut_tempo_bpm: None, first_count: 0 },
+            })
+            .collect();
+        self.cut_sources(&doc.sources, blobs, referenced, old_cuts, lib, keys, Vec::new());
+    }
+
+    /// Adds the clips of `sources` to a library (see [`Derived::update`]) and installs it.
+    #[allow(clippy::too_many_arguments)]
+    fn cut_sources(&mut self, sources: &[Source], blobs: &BlobStore, referenced: &HashSet<String>, old_cuts: &BTreeMap<ClipRef, Vec<Option<f32>>>, mut lib: SegmentLibrary, mut keys: Vec<MoveKey>, mut clips: Vec<ClipInfo>) {
+        for src in sources {
+            let Some(bytes) = blobs.get(&src.blob).cloned() else { continue };
+            let Ok(imported) = self.import(&src.blob, &src.file_name, &bytes, &src.options) else { continue };
+            let mut infos = clip_infos(src.id, &imported);
+            for (j, clip) in imported.clips.iter().enumerate() {
+                let info = &mut infos[j];
+                if info.refused.is_some() {
+                    continue;
+                }
+                let cref = info.clip;
+                let current = src.cut_tempo_bpm(j as u32);
+                let mut cuts: Vec<Option<f32>> = old_cuts.get(&cref).map(|v| v.iter().copied().filter(|t| *t != current).collect()).unwrap_or_default();
+                cuts.push(current);
+                let mut lib_clip: Option<usize> = None;
+                for (n, &tempo) in cuts.iter().enumerate() {
+                    let is_current = n + 1 == cuts.len();
+                    let opts = SegmentOptions { tempo_bpm: tempo, ..Default::default() };
+                    let result = match lib_clip {
+                        None => lib.add_clip(clip, &imported.humanoid, &imported.status, &opts),
+                        Some(ci) => {
+                            let keep = |i: usize| keys.get(i).is_some_and(|k| referenced.contains(&k.id()));
+                            lib.recut_clip(ci, &opts, &keep).map(|r| {
+                                let mut remapped = vec![None; lib.len()];
+                                for (old, new) in r.remap.iter().enumerate() {
+                                    if let (Some(new), Some(k)) = (new, keys.get(old)) {
+                                        remapped[*new] = Some(k.clone());
+                                    }
+                                }
+                                keys = remapped.into_iter().map(|k| k.unwrap_or(MoveKey::Cut { clip: cref, cut_tempo_bpm: tempo, first_count: 0 })).collect();
+                                r.summary
+                            })
+                        }
+                    };
+                    match result {
+                        Ok(summary) => {
+                            lib_clip = Some(summary.clip);
+                            keys.truncate(lib.len() - summary.segments);
+                            for seg in &lib.segments()[lib.len() - summary.segments..] {
+                                let beats = &lib.clips()[seg.clip].beat_frames;
+                                let first_count = beats.iter().position(|b| b.round().max(0.0) == seg.start_frame).unwrap_or(usize::MAX) as u32;
+                                keys.push(MoveKey::Cut { clip: cref, cut_tempo_bpm: tempo, first_count });
+                            }
+                            if is_current {
+                                info.cut = Some(summary);
+                            }
+                        }
+                        Err(e) if is_current => info.refused = Some(e.to_string()),
+                        Err(_) => {}
+                    }
+                }
+            }
+            clips.extend(infos);
+        }
+        self.index = keys.iter().enumerate().map(|(i, k)| (k.id(), i)).collect();
+        self.keys = keys;
+        self.lib = lib;
+        self.clips = clips;
+    }
+
+    pub fn library(&self) -> &SegmentLibrary {
+        &self.lib
+    }
+
+    /// Every clip of every source (as of the last update).
+    pub fn clips(&self) -> &[ClipInfo] {
+        &self.clips
+    }
+
+    pub fn clip(&self, clip: ClipRef) -> Option<&ClipInfo> {
+        self.clips.iter().find(|c| c.clip == clip)
+    }
+
+    /// The song's grid (`None`: no song).
+    pub fn grid(&self) -> Option<&Result<SongGrid, ProjectError>> {
+        self.grid.as_ref()
+    }
+
+    /// The key of segment `index`.
+    pub fn key(&self, index: usize) -> Option<&MoveKey> {
+        self.keys.get(index)
+    }
+
+    /// The segment a key names, if it is in the library.
+    pub fn index_of(&self, key: &MoveKey) -> Option<usize> {
+        self.index.get(&key.id()).copied()
+    }
+
+    pub(crate) fn keys_of(&self, segments: &[usize]) -> Vec<MoveKey> {
+        segments.iter().filter_map(|&s| self.keys.get(s).cloned()).collect()
+    }
+
+    pub(crate) fn indices_of(&self, keys: &[MoveKey]) -> Result<Vec<usize>, ProjectError> {
+        keys.iter().map(|k| self.index_of(k).ok_or_else(|| ProjectError::UnknownMove { key: k.id() })).collect()
+    }
+
+    /// The dance as a [`Choreography`] over this library (moves not in it leave their bar
+    /// empty, shown candidates not in it are forgotten).
+    pub(crate) fn choreography(&self, doc: &ProjectDoc) -> Result<Choreography, ProjectError> {
+        let grid = match &self.grid {
+            None => return Err(ProjectError::NoSong),
+            Some(Err(e)) => return Err(e.clone()),
+            Some(Ok(g)) => g,
+        };
+        let resolve = |v: &[MoveKey]| -> Vec<usize> { v.iter().filter_map(|k| self.index_of(k)).collect() };
+        let states = doc
+            .dance
+            .bars
+            .iter()
+            .map(|b| match (b.state, b.r#move.as_ref().and_then(|k| self.index_of(k))) {
+                (BarKind::Pinned, Some(segment)) => BarState::Pinned { segment },
+                (BarKind::Generated, Some(segment)) => BarState::Generated { segment },
+                _ => BarState::Empty,
+            })
+            .collect();
+        let sessions = doc
+            .dance
+            .bars
+            .iter()
+            .map(|b| b.search.as_ref().map(|s| FeedbackSession { tau: s.tau, shown: resolve(&s.shown), liked: resolve(&s.liked), round: resolve(&s.round), rounds: s.rounds }))
+            .collect();
+        Ok(Choreography::from_parts(grid.bars.clone(), states, sessions, doc.dance.settings)?)
+    }
+
+    /// A choreography's dance by keys.
+    pub(crate) fn dance_doc(&self, ch: &Choreography) -> DanceDoc {
+        let bars = ch
+            .states()
+            .iter()
+            .zip(ch.sessions())
+            .map(|(state, session)| {
+                let (kind, seg) = match *state {
+                    BarState::Empty => (BarKind::Empty, None),
+                    BarState::Pinned { segment } => (BarKind::Pinned, Some(segment)),
+                    BarState::Generated { segment } => (BarKind::Generated, Some(segment)),
+                };
+                BarDoc {
+                    state: kind,
+                    r#move: seg.and_then(|s| self.keys.get(s).cloned()),
+                    search: session.as_ref().map(|s| SearchDoc { tau: s.tau, shown: self.keys_of(&s.shown), liked: self.keys_of(&s.liked), round: self.keys_of(&s.round), rounds: s.rounds }),
+                }
+            })
+            .collect();
+        DanceDoc { bars, settings: *ch.settings() }
+    }
+}

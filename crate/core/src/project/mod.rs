@@ -1,0 +1,653 @@
+//! The project (spec §K): one document holding all that a person made — the imported sources
+//! (file name, the bytes as given, import options, the tempo each clip is cut at), the song
+//! (audio bytes, its loudness envelope, the analysis options and every grid correction), the
+//! dance (each bar's state and move by a stable [`MoveKey`], never by an index into a vector;
+//! the shown and liked candidates of each bar's search; ρ and the filling's weights), clip
+//! tags, texts, the chosen character and the camera.
+//!
+//! Edits are methods on [`Project`]; each one that changes the document records the previous
+//! document, so undo/redo is the project's history (kept and saved with it). Everything else —
+//! the imported clips, the segment library, the join table, the song's grid, the rendered
+//! dance — is derived from the document and rebuilt on demand ([`derive`]), so a project read
+//! back from bytes ([`file`]) is the same project and renders the same dance.
+//!
+//! Why the dance is stored by keys: segment numbers change whenever the library changes
+//! (another clip imported, a clip re-cut); a key names the motion itself — a built-in move by
+//! what it is made of, an imported one by its source, clip, the tempo it was cut at and the
+//! count it starts on — so it means the same motion in any session that rebuilds the library.
+
+pub mod blob;
+pub mod derive;
+pub mod file;
+
+use std::collections::BTreeSet;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::choreo::{ChoreoError, FillWeights, GenerateReport, SegmentError, Settings};
+use crate::clip::Clip;
+use crate::import::{ImportError, ImportOptions};
+use crate::library::MoveInfo;
+use crate::music::{AnalysisOptions, GridCorrection, MusicError, RmsEnvelope};
+
+pub use blob::{BlobHash, BlobStore};
+pub use derive::{ClipInfo, Derived};
+pub use file::{open, save, FileError, MissingBlob, Opened, CURRENT_SCHEMA_VERSION, ODORI_MIME};
+
+/// Most undo steps a project keeps (and saves): enough for a session's work, small enough that
+/// the manifest written on every autosave stays a few hundred kilobytes.
+pub const UNDO_LIMIT: usize = 100;
+
+/// A source's number in its project: given once, never reused (so keys stay valid after a
+/// source is gone from the current document but still referred to by its history).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct SourceId(pub u32);
+
+/// One clip of one source: the `clip`-th animation of the file (BVH: always 0).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct ClipRef {
+    pub source: SourceId,
+    pub clip: u32,
+}
+
+/// An imported file, as given.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Source {
+    pub id: SourceId,
+    pub file_name: String,
+    /// The file's bytes, exactly as given.
+    pub blob: BlobHash,
+    pub options: ImportOptions,
+    /// Tempo (counts per minute) the person stated for a clip, by clip number; a clip not
+    /// listed is cut at the tempo detected from its motion.
+    #[serde(default)]
+    pub cut_tempos_bpm: Vec<(u32, f32)>,
+}
+
+impl Source {
+    /// The stated cut tempo of clip `clip` (`None`: detected).
+    pub fn cut_tempo_bpm(&self, clip: u32) -> Option<f32> {
+        self.cut_tempos_bpm.iter().find(|(c, _)| *c == clip).map(|&(_, t)| t)
+    }
+}
+
+/// A move, by what it is rather than where it sits in a vector.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "camelCase")]
+pub enum MoveKey {
+    /// One of the built-in moves.
+    #[serde(rename_all = "camelCase")]
+    Builtin { r#move: MoveInfo },
+    /// Four counts of an imported clip, cut at `cut_tempo_bpm` (the tempo the person stated;
+    /// `None`: the tempo detected from the motion), starting on count `first_count` (0-based).
+    #[serde(rename_all = "camelCase")]
+    Cut { clip: ClipRef, cut_tempo_bpm: Option<f32>, first_count: u32 },
+}
+
+impl MoveKey {
+    /// A string that identifies the key (for maps).
+    pub fn id(&self) -> String {
+        serde_json::to_string(self).unwrap_or_default()
+    }
+}
+
+/// The song, as given, with the person's corrections of its grid.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct SongDoc {
+    /// File name ("demo" for the built-in demo song).
+    pub file_name: String,
+    /// The audio file's bytes as given (`None` for the demo song, which the engine renders).
+    pub audio: Option<BlobHash>,
+    /// The loudness envelope the host computed from the decoded audio (see
+    /// [`encode_envelope`]): kept so the grid is rebuilt exactly without decoding again.
+    pub envelope: BlobHash,
+    pub options: AnalysisOptions,
+    /// Every correction, in the order made; the grid is the analysis with these applied.
+    pub corrections: Vec<GridCorrection>,
+}
+
+/// What a bar holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum BarKind {
+    #[default]
+    Empty,
+    Pinned,
+    Generated,
+}
+
+/// One bar's relevance-feedback search (spec §F), by keys.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct SearchDoc {
+    pub tau: f32,
+    pub shown: Vec<MoveKey>,
+    pub liked: Vec<MoveKey>,
+    pub round: Vec<MoveKey>,
+    pub rounds: usize,
+}
+
+/// One bar of the dance.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct BarDoc {
+    pub state: BarKind,
+    /// The move (with `Pinned` and `Generated`).
+    pub r#move: Option<MoveKey>,
+    pub search: Option<SearchDoc>,
+}
+
+/// The dance: one entry per bar of the song's grid, and the knobs of search and filling.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct DanceDoc {
+    pub bars: Vec<BarDoc>,
+    pub settings: Settings,
+}
+
+/// Words a person attached to a clip so text can call it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Tagging {
+    pub clip: ClipRef,
+    pub tags: Vec<String>,
+}
+
+/// Where the viewer looks from.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Camera {
+    pub yaw_rad: f32,
+    pub pitch_rad: f32,
+    pub distance_m: f32,
+    pub target_m: [f32; 3],
+}
+
+/// Everything a person made (spec §K). Serialised as the manifest's `project`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct ProjectDoc {
+    pub name: String,
+    /// The next [`SourceId`] to give.
+    pub next_source: u32,
+    pub sources: Vec<Source>,
+    pub song: Option<SongDoc>,
+    pub dance: DanceDoc,
+    pub tags: Vec<Tagging>,
+    pub texts: Vec<String>,
+    pub character: Option<ClipRef>,
+    pub camera: Option<Camera>,
+}
+
+impl ProjectDoc {
+    /// Every blob the document refers to.
+    pub fn blobs(&self) -> impl Iterator<Item = &BlobHash> {
+        self.sources.iter().map(|s| &s.blob).chain(self.song.iter().flat_map(|s| s.audio.iter().chain(std::iter::once(&s.envelope))))
+    }
+
+    /// Every move key the document refers to for keeps: bars' moves and liked candidates.
+    pub(crate) fn kept_keys(&self) -> impl Iterator<Item = &MoveKey> {
+        self.dance.bars.iter().flat_map(|b| b.r#move.iter().chain(b.search.iter().flat_map(|s| s.liked.iter())))
+    }
+
+    pub fn source(&self, id: SourceId) -> Option<&Source> {
+        self.sources.iter().find(|s| s.id == id)
+    }
+}
+
+/// Why an edit was refused. On error the project is unchanged.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ProjectError {
+    #[error(transparent)]
+    Import(#[from] ImportError),
+    #[error(transparent)]
+    Music(#[from] MusicError),
+    #[error(transparent)]
+    Choreo(#[from] ChoreoError),
+    #[error(transparent)]
+    Segment(#[from] SegmentError),
+    #[error("the project has no song: open a song (or use the demo song) before composing a dance")]
+    NoSong,
+    #[error("there is no source {source_id} in the project")]
+    NoSuchSource { source_id: u32 },
+    #[error("source {source_id} ({file_name}) has no clip {clip}: it has {clips}")]
+    NoSuchClip { source_id: u32, file_name: String, clip: u32, clips: usize },
+    #[error("clip {clip} of {file_name} is not in the dance library: {reason}")]
+    NotDanceable { file_name: String, clip: u32, reason: String },
+    #[error("move {key} is not in the library (its source is missing or was cut differently)")]
+    UnknownMove { key: String },
+    #[error("the dance cannot be edited while {count} stored item(s) are missing ({first}): nothing of it would be kept")]
+    Incomplete { count: usize, first: String },
+    #[error("bad song envelope: {message}")]
+    BadEnvelope { message: String },
+}
+
+impl ProjectError {
+    /// A short machine-readable kind, stable for the JS API.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            ProjectError::Import(e) => e.kind(),
+            ProjectError::Music(_) => "music",
+            ProjectError::Choreo(_) | ProjectError::Segment(_) => "choreo",
+            ProjectError::NoSong => "no-song",
+            ProjectError::NoSuchSource { .. } | ProjectError::NoSuchClip { .. } | ProjectError::UnknownMove { .. } => "not-found",
+            ProjectError::NotDanceable { .. } => "not-humanoid",
+            ProjectError::Incomplete { .. } => "missing-blob",
+            ProjectError::BadEnvelope { .. } => "bad-argument",
+        }
+    }
+}
+
+/// What adding a source gave.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct SourceReport {
+    pub id: SourceId,
+    pub clips: Vec<ClipInfo>,
+    pub warnings: Vec<String>,
+}
+
+/// The project: the document, its history, its blobs, and the derived state built from them.
+#[derive(Debug, Default)]
+pub struct Project {
+    doc: ProjectDoc,
+    undo: Vec<ProjectDoc>,
+    redo: Vec<ProjectDoc>,
+    blobs: BlobStore,
+    /// Blobs the document refers to that were absent when it was opened.
+    missing: Vec<MissingBlob>,
+    derived: Derived,
+}
+
+/// Two projects are the same when what a person made (document, history, blobs) is the same;
+/// the derived state is rebuilt from those.
+impl PartialEq for Project {
+    fn eq(&self, other: &Self) -> bool {
+        self.doc == other.doc && self.undo == other.undo && self.redo == other.redo && self.blobs == other.blobs
+    }
+}
+
+/// Writes an envelope as the song's envelope blob: `b"ODRMS1"`, hop seconds (f32), band count
+/// and frame count (u32), then the bands one after the other; little-endian throughout.
+pub fn encode_envelope(env: &RmsEnvelope) -> Vec<u8> {
+    let frames = env.bands.first().map_or(0, Vec::len);
+    let mut out = Vec::with_capacity(14 + env.bands.len() * frames * 4);
+    out.extend_from_slice(b"ODRMS1");
+    out.extend_from_slice(&env.hop_secs.to_le_bytes());
+    out.extend_from_slice(&(env.bands.len() as u32).to_le_bytes());
+    out.extend_from_slice(&(frames as u32).to_le_bytes());
+    for band in &env.bands {
+        for v in band.iter().take(frames) {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        // A short band is padded so the layout stays rectangular; `analyze` refuses it anyway.
+        for _ in band.len()..frames {
+            out.extend_from_slice(&0f32.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// Reads [`encode_envelope`]'s format.
+pub fn decode_envelope(bytes: &[u8]) -> Result<RmsEnvelope, ProjectError> {
+    let bad = |message: String| ProjectError::BadEnvelope { message };
+    if bytes.len() < 18 || &bytes[..6] != b"ODRMS1" {
+        return Err(bad(format!("{} bytes that do not start with the envelope header", bytes.len())));
+    }
+    let word = |at: usize| [bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]];
+    let hop_secs = f32::from_le_bytes(word(6));
+    let bands = u32::from_le_bytes(word(10)) as usize;
+    let frames = u32::from_le_bytes(word(14)) as usize;
+    let need = bands.checked_mul(frames).and_then(|n| n.checked_mul(4)).and_then(|n| n.checked_add(18));
+    if need != Some(bytes.len()) {
+        return Err(bad(format!("{bands} bands of {frames} frames need {need:?} bytes, the blob has {}", bytes.len())));
+    }
+    let bands = (0..bands).map(|b| (0..frames).map(|f| f32::from_le_bytes(word(18 + (b * frames + f) * 4))).collect()).collect();
+    Ok(RmsEnvelope { hop_secs, bands })
+}
+
+impl Project {
+    /// An empty project.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A project from parts read back from a file or a store (history included). `missing`
+    /// names what the document refers to that was not there.
+    pub(crate) fn from_parts(doc: ProjectDoc, undo: Vec<ProjectDoc>, redo: Vec<ProjectDoc>, blobs: BlobStore, missing: Vec<MissingBlob>) -> Self {
+        Self { doc, undo, redo, blobs, missing, derived: Derived::default() }
+    }
+
+    pub fn doc(&self) -> &ProjectDoc {
+        &self.doc
+    }
+
+    pub fn blobs(&self) -> &BlobStore {
+        &self.blobs
+    }
+
+    pub fn undo_history(&self) -> &[ProjectDoc] {
+        &self.undo
+    }
+
+    pub fn redo_history(&self) -> &[ProjectDoc] {
+        &self.redo
+    }
+
+    /// Items the document names whose bytes were missing when it was opened.
+    pub fn missing(&self) -> &[MissingBlob] {
+        &self.missing
+    }
+
+    /// Every blob the document or its history refers to.
+    pub fn referenced_blobs(&self) -> BTreeSet<BlobHash> {
+        std::iter::once(&self.doc).chain(&self.undo).chain(&self.redo).flat_map(|d| d.blobs().cloned().collect::<Vec<_>>()).collect()
+    }
+
+    /// The derived state, brought up to date with the document.
+    pub fn derived(&mut self) -> &Derived {
+        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        &self.derived
+    }
+
+    /// Commits `doc` as the next state (recording the current one for undo) when it differs.
+    fn commit(&mut self, doc: ProjectDoc) -> bool {
+        if doc == self.doc {
+            return false;
+        }
+        let prev = std::mem::replace(&mut self.doc, doc);
+        self.undo.push(prev);
+        if self.undo.len() > UNDO_LIMIT {
+            self.undo.remove(0);
+        }
+        self.redo.clear();
+        let keep = self.referenced_blobs();
+        self.blobs.retain(&keep);
+        true
+    }
+
+    /// Undoes the last edit; `false` when there is none.
+    pub fn undo(&mut self) -> bool {
+        match self.undo.pop() {
+            Some(prev) => {
+                self.redo.push(std::mem::replace(&mut self.doc, prev));
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Redoes the last undone edit; `false` when there is none.
+    pub fn redo(&mut self) -> bool {
+        match self.redo.pop() {
+            Some(next) => {
+                self.undo.push(std::mem::replace(&mut self.doc, next));
+                true
+            }
+            None => false,
+        }
+    }
+
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+
+    /// Renames the project. Undoable.
+    pub fn set_name(&mut self, name: &str) {
+        let mut doc = self.doc.clone();
+        doc.name = name.to_string();
+        self.commit(doc);
+    }
+
+    /// Imports a motion file (BVH, glTF, GLB): refused with the importer's error when the
+    /// bytes are not a readable file. Its humanoid clips join the dance library, cut at their
+    /// detected tempo; the report gives each clip's cut (or why it is not in the library).
+    /// Undoable.
+    pub fn add_source(&mut self, file_name: &str, bytes: &[u8], options: ImportOptions) -> Result<SourceReport, ProjectError> {
+        let imported = self.derived.import(&BlobHash::of(bytes), file_name, bytes, &options)?;
+        let id = SourceId(self.doc.next_source);
+        let clips = derive::clip_infos(id, &imported);
+        let warnings = imported.warnings.clone();
+        let blob = self.blobs.put(bytes);
+        let mut doc = self.doc.clone();
+        doc.next_source += 1;
+        doc.sources.push(Source { id, file_name: file_name.to_string(), blob, options, cut_tempos_bpm: Vec::new() });
+        self.commit(doc);
+        // Report each clip as the dance library has it now (its cut, or why it is refused).
+        let d = self.derived();
+        let clips = clips.into_iter().map(|c| d.clip(c.clip).cloned().unwrap_or(c)).collect();
+        Ok(SourceReport { id, clips, warnings })
+    }
+
+    /// Removes a source from the document. Its clips leave the library; bars that hold one of
+    /// its moves keep it in the history only (undo brings everything back). Undoable.
+    pub fn remove_source(&mut self, id: SourceId) -> Result<(), ProjectError> {
+        let mut doc = self.doc.clone();
+        let before = doc.sources.len();
+        doc.sources.retain(|s| s.id != id);
+        if doc.sources.len() == before {
+            return Err(ProjectError::NoSuchSource { source_id: id.0 });
+        }
+        let uses = |k: &MoveKey| matches!(k, MoveKey::Cut { clip, .. } if clip.source == id);
+        for b in &mut doc.dance.bars {
+            if b.r#move.as_ref().is_some_and(uses) {
+                *b = BarDoc { state: BarKind::Empty, r#move: None, search: b.search.take() };
+            }
+            if let Some(s) = &mut b.search {
+                for list in [&mut s.shown, &mut s.liked, &mut s.round] {
+                    list.retain(|k| !uses(k));
+                }
+            }
+        }
+        doc.tags.retain(|t| t.clip.source != id);
+        if doc.character.is_some_and(|c| c.source == id) {
+            doc.character = None;
+        }
+        self.commit(doc);
+        Ok(())
+    }
+
+    /// Re-cuts a clip at a stated tempo (counts per minute), or at its detected tempo again
+    /// (`None`). Bars holding a move of the earlier cut keep it (it stays in the library,
+    /// never offered again). Refused, with nothing changed, for a clip that is not in the
+    /// dance library or a tempo at which it holds no 4 counts. Undoable.
+    pub fn set_clip_tempo(&mut self, clip: ClipRef, tempo_bpm: Option<f32>) -> Result<ClipInfo, ProjectError> {
+        let source = self.doc.source(clip.source).ok_or(ProjectError::NoSuchSource { source_id: clip.source.0 })?.clone();
+        let mut doc = self.doc.clone();
+        let Some(src) = doc.sources.iter_mut().find(|s| s.id == clip.source) else {
+            return Err(ProjectError::NoSuchSource { source_id: clip.source.0 });
+        };
+        src.cut_tempos_bpm.retain(|(c, _)| *c != clip.clip);
+        if let Some(t) = tempo_bpm {
+            src.cut_tempos_bpm.push((clip.clip, t));
+            src.cut_tempos_bpm.sort_by_key(|(c, _)| *c);
+        }
+        // Try the cut on the derived state of the new document before committing it.
+        let saved_doc = std::mem::replace(&mut self.doc, doc.clone());
+        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        let info = self.derived.clip(clip).cloned();
+        self.doc = saved_doc;
+        let info = info.ok_or(ProjectError::NoSuchClip { source_id: clip.source.0, file_name: source.file_name.clone(), clip: clip.clip, clips: 0 })?;
+        if let Some(reason) = &info.refused {
+            return Err(ProjectError::NotDanceable { file_name: source.file_name, clip: clip.clip, reason: reason.clone() });
+        }
+        self.commit(doc);
+        Ok(info)
+    }
+
+    /// Sets the song: its file name and bytes as given (`None` for the demo song), the
+    /// loudness envelope the host computed from it, and the analysis options. Refused when the
+    /// analysis fails. The dance keeps bar `i`'s state while the new grid has a bar `i`.
+    /// Undoable.
+    pub fn set_song(&mut self, file_name: &str, audio: Option<&[u8]>, envelope: &RmsEnvelope, options: AnalysisOptions) -> Result<(), ProjectError> {
+        let grid = crate::music::analyze(envelope, &options)?;
+        let mut doc = self.doc.clone();
+        let audio = audio.map(|a| self.blobs.put(a));
+        let envelope = self.blobs.put(&encode_envelope(envelope));
+        doc.song = Some(SongDoc { file_name: file_name.to_string(), audio, envelope, options, corrections: Vec::new() });
+        doc.dance.bars.resize(grid.bars.len(), BarDoc::default());
+        self.commit(doc);
+        Ok(())
+    }
+
+    /// Corrects the song's grid (tempo, taps, beats per bar, first downbeat, nudge). Refused
+    /// with the music error when the correction is invalid. Undoable.
+    pub fn correct_grid(&mut self, correction: GridCorrection) -> Result<(), ProjectError> {
+        let mut doc = self.doc.clone();
+        let song = doc.song.as_mut().ok_or(ProjectError::NoSong)?;
+        song.corrections.push(correction);
+        let grid = derive::song_grid(song, &self.blobs)?;
+        doc.dance.bars.resize(grid.bars.len(), BarDoc::default());
+        self.commit(doc);
+        Ok(())
+    }
+
+    /// Back to the analysed grid (every correction dropped). Undoable.
+    pub fn reset_grid(&mut self) -> Result<(), ProjectError> {
+        let mut doc = self.doc.clone();
+        let song = doc.song.as_mut().ok_or(ProjectError::NoSong)?;
+        song.corrections.clear();
+        let grid = derive::song_grid(song, &self.blobs)?;
+        doc.dance.bars.resize(grid.bars.len(), BarDoc::default());
+        self.commit(doc);
+        Ok(())
+    }
+
+    /// Tags a clip so text can call it (an empty list removes its tags). Undoable.
+    pub fn set_tags(&mut self, clip: ClipRef, tags: Vec<String>) -> Result<(), ProjectError> {
+        self.check_clip(clip)?;
+        let mut doc = self.doc.clone();
+        doc.tags.retain(|t| t.clip != clip);
+        if !tags.is_empty() {
+            doc.tags.push(Tagging { clip, tags });
+        }
+        self.commit(doc);
+        Ok(())
+    }
+
+    /// The texts typed (the text panel's contents). Undoable.
+    pub fn set_texts(&mut self, texts: Vec<String>) {
+        let mut doc = self.doc.clone();
+        doc.texts = texts;
+        self.commit(doc);
+    }
+
+    /// The character the dance is shown on (`None`: the stick figure). Undoable.
+    pub fn set_character(&mut self, clip: Option<ClipRef>) -> Result<(), ProjectError> {
+        if let Some(c) = clip {
+            self.check_clip(c)?;
+        }
+        let mut doc = self.doc.clone();
+        doc.character = clip;
+        self.commit(doc);
+        Ok(())
+    }
+
+    /// Where the viewer looks from. A view setting, not an edit: kept and saved, not undone.
+    pub fn set_camera(&mut self, camera: Option<Camera>) {
+        self.doc.camera = camera;
+    }
+
+    fn check_clip(&mut self, clip: ClipRef) -> Result<(), ProjectError> {
+        let source = self.doc.source(clip.source).ok_or(ProjectError::NoSuchSource { source_id: clip.source.0 })?.clone();
+        let d = self.derived();
+        let clips = d.clips().iter().filter(|c| c.clip.source == clip.source).count();
+        if clip.clip as usize >= clips && !self.missing.iter().any(|m| m.hash == source.blob) {
+            return Err(ProjectError::NoSuchClip { source_id: clip.source.0, file_name: source.file_name, clip: clip.clip, clips });
+        }
+        Ok(())
+    }
+
+    /// Runs a choreography command on the dance (see [`crate::choreo::Choreography`]) and keeps
+    /// the result by keys.
+    fn dance_edit<R>(&mut self, f: impl FnOnce(&mut crate::choreo::Choreography, &crate::choreo::SegmentLibrary) -> Result<R, ChoreoError>) -> Result<R, ProjectError> {
+        if let Some(m) = self.missing.first() {
+            if self.doc.sources.iter().any(|s| self.missing.iter().any(|m| m.hash == s.blob)) {
+                return Err(ProjectError::Incomplete { count: self.missing.len(), first: m.what.clone() });
+            }
+        }
+        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        let mut ch = self.derived.choreography(&self.doc)?;
+        let out = f(&mut ch, self.derived.library())?;
+        let mut doc = self.doc.clone();
+        doc.dance = self.derived.dance_doc(&ch);
+        self.commit(doc);
+        Ok(out)
+    }
+
+    /// The bar's current candidates, opening its search when none is open.
+    pub fn candidates(&mut self, bar: usize) -> Result<Vec<MoveKey>, ProjectError> {
+        let round = self.dance_edit(|ch, lib| ch.candidates(lib, bar))?;
+        Ok(self.derived.keys_of(&round))
+    }
+
+    /// Search: likes `liked` (from the current round) and returns the next round.
+    pub fn search(&mut self, bar: usize, liked: &[MoveKey]) -> Result<Vec<MoveKey>, ProjectError> {
+        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        let liked = self.derived.indices_of(liked)?;
+        let round = self.dance_edit(|ch, lib| ch.search(lib, bar, &liked))?;
+        Ok(self.derived.keys_of(&round))
+    }
+
+    /// Forgets the bar's search.
+    pub fn reset_search(&mut self, bar: usize) -> Result<bool, ProjectError> {
+        self.dance_edit(|ch, _| ch.reset_search(bar))
+    }
+
+    /// Pins a move to a bar.
+    pub fn set(&mut self, bar: usize, key: &MoveKey) -> Result<(), ProjectError> {
+        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        let seg = self.derived.indices_of(std::slice::from_ref(key))?[0];
+        self.dance_edit(|ch, lib| ch.set(lib, bar, seg))
+    }
+
+    /// Unpins a bar (its move stays, as generated).
+    pub fn unpin(&mut self, bar: usize) -> Result<(), ProjectError> {
+        self.dance_edit(|ch, _| ch.unpin(bar))
+    }
+
+    /// Empties a bar.
+    pub fn clear(&mut self, bar: usize) -> Result<(), ProjectError> {
+        self.dance_edit(|ch, _| ch.clear(bar))
+    }
+
+    /// Fills every bar that is not pinned (spec §G).
+    pub fn generate(&mut self) -> Result<GenerateReport, ProjectError> {
+        self.dance_edit(|ch, lib| ch.generate(lib))
+    }
+
+    /// ρ of spec §F eq. 1, in 0..=1.
+    pub fn set_rho(&mut self, rho: f32) -> Result<(), ProjectError> {
+        self.dance_edit(|ch, _| ch.set_rho(rho))
+    }
+
+    /// Weight of the music term of the filling, in 0..=100.
+    pub fn set_music_weight(&mut self, w: f32) -> Result<(), ProjectError> {
+        self.dance_edit(|ch, _| ch.set_music_weight(w))
+    }
+
+    /// The filling's weights in force.
+    pub fn fill_weights(&self) -> FillWeights {
+        self.doc.dance.settings.fill
+    }
+
+    /// The whole dance as one canonical clip; frame 0 is song time 0. Bars whose move cannot
+    /// be found (a missing source) stand neutral.
+    pub fn render_dance(&mut self, options: &crate::choreo::RenderOptions) -> Result<Clip, ProjectError> {
+        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        let ch = self.derived.choreography(&self.doc)?;
+        let mut clip = ch.render(self.derived.library(), options);
+        clip.name = "Dance".into();
+        clip.source = "choreography".into();
+        Ok(clip)
+    }
+}

@@ -1,0 +1,104 @@
+//! The golden `.odori` file of schema version 1 (`tests/golden/project_v1.odori`, written once by
+//! `tests/tools/make_golden_project.rs` and reviewed; never written by the tests) opens with
+//! this build: everything its maker put in is there, it renders, and its history works. When
+//! the schema changes, this file must keep opening (through `project::file::migrate`).
+
+use odori_core::choreo::RenderOptions;
+use odori_core::library::builtin_moves;
+use odori_core::project::{self, BarKind, MoveKey};
+
+const GOLDEN: &[u8] = include_bytes!("../golden/project_v1.odori");
+
+#[test]
+fn golden_v1_opens_with_everything_in_it() {
+    let opened = project::open(GOLDEN).expect("the golden v1 file opens");
+    assert!(opened.missing.is_empty(), "{:?}", opened.missing);
+    assert_eq!(opened.migrated_from, None);
+    let mut p = opened.project;
+    let doc = p.doc().clone();
+    assert_eq!(doc.name, "golden v1");
+    assert_eq!(doc.sources.len(), 1);
+    assert_eq!(doc.sources[0].file_name, "tiny.bvh");
+    assert_eq!(doc.sources[0].options.fps_override, Some(30.0));
+    let song = doc.song.as_ref().expect("song");
+    assert_eq!((song.file_name.as_str(), song.audio.is_none(), song.corrections.len()), ("demo", true, 1));
+    assert_eq!(song.corrections[0].nudge_secs, Some(0.02));
+    assert_eq!(doc.tags.len(), 1);
+    assert_eq!(doc.tags[0].tags, vec!["lean".to_string(), "傾く".to_string()]);
+    assert_eq!(doc.texts[1], "歩きながら右手を振る");
+    assert_eq!(doc.dance.settings.rho, 0.5);
+    assert_eq!(doc.camera.map(|c| c.distance_m), Some(4.0));
+    // Bar 2 is pinned to the eighth built-in move, named by what it is.
+    assert_eq!(doc.dance.bars[1].state, BarKind::Pinned);
+    assert_eq!(doc.dance.bars[1].r#move, Some(MoveKey::Builtin { r#move: builtin_moves()[7] }));
+    let search = doc.dance.bars[3].search.as_ref().expect("bar 4's search");
+    assert_eq!((search.rounds, search.liked.len(), search.shown.len()), (2, 2, 12));
+    assert!(doc.dance.bars.iter().all(|b| b.state != BarKind::Empty), "Generate filled every bar");
+    // Every key resolves in this build's library, and the dance renders.
+    for b in &doc.dance.bars {
+        let k = b.r#move.as_ref().unwrap();
+        assert!(p.derived().index_of(k).is_some(), "{k:?} is not in the library");
+    }
+    let clip = p.render_dance(&RenderOptions::default()).expect("render");
+    assert!(clip.frame_count() > 60);
+    // The tiny BVH is not humanoid: it is kept and listed but not in the dance library.
+    assert!(p.derived().clips()[0].refused.is_some());
+    // History: undo goes back through the edits to the project's start.
+    let steps = p.undo_history().len();
+    assert!(steps >= 9, "{steps} undo steps");
+    while p.undo() {}
+    assert!(p.doc().song.is_none() && p.doc().sources.is_empty());
+    while p.redo() {}
+    assert_eq!(p.doc(), &doc);
+    // Saved again by this build, it reopens identically.
+    let again = project::open(&project::save(&p).unwrap()).unwrap().project;
+    assert!(again == p);
+}
+
+/// The error kinds the `.d.ts` lists (crate/web/src/lib.rs) cover every kind the project and
+/// file errors (and the importer's, which a project edit passes on) can have.
+#[test]
+fn dts_error_kinds_cover_the_core_kinds() {
+    use odori_core::import::ImportError;
+    use odori_core::music::MusicError;
+    use odori_core::project::{FileError, ProjectError};
+    let lib_rs = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../crate/web/src/lib.rs")).expect("crate/web/src/lib.rs");
+    let start = lib_rs.find("export interface OdoriError").expect("the OdoriError interface");
+    let dts = &lib_rs[start..start + lib_rs[start..].find('}').unwrap()];
+    let f = || "f".to_string();
+    let file_errors = [
+        FileError::Empty,
+        FileError::NotOdori { start: f() },
+        FileError::Truncated { size_bytes: 1, message: f() },
+        FileError::Corrupt { entry: f(), message: f() },
+        FileError::NoManifest,
+        FileError::BadManifest { line: 1, column: 1, message: f() },
+        FileError::BadProject { message: f() },
+        FileError::WrongFormat { format: f() },
+        FileError::NewerVersion { found: 2, supported: 1 },
+        FileError::TooOld { found: 0, oldest: 1 },
+        FileError::BlobMismatch { name: f(), actual: f() },
+        FileError::Write { message: f() },
+    ];
+    let project_errors = [
+        ProjectError::Import(ImportError::Empty { file: f() }),
+        ProjectError::Import(ImportError::UnknownFormat { file: f(), start: f() }),
+        ProjectError::Import(ImportError::Bvh { file: f(), line: 1, column: 1, message: f() }),
+        ProjectError::Import(ImportError::Gltf { file: f(), message: f() }),
+        ProjectError::Import(ImportError::Unsupported { file: f(), message: f() }),
+        ProjectError::Import(ImportError::Invalid { file: f(), message: f() }),
+        ProjectError::Music(MusicError::TooFewTaps { taps: 1, min: 4 }),
+        ProjectError::Choreo(odori_core::choreo::ChoreoError::NoBars),
+        ProjectError::NoSong,
+        ProjectError::NoSuchSource { source_id: 1 },
+        ProjectError::NoSuchClip { source_id: 1, file_name: f(), clip: 1, clips: 0 },
+        ProjectError::NotDanceable { file_name: f(), clip: 0, reason: f() },
+        ProjectError::UnknownMove { key: f() },
+        ProjectError::Incomplete { count: 1, first: f() },
+        ProjectError::BadEnvelope { message: f() },
+    ];
+    let kinds: Vec<&str> = file_errors.iter().map(FileError::kind).chain(project_errors.iter().map(ProjectError::kind)).collect();
+    for k in kinds {
+        assert!(dts.contains(&format!("\"{k}\"")), "error kind {k:?} is missing from the OdoriError kinds in the .d.ts");
+    }
+}

@@ -1,0 +1,117 @@
+// The npm package's Project handle (spec §K) from Node: edits by stable move keys, undo/redo,
+// `.odori` save → open identical, the manifest + blobs autosave writes, and typed errors for
+// bad files (the open project untouched).
+import { test } from "node:test";
+import assert from "node:assert/strict";
+import { readFileSync, existsSync } from "node:fs";
+import { fileURLToPath } from "node:url";
+import { dirname, join } from "node:path";
+
+const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
+const data = join(root, "..", "shared", "data");
+if (!existsSync(data)) throw new Error(`../shared/data is missing: these tests read the shared real data beside the repository (${data})`);
+const pkg = await import(join(root, "pkg", "odori.js"));
+pkg.initSync({ module: readFileSync(join(root, "pkg", "odori_bg.wasm")) });
+const { Project, DemoSong, Song, Library } = pkg;
+
+const read = (rel) => new Uint8Array(readFileSync(join(data, rel)));
+
+/** A demo-song envelope computed the way the page does (mono RMS, one band). */
+function demoEnvelope() {
+  const demo = DemoSong.render(22050);
+  const hop = Math.round(demo.sampleRateHz * 0.01);
+  const s = demo.samples;
+  const n = Math.floor(s.length / hop);
+  const band = new Float32Array(n);
+  for (let f = 0; f < n; f++) {
+    let acc = 0;
+    for (let i = f * hop; i < (f + 1) * hop; i++) acc += s[i] * s[i];
+    band[f] = Math.sqrt(acc / hop);
+  }
+  return { hopSecs: hop / demo.sampleRateHz, bands: [band] };
+}
+
+function sampleProject() {
+  const p = new Project();
+  p.setName("node test");
+  const env = demoEnvelope();
+  p.setSong("demo", undefined, env.hopSecs, env.bands, undefined);
+  const src = p.addSource("salsa_10.bvh", read("mocap/cmu-salsa/salsa_10.bvh"), { fpsOverride: 60 });
+  p.correctGrid({ nudgeSecs: 0.01 });
+  const round = p.candidates(0);
+  p.set(1, round[0]);
+  p.search(0, [round[1]]);
+  p.generate();
+  p.setTags({ source: src.id, clip: 0 }, ["salsa", "サルサ"]);
+  p.setTexts(["サルサして、喜ぶ。"]);
+  return { p, src, round };
+}
+
+function poses(p) {
+  const lib = new Library();
+  const id = p.renderDance(lib);
+  const d = lib.clip(id).durationSecs;
+  return [0, 0.25, 0.5, 0.75, 1].map((k) => Array.from(lib.jointPositions(id, d * k)));
+}
+
+test("a project saves to .odori and opens identical, dance included", () => {
+  const { p, src } = sampleProject();
+  assert.equal(src.clips.length, 1);
+  assert.ok(src.clips[0].cut.segments > 10, "the salsa clip is cut into segments");
+  const doc = p.doc();
+  assert.equal(doc.dance.bars[1].state, "pinned");
+  assert.equal(doc.dance.bars[1].move.kind, "builtin");
+  const bytes = p.save();
+  const q = Project.open(bytes);
+  assert.deepEqual(q.doc(), doc);
+  assert.deepEqual(Array.from(q.save()), Array.from(bytes), "saving again gives the same bytes");
+  assert.deepEqual(poses(q), poses(p));
+  assert.deepEqual(q.grid().beatTimesSecs, p.grid().beatTimesSecs);
+  assert.ok(q.undo() && p.undo());
+  assert.deepEqual(q.doc(), p.doc(), "undo works the same after the round trip");
+});
+
+test("manifest + blobs rebuild the project (what autosave stores)", () => {
+  const { p } = sampleProject();
+  const manifest = p.manifest();
+  const hashes = p.blobHashes();
+  assert.equal(hashes.length, 2, "the BVH and the song envelope, once each");
+  const store = new Map(hashes.map((h) => [h, p.blob(h)]));
+  const q = Project.fromManifest(manifest, (h) => store.get(h));
+  assert.deepEqual(q.doc(), p.doc());
+  assert.deepEqual(q.missing(), []);
+  // A blob the store lost: the rest opens and the missing item is named.
+  const bvhHash = p.doc().sources[0].blob;
+  const r = Project.fromManifest(manifest, (h) => (h === bvhHash ? undefined : store.get(h)));
+  assert.equal(r.missing().length, 1);
+  assert.equal(r.missing()[0].what, "motion file salsa_10.bvh");
+  assert.throws(() => r.generate(), (e) => e.name === "OdoriError" && e.kind === "missing-blob");
+});
+
+test("bad files throw typed errors and leave the open project alone", () => {
+  const { p } = sampleProject();
+  const good = p.save();
+  const before = p.save();
+  const cases = [
+    [new Uint8Array(0), "empty"],
+    [read("mocap/cmu-salsa/salsa_10.bvh").slice(0, 2000), "not-odori"],
+    [good.slice(0, good.length >> 1), "truncated"],
+  ];
+  const flipped = good.slice();
+  flipped[flipped.length >> 1] ^= 0xff;
+  cases.push([flipped, "corrupt"]);
+  for (const [bytes, kind] of cases) {
+    assert.throws(() => Project.open(bytes), (e) => e.name === "OdoriError" && e.kind === kind && e.message.length > 10, kind);
+  }
+  assert.deepEqual(Array.from(p.save()), Array.from(before));
+});
+
+test("edits are refused with typed errors and change nothing", () => {
+  const { p } = sampleProject();
+  const doc = p.doc();
+  assert.throws(() => p.set(999, { kind: "builtin", move: doc.dance.bars[1].move.move }), (e) => e.kind === "choreo");
+  assert.throws(() => p.correctGrid({ bpm: 9999 }), (e) => e.kind === "music");
+  assert.throws(() => p.addSource("x.bvh", new TextEncoder().encode("HIERARCHY\nROOT"), undefined), (e) => e.kind === "bvh" && e.file === "x.bvh");
+  assert.throws(() => p.correctGrid({ bmp: 120 }), (e) => e.kind === "bad-argument");
+  assert.deepEqual(p.doc(), doc);
+});
