@@ -3,6 +3,39 @@
 use odori_core::import::ImportError;
 use wasm_bindgen::prelude::*;
 
+/// Declares the list of error kinds once: the Rust constant [`ERROR_KINDS`] and the TypeScript
+/// union `OdoriErrorKind` come from the same literals, so they cannot drift apart.
+macro_rules! error_kinds {
+    ($($kind:literal: $doc:literal,)*) => {
+        /// Every `kind` an `OdoriError` thrown to JS can carry.
+        pub const ERROR_KINDS: &[&str] = &[$($kind),*];
+        #[wasm_bindgen(typescript_custom_section)]
+        const TS_ERROR_KINDS: &'static str = concat!(
+            "/** The `kind` of an `OdoriError` (the list is also `errorKinds()`). */\nexport type OdoriErrorKind =",
+            $("\n  /** ", $doc, " */\n  | \"", $kind, "\""),*,
+            ";\n"
+        );
+    };
+}
+
+error_kinds! {
+    "empty": "import: the file is empty",
+    "unknown-format": "import: not a BVH, glTF or GLB file",
+    "bvh": "import: a BVH syntax or structure error (message has line:column)",
+    "gltf": "import: an invalid glTF/GLB file",
+    "unsupported": "import: a valid file using something the importer does not handle",
+    "invalid": "import: values that make no motion (no frames, bad frame time, ...)",
+    "not-found": "no clip (or segment) with this id",
+    "bad-argument": "an argument or option is missing, misspelt or out of range",
+    "gpu": "no WebGPU/WebGL2 adapter, device or canvas surface",
+    "not-humanoid": "the clip does not map onto the canonical humanoid",
+    "search": "search by example failed (bad query or parameters)",
+    "cancelled": "search cancelled by its progress callback",
+    "music": "song analysis failed (bad envelope, samples or correction)",
+    "choreo": "choreography: no bars yet, clip already added, bad bar or segment",
+    "text": "text to animation: nothing could be animated, or a clip cannot be tagged",
+}
+
 /// Builds the `OdoriError` thrown to JS.
 pub struct OdoriError {
     pub kind: &'static str,
