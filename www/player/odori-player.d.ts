@@ -23,10 +23,11 @@ export interface OdoriPlayerClip {
   durationSecs: number;
 }
 
-export interface OdoriPlayerEventMap extends HTMLElementEventMap {
+/** The player's own events (its `progress` and `error` are CustomEvents, as <model-viewer>'s). */
+export interface OdoriPlayerEventMap {
   load: CustomEvent<{ clip: OdoriPlayerClip }>;
   progress: CustomEvent<OdoriPlayerProgressDetail>;
-  error: CustomEvent<OdoriPlayerErrorDetail> & ErrorEvent;
+  error: CustomEvent<OdoriPlayerErrorDetail>;
   ended: CustomEvent<Record<string, never>>;
   firstpose: CustomEvent<{ ms: number; backend: "webgpu" | "webgl2" }>;
 }
@@ -73,6 +74,7 @@ export declare class OdoriPlayer extends HTMLElement {
   pause(): void;
 
   addEventListener<K extends keyof OdoriPlayerEventMap>(type: K, listener: (this: OdoriPlayer, ev: OdoriPlayerEventMap[K]) => unknown, options?: boolean | AddEventListenerOptions): void;
+  addEventListener<K extends keyof HTMLElementEventMap>(type: K, listener: (this: OdoriPlayer, ev: HTMLElementEventMap[K]) => unknown, options?: boolean | AddEventListenerOptions): void;
   addEventListener(type: string, listener: EventListenerOrEventListenerObject, options?: boolean | AddEventListenerOptions): void;
 }
 

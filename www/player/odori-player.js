@@ -19,13 +19,13 @@
 // - Where neither WebGPU nor WebGL2 exists the poster stays, with a message.
 // - Autoplay with sound is often blocked: the player then starts muted and shows "Unmute".
 
-const ENGINE_PATH = "./odori_player.js";
 let enginePromise = null;
 let graphicsProbe = null;
 
 /** Loads (once per page) the player build of the engine. */
 function loadEngine() {
-  enginePromise ??= import(ENGINE_PATH).then(async (engine) => {
+  // A literal specifier, so bundlers (esbuild, vite) follow it into the player build.
+  enginePromise ??= import("./odori_player.js").then(async (engine) => {
     const wasm = OdoriPlayer.wasmUrl;
     await engine.default(wasm ? { module_or_path: wasm } : undefined);
     return engine;
