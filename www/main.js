@@ -11,6 +11,7 @@ import { SearchClient } from "./search/client.js";
 import { SearchPanel } from "./ui/search-panel.js";
 import { TextPanel } from "./ui/text-panel.js";
 import { ChoreoPanel } from "./ui/choreo-panel.js";
+import { installShare } from "./share.js";
 
 const t0 = performance.now();
 const $ = (sel) => document.querySelector(sel);
@@ -85,11 +86,13 @@ async function main() {
   bindSongInput($("#song-input"), songPanel, messages);
   // The built-in demo song, analysed like any file (WebAudio envelope → core), after the
   // first pose is on screen.
-  loadDemoSong(songPanel, messages);
+  const demoSong = loadDemoSong(songPanel, messages);
+  // Share by link: a button beside Generate; a #dance=… link is applied once the bars are in.
+  const share = installShare({ choreo, messages, songReady: demoSong });
   // A new canvas size clears the canvas: draw again at once (a paused figure would
   // otherwise vanish until the next edit).
   new ResizeObserver(() => { fitCanvas(canvas); viewer.resize(canvas.width, canvas.height); player.drawNow(); }).observe(canvas);
-  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, text: textPanel, choreo, version: version() };
+  window.odori = { library, viewer, player, panel, loader, messages, song: songPanel, songPlayer, search: searchPanel, searchClient, text: textPanel, choreo, share, version: version() };
 }
 
 async function analyse(buffer) {
