@@ -63,12 +63,19 @@ const PAGES = {
     document.body.append(m);
   </script>`,
 };
+// localhost is a secure context (WebGPU needs one); nothing listens there: the test serves every request.
+const ORIGIN_HOST = "localhost:47123";
+const ORIGIN = `http://${ORIGIN_HOST}`;
+const external = new Set();
 const TYPES = { ".js": "text/javascript", ".wasm": "application/wasm", ".html": "text/html", ".glb": "model/gltf-binary" };
 
 async function measure(backend, pageName) {
   const { browser, page } = await launch(backend);
   try {
-    await page.route("http://bench.test/**", (route) => {
+    // Anything else (model-viewer may reach for a CDN) fails at once: no internet here, and a
+    // hanging request would be counted against it.
+    await page.route((url) => url.host !== ORIGIN_HOST, (route) => { external.add(route.request().url()); return route.abort(); });
+    await page.route(`${ORIGIN}/**`, (route) => {
       const path = new URL(route.request().url()).pathname;
       let body;
       if (PAGES[path]) body = PAGES[path];
@@ -78,7 +85,7 @@ async function measure(backend, pageName) {
       else return route.fulfill({ status: 404, body: "" });
       return route.fulfill({ status: 200, contentType: TYPES[extname(path)] || "application/octet-stream", body });
     });
-    await page.goto(`http://bench.test${pageName}?backend=${backend}`);
+    await page.goto(`${ORIGIN}${pageName}?backend=${backend}`);
     await page.waitForFunction(() => window.result, null, { timeout: 120000 });
     return await page.evaluate(() => window.result);
   } finally {
@@ -101,5 +108,6 @@ for (const [label, backend, path] of rows) {
   results[`${label} ${backend}`] = a;
   console.log(`  ${label.padEnd(20)} ${backend.padEnd(7)} attach → first pose ${a.toFixed(0).padStart(6)} ms   navigation → first pose ${n.toFixed(0).padStart(6)} ms   (${rs.map((r) => r.attachToFirstMs.toFixed(0)).join(", ")})`);
 }
+if (external.size) console.log(`  requests to other hosts, refused: ${[...external].join(", ")}`);
 const ours = results["odori player webgl2"], theirs = results[`model-viewer ${mvVersion} webgl2`];
 console.log(`  odori / model-viewer (attach → first pose, WebGL2): ${(ours / theirs).toFixed(2)}; goal ≤ 1: ${ours <= theirs ? "met" : "NOT met"}`);
