@@ -1,8 +1,9 @@
 // The npm package as a stranger gets it: `npm pack` of pkg/, installed from the tarball into a
 // clean folder outside the repository; there (a) the Node example (examples/node/dance.mjs)
-// analyses a song, generates a dance and writes joint positions, (b) a page bundled with
-// esbuild from the package (the full engine and the <odori-player> element) loads and draws in
-// headless Chromium, (c) `tsc --noEmit --strict` passes on the TypeScript example.
+// analyses a song, generates a dance and writes joint positions, and so does every Node example
+// of pkg/README.md, (b) pages bundled with esbuild and with vite from the package (the full
+// engine and the <odori-player> element) load and draw in headless Chromium, (c)
+// `tsc --noEmit --strict` passes on the TypeScript example.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { execFileSync } from "node:child_process";
@@ -101,10 +102,8 @@ test("(c) tsc --noEmit --strict passes on the TypeScript example against the ins
   assert.throws(() => sh(bin("tsc"), ["--noEmit", "-p", join(ts, "tsconfig.bad.json")], ts), (e) => /Type 'number' is not assignable to type 'string'/.test(e.stdout));
 });
 
-test("(b) a page bundled with esbuild from the package loads and draws (full engine and <odori-player>)", async () => {
-  const web = join(dir, "web");
-  mkdirSync(web, { recursive: true });
-  writeFileSync(join(web, "entry.js"), `
+/** The page's script: the full engine draws on a canvas, and an <odori-player> plays. */
+const ENTRY = `
 import init, { Library, Viewer } from "odori";
 import { OdoriPlayer } from "odori/player";
 OdoriPlayer.backend = "webgl2";
@@ -125,27 +124,25 @@ const viewer = await Viewer.create(canvas, { backend: "webgl2" });
 viewer.frameFigures(library, [{ clip: clip.id, timeSecs: 0 }]);
 viewer.draw(library, [{ clip: clip.id, timeSecs: 0.5 }]);
 document.body.dataset.engine = "drawn";
-`);
-  writeFileSync(join(web, "index.html"), '<!doctype html><meta charset="utf-8"><body style="margin:0;background:#fff"><script type="module" src="dist/entry.js"></script>');
-  sh(bin("esbuild"), ["entry.js", "--bundle", "--format=esm", "--target=es2022", "--outdir=dist"], web);
-  // The bundler leaves the .wasm files to be served beside the bundle (pkg/README.md says so).
-  copyFileSync(join(dir, "node_modules", "odori", "odori_bg.wasm"), join(web, "dist", "odori_bg.wasm"));
-  copyFileSync(join(dir, "node_modules", "odori", "player", "odori_player_bg.wasm"), join(web, "dist", "odori_player_bg.wasm"));
-  console.log("esbuild output:", readdirSync(join(web, "dist")).join(", "));
+`;
+
+/** Opens a bundled page (files under `web`) in Chromium; asserts both figures are drawn. */
+async function pageDraws(web, label) {
   const { browser, page, logs } = await launch("webgl2");
   try {
     const types = { ".html": "text/html", ".js": "text/javascript", ".wasm": "application/wasm" };
-    await page.route("http://consumer.test/**", (route) => {
-      const path = new URL(route.request().url()).pathname.replace(/^\/$/, "/index.html");
+    // localhost: a secure context like any https page; nothing listens, the test answers.
+    await page.route("http://localhost:47124/**", (route) => {
+      const path = new URL(route.request().url()).pathname.replace(/\/$/, "/index.html");
       try {
         return route.fulfill({ status: 200, contentType: types[extname(path)] || "application/octet-stream", body: readFileSync(join(web, path)) });
       } catch {
         return route.fulfill({ status: 404, body: "not found" });
       }
     });
-    await page.goto("http://consumer.test/");
-    await page.waitForFunction(() => document.body.dataset.engine === "drawn" && document.getElementById("player").lastFrame, null, { timeout: 60000 })
-      .catch((e) => { throw new Error(`${e.message}\n${logs.join("\n")}`); });
+    await page.goto("http://localhost:47124/");
+    await page.waitForFunction(() => document.body.dataset.engine === "drawn" && document.getElementById("player")?.lastFrame, null, { timeout: 60000 })
+      .catch((e) => { throw new Error(`${label}: ${e.message}\n${logs.join("\n")}`); });
     await page.waitForTimeout(200);
     const shot = async (sel, name) => {
       const png = await (await page.$(sel)).screenshot({ path: join(artifacts, name) });
@@ -163,11 +160,39 @@ document.body.dataset.engine = "drawn";
         return n;
       }, png.toString("base64"));
     };
-    const enginePixels = await shot("#engine", "npm-esbuild-engine.png");
-    const playerPixels = await shot("#player", "npm-esbuild-player.png");
-    assert.ok(enginePixels > 200, `the full engine drew ${enginePixels} figure pixels`);
-    assert.ok(playerPixels > 200, `the player drew ${playerPixels} figure pixels`);
+    const enginePixels = await shot("#engine", `npm-${label}-engine.png`);
+    const playerPixels = await shot("#player", `npm-${label}-player.png`);
+    assert.ok(enginePixels > 200, `${label}: the full engine drew ${enginePixels} figure pixels`);
+    assert.ok(playerPixels > 200, `${label}: the player drew ${playerPixels} figure pixels`);
   } finally {
     await browser.close();
   }
+}
+
+test("(b) a page bundled with esbuild from the package loads and draws (full engine and <odori-player>)", async () => {
+  const web = join(dir, "web-esbuild");
+  mkdirSync(web, { recursive: true });
+  writeFileSync(join(web, "entry.js"), ENTRY);
+  writeFileSync(join(web, "index.html"), '<!doctype html><meta charset="utf-8"><body style="margin:0;background:#fff"><script type="module" src="dist/entry.js"></script>');
+  sh(bin("esbuild"), ["entry.js", "--bundle", "--format=esm", "--target=es2022", "--outdir=dist"], web);
+  // esbuild leaves the .wasm files to be served beside the bundle (pkg/README.md says so).
+  copyFileSync(join(dir, "node_modules", "odori", "odori_bg.wasm"), join(web, "dist", "odori_bg.wasm"));
+  copyFileSync(join(dir, "node_modules", "odori", "player", "odori_player_bg.wasm"), join(web, "dist", "odori_player_bg.wasm"));
+  await pageDraws(web, "esbuild");
+});
+
+test("(b) a page bundled with vite from the package loads and draws (the .wasm files found by vite itself)", async () => {
+  const src = join(dir, "web-vite");
+  mkdirSync(src, { recursive: true });
+  writeFileSync(join(src, "main.js"), ENTRY);
+  writeFileSync(join(src, "index.html"), '<!doctype html><meta charset="utf-8"><body style="margin:0;background:#fff"><script type="module" src="./main.js"></script>');
+  try {
+    sh(bin("vite"), ["build", src, "--outDir", join(src, "dist"), "--target", "es2022", "--logLevel", "warn"], src);
+  } catch (e) {
+    assert.fail(`vite build failed:\n${e.stdout}${e.stderr}`);
+  }
+  const assets = readdirSync(join(src, "dist", "assets"));
+  console.log("vite output:", assets.join(", "));
+  assert.ok(assets.some((f) => /^odori_bg-.*\.wasm$/.test(f)) && assets.some((f) => /^odori_player_bg-.*\.wasm$/.test(f)), "vite emitted both .wasm files");
+  await pageDraws(join(src, "dist"), "vite");
 });
