@@ -47,6 +47,16 @@ struct PlayerSettings {
     features: Vec<String>,
     /// A folder whose files are copied into `out_dir` (the custom element).
     element: String,
+    /// Overrides of the release profile for this build (size over speed), if any.
+    #[serde(default)]
+    release: Option<PlayerRelease>,
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "kebab-case")]
+struct PlayerRelease {
+    cargo_profile: String,
+    wasm_opt: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -211,7 +221,12 @@ fn build_web(dev: bool, only: Option<&str>) {
             args.push("--features".into());
             args.push(player.features.join(","));
         }
-        build_wasm(&root, &settings, profile, &args, &player_dir, &player.out_name);
+        // In release, the player may use its own cargo profile and wasm-opt flags.
+        let own = match (&player.release, dev) {
+            (Some(r), false) => Some(ProfileSettings { cargo_profile: r.cargo_profile.clone(), wasm_opt: r.wasm_opt.clone(), keep_debug_names: profile.keep_debug_names }),
+            _ => None,
+        };
+        build_wasm(&root, &settings, own.as_ref().unwrap_or(profile), &args, &player_dir, &player.out_name);
         let element = root.join(&player.element);
         let files = std::fs::read_dir(&element).unwrap_or_else(|e| fail(format!("{}: {e}", element.display())));
         for f in files.flatten().filter(|f| f.path().is_file()) {
