@@ -12,6 +12,7 @@ import { SearchPanel } from "./ui/search-panel.js";
 import { TextPanel } from "./ui/text-panel.js";
 import { ChoreoPanel } from "./ui/choreo-panel.js";
 import { ExportPanel } from "./ui/export-panel.js";
+import { installShare } from "./share.js";
 
 const t0 = performance.now();
 const $ = (sel) => document.querySelector(sel);
@@ -131,11 +132,12 @@ async function main() {
   songPanel.attachTransport(player);
   player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
   bindSongInput($("#song-input"), songPanel, messages);
-  Object.assign(odori, { song: songPanel, search: searchPanel, searchClient, text: textPanel, choreo });
+  // The built-in demo song, analysed like any file (WebAudio envelope → core), in a task of its own.
+  const demoSong = nextTask().then(() => loadDemoSong(songPanel, messages));
+  // Share by link: a button beside Generate; a #dance=… link is applied once the bars are in.
+  const share = installShare({ choreo, messages, songReady: demoSong });
+  Object.assign(odori, { song: songPanel, search: searchPanel, searchClient, text: textPanel, choreo, share });
   document.body.dataset.ready = "1";
-  // The built-in demo song, analysed like any file (WebAudio envelope → core).
-  await nextTask();
-  loadDemoSong(songPanel, messages);
 }
 
 /** A Choreographer with its built-in moves added in slices of about SLICE_MS each. */

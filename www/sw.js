@@ -6,7 +6,7 @@ const SHELL = [
   "./", "./index.html", "./style.css", "./favicon.svg", "./main.js", "./search-worker.js", "./demo-song-worker.js",
   "./ui/messages.js", "./ui/library-panel.js", "./ui/player.js", "./ui/files.js", "./ui/song-panel.js",
   "./ui/search-panel.js", "./ui/text-panel.js", "./ui/choreo-panel.js", "./ui/export-panel.js",
-  "./audio/rms.js", "./audio/song-player.js", "./search/client.js",
+  "./audio/rms.js", "./audio/song-player.js", "./search/client.js", "./share.js",
   "./pkg/odori.js", "./pkg/odori_bg.wasm",
 ];
 

@@ -55,16 +55,18 @@ fn golden_v1_opens_with_everything_in_it() {
     assert!(again == p);
 }
 
-/// The error kinds the `.d.ts` lists (crate/web/src/lib.rs) cover every kind the project and
+/// The error kinds the `.d.ts` lists (`error_kinds!` in crate/web/src/error.rs) cover every kind the project and
 /// file errors (and the importer's, which a project edit passes on) can have.
 #[test]
 fn dts_error_kinds_cover_the_core_kinds() {
     use odori_core::import::ImportError;
     use odori_core::music::MusicError;
     use odori_core::project::{FileError, ProjectError};
-    let lib_rs = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../crate/web/src/lib.rs")).expect("crate/web/src/lib.rs");
-    let start = lib_rs.find("export interface OdoriError").expect("the OdoriError interface");
-    let dts = &lib_rs[start..start + lib_rs[start..].find('}').unwrap()];
+    // The kinds are declared once, in `error_kinds!` (crate/web/src/error.rs), which makes both
+    // the TypeScript union `OdoriErrorKind` and `errorKinds()`.
+    let error_rs = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../crate/web/src/error.rs")).expect("crate/web/src/error.rs");
+    let start = error_rs.find("error_kinds! {").expect("the error_kinds! list");
+    let dts = &error_rs[start..start + error_rs[start..].find("\n}").unwrap()];
     let f = || "f".to_string();
     let file_errors = [
         FileError::Empty,

@@ -5,6 +5,59 @@ use odori_core::import::ImportError;
 use odori_core::project::{FileError, ProjectError};
 use wasm_bindgen::prelude::*;
 
+/// Declares the list of error kinds once: the Rust constant [`ERROR_KINDS`] and the TypeScript
+/// union `OdoriErrorKind` come from the same literals, so they cannot drift apart.
+macro_rules! error_kinds {
+    ($($kind:literal: $doc:literal,)*) => {
+        /// Every `kind` an `OdoriError` thrown to JS can carry.
+        pub const ERROR_KINDS: &[&str] = &[$($kind),*];
+        #[wasm_bindgen(typescript_custom_section)]
+        const TS_ERROR_KINDS: &'static str = concat!(
+            "/** The `kind` of an `OdoriError` (the list is also `errorKinds()`). */\nexport type OdoriErrorKind =",
+            $("\n  /** ", $doc, " */\n  | \"", $kind, "\""),*,
+            ";\n"
+        );
+    };
+}
+
+error_kinds! {
+    "empty": "import: the file is empty",
+    "unknown-format": "import: not a BVH, glTF or GLB file",
+    "bvh": "import: a BVH syntax or structure error (message has line:column)",
+    "gltf": "import: an invalid glTF/GLB file",
+    "unsupported": "import: a valid file using something the importer does not handle",
+    "invalid": "import: values that make no motion (no frames, bad frame time, ...)",
+    "not-found": "no clip (or segment) with this id",
+    "bad-argument": "an argument or option is missing, misspelt or out of range",
+    "gpu": "no WebGPU/WebGL2 adapter, device or canvas surface",
+    "not-humanoid": "the clip does not map onto the canonical humanoid",
+    "search": "search by example failed (bad query or parameters)",
+    "cancelled": "search cancelled by its progress callback",
+    "music": "song analysis failed (bad envelope, samples or correction)",
+    "choreo": "choreography: no bars yet, clip already added, bad bar or segment",
+    "text": "text to animation: nothing could be animated, or a clip cannot be tagged",
+    "no-song": "project: a dance edit needs a song first",
+    "missing-blob": "project: an item's bytes were missing when the project was opened (the dance is read-only)",
+    "not-odori": ".odori: not an Odori project file (no manifest, or another format)",
+    "truncated": ".odori: the file ends early",
+    "corrupt": ".odori: a damaged container, manifest, document or blob",
+    "newer-version": ".odori: written by a newer version of Odori",
+    "too-old": ".odori: written by a version too old to migrate",
+    "write": ".odori: the file could not be written",
+    "export-bad-clip": "export: the clip or range has no frames to export",
+    "export-bad-mesh": "export: the character's mesh cannot be written",
+    "export-empty-skeleton": "export: the skeleton has no joints",
+    "export-encode": "export: the file could not be encoded",
+    "export-no-clips": "export: nothing to export",
+    "export-not-finite": "export: a position or rotation is not a finite number",
+    "export-skeleton-mismatch": "export: the motion does not fit the character's skeleton",
+    "export-needs-canonical": "export: this export needs a clip on the canonical humanoid",
+    "character-no-skin": "character: the file has no skinned mesh",
+    "character-not-humanoid": "character: the rig does not map onto the canonical humanoid",
+    "character-missing-limbs": "character: the rig lacks limbs the motion needs (named in the message)",
+    "motion-not-humanoid": "character: the motion to put on the character is not humanoid",
+}
+
 /// Builds the `OdoriError` thrown to JS.
 pub struct OdoriError {
     pub kind: &'static str,

@@ -6,30 +6,54 @@
 //! imports, the `file`; no panic crosses into JS with a bad file (and if a bug panics, the
 //! panic hook prints it to the console).
 
-mod choreo;
 mod error;
 mod export;
 mod library;
-mod music;
-mod project;
-mod search;
-mod text;
 mod viewer;
+// Authoring (feature "authoring", on by default): left out of the player build.
+#[cfg(feature = "authoring")]
+mod choreo;
+#[cfg(feature = "authoring")]
+mod music;
+#[cfg(feature = "authoring")]
+mod project;
+#[cfg(feature = "authoring")]
+mod search;
+#[cfg(feature = "authoring")]
+mod text;
 
-pub use choreo::Choreographer;
-pub use error::OdoriError;
+pub use error::{OdoriError, ERROR_KINDS};
 pub use library::Library;
-pub use music::{DemoSong, Song};
-pub use project::Project;
-pub use search::SearchIndex;
-pub use text::TextAnimator;
 pub use viewer::Viewer;
+#[cfg(feature = "authoring")]
+pub use choreo::Choreographer;
+#[cfg(feature = "authoring")]
+pub use music::{DemoSong, Song};
+#[cfg(feature = "authoring")]
+pub use project::Project;
+#[cfg(feature = "authoring")]
+pub use search::SearchIndex;
+#[cfg(feature = "authoring")]
+pub use text::TextAnimator;
 
 use wasm_bindgen::prelude::*;
 
 #[wasm_bindgen(start)]
 pub fn start() {
     console_error_panic_hook::set_once();
+}
+
+/// Every `kind` an `OdoriError` can have, in this build and the other (the list is the same).
+#[wasm_bindgen(js_name = errorKinds, unchecked_return_type = "OdoriErrorKind[]")]
+pub fn error_kinds() -> Vec<String> {
+    ERROR_KINDS.iter().map(|k| k.to_string()).collect()
+}
+
+/// True in the full engine, false in the player build (no search, text, music analysis or
+/// choreography).
+#[wasm_bindgen(js_name = hasAuthoring)]
+pub fn has_authoring() -> bool {
+    cfg!(feature = "authoring")
 }
 
 /// The engine's version (the crate's).
@@ -43,10 +67,8 @@ const TS_TYPES: &'static str = r#"
 /** What an Odori call throws: an Error with name "OdoriError", a machine-readable kind and, for imports, the file. */
 export interface OdoriError extends Error {
   name: "OdoriError";
-  /** "empty" | "unknown-format" | "bvh" | "gltf" | "unsupported" | "invalid" | "not-found" | "bad-argument" | "gpu"
-   *  | project edits: "music" | "choreo" | "no-song" | "not-humanoid" | "missing-blob"
-   *  | .odori files: "not-odori" | "truncated" | "corrupt" | "newer-version" | "too-old" | "write" */
-  kind: string;
+  /** One of `errorKinds()`. */
+  kind: OdoriErrorKind;
   file?: string;
 }
 export type HumanoidStatus =

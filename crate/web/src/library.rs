@@ -14,6 +14,7 @@ pub(crate) struct Entry {
     pub id: u32,
     pub clip: Clip,
     pub format: &'static str,
+    #[cfg_attr(not(feature = "authoring"), allow(dead_code))]
     pub humanoid: HumanoidMap,
     pub status: HumanoidStatus,
     /// Shared by every clip of one glTF file; the id lets the viewer upload it once.
@@ -99,6 +100,7 @@ impl Library {
 
     /// Adds a clip the engine made (text animation, a generated dance); with `replace`, it
     /// takes that clip's place and id.
+    #[cfg_attr(not(feature = "authoring"), allow(dead_code))]
     pub(crate) fn insert_clip(&mut self, clip: Clip, format: &'static str, replace: Option<u32>) -> u32 {
         let map = HumanoidMap::from_skeleton(&clip.skeleton);
         let status = map.status(&clip.skeleton, Some(&clip));

@@ -146,6 +146,14 @@ impl Viewer {
         })
     }
 
+    /// Gives the graphics device back now instead of when the garbage collector gets to it
+    /// (browsers allow only a few live contexts per page: an embedded player that scrolls
+    /// off-screen calls this). The viewer cannot be used afterwards. On WebGL2 the caller
+    /// also loses the canvas's context (`WEBGL_lose_context`), which wgpu does not do.
+    pub fn release(self) {
+        self.renderer.device().destroy();
+    }
+
     /// "webgpu" or "webgl2".
     #[wasm_bindgen(getter)]
     pub fn backend(&self) -> String {

@@ -1,10 +1,12 @@
 //! Odori's build tool.
 //!
-//! - `build-web [--dev]`: cargo (wasm32) → wasm-bindgen → wasm-opt → `pkg/` with its
-//!   `package.json`, driven by `wasm-pack.toml`. Uses the active rustc's wasm32 std when it has
+//! - `build-web [--dev] [--only full|player]`: cargo (wasm32) → wasm-bindgen → wasm-opt →
+//!   `pkg/` with its `package.json`, driven by `wasm-pack.toml`; then the player build (the
+//!   same crate without authoring) → `pkg/player/` with the `<odori-player>` element. Uses the active rustc's wasm32 std when it has
 //!   one; otherwise builds std from source with Debian's `rustc-web`/`cargo-web` (see
 //!   ../shared guides and the README).
-//! - `serve [--port N]`: a static server for the app (`/` → `www/`, `/pkg/` → `pkg/`), on
+//! - `serve [--port N]`: a static server for the app (`/` → `www/`, `/pkg/` → `pkg/`,
+//!   `/examples/` → `examples/`), on
 //!   127.0.0.1, printing the URL.
 //! - `check-core-deps`: fails when the core's dependency tree contains a web crate.
 
@@ -19,6 +21,7 @@ use serde::Deserialize;
 struct Settings {
     package: PackageSettings,
     toolchain: ToolchainSettings,
+    player: PlayerSettings,
     profile: std::collections::BTreeMap<String, ProfileSettings>,
 }
 
@@ -32,6 +35,28 @@ struct PackageSettings {
     target: String,
     npm_name: String,
     description: String,
+}
+
+/// The second build: the bindings crate with other cargo features, plus the element's files.
+#[derive(Deserialize)]
+#[serde(rename_all = "kebab-case")]
+struct PlayerSettings {
+    out_dir: String,
+    out_name: String,
+    no_default_features: bool,
+    features: Vec<String>,
+    /// A folder whose files are copied into `out_dir` (the custom element).
+    element: String,
+    /// Overrides of the release profile for this build (size over speed), if any.
+    #[serde(default)]
+    release: Option<PlayerRelease>,
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "kebab-case")]
+struct PlayerRelease {
+    cargo_profile: String,
+    wasm_opt: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -97,13 +122,11 @@ fn cdylib_name(root: &Path, krate: &str) -> String {
         .unwrap_or_else(|| fail(format!("package {krate} has no cdylib target")))
 }
 
-fn build_web(dev: bool) {
-    let root = root();
-    let settings: Settings = toml::from_str(&std::fs::read_to_string(root.join("wasm-pack.toml")).expect("wasm-pack.toml"))
-        .unwrap_or_else(|e| fail(format!("wasm-pack.toml: {e}")));
-    let profile_name = if dev { "dev" } else { "release" };
-    let profile = settings.profile.get(profile_name).unwrap_or_else(|| fail(format!("wasm-pack.toml has no [profile.{profile_name}]")));
+/// One wasm build: cargo with these feature flags → wasm-bindgen → wasm-opt into `out_dir`.
+/// Returns (bytes after wasm-bindgen, bytes after wasm-opt).
+fn build_wasm(root: &Path, settings: &Settings, profile: &ProfileSettings, feature_args: &[String], out_dir: &Path, out_name: &str) -> (u64, u64) {
     let target = &settings.toolchain.target;
+    let started = std::time::Instant::now();
 
     // 1. cargo build for wasm32.
     let mut cargo;
@@ -121,14 +144,14 @@ fn build_web(dev: bool) {
     } else {
         fail("no Rust toolchain with a wasm32 std: run ./dev setup (installs rustc-web, cargo-web, rust-web-src, lld-19)");
     }
-    cargo.current_dir(&root).args(["build", "--target", target, "-p", &settings.package.krate, "--profile", &profile.cargo_profile]);
+    cargo.current_dir(root).args(["build", "--target", target, "-p", &settings.package.krate, "--profile", &profile.cargo_profile]).args(feature_args);
     if !settings.toolchain.rustflags.is_empty() {
         let var = format!("CARGO_TARGET_{}_RUSTFLAGS", target.to_uppercase().replace(['-', '.'], "_"));
         cargo.env(var, settings.toolchain.rustflags.join(" "));
     }
     run(&mut cargo);
     let dir_name = if profile.cargo_profile == "dev" { "debug" } else { &profile.cargo_profile };
-    let wasm_in = root.join("target").join(target).join(dir_name).join(format!("{}.wasm", cdylib_name(&root, &settings.package.krate)));
+    let wasm_in = root.join("target").join(target).join(dir_name).join(format!("{}.wasm", cdylib_name(root, &settings.package.krate)));
     if !wasm_in.exists() {
         fail(format!("expected {} after the cargo build", wasm_in.display()));
     }
@@ -141,34 +164,83 @@ fn build_web(dev: bool) {
             settings.toolchain.wasm_bindgen, settings.toolchain.wasm_bindgen
         ));
     }
-    let out_dir = root.join(&settings.package.out_dir);
-    std::fs::create_dir_all(&out_dir).expect("create pkg/");
+    std::fs::create_dir_all(out_dir).unwrap_or_else(|e| fail(format!("create {}: {e}", out_dir.display())));
     let mut wb = Command::new("wasm-bindgen");
-    wb.arg(&wasm_in).arg("--out-dir").arg(&out_dir).args(["--out-name", &settings.package.out_name, "--target", &settings.package.target]);
+    wb.arg(&wasm_in).arg("--out-dir").arg(out_dir).args(["--out-name", out_name, "--target", &settings.package.target]);
     if profile.keep_debug_names {
         wb.arg("--keep-debug");
     }
     run(&mut wb);
 
     // 3. wasm-opt from node_modules (npm's binaryen).
-    let wasm_out = out_dir.join(format!("{}_bg.wasm", settings.package.out_name));
+    let wasm_out = out_dir.join(format!("{out_name}_bg.wasm"));
     let raw = std::fs::metadata(&wasm_out).map(|m| m.len()).unwrap_or(0);
     if !profile.wasm_opt.is_empty() {
         let wasm_opt = root.join("node_modules/.bin/wasm-opt");
         if !wasm_opt.exists() {
-            fail("node_modules/.bin/wasm-opt is missing: run npm ci (./dev setup does)");
+            fail("node_modules/.bin/wasm-opt is missing: run npm install (./dev setup does)");
         }
         let tmp = out_dir.join("opt.wasm");
         run(Command::new(&wasm_opt).args(&profile.wasm_opt).arg(&wasm_out).arg("-o").arg(&tmp));
         std::fs::rename(&tmp, &wasm_out).expect("replace wasm");
     }
     let opt = std::fs::metadata(&wasm_out).map(|m| m.len()).unwrap_or(0);
+    eprintln!("xtask: {} ready in {:.0} s: raw {raw} bytes, after wasm-opt {opt} bytes", wasm_out.display(), started.elapsed().as_secs_f64());
+    (raw, opt)
+}
 
-    // 4. package.json for npm consumers.
+fn build_web(dev: bool, only: Option<&str>) {
+    let root = root();
+    let settings: Settings = toml::from_str(&std::fs::read_to_string(root.join("wasm-pack.toml")).expect("wasm-pack.toml"))
+        .unwrap_or_else(|e| fail(format!("wasm-pack.toml: {e}")));
+    let profile_name = if dev { "dev" } else { "release" };
+    let profile = settings.profile.get(profile_name).unwrap_or_else(|| fail(format!("wasm-pack.toml has no [profile.{profile_name}]")));
+    let (build_full, build_player) = match only {
+        None => (true, true),
+        Some("full") => (true, false),
+        Some("player") => (false, true),
+        Some(other) => fail(format!("--only takes full or player, not '{other}'")),
+    };
+    let out_dir = root.join(&settings.package.out_dir);
+    let name = &settings.package.out_name;
+
+    // The full engine: the crate's default features.
+    if build_full {
+        build_wasm(&root, &settings, profile, &[], &out_dir, name);
+    }
+
+    // The player build: other features, its own folder, the element's files beside it.
+    let player = &settings.player;
+    let player_dir = root.join(&player.out_dir);
+    if build_player {
+        let mut args = Vec::new();
+        if player.no_default_features {
+            args.push("--no-default-features".to_string());
+        }
+        if !player.features.is_empty() {
+            args.push("--features".into());
+            args.push(player.features.join(","));
+        }
+        // In release, the player may use its own cargo profile and wasm-opt flags.
+        let own = match (&player.release, dev) {
+            (Some(r), false) => Some(ProfileSettings { cargo_profile: r.cargo_profile.clone(), wasm_opt: r.wasm_opt.clone(), keep_debug_names: profile.keep_debug_names }),
+            _ => None,
+        };
+        build_wasm(&root, &settings, own.as_ref().unwrap_or(profile), &args, &player_dir, &player.out_name);
+        let element = root.join(&player.element);
+        let files = std::fs::read_dir(&element).unwrap_or_else(|e| fail(format!("{}: {e}", element.display())));
+        for f in files.flatten().filter(|f| f.path().is_file()) {
+            std::fs::copy(f.path(), player_dir.join(f.file_name())).unwrap_or_else(|e| fail(format!("copy {}: {e}", f.path().display())));
+        }
+    }
+
+    // 4. package.json for npm consumers: `odori` is the full engine, `odori/player` the element
+    //    with the player build (the path of the player folder inside the package).
+    let player_rel = player_dir.strip_prefix(&out_dir).unwrap_or_else(|_| fail("[player] out-dir must be inside [package] out-dir")).to_string_lossy().replace('\\', "/");
     let version = output(Command::new("cargo").current_dir(&root).args(["pkgid", "-p", &settings.package.krate]))
         .and_then(|s| s.rsplit(['@', '#']).next().map(str::to_string))
         .unwrap_or_else(|| "0.0.0".into());
-    let name = &settings.package.out_name;
+    let pname = &player.out_name;
     let pkg = serde_json::json!({
         "name": settings.package.npm_name,
         "version": version,
@@ -178,18 +250,26 @@ fn build_web(dev: bool) {
         "main": format!("{name}.js"),
         "module": format!("{name}.js"),
         "types": format!("{name}.d.ts"),
-        "files": [format!("{name}_bg.wasm"), format!("{name}.js"), format!("{name}.d.ts"), format!("{name}_bg.wasm.d.ts"), "README.md"],
-        "sideEffects": ["./snippets/*"],
-        "keywords": ["dance", "motion", "animation", "bvh", "gltf", "wasm", "webgpu"]
+        "exports": {
+            ".": { "types": format!("./{name}.d.ts"), "default": format!("./{name}.js") },
+            "./player": { "types": format!("./{player_rel}/odori-player.d.ts"), "default": format!("./{player_rel}/odori-player.js") },
+            "./player/engine": { "types": format!("./{player_rel}/{pname}.d.ts"), "default": format!("./{player_rel}/{pname}.js") },
+            format!("./{name}_bg.wasm"): format!("./{name}_bg.wasm"),
+            format!("./player/{pname}_bg.wasm"): format!("./{player_rel}/{pname}_bg.wasm"),
+            "./package.json": "./package.json"
+        },
+        "files": [format!("{name}_bg.wasm"), format!("{name}.js"), format!("{name}.d.ts"), format!("{name}_bg.wasm.d.ts"), format!("{player_rel}/"), "README.md"],
+        "sideEffects": ["./snippets/*", format!("./{player_rel}/odori-player.js")],
+        "keywords": ["dance", "motion", "animation", "bvh", "gltf", "wasm", "webgpu", "web-component"]
     });
     std::fs::write(out_dir.join("package.json"), serde_json::to_string_pretty(&pkg).unwrap() + "\n").expect("write package.json");
-    eprintln!("xtask: pkg/ ready: {} raw {} bytes, after wasm-opt {} bytes", wasm_out.display(), raw, opt);
+    eprintln!("xtask: pkg/ ready (full engine in {}, player in {})", out_dir.display(), player_dir.display());
 
     // 5. The app's one npm runtime module, vendored so the page (static files, no bundler)
     //    loads it offline: idb, the IndexedDB wrapper autosave uses (www/project/store.js).
     let idb = root.join("node_modules/idb/build/index.js");
     if !idb.exists() {
-        fail("node_modules/idb is missing: run npm ci (./dev setup does)");
+        fail("node_modules/idb is missing: run npm install (./dev setup does)");
     }
     std::fs::create_dir_all(root.join("www/vendor")).expect("create www/vendor/");
     std::fs::copy(&idb, root.join("www/vendor/idb.js")).expect("copy idb into www/vendor/");
@@ -205,11 +285,14 @@ fn content_type(path: &Path) -> &'static str {
         "svg" => "image/svg+xml",
         "png" => "image/png",
         "ts" => "text/plain; charset=utf-8",
+        "glb" => "model/gltf-binary",
+        "ogg" => "audio/ogg",
+        "wav" => "audio/wav",
         _ => "application/octet-stream",
     }
 }
 
-fn respond(mut stream: TcpStream, www: &Path, pkg: &Path) {
+fn respond(mut stream: TcpStream, www: &Path, pkg: &Path, examples: &Path) {
     let mut reader = BufReader::new(stream.try_clone().expect("clone stream"));
     let mut request_line = String::new();
     if reader.read_line(&mut request_line).is_err() {
@@ -224,9 +307,12 @@ fn respond(mut stream: TcpStream, www: &Path, pkg: &Path) {
     let (method, target) = (parts.next().unwrap_or(""), parts.next().unwrap_or("/"));
     let path = target.split(['?', '#']).next().unwrap_or("/");
     let path = percent_decode(path);
-    let (base, rel) = match path.strip_prefix("/pkg/") {
-        Some(rest) => (pkg, rest.to_string()),
-        None => (www, path.trim_start_matches('/').to_string()),
+    let (base, rel) = if let Some(rest) = path.strip_prefix("/pkg/") {
+        (pkg, rest.to_string())
+    } else if let Some(rest) = path.strip_prefix("/examples/") {
+        (examples, rest.to_string())
+    } else {
+        (www, path.trim_start_matches('/').to_string())
     };
     let rel = if rel.is_empty() || rel.ends_with('/') { format!("{rel}index.html") } else { rel };
     let file = base.join(&rel);
@@ -266,7 +352,7 @@ fn percent_decode(s: &str) -> String {
 
 fn serve(port: u16) {
     let root = root();
-    let (www, pkg) = (root.join("www"), root.join("pkg"));
+    let (www, pkg, examples) = (root.join("www"), root.join("pkg"), root.join("examples"));
     if !pkg.join("odori_bg.wasm").exists() {
         fail("pkg/odori_bg.wasm is missing: build first (./dev serve does)");
     }
@@ -275,8 +361,8 @@ fn serve(port: u16) {
     println!("Odori is served at http://localhost:{port}/  (Ctrl-C stops)");
     let _ = std::io::stdout().flush();
     for stream in listener.incoming().flatten() {
-        let (www, pkg) = (www.clone(), pkg.clone());
-        std::thread::spawn(move || respond(stream, &www, &pkg));
+        let (www, pkg, examples) = (www.clone(), pkg.clone(), examples.clone());
+        std::thread::spawn(move || respond(stream, &www, &pkg, &examples));
     }
 }
 
@@ -295,12 +381,15 @@ fn check_core_deps() {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
-        Some("build-web") => build_web(args.iter().any(|a| a == "--dev")),
+        Some("build-web") => {
+            let only = args.iter().position(|a| a == "--only").and_then(|i| args.get(i + 1)).map(String::as_str);
+            build_web(args.iter().any(|a| a == "--dev"), only)
+        }
         Some("serve") => {
             let port = args.iter().position(|a| a == "--port").and_then(|i| args.get(i + 1)).and_then(|p| p.parse().ok()).unwrap_or(8080);
             serve(port)
         }
         Some("check-core-deps") => check_core_deps(),
-        _ => fail("usage: xtask build-web [--dev] | serve [--port N] | check-core-deps"),
+        _ => fail("usage: xtask build-web [--dev] [--only full|player] | serve [--port N] | check-core-deps"),
     }
 }

@@ -1,0 +1,113 @@
+// Benchmark (issue 12): embedding a dance, side by side with <model-viewer> 4.4.0 measured in
+// the same run on the same machine. Prints
+//  - bundle sizes, raw and gzip: the player (element + player build: JS + wasm), the full
+//    engine (JS + wasm) and model-viewer (its one minified module, three.js inside);
+//  - time from element attach to the first drawn pose / frame, on the same GLB
+//    (RobotExpressive, 464 KB) in headless Chromium (WebGL2 for both: model-viewer has no
+//    WebGPU path; ours also on WebGPU), median of N cold page loads; plus the time from
+//    navigation start, which counts model-viewer's script (it carries three.js) and our
+//    engine fetch alike.
+// Not a test. Run after `./dev build`: node tests/bench/embed.mjs [runs]
+import { readFileSync, statSync } from "node:fs";
+import { gzipSync } from "node:zlib";
+import { join, extname } from "node:path";
+import { root, data, launch } from "../browser/harness.mjs";
+
+const RUNS = Number(process.argv[2] || 5);
+const MV = join(root, "node_modules", "@google", "model-viewer", "dist", "model-viewer.min.js");
+const mvVersion = JSON.parse(readFileSync(join(root, "node_modules", "@google", "model-viewer", "package.json"), "utf8")).version;
+
+function size(files) {
+  const bufs = files.map((f) => readFileSync(f));
+  return { raw: bufs.reduce((s, b) => s + b.length, 0), gzip: bufs.reduce((s, b) => s + gzipSync(b, { level: 9 }).length, 0) };
+}
+const kb = (n) => `${(n / 1024).toFixed(0)} KB`;
+const mb = (n) => `${(n / 1048576).toFixed(2)} MB`;
+
+const sizes = {
+  "odori player (odori/player)": size(["player/odori-player.js", "player/odori_player.js", "player/odori_player_bg.wasm"].map((f) => join(root, "pkg", f))),
+  "odori full engine (odori)": size(["odori.js", "odori_bg.wasm"].map((f) => join(root, "pkg", f))),
+  [`model-viewer ${mvVersion}`]: size([MV]),
+};
+console.log("bundle sizes (wasm + JS):");
+for (const [k, v] of Object.entries(sizes)) console.log(`  ${k.padEnd(34)} raw ${mb(v.raw).padStart(8)}   gzip ${kb(v.gzip).padStart(8)}`);
+const player = sizes["odori player (odori/player)"], fullS = sizes["odori full engine (odori)"], mv = sizes[`model-viewer ${mvVersion}`];
+console.log(`  player / full engine (gzip): ${(player.gzip / fullS.gzip).toFixed(2)}; player / model-viewer (gzip): ${(player.gzip / mv.gzip).toFixed(2)}; goal player ≤ 1.0 MB gzip: ${player.gzip <= 1048576 ? "met" : "NOT met"}`);
+
+// One origin serves both pages, the packages and the GLB.
+const GLB = join(data, "gltf", "RobotExpressive.glb");
+const PAGES = {
+  "/odori.html": `<!doctype html><body style="margin:0"><script type="module">
+    import { OdoriPlayer } from "/pkg/player/odori-player.js";
+    OdoriPlayer.backend = new URLSearchParams(location.search).get("backend");
+    const p = document.createElement("odori-player");
+    p.setAttribute("src", "/robot.glb"); p.setAttribute("animation-name", "Dance"); p.setAttribute("loading", "eager");
+    p.style.cssText = "width:640px;height:480px;display:block";
+    p.addEventListener("firstpose", (e) => { window.result = { attachToFirstMs: e.detail.ms, sinceNavMs: performance.now(), backend: e.detail.backend }; });
+    p.addEventListener("error", (e) => { window.result = { error: e.detail.message }; });
+    document.body.append(p);
+  </script>`,
+  "/mv.html": `<!doctype html><body style="margin:0"><script type="module">
+    import "/mv/model-viewer.min.js";
+    await customElements.whenDefined("model-viewer");
+    const m = document.createElement("model-viewer");
+    m.setAttribute("src", "/robot.glb"); m.setAttribute("animation-name", "Dance"); m.setAttribute("autoplay", ""); m.setAttribute("loading", "eager");
+    m.style.cssText = "width:640px;height:480px;display:block";
+    const t0 = performance.now();
+    // model-viewer has no first-frame event: 'load' fires when the model is ready to render;
+    // its first frame is drawn in the next animation frame, so we wait two.
+    m.addEventListener("load", () => requestAnimationFrame(() => requestAnimationFrame(() => {
+      window.result = { attachToFirstMs: performance.now() - t0, sinceNavMs: performance.now(), backend: "webgl2" };
+    })));
+    m.addEventListener("error", (e) => { window.result = { error: String(e.detail?.type || "error") }; });
+    document.body.append(m);
+  </script>`,
+};
+// localhost is a secure context (WebGPU needs one); nothing listens there: the test serves every request.
+const ORIGIN_HOST = "localhost:47123";
+const ORIGIN = `http://${ORIGIN_HOST}`;
+const external = new Set();
+const TYPES = { ".js": "text/javascript", ".wasm": "application/wasm", ".html": "text/html", ".glb": "model/gltf-binary" };
+
+async function measure(backend, pageName) {
+  const { browser, page } = await launch(backend);
+  try {
+    // Anything else (model-viewer may reach for a CDN) fails at once: no internet here, and a
+    // hanging request would be counted against it.
+    await page.route((url) => url.host !== ORIGIN_HOST, (route) => { external.add(route.request().url()); return route.abort(); });
+    await page.route(`${ORIGIN}/**`, (route) => {
+      const path = new URL(route.request().url()).pathname;
+      let body;
+      if (PAGES[path]) body = PAGES[path];
+      else if (path === "/robot.glb") body = readFileSync(GLB);
+      else if (path.startsWith("/mv/")) body = readFileSync(MV);
+      else if (path.startsWith("/pkg/")) body = readFileSync(join(root, path));
+      else return route.fulfill({ status: 404, body: "" });
+      return route.fulfill({ status: 200, contentType: TYPES[extname(path)] || "application/octet-stream", body });
+    });
+    await page.goto(`${ORIGIN}${pageName}?backend=${backend}`);
+    await page.waitForFunction(() => window.result, null, { timeout: 120000 });
+    return await page.evaluate(() => window.result);
+  } finally {
+    await browser.close();
+  }
+}
+
+const median = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length / 2)]; };
+console.log(`\ntime to the first drawn pose, ${RUNS} cold page loads each, median (GLB ${kb(statSync(GLB).size)}):`);
+const rows = [["odori player", "webgl2", "/odori.html"], [`model-viewer ${mvVersion}`, "webgl2", "/mv.html"], ["odori player", "webgpu", "/odori.html"]];
+const results = {};
+for (const [label, backend, path] of rows) {
+  const rs = [];
+  for (let i = 0; i < RUNS; i++) {
+    const r = await measure(backend, path);
+    if (r.error) throw new Error(`${label} on ${backend}: ${r.error}`);
+    rs.push(r);
+  }
+  const a = median(rs.map((r) => r.attachToFirstMs)), n = median(rs.map((r) => r.sinceNavMs));
+  results[`${label} ${backend}`] = a;
+  console.log(`  ${label.padEnd(20)} ${backend.padEnd(7)} attach → first pose ${a.toFixed(0).padStart(6)} ms   navigation → first pose ${n.toFixed(0).padStart(6)} ms   (${rs.map((r) => r.attachToFirstMs.toFixed(0)).join(", ")})`);
+}
+if (external.size) console.log(`  requests to other hosts, refused: ${[...external].join(", ")}`);
+const ours = results["odori player webgl2"], theirs = results[`model-viewer ${mvVersion} webgl2`];
+console.log(`  odori / model-viewer (attach → first pose, WebGL2): ${(ours / theirs).toFixed(2)}; goal ≤ 1: ${ours <= theirs ? "met" : "NOT met"}`);

@@ -1,0 +1,73 @@
+// Share by link (issue 12): a dance of built-in moves on the demo song goes into the URL
+// fragment; opening that link in a fresh browser context gives the same bars and the same
+// moves (pinned bars pinned, generated ones generated). A damaged link is reported by name.
+import { test, before, after } from "node:test";
+import assert from "node:assert/strict";
+import { startServer, launch, openApp } from "./harness.mjs";
+
+let server;
+before(async () => { server = await startServer(); });
+after(() => server && server.stop());
+
+const danceOf = (page) => page.evaluate(() => window.odori.choreo.choreographer.view().map((v) => ({
+  start: Math.round(v.bar.startSecs * 1000), end: Math.round(v.bar.endSecs * 1000), kind: v.state.kind, segment: v.state.segment ?? null,
+})));
+
+async function demoReady(page) {
+  await page.waitForFunction(() => document.body.dataset.song === "demo" && window.odori.choreo.choreographer.view().length > 0, null, { timeout: 60000 });
+}
+
+test("a dance's link opens the same dance in a fresh page; a damaged link is reported", async () => {
+  const { browser, page, logs } = await launch("webgl2");
+  try {
+    await openApp(page, server, "webgl2");
+    await demoReady(page);
+    // Build a dance: pin two bars to candidates, generate the rest.
+    const pins = await page.evaluate(async () => {
+      const { choreo } = window.odori;
+      await choreo.prepareJoins();
+      const c = choreo.choreographer;
+      const a = c.candidates(1)[2], b = c.candidates(5)[4];
+      c.set(1, a);
+      c.set(5, b);
+      c.generate();
+      choreo.refresh();
+      return [a, b];
+    });
+    const original = await danceOf(page);
+    assert.ok(original.length >= 16, `${original.length} bars`);
+    assert.deepEqual([original[1].kind, original[1].segment, original[5].segment], ["pinned", pins[0], pins[1]]);
+    assert.ok(original.filter((b) => b.kind === "generated").length >= original.length - 2, "the other bars are generated");
+    // The button puts the link in the address bar; it is the same as share.link().
+    await page.click("#dance-share");
+    const link = await page.evaluate(() => window.odori.share.link());
+    assert.equal(await page.evaluate(() => location.href), link);
+    assert.match(link, /#dance=1\.demo\.\d+\./);
+    console.log(`link: ${link.length} characters for ${original.length} bars`);
+
+    // A fresh context (nothing shared with the first page but the link); the first page is
+    // closed so the new one is the only one drawing.
+    await page.close();
+    const ctx = await browser.newContext({ viewport: { width: 1280, height: 800 } });
+    const fresh = await ctx.newPage();
+    assert.match(link, /\?backend=webgl2#/, "the link keeps the page's own query");
+    await fresh.goto(link);
+    await fresh.waitForFunction(() => document.body.dataset.shared, null, { timeout: 90000 }).catch(async (e) => {
+      throw new Error(`${e.message}: ${JSON.stringify(await fresh.evaluate(() => ({ ...document.body.dataset, messages: document.querySelector("#messages")?.textContent })))}`);
+    });
+    assert.equal(await fresh.evaluate(() => document.body.dataset.shared), "applied", await fresh.textContent("#messages"));
+    assert.deepEqual(await danceOf(fresh), original, "same bars, same moves, same pinned/generated");
+    await ctx.close();
+
+    // A damaged link: a clear message, the app still works.
+    const ctx2 = await browser.newContext();
+    const bad = await ctx2.newPage();
+    await bad.goto(server.url + "?backend=webgl2#dance=1.demo.3.p1.zz!.-");
+    await bad.waitForFunction(() => document.body.dataset.shared === "error", null, { timeout: 60000 });
+    assert.match(await bad.textContent("#messages"), /Dance link: this dance link is damaged/);
+    await ctx2.close();
+    assert.ok(!logs.some((l) => l.includes("[pageerror]")), logs.join("\n"));
+  } finally {
+    await browser.close();
+  }
+});

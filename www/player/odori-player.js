@@ -1,0 +1,575 @@
+// <odori-player>: a dance on any web page, in one tag.
+//
+// A small custom element (Rust cannot subclass HTMLElement) over the player build of the
+// engine (odori_player.js: Library + Viewer, no authoring). Attribute names follow
+// <model-viewer> where they mean the same: src, poster, loading, autoplay, camera-controls,
+// animation-name; plus music (an audio URL, or "#id" of an <audio> on the page: its clock
+// drives the figure), loop, character ("auto" | "stick") and backend ("auto" | "webgpu" |
+// "webgl2"). Methods play(), pause(); properties currentTime, duration, paused; events load,
+// progress, error, ended.
+//
+// Why it is shaped this way:
+// - The engine is fetched only when the element comes near the viewport (IntersectionObserver),
+//   or at once with loading="eager"; every player on a page shares the one engine module.
+// - Browsers allow a handful of live GPU contexts per page (Chromium: 16 WebGL). A player that
+//   leaves the viewport pauses, destroys its device, loses its WebGL context and drops its
+//   canvas; it takes a fresh one when it comes back. Many players on one page never run out.
+// - With music, the audio element's clock is the only clock: each frame reads
+//   audio.currentTime and draws that instant of the dance, so figure and song cannot drift.
+// - Where neither WebGPU nor WebGL2 exists the poster stays, with a message.
+// - Autoplay with sound is often blocked: the player then starts muted and shows "Unmute".
+
+let enginePromise = null;
+let graphicsProbe = null;
+
+/** Loads (once per page) the player build of the engine. */
+function loadEngine() {
+  // A literal specifier, so bundlers (esbuild, vite) follow it into the player build.
+  enginePromise ??= import("./odori_player.js").then(async (engine) => {
+    const wasm = OdoriPlayer.wasmUrl;
+    await engine.default(wasm ? { module_or_path: wasm } : undefined);
+    return engine;
+  });
+  return enginePromise;
+}
+
+/** Does this browser have WebGPU or WebGL2 at all? Probed once per page. */
+function graphicsAvailable() {
+  graphicsProbe ??= (async () => {
+    if (navigator.gpu) {
+      try {
+        if (await navigator.gpu.requestAdapter()) return true;
+      } catch { /* fall through to WebGL2 */ }
+    }
+    try {
+      const gl = document.createElement("canvas").getContext("webgl2");
+      if (gl) {
+        // Give the probe's context back at once: contexts are scarce.
+        gl.getExtension("WEBGL_lose_context")?.loseContext();
+        return true;
+      }
+    } catch { /* no WebGL2 */ }
+    return false;
+  })();
+  return graphicsProbe;
+}
+
+/**
+ * Turns a source's bytes into clips in the library and returns the import report. The one
+ * place a new kind of source plugs in: `.odori` projects (issue #10) go here.
+ */
+export function importSource(library, fileName, bytes) {
+  if (/\.odori$/i.test(fileName)) {
+    const e = new Error(`${fileName}: .odori projects cannot be played by this version of the player yet`);
+    Object.assign(e, { name: "OdoriError", kind: "unsupported", file: fileName });
+    throw e;
+  }
+  return library.importFile(fileName, bytes, {});
+}
+
+const STYLE = `
+:host { display: inline-block; position: relative; width: 300px; height: 300px; background: #16181d; color: #eee;
+  font: 13px system-ui, sans-serif; overflow: hidden; contain: strict; }
+.stage, canvas, img.poster, .message { position: absolute; inset: 0; width: 100%; height: 100%; }
+canvas { display: block; touch-action: none; outline: none; }
+canvas:focus-visible { box-shadow: inset 0 0 0 2px #6cf; }
+img.poster { object-fit: contain; }
+img.poster[hidden], .message[hidden], [hidden] { display: none !important; }
+.message { display: flex; align-items: center; justify-content: center; text-align: center; padding: 1em;
+  box-sizing: border-box; height: auto; top: auto; bottom: 2.6em; background: rgba(0,0,0,.65); }
+.controls { position: absolute; left: 0; right: 0; bottom: 0; display: flex; gap: .5em; align-items: center;
+  padding: .35em .5em; background: linear-gradient(transparent, rgba(0,0,0,.6)); }
+button { font: inherit; color: inherit; background: rgba(255,255,255,.12); border: 1px solid rgba(255,255,255,.3);
+  border-radius: 4px; min-width: 2.2em; padding: .15em .5em; cursor: pointer; }
+button:focus-visible, input:focus-visible { outline: 2px solid #6cf; outline-offset: 1px; }
+input[type=range] { flex: 1; min-width: 0; }
+.time { font-variant-numeric: tabular-nums; white-space: nowrap; }
+`;
+
+const TEMPLATE = `
+<style>${STYLE}</style>
+<div class="stage" part="stage"></div>
+<img class="poster" part="poster" alt="" hidden>
+<div class="message" part="message" role="status" hidden></div>
+<div class="controls" part="controls">
+  <button class="play" type="button" aria-label="Play">▶</button>
+  <input class="seek" type="range" min="0" max="0" step="0.01" value="0" aria-label="Position in seconds">
+  <span class="time" aria-hidden="true">0:00</span>
+  <button class="unmute" type="button" aria-label="Unmute" hidden>🔇 Unmute</button>
+</div>`;
+
+const fmt = (s) => {
+  const t = Math.max(0, Math.floor(s || 0));
+  return `${Math.floor(t / 60)}:${String(t % 60).padStart(2, "0")}`;
+};
+
+export class OdoriPlayer extends HTMLElement {
+  /** Where the player build's .wasm is, when a bundler moved it (default: beside odori_player.js). */
+  static wasmUrl = undefined;
+  /** How far outside the viewport (CSS margin) a player loads and keeps its GPU context. */
+  static nearMargin = "100px";
+  /** Graphics back end for players without a `backend` attribute: "auto" | "webgpu" | "webgl2". */
+  static backend = "auto";
+
+  static get observedAttributes() {
+    return ["src", "music", "animation-name", "poster", "loop", "character", "camera-controls"];
+  }
+
+  #engine = null;
+  #library = null;
+  #clip = null; // ClipInfo of the clip playing
+  #viewer = null;
+  #canvas = null;
+  #audio = null; // HTMLAudioElement when `music` is set
+  #ownAudio = false;
+  #state = "idle"; // idle | loading | ready | error
+  #near = false;
+  #playing = false; // what the person (or autoplay) asked for
+  #resume = false; // paused because off-screen: resume when back
+  #offsetSecs = 0; // clock without music: time at #startMs
+  #startMs = 0;
+  #raf = 0;
+  #acquiring = null;
+  #observer = null;
+  #resizeObserver = null;
+  #attachMs = 0;
+  #drag = null;
+  #loadToken = 0;
+  /** The last drawn frame: { songTimeSecs, clipTimeSecs } (for tests and sync checks). */
+  lastFrame = null;
+  /** Milliseconds from attach to the first drawn pose (and to the engine/source being ready). */
+  timings = {};
+
+  constructor() {
+    super();
+    const root = this.attachShadow({ mode: "open" });
+    root.innerHTML = TEMPLATE;
+    this.$ = (sel) => root.querySelector(sel);
+    this.$(".play").addEventListener("click", () => (this.paused ? this.play() : this.pause()));
+    this.$(".unmute").addEventListener("click", () => {
+      if (this.#audio) this.#audio.muted = false;
+      this.$(".unmute").hidden = true;
+    });
+    const seek = this.$(".seek");
+    seek.addEventListener("input", () => { this.currentTime = Number(seek.value); });
+    this.addEventListener("keydown", (ev) => {
+      // Space on the host or the canvas; buttons and the slider handle their own keys.
+      const inner = ev.composedPath()[0];
+      if (inner !== this && inner?.tagName !== "CANVAS") return;
+      if (ev.code === "Space" || ev.key === "k") { ev.preventDefault(); this.paused ? this.play() : this.pause(); }
+    });
+  }
+
+  // ---- attributes ----
+  get src() { return this.getAttribute("src"); }
+  set src(v) { this.setAttribute("src", v); }
+  get music() { return this.getAttribute("music"); }
+  set music(v) { this.setAttribute("music", v); }
+  get loop() { return this.hasAttribute("loop"); }
+  set loop(v) { this.toggleAttribute("loop", !!v); }
+  get autoplay() { return this.hasAttribute("autoplay"); }
+  set autoplay(v) { this.toggleAttribute("autoplay", !!v); }
+  get loading() { return this.getAttribute("loading") === "eager" ? "eager" : "lazy"; }
+  set loading(v) { this.setAttribute("loading", v); }
+
+  /** Playback position in seconds: the song's when there is music, else the clip's. */
+  get currentTime() {
+    if (this.#audio) return this.#audio.currentTime;
+    if (!this.#playing) return this.#offsetSecs;
+    return this.#offsetSecs + (performance.now() - this.#startMs) / 1000;
+  }
+  set currentTime(t) {
+    const secs = Math.max(0, Number(t) || 0);
+    if (this.#audio) this.#audio.currentTime = secs;
+    this.#offsetSecs = secs;
+    this.#startMs = performance.now();
+    this.#drawNow();
+  }
+
+  /** Seconds: the song's length with music, else the clip's; NaN before loading. */
+  get duration() {
+    if (this.#audio) return this.#audio.duration;
+    return this.#clip ? this.#clip.durationSecs : NaN;
+  }
+
+  get paused() { return !this.#playing; }
+  /** "loading", "ready", "error" or "idle" (not loaded yet). */
+  get state() { return this.#state; }
+  /** The graphics back end while a GPU context is held ("webgpu" | "webgl2"), else null. */
+  get gpuContext() { return this.#viewer ? this.#viewer.backend : null; }
+  /** The audio element whose clock drives the figure, or null. */
+  get audioElement() { return this.#audio; }
+  /** The clip being played (ClipInfo), or null. */
+  get clip() { return this.#clip; }
+
+  // ---- lifecycle ----
+  connectedCallback() {
+    this.#attachMs = performance.now();
+    this.timings = {};
+    if (!this.hasAttribute("tabindex")) this.tabIndex = 0;
+    if (!this.hasAttribute("role")) this.setAttribute("role", "region");
+    if (!this.hasAttribute("aria-label")) this.setAttribute("aria-label", "Dance player");
+    this.#showPoster();
+    this.#observer = new IntersectionObserver((entries) => {
+      const e = entries[entries.length - 1];
+      this.#setNear(e.isIntersecting);
+    }, { rootMargin: OdoriPlayer.nearMargin });
+    this.#observer.observe(this);
+    this.#resizeObserver = new ResizeObserver(() => this.#fit());
+    this.#resizeObserver.observe(this);
+    if (this.loading === "eager") this.#load();
+  }
+
+  disconnectedCallback() {
+    this.#observer?.disconnect();
+    this.#resizeObserver?.disconnect();
+    this.#near = false;
+    this.pause();
+    this.#release();
+  }
+
+  attributeChangedCallback(name, oldValue, value) {
+    if (oldValue === value) return;
+    if (name === "poster") this.#showPoster();
+    if (name === "loop" && this.#audio && this.#ownAudio) this.#audio.loop = this.loop;
+    if (name === "character") this.#drawNow();
+    if (name === "camera-controls" && this.#canvas) this.#bindCamera(this.#canvas);
+    if ((name === "src" || name === "music" || name === "animation-name") && this.#state !== "idle") {
+      this.pause();
+      this.#state = "idle";
+      this.#load();
+    }
+  }
+
+  // ---- playback ----
+  /** Starts playing (loading first if needed). Resolves when playback has started. */
+  async play() {
+    this.#playing = true;
+    this.#resume = false;
+    this.#updateButton();
+    if (this.#state === "idle") this.#load();
+    if (this.#state !== "ready" || !this.#viewer) return;
+    if (this.#audio) {
+      try {
+        await this.#audio.play();
+      } catch (e) {
+        if (e.name !== "NotAllowedError") throw e;
+        // Autoplay with sound is blocked here: start muted, offer to unmute.
+        this.#audio.muted = true;
+        this.$(".unmute").hidden = false;
+        await this.#audio.play();
+      }
+    } else {
+      if (this.#clip && !this.loop && this.#offsetSecs >= this.#clip.durationSecs) this.#offsetSecs = 0;
+      this.#startMs = performance.now();
+    }
+    this.#tick();
+  }
+
+  /** Pauses; the figure stays on the current pose. */
+  pause() {
+    if (!this.#audio && this.#playing) this.#offsetSecs = this.currentTime;
+    this.#playing = false;
+    this.#audio?.pause();
+    cancelAnimationFrame(this.#raf);
+    this.#raf = 0;
+    this.#updateButton();
+  }
+
+  // ---- internals ----
+  #setNear(near) {
+    this.#near = near;
+    if (near) {
+      this.#load();
+      if (this.#state === "ready") this.#acquire();
+    } else {
+      if (this.#playing) {
+        this.pause();
+        this.#resume = true;
+      }
+      this.#release();
+    }
+  }
+
+  #event(type, detail) {
+    this.dispatchEvent(new CustomEvent(type, { detail }));
+  }
+
+  #message(text) {
+    const m = this.$(".message");
+    m.textContent = text || "";
+    m.hidden = !text;
+  }
+
+  #fail(e) {
+    this.#state = "error";
+    const detail = { kind: e.kind || "load", message: e.message || String(e), file: e.file };
+    this.#message(detail.message);
+    this.#event("error", detail);
+  }
+
+  #showPoster() {
+    const img = this.$(".poster");
+    const url = this.getAttribute("poster");
+    if (url) img.src = url;
+    img.hidden = !url || (this.#viewer !== null && this.lastFrame !== null);
+  }
+
+  async #fetchBytes(url) {
+    const res = await fetch(url);
+    if (!res.ok) throw Object.assign(new Error(`${url}: HTTP ${res.status} ${res.statusText}`), { kind: "load", file: url });
+    const total = Number(res.headers.get("content-length")) || 0;
+    if (!res.body || !total) {
+      const bytes = new Uint8Array(await res.arrayBuffer());
+      this.#event("progress", { totalProgress: 1 });
+      return bytes;
+    }
+    const reader = res.body.getReader();
+    const parts = [];
+    let got = 0;
+    for (;;) {
+      const { done, value } = await reader.read();
+      if (done) break;
+      parts.push(value);
+      got += value.length;
+      this.#event("progress", { totalProgress: Math.min(1, got / total) });
+    }
+    const bytes = new Uint8Array(got);
+    let at = 0;
+    for (const p of parts) { bytes.set(p, at); at += p.length; }
+    return bytes;
+  }
+
+  /** Engine, source and music: once per source (again when src/music change). */
+  async #load() {
+    if (this.#state !== "idle") return;
+    this.#state = "loading";
+    const token = ++this.#loadToken;
+    this.#message("");
+    try {
+      if (!(await graphicsAvailable())) {
+        // No 3D at all: the poster is the player.
+        this.#state = "error";
+        this.#showPoster();
+        this.$(".controls").hidden = true;
+        this.#message(this.getAttribute("poster") ? "" : "3D is not available in this browser.");
+        this.#event("error", { kind: "gpu", message: "neither WebGPU nor WebGL2 is available" });
+        return;
+      }
+      const src = this.src;
+      const [engine, bytes] = await Promise.all([loadEngine(), src ? this.#fetchBytes(src) : null]);
+      if (token !== this.#loadToken) return;
+      this.timings.engineMs = performance.now() - this.#attachMs;
+      this.#engine = engine;
+      this.#library?.free();
+      this.#library = new engine.Library();
+      let clips;
+      if (bytes) {
+        const name = decodeURIComponent(new URL(src, document.baseURI).pathname.split("/").pop() || "source");
+        clips = importSource(this.#library, name, bytes).clips;
+      } else {
+        // No src: the engine's own step-touch routine.
+        clips = [this.#library.addBuiltinDemo()];
+        this.#event("progress", { totalProgress: 1 });
+      }
+      const wanted = this.getAttribute("animation-name");
+      const clip = wanted ? clips.find((c) => c.name === wanted) : clips[0];
+      if (!clip) {
+        throw Object.assign(new Error(`${src || "built-in"}: no animation named "${wanted}" (it has: ${clips.map((c) => c.name).join(", ") || "none"})`), { kind: "not-found", file: src });
+      }
+      this.#clip = clip;
+      this.#setupAudio();
+      this.#offsetSecs = 0;
+      this.#state = "ready";
+      this.$(".seek").max = String(this.duration || clip.durationSecs);
+      this.#event("load", { clip });
+      // Autoplay starts once a GPU context is held (when near the viewport).
+      if (this.autoplay) this.#resume = true;
+      if (this.#near) await this.#acquire();
+    } catch (e) {
+      if (token === this.#loadToken) this.#fail(e);
+    }
+  }
+
+  #setupAudio() {
+    if (this.#audio && this.#ownAudio) { this.#audio.pause(); this.#audio.removeAttribute("src"); this.#audio.load(); }
+    this.#audio = null;
+    const music = this.music;
+    if (!music) return;
+    if (music.startsWith("#")) {
+      const el = document.getElementById(music.slice(1));
+      if (!(el instanceof HTMLMediaElement)) throw Object.assign(new Error(`music="${music}": no <audio> element with that id`), { kind: "bad-argument" });
+      this.#audio = el;
+      this.#ownAudio = false;
+    } else {
+      this.#audio = new Audio();
+      this.#audio.preload = "auto";
+      this.#audio.src = new URL(music, document.baseURI).href;
+      this.#audio.loop = this.loop;
+      this.#ownAudio = true;
+    }
+    const a = this.#audio;
+    a.addEventListener("loadedmetadata", () => { this.$(".seek").max = String(a.duration || 0); });
+    a.addEventListener("error", () => this.#fail(Object.assign(new Error(`${music}: the song cannot be played (${a.error?.message || "media error " + a.error?.code})`), { kind: "load", file: music })));
+    a.addEventListener("ended", () => { this.pause(); this.#event("ended", {}); });
+    // An <audio> of the page can be played and paused by its own controls: follow it.
+    a.addEventListener("play", () => { if (!this.#playing) { this.#playing = true; this.#updateButton(); this.#tick(); } });
+    a.addEventListener("pause", () => { if (this.#playing && !a.ended) { this.#playing = false; this.#updateButton(); } });
+    a.addEventListener("seeked", () => this.#drawNow());
+  }
+
+  /** Takes a GPU context (a fresh canvas and viewer) if near and none is held. */
+  async #acquire() {
+    if (this.#viewer || this.#state !== "ready" || !this.#near) return;
+    if (this.#acquiring) return this.#acquiring;
+    this.#acquiring = (async () => {
+      const canvas = document.createElement("canvas");
+      canvas.setAttribute("part", "canvas");
+      this.$(".stage").replaceChildren(canvas);
+      this.#canvas = canvas;
+      this.#fitCanvas(canvas);
+      let viewer;
+      try {
+        viewer = await this.#engine.Viewer.create(canvas, { backend: this.getAttribute("backend") || OdoriPlayer.backend });
+      } catch (e) {
+        this.#canvas = null;
+        canvas.remove();
+        this.#showPoster();
+        this.#fail(e);
+        return;
+      }
+      if (!this.#near || this.#canvas !== canvas) {
+        // Went off-screen while the device was being opened: give it straight back.
+        this.#dropViewer(viewer, canvas);
+        return;
+      }
+      this.#viewer = viewer;
+      this.#bindCamera(canvas);
+      viewer.frameFigures(this.#library, this.#figures(0));
+      this.#drawNow();
+      if (this.timings.firstPoseMs === undefined) {
+        this.timings.firstPoseMs = performance.now() - this.#attachMs;
+        this.#event("firstpose", { ms: this.timings.firstPoseMs, backend: viewer.backend });
+      }
+      this.#showPoster();
+      if (this.#playing || this.#resume) this.play();
+    })();
+    try { await this.#acquiring; } finally { this.#acquiring = null; }
+  }
+
+  #dropViewer(viewer, canvas) {
+    const backend = viewer.backend;
+    viewer.release();
+    if (backend === "webgl2") canvas.getContext("webgl2")?.getExtension("WEBGL_lose_context")?.loseContext();
+    canvas.remove();
+  }
+
+  /** Gives the GPU context back (off-screen or detached). */
+  #release() {
+    const canvas = this.#canvas;
+    this.#canvas = null;
+    if (this.#viewer) {
+      const v = this.#viewer;
+      this.#viewer = null;
+      this.#dropViewer(v, canvas);
+    } else {
+      canvas?.remove();
+    }
+    this.#showPoster();
+  }
+
+  #figures(clipTimeSecs) {
+    const style = this.getAttribute("character") === "stick" ? "stick" : "auto";
+    return [{ clip: this.#clip.id, timeSecs: clipTimeSecs, style }];
+  }
+
+  #fitCanvas(canvas) {
+    const dpr = Math.min(window.devicePixelRatio || 1, 2);
+    canvas.width = Math.max(1, Math.round(this.clientWidth * dpr));
+    canvas.height = Math.max(1, Math.round(this.clientHeight * dpr));
+  }
+
+  #fit() {
+    if (!this.#canvas) return;
+    this.#fitCanvas(this.#canvas);
+    this.#viewer?.resize(this.#canvas.width, this.#canvas.height);
+    this.#drawNow();
+  }
+
+  /** Draws the pose for the clock's time now; handles the clip's end without music. */
+  #drawNow() {
+    if (!this.#clip) return;
+    let song = this.currentTime;
+    const dur = this.#clip.durationSecs;
+    let clipTime;
+    if (this.#audio) {
+      // The dance repeats under the song.
+      clipTime = dur > 0 ? song % dur : 0;
+    } else if (this.loop) {
+      clipTime = dur > 0 ? song % dur : 0;
+    } else {
+      clipTime = Math.min(song, dur);
+      if (this.#playing && song >= dur) {
+        this.#offsetSecs = dur;
+        song = dur;
+        this.pause();
+        this.#event("ended", {});
+      }
+    }
+    const seek = this.$(".seek");
+    if (this.shadowRoot.activeElement !== seek) seek.value = String(this.#audio || !this.loop ? song : clipTime);
+    this.$(".time").textContent = fmt(song);
+    if (!this.#viewer) return;
+    try {
+      this.#viewer.draw(this.#library, this.#figures(clipTime));
+      this.lastFrame = { songTimeSecs: song, clipTimeSecs: clipTime };
+    } catch (e) {
+      this.pause();
+      this.#fail(e);
+    }
+  }
+
+  #tick() {
+    if (this.#raf || !this.#playing) return;
+    const frame = () => {
+      this.#raf = 0;
+      if (!this.#playing) return;
+      this.#drawNow();
+      if (this.#playing) this.#raf = requestAnimationFrame(frame);
+    };
+    this.#raf = requestAnimationFrame(frame);
+  }
+
+  #updateButton() {
+    const b = this.$(".play");
+    b.textContent = this.#playing ? "❚❚" : "▶";
+    b.setAttribute("aria-label", this.#playing ? "Pause" : "Play");
+  }
+
+  /** Orbit by drag, zoom by wheel, and the same from the keyboard (arrows, + and -). */
+  #bindCamera(canvas) {
+    const on = this.hasAttribute("camera-controls");
+    canvas.tabIndex = on ? 0 : -1;
+    if (on) canvas.setAttribute("aria-label", "3D view: arrow keys turn the camera, + and - zoom");
+    if (!on || canvas.dataset.bound) return;
+    canvas.dataset.bound = "1";
+    const orbit = (dx, dy) => { if (this.hasAttribute("camera-controls") && this.#viewer) { this.#viewer.orbit(dx, dy); this.#drawNow(); } };
+    const zoom = (steps) => { if (this.hasAttribute("camera-controls") && this.#viewer) { this.#viewer.zoom(steps); this.#drawNow(); } };
+    canvas.addEventListener("pointerdown", (ev) => { this.#drag = { x: ev.clientX, y: ev.clientY }; canvas.setPointerCapture(ev.pointerId); });
+    canvas.addEventListener("pointermove", (ev) => {
+      if (!this.#drag) return;
+      orbit((ev.clientX - this.#drag.x) / canvas.clientWidth, (ev.clientY - this.#drag.y) / canvas.clientHeight);
+      this.#drag = { x: ev.clientX, y: ev.clientY };
+    });
+    canvas.addEventListener("pointerup", () => { this.#drag = null; });
+    canvas.addEventListener("wheel", (ev) => { ev.preventDefault(); zoom(Math.sign(ev.deltaY)); }, { passive: false });
+    canvas.addEventListener("keydown", (ev) => {
+      const moves = { ArrowLeft: [-0.05, 0], ArrowRight: [0.05, 0], ArrowUp: [0, -0.05], ArrowDown: [0, 0.05] };
+      if (moves[ev.key]) { ev.preventDefault(); orbit(...moves[ev.key]); }
+      if (ev.key === "+" || ev.key === "=") { ev.preventDefault(); zoom(-1); }
+      if (ev.key === "-") { ev.preventDefault(); zoom(1); }
+    });
+  }
+}
+
+if (!customElements.get("odori-player")) customElements.define("odori-player", OdoriPlayer);
