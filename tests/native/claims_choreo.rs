@@ -5,6 +5,7 @@
 //! search of the full objective on small cases.
 
 use odori_core::choreo::{fill, path_cost, FeedbackSession, FillWeights, Layer, SegmentLibrary, TransitionTable, CANDIDATES_PER_ROUND};
+use odori_core::humanoid::Canon;
 use odori_core::library::{builtin_clips, builtin_moves};
 
 /// SplitMix64.
@@ -60,18 +61,28 @@ fn exactly_420_builtin_moves_each_moving_differently() {
     }
     println!("closest two built-in moves: {} and {}, mean joint distance {:.4} m", clips[nearest.1].name, clips[nearest.2].name, nearest.0);
     // The same motion: less than 1 mm of mean joint distance over the bar. The only pairs
-    // allowed are mirror twins (same step, arms, energy, other side) of a move that is its own
-    // mirror image: the README's 420 counts them twice (a finding of issue 17, see
-    // tests/README.md); any other duplicate fails.
+    // allowed are mirror twins (same step, arms, energy, other side) of a move that is itself
+    // left/right symmetric (equal to its own mirror image, measured here: x negated, left and
+    // right joints swapped): the README's 420 counts those twice (a finding of issue 17, see
+    // tests/README.md). Any other duplicate fails, a broken mirroring included.
+    let names: Vec<&str> = Canon::ALL.iter().map(|c| c.name()).collect();
+    let partner: Vec<usize> = names
+        .iter()
+        .map(|n| {
+            let swapped = if let Some(r) = n.strip_prefix("left") { format!("right{r}") } else if let Some(r) = n.strip_prefix("right") { format!("left{r}") } else { n.to_string() };
+            names.iter().position(|m| *m == swapped).unwrap_or_else(|| panic!("no partner for {n}"))
+        })
+        .collect();
+    let joints = Canon::ALL.len();
+    let mirror = |f: &[glam::Vec3]| -> Vec<glam::Vec3> {
+        f.chunks(joints).flat_map(|frame| (0..joints).map(|j| frame[partner[j]] * glam::Vec3::new(-1.0, 1.0, 1.0)).collect::<Vec<_>>()).collect()
+    };
     let same: Vec<(usize, usize)> = (0..feats.len()).flat_map(|i| (i + 1..feats.len()).map(move |j| (i, j))).filter(|&(i, j)| dist(&feats[i], &feats[j]) < 0.001).collect();
     for &(i, j) in &same {
         let (a, b) = (&moves[i], &moves[j]);
-        assert!(
-            a.step == b.step && a.arms == b.arms && a.energy == b.energy && a.mirrored != b.mirrored,
-            "{} and {} are the same motion but not mirror twins",
-            clips[i].name,
-            clips[j].name
-        );
+        let twins = a.step == b.step && a.arms == b.arms && a.energy == b.energy && a.mirrored != b.mirrored;
+        let symmetric = dist(&feats[i], &mirror(&feats[i])) < 0.001;
+        assert!(twins && symmetric, "{} and {} are the same motion (twins: {twins}, symmetric move: {symmetric})", clips[i].name, clips[j].name);
     }
     println!("distinct motions: {} of 420 ({} mirror twins of symmetric moves; {} pairs within 1 cm)", 420 - same.len(), same.len(), alike.len());
 }
