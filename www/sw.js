@@ -27,8 +27,12 @@ self.addEventListener("fetch", (ev) => {
     fetch(req)
       .then((res) => {
         if (res.ok) {
+          // Kept without the query (?backend=…): the page opened with a query must refresh the
+          // same entry the install made, or an offline start after an update finds the old one.
           const copy = res.clone();
-          caches.open(CACHE).then((c) => c.put(req, copy));
+          const key = new URL(req.url);
+          key.search = "";
+          caches.open(CACHE).then((c) => c.put(key.href, copy));
         }
         return res;
       })

@@ -55,7 +55,17 @@ fn main() {
         bands: demo_env.bands.iter().map(|b| b.iter().cycle().copied().take(frames).collect()).collect(),
     };
     let demo_analysis_secs = median_secs(21, || analyze(&demo_180, &options).expect("demo analysis"));
+    // A 20-minute song (the same 3-minute envelope looped; moved here from the bad-input test,
+    // which printed the time without asserting it): the ratio to the 3-minute analysis says
+    // whether the analysis stays near linear in the song's length.
+    let frames_20 = (1200.0 / env.hop_secs).round() as usize;
+    let env_20 = odori_core::music::RmsEnvelope {
+        hop_secs: env.hop_secs,
+        bands: env.bands.iter().map(|b| b.iter().cycle().copied().take(frames_20).collect()).collect(),
+    };
+    let analysis_20_secs = median_secs(5, || analyze(&env_20, &options).expect("20-minute analysis"));
     println!("frames per band: {}, bands: {}", env.frame_count(), env.bands.len());
+    println!("core analysis, 20-minute song:                                 {:.1} ms ({:.1}x the 3-minute song's time for {:.1}x its length)", analysis_20_secs * 1e3, analysis_20_secs / analysis_secs, 1200.0 / 180.0);
     println!("result: {:.2} BPM, {} beats, {} bars", grid.bpm, grid.beat_times_secs.len(), grid.bars.len());
     println!("envelope from PCM (Rust fallback of the host's WebAudio step): {:.1} ms", env_secs * 1e3);
     println!("core analysis, envelope -> grid (3-minute song):              {:.2} ms", analysis_secs * 1e3);

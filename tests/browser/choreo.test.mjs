@@ -4,7 +4,7 @@
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
-import { startServer, launch, openApp, canvasPixels, countAll, artifacts, data } from "./harness.mjs";
+import { startServer, launch, openApp, canvasPixels, countAll, artifacts, data, waitUntil } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -111,8 +111,10 @@ test("dance: candidates, Set, Search twice, Generate, play", async () => {
     // Play the dance with the music: the figure follows the song's clock.
     await page.click('#dance-bars [data-bar="0"]');
     await page.click("#dance-play");
-    await page.waitForTimeout(1500);
-    const st = await page.evaluate(() => ({ song: window.odori.songPlayer.position(), playing: window.odori.songPlayer.playing, time: window.odori.player.time, clip: window.odori.player.clip, dance: window.odori.choreo.danceId }));
+    await waitUntil(() => page.evaluate(() => window.odori.songPlayer.playing && window.odori.songPlayer.position() > 0.5), { what: "the song playing past 0.5 s" });
+    // Read the figure's time and the song's clock in one animation frame, just after the
+    // player's own tick: a loaded machine may skip frames, but never between the two reads.
+    const st = await page.evaluate(() => new Promise((done) => requestAnimationFrame(() => done({ song: window.odori.songPlayer.position(), playing: window.odori.songPlayer.playing, time: window.odori.player.time, clip: window.odori.player.clip, dance: window.odori.choreo.danceId }))));
     assert.ok(st.playing, "the song plays");
     assert.equal(st.clip, st.dance);
     assert.ok(st.song > 0.5 && Math.abs(st.time - st.song) < 0.25, `figure time ${st.time} vs song ${st.song}`);

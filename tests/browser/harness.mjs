@@ -1,7 +1,8 @@
 // Shared by the browser tests: the app's server, Debian's headless Chromium on either
 // graphics back end, and pixel reading from real screenshots.
 import { spawn } from "node:child_process";
-import { existsSync, mkdirSync } from "node:fs";
+import { existsSync, mkdirSync, readFileSync, statSync } from "node:fs";
+import { createServer } from "node:http";
 import { fileURLToPath } from "node:url";
 import { dirname, join } from "node:path";
 import { chromium } from "playwright-core";
@@ -101,3 +102,64 @@ export function countAll(img, pred) {
 export const isOrange = ([r, g, b]) => r > 90 && r > g * 1.25 && g > b * 1.2 && r - b > 60;
 export const isTeal = ([r, g, b]) => b > 70 && g > 50 && g > r * 1.5 && b > r * 1.6;
 export const isBackground = ([r, g, b]) => Math.max(r, g, b) < 90 && Math.abs(r - b) < 30;
+
+/**
+ * Polls `probe` (sync or async, run in Node) until it returns a truthy value, and returns that
+ * value; after `timeoutMs` it throws, naming `what` and the last value seen. Browser tests
+ * wait on state with this rather than on fixed sleeps: on a loaded 2-core machine a sleep is
+ * either too short (a flake) or far too long.
+ */
+export async function waitUntil(probe, { what = "condition", timeoutMs = 30000, intervalMs = 50 } = {}) {
+  const deadline = Date.now() + timeoutMs;
+  let last;
+  for (;;) {
+    last = await probe();
+    if (last) return last;
+    if (Date.now() > deadline) throw new Error(`timed out after ${timeoutMs} ms waiting for ${what}; last seen: ${JSON.stringify(last)}`);
+    await new Promise((r) => setTimeout(r, intervalMs));
+  }
+}
+
+/**
+ * Screenshots the canvas until `pred(img)` holds (the renderer draws on the next animation
+ * frame, whenever the machine gets to it); returns the last image. Throws with `what` on timeout.
+ */
+export async function canvasPixelsUntil(page, pred, what, name, timeoutMs = 30000) {
+  let img;
+  await waitUntil(async () => { img = await canvasPixels(page, name); return pred(img); }, { what, timeoutMs, intervalMs: 100 });
+  return img;
+}
+
+/**
+ * A static server for www/ and pkg/ in Node, like `xtask serve` (same paths, types and
+ * headers) but on a port the caller may choose again after stopping it, with `overrides`
+ * ({ "/main.js": Buffer }) serving other bytes: the offline test uses it to take the origin
+ * away and to bring it back with a new build. Resolves to { url, port, stop(), requests }.
+ */
+export function startStaticServer({ port = 0, overrides = {} } = {}) {
+  const types = { html: "text/html; charset=utf-8", js: "text/javascript; charset=utf-8", mjs: "text/javascript; charset=utf-8", css: "text/css; charset=utf-8", wasm: "application/wasm", svg: "image/svg+xml", png: "image/png", json: "application/json", webmanifest: "application/json", ts: "text/plain; charset=utf-8", md: "text/plain; charset=utf-8" };
+  const requests = [];
+  const sockets = new Set();
+  const server = createServer((req, res) => {
+    let path = decodeURIComponent(req.url.split(/[?#]/)[0]);
+    requests.push(path);
+    if (path.endsWith("/")) path += "index.html";
+    const file = path.startsWith("/pkg/") ? join(root, "pkg", path.slice(5)) : join(root, "www", path.slice(1));
+    const body = overrides[path] ?? (path.split("/").includes("..") || !existsSync(file) || !statSync(file).isFile() ? null : readFileSync(file));
+    if (!body) { res.writeHead(404, { "Content-Type": "text/plain" }); res.end(`not found: ${path}\n`); return; }
+    res.writeHead(200, { "Content-Type": types[path.split(".").pop()] ?? "application/octet-stream", "Content-Length": body.length, "Cache-Control": "no-cache", "Cross-Origin-Opener-Policy": "same-origin", Connection: "close" });
+    res.end(req.method === "HEAD" ? undefined : body);
+  });
+  server.on("connection", (s) => { sockets.add(s); s.on("close", () => sockets.delete(s)); });
+  return new Promise((resolve, reject) => {
+    server.once("error", reject);
+    server.listen(port, "127.0.0.1", () => {
+      const p = server.address().port;
+      resolve({
+        url: `http://127.0.0.1:${p}/`, port: p, requests,
+        // Closes the listener and every open connection: afterwards the origin refuses connections.
+        stop: () => new Promise((r) => { for (const s of sockets) s.destroy(); server.close(() => r()); }),
+      });
+    });
+  });
+}

@@ -6,7 +6,7 @@ import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
 import { writeFileSync } from "node:fs";
-import { startServer, launch, openApp, canvasPixels, countNear, countAll, isOrange, isTeal, isBackground, data, artifacts } from "./harness.mjs";
+import { startServer, launch, openApp, canvasPixels, canvasPixelsUntil, waitUntil, countNear, countAll, isOrange, isTeal, isBackground, data, artifacts } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -49,9 +49,7 @@ for (const backend of ["webgl2", "webgpu"]) {
       // The built-in clip plays with no file.
       const rows0 = await page.$$eval("#library tbody tr", (trs) => trs.length);
       assert.equal(rows0, 1);
-      await page.waitForTimeout(300);
-      const first = await canvasPixels(page, `${backend}-01-builtin.png`);
-      assert.ok(countAll(first, isOrange) > 300, "the built-in figure is drawn");
+      await canvasPixelsUntil(page, (img) => countAll(img, isOrange) > 300, "the built-in figure drawn", `${backend}-01-builtin.png`);
 
       // A real BVH through the file input, with the salsa frame-rate fix.
       await page.fill("#fps-override", "60");
@@ -70,16 +68,14 @@ for (const backend of ["webgl2", "webgpu"]) {
 
       // Paused, the canvas changes size (the page's layout moved): the figure is drawn again.
       await page.evaluate(() => { const v = document.querySelector("#view"); v.style.flex = "none"; v.style.height = `${v.clientHeight - 37}px`; });
-      await page.waitForTimeout(300);
-      const resized = await canvasPixels(page, `${backend}-03b-resized-paused.png`);
-      assert.ok(countAll(resized, isOrange) > 300, "the paused figure vanished when the canvas was resized");
+      // Wait until the canvas has taken its new size, then for the figure on it.
+      await waitUntil(() => page.evaluate(() => { const v = document.querySelector("#view"); return v.height === Math.max(1, Math.round(v.clientHeight * Math.min(devicePixelRatio, 2))); }), { what: "the canvas taking its new size" });
+      await canvasPixelsUntil(page, (img) => countAll(img, isOrange) > 300, "the paused figure drawn again after the canvas was resized", `${backend}-03b-resized-paused.png`);
       await page.evaluate(() => { const v = document.querySelector("#view"); v.style.flex = ""; v.style.height = ""; });
 
       // Playing advances the frame counter.
       const f0 = await page.evaluate(() => { window.odori.player.play(); return Number(document.querySelector("#scrub").value); });
-      await page.waitForTimeout(700);
-      const f1 = await page.evaluate(() => Number(document.querySelector("#scrub").value));
-      assert.notEqual(f1, f0, "playback did not move the frame");
+      await waitUntil(() => page.evaluate((f0) => Number(document.querySelector("#scrub").value) !== f0, f0), { what: "playback moving the frame counter" });
 
       // Overlay a second clip: two colours in one scene.
       await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_16.bvh"));

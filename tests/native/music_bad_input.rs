@@ -41,7 +41,7 @@ fn a_two_second_clip_is_too_short_and_a_manual_grid_still_works() {
 }
 
 #[test]
-fn a_twenty_minute_song_is_analysed_quickly() {
+fn a_twenty_minute_song_keeps_its_tempo_and_beats() {
     // 20 minutes built from the real drum performance's envelope: its first 16 bars
     // (27.83 s = 2783 frames at 10 ms) repeated 43 times. Tempo and beats must survive.
     let audio = decode_data(DRUMS);
@@ -52,9 +52,9 @@ fn a_twenty_minute_song_is_analysed_quickly() {
         bands: env.bands.iter().map(|b| b[..bar_frames].repeat(43)).collect(),
     };
     assert!(long.duration_secs() > 1190.0);
-    let t = std::time::Instant::now();
+    // Its time is a benchmark figure (`cargo bench --bench music_analysis`), not asserted here.
     let g = analyze(&long, &AnalysisOptions::default()).unwrap();
-    println!("20-minute song: {:.2} BPM, {} beats, {} bars in {:.2} s (dev profile)", g.bpm, g.beat_times_secs.len(), g.bars.len(), t.elapsed().as_secs_f32());
+    println!("20-minute song: {:.2} BPM, {} beats, {} bars", g.bpm, g.beat_times_secs.len(), g.bars.len());
     assert!((g.bpm / 138.0 - 1.0).abs() < 0.02, "{}", g.bpm);
     assert!(g.beat_times_secs.len() > 2600);
     // And the PCM path takes a 20-minute synthetic signal (8 kHz clicks over noise).

@@ -62,6 +62,15 @@ pub fn version() -> String {
     env!("CARGO_PKG_VERSION").into()
 }
 
+/// Self-check of the search's frame-distance kernel in this build: `{ path, cases, mismatches }`
+/// — the vector path compiled in ("simd128" in the web build) and how many of `cases` random
+/// inputs give other bits than the scalar kernel (0 expected). For tests and bug reports.
+#[wasm_bindgen(js_name = distanceKernelCheck)]
+pub fn distance_kernel_check(cases: u32) -> String {
+    let (path, mismatches) = odori_core::search::distance_kernel_check(cases);
+    format!("{{\"path\":\"{path}\",\"cases\":{cases},\"mismatches\":{mismatches}}}")
+}
+
 #[wasm_bindgen(typescript_custom_section)]
 const TS_TYPES: &'static str = r#"
 /** What an Odori call throws: an Error with name "OdoriError", a machine-readable kind and, for imports, the file. */

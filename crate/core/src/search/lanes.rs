@@ -316,6 +316,38 @@ pub fn box_box(a: &[f32], b: &[f32], groups: &[(usize, [f32; LANES])]) -> f32 {
     s
 }
 
+/// Which [`V4`] this build runs: "sse", "simd128" or "scalar".
+pub const VECTOR_PATH: &str = if cfg!(target_arch = "x86_64") {
+    "sse"
+} else if cfg!(all(target_arch = "wasm32", target_feature = "simd128")) {
+    "simd128"
+} else {
+    "scalar"
+};
+
+/// Runs `cases` random lane groups (coordinates in ±1.5, one weight 0) through the vector
+/// kernel and the scalar one in the build that runs it, and counts results that differ in any
+/// bit. The fast search's exactness rests on 0; the wasm build checks it under Node.
+pub fn kernel_mismatches(cases: u32) -> u32 {
+    let mut x = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        ((x >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 3.0
+    };
+    let mut bad = 0;
+    for _ in 0..cases {
+        let a: Vec<f32> = (0..GROUP_FLOATS).map(|_| next()).collect();
+        let b: Vec<f32> = (0..GROUP_FLOATS).map(|_| next()).collect();
+        let w = [next().abs(), next().abs(), 0.0, next().abs()];
+        if group(&a, &b, &w).to_bits() != group_plain(&a, &b, &w).to_bits() {
+            bad += 1;
+        }
+    }
+    bad
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

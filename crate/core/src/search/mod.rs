@@ -259,6 +259,13 @@ pub fn search_plain(
     dp::run(index, &prep, progress)
 }
 
+/// Self-check of the frame-distance kernel in the running build: (vector path compiled in —
+/// "sse", "simd128" or "scalar" — and how many of `cases` random inputs give other bits than
+/// the scalar kernel; 0 is the contract the fast search's exactness rests on).
+pub fn distance_kernel_check(cases: u32) -> (&'static str, u32) {
+    (lanes::VECTOR_PATH, lanes::kernel_mismatches(cases))
+}
+
 /// A progress callback that never cancels.
 pub fn no_progress() -> impl FnMut(SearchProgress) -> ControlFlow<()> {
     |_| ControlFlow::Continue(())
