@@ -296,6 +296,18 @@ impl HumanoidMap {
         self.joints[c.index()]
     }
 
+    /// The bones to draw for this skeleton: every (parent, child) pair, except, when the hips
+    /// are found below other nodes (a moving `Root` / `Character` / `Armature` node above them),
+    /// the bones hanging from those nodes. Such a node is not part of the body; drawn, it is a
+    /// long stick from the ground or the world origin to the pelvis.
+    pub fn figure_bones(&self, sk: &Skeleton) -> Vec<(usize, usize)> {
+        let all = sk.bones();
+        let Some(hips) = self.get(Canon::Hips).filter(|&h| h < sk.len() && sk.joints[h].parent.is_some()) else {
+            return all;
+        };
+        all.into_iter().filter(|&(p, _)| p == hips || is_ancestor(sk, hips, p)).collect()
+    }
+
     pub fn missing(&self) -> Vec<Canon> {
         Canon::ALL.into_iter().filter(|c| self.get(*c).is_none()).collect()
     }

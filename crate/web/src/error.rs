@@ -24,7 +24,9 @@ impl From<ImportError> for OdoriError {
             | ImportError::Bvh { file, .. }
             | ImportError::Gltf { file, .. }
             | ImportError::Unsupported { file, .. }
-            | ImportError::Invalid { file, .. } => file.clone(),
+            | ImportError::Invalid { file, .. }
+            | ImportError::BadOption { file, .. }
+            | ImportError::TooLarge { file, .. } => file.clone(),
         };
         OdoriError { kind: e.kind(), message: e.to_string(), file: Some(file) }
     }

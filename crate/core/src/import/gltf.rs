@@ -71,6 +71,18 @@ fn check_buffers(file: &str, doc: &gltf::Document, data: &[Vec<u8>]) -> Result<(
         Ok(())
     };
     for a in doc.accessors() {
+        // Without a buffer view an accessor is zeros (plus any sparse values): nothing bounds
+        // its count but the JSON, so bound it here before a reader allocates for it.
+        if a.view().is_none() && a.count() > super::MAX_VIEWLESS_ACCESSOR_ELEMENTS {
+            return Err(ImportError::TooLarge {
+                file: file.to_string(),
+                what: format!("accessor {} declares {} elements with no buffer data behind them", a.index(), a.count()),
+                limit: format!("{} elements", super::MAX_VIEWLESS_ACCESSOR_ELEMENTS),
+            });
+        }
+        if let Some(s) = a.sparse().filter(|s| s.count() > a.count()) {
+            return Err(gerr(file, format!("accessor {} has {} sparse values for {} elements", a.index(), s.count(), a.count())));
+        }
         if let Some(view) = a.view() {
             check_view(format!("accessor {}", a.index()), view, a.offset(), a.count(), a.size())?;
         }
@@ -371,6 +383,13 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
         }
         // Enough frames that the last one reaches the animation's end (sampling clamps there).
         let frames = (duration * fps - 1e-3).ceil().max(0.0) as usize + 1;
+        if frames.saturating_mul(nj) > super::MAX_SAMPLES {
+            return Err(ImportError::TooLarge {
+                file: file.to_string(),
+                what: format!("animation '{name}': {frames} frames of {nj} joints at {fps} fps"),
+                limit: format!("{} joint samples", super::MAX_SAMPLES),
+            });
+        }
         let mut rotations = Vec::with_capacity(frames * nj);
         let mut pos_joints: Vec<usize> = pos_tracks.keys().copied().collect();
         pos_joints.sort_unstable();
