@@ -272,6 +272,17 @@ impl HumanoidStatus {
     }
 }
 
+/// The status in words, for messages people read (never the `Debug` form).
+impl std::fmt::Display for HumanoidStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            HumanoidStatus::Complete => write!(f, "a complete humanoid"),
+            HumanoidStatus::Partial { missing } => write!(f, "a humanoid missing {}", missing.join(", ")),
+            HumanoidStatus::NotHumanoid { reason } => write!(f, "{reason}"),
+        }
+    }
+}
+
 fn depth(sk: &Skeleton, mut j: usize) -> usize {
     let mut d = 0;
     while let Some(p) = sk.joints[j].parent {
