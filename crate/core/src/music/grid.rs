@@ -445,6 +445,8 @@ mod tests {
             "beatTimesSecs",
             "firstDownbeatIndex",
             "firstDownbeatSecs",
+            "beatClarity",
+            "clearBeat",
             "downbeatTimesSecs",
             "bars",
             "regular",
@@ -454,8 +456,8 @@ mod tests {
         }
         assert!(v["bars"][0].get("startSecs").is_some() && v["loudness"].get("hopSecs").is_some());
         // A correction from JavaScript may leave out any field.
-        let c: GridCorrection = serde_json::from_str(r#"{"tapTimesSecs":[0,0.5,1.0],"nudgeSecs":null}"#).unwrap();
-        assert_eq!(c.tap_times_secs, Some(vec![0.0, 0.5, 1.0]));
+        let c: GridCorrection = serde_json::from_str(r#"{"tapTimesSecs":[0,0.5,1.0,1.5],"nudgeSecs":null}"#).unwrap();
+        assert_eq!(c.tap_times_secs, Some(vec![0.0, 0.5, 1.0, 1.5]));
         assert_eq!(c.bpm, None);
         assert_eq!(g.corrected(&c).unwrap().bpm, 120.0);
     }
