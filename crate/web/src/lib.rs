@@ -40,7 +40,7 @@ const TS_TYPES: &'static str = r#"
 /** What an Odori call throws: an Error with name "OdoriError", a machine-readable kind and, for imports, the file. */
 export interface OdoriError extends Error {
   name: "OdoriError";
-  /** "empty" | "unknown-format" | "bvh" | "gltf" | "unsupported" | "invalid" | "not-found" | "bad-argument" | "gpu" */
+  /** "empty" | "unknown-format" | "bvh" | "gltf" | "unsupported" | "invalid" | "too-large" | "not-found" | "bad-argument" | "callback" | "music" | "text" | "choreo" | "gpu" */
   kind: string;
   file?: string;
 }
@@ -56,6 +56,7 @@ export interface ClipInfo {
   format: "bvh" | "gltf" | "builtin" | "text" | "dance";
   fps: number;
   frames: number;
+  /** From the first frame to the last: (frames - 1) / fps. */
   durationSecs: number;
   /** Joints of the clip's own skeleton, as the file counts them (BVH: ROOT and JOINT). */
   joints: number;
@@ -68,7 +69,7 @@ export interface ClipInfo {
 export interface ImportOptions {
   /** Play at this frame rate instead of the file's (CMU salsa BVH headers say 120, the data is 60). */
   fpsOverride?: number;
-  /** Metres per BVH unit; guessed from the skeleton's size when absent. */
+  /** Metres per BVH unit, 0.0001..=10 (refused outside); guessed from the skeleton's size when absent (a humanoid of implausible height is then reported in `warnings`). */
   unitScale?: number;
   /** Resampling rate for glTF animations (default 30). */
   gltfFps?: number;
