@@ -94,7 +94,9 @@ fn unit_scale_outside_its_range_is_refused_with_the_value() {
         assert!(matches!(e, ImportError::BadOption { option: "unitScale", .. }), "{bad}: {e:?}");
         assert_eq!(e.kind(), "bad-argument");
         let msg = e.to_string();
-        assert!(msg.contains("unitScale") && msg.contains(&bad.to_string()), "{msg}");
+        let shown = if bad.is_finite() && bad != 0.0 && !(1e-3..1e6).contains(&bad.abs()) { format!("{bad:e}") } else { bad.to_string() };
+        assert!(msg.contains(&format!("unitScale = {shown} ")), "{msg}");
+        assert!(msg.len() < 160, "{msg}");
     }
     // Sensible scales still work: millimetres, inches, metres.
     for good in [0.001, 0.0254, 1.0] {

@@ -77,6 +77,15 @@ impl ImportOptions {
     }
 }
 
+/// A number as a person reads it: 1e30 rather than thirty-one digits, 0.01 as it is.
+pub(crate) fn readable(v: f32) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-3..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
+}
+
 /// The file formats the engine reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Format {
@@ -114,7 +123,7 @@ pub enum ImportError {
     Unsupported { file: String, message: String },
     #[error("{file}: {message}")]
     Invalid { file: String, message: String },
-    #[error("{file}: import option {option} = {value} is out of range (expected {expected})")]
+    #[error("{file}: import option {option} = {} is out of range (expected {expected})", readable(*.value))]
     BadOption { file: String, option: &'static str, value: f32, expected: String },
     #[error("{file}: {what} is more than this tab can hold (limit {limit}); the file was not read")]
     TooLarge { file: String, what: String, limit: String },
