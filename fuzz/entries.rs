@@ -3,6 +3,9 @@
 //! same code. Each takes arbitrary bytes and must return (an `Ok` or a typed error) without
 //! panicking, aborting on allocation, or hanging.
 
+// Each libFuzzer target uses one of these.
+#![allow(dead_code)]
+
 use odori_core::import::{bvh, gltf, ImportOptions};
 use odori_core::music::{analyze, AnalysisOptions, RmsEnvelope};
 use odori_core::text::{parse, Lexicon};

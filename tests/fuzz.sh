@@ -2,8 +2,10 @@
 # Coverage-guided fuzzing of the core's input boundaries (cargo-fuzz / libFuzzer, nightly):
 #   tests/fuzz.sh SECS [TARGET...]   each target for SECS seconds (default: all four targets)
 # `./dev fuzz [SECS]` runs it long (default 600 s per target); `./dev test` runs it short.
-# New inputs libFuzzer finds interesting are kept in fuzz/corpus/<target>/ (commit the small
-# ones); a crash is written to fuzz/artifacts/<target>/ and fails the run. Without the nightly
+# The committed seeds (fuzz/corpus/<target>/) are read, never written: what libFuzzer finds is
+# kept in fuzz/corpus-work/<target>/ (not committed; it carries over between runs). A crash is
+# written to fuzz/artifacts/<target>/ and fails the run: once fixed, copy the input into
+# fuzz/corpus/<target>/ so `cargo test --test fuzz_corpus` keeps it fixed. Without the nightly
 # toolchain or cargo-fuzz it says so and exits 0: `cargo test` (tests/native/fuzz_corpus.rs)
 # still replays the whole corpus through the same entry points on stable.
 set -euo pipefail
@@ -23,10 +25,10 @@ fi
 # (what a browser tab can give) is a crash. -max_len 64 KiB: big enough for rigs and envelopes.
 # -timeout 10 s per input: a hang is a crash.
 for t in "${targets[@]}"; do
-  mkdir -p "fuzz/corpus/$t" "fuzz/artifacts/$t"
+  mkdir -p "fuzz/corpus-work/$t" "fuzz/artifacts/$t"
   echo "== fuzz $t for ${secs}s"
   log=$(mktemp)
-  if ! nice -n 15 cargo +nightly fuzz run -s none -a "$t" "fuzz/corpus/$t" -- \
+  if ! nice -n 15 cargo +nightly fuzz run -s none -a "$t" "fuzz/corpus-work/$t" "fuzz/corpus/$t" -- \
       -max_total_time="$secs" -rss_limit_mb=2048 -malloc_limit_mb=2048 -max_len=65536 -timeout=10 \
       -artifact_prefix="fuzz/artifacts/$t/" -print_final_stats=1 >"$log" 2>&1; then
     tail -40 "$log"
