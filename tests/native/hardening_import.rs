@@ -268,3 +268,16 @@ fn node_above_the_hips_is_not_drawn_as_a_bone() {
     let plain = import_bytes("plain.bvh", humanoid_bvh(100.0, 2, false).as_bytes(), &ImportOptions::default()).unwrap();
     assert_eq!(plain.humanoid.figure_bones(&plain.skeleton), plain.skeleton.bones());
 }
+
+#[test]
+fn glb_header_shorter_than_itself_is_an_error_not_a_panic() {
+    // Found by the import_gltf fuzz target (kept in fuzz/corpus/import_gltf/): a GLB header
+    // whose total length is under 12 made the gltf crate subtract with overflow.
+    let mut bytes = glb(&animated_gltf_json(TIMES, ROTS, 40), &key_bytes(1.0));
+    for declared in [0u32, 11] {
+        bytes[8..12].copy_from_slice(&declared.to_le_bytes());
+        let e = import_bytes("short_header.glb", &bytes, &ImportOptions::default()).unwrap_err();
+        assert!(matches!(e, ImportError::Gltf { .. }), "{e:?}");
+        assert!(e.to_string().contains(&format!("total length of {declared} bytes")), "{e}");
+    }
+}

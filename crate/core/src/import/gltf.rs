@@ -218,6 +218,15 @@ impl Sampled {
 
 /// Reads a glTF (JSON with embedded buffers) or GLB file.
 pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Imported, ImportError> {
+    // The GLB header's total length must at least cover the header: the gltf crate (1.4)
+    // subtracts 12 from it unchecked (found by fuzzing: an overflow panic in checked builds,
+    // a wrapped length in release ones).
+    if let Some(len) = bytes.strip_prefix(b"glTF").and_then(|b| b.get(4..8)) {
+        let declared = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
+        if declared < 12 {
+            return Err(gerr(file, format!("the GLB header declares a total length of {declared} bytes, less than the 12-byte header itself")));
+        }
+    }
     let g = gltf::Gltf::from_slice(bytes).map_err(|e| gerr(file, e.to_string()))?;
     let data = load_buffers(file, &g)?;
     let doc = &g.document;
