@@ -16,6 +16,10 @@ shift || true
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(import_bvh import_gltf music_envelope text_parse)
 
+if [ "$secs" = 0 ]; then
+  echo "fuzz: skipped (0 s asked); the corpus is replayed by 'cargo test --test fuzz_corpus'."
+  exit 0
+fi
 if ! rustup toolchain list 2>/dev/null | grep -q '^nightly' || ! command -v cargo-fuzz >/dev/null; then
   echo "fuzz: skipped (needs rustup's nightly toolchain and cargo-fuzz; ./dev setup installs cargo-fuzz when nightly is there). The corpus is still replayed on stable by 'cargo test --test fuzz_corpus'."
   exit 0
