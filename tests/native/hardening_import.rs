@@ -281,3 +281,13 @@ fn glb_header_shorter_than_itself_is_an_error_not_a_panic() {
         assert!(e.to_string().contains(&format!("total length of {declared} bytes")), "{e}");
     }
 }
+
+#[test]
+fn animation_channel_with_an_unknown_path_is_an_error_not_a_panic() {
+    // Found by the import_gltf fuzz target (kept in fuzz/corpus/import_gltf/): the gltf crate
+    // accepted a channel whose path is not a property, then panicked reading it.
+    let json = animated_gltf_json(TIMES, ROTS, 40).replace(r#""path":"rotation""#, r#""path":"toanrtoi""#);
+    let e = import_bytes("bad_path.glb", &glb(&json, &key_bytes(1.0)), &ImportOptions::default()).unwrap_err();
+    assert!(matches!(e, ImportError::Gltf { .. }), "{e:?}");
+    assert!(e.to_string().contains("animation 0, channel 0"), "{e}");
+}

@@ -101,6 +101,49 @@ fn check_buffers(file: &str, doc: &gltf::Document, data: &[Vec<u8>]) -> Result<(
     Ok(())
 }
 
+/// Checks every enum value and index the gltf crate unwraps when it is read (found by fuzzing:
+/// an animation channel whose `path` is not a known property passes its validation and then
+/// panics in `Channel::target().property()`). What is refused here can never panic there.
+fn check_references(file: &str, root: &gltf::json::Root) -> Result<(), ImportError> {
+    use gltf::json::validation::Checked;
+    let invalid = |what: String| Err(gerr(file, what));
+    let (nodes, accessors) = (root.nodes.len(), root.accessors.len());
+    for (i, a) in root.accessors.iter().enumerate() {
+        if matches!(a.component_type, Checked::Invalid) || matches!(a.type_, Checked::Invalid) {
+            return invalid(format!("accessor {i} has an unknown component type or element type"));
+        }
+    }
+    for (ai, a) in root.animations.iter().enumerate() {
+        for (si, s) in a.samplers.iter().enumerate() {
+            if matches!(s.interpolation, Checked::Invalid) {
+                return invalid(format!("animation {ai}, sampler {si}: unknown interpolation"));
+            }
+            if s.input.value() >= accessors || s.output.value() >= accessors {
+                return invalid(format!("animation {ai}, sampler {si}: accessor {} or {} does not exist ({accessors} accessors)", s.input.value(), s.output.value()));
+            }
+        }
+        for (ci, c) in a.channels.iter().enumerate() {
+            if matches!(c.target.path, Checked::Invalid) {
+                return invalid(format!("animation {ai}, channel {ci}: the target path is not translation, rotation, scale or weights"));
+            }
+            if c.target.node.value() >= nodes || c.sampler.value() >= a.samplers.len() {
+                return invalid(format!("animation {ai}, channel {ci}: node {} or sampler {} does not exist", c.target.node.value(), c.sampler.value()));
+            }
+        }
+    }
+    for (mi, m) in root.meshes.iter().enumerate() {
+        for (pi, p) in m.primitives.iter().enumerate() {
+            if matches!(p.mode, Checked::Invalid) || p.attributes.keys().any(|k| matches!(k, Checked::Invalid)) {
+                return invalid(format!("mesh {mi}, primitive {pi}: unknown mode or attribute name"));
+            }
+            if p.attributes.values().chain(p.indices.iter()).any(|a| a.value() >= accessors) {
+                return invalid(format!("mesh {mi}, primitive {pi}: refers to an accessor that does not exist ({accessors} accessors)"));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn decode_base64(s: &str) -> Option<Vec<u8>> {
     let mut out = Vec::with_capacity(s.len() * 3 / 4);
     let mut acc = 0u32;
@@ -228,6 +271,7 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
         }
     }
     let g = gltf::Gltf::from_slice(bytes).map_err(|e| gerr(file, e.to_string()))?;
+    check_references(file, g.document.as_json())?;
     let data = load_buffers(file, &g)?;
     let doc = &g.document;
     check_buffers(file, doc, &data)?;
