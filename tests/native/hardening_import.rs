@@ -291,3 +291,16 @@ fn animation_channel_with_an_unknown_path_is_an_error_not_a_panic() {
     assert!(matches!(e, ImportError::Gltf { .. }), "{e:?}");
     assert!(e.to_string().contains("animation 0, channel 0"), "{e}");
 }
+
+#[test]
+fn accessor_of_the_wrong_element_type_is_an_error() {
+    // Found by the import_gltf fuzz target (kept in fuzz/corpus/import_gltf/): keyframe times
+    // read from a VEC4 accessor failed an assertion in the gltf crate's reader.
+    let times_vec4 = r#"{"bufferView":1,"componentType":5126,"count":2,"type":"VEC4"}"#;
+    let e = import_bytes("times.glb", &glb(&animated_gltf_json(times_vec4, ROTS, 40), &key_bytes(1.0)), &ImportOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("sampler 0 times: accessor 0 holds Some(Vec4) elements, Scalar expected"), "{e}");
+    // Rotations from a SCALAR accessor.
+    let rots_scalar = r#"{"bufferView":1,"componentType":5126,"count":2,"type":"SCALAR"}"#;
+    let e = import_bytes("rots.glb", &glb(&animated_gltf_json(TIMES, rots_scalar, 40), &key_bytes(1.0)), &ImportOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("channel 0 values"), "{e}");
+}

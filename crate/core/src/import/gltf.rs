@@ -107,12 +107,26 @@ fn check_buffers(file: &str, doc: &gltf::Document, data: &[Vec<u8>]) -> Result<(
 fn check_references(file: &str, root: &gltf::json::Root) -> Result<(), ImportError> {
     use gltf::json::validation::Checked;
     let invalid = |what: String| Err(gerr(file, what));
+    use gltf::json::accessor::{ComponentType, GenericComponentType, Type};
+    use gltf::json::mesh::Semantic;
     let (nodes, accessors) = (root.nodes.len(), root.accessors.len());
     for (i, a) in root.accessors.iter().enumerate() {
         if matches!(a.component_type, Checked::Invalid) || matches!(a.type_, Checked::Invalid) {
             return invalid(format!("accessor {i} has an unknown component type or element type"));
         }
     }
+    // The element type each use reads (the crate's readers assume it: a VEC4 read as times
+    // failed a size assertion, found by fuzzing). Indices are checked below before use.
+    let type_of = |i: usize| match root.accessors.get(i).map(|a| a.type_) {
+        Some(Checked::Valid(t)) => Some(t),
+        _ => None,
+    };
+    let expect = |i: usize, want: Type, what: &str| -> Result<(), ImportError> {
+        if i < accessors && type_of(i) != Some(want) {
+            return Err(gerr(file, format!("{what}: accessor {i} holds {:?} elements, {want:?} expected", type_of(i))));
+        }
+        Ok(())
+    };
     for (ai, a) in root.animations.iter().enumerate() {
         for (si, s) in a.samplers.iter().enumerate() {
             if matches!(s.interpolation, Checked::Invalid) {
@@ -120,6 +134,10 @@ fn check_references(file: &str, root: &gltf::json::Root) -> Result<(), ImportErr
             }
             if s.input.value() >= accessors || s.output.value() >= accessors {
                 return invalid(format!("animation {ai}, sampler {si}: accessor {} or {} does not exist ({accessors} accessors)", s.input.value(), s.output.value()));
+            }
+            expect(s.input.value(), Type::Scalar, &format!("animation {ai}, sampler {si} times"))?;
+            if !matches!(root.accessors[s.input.value()].component_type, Checked::Valid(GenericComponentType(ComponentType::F32))) {
+                return invalid(format!("animation {ai}, sampler {si}: keyframe times must be floats"));
             }
         }
         for (ci, c) in a.channels.iter().enumerate() {
@@ -129,6 +147,12 @@ fn check_references(file: &str, root: &gltf::json::Root) -> Result<(), ImportErr
             if c.target.node.value() >= nodes || c.sampler.value() >= a.samplers.len() {
                 return invalid(format!("animation {ai}, channel {ci}: node {} or sampler {} does not exist", c.target.node.value(), c.sampler.value()));
             }
+            let want = match c.target.path {
+                Checked::Valid(gltf::json::animation::Property::Rotation) => Type::Vec4,
+                Checked::Valid(gltf::json::animation::Property::MorphTargetWeights) => Type::Scalar,
+                _ => Type::Vec3,
+            };
+            expect(a.samplers[c.sampler.value()].output.value(), want, &format!("animation {ai}, channel {ci} values"))?;
         }
     }
     for (mi, m) in root.meshes.iter().enumerate() {
@@ -139,6 +163,25 @@ fn check_references(file: &str, root: &gltf::json::Root) -> Result<(), ImportErr
             if p.attributes.values().chain(p.indices.iter()).any(|a| a.value() >= accessors) {
                 return invalid(format!("mesh {mi}, primitive {pi}: refers to an accessor that does not exist ({accessors} accessors)"));
             }
+            for (k, a) in &p.attributes {
+                let want = match k {
+                    Checked::Valid(Semantic::Positions | Semantic::Normals) => Type::Vec3,
+                    Checked::Valid(Semantic::Joints(_) | Semantic::Weights(_)) => Type::Vec4,
+                    _ => continue,
+                };
+                expect(a.value(), want, &format!("mesh {mi}, primitive {pi}, {k:?}"))?;
+            }
+            if let Some(i) = p.indices {
+                expect(i.value(), Type::Scalar, &format!("mesh {mi}, primitive {pi} indices"))?;
+            }
+        }
+    }
+    for (si, skin) in root.skins.iter().enumerate() {
+        if let Some(m) = skin.inverse_bind_matrices {
+            if m.value() >= accessors {
+                return invalid(format!("skin {si}: inverse bind matrices accessor {} does not exist", m.value()));
+            }
+            expect(m.value(), Type::Mat4, &format!("skin {si} inverse bind matrices"))?;
         }
     }
     Ok(())
