@@ -127,6 +127,17 @@ fn check_references(file: &str, root: &gltf::json::Root) -> Result<(), ImportErr
         }
         Ok(())
     };
+    // And the component types the readers handle (others hit `unreachable!` in the crate,
+    // found by fuzzing: a rotation of u32 components).
+    let component = |i: usize, allowed: &[ComponentType], what: &str| -> Result<(), ImportError> {
+        match root.accessors.get(i).map(|a| a.component_type) {
+            Some(Checked::Valid(GenericComponentType(c))) if !allowed.contains(&c) => {
+                Err(gerr(file, format!("{what}: accessor {i} has {c:?} components, one of {allowed:?} expected")))
+            }
+            _ => Ok(()),
+        }
+    };
+    use ComponentType::{F32, I16, I8, U16, U32, U8};
     for (ai, a) in root.animations.iter().enumerate() {
         for (si, s) in a.samplers.iter().enumerate() {
             if matches!(s.interpolation, Checked::Invalid) {
@@ -152,7 +163,10 @@ fn check_references(file: &str, root: &gltf::json::Root) -> Result<(), ImportErr
                 Checked::Valid(gltf::json::animation::Property::MorphTargetWeights) => Type::Scalar,
                 _ => Type::Vec3,
             };
-            expect(a.samplers[c.sampler.value()].output.value(), want, &format!("animation {ai}, channel {ci} values"))?;
+            let out = a.samplers[c.sampler.value()].output.value();
+            expect(out, want, &format!("animation {ai}, channel {ci} values"))?;
+            let allowed: &[ComponentType] = if want == Type::Vec3 { &[F32] } else { &[F32, I8, U8, I16, U16] };
+            component(out, allowed, &format!("animation {ai}, channel {ci} values"))?;
         }
     }
     for (mi, m) in root.meshes.iter().enumerate() {
@@ -164,15 +178,18 @@ fn check_references(file: &str, root: &gltf::json::Root) -> Result<(), ImportErr
                 return invalid(format!("mesh {mi}, primitive {pi}: refers to an accessor that does not exist ({accessors} accessors)"));
             }
             for (k, a) in &p.attributes {
-                let want = match k {
-                    Checked::Valid(Semantic::Positions | Semantic::Normals) => Type::Vec3,
-                    Checked::Valid(Semantic::Joints(_) | Semantic::Weights(_)) => Type::Vec4,
+                let (want, allowed): (Type, &[ComponentType]) = match k {
+                    Checked::Valid(Semantic::Positions | Semantic::Normals) => (Type::Vec3, &[F32]),
+                    Checked::Valid(Semantic::Joints(_)) => (Type::Vec4, &[U8, U16]),
+                    Checked::Valid(Semantic::Weights(_)) => (Type::Vec4, &[F32, U8, U16]),
                     _ => continue,
                 };
                 expect(a.value(), want, &format!("mesh {mi}, primitive {pi}, {k:?}"))?;
+                component(a.value(), allowed, &format!("mesh {mi}, primitive {pi}, {k:?}"))?;
             }
             if let Some(i) = p.indices {
                 expect(i.value(), Type::Scalar, &format!("mesh {mi}, primitive {pi} indices"))?;
+                component(i.value(), &[U8, U16, U32], &format!("mesh {mi}, primitive {pi} indices"))?;
             }
         }
     }
@@ -182,6 +199,7 @@ fn check_references(file: &str, root: &gltf::json::Root) -> Result<(), ImportErr
                 return invalid(format!("skin {si}: inverse bind matrices accessor {} does not exist", m.value()));
             }
             expect(m.value(), Type::Mat4, &format!("skin {si} inverse bind matrices"))?;
+            component(m.value(), &[F32], &format!("skin {si} inverse bind matrices"))?;
         }
     }
     Ok(())
