@@ -307,4 +307,8 @@ fn accessor_of_the_wrong_element_type_is_an_error() {
     let rots_u32 = r#"{"bufferView":1,"componentType":5125,"count":2,"type":"VEC4"}"#;
     let e = import_bytes("u32.glb", &glb(&animated_gltf_json(TIMES, rots_u32, 40), &key_bytes(1.0)), &ImportOptions::default()).unwrap_err();
     assert!(e.to_string().contains("has U32 components"), "{e}");
+    // An accessor with no elements (the crate's reader computes count − 1).
+    let times_empty = r#"{"bufferView":0,"componentType":5126,"count":0,"type":"SCALAR"}"#;
+    let e = import_bytes("empty.glb", &glb(&animated_gltf_json(times_empty, ROTS, 40), &key_bytes(1.0)), &ImportOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("accessor 0 has no elements"), "{e}");
 }

@@ -80,6 +80,14 @@ fn check_buffers(file: &str, doc: &gltf::Document, data: &[Vec<u8>]) -> Result<(
                 limit: format!("{} elements", super::MAX_VIEWLESS_ACCESSOR_ELEMENTS),
             });
         }
+        // glTF requires count ≥ 1 and a stride of at least one element; the crate's readers
+        // compute `count − 1` and assume the stride (found by fuzzing).
+        if a.count() == 0 {
+            return Err(gerr(file, format!("accessor {} has no elements (count 0; glTF requires at least 1)", a.index())));
+        }
+        if let Some(stride) = a.view().and_then(|v| v.stride()).filter(|&st| st < a.size()) {
+            return Err(gerr(file, format!("accessor {}: its buffer view's stride {stride} is shorter than one element ({} bytes)", a.index(), a.size())));
+        }
         if let Some(s) = a.sparse().filter(|s| s.count() > a.count()) {
             return Err(gerr(file, format!("accessor {} has {} sparse values for {} elements", a.index(), s.count(), a.count())));
         }
