@@ -18,6 +18,9 @@ cargo run -q -p xtask -- check-core-deps
 step "native tests (cargo test: the core, its real-data integration tests, the build tool)"
 cargo test -q
 
+step "short fuzz run (${ODORI_FUZZ_SECS:-10} s per target; ./dev fuzz runs long)"
+bash tests/fuzz.sh "${ODORI_FUZZ_SECS:-10}"
+
 step "wasm package in Node and the app in headless Chromium (WebGL2 and WebGPU)"
 cargo build -q -p xtask
 node --test --test-reporter=spec tests/node/ tests/browser/

@@ -56,7 +56,8 @@ for (const backend of ["webgl2", "webgpu"]) {
       await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_01.bvh"));
       await page.waitForSelector("#library tbody tr:nth-child(2)", { timeout: 30000 });
       const row = await page.$$eval("#library tbody tr:nth-child(2) td", (tds) => tds.map((t) => t.textContent));
-      assert.deepEqual(row.slice(0, 6), ["salsa_01", "salsa_01.bvh", "60", "2243", "37.38", "43"]);
+      // Duration spans the frames: (2243 − 1) / 60 = 37.37 s.
+      assert.deepEqual(row.slice(0, 6), ["salsa_01", "salsa_01.bvh", "60", "2243", "37.37", "43"]);
       const salsa = await page.evaluate(() => window.odori.player.clip);
       const a = await figureIsWhereExpected(page, salsa, 2.0, `${backend}-02-salsa-t2.png`);
       const b = await figureIsWhereExpected(page, salsa, 5.0, `${backend}-03-salsa-t5.png`);

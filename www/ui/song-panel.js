@@ -82,7 +82,7 @@ export class SongPanel {
     this.player.setGrid(grid);
     this.$("#song-bpm").value = grid.bpm.toFixed(1);
     this.$("#song-bpb").value = String(grid.beatsPerBar);
-    this.$("#song-info").textContent = `${this.name} — ${grid.bpm.toFixed(1)} BPM, ${grid.bars.length} bars of ${grid.beatsPerBar}${grid.regular ? " (regular grid)" : ""}`;
+    this.$("#song-info").textContent = `${this.name} — ${grid.bpm.toFixed(1)} BPM, ${grid.bars.length} bars of ${grid.beatsPerBar}${grid.regular ? " (regular grid)" : ""}${grid.clearBeat === false ? " — no clear beat found: the grid is a guess; type the tempo or tap along" : ""}`;
     this.root.dataset.bars = String(grid.bars.length);
     this.draw();
     if (this.onGrid) this.onGrid(grid);

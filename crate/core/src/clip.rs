@@ -82,8 +82,11 @@ impl Clip {
         }
     }
 
+    /// Time from the first frame to the last, seconds: `(frames − 1) / fps`. Frame `k` is at
+    /// `k / fps`, so this is the animation's own length (a glTF animation of 1 s sampled at
+    /// 30 fps has 31 frames and lasts 1 s; a single-frame clip lasts 0 s).
     pub fn duration_secs(&self) -> f32 {
-        self.frame_count() as f32 / self.fps
+        self.frame_count().saturating_sub(1) as f32 / self.fps
     }
 
     pub fn joint_count(&self) -> usize {
@@ -203,11 +206,12 @@ impl Clip {
         }
     }
 
-    /// Resampled to `fps` (slerp between neighbouring frames); keeps the duration.
+    /// Resampled to `fps` (slerp between neighbouring frames); keeps the duration: the first
+    /// and last frames stay where they were, so the end is not a repeated frame.
     pub fn resampled(&self, fps: f32) -> Clip {
         let frames = self.frame_count();
         let n = self.skeleton.len();
-        let new_frames = ((self.duration_secs() * fps).round() as usize).max(1);
+        let new_frames = (self.duration_secs() * fps).round() as usize + 1;
         let mut rotations = Vec::with_capacity(new_frames * n);
         let mut tracks: Vec<TranslationTrack> =
             self.translations.iter().map(|t| TranslationTrack { joint: t.joint, values: Vec::with_capacity(new_frames) }).collect();
@@ -271,8 +275,14 @@ mod tests {
 
     #[test]
     fn resample_keeps_duration() {
-        let c = two_bone().resampled(20.0);
-        assert_eq!(c.frame_count(), 4);
+        // Two frames at 10 fps span 0.1 s: at 20 fps that is three frames, the last one the
+        // source's last frame (not a copy of it one frame later).
+        let src = two_bone();
+        let c = src.resampled(20.0);
+        assert_eq!(c.frame_count(), 3);
+        assert!((c.duration_secs() - src.duration_secs()).abs() < 1e-6);
+        assert!((c.root_translation(2) - Vec3::X).length() < 1e-6);
+        assert!((c.root_translation(1) - Vec3::X * 0.5).length() < 1e-6);
         c.validate().unwrap();
     }
 }

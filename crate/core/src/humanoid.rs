@@ -272,6 +272,17 @@ impl HumanoidStatus {
     }
 }
 
+/// The status in words, for messages people read (never the `Debug` form).
+impl std::fmt::Display for HumanoidStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            HumanoidStatus::Complete => write!(f, "a complete humanoid"),
+            HumanoidStatus::Partial { missing } => write!(f, "a humanoid missing {}", missing.join(", ")),
+            HumanoidStatus::NotHumanoid { reason } => write!(f, "{reason}"),
+        }
+    }
+}
+
 fn depth(sk: &Skeleton, mut j: usize) -> usize {
     let mut d = 0;
     while let Some(p) = sk.joints[j].parent {
@@ -294,6 +305,18 @@ fn is_ancestor(sk: &Skeleton, a: usize, mut b: usize) -> bool {
 impl HumanoidMap {
     pub fn get(&self, c: Canon) -> Option<usize> {
         self.joints[c.index()]
+    }
+
+    /// The bones to draw for this skeleton: every (parent, child) pair, except, when the hips
+    /// are found below other nodes (a moving `Root` / `Character` / `Armature` node above them),
+    /// the bones hanging from those nodes. Such a node is not part of the body; drawn, it is a
+    /// long stick from the ground or the world origin to the pelvis.
+    pub fn figure_bones(&self, sk: &Skeleton) -> Vec<(usize, usize)> {
+        let all = sk.bones();
+        let Some(hips) = self.get(Canon::Hips).filter(|&h| h < sk.len() && sk.joints[h].parent.is_some()) else {
+            return all;
+        };
+        all.into_iter().filter(|&(p, _)| p == hips || is_ancestor(sk, hips, p)).collect()
     }
 
     pub fn missing(&self) -> Vec<Canon> {

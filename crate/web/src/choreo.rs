@@ -15,6 +15,17 @@ fn choreo_err(e: impl std::fmt::Display) -> OdoriError {
     OdoriError::new("choreo", e.to_string())
 }
 
+/// A bar or segment index from JS. Taken as a JS number (not `usize`, which wasm-bindgen
+/// converts modulo 2³², so −1 became bar 4294967295): anything but a whole number ≥ 0 is
+/// refused with the value the caller gave.
+fn index_arg(what: &str, value: f64) -> Result<usize, OdoriError> {
+    if value.is_finite() && value >= 0.0 && value.fract() == 0.0 && value <= f64::from(u32::MAX) {
+        Ok(value as usize)
+    } else {
+        Err(OdoriError::new("bad-argument", format!("{what} {value} is not an index (a whole number from 0)")))
+    }
+}
+
 /// A dance in progress.
 #[wasm_bindgen]
 pub struct Choreographer {
@@ -180,8 +191,8 @@ impl Choreographer {
     }
 
     /// One segment's facts (`{ index, name, source, tempoBpm, intensity01, ... }`).
-    pub fn segment(&self, index: usize) -> JsValue {
-        self.lib.segment(index).map(to_js).unwrap_or(JsValue::UNDEFINED)
+    pub fn segment(&self, index: f64) -> JsValue {
+        index_arg("segment", index).ok().and_then(|i| self.lib.segment(i)).map(to_js).unwrap_or(JsValue::UNDEFINED)
     }
 
     /// Each bar: `{ bar, state: { kind, segment? }, tau, candidates, liked, shownCount, rounds }`.
@@ -191,14 +202,17 @@ impl Choreographer {
     }
 
     /// The bar's current 6 candidates (opens its search on first use).
-    pub fn candidates(&mut self, bar: usize) -> Result<Vec<u32>, OdoriError> {
+    pub fn candidates(&mut self, bar: f64) -> Result<Vec<u32>, OdoriError> {
+        let bar = index_arg("bar", bar)?;
         let lib = &self.lib;
         let d = self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
         Ok(d.candidates(lib, bar).map_err(choreo_err)?.into_iter().map(|s| s as u32).collect())
     }
 
     /// Next round: like `liked` (from the current round), τ × 19/20, 6 new candidates.
-    pub fn search(&mut self, bar: usize, liked: Vec<u32>) -> Result<Vec<u32>, OdoriError> {
+    pub fn search(&mut self, bar: f64, liked: Vec<f64>) -> Result<Vec<u32>, OdoriError> {
+        let bar = index_arg("bar", bar)?;
+        let liked: Vec<u32> = liked.into_iter().map(|x| index_arg("liked segment", x).map(|i| i as u32)).collect::<Result<_, _>>()?;
         let liked: Vec<usize> = liked.into_iter().map(|x| x as usize).collect();
         let lib = &self.lib;
         let d = self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
@@ -206,20 +220,23 @@ impl Choreographer {
     }
 
     /// Pins a segment to a bar.
-    pub fn set(&mut self, bar: usize, segment: usize) -> Result<(), OdoriError> {
+    pub fn set(&mut self, bar: f64, segment: f64) -> Result<(), OdoriError> {
+        let (bar, segment) = (index_arg("bar", bar)?, index_arg("segment", segment)?);
         let lib = &self.lib;
         let d = self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
         d.set(lib, bar, segment).map_err(choreo_err)
     }
 
     /// Unpins a bar (its segment stays, as generated).
-    pub fn unpin(&mut self, bar: usize) -> Result<(), OdoriError> {
+    pub fn unpin(&mut self, bar: f64) -> Result<(), OdoriError> {
+        let bar = index_arg("bar", bar)?;
         self.doc()?.unpin(bar).map_err(choreo_err)
     }
 
     /// Starts the bar's search over (τ back to 1, nothing shown).
     #[wasm_bindgen(js_name = resetSearch)]
-    pub fn reset_search(&mut self, bar: usize) -> Result<bool, OdoriError> {
+    pub fn reset_search(&mut self, bar: f64) -> Result<bool, OdoriError> {
+        let bar = index_arg("bar", bar)?;
         self.doc()?.reset_search(bar).map_err(choreo_err)
     }
 
@@ -304,7 +321,8 @@ impl Choreographer {
 
     /// One segment time-resampled to `durationSecs` (a candidate preview) into `library`.
     #[wasm_bindgen(js_name = previewSegment)]
-    pub fn preview_segment(&self, library: &mut Library, segment: usize, duration_secs: f32, replace: Option<u32>) -> Result<u32, OdoriError> {
+    pub fn preview_segment(&self, library: &mut Library, segment: f64, duration_secs: f32, replace: Option<u32>) -> Result<u32, OdoriError> {
+        let segment = index_arg("segment", segment)?;
         let mut clip = segment_clip(&self.lib, segment, duration_secs, 60.0)
             .ok_or_else(|| OdoriError::new("not-found", format!("no segment {segment} in the library")))?;
         clip.source = "candidate".into();

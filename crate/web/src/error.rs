@@ -27,12 +27,14 @@ error_kinds! {
     "gltf": "import: an invalid glTF/GLB file",
     "unsupported": "import: a valid file using something the importer does not handle",
     "invalid": "import: values that make no motion (no frames, bad frame time, ...)",
+    "too-large": "import: the file declares more than a tab can hold (refused before allocation)",
     "not-found": "no clip (or segment) with this id",
     "bad-argument": "an argument or option is missing, misspelt or out of range",
     "gpu": "no WebGPU/WebGL2 adapter, device or canvas surface",
     "not-humanoid": "the clip does not map onto the canonical humanoid",
     "search": "search by example failed (bad query or parameters)",
     "cancelled": "search cancelled by its progress callback",
+    "callback": "a progress callback threw: the work stopped (the message is the callback's)",
     "music": "song analysis failed (bad envelope, samples or correction)",
     "choreo": "choreography: no bars yet, clip already added, bad bar or segment",
     "text": "text to animation: nothing could be animated, or a clip cannot be tagged",
@@ -79,7 +81,9 @@ impl From<ImportError> for OdoriError {
             | ImportError::Bvh { file, .. }
             | ImportError::Gltf { file, .. }
             | ImportError::Unsupported { file, .. }
-            | ImportError::Invalid { file, .. } => file.clone(),
+            | ImportError::Invalid { file, .. }
+            | ImportError::BadOption { file, .. }
+            | ImportError::TooLarge { file, .. } => file.clone(),
         };
         OdoriError { kind: e.kind(), message: e.to_string(), file: Some(file) }
     }

@@ -92,6 +92,7 @@ export interface ClipInfo {
   format: "bvh" | "gltf" | "builtin" | "text" | "dance" | "character";
   fps: number;
   frames: number;
+  /** From the first frame to the last: (frames - 1) / fps. */
   durationSecs: number;
   /** Joints of the clip's own skeleton, as the file counts them (BVH: ROOT and JOINT). */
   joints: number;
@@ -104,7 +105,7 @@ export interface ClipInfo {
 export interface ImportOptions {
   /** Play at this frame rate instead of the file's (CMU salsa BVH headers say 120, the data is 60). */
   fpsOverride?: number;
-  /** Metres per BVH unit; guessed from the skeleton's size when absent. */
+  /** Metres per BVH unit, 0.0001..=10 (refused outside); guessed from the skeleton's size when absent (a humanoid of implausible height is then reported in `warnings`). */
   unitScale?: number;
   /** Resampling rate for glTF animations (default 30). */
   gltfFps?: number;

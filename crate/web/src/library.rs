@@ -92,7 +92,7 @@ impl Library {
     pub(crate) fn push(&mut self, clip: Clip, format: &'static str, humanoid: HumanoidMap, status: HumanoidStatus, mesh: Option<(u32, Rc<SkinnedMesh>)>) -> u32 {
         let id = self.next_id;
         self.next_id += 1;
-        let bones = clip.skeleton.bones();
+        let bones = if status.is_humanoid() { humanoid.figure_bones(&clip.skeleton) } else { clip.skeleton.bones() };
         let head = humanoid.get(Canon::Head).filter(|_| status.is_humanoid());
         self.entries.push(Entry { id, clip, format, humanoid, status, mesh, bones, head });
         id
@@ -106,7 +106,7 @@ impl Library {
         let status = map.status(&clip.skeleton, Some(&clip));
         if let Some(old) = replace.and_then(|r| self.entries.iter().position(|e| e.id == r)) {
             let id = self.entries[old].id;
-            let bones = clip.skeleton.bones();
+            let bones = if status.is_humanoid() { map.figure_bones(&clip.skeleton) } else { clip.skeleton.bones() };
             let head = map.get(Canon::Head);
             self.entries[old] = Entry { id, clip, format, humanoid: map, status, mesh: None, bones, head };
             return id;
@@ -152,9 +152,7 @@ impl Library {
         if let Some(f) = o.gltf_fps {
             opts.gltf_fps = f;
         }
-        if let Some(f) = opts.fps_override.filter(|f| !(f.is_finite() && *f > 0.0 && *f <= 1000.0)) {
-            return Err(OdoriError::new("bad-argument", format!("fpsOverride must be between 0 and 1000, got {f}")));
-        }
+        // Option ranges are checked by the core (`ImportOptions::validate`): one rule, one message.
         let im = import_bytes(file_name, bytes, &opts)?;
         let format = match im.format {
             Format::Bvh => "bvh",
@@ -194,10 +192,14 @@ impl Library {
     }
 
     /// World joint positions (x, y, z per joint, metres, Y up) of a clip at a time in seconds,
-    /// interpolated between frames and clamped to the clip.
+    /// interpolated between frames and clamped to the clip. A time that is not a finite number
+    /// (NaN, ±Infinity) is refused with a "bad-argument" error: there is no pose at NaN.
     #[wasm_bindgen(js_name = jointPositions)]
     pub fn joint_positions(&self, id: u32, time_secs: f32) -> Result<Vec<f32>, OdoriError> {
         let e = self.entry(id)?;
+        if !time_secs.is_finite() {
+            return Err(OdoriError::new("bad-argument", format!("jointPositions: time {time_secs} s is not a finite number")));
+        }
         Ok(crate::viewer::pose_at(&e.clip, time_secs).iter().flat_map(|p| p.to_array()).collect())
     }
 

@@ -74,7 +74,8 @@ impl Song {
 
     /// Applies a correction (`{ bpm?, tapTimesSecs?, beatsPerBar?, firstDownbeatSecs?,
     /// nudgeSecs? }`) to the current grid and returns the new grid; on a bad value throws and
-    /// keeps the grid as it was.
+    /// keeps the grid as it was: fewer than 4 taps, or a nudge of more than one bar (a nudge
+    /// corrects the phase; use `firstDownbeatSecs` or `bpm` for more).
     #[wasm_bindgen(unchecked_return_type = "SongGrid")]
     pub fn correct(
         &mut self,
@@ -139,6 +140,10 @@ export interface SongGrid {
   durationSecs: number; bpm: number; beatsPerBar: number;
   beatTimesSecs: number[]; firstDownbeatIndex: number; firstDownbeatSecs: number;
   downbeatTimesSecs: number[]; bars: Bar[]; regular: boolean;
+  /** Analysed grids: how clearly the song beats at this tempo (z-score vs its onsets shuffled); null for typed/tapped grids. */
+  beatClarity: number | null;
+  /** False when analysis found no clear beat (beatClarity < 5): the grid is a guess; say so and offer typing or tapping. */
+  clearBeat: boolean;
   loudness: { hopSecs: number; values: number[] };
 }
 export interface GridCorrection { bpm?: number; tapTimesSecs?: number[]; beatsPerBar?: number; firstDownbeatSecs?: number; nudgeSecs?: number; }

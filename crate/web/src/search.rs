@@ -145,7 +145,8 @@ impl SearchIndex {
     /// Searches every indexed clip for the query (`{ clipId, startFrame, endFrame }`, frames
     /// at `fps`, end exclusive) with `{ preset?, weights?, threshold?, maxResults?,
     /// minSpanRatio?, maxSpanRatio? }`. `progress(framesDone, framesTotal)` is called between
-    /// chunks; returning `false` cancels (throws kind "cancelled"). Returns
+    /// chunks; returning `false` cancels (throws kind "cancelled"); a callback that throws stops
+    /// the search too, which then throws kind "callback" carrying the callback's message. Returns
     /// `{ matches: [{ clipId, clipName, startFrame, endFrame, lengthFrames, startSecs, endSecs,
     /// distance, path }], skipped, stats }`, best first, non-overlapping. The distance is the
     /// DP cost divided by the path's total step weight (spec §C), and a match spans between
@@ -179,20 +180,32 @@ impl SearchIndex {
         }
         let k = self.position(q.clip_id)?;
         let query = self.index.query_range(k, q.start_frame, q.end_frame).map_err(search_err)?;
+        // A callback that throws stops the search, and the caller gets an error saying so (with
+        // the callback's own message): ignoring it would hide a bug in the caller's UI code.
+        let mut thrown: Option<String> = None;
         let mut cb = |pr: search::SearchProgress| -> ControlFlow<()> {
             match &progress {
-                Some(f) => {
-                    let r = f.call2(&JsValue::NULL, &JsValue::from(pr.frames_done as f64), &JsValue::from(pr.frames_total as f64));
-                    if matches!(r, Ok(v) if v.as_bool() == Some(false)) {
+                Some(f) => match f.call2(&JsValue::NULL, &JsValue::from(pr.frames_done as f64), &JsValue::from(pr.frames_total as f64)) {
+                    Ok(v) if v.as_bool() == Some(false) => ControlFlow::Break(()),
+                    Ok(_) => ControlFlow::Continue(()),
+                    Err(e) => {
+                        let message = e
+                            .dyn_ref::<js_sys::Error>()
+                            .map(|e| String::from(e.message()))
+                            .or_else(|| e.as_string())
+                            .unwrap_or_else(|| "a value that is not an Error".into());
+                        thrown = Some(message);
                         ControlFlow::Break(())
-                    } else {
-                        ControlFlow::Continue(())
                     }
-                }
+                },
                 None => ControlFlow::Continue(()),
             }
         };
-        let out = search::search(&self.index, &query, &sp, &mut cb).map_err(search_err)?;
+        let out = search::search(&self.index, &query, &sp, &mut cb);
+        if let Some(message) = thrown {
+            return Err(OdoriError::new("callback", format!("the progress callback threw ({message}); the search was stopped")));
+        }
+        let out = out.map_err(search_err)?;
         let matches: Vec<JsMatch> = out.matches.iter().map(|m| JsMatch { clip_id: self.ids[m.clip_index], inner: m }).collect();
         Ok(to_js(&serde_json::json!({ "matches": to_json(&matches), "skipped": to_json(&out.skipped), "stats": to_json(&out.stats) })))
     }

@@ -72,12 +72,16 @@ impl TextAnimator {
     }
 
     /// Re-animates an edited time table (e.g. an element's `clip` swapped for one of its
-    /// `alternatives`).
+    /// `alternatives`). An element whose `clip` is not an index of the action library is
+    /// refused with a "not-found" error (it is not replaced by the default silently).
     #[wasm_bindgen(js_name = animateTable)]
     pub fn animate_table(&self, library: &mut Library, elements: JsValue, replace: Option<u32>) -> Result<JsValue, OdoriError> {
         let table: Vec<TimeTableElement> =
             serde_wasm_bindgen::from_value(elements).map_err(|e| OdoriError::new("bad-argument", format!("time table: {e}")))?;
-        let anim = text::animate_table(&table, &self.actions, Vec::new()).map_err(|e| OdoriError::new("text", e.to_string()))?;
+        let anim = text::animate_table(&table, &self.actions, Vec::new()).map_err(|e| match e {
+            text::TextError::NoSuchClip { .. } => OdoriError::new("not-found", e.to_string()),
+            e => OdoriError::new("text", e.to_string()),
+        })?;
         Ok(self.publish(library, anim, replace))
     }
 }

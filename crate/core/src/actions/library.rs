@@ -236,7 +236,7 @@ pub fn retarget_to_canonical(clip: &Clip) -> Result<Clip, ActionError> {
     let map = HumanoidMap::from_skeleton(&clip.skeleton);
     let status = map.status(&clip.skeleton, Some(clip));
     if !status.is_humanoid() {
-        return Err(ActionError::NotHumanoid { name: clip.name.clone(), reason: format!("{status:?}") });
+        return Err(ActionError::NotHumanoid { name: clip.name.clone(), reason: status.to_string() });
     }
     Ok(to_canonical(clip, &map, clip.fps))
 }

@@ -96,6 +96,8 @@ pub enum ChoreoError {
     NoBars,
     #[error("bar {index} runs from {start_secs} s to {end_secs} s: bars must have positive length and come in order")]
     BadBar { index: usize, start_secs: f32, end_secs: f32 },
+    #[error("bar {index} has intensity {intensity}: intensity must be a number from 0 to 1")]
+    BadBarIntensity { index: usize, intensity: f32 },
     #[error("there is no bar {bar}: the song has {bars} bars")]
     NoSuchBar { bar: usize, bars: usize },
     #[error("there is no segment {segment}: the library has {segments}")]
@@ -188,6 +190,11 @@ fn check_bars(bars: &[Bar]) -> Result<(), ChoreoError> {
     for b in bars {
         if !(b.end_secs > b.start_secs && b.start_secs.is_finite() && b.end_secs.is_finite() && b.start_secs >= prev_end - 1e-3) {
             return Err(ChoreoError::BadBar { index: b.index, start_secs: b.start_secs, end_secs: b.end_secs });
+        }
+        // Intensity is a fraction of the song's loudness range: anything else is not a bar the
+        // analysis made, and would skew the filling's music term without a word.
+        if !(0.0..=1.0).contains(&b.intensity) {
+            return Err(ChoreoError::BadBarIntensity { index: b.index, intensity: b.intensity });
         }
         prev_end = b.end_secs;
     }

@@ -242,7 +242,20 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
 
     let n_channels: usize = raw.channels.iter().map(Vec::len).sum();
     let n_joints = raw.joints.len();
+    // Refuse a frame count the tab cannot hold before reserving anything for it.
+    if frames.saturating_mul(n_joints) > super::MAX_SAMPLES {
+        return Err(ImportError::TooLarge {
+            file: file.to_string(),
+            what: format!("{frames} frames of {n_joints} joints (line {}: 'Frames: {frames}')", ft.line),
+            limit: format!("{} joint samples", super::MAX_SAMPLES),
+        });
+    }
+    // A frame needs at least one byte per channel value plus a separator: a count beyond what
+    // the remaining bytes can hold is found out while reading, so reserve only what can exist.
+    let room_frames = (lx.src.len() - lx.pos) / (2 * n_channels).max(1) + 1;
+    let reserve_frames = frames.min(room_frames);
     let skeleton_unscaled = Skeleton { joints: raw.joints.clone() };
+    let guessed = options.unit_scale.is_none();
     let scale = options.unit_scale.unwrap_or_else(|| guess_unit_scale(&skeleton_unscaled));
 
     // Joints with position channels get a translation track.
@@ -251,10 +264,10 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
     for (j, ch) in raw.channels.iter().enumerate() {
         if ch.iter().any(|c| matches!(c, Channel::Pos(_))) {
             track_of[j] = tracks.len();
-            tracks.push(TranslationTrack { joint: j, values: Vec::with_capacity(frames) });
+            tracks.push(TranslationTrack { joint: j, values: Vec::with_capacity(reserve_frames) });
         }
     }
-    let mut rotations = Vec::with_capacity(frames * n_joints);
+    let mut rotations = Vec::with_capacity(reserve_frames * n_joints);
     let mut values = vec![0f32; n_channels];
     for f in 0..frames {
         // A frame is one line of numbers: read it as a line so a short row is caught there.
@@ -332,7 +345,42 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
         rotations,
         translations: tracks,
     };
-    finish(Format::Bvh, file, skeleton, vec![clip], None, warnings)
+    let mut imported = finish(Format::Bvh, file, skeleton, vec![clip], None, warnings)?;
+    if imported.status.is_humanoid() {
+        if let Some(w) = height_warning(file, &imported.clips[0], scale, guessed) {
+            imported.warnings.push(w);
+        }
+    }
+    Ok(imported)
+}
+
+/// Plausible standing height of a person, metres (a toddler to a very tall adult, with room).
+pub const PLAUSIBLE_HEIGHT_M: std::ops::RangeInclusive<f32> = 0.5..=2.5;
+
+/// The figure's height: the largest vertical extent of its joints over the clip's first
+/// frame and its rest pose, metres.
+pub fn figure_height_m(clip: &Clip) -> f32 {
+    let extent = |p: &[Vec3]| {
+        let (lo, hi) = p.iter().fold((f32::MAX, f32::MIN), |(lo, hi), v| (lo.min(v.y), hi.max(v.y)));
+        if p.is_empty() { 0.0 } else { hi - lo }
+    };
+    extent(&clip.skeleton.rest_positions()).max(extent(&clip.world_positions(0)))
+}
+
+/// A warning when a humanoid figure's height is implausible for the unit scale used (a file in
+/// centimetres read as decimetres stands 10× too tall): the clip is kept as read, and the
+/// person is told the height and how to fix it.
+fn height_warning(file: &str, clip: &Clip, scale: f32, guessed: bool) -> Option<String> {
+    let h = figure_height_m(clip);
+    if PLAUSIBLE_HEIGHT_M.contains(&h) {
+        return None;
+    }
+    let how = if guessed { "guessed from the skeleton's size" } else { "as given" };
+    Some(format!(
+        "{file}: the figure is {h:.2} m tall at {scale} m per file unit ({how}); a person is {:.1}–{:.1} m: if the unit is wrong, import again with the right unitScale (metres per unit, e.g. 0.01 for centimetres)",
+        PLAUSIBLE_HEIGHT_M.start(),
+        PLAUSIBLE_HEIGHT_M.end()
+    ))
 }
 
 /// The next non-empty line after the lexer's position, with its 1-based line number.

@@ -71,6 +71,26 @@ fn check_buffers(file: &str, doc: &gltf::Document, data: &[Vec<u8>]) -> Result<(
         Ok(())
     };
     for a in doc.accessors() {
+        // Without a buffer view an accessor is zeros (plus any sparse values): nothing bounds
+        // its count but the JSON, so bound it here before a reader allocates for it.
+        if a.view().is_none() && a.count() > super::MAX_VIEWLESS_ACCESSOR_ELEMENTS {
+            return Err(ImportError::TooLarge {
+                file: file.to_string(),
+                what: format!("accessor {} declares {} elements with no buffer data behind them", a.index(), a.count()),
+                limit: format!("{} elements", super::MAX_VIEWLESS_ACCESSOR_ELEMENTS),
+            });
+        }
+        // glTF requires count ≥ 1 and a stride of at least one element; the crate's readers
+        // compute `count − 1` and assume the stride (found by fuzzing).
+        if a.count() == 0 {
+            return Err(gerr(file, format!("accessor {} has no elements (count 0; glTF requires at least 1)", a.index())));
+        }
+        if let Some(stride) = a.view().and_then(|v| v.stride()).filter(|&st| st < a.size()) {
+            return Err(gerr(file, format!("accessor {}: its buffer view's stride {stride} is shorter than one element ({} bytes)", a.index(), a.size())));
+        }
+        if let Some(s) = a.sparse().filter(|s| s.count() > a.count()) {
+            return Err(gerr(file, format!("accessor {} has {} sparse values for {} elements", a.index(), s.count(), a.count())));
+        }
         if let Some(view) = a.view() {
             check_view(format!("accessor {}", a.index()), view, a.offset(), a.count(), a.size())?;
         }
@@ -84,6 +104,110 @@ fn check_buffers(file: &str, doc: &gltf::Document, data: &[Vec<u8>]) -> Result<(
             check_view(format!("sparse indices of accessor {}", a.index()), iv.view(), iv.offset() as usize, s.count(), isz)?;
             let vv = s.values();
             check_view(format!("sparse values of accessor {}", a.index()), vv.view(), vv.offset() as usize, s.count(), a.size())?;
+        }
+    }
+    Ok(())
+}
+
+/// Checks every enum value and index the gltf crate unwraps when it is read (found by fuzzing:
+/// an animation channel whose `path` is not a known property passes its validation and then
+/// panics in `Channel::target().property()`). What is refused here can never panic there.
+fn check_references(file: &str, root: &gltf::json::Root) -> Result<(), ImportError> {
+    use gltf::json::validation::Checked;
+    let invalid = |what: String| Err(gerr(file, what));
+    use gltf::json::accessor::{ComponentType, GenericComponentType, Type};
+    use gltf::json::mesh::Semantic;
+    let (nodes, accessors) = (root.nodes.len(), root.accessors.len());
+    for (i, a) in root.accessors.iter().enumerate() {
+        if matches!(a.component_type, Checked::Invalid) || matches!(a.type_, Checked::Invalid) {
+            return invalid(format!("accessor {i} has an unknown component type or element type"));
+        }
+    }
+    // The element type each use reads (the crate's readers assume it: a VEC4 read as times
+    // failed a size assertion, found by fuzzing). Indices are checked below before use.
+    let type_of = |i: usize| match root.accessors.get(i).map(|a| a.type_) {
+        Some(Checked::Valid(t)) => Some(t),
+        _ => None,
+    };
+    let expect = |i: usize, want: Type, what: &str| -> Result<(), ImportError> {
+        if i < accessors && type_of(i) != Some(want) {
+            return Err(gerr(file, format!("{what}: accessor {i} holds {:?} elements, {want:?} expected", type_of(i))));
+        }
+        Ok(())
+    };
+    // And the component types the readers handle (others hit `unreachable!` in the crate,
+    // found by fuzzing: a rotation of u32 components).
+    let component = |i: usize, allowed: &[ComponentType], what: &str| -> Result<(), ImportError> {
+        match root.accessors.get(i).map(|a| a.component_type) {
+            Some(Checked::Valid(GenericComponentType(c))) if !allowed.contains(&c) => {
+                Err(gerr(file, format!("{what}: accessor {i} has {c:?} components, one of {allowed:?} expected")))
+            }
+            _ => Ok(()),
+        }
+    };
+    use ComponentType::{F32, I16, I8, U16, U32, U8};
+    for (ai, a) in root.animations.iter().enumerate() {
+        for (si, s) in a.samplers.iter().enumerate() {
+            if matches!(s.interpolation, Checked::Invalid) {
+                return invalid(format!("animation {ai}, sampler {si}: unknown interpolation"));
+            }
+            if s.input.value() >= accessors || s.output.value() >= accessors {
+                return invalid(format!("animation {ai}, sampler {si}: accessor {} or {} does not exist ({accessors} accessors)", s.input.value(), s.output.value()));
+            }
+            expect(s.input.value(), Type::Scalar, &format!("animation {ai}, sampler {si} times"))?;
+            if !matches!(root.accessors[s.input.value()].component_type, Checked::Valid(GenericComponentType(ComponentType::F32))) {
+                return invalid(format!("animation {ai}, sampler {si}: keyframe times must be floats"));
+            }
+        }
+        for (ci, c) in a.channels.iter().enumerate() {
+            if matches!(c.target.path, Checked::Invalid) {
+                return invalid(format!("animation {ai}, channel {ci}: the target path is not translation, rotation, scale or weights"));
+            }
+            if c.target.node.value() >= nodes || c.sampler.value() >= a.samplers.len() {
+                return invalid(format!("animation {ai}, channel {ci}: node {} or sampler {} does not exist", c.target.node.value(), c.sampler.value()));
+            }
+            let want = match c.target.path {
+                Checked::Valid(gltf::json::animation::Property::Rotation) => Type::Vec4,
+                Checked::Valid(gltf::json::animation::Property::MorphTargetWeights) => Type::Scalar,
+                _ => Type::Vec3,
+            };
+            let out = a.samplers[c.sampler.value()].output.value();
+            expect(out, want, &format!("animation {ai}, channel {ci} values"))?;
+            let allowed: &[ComponentType] = if want == Type::Vec3 { &[F32] } else { &[F32, I8, U8, I16, U16] };
+            component(out, allowed, &format!("animation {ai}, channel {ci} values"))?;
+        }
+    }
+    for (mi, m) in root.meshes.iter().enumerate() {
+        for (pi, p) in m.primitives.iter().enumerate() {
+            if matches!(p.mode, Checked::Invalid) || p.attributes.keys().any(|k| matches!(k, Checked::Invalid)) {
+                return invalid(format!("mesh {mi}, primitive {pi}: unknown mode or attribute name"));
+            }
+            if p.attributes.values().chain(p.indices.iter()).any(|a| a.value() >= accessors) {
+                return invalid(format!("mesh {mi}, primitive {pi}: refers to an accessor that does not exist ({accessors} accessors)"));
+            }
+            for (k, a) in &p.attributes {
+                let (want, allowed): (Type, &[ComponentType]) = match k {
+                    Checked::Valid(Semantic::Positions | Semantic::Normals) => (Type::Vec3, &[F32]),
+                    Checked::Valid(Semantic::Joints(_)) => (Type::Vec4, &[U8, U16]),
+                    Checked::Valid(Semantic::Weights(_)) => (Type::Vec4, &[F32, U8, U16]),
+                    _ => continue,
+                };
+                expect(a.value(), want, &format!("mesh {mi}, primitive {pi}, {k:?}"))?;
+                component(a.value(), allowed, &format!("mesh {mi}, primitive {pi}, {k:?}"))?;
+            }
+            if let Some(i) = p.indices {
+                expect(i.value(), Type::Scalar, &format!("mesh {mi}, primitive {pi} indices"))?;
+                component(i.value(), &[U8, U16, U32], &format!("mesh {mi}, primitive {pi} indices"))?;
+            }
+        }
+    }
+    for (si, skin) in root.skins.iter().enumerate() {
+        if let Some(m) = skin.inverse_bind_matrices {
+            if m.value() >= accessors {
+                return invalid(format!("skin {si}: inverse bind matrices accessor {} does not exist", m.value()));
+            }
+            expect(m.value(), Type::Mat4, &format!("skin {si} inverse bind matrices"))?;
+            component(m.value(), &[F32], &format!("skin {si} inverse bind matrices"))?;
         }
     }
     Ok(())
@@ -206,7 +330,17 @@ impl Sampled {
 
 /// Reads a glTF (JSON with embedded buffers) or GLB file.
 pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Imported, ImportError> {
+    // The GLB header's total length must at least cover the header: the gltf crate (1.4)
+    // subtracts 12 from it unchecked (found by fuzzing: an overflow panic in checked builds,
+    // a wrapped length in release ones).
+    if let Some(len) = bytes.strip_prefix(b"glTF").and_then(|b| b.get(4..8)) {
+        let declared = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
+        if declared < 12 {
+            return Err(gerr(file, format!("the GLB header declares a total length of {declared} bytes, less than the 12-byte header itself")));
+        }
+    }
     let g = gltf::Gltf::from_slice(bytes).map_err(|e| gerr(file, e.to_string()))?;
+    check_references(file, g.document.as_json())?;
     let data = load_buffers(file, &g)?;
     let doc = &g.document;
     check_buffers(file, doc, &data)?;
@@ -371,6 +505,13 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
         }
         // Enough frames that the last one reaches the animation's end (sampling clamps there).
         let frames = (duration * fps - 1e-3).ceil().max(0.0) as usize + 1;
+        if frames.saturating_mul(nj) > super::MAX_SAMPLES {
+            return Err(ImportError::TooLarge {
+                file: file.to_string(),
+                what: format!("animation '{name}': {frames} frames of {nj} joints at {fps} fps"),
+                limit: format!("{} joint samples", super::MAX_SAMPLES),
+            });
+        }
         let mut rotations = Vec::with_capacity(frames * nj);
         let mut pos_joints: Vec<usize> = pos_tracks.keys().copied().collect();
         pos_joints.sort_unstable();

@@ -3,6 +3,13 @@
 //!
 //! Every importer returns a typed [`ImportError`] naming the file and, where it can, the line,
 //! joint or accessor at fault; no input makes it panic.
+//!
+//! The rule at this boundary: options are validated before a byte is read ([`ImportOptions::validate`],
+//! out-of-range values are refused with the value, never clamped), and a file that declares more
+//! data than a browser tab can hold (a BVH claiming 10⁹ frames, a 1 KB GLB whose accessor claims
+//! two billion elements) is refused with [`ImportError::TooLarge`] *before* anything is allocated
+//! for it ([`MAX_SAMPLES`], [`MAX_VIEWLESS_ACCESSOR_ELEMENTS`]). What is read but doubtful (a figure
+//! of implausible height for its unit guess) is kept and reported in [`Imported::warnings`].
 
 pub mod bvh;
 pub mod gltf;
@@ -36,6 +43,46 @@ pub struct ImportOptions {
 impl Default for ImportOptions {
     fn default() -> Self {
         Self { fps_override: None, unit_scale: None, gltf_fps: 30.0 }
+    }
+}
+
+/// Valid range of [`ImportOptions::unit_scale`], metres per file unit: from tenths of a
+/// millimetre to ten metres. Outside it no motion file is meaningful (0 collapses the figure,
+/// a negative scale mirrors it, 1e30 overflows).
+pub const UNIT_SCALE_RANGE: std::ops::RangeInclusive<f32> = 1e-4..=10.0;
+/// Valid range of frame rates (`fps_override`, `gltf_fps`), frames per second.
+pub const FPS_RANGE: std::ops::RangeInclusive<f32> = 0.1..=1000.0;
+/// Most joint-rotation samples (frames × joints) one clip may hold: 2²⁴ quaternions, 256 MB.
+/// A file declaring more is refused before allocation.
+pub const MAX_SAMPLES: usize = 1 << 24;
+/// Most elements an accessor without a buffer view (all zeros, or sparse) may declare. With a
+/// buffer view the accessor is bounded by the bytes actually present; without one a 1 KB file
+/// could claim billions.
+pub const MAX_VIEWLESS_ACCESSOR_ELEMENTS: usize = 1 << 22;
+
+impl ImportOptions {
+    /// Checks every option against its documented range; the error names the option and value.
+    pub fn validate(&self, file: &str) -> Result<(), ImportError> {
+        let bad = |option: &'static str, value: f32, expected: String| ImportError::BadOption { file: file.to_string(), option, value, expected };
+        if let Some(s) = self.unit_scale.filter(|s| !UNIT_SCALE_RANGE.contains(s)) {
+            return Err(bad("unitScale", s, format!("metres per file unit, {} to {}", UNIT_SCALE_RANGE.start(), UNIT_SCALE_RANGE.end())));
+        }
+        if let Some(f) = self.fps_override.filter(|f| !FPS_RANGE.contains(f)) {
+            return Err(bad("fpsOverride", f, format!("frames per second, {} to {}", FPS_RANGE.start(), FPS_RANGE.end())));
+        }
+        if !FPS_RANGE.contains(&self.gltf_fps) {
+            return Err(bad("gltfFps", self.gltf_fps, format!("frames per second, {} to {}", FPS_RANGE.start(), FPS_RANGE.end())));
+        }
+        Ok(())
+    }
+}
+
+/// A number as a person reads it: 1e30 rather than thirty-one digits, 0.01 as it is.
+pub(crate) fn readable(v: f32) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-3..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
     }
 }
 
@@ -76,6 +123,10 @@ pub enum ImportError {
     Unsupported { file: String, message: String },
     #[error("{file}: {message}")]
     Invalid { file: String, message: String },
+    #[error("{file}: import option {option} = {} is out of range (expected {expected})", readable(*.value))]
+    BadOption { file: String, option: &'static str, value: f32, expected: String },
+    #[error("{file}: {what} is more than this tab can hold (limit {limit}); the file was not read")]
+    TooLarge { file: String, what: String, limit: String },
 }
 
 impl ImportError {
@@ -88,6 +139,8 @@ impl ImportError {
             ImportError::Gltf { .. } => "gltf",
             ImportError::Unsupported { .. } => "unsupported",
             ImportError::Invalid { .. } => "invalid",
+            ImportError::BadOption { .. } => "bad-argument",
+            ImportError::TooLarge { .. } => "too-large",
         }
     }
 }
@@ -114,6 +167,7 @@ pub fn sniff(bytes: &[u8]) -> Option<Format> {
 
 /// Reads a motion file of any supported format.
 pub fn import_bytes(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Imported, ImportError> {
+    options.validate(file)?;
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(ImportError::Empty { file: file.to_string() });
     }

@@ -80,6 +80,20 @@ pub struct SongGrid {
     pub regular: bool,
     /// The loudness curve bars take their intensity from.
     pub loudness: LoudnessCurve,
+    /// For an analysed grid: how clearly the song beats at this tempo ([`super::tempo::pulse_clarity`],
+    /// a z-score against the same song's onsets shuffled in time). `None` for a typed or tapped
+    /// grid.
+    #[serde(default)]
+    pub beat_clarity: Option<f32>,
+    /// False when the analysis found no clear beat (`beat_clarity` below
+    /// [`super::tempo::MIN_CLEAR_BEAT_Z`]): the grid is a guess, and the person is told to
+    /// type or tap the tempo. True for typed or tapped grids.
+    #[serde(default = "yes")]
+    pub clear_beat: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// A user's correction of the grid, as the UI sends it; fields left out keep their value.
@@ -116,6 +130,10 @@ fn check_beats_per_bar(beats_per_bar: u32) -> Result<(), MusicError> {
     }
 }
 
+/// Fewest taps that make a tempo: two taps are one interval, which says nothing about whether
+/// the person kept time; four give three intervals whose median rejects one stray tap.
+pub const MIN_TAPS: usize = 4;
+
 fn check_time(what: &'static str, time_secs: f32) -> Result<(), MusicError> {
     if time_secs.is_finite() {
         Ok(())
@@ -126,10 +144,10 @@ fn check_time(what: &'static str, time_secs: f32) -> Result<(), MusicError> {
 
 /// The tempo of tap-tempo taps: taps are numbered by the median interval (so a missed tap
 /// counts as two intervals), then the BPM is 60 over the least-squares slope of time against
-/// tap number. Needs at least two increasing, finite taps.
+/// tap number. Needs at least [`MIN_TAPS`] increasing, finite taps.
 pub fn bpm_from_taps(tap_times_secs: &[f32]) -> Result<f32, MusicError> {
-    if tap_times_secs.len() < 2 {
-        return Err(MusicError::TooFewTaps { taps: tap_times_secs.len(), min: 2 });
+    if tap_times_secs.len() < MIN_TAPS {
+        return Err(MusicError::TooFewTaps { taps: tap_times_secs.len(), min: MIN_TAPS });
     }
     for (index, w) in tap_times_secs.windows(2).enumerate() {
         if !(w[0].is_finite() && w[1].is_finite() && w[1] > w[0]) {
@@ -213,6 +231,8 @@ impl SongGrid {
             bars,
             regular,
             loudness,
+            beat_clarity: None,
+            clear_beat: true,
         }
     }
 
@@ -327,6 +347,13 @@ impl SongGrid {
             grid = grid.with_first_downbeat(t)?;
         }
         if let Some(d) = correction.nudge_secs {
+            // A nudge corrects the grid's phase: within a bar every phase is reachable, so a
+            // larger one is a mistake (it would push the grid out of the song and empty it).
+            check_time("nudge", d)?;
+            let bar_secs = 60.0 * grid.beats_per_bar as f32 / grid.bpm;
+            if d.abs() > bar_secs {
+                return Err(MusicError::NudgeTooFar { nudge_secs: d, max_secs: bar_secs });
+            }
             grid = grid.nudged(d)?;
         }
         Ok(grid)
@@ -362,8 +389,8 @@ mod tests {
         let bpm = bpm_from_taps(&taps).unwrap();
         assert!((bpm - 120.0).abs() < 2.0, "{bpm}");
         assert!(matches!(bpm_from_taps(&[1.0]), Err(MusicError::TooFewTaps { taps: 1, .. })));
-        assert!(matches!(bpm_from_taps(&[1.0, 0.5]), Err(MusicError::TapsNotIncreasing { index: 1, .. })));
-        assert!(matches!(bpm_from_taps(&[0.0, 10.0]), Err(MusicError::BpmOutOfRange { .. })));
+        assert!(matches!(bpm_from_taps(&[1.0, 0.5, 2.0, 3.0]), Err(MusicError::TapsNotIncreasing { index: 1, .. })));
+        assert!(matches!(bpm_from_taps(&[0.0, 10.0, 20.0, 30.0]), Err(MusicError::BpmOutOfRange { .. })));
     }
 
     #[test]
@@ -418,6 +445,8 @@ mod tests {
             "beatTimesSecs",
             "firstDownbeatIndex",
             "firstDownbeatSecs",
+            "beatClarity",
+            "clearBeat",
             "downbeatTimesSecs",
             "bars",
             "regular",
@@ -427,8 +456,8 @@ mod tests {
         }
         assert!(v["bars"][0].get("startSecs").is_some() && v["loudness"].get("hopSecs").is_some());
         // A correction from JavaScript may leave out any field.
-        let c: GridCorrection = serde_json::from_str(r#"{"tapTimesSecs":[0,0.5,1.0],"nudgeSecs":null}"#).unwrap();
-        assert_eq!(c.tap_times_secs, Some(vec![0.0, 0.5, 1.0]));
+        let c: GridCorrection = serde_json::from_str(r#"{"tapTimesSecs":[0,0.5,1.0,1.5],"nudgeSecs":null}"#).unwrap();
+        assert_eq!(c.tap_times_secs, Some(vec![0.0, 0.5, 1.0, 1.5]));
         assert_eq!(c.bpm, None);
         assert_eq!(g.corrected(&c).unwrap().bpm, 120.0);
     }

@@ -73,6 +73,8 @@ pub enum MusicError {
     BadBeatsPerBar { beats_per_bar: u32, max: u32 },
     #[error("{what} time {time_secs} s is not a finite number")]
     BadTime { what: &'static str, time_secs: f32 },
+    #[error("a nudge of {nudge_secs} s is more than a bar ({max_secs:.3} s): nudge by less than a bar, or set the first downbeat or the tempo")]
+    NudgeTooFar { nudge_secs: f32, max_secs: f32 },
     #[error("tap tempo needs at least {min} taps, got {taps}")]
     TooFewTaps { taps: usize, min: usize },
     #[error("tap {index} at {time_secs} s is not later than the tap before it")]
@@ -193,7 +195,7 @@ pub fn analyze(envelope: &RmsEnvelope, options: &AnalysisOptions) -> Result<Song
         first.bpm
     }
     .clamp(grid::MIN_GRID_BPM, grid::MAX_GRID_BPM);
-    Ok(SongGrid::assemble(
+    let mut grid = SongGrid::assemble(
         duration_secs,
         bpm,
         options.beats_per_bar,
@@ -201,7 +203,13 @@ pub fn analyze(envelope: &RmsEnvelope, options: &AnalysisOptions) -> Result<Song
         phase,
         false,
         LoudnessCurve::from_rms(envelope.hop_secs, full),
-    ))
+    );
+    // Clamp with a notice: the grid is still given (the person may tap over it), marked as a
+    // guess when the song shows no clear beat at its tempo (noise, free-time playing).
+    let clarity = tempo::pulse_clarity(&onsets.total, period_frames);
+    grid.beat_clarity = Some(clarity);
+    grid.clear_beat = clarity >= tempo::MIN_CLEAR_BEAT_Z;
+    Ok(grid)
 }
 
 #[cfg(test)]

@@ -36,8 +36,11 @@ pub struct TextAnimation {
 const JOIN_TAIL_SECS: f32 = 3.0;
 /// A cycle (walk, run) on its own plays at least this long, seconds.
 const CYCLE_MIN_SECS: f32 = 2.2;
-/// Longest stated delay honoured, seconds (「99999秒後に」 waits this long).
+/// Longest stated delay honoured, seconds: 「99999秒後に」 waits this long, with a notice. A
+/// negative or non-finite delay is not a wait at all: it is dropped, with a notice.
 pub const MAX_DELAY_SECS: f32 = 30.0;
+/// Shortest one-shot that can carry a Composition (the overlay is cut to its length), seconds.
+const MIN_COMPOSITION_BASE_SECS: f32 = 0.5;
 
 /// Text → animation: [`parse`] with the library's tags, then [`animate_table`].
 pub fn animate_text(text: &str, library: &ActionLibrary) -> Result<TextAnimation, TextError> {
@@ -68,6 +71,11 @@ pub fn animate_table_with_progress(elements: &[TimeTableElement], library: &Acti
     if library.is_empty() {
         return Err(TextError::EmptyLibrary);
     }
+    // An element's clip set by the caller must exist: a swap to a clip that is not there is
+    // refused, not silently replaced by the default.
+    if let Some(e) = elements.iter().find(|e| e.clip.is_some_and(|c| c >= library.len())) {
+        return Err(TextError::NoSuchClip { index: e.index, clip: e.clip.unwrap_or(0), clips: library.len() });
+    }
     // Resolve clips; drop elements without one (re-pointing references).
     let mut table: Vec<TimeTableElement> = Vec::new();
     let mut remap: Vec<Option<usize>> = Vec::with_capacity(elements.len());
@@ -82,6 +90,21 @@ pub fn animate_table_with_progress(elements: &[TimeTableElement], library: &Acti
         match clip {
             Some(c) => {
                 let mut e = e.clone();
+                // Clamp the stated delay, with a notice (the person asked for something else).
+                let asked = e.delay_secs;
+                if !(asked.is_finite() && (0.0..=MAX_DELAY_SECS).contains(&asked)) {
+                    e.delay_secs = if asked.is_finite() && asked > 0.0 { MAX_DELAY_SECS } else { 0.0 };
+                    diagnostics.push(Diagnostic {
+                        kind: DiagnosticKind::DelayClamped,
+                        text: e.verb.clone(),
+                        span: e.span,
+                        message: if asked.is_finite() && asked > 0.0 {
+                            format!("a wait of {asked} s before '{}' is longer than the {MAX_DELAY_SECS} s an animation waits; it waits {MAX_DELAY_SECS} s", e.verb)
+                        } else {
+                            format!("a wait of {asked} s before '{}' is not a wait; '{}' follows without one", e.verb, e.verb)
+                        },
+                    });
+                }
                 e.clip = Some(c);
                 e.clip_name = library.entries[c].name.clone();
                 e.alternatives = library.alternatives(c, &e.motion);
@@ -110,8 +133,9 @@ pub fn animate_table_with_progress(elements: &[TimeTableElement], library: &Acti
     if table.is_empty() {
         return Err(TextError::NoActions { diagnostics });
     }
-    // A Composition needs a base that outlasts it: a cycle (repeated as needed) or a one-shot
-    // longer than the overlay. Otherwise the element plays after the previous one.
+    // A Composition needs a base to run on: a cycle (repeated to outlast the overlay) or a
+    // one-shot long enough to carry a part of it (the overlay is then cut to the base's length,
+    // below: "clap while jumping" claps during the jump). Otherwise it plays after the previous one.
     let mut base: Option<usize> = None;
     for k in 0..table.len() {
         if table[k].join != JoinType::Composition {
@@ -120,8 +144,7 @@ pub fn animate_table_with_progress(elements: &[TimeTableElement], library: &Acti
         }
         let fits = base.is_some_and(|b| {
             let be = &library.entries[table[b].clip.unwrap_or(0)];
-            let ov = &library.entries[table[k].clip.unwrap_or(0)];
-            be.cycle_advance.is_some() || be.clip.duration_secs() >= ov.clip.duration_secs() + 0.2
+            be.cycle_advance.is_some() || be.clip.duration_secs() >= MIN_COMPOSITION_BASE_SECS
         });
         if !fits {
             if let Some(b) = base {
@@ -167,7 +190,26 @@ pub fn animate_table_with_progress(elements: &[TimeTableElement], library: &Acti
         for &k in &g[1..] {
             let ov = &library.entries[table[k].clip.unwrap_or(0)];
             let part = table[k].switched_part.or(ov.part).unwrap_or(BodyPart::RightArm);
-            let ov_clip = if (ov.clip.fps - segment.fps).abs() > 1e-3 { ov.clip.resampled(segment.fps) } else { ov.clip.clone() };
+            let mut ov_clip = if (ov.clip.fps - segment.fps).abs() > 1e-3 { ov.clip.resampled(segment.fps) } else { ov.clip.clone() };
+            // A one-shot base shorter than the overlay carries as much of it as fits.
+            let room = segment.frame_count().saturating_sub(8);
+            if ov_clip.frame_count() > room && room >= 8 && ov_clip.frame_count() >= 8 {
+                diagnostics.push(Diagnostic {
+                    kind: DiagnosticKind::JoinFallback,
+                    text: table[k].verb.clone(),
+                    span: table[k].span,
+                    message: format!(
+                        "'{}' ({:.1} s) is longer than '{}' ({:.1} s) it runs with; its first {:.1} s play during it",
+                        table[k].verb,
+                        ov_clip.duration_secs(),
+                        table[base_el].verb,
+                        segment.duration_secs(),
+                        (room - 1) as f32 / segment.fps
+                    ),
+                });
+                let name = ov_clip.name.clone();
+                ov_clip = ov_clip.slice(0, room, name);
+            }
             if ov_clip.frame_count() + 8 > segment.frame_count() || ov_clip.frame_count() < 8 {
                 // The base cannot carry it (a one-shot shorter than the overlay): play it on
                 // its own afterwards instead.
@@ -202,7 +244,7 @@ pub fn animate_table_with_progress(elements: &[TimeTableElement], library: &Acti
                     JoinType::Transition if table[base_el].delay_secs <= 0.0 => JoinKind::Transition,
                     _ => JoinKind::Connection,
                 };
-                let opts = JoinOptions { delay_secs: table[base_el].delay_secs.clamp(0.0, MAX_DELAY_SECS), ..JoinOptions::default() };
+                let opts = JoinOptions { delay_secs: table[base_el].delay_secs, ..JoinOptions::default() };
                 let tail_frames = ((JOIN_TAIL_SECS * fps) as usize).max(8);
                 let cut = whole.frame_count().saturating_sub(tail_frames);
                 let tail = whole.slice(cut, whole.frame_count(), whole.name.clone());

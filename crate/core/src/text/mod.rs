@@ -110,6 +110,8 @@ pub enum DiagnosticKind {
     MixedLanguages,
     /// A join could not be made as written and was made another way.
     JoinFallback,
+    /// A stated delay outside 0..=MAX_DELAY_SECS was clamped (99999 s) or dropped (−5 s).
+    DelayClamped,
 }
 
 /// A remark about the text, with where it applies.
@@ -137,13 +139,33 @@ pub enum TextError {
     Cancelled { done: usize, total: usize },
     #[error("element {index} ({motion}): {source}")]
     Join { index: usize, motion: String, source: ActionError },
+    #[error("element {index}: clip {clip} does not exist (the action library has {clips}: 0..{clips})")]
+    NoSuchClip { index: usize, clip: usize, clips: usize },
 }
 
+/// At most this many unknown words are listed in an error message; the rest are counted
+/// ("… and 9,990 more"): every word is still in the diagnostics.
+pub const MAX_LISTED_WORDS: usize = 10;
+/// Longest word quoted in an error message, characters (longer ones are cut with "…").
+pub const MAX_QUOTED_CHARS: usize = 40;
+
+/// The unknown words of an error message, bounded: a 10,000-word text gives a message of a
+/// few hundred characters, not tens of thousands.
 fn unknown_list(d: &[Diagnostic]) -> String {
-    let words: Vec<String> = d.iter().filter(|x| x.kind == DiagnosticKind::UnknownVerb).map(|x| format!("'{}' at {}", x.text, x.span.start)).collect();
-    if words.is_empty() {
-        "nothing".into()
-    } else {
-        words.join(", ")
+    let unknown: Vec<&Diagnostic> = d.iter().filter(|x| x.kind == DiagnosticKind::UnknownVerb).collect();
+    if unknown.is_empty() {
+        return "nothing".into();
     }
+    let quote = |t: &str| {
+        if t.chars().count() > MAX_QUOTED_CHARS {
+            format!("{}…", t.chars().take(MAX_QUOTED_CHARS).collect::<String>())
+        } else {
+            t.to_string()
+        }
+    };
+    let mut out = unknown.iter().take(MAX_LISTED_WORDS).map(|x| format!("'{}' at {}", quote(&x.text), x.span.start)).collect::<Vec<_>>().join(", ");
+    if unknown.len() > MAX_LISTED_WORDS {
+        out.push_str(&format!(" and {} more", unknown.len() - MAX_LISTED_WORDS));
+    }
+    out
 }

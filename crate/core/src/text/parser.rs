@@ -154,7 +154,12 @@ fn ja_delay(cs: &[char], i: usize) -> Option<(f32, usize)> {
             return Some((secs, s.chars().count()));
         }
     }
-    let (v, n) = number_at(cs, i)?;
+    // A sign is read, not skipped: 「-5秒後に」 is a negative delay (refused with a notice when
+    // animated), not a 5 s one.
+    let sign_len = if starts_with(cs, i, "マイナス") { 4 } else if matches!(cs.get(i), Some('-' | '−' | '－')) { 1 } else { 0 };
+    let (v, n) = number_at(cs, i + sign_len)?;
+    let v = if sign_len > 0 { -v } else { v };
+    let n = n + sign_len;
     let mut k = i + n;
     if k < cs.len() && cs[k] == '秒' {
         k += 1;

@@ -1,0 +1,67 @@
+//! The fuzzed entry points, shared by the libFuzzer targets (`fuzz/fuzz_targets/`) and the
+//! stable-toolchain corpus replay (`tests/native/fuzz_corpus.rs`), so both exercise exactly the
+//! same code. Each takes arbitrary bytes and must return (an `Ok` or a typed error) without
+//! panicking, aborting on allocation, or hanging.
+
+// Each libFuzzer target uses one of these.
+#![allow(dead_code)]
+
+use odori_core::import::{bvh, gltf, ImportOptions};
+use odori_core::music::{analyze, AnalysisOptions, RmsEnvelope};
+use odori_core::text::{parse, Lexicon};
+
+/// The BVH importer on the bytes, with the default options and with an explicit unit and rate
+/// taken from the first byte (so option handling is fuzzed too).
+pub fn import_bvh(data: &[u8]) {
+    let _ = bvh::import("fuzz.bvh", data, &ImportOptions::default());
+    if let Some(&b) = data.first() {
+        let o = ImportOptions { unit_scale: Some(0.001 * f32::from(b.max(1))), fps_override: Some(f32::from(b) + 0.5), ..Default::default() };
+        let _ = bvh::import("fuzz.bvh", &data[1..], &o);
+    }
+}
+
+/// The glTF / GLB importer on the bytes.
+pub fn import_gltf(data: &[u8]) {
+    let _ = gltf::import("fuzz.glb", data, &ImportOptions::default());
+}
+
+/// Song analysis of an envelope decoded from the bytes: byte 0 picks the hop (5–50 ms, or a
+/// bad one), byte 1 the band count (1–4); the rest are little-endian u16 RMS values (0xFFFF is
+/// NaN, 0xFFFE negative: bad values the analysis must refuse).
+pub fn music_envelope(data: &[u8]) {
+    if data.len() < 2 {
+        return;
+    }
+    let hop_secs = match data[0] {
+        0 => f32::NAN,
+        1 => 0.0,
+        h => 0.005 + 0.045 * f32::from(h) / 255.0,
+    };
+    let bands_n = usize::from(data[1] % 4) + 1;
+    let values: Vec<f32> = data[2..]
+        .chunks_exact(2)
+        .map(|c| match u16::from_le_bytes([c[0], c[1]]) {
+            0xFFFF => f32::NAN,
+            0xFFFE => -1.0,
+            v => f32::from(v) / 65535.0,
+        })
+        .collect();
+    let frames = values.len() / bands_n;
+    let bands: Vec<Vec<f32>> = (0..bands_n).map(|b| values[b * frames..(b + 1) * frames].to_vec()).collect();
+    let _ = analyze(&RmsEnvelope { hop_secs, bands }, &AnalysisOptions::default());
+}
+
+/// The text parser on the bytes read as UTF-8 (lossily, so every input is a text).
+pub fn text_parse(data: &[u8]) {
+    thread_local! {
+        static LEXICON: Lexicon = Lexicon::builtin();
+    }
+    let text = String::from_utf8_lossy(data);
+    LEXICON.with(|lex| {
+        let p = parse(&text, lex);
+        // The table's references must point inside it.
+        for e in &p.elements {
+            assert!(e.previous.is_none_or(|k| k < e.index), "element {} refers forward to {:?}", e.index, e.previous);
+        }
+    });
+}

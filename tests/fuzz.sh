@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Coverage-guided fuzzing of the core's input boundaries (cargo-fuzz / libFuzzer, nightly):
+#   tests/fuzz.sh SECS [TARGET...]   each target for SECS seconds (default: all four targets)
+# `./dev fuzz [SECS]` runs it long (default 600 s per target); `./dev test` runs it short.
+# The committed seeds (fuzz/corpus/<target>/) are read, never written: what libFuzzer finds is
+# kept in fuzz/corpus-work/<target>/ (not committed; it carries over between runs). A crash is
+# written to fuzz/artifacts/<target>/ and fails the run: once fixed, copy the input into
+# fuzz/corpus/<target>/ so `cargo test --test fuzz_corpus` keeps it fixed. Without the nightly
+# toolchain or cargo-fuzz it says so and exits 0: `cargo test` (tests/native/fuzz_corpus.rs)
+# still replays the whole corpus through the same entry points on stable.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH="$HOME/.cargo/bin:$PATH"
+secs=${1:-600}
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(import_bvh import_gltf music_envelope text_parse)
+
+if [ "$secs" = 0 ]; then
+  echo "fuzz: skipped (0 s asked); the corpus is replayed by 'cargo test --test fuzz_corpus'."
+  exit 0
+fi
+if ! rustup toolchain list 2>/dev/null | grep -q '^nightly' || ! command -v cargo-fuzz >/dev/null; then
+  echo "fuzz: skipped (needs rustup's nightly toolchain and cargo-fuzz; ./dev setup installs cargo-fuzz when nightly is there). The corpus is still replayed on stable by 'cargo test --test fuzz_corpus'."
+  exit 0
+fi
+# Safe Rust: no sanitizer (more executions per second); debug assertions on, so an arithmetic
+# overflow is a finding too. -rss_limit_mb: an input that makes the engine allocate past 2 GB
+# (what a browser tab can give) is a crash. -max_len 64 KiB: big enough for rigs and envelopes.
+# -timeout 10 s per input: a hang is a crash.
+for t in "${targets[@]}"; do
+  mkdir -p "fuzz/corpus-work/$t" "fuzz/artifacts/$t"
+  echo "== fuzz $t for ${secs}s"
+  log=$(mktemp)
+  if ! nice -n 15 cargo +nightly fuzz run -s none -a "$t" "fuzz/corpus-work/$t" "fuzz/corpus/$t" -- \
+      -max_total_time="$secs" -rss_limit_mb=2048 -malloc_limit_mb=2048 -max_len=65536 -timeout=10 \
+      -artifact_prefix="fuzz/artifacts/$t/" -print_final_stats=1 >"$log" 2>&1; then
+    tail -40 "$log"
+    echo "fuzz: $t FAILED (crash input in fuzz/artifacts/$t/)"
+    exit 1
+  fi
+  grep -E '^stat::number_of_executed_units|^stat::peak_rss_mb|Done [0-9]+ runs' "$log" | sed "s/^/  $t: /"
+  rm -f "$log"
+done
