@@ -3,6 +3,10 @@
 //! up and down), each against a control (the analysis held to 4 beats per bar, or to one
 //! steady period), plus the 4/4 demo song, which must stay in 4.
 
+#[path = "music_audio.rs"]
+mod music_audio;
+
+use music_audio::*;
 use odori_core::music::demo_song::{demo_song_with, DemoSong, DemoSongOptions};
 use odori_core::music::{analyze, envelope, f_measure, AnalysisOptions, SongGrid};
 
@@ -101,5 +105,29 @@ fn beats_follow_a_tempo_ramp() {
         assert!(downbeat_f >= 0.9, "{from}->{to}: downbeat F {downbeat_f}");
         assert!(error <= 0.03, "{from}->{to}: local tempo off by {error}");
         assert!(beat_f > steady_beat_f, "{from}->{to}: following the tempo must beat the steady control");
+    }
+}
+
+#[test]
+fn real_recordings_keep_their_grids() {
+    // The drum take (4/4, steady 138 BPM): the brief's goals, and the detection must not move it.
+    let audio = decode_data(DRUMS);
+    let env = audio.envelope().expect("envelope");
+    let g = analyze(&env, &AnalysisOptions::default()).expect("analysis");
+    let (beats, downbeats) = read_beats(DRUMS_BEATS);
+    let beat_f = f_measure(&g.beat_times_secs, &beats, TOLERANCE_SECS);
+    let downbeat_f = f_measure(&g.downbeat_times_secs, &downbeats, TOLERANCE_SECS);
+    println!("drums: metre {}, {:.2} BPM, beat F {beat_f:.3}, downbeat F {downbeat_f:.3}", g.beats_per_bar, g.bpm);
+    assert_eq!(g.beats_per_bar, 4);
+    assert!(beat_f >= 0.95 && downbeat_f >= 0.90, "drums: beat F {beat_f}, downbeat F {downbeat_f}");
+    // The songs: metre found, and how far following the tempo moved the beats from one steady
+    // period (the share of beats within 70 ms of the steady tracker's).
+    for rel in FULL_TRACKS.iter().chain([&TRUMPET]) {
+        let env = decode_data(rel).envelope().expect("envelope");
+        let g = analyze(&env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        let steady = analyze(&env, &AnalysisOptions { follow_tempo: false, ..Default::default() }).expect("steady");
+        let agree = f_measure(&g.beat_times_secs, &steady.beat_times_secs, TOLERANCE_SECS);
+        println!("{rel}: metre {}, {:.2} BPM, {} bars; agreement with one steady period F {agree:.3}", g.beats_per_bar, g.bpm, g.bars.len());
+        assert!((3..=4).contains(&g.beats_per_bar), "{rel}: metre {}", g.beats_per_bar);
     }
 }

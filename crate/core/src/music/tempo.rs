@@ -7,7 +7,8 @@
 //! Local tempo ([`local_periods`]): the same comb on windows of a few seconds, restricted to
 //! tempi near the global one (so the metrical level cannot jump), and a Viterbi path through
 //! the windows that charges each change of tempo (so one noisy window cannot pull the path
-//! away). A piece whose path stays within [`STEADY_SPREAD`] of one tempo is taken to be steady.
+//! away). A piece whose path (but for its 10 % extremes) stays within [`STEADY_SPREAD`] of one tempo is
+//! taken to be steady.
 
 use serde::{Deserialize, Serialize};
 
@@ -146,8 +147,9 @@ const LOCAL_STEP: f32 = 1.01;
 /// to 1 per window): a drift of one bin per window costs a little, a jump of ten bins costs
 /// more than any one window can gain.
 const LOCAL_JUMP_COST: f32 = 0.02;
-/// A local-tempo path whose slowest and fastest tempi are within this ratio is steady.
-pub const STEADY_SPREAD: f32 = 1.04;
+/// A local-tempo path whose 10th- and 90th-percentile tempi are within this ratio is steady
+/// (a song that changes tempo by less keeps one period; the tracker absorbs a few per cent).
+pub const STEADY_SPREAD: f32 = 1.08;
 
 /// Local tempo bins around `centre_bpm`: `1/LOCAL_RANGE ..= LOCAL_RANGE` times it in 1 % steps.
 fn local_bins(centre_bpm: f32) -> Vec<f32> {
@@ -272,8 +274,11 @@ pub fn local_periods(onset: &[f32], fps: f32, global_bpm: f32) -> Option<Vec<f32
         j = back[w][j];
     }
     let tempi: Vec<f32> = path.iter().map(|&j| bins[j]).collect();
-    let lo = tempi.iter().copied().fold(f32::INFINITY, f32::min);
-    let hi = tempi.iter().copied().fold(0.0f32, f32::max);
+    // The spread between the 10th and 90th percentile of the path: a passage of a few seconds
+    // where the path wanders (a fill, a held chord) does not make a steady song unsteady.
+    let mut sorted = tempi.clone();
+    sorted.sort_by(f32::total_cmp);
+    let (lo, hi) = (sorted[sorted.len() / 10], sorted[sorted.len() * 9 / 10]);
     if hi / lo <= STEADY_SPREAD {
         return None;
     }
