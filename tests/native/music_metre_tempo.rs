@@ -55,7 +55,7 @@ fn a_waltz_is_found_in_three() {
         let g = analyse(&song, &AnalysisOptions::default());
         let (beat_f, downbeat_f) = scores(&g, &song);
         // Control: the same analysis told 4 beats per bar (what every song got before).
-        let four = analyse(&song, &AnalysisOptions { beats_per_bar: Some(4), ..Default::default() });
+        let four = analyse(&song, &AnalysisOptions { beats_per_bar: 4, ..Default::default() });
         let (_, four_downbeat_f) = scores(&four, &song);
         println!(
             "waltz {bpm} BPM: metre {} (true 3), {:.2} BPM, beat F {beat_f:.3}, downbeat F {downbeat_f:.3} (held to 4: {four_downbeat_f:.3})",

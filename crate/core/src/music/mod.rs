@@ -87,9 +87,9 @@ pub enum MusicError {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase", default)]
 pub struct AnalysisOptions {
-    /// Beats per bar of the result; `None` (the default) detects it (3 or 4, 4 when unsure,
+    /// Beats per bar of the result; 0 (the default) detects it (3 or 4, 4 when unsure,
     /// [`downbeats::detect_metre`]).
-    pub beats_per_bar: Option<u32>,
+    pub beats_per_bar: u32,
     /// Slowest tempo considered, BPM.
     pub min_bpm: f32,
     /// Fastest tempo considered, BPM.
@@ -107,17 +107,16 @@ pub struct AnalysisOptions {
 
 impl Default for AnalysisOptions {
     fn default() -> Self {
-        Self { beats_per_bar: None, min_bpm: 50.0, max_bpm: 220.0, prior_bpm: 120.0, prior_octaves: 0.9, tightness: 1000.0, follow_tempo: true }
+        Self { beats_per_bar: 0, min_bpm: 50.0, max_bpm: 220.0, prior_bpm: 120.0, prior_octaves: 0.9, tightness: 1000.0, follow_tempo: true }
     }
 }
 
 impl AnalysisOptions {
     fn validate(&self) -> Result<(), MusicError> {
         let bad = |what, value: f32| Err(MusicError::BadOption { what, value });
-        if let Some(beats_per_bar) = self.beats_per_bar {
-            if !(1..=grid::MAX_BEATS_PER_BAR).contains(&beats_per_bar) {
-                return Err(MusicError::BadBeatsPerBar { beats_per_bar, max: grid::MAX_BEATS_PER_BAR });
-            }
+        // 0 asks for detection.
+        if self.beats_per_bar > grid::MAX_BEATS_PER_BAR {
+            return Err(MusicError::BadBeatsPerBar { beats_per_bar: self.beats_per_bar, max: grid::MAX_BEATS_PER_BAR });
         }
         if !(self.min_bpm.is_finite() && self.min_bpm >= grid::MIN_GRID_BPM) {
             return bad("minBpm", self.min_bpm);
@@ -177,7 +176,7 @@ pub fn analyze(envelope: &RmsEnvelope, options: &AnalysisOptions) -> Result<Song
         prior_bpm: options.prior_bpm,
         prior_octaves: options.prior_octaves,
         // A loop of unknown metre is judged in 4 (the common case; 3 is found afterwards).
-        loop_bars: (duration_secs <= LOOP_MAX_SECS).then_some((duration_secs, options.beats_per_bar.unwrap_or(4))),
+        loop_bars: (duration_secs <= LOOP_MAX_SECS).then_some((duration_secs, if options.beats_per_bar == 0 { 4 } else { options.beats_per_bar })),
     };
     let candidates = tempo::tempo_candidates(&onsets.total, fps, &settings);
     let first = candidates.first().ok_or(MusicError::NoPulse)?;
@@ -201,8 +200,8 @@ pub fn analyze(envelope: &RmsEnvelope, options: &AnalysisOptions) -> Result<Song
         return Err(MusicError::NoPulse);
     }
     let beats_per_bar = match options.beats_per_bar {
-        Some(n) => n,
-        None => downbeats::detect_metre(&beat_frames, &[&onsets.low, &onsets.mid, &onsets.total], period_frames).0 as u32,
+        0 => downbeats::detect_metre(&beat_frames, &[&onsets.low, &onsets.mid, &onsets.total], period_frames).0 as u32,
+        n => n,
     };
     let (phase, _confidence) =
         downbeats::bar_phase(&beat_frames, &onsets.low, &onsets.mid, period_frames, beats_per_bar as usize);
@@ -301,7 +300,7 @@ mod tests {
         for band in &mut e.bands {
             band.splice(0..0, std::iter::repeat_n(0.001, 30));
         }
-        let o = AnalysisOptions { beats_per_bar: Some(3), ..AnalysisOptions::default() };
+        let o = AnalysisOptions { beats_per_bar: 3, ..AnalysisOptions::default() };
         let g = analyze(&e, &o).unwrap();
         assert_eq!(g.beats_per_bar, 3);
         let bar = 3.0 * 60.0 / 150.0;
