@@ -25,7 +25,7 @@ fn arrays(value: &Array, what: &str) -> Result<Vec<Vec<f32>>, OdoriError> {
         .collect()
 }
 
-const OPTION_KEYS: [&str; 6] = ["beatsPerBar", "minBpm", "maxBpm", "priorBpm", "priorOctaves", "tightness"];
+const OPTION_KEYS: [&str; 7] = ["beatsPerBar", "minBpm", "maxBpm", "priorBpm", "priorOctaves", "tightness", "followTempo"];
 
 /// A song's beat grid, analysed once and corrected by the person.
 #[wasm_bindgen]
@@ -147,6 +147,6 @@ export interface SongGrid {
   loudness: { hopSecs: number; values: number[] };
 }
 export interface GridCorrection { bpm?: number; tapTimesSecs?: number[]; beatsPerBar?: number; firstDownbeatSecs?: number; nudgeSecs?: number; }
-export interface AnalysisOptions { beatsPerBar?: number; minBpm?: number; maxBpm?: number; priorBpm?: number; priorOctaves?: number; tightness?: number; }
+export interface AnalysisOptions { beatsPerBar?: number; minBpm?: number; maxBpm?: number; priorBpm?: number; priorOctaves?: number; tightness?: number; followTempo?: boolean; }
 export interface DemoSongInfo { bpm: number; beatsPerBar: number; firstDownbeatSecs: number; barCount: number; sampleRateHz: number; sections: { name: string; startBar: number; barCount: number; startSecs: number; endSecs: number }[]; }
 "#;

@@ -4,6 +4,10 @@
 //! `C(t) = O(t) + max_{τ ∈ [t−2P, t−P/2]} ( C(τ) − α · ln((t−τ)/P)² )`,
 //! then backtracks from the last strong cumulative-score peak and trims weak beats at both ends
 //! (silence before the music starts, a reverb tail after it ends).
+//!
+//! With a tempo that changes ([`track_beats_varying`]), `P` becomes the local period `P(t)` at
+//! the later beat (from [`super::tempo::local_periods`]), so the penalty follows the tempo
+//! instead of pulling every interval back to one global period.
 
 /// Gaussian smoothing of the onset curve (σ in frames), so a beat need not hit the exact onset
 /// frame to collect it.
@@ -32,14 +36,39 @@ fn smooth(onset: &[f32], sigma: f32) -> Vec<f32> {
 /// Tracks beats through `onset` (frames) at a period of `period_frames`; `tightness` is α.
 /// Returns beat frames in increasing order (empty when the curve is too short or flat).
 pub fn track_beats(onset: &[f32], period_frames: f32, tightness: f32) -> Vec<usize> {
+    track(onset, period_frames, None, tightness)
+}
+
+/// [`track_beats`] with a period per frame (`periods_frames.len() == onset.len()`): a beat at
+/// frame `t` is expected `periods_frames[t]` after the one before. Empty when the lengths
+/// differ or a period is not finite and ≥ 2 frames.
+pub fn track_beats_varying(onset: &[f32], periods_frames: &[f32], tightness: f32) -> Vec<usize> {
+    if periods_frames.len() != onset.len() || periods_frames.iter().any(|p| !(p.is_finite() && *p >= 2.0)) {
+        return Vec::new();
+    }
+    let mut sorted = periods_frames.to_vec();
+    sorted.sort_by(f32::total_cmp);
+    let Some(&median) = sorted.get(sorted.len() / 2) else {
+        return Vec::new();
+    };
+    track(onset, median, Some(periods_frames), tightness)
+}
+
+/// The dynamic programme: `period_frames` sets the smoothing and, without `periods`, the
+/// expected interval; `periods` (one per frame) overrides the expected interval.
+#[allow(clippy::needless_range_loop)] // `tau` indexes the step length as well as the arrays.
+fn track(onset: &[f32], period_frames: f32, periods: Option<&[f32]>, tightness: f32) -> Vec<usize> {
     let n = onset.len();
     if n < 2 || !(period_frames.is_finite() && period_frames >= 2.0) {
         return Vec::new();
     }
     let local = smooth(onset, (period_frames / 16.0).max(1.0));
-    let min_step = (period_frames / 2.0).round().max(1.0) as usize;
-    let max_step = (period_frames * 2.0).round().max(min_step as f32 + 1.0) as usize;
-    // Transition penalty per step length, precomputed.
+    let (shortest, longest) = periods.map_or((period_frames, period_frames), |p| {
+        (p.iter().copied().fold(f32::INFINITY, f32::min), p.iter().copied().fold(0.0f32, f32::max))
+    });
+    let min_step = (shortest / 2.0).round().max(1.0) as usize;
+    let max_step = (longest * 2.0).round().max(min_step as f32 + 1.0) as usize;
+    // Transition penalty per step length, precomputed for the steady case.
     let penalty: Vec<f32> = (0..=max_step)
         .map(|d| if d == 0 { f32::INFINITY } else { tightness * (d as f32 / period_frames).ln().powi(2) })
         .collect();
@@ -48,10 +77,17 @@ pub fn track_beats(onset: &[f32], period_frames: f32, tightness: f32) -> Vec<usi
     for t in 0..n {
         let mut best = f32::NEG_INFINITY;
         let mut arg = None;
-        if t >= min_step {
-            let lo = t.saturating_sub(max_step);
-            for tau in lo..=t - min_step {
-                let s = cumulative[tau] - penalty[t - tau];
+        // This frame's expected interval and the steps it allows.
+        let (p_t, lo_step, hi_step) = match periods {
+            Some(p) => (p[t], (p[t] / 2.0).round().max(1.0) as usize, (p[t] * 2.0).round() as usize),
+            None => (period_frames, min_step, max_step),
+        };
+        if t >= lo_step {
+            let lo = t.saturating_sub(hi_step);
+            for tau in lo..=t - lo_step {
+                let d = t - tau;
+                let cost = if periods.is_some() { tightness * (d as f32 / p_t).ln().powi(2) } else { penalty[d] };
+                let s = cumulative[tau] - cost;
                 if s > best {
                     best = s;
                     arg = Some(tau);
@@ -135,6 +171,29 @@ mod tests {
         for (b, e) in beats.iter().zip(&expected) {
             assert!((*b as i32 - *e as i32).abs() <= 1, "{beats:?}");
         }
+    }
+
+    #[test]
+    fn a_varying_period_follows_an_accelerating_pulse() {
+        // Intervals shrink from 60 to 40 frames; the steady tracker at the mean period loses
+        // beats, the varying one keeps every beat within a frame.
+        let mut x = vec![0.0f32; 2400];
+        let mut expected = Vec::new();
+        let mut t = 100.0f32;
+        let mut periods = vec![0.0f32; 2400];
+        while t < 2200.0 {
+            let p = 60.0 - 20.0 * (t - 100.0) / 2100.0;
+            expected.push(t.round() as usize);
+            x[t.round() as usize] = 3.0;
+            t += p;
+        }
+        for (f, p) in periods.iter_mut().enumerate() {
+            *p = (60.0 - 20.0 * (f as f32 - 100.0) / 2100.0).clamp(40.0, 60.0);
+        }
+        let beats = track_beats_varying(&x, &periods, 1000.0);
+        assert_eq!(beats.len(), expected.len(), "{beats:?}");
+        assert!(beats.iter().zip(&expected).all(|(b, e)| b.abs_diff(*e) <= 1), "{beats:?}");
+        assert!(track_beats_varying(&x, &periods[..10], 1000.0).is_empty());
     }
 
     #[test]

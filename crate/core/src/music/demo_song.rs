@@ -6,6 +6,12 @@
 //! Rendering is deterministic (a fixed-seed noise generator, no clocks) and takes a few hundred
 //! milliseconds natively. Its true grid is exact by construction: a beat every 0.5 s from 0,
 //! a downbeat every 2 s from 0, so tests can check that analysis recovers it.
+//!
+//! [`demo_song_with`] renders variants for testing the grid analysis: another metre (3/4, an
+//! "oom-pah-pah" waltz pattern: kick on the one, snare and hats on two and three) and a tempo
+//! that ramps linearly per beat from `bpm` to `end_bpm`, whose true beats are then uneven but
+//! still exact by construction. The default options give the demo song itself, sample for
+//! sample.
 
 use serde::{Deserialize, Serialize};
 
@@ -39,7 +45,11 @@ pub struct DemoSong {
     pub sample_rate_hz: f32,
     /// Mono PCM, full scale ±1 (peak 0.9).
     pub samples: Vec<f32>,
+    /// Tempo at the first beat, BPM.
     pub bpm: f32,
+    /// Tempo at the last beat, BPM (equal to `bpm` for a steady tempo; in between, the tempo
+    /// changes linearly per beat).
+    pub end_bpm: f32,
     pub beats_per_bar: u32,
     /// The true first downbeat (0: the song starts on the one).
     pub first_downbeat_secs: f32,
@@ -54,16 +64,75 @@ impl DemoSong {
         self.samples.len() as f32 / self.sample_rate_hz
     }
 
-    /// The true beat times: every `60 / bpm` seconds through the last bar.
+    /// The true beat times: every `60 / bpm` seconds through the last bar (with a ramp, each
+    /// beat lasts `60 / tempo` at its own tempo).
     pub fn beat_times_secs(&self) -> Vec<f32> {
         let n = self.bar_count * self.beats_per_bar as usize;
-        (0..n).map(|k| self.first_downbeat_secs + k as f32 * 60.0 / self.bpm).collect()
+        if self.end_bpm == self.bpm {
+            return (0..n).map(|k| self.first_downbeat_secs + k as f32 * 60.0 / self.bpm).collect();
+        }
+        let map = TimeMap::ramp(self.bpm, self.end_bpm, n);
+        (0..n).map(|k| self.first_downbeat_secs + map.at(k as f32)).collect()
     }
 
     /// The true downbeat times, one per bar.
     pub fn downbeat_times_secs(&self) -> Vec<f32> {
-        let bar = self.beats_per_bar as f32 * 60.0 / self.bpm;
-        (0..self.bar_count).map(|k| self.first_downbeat_secs + k as f32 * bar).collect()
+        let bpb = self.beats_per_bar as usize;
+        self.beat_times_secs().into_iter().step_by(bpb.max(1)).collect()
+    }
+
+    /// The true tempo at each beat, BPM (`60 / ` the beat's length).
+    pub fn tempo_at_beats_bpm(&self) -> Vec<f32> {
+        let n = self.bar_count * self.beats_per_bar as usize;
+        (0..n).map(|k| ramp_bpm(self.bpm, self.end_bpm, k, n)).collect()
+    }
+}
+
+/// The variant of the demo song [`demo_song_with`] renders.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DemoSongOptions {
+    /// 4 (the demo song) or 3 (a waltz pattern).
+    pub beats_per_bar: u32,
+    /// Tempo at the first beat, BPM.
+    pub bpm: f32,
+    /// Tempo at the last beat, BPM.
+    pub end_bpm: f32,
+}
+
+impl Default for DemoSongOptions {
+    fn default() -> Self {
+        Self { beats_per_bar: DEMO_BEATS_PER_BAR, bpm: DEMO_BPM, end_bpm: DEMO_BPM }
+    }
+}
+
+/// The tempo of beat `k` of `n` on a ramp from `start_bpm` to `end_bpm`.
+fn ramp_bpm(start_bpm: f32, end_bpm: f32, k: usize, n: usize) -> f32 {
+    start_bpm + (end_bpm - start_bpm) * k as f32 / (n.max(2) - 1) as f32
+}
+
+/// Song time of a position counted in beats: beat `k` lasts `60 / tempo_k` seconds, and a
+/// position within a beat is linear in it.
+struct TimeMap {
+    /// Start of every beat, plus the end of the last (and one more beat for the ring-out).
+    starts_secs: Vec<f32>,
+}
+
+impl TimeMap {
+    fn ramp(start_bpm: f32, end_bpm: f32, beats: usize) -> Self {
+        let mut starts_secs = vec![0.0f32];
+        let mut t = 0.0f64;
+        for k in 0..beats + 8 {
+            t += 60.0 / f64::from(ramp_bpm(start_bpm, end_bpm, k.min(beats.saturating_sub(1)), beats));
+            starts_secs.push(t as f32);
+        }
+        Self { starts_secs }
+    }
+
+    fn at(&self, beat: f32) -> f32 {
+        let last = self.starts_secs.len() - 2;
+        let k = (beat.max(0.0).floor() as usize).min(last);
+        let f = beat - k as f32;
+        self.starts_secs[k] + f * (self.starts_secs[k + 1] - self.starts_secs[k])
     }
 }
 
@@ -288,13 +357,43 @@ impl Phasor {
 
 /// Renders the demo song at `sample_rate_hz` (8 kHz to 192 kHz).
 pub fn demo_song(sample_rate_hz: f32) -> Result<DemoSong, MusicError> {
+    demo_song_with(sample_rate_hz, &DemoSongOptions::default())
+}
+
+/// Renders a variant of the demo song (another metre, a tempo ramp) at `sample_rate_hz`: same
+/// sections, instruments and chords; a 3/4 bar keeps the first three beats of each 4/4 part
+/// with a waltz drum pattern.
+///
+/// Errors: a sample rate outside 8 kHz..=192 kHz, beats per bar other than 3 or 4, or a tempo
+/// outside 40..=240 BPM.
+pub fn demo_song_with(sample_rate_hz: f32, options: &DemoSongOptions) -> Result<DemoSong, MusicError> {
     if !(sample_rate_hz.is_finite() && (super::rms::MIN_SAMPLE_RATE_HZ..=MAX_DEMO_SAMPLE_RATE_HZ).contains(&sample_rate_hz)) {
         return Err(MusicError::BadSampleRate { sample_rate_hz, min_hz: super::rms::MIN_SAMPLE_RATE_HZ });
     }
-    let beat = 60.0 / DEMO_BPM;
-    let bar_secs = beat * DEMO_BEATS_PER_BAR as f32;
+    if !(3..=4).contains(&options.beats_per_bar) {
+        return Err(MusicError::BadBeatsPerBar { beats_per_bar: options.beats_per_bar, max: 4 });
+    }
+    for bpm in [options.bpm, options.end_bpm] {
+        if !(bpm.is_finite() && (40.0..=240.0).contains(&bpm)) {
+            return Err(MusicError::BpmOutOfRange { bpm, min_bpm: 40.0, max_bpm: 240.0 });
+        }
+    }
+    let bpb = options.beats_per_bar as usize;
+    let waltz = bpb == 3;
+    let steady = options.end_bpm == options.bpm;
+    let beat = 60.0 / options.bpm;
+    let bar_secs = beat * options.beats_per_bar as f32;
     let bar_count: usize = SECTIONS.iter().map(|s| s.1).sum();
-    let total_secs = bar_count as f32 * bar_secs + RING_OUT_SECS;
+    let map = TimeMap::ramp(options.bpm, options.end_bpm, bar_count * bpb);
+    // Song time of beat `b` of bar `bar` (the steady case keeps the demo song's own arithmetic).
+    let time_of = |bar: usize, b: f32| {
+        if steady {
+            bar as f32 * bar_secs + b * beat
+        } else {
+            map.at((bar * bpb) as f32 + b)
+        }
+    };
+    let total_secs = time_of(bar_count, 0.0) + RING_OUT_SECS;
     let mut mix = Mix { fs: sample_rate_hz, out: vec![0.0; (total_secs * sample_rate_hz) as usize], noise: Noise(0x0D0_121) };
     let mut sections = Vec::new();
     let mut bar0 = 0usize;
@@ -303,22 +402,29 @@ pub fn demo_song(sample_rate_hz: f32) -> Result<DemoSong, MusicError> {
             name: name.to_string(),
             start_bar: bar0,
             bar_count: bars,
-            start_secs: bar0 as f32 * bar_secs,
-            end_secs: (bar0 + bars) as f32 * bar_secs,
+            start_secs: time_of(bar0, 0.0),
+            end_secs: time_of(bar0 + bars, 0.0),
         });
         for local in 0..bars {
             let bar = bar0 + local;
-            let t = bar as f32 * bar_secs;
+            let t = time_of(bar, 0.0);
+            let (bar_secs, beat) = if steady {
+                (bar_secs, beat)
+            } else {
+                let secs = time_of(bar + 1, 0.0) - t;
+                (secs, secs / bpb as f32)
+            };
             let cycle = bar % 4;
             let chord = CHORDS[cycle];
             let root = ROOTS[cycle];
-            let at = |b: f32| t + b * beat;
+            let at = |b: f32| time_of(bar, b);
+            let eighths = 2 * bpb;
             match name {
                 "intro" => {
                     for &n in &chord {
                         mix.saw(t, bar_secs, midi_hz(n), 0.05, 0.4, 0.6, 1200.0, 0.004);
                     }
-                    for e in 0..8 {
+                    for e in 0..eighths {
                         mix.hat(at(e as f32 * 0.5), if e % 2 == 0 { 0.22 } else { 0.12 }, 0.025);
                     }
                     mix.kick(t, 0.25);
@@ -327,22 +433,23 @@ pub fn demo_song(sample_rate_hz: f32) -> Result<DemoSong, MusicError> {
                     for &n in &chord {
                         mix.saw(t, bar_secs, midi_hz(n), 0.035, 0.3, 0.5, 1500.0, 0.004);
                     }
-                    for b in [0.0, 2.0, 2.5] {
+                    let (kicks, snares): (&[f32], &[f32]) = if waltz { (&[0.0], &[1.0, 2.0]) } else { (&[0.0, 2.0, 2.5], &[1.0, 3.0]) };
+                    for &b in kicks {
                         mix.kick(at(b), if b == 0.0 { 0.75 } else { 0.55 });
                     }
-                    for b in [1.0, 3.0] {
-                        mix.snare(at(b), 0.32);
+                    for &b in snares {
+                        mix.snare(at(b), if waltz { 0.22 } else { 0.32 });
                     }
-                    for e in 0..8 {
+                    for e in 0..eighths {
                         mix.hat(at(e as f32 * 0.5), if e % 2 == 0 { 0.35 } else { 0.2 }, 0.03);
                     }
                     // Bass on eighths, root with a fifth on the last one.
-                    for e in 0..8 {
-                        let n = if e == 7 { root + 7 } else { root };
+                    for e in 0..eighths {
+                        let n = if e == eighths - 1 { root + 7 } else { root };
                         mix.saw(at(e as f32 * 0.5), beat * 0.4, midi_hz(n), 0.22, 0.005, 0.04, 700.0, 0.0);
                     }
                     // Arpeggio through the chord tones, an octave up.
-                    for e in 0..8 {
+                    for e in 0..eighths {
                         let n = chord[[0, 1, 2, 1][e % 4]] + 12;
                         mix.saw(at(e as f32 * 0.5), beat * 0.3, midi_hz(n), 0.05, 0.003, 0.08, 2500.0, 0.0);
                     }
@@ -355,22 +462,25 @@ pub fn demo_song(sample_rate_hz: f32) -> Result<DemoSong, MusicError> {
                     if local == 0 {
                         mix.hat(t, 0.5, 0.4);
                     }
-                    for b in 0..4 {
+                    // The waltz keeps its kick on the one only: "oom-pah-pah".
+                    for b in 0..if waltz { 1 } else { 4 } {
                         mix.kick(at(b as f32), if b == 0 { 0.95 } else { 0.7 });
                     }
-                    for b in [1.0, 3.0] {
-                        mix.snare(at(b), 0.42);
+                    let snares: &[f32] = if waltz { &[1.0, 2.0] } else { &[1.0, 3.0] };
+                    for &b in snares {
+                        mix.snare(at(b), if waltz { 0.3 } else { 0.42 });
                     }
-                    for e in 0..8 {
+                    for e in 0..eighths {
                         let off = e % 2 == 1;
                         mix.hat(at(e as f32 * 0.5), if off { 0.4 } else { 0.25 }, if off { 0.09 } else { 0.03 });
                     }
-                    for e in 0..8 {
+                    for e in 0..eighths {
                         let n = if e % 2 == 1 { root + 12 } else { root };
                         mix.saw(at(e as f32 * 0.5), beat * 0.42, midi_hz(n), 0.26, 0.004, 0.04, 900.0, 0.0);
                     }
-                    for &(mb, start, len, note) in MELODY.iter().filter(|m| m.0 == cycle) {
+                    for &(mb, start, len, note) in MELODY.iter().filter(|m| m.0 == cycle && m.1 < bpb as f32) {
                         let _ = mb;
+                        let len = len.min(bpb as f32 - start);
                         mix.lead(at(start), len * beat * 0.95, midi_hz(note), 0.16);
                     }
                 }
@@ -379,7 +489,7 @@ pub fn demo_song(sample_rate_hz: f32) -> Result<DemoSong, MusicError> {
                         mix.saw(t, bar_secs, midi_hz(n), 0.045, 0.5, 0.8, 900.0, 0.005);
                     }
                     // The melody's first note of each beat, softly, on quarters.
-                    for b in 0..4 {
+                    for b in 0..bpb {
                         let note = MELODY
                             .iter()
                             .rfind(|m| m.0 == cycle && m.1 <= b as f32)
@@ -388,8 +498,9 @@ pub fn demo_song(sample_rate_hz: f32) -> Result<DemoSong, MusicError> {
                     }
                     // The last bar builds up with a snare roll into the chorus.
                     if local == bars - 1 {
-                        for s in 0..16 {
-                            mix.snare(at(s as f32 * 0.25), 0.08 + 0.3 * s as f32 / 16.0);
+                        let rolls = 4 * bpb;
+                        for s in 0..rolls {
+                            mix.snare(at(s as f32 * 0.25), 0.08 + 0.3 * s as f32 / rolls as f32);
                         }
                     }
                 }
@@ -403,7 +514,9 @@ pub fn demo_song(sample_rate_hz: f32) -> Result<DemoSong, MusicError> {
                         mix.hat(t, 0.5, 0.5);
                     }
                     mix.kick(t, 0.8);
-                    mix.kick(at(2.0), 0.5);
+                    if !waltz {
+                        mix.kick(at(2.0), 0.5);
+                    }
                 }
             }
         }
@@ -418,8 +531,9 @@ pub fn demo_song(sample_rate_hz: f32) -> Result<DemoSong, MusicError> {
     Ok(DemoSong {
         sample_rate_hz,
         samples: mix.out,
-        bpm: DEMO_BPM,
-        beats_per_bar: DEMO_BEATS_PER_BAR,
+        bpm: options.bpm,
+        end_bpm: options.end_bpm,
+        beats_per_bar: options.beats_per_bar,
         first_downbeat_secs: 0.0,
         bar_count,
         sections,

@@ -8,6 +8,12 @@
 //! The backbeat alone cannot tell beat 1 from beat 3; the kick settles it. Music without drums
 //! falls back to the low band (bass notes and chord changes). The user corrects the rest
 //! (spec §D).
+//!
+//! The metre ([`detect_metre`]): how many beats a bar holds, 3 or 4. The accents at the beats
+//! (low band, mid band, all bands) repeat with the bar, so each accent series, read beat by
+//! beat, correlates with itself at a lag of one bar and its double: a waltz at lags 3 and 6,
+//! 4/4 (and 2/4) at 4 and 8, while each correlates poorly at the other's lags. 4 wins ties and
+//! short songs; the person corrects the rest (beats per bar is a grid correction).
 
 /// Weight of the backbeat term relative to the kick term.
 const BACKBEAT_WEIGHT: f32 = 1.0;
@@ -93,9 +99,86 @@ pub fn bar_phase(
     (best, margin)
 }
 
+/// The metres [`detect_metre`] chooses between, most likely first.
+pub const METRES: [usize; 2] = [4, 3];
+/// Fewest beats for a metre decision (four bars of 4): below it, 4.
+const MIN_BEATS_FOR_METRE: usize = 16;
+/// How much better (in summed correlation) 3 must score than 4 to win: 4/4 is the default of
+/// popular and dance music, so ambiguity keeps it.
+const METRE_MARGIN: f32 = 0.1;
+
+/// Autocorrelation (normalised, mean removed) of a series at `lag` (0 when undefined).
+fn lag_correlation(x: &[f32], lag: usize) -> f32 {
+    if x.len() <= lag + 2 {
+        return 0.0;
+    }
+    let mean = x.iter().sum::<f32>() / x.len() as f32;
+    let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f32>() / x.len() as f32;
+    if var <= 1e-12 {
+        return 0.0;
+    }
+    let cov = x[lag..].iter().zip(x).map(|(a, b)| (a - mean) * (b - mean)).sum::<f32>() / (x.len() - lag) as f32;
+    cov / var
+}
+
+/// The beats per bar (one of [`METRES`]) of a beat sequence and the score of each metre (the
+/// sum over accent series of their correlation at one and two bars), in the order of
+/// [`METRES`]. `accents` are onset curves (e.g. low band, mid band, total) read at the beats.
+pub fn detect_metre(beat_frames: &[usize], accents: &[&[f32]], period_frames: f32) -> (usize, [f32; 2]) {
+    if beat_frames.len() < MIN_BEATS_FOR_METRE {
+        return (METRES[0], [0.0; 2]);
+    }
+    let radius = (period_frames / 8.0).round().max(1.0) as usize;
+    let series: Vec<Vec<f32>> = accents
+        .iter()
+        .map(|curve| {
+            let mut x: Vec<f32> = beat_frames.iter().map(|&b| max_around(curve, b, radius)).collect();
+            normalise_mean(&mut x);
+            x
+        })
+        .collect();
+    let mut scores = [0.0f32; 2];
+    for (score, &m) in scores.iter_mut().zip(&METRES) {
+        *score = series.iter().map(|x| lag_correlation(x, m) + lag_correlation(x, 2 * m)).sum();
+    }
+    let metre = if scores[1] > scores[0] + METRE_MARGIN { METRES[1] } else { METRES[0] };
+    (metre, scores)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Accent curves for `beats` beats 50 frames apart with the pattern `low`/`mid` per beat of
+    /// the bar.
+    fn accents(beats: usize, low_pattern: &[f32], mid_pattern: &[f32]) -> (Vec<usize>, Vec<f32>, Vec<f32>) {
+        let frames: Vec<usize> = (0..beats).map(|k| 10 + 50 * k).collect();
+        let mut low = vec![0.0f32; 50 * beats + 20];
+        let mut mid = low.clone();
+        for (k, &b) in frames.iter().enumerate() {
+            low[b] = low_pattern[k % low_pattern.len()];
+            mid[b] = mid_pattern[k % mid_pattern.len()];
+        }
+        (frames, low, mid)
+    }
+
+    #[test]
+    fn metre_is_three_for_a_waltz_and_four_for_rock_or_a_march() {
+        // Waltz: kick on one, snare on two and three.
+        let (f, low, mid) = accents(48, &[2.0, 0.2, 0.2], &[0.2, 1.0, 1.0]);
+        assert_eq!(detect_metre(&f, &[&low, &mid], 50.0).0, 3);
+        // Rock: kick on one and three, snare on two and four.
+        let (f, low, mid) = accents(48, &[2.0, 0.2, 1.2, 0.2], &[0.2, 1.0, 0.2, 1.0]);
+        assert_eq!(detect_metre(&f, &[&low, &mid], 50.0).0, 4);
+        // A march in 2/4 reads as 4 (its bars pair up), never 3.
+        let (f, low, mid) = accents(48, &[2.0, 0.5], &[0.2, 1.0]);
+        assert_eq!(detect_metre(&f, &[&low, &mid], 50.0).0, 4);
+        // No accents, or too few beats: 4.
+        let (f, low, mid) = accents(48, &[1.0], &[1.0]);
+        assert_eq!(detect_metre(&f, &[&low, &mid], 50.0).0, 4);
+        let (f, low, mid) = accents(9, &[2.0, 0.2, 0.2], &[0.2, 1.0, 1.0]);
+        assert_eq!(detect_metre(&f, &[&low, &mid], 50.0).0, 4);
+    }
 
     #[test]
     fn the_accented_beat_is_the_downbeat() {

@@ -6,8 +6,10 @@
 //! The pipeline of [`analyze`]: onset strength per band (log RMS flux, [`onset`]) → global tempo
 //! (autocorrelation comb over beat and bar lags with a log-normal prior around 120 BPM, and a
 //! whole-bars preference for short loops, [`tempo`]) → beats by dynamic programming (Ellis 2007,
-//! [`beats`]) → bar phase from the kick (low band) and backbeat (mid band) accents
-//! ([`downbeats`]) → bars whose intensity is the mean full-band RMS scaled to the song's range.
+//! [`beats`], following a changing tempo through a local-tempo path when the tempo is not
+//! steady, [`tempo::local_periods`]) → bar phase from the kick (low band) and backbeat (mid band) accents
+//! ([`downbeats`]), with the metre (3 or 4 beats per bar) found from how the beat accents repeat
+//! unless the caller fixes it → bars whose intensity is the mean full-band RMS scaled to the song's range.
 //! All steps are deterministic and linear (or linear times the beat period) in the number of
 //! frames: a 3-minute song takes a few tens of milliseconds natively.
 
@@ -87,7 +89,8 @@ pub enum MusicError {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase", default)]
 pub struct AnalysisOptions {
-    /// Beats per bar of the result (spec §D: 4).
+    /// Beats per bar of the result; 0 (the default) detects it (3 or 4, 4 when unsure,
+    /// [`downbeats::detect_metre`]).
     pub beats_per_bar: u32,
     /// Slowest tempo considered, BPM.
     pub min_bpm: f32,
@@ -99,18 +102,22 @@ pub struct AnalysisOptions {
     pub prior_octaves: f32,
     /// How strongly beats keep to the period (Ellis's α; higher = steadier).
     pub tightness: f32,
+    /// Let the beat period follow a changing tempo (default true); false keeps one period for
+    /// the whole song.
+    pub follow_tempo: bool,
 }
 
 impl Default for AnalysisOptions {
     fn default() -> Self {
-        Self { beats_per_bar: 4, min_bpm: 50.0, max_bpm: 220.0, prior_bpm: 120.0, prior_octaves: 0.9, tightness: 1000.0 }
+        Self { beats_per_bar: 0, min_bpm: 50.0, max_bpm: 220.0, prior_bpm: 120.0, prior_octaves: 0.9, tightness: 1000.0, follow_tempo: true }
     }
 }
 
 impl AnalysisOptions {
     fn validate(&self) -> Result<(), MusicError> {
         let bad = |what, value: f32| Err(MusicError::BadOption { what, value });
-        if !(1..=grid::MAX_BEATS_PER_BAR).contains(&self.beats_per_bar) {
+        // 0 asks for detection.
+        if self.beats_per_bar > grid::MAX_BEATS_PER_BAR {
             return Err(MusicError::BadBeatsPerBar { beats_per_bar: self.beats_per_bar, max: grid::MAX_BEATS_PER_BAR });
         }
         if !(self.min_bpm.is_finite() && self.min_bpm >= grid::MIN_GRID_BPM) {
@@ -170,35 +177,49 @@ pub fn analyze(envelope: &RmsEnvelope, options: &AnalysisOptions) -> Result<Song
         max_bpm: options.max_bpm,
         prior_bpm: options.prior_bpm,
         prior_octaves: options.prior_octaves,
-        loop_bars: (duration_secs <= LOOP_MAX_SECS).then_some((duration_secs, options.beats_per_bar)),
+        // A loop of unknown metre is judged in 4 (the common case; 3 is found afterwards).
+        loop_bars: (duration_secs <= LOOP_MAX_SECS).then_some((duration_secs, if options.beats_per_bar == 0 { 4 } else { options.beats_per_bar })),
     };
     let candidates = tempo::tempo_candidates(&onsets.total, fps, &settings);
     let first = candidates.first().ok_or(MusicError::NoPulse)?;
-    let period_frames = 60.0 * fps / first.bpm;
-    let beat_frames = beats::track_beats(&onsets.total, period_frames, options.tightness);
+    // A changing tempo: first the metrical level judged window by window (a ramp can make the
+    // song-wide comb prefer the double tempo), then the local periods at that level.
+    let (level_bpm, local) = if options.follow_tempo && tempo::local_periods(&onsets.total, fps, first.bpm).is_some() {
+        let level_bpm = tempo::local_level(&onsets.total, fps, first.bpm, &settings);
+        (level_bpm, tempo::local_periods(&onsets.total, fps, level_bpm))
+    } else {
+        (first.bpm, None)
+    };
+    let period_frames = match &local {
+        Some(periods) => periods.iter().sum::<f32>() / periods.len() as f32,
+        None => 60.0 * fps / level_bpm,
+    };
+    let beat_frames = match &local {
+        Some(periods) => beats::track_beats_varying(&onsets.total, periods, options.tightness),
+        None => beats::track_beats(&onsets.total, period_frames, options.tightness),
+    };
     if beat_frames.len() < 2 {
         return Err(MusicError::NoPulse);
     }
-    let (phase, _confidence) = downbeats::bar_phase(
-        &beat_frames,
-        &onsets.low,
-        &onsets.mid,
-        period_frames,
-        options.beats_per_bar as usize,
-    );
+    let beats_per_bar = match options.beats_per_bar {
+        0 => downbeats::detect_metre(&beat_frames, &[&onsets.low, &onsets.mid, &onsets.total], period_frames).0 as u32,
+        n => n,
+    };
+    let (phase, _confidence) =
+        downbeats::bar_phase(&beat_frames, &onsets.low, &onsets.mid, period_frames, beats_per_bar as usize);
     let beat_times_secs: Vec<f32> = beat_frames.iter().map(|&f| f as f32 * envelope.hop_secs).collect();
     // The tracked beats measure the tempo more finely than the 0.5 % comb steps, once there are
     // enough of them to average out the player's timing.
     let bpm = if beat_times_secs.len() >= MIN_BEATS_FOR_SLOPE {
-        grid::bpm_of_beats(&beat_times_secs).unwrap_or(first.bpm)
+        grid::bpm_of_beats(&beat_times_secs).unwrap_or(level_bpm)
     } else {
-        first.bpm
+        level_bpm
     }
     .clamp(grid::MIN_GRID_BPM, grid::MAX_GRID_BPM);
     let mut grid = SongGrid::assemble(
         duration_secs,
         bpm,
-        options.beats_per_bar,
+        beats_per_bar,
         beat_times_secs,
         phase,
         false,
@@ -294,6 +315,9 @@ mod tests {
         let off = ((g.first_downbeat_secs - 0.3) / bar).rem_euclid(1.0);
         assert!(!(0.02..0.98).contains(&off), "first downbeat {}", g.first_downbeat_secs);
         assert!((g.bars[0].duration_secs() - bar).abs() < 0.03);
+        // Left to itself, the analysis finds the 3; a 4/4 pulse stays in 4.
+        assert_eq!(analyze(&e, &AnalysisOptions::default()).unwrap().beats_per_bar, 3);
+        assert_eq!(analyze(&pulse_envelope(120.0, 24.0), &AnalysisOptions::default()).unwrap().beats_per_bar, 4);
     }
 
     #[test]

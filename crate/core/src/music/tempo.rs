@@ -3,6 +3,12 @@
 //! bars as well as its beats), weighted by a log-normal tempo prior. The comb and the prior
 //! together settle half/double ambiguities: a doubled tempo gains its half-beat lag but loses
 //! the prior, a halved tempo loses its own beat lag.
+//!
+//! Local tempo ([`local_periods`]): the same comb on windows of a few seconds, restricted to
+//! tempi near the global one (so the metrical level cannot jump), and a Viterbi path through
+//! the windows that charges each change of tempo (so one noisy window cannot pull the path
+//! away). A piece whose path (but for its 10 % extremes) stays within [`STEADY_SPREAD`] of one tempo is
+//! taken to be steady.
 
 use serde::{Deserialize, Serialize};
 
@@ -128,6 +134,175 @@ pub fn tempo_candidates(onset: &[f32], fps: f32, settings: &TempoSettings) -> Ve
     peaks
 }
 
+/// Seconds of onset curve in one local-tempo window (about four bars at 120 BPM: enough lags
+/// for a comb over a beat and its multiples).
+const LOCAL_WINDOW_SECS: f32 = 8.0;
+/// Seconds between local-tempo windows.
+const LOCAL_HOP_SECS: f32 = 1.0;
+/// Local tempi considered: the global tempo times `1/LOCAL_RANGE ..= LOCAL_RANGE`.
+const LOCAL_RANGE: f32 = 1.35;
+/// Step between local tempo bins (1 %).
+const LOCAL_STEP: f32 = 1.01;
+/// Viterbi cost of changing tempo between windows, per squared bin step (scores are normalised
+/// to 1 per window): a drift of one bin per window costs a little, a jump of ten bins costs
+/// more than any one window can gain.
+const LOCAL_JUMP_COST: f32 = 0.02;
+/// A local-tempo path whose 10th- and 90th-percentile tempi are within this ratio is steady
+/// (a song that changes tempo by less keeps one period; the tracker absorbs a few per cent).
+pub const STEADY_SPREAD: f32 = 1.08;
+
+/// Local tempo bins around `centre_bpm`: `1/LOCAL_RANGE ..= LOCAL_RANGE` times it in 1 % steps.
+fn local_bins(centre_bpm: f32) -> Vec<f32> {
+    let mut bins = Vec::new();
+    let mut bpm = centre_bpm / LOCAL_RANGE;
+    while bpm <= centre_bpm * LOCAL_RANGE {
+        bins.push(bpm);
+        bpm *= LOCAL_STEP;
+    }
+    bins
+}
+
+/// Window starts (frames) and the comb score (over `combs` multiples of the beat) of each bin
+/// in each window; `None` when the curve is shorter than two windows.
+fn window_scores(onset: &[f32], fps: f32, bins: &[f32], combs: usize) -> Option<(Vec<usize>, Vec<Vec<f32>>)> {
+    let window = (LOCAL_WINDOW_SECS * fps).round() as usize;
+    let hop = (LOCAL_HOP_SECS * fps).round().max(1.0) as usize;
+    let slowest = bins.iter().copied().fold(f32::INFINITY, f32::min);
+    if onset.len() < 2 * window || !(slowest.is_finite() && slowest > 0.0) {
+        return None;
+    }
+    let longest = 60.0 * fps / slowest;
+    let max_lag = ((combs as f32 * longest).ceil() as usize + 2).min(window - 1);
+    let starts: Vec<usize> = (0..=(onset.len() - window) / hop).map(|i| i * hop).collect();
+    let scores = starts
+        .iter()
+        .map(|&a| {
+            let r = autocorrelation(&onset[a..a + window], max_lag);
+            bins.iter()
+                .map(|&bpm| {
+                    let period = 60.0 * fps / bpm;
+                    let tol = (period * 0.02).max(0.5);
+                    (1..=combs)
+                        .map(|k| {
+                            let lag = period * k as f32;
+                            if lag < r.len() as f32 - 1.0 {
+                                peak_near(&r, lag, tol).max(0.0) / (k as f32).sqrt()
+                            } else {
+                                0.0
+                            }
+                        })
+                        .sum()
+                })
+                .collect()
+        })
+        .collect();
+    Some((starts, scores))
+}
+
+/// The metrical level of a changing tempo: of `global_bpm`, its half and its double (those
+/// within the settings' range), the one whose windows, each judged by the global estimator's
+/// comb (beat and bar lags) times its prior at its own best local tempo, score highest in sum.
+/// Over a whole song a tempo ramp smears the long bar lags more than the short ones, which can
+/// make the song-wide comb prefer the double tempo; within a window the tempo is nearly steady.
+pub fn local_level(onset: &[f32], fps: f32, global_bpm: f32, settings: &TempoSettings) -> f32 {
+    let prior = |bpm: f32| {
+        let octaves = (bpm / settings.prior_bpm).log2() / settings.prior_octaves.max(0.05);
+        (-0.5 * octaves * octaves).exp()
+    };
+    let mut best = (global_bpm, f32::NEG_INFINITY);
+    for level in [global_bpm, global_bpm / 2.0, global_bpm * 2.0] {
+        if !(settings.min_bpm..=settings.max_bpm).contains(&level) {
+            continue;
+        }
+        let bins = local_bins(level);
+        let Some((_, scores)) = window_scores(onset, fps, &bins, 4) else {
+            return global_bpm;
+        };
+        let total: f32 = scores
+            .iter()
+            .map(|row| row.iter().zip(&bins).map(|(s, &b)| s * prior(b)).fold(0.0f32, f32::max))
+            .sum();
+        if total > best.1 {
+            best = (level, total);
+        }
+    }
+    best.0
+}
+
+/// The beat period in frames at every frame of `onset`, following a changing tempo around
+/// `global_bpm`; `None` when the tempo is steady (within [`STEADY_SPREAD`]) or the curve is
+/// shorter than two windows, so steady music keeps the single global period.
+pub fn local_periods(onset: &[f32], fps: f32, global_bpm: f32) -> Option<Vec<f32>> {
+    if !(global_bpm.is_finite() && global_bpm > 0.0) {
+        return None;
+    }
+    let window = (LOCAL_WINDOW_SECS * fps).round() as usize;
+    let bins = local_bins(global_bpm);
+    let (starts, mut scores) = window_scores(onset, fps, &bins, 3)?;
+    // Normalised to each window's best, so loud and quiet passages weigh alike.
+    for row in &mut scores {
+        let best = row.iter().copied().fold(0.0f32, f32::max);
+        if best > 0.0 {
+            row.iter_mut().for_each(|v| *v /= best);
+        }
+    }
+    // Viterbi: the path of bins maximising score minus the cost of its changes.
+    let nb = bins.len();
+    let mut total = scores[0].clone();
+    let mut back = vec![vec![0usize; nb]; scores.len()];
+    for w in 1..scores.len() {
+        let mut next = vec![0.0f32; nb];
+        for j in 0..nb {
+            let (mut best, mut arg) = (f32::NEG_INFINITY, j);
+            for (i, &v) in total.iter().enumerate() {
+                let d = i.abs_diff(j) as f32;
+                let s = v - LOCAL_JUMP_COST * d * d;
+                if s > best {
+                    best = s;
+                    arg = i;
+                }
+            }
+            next[j] = best + scores[w][j];
+            back[w][j] = arg;
+        }
+        total = next;
+    }
+    let mut j = (0..nb).max_by(|&a, &b| total[a].total_cmp(&total[b]))?;
+    let mut path = vec![0usize; scores.len()];
+    for w in (0..scores.len()).rev() {
+        path[w] = j;
+        j = back[w][j];
+    }
+    let tempi: Vec<f32> = path.iter().map(|&j| bins[j]).collect();
+    // The spread between the 10th and 90th percentile of the path: a passage of a few seconds
+    // where the path wanders (a fill, a held chord) does not make a steady song unsteady.
+    let mut sorted = tempi.clone();
+    sorted.sort_by(f32::total_cmp);
+    let (lo, hi) = (sorted[sorted.len() / 10], sorted[sorted.len() * 9 / 10]);
+    if hi / lo <= STEADY_SPREAD {
+        return None;
+    }
+    // Period per frame: linear between window centres, held beyond the first and last.
+    let centres: Vec<f32> = starts.iter().map(|&a| a as f32 + window as f32 / 2.0).collect();
+    let periods: Vec<f32> = tempi.iter().map(|&bpm| 60.0 * fps / bpm).collect();
+    Some(
+        (0..onset.len())
+            .map(|t| {
+                let t = t as f32;
+                let k = centres.partition_point(|&c| c <= t);
+                if k == 0 {
+                    periods[0]
+                } else if k == centres.len() {
+                    periods[k - 1]
+                } else {
+                    let f = (t - centres[k - 1]) / (centres[k] - centres[k - 1]);
+                    periods[k - 1] + f * (periods[k] - periods[k - 1])
+                }
+            })
+            .collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -155,6 +330,38 @@ mod tests {
             let c = tempo_candidates(&x, 100.0, &settings());
             assert!((c[0].bpm / bpm - 1.0).abs() < 0.02, "{bpm}: {:?}", &c[..3]);
         }
+    }
+
+    /// Pulses whose tempo ramps linearly per beat from `from_bpm` to `to_bpm` over `beats`.
+    fn ramp(from_bpm: f32, to_bpm: f32, beats: usize, fps: f32) -> (Vec<f32>, Vec<f32>) {
+        let mut t = 1.0f32;
+        let mut times = Vec::new();
+        for k in 0..beats {
+            times.push(t);
+            t += 60.0 / (from_bpm + (to_bpm - from_bpm) * k as f32 / (beats - 1) as f32);
+        }
+        let mut x = vec![0.0f32; ((t + 1.0) * fps) as usize];
+        for (k, &b) in times.iter().enumerate() {
+            x[(b * fps).round() as usize] = if k % 4 == 0 { 2.0 } else { 1.0 };
+        }
+        (x, times)
+    }
+
+    #[test]
+    fn local_tempo_follows_a_ramp_and_stays_silent_on_a_steady_pulse() {
+        let fps = 100.0;
+        let (x, times) = ramp(100.0, 140.0, 160, fps);
+        let global = tempo_candidates(&x, fps, &settings())[0].bpm;
+        let periods = local_periods(&x, fps, global).expect("a ramp is not steady");
+        // Mid-song (away from the held ends), the local tempo is within 3 % of the true one.
+        for k in (20..140).step_by(10) {
+            let true_bpm = 60.0 / (times[k + 1] - times[k]);
+            let frame = (times[k] * fps) as usize;
+            let found = 60.0 * fps / periods[frame];
+            assert!((found / true_bpm - 1.0).abs() < 0.03, "beat {k}: {found} vs {true_bpm}");
+        }
+        let steady = pulses(50.0, 6000, 4);
+        assert!(local_periods(&steady, fps, 120.0).is_none());
     }
 
     #[test]
