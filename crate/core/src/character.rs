@@ -15,11 +15,14 @@
 //!   world rotation of the next mapped bone down the chain already includes it (folded).
 //!   Character joints no canonical bone maps to (extra spine joints, fingers, twist helpers)
 //!   keep their rest rotation and follow their parent.
-//! - Root: the hips follow the source's hips scaled by the ratio of hip heights.
-//! - Not done here: holding planted feet with two-bone IK (`motion::two_bone`). Tracking the
-//!   source's scaled ankle with it was tried and made RobotExpressive's skate worse (its
-//!   thigh:shin proportions put the targets out of reach); the benchmark prints the foot skate
-//!   this leaves against the source's (`tests/bench/retarget.rs`).
+//! - Root: the hips follow the source's hips scaled by the ratio of leg lengths (thigh +
+//!   shin), raised by what the rig's bent rest legs gain when straightened.
+//! - Planted feet: where the source's ankle is planted (near its floor and slow), the
+//!   character's ankle is held where it was when the plant began, at the source's ankle height
+//!   on the character's ground, by two-bone IK on thigh and shin (`motion::two_bone`); the
+//!   pelvis drops (smoothly) where a held foot would be out of reach, and a released foot eases
+//!   back onto its free path. The benchmark prints the skate against the source's and against
+//!   the free-feet control (`tests/bench/retarget.rs`).
 
 use std::sync::Arc;
 
@@ -148,6 +151,26 @@ fn hip_height(map: &HumanoidMap, rest_pos: &[Vec3]) -> f32 {
     }
 }
 
+/// Mean length of the two legs (thigh plus shin bone, hip joint to ankle), metres (at least
+/// 1 mm): the size the root's motion scales by. It is the hip height once the legs are
+/// straightened into the reference pose, which a rig standing with bent or splayed legs at
+/// rest (RobotExpressive) is not.
+fn leg_length(map: &HumanoidMap, rest_pos: &[Vec3]) -> f32 {
+    let mut sum = 0.0;
+    let mut n = 0;
+    for (ul, ll, foot) in [(Canon::LeftUpperLeg, Canon::LeftLowerLeg, Canon::LeftFoot), (Canon::RightUpperLeg, Canon::RightLowerLeg, Canon::RightFoot)] {
+        if let (Some(a), Some(b), Some(c)) = (map.get(ul), map.get(ll), map.get(foot)) {
+            sum += (rest_pos[b] - rest_pos[a]).length() + (rest_pos[c] - rest_pos[b]).length();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        1.0
+    } else {
+        (sum / n as f32).max(1e-3)
+    }
+}
+
 /// The canonical joint below `c` on its chain toward the head or the hands (for a bone whose
 /// canonical child the rig lacks: a spine without a chest points at the neck).
 fn next_down(c: Canon) -> Option<Canon> {
@@ -175,6 +198,8 @@ pub struct Character {
     /// that scales the root's motion (a rig whose hips joint sits high in the body, as
     /// RobotExpressive's `Body` does, is not taken for long-legged).
     hip_height_m: f32,
+    /// Mean leg length (thigh + shin), metres: what the root's motion scales by.
+    leg_length_m: f32,
     /// Rest world position of the hips joint.
     hips_rest: Vec3,
     /// How far the character's upper arms were swung to reach the T-pose, radians (0 for a
@@ -244,13 +269,26 @@ impl Character {
             reference[c.index()] = (swing * rest_rot[j]).normalize();
         }
         let hip_height_m = hip_height(&map, &rest_pos);
+        let leg_length_m = leg_length(&map, &rest_pos);
         let hips_rest = map.get(Canon::Hips).map(|j| rest_pos[j]).unwrap_or(Vec3::ZERO);
-        Character { name: name.to_string(), skeleton, mesh, map, reference, hip_height_m, hips_rest, arm_swing_rad }
+        Character { name: name.to_string(), skeleton, mesh, map, reference, hip_height_m, leg_length_m, hips_rest, arm_swing_rad }
     }
 
     /// Height of the hip (thigh) joints above the ankles in the rest pose, metres.
     pub fn hip_height_m(&self) -> f32 {
         self.hip_height_m
+    }
+
+    /// Mean leg length (thigh + shin bones), metres: the root's motion is scaled by the ratio
+    /// of this to the source's.
+    pub fn leg_length_m(&self) -> f32 {
+        self.leg_length_m
+    }
+
+    /// The factor from the canonical skeleton's size to this character's (leg lengths).
+    pub fn scale_from_canonical(&self) -> f32 {
+        let canon = canonical_skeleton();
+        self.leg_length_m / leg_length(&HumanoidMap::from_skeleton(&canon), &canon.rest_positions())
     }
 
     /// The motion of `clip` (any humanoid clip; `clip_map` its mapping) played by this
@@ -262,6 +300,12 @@ impl Character {
     /// [`Character::retarget`] with a choice of transfer (the direction-only one is the
     /// benchmark's control).
     pub fn retarget_with(&self, clip: &Clip, clip_map: &HumanoidMap, transfer: Transfer) -> Result<Clip, CharacterError> {
+        self.retarget_options(clip, clip_map, &RetargetOptions { transfer, hold_feet: true })
+    }
+
+    /// [`Character::retarget`] with every choice spelled out (the benchmark's controls).
+    pub fn retarget_options(&self, clip: &Clip, clip_map: &HumanoidMap, options: &RetargetOptions) -> Result<Clip, CharacterError> {
+        let transfer = options.transfer;
         let status = clip_map.status(&clip.skeleton, Some(clip));
         if let HumanoidStatus::NotHumanoid { reason } = status {
             return Err(CharacterError::SourceNotHumanoid { clip: clip.name.clone(), reason });
@@ -272,7 +316,10 @@ impl Character {
         let canon = &src.skeleton;
         let canon_rest = canon.rest_positions();
         let canon_map = HumanoidMap::from_skeleton(canon);
-        let scale = self.hip_height_m / hip_height(&canon_map, &canon_rest);
+        let scale = self.leg_length_m / leg_length(&canon_map, &canon_rest);
+        // Legs straightened into the reference pose reach lower than a rig's bent rest legs
+        // did: the hips rise by the difference, so straight legs stand on the rest ankles.
+        let lift = Vec3::Y * (self.leg_length_m - self.hip_height_m);
         let canon_hips = canon_rest[Canon::Hips.index()];
         let (char_rest_rot, char_rest_pos) = motion::rest_world(&self.skeleton);
         let n = self.skeleton.len();
@@ -322,18 +369,73 @@ impl Character {
             track_of[j] = k;
         }
 
+        // The legs for planted-foot IK: thigh, shin and foot joints, bone lengths, and each
+        // bone's vector in its joint's own frame (to swing the posed bone onto the IK's).
+        let legs: Vec<Leg> = [
+            (Canon::LeftUpperLeg, Canon::LeftLowerLeg, Canon::LeftFoot),
+            (Canon::RightUpperLeg, Canon::RightLowerLeg, Canon::RightFoot),
+        ]
+        .into_iter()
+        .filter_map(|(a, b, c)| {
+            let (hip, knee, foot) = (self.map.get(a)?, self.map.get(b)?, self.map.get(c)?);
+            let thigh = char_rest_pos[knee] - char_rest_pos[hip];
+            let shin = char_rest_pos[foot] - char_rest_pos[knee];
+            Some(Leg {
+                canon_foot: c,
+                hip,
+                knee,
+                foot,
+                thigh_m: thigh.length(),
+                shin_m: shin.length(),
+                thigh_local: char_rest_rot[hip].inverse() * thigh,
+                shin_local: char_rest_rot[knee].inverse() * shin,
+            })
+        })
+        .collect();
+        let mut leg_of = vec![usize::MAX; n];
+        for (k, leg) in legs.iter().enumerate() {
+            leg_of[leg.hip] = k;
+            leg_of[leg.knee] = k;
+        }
+        // Pass 0 poses the character freely and records where its feet and hips go and where
+        // the source's ankles are; the plants and the pelvis drop follow from those; pass 1
+        // poses again with the feet held.
+        let hold = options.hold_feet && legs.len() == 2 && frames > 1;
+        let mut free_foot: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
+        let mut free_hip: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
+        let mut src_ankle: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
+        let mut plant_target: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs.len()];
+        let mut drop_m = vec![0.0f32; frames];
+
         let mut rotations = Vec::with_capacity(frames * n);
         let (mut src_rot, mut src_pos) = (vec![Quat::IDENTITY; CANON_COUNT], vec![Vec3::ZERO; CANON_COUNT]);
         let mut src_t = Vec::with_capacity(CANON_COUNT);
         let mut g = vec![Quat::IDENTITY; n];
         let mut p = vec![Vec3::ZERO; n];
         let mut local = vec![Quat::IDENTITY; n];
+        let mut ik = [(Vec3::ZERO, Vec3::ZERO); 2];
+        for pass in if hold { 0..2 } else { 1..2 } {
+            if pass == 1 && hold {
+                for k in 0..legs.len() {
+                    // The source's ankle height maps onto the character's: its rest ankle
+                    // stands where the canonical rest ankle does, scaled.
+                    let leg = &legs[k];
+                    let y_offset = char_rest_pos[leg.foot].y - canon_rest[leg.canon_foot.index()].y * scale;
+                    plant_target[k] = plants(&src_ankle[k], &free_foot[k], y_offset, src.fps);
+                }
+                drop_m = pelvis_drop(&legs, &free_hip, &plant_target, src.fps);
+            }
+            rotations.clear();
+            for t in tracks.iter_mut() {
+                t.values.clear();
+            }
         for f in 0..frames {
             src.local_translations_into(f, &mut src_t);
             motion::local_to_world(canon, src.frame_rotations(f), &src_t, &mut src_rot, &mut src_pos);
             // Hips target: the character's rest hips moved as the source's hips move from
-            // theirs, scaled by the ratio of hip heights (leg lengths).
-            let target = self.hips_rest + (src_pos[Canon::Hips.index()] - canon_hips) * scale;
+            // theirs, scaled by the ratio of hip heights (leg lengths), lowered where a held
+            // foot would otherwise be out of reach.
+            let target = self.hips_rest + lift + (src_pos[Canon::Hips.index()] - canon_hips) * scale - Vec3::Y * drop_m[f];
             for &i in &order {
                 let j = &self.skeleton.joints[i];
                 let parent = j.parent.filter(|&q| q < i);
@@ -371,8 +473,36 @@ impl Character {
                     tracks[track_of[i]].values.push(t);
                 }
                 p[i] = pp + pg * t;
+                // Held foot: the thigh swings its knee, then the shin its ankle, onto the
+                // two-bone solution (the foot keeps its own world rotation).
+                let k = leg_of[i];
+                if pass == 1 && k != usize::MAX {
+                    if let Some(goal) = plant_target[k][f] {
+                        let leg = &legs[k];
+                        let (bone, aim) = if i == leg.hip {
+                            let knee_now = g[i] * leg.thigh_local;
+                            ik[k] = motion::two_bone(p[i], goal, leg.thigh_m, leg.shin_m, knee_now);
+                            (knee_now, ik[k].0 - p[i])
+                        } else {
+                            (g[i] * leg.shin_local, ik[k].1 - p[i])
+                        };
+                        if let (Some(a), Some(b)) = (bone.try_normalize(), aim.try_normalize()) {
+                            g[i] = (Quat::from_rotation_arc(a, b) * g[i]).normalize();
+                            local[i] = (pg.inverse() * g[i]).normalize();
+                        }
+                    }
+                }
             }
-            rotations.extend_from_slice(&local);
+            if pass == 0 {
+                for (k, leg) in legs.iter().enumerate() {
+                    free_foot[k].push(p[leg.foot]);
+                    free_hip[k].push(p[leg.hip]);
+                    src_ankle[k].push(src_pos[leg.canon_foot.index()] * scale);
+                }
+            } else {
+                rotations.extend_from_slice(&local);
+            }
+        }
         }
         Ok(Clip {
             name: format!("{} on {}", src.name, self.name),
@@ -383,6 +513,106 @@ impl Character {
             translations: tracks,
         })
     }
+}
+
+/// Choices of [`Character::retarget_options`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RetargetOptions {
+    pub transfer: Transfer,
+    /// Hold the character's foot where the source's foot is planted (two-bone IK, the
+    /// pelvis lowered to reach); off only as a control.
+    pub hold_feet: bool,
+}
+
+impl Default for RetargetOptions {
+    fn default() -> Self {
+        RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true }
+    }
+}
+
+/// One leg of the character for planted-foot IK.
+struct Leg {
+    canon_foot: Canon,
+    hip: usize,
+    knee: usize,
+    foot: usize,
+    thigh_m: f32,
+    shin_m: f32,
+    thigh_local: Vec3,
+    shin_local: Vec3,
+}
+
+/// A source ankle counts as planted within this height of its floor (spec §J's foot-contact
+/// band) ...
+const PLANT_HEIGHT_M: f32 = 0.05;
+/// ... and below this horizontal speed (at the character's size), cm/s.
+const PLANT_SPEED_CM_S: f32 = 30.0;
+/// Time over which a released foot is eased from where it was held back to its free path, s.
+const RELEASE_S: f32 = 0.15;
+
+/// Where the character's ankle is held on each frame: on each run of frames on which the
+/// source's ankle (`src`, scaled to the character) is planted, horizontally where the
+/// character's own free ankle (`free`) is on the run's first frame, at the source's ankle
+/// height plus `y_offset` (the character's ground); after the run the target eases back onto
+/// the free path over [`RELEASE_S`] (no jump on release).
+fn plants(src: &[Vec3], free: &[Vec3], y_offset: f32, fps: f32) -> Vec<Option<Vec3>> {
+    let frames = src.len().min(free.len());
+    let mut out = vec![None; frames];
+    let heights: Vec<f32> = src.iter().map(|p| p.y).collect();
+    let Some(floor) = motion::floor_height(&heights) else { return out };
+    let planted = |f: usize| {
+        let (a, b) = (f.saturating_sub(1), (f + 1).min(frames - 1));
+        let span = (b - a).max(1) as f32;
+        let speed_cm_s = Vec3::new(src[b].x - src[a].x, 0.0, src[b].z - src[a].z).length() * fps * 100.0 / span;
+        src[f].y - floor < PLANT_HEIGHT_M && speed_cm_s < PLANT_SPEED_CM_S
+    };
+    let release = ((RELEASE_S * fps).round() as usize).max(1);
+    let mut f = 0;
+    while f < frames {
+        if !planted(f) {
+            f += 1;
+            continue;
+        }
+        let start = free[f];
+        let mut held = start;
+        while f < frames && planted(f) {
+            held = Vec3::new(start.x, src[f].y + y_offset, start.z);
+            out[f] = Some(held);
+            f += 1;
+        }
+        // Ease out: the held point slides back onto the free path (smoothstep), unless a new
+        // plant starts first.
+        let released = f;
+        while f < frames && f - released < release && !planted(f) {
+            let s = (f - released + 1) as f32 / (release + 1) as f32;
+            out[f] = Some(held.lerp(free[f], s * s * (3.0 - 2.0 * s)));
+            f += 1;
+        }
+    }
+    out
+}
+
+/// How far the pelvis drops on each frame so every held foot is within reach of its hip
+/// (legs nearly straight at most), smoothed so the body does not bob: a running maximum then
+/// a running mean over ±[`RELEASE_S`].
+fn pelvis_drop(legs: &[Leg], hips: &[Vec<Vec3>], targets: &[Vec<Option<Vec3>>], fps: f32) -> Vec<f32> {
+    let frames = targets.first().map_or(0, |t| t.len());
+    let mut raw = vec![0.0f32; frames];
+    for (k, leg) in legs.iter().enumerate() {
+        let reach = (leg.thigh_m + leg.shin_m) * 0.995;
+        for f in 0..frames {
+            let Some(goal) = targets[k][f] else { continue };
+            let d = goal - hips[k][f];
+            let across = Vec3::new(d.x, 0.0, d.z).length();
+            // Lowering the hip by y brings it to |d + y·Y| = reach: y = −d.y − √(reach² − across²).
+            let y = if across < reach { -d.y - (reach * reach - across * across).sqrt() } else { -d.y };
+            raw[f] = raw[f].max(y.max(0.0));
+        }
+    }
+    let w = ((RELEASE_S * fps).round() as usize).max(1);
+    let window = |f: usize| f.saturating_sub(w)..(f + w + 1).min(frames);
+    let held: Vec<f32> = (0..frames).map(|f| raw[window(f)].iter().copied().fold(0.0, f32::max)).collect();
+    (0..frames).map(|f| held[window(f)].iter().sum::<f32>() / window(f).len() as f32).collect()
 }
 
 /// Compares a retargeted clip with its canonical source (same frame count and rate).
@@ -403,7 +633,7 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
     let feet = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
     let mut src_tracks: Vec<Vec<Vec3>> = (0..4).map(|_| Vec::with_capacity(frames)).collect();
     let mut out_tracks: Vec<Vec<Vec3>> = (0..4).map(|_| Vec::with_capacity(frames)).collect();
-    let scale = character.hip_height_m / hip_height(&HumanoidMap::from_skeleton(&canon), &canon_rest);
+    let scale = character.scale_from_canonical();
     for f in 0..frames {
         src.local_translations_into(f, &mut st);
         motion::local_to_world(&src.skeleton, src.frame_rotations(f), &st, &mut sr, &mut sp);
@@ -450,7 +680,7 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
         motion::mean_p95(&all)
     };
     // The source's skate is measured at the character's size (its positions scaled by the
-    // ratio of hip heights), so the two figures compare.
+    // ratio of leg lengths), so the two figures compare.
     let (source_skate_mean_cm_s, source_skate_p95_cm_s) = skate(&src_tracks, src.fps);
     let (skate_mean_cm_s, skate_p95_cm_s) = skate(&out_tracks, out.fps);
     RetargetReport {
@@ -478,7 +708,8 @@ mod tests {
         let map = HumanoidMap::from_skeleton(&sk);
         let ch = Character::build("body", sk.clone(), builtin_body(&sk), map.clone());
         assert!(ch.arm_swing_rad < 1e-3);
-        let out = ch.retarget(&demo, &map).unwrap();
+        // Feet free: the held feet would (rightly) differ from the source's sliding ones.
+        let out = ch.retarget_options(&demo, &map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
         for f in [0, 50, 120] {
             let (a, b) = (demo.world_positions(f), out.world_positions(f));
             for (x, y) in a.iter().zip(&b) {
@@ -500,7 +731,8 @@ mod tests {
         let map = HumanoidMap::from_skeleton(&sk);
         let ch = Character::build("a-pose", sk.clone(), builtin_body(&sk), map);
         assert!((ch.arm_swing_rad - 0.8).abs() < 1e-3, "{}", ch.arm_swing_rad);
-        let out = ch.retarget(&demo, &HumanoidMap::from_skeleton(&demo.skeleton)).unwrap();
+        // Feet free: held feet bend the legs away from the source's directions, as they should.
+        let out = ch.retarget_options(&demo, &HumanoidMap::from_skeleton(&demo.skeleton), &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
         for f in [0, 50, 120] {
             let (a, b) = (demo.world_positions(f), out.world_positions(f));
             for (s, c) in Canon::links() {
