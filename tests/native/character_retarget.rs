@@ -106,10 +106,10 @@ fn bad_characters_are_refused_naming_what_is_missing() {
 /// cm/s, on clips the benchmark does not print (it takes every 20th built-in move from the
 /// first; these are every 20th from the 10th, the built-in demo dance, and CMU modern, Indian
 /// and martial-arts capture where the benchmark has salsa), with the free-feet control.
-/// - Xbot (a rig in the source's proportions): every built-in move within the acceptance.
-/// - Both characters, over all the clips: fewer cases above the acceptance with the feet held
-///   than free, and a lower total skate. (Not every CMU clip meets the acceptance: the figures
-///   are printed; see the report of issue #11.)
+/// - Xbot (a rig in the source's proportions): every clip within the acceptance.
+/// - Both characters: fewer cases above the acceptance with the feet held than free, and a
+///   lower total skate. (RobotExpressive, hips 3.7× wider than the source's at its size, does
+///   not meet the acceptance on every clip: the figures are printed.)
 #[test]
 fn held_feet_skate_no_more_than_the_source() {
     let mut sources: Vec<(Clip, HumanoidMap)> =
@@ -127,7 +127,7 @@ fn held_feet_skate_no_more_than_the_source() {
     }
     for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
         let (_, ch) = character(file);
-        let (mut worse, mut free_worse, mut builtin_worse, mut held_sum, mut free_sum) = (Vec::new(), 0, 0, 0.0, 0.0);
+        let (mut worse, mut free_worse, mut xbot_worse, mut held_sum, mut free_sum) = (Vec::new(), 0, 0, 0.0, 0.0);
         for (clip, map) in &sources {
             let r = report(clip, map, &ch, &ch.retarget(clip, map).unwrap());
             let free = ch.retarget_options(clip, map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
@@ -135,8 +135,8 @@ fn held_feet_skate_no_more_than_the_source() {
             println!("{file} ← '{}': skate held {:.2} cm/s, free {:.2}, source {:.2}", clip.name, r.skate_mean_cm_s, f.skate_mean_cm_s, r.source_skate_mean_cm_s);
             if r.skate_mean_cm_s > r.source_skate_mean_cm_s + 1.0 {
                 worse.push(format!("{}: {:.2} vs source {:.2}", clip.name, r.skate_mean_cm_s, r.source_skate_mean_cm_s));
-                if file.contains("Xbot") && !clip.name.starts_with("mocap/") {
-                    builtin_worse += 1;
+                if file.contains("Xbot") {
+                    xbot_worse += 1;
                 }
             }
             free_worse += usize::from(f.skate_mean_cm_s > f.source_skate_mean_cm_s + 1.0);
@@ -144,7 +144,7 @@ fn held_feet_skate_no_more_than_the_source() {
             free_sum += f.skate_mean_cm_s;
         }
         println!("{file}: {} of {} worse than source + 1 cm/s held, {free_worse} free", worse.len(), sources.len());
-        assert_eq!(builtin_worse, 0, "{file}: built-in moves with skate above the source's + 1 cm/s: {worse:#?}");
+        assert_eq!(xbot_worse, 0, "{file}: skate above the source's + 1 cm/s: {worse:#?}");
         assert!(worse.len() < free_worse && held_sum < free_sum, "{file}: held {} cases (skate sum {held_sum:.1}) vs free {free_worse} ({free_sum:.1}): {worse:#?}", worse.len());
     }
 }

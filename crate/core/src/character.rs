@@ -18,10 +18,12 @@
 //! - Root: the hips follow the source's hips scaled by the ratio of leg lengths (thigh +
 //!   shin), raised by what the rig's bent rest legs gain when straightened.
 //! - Planted feet: where the source's ankle is planted (near its floor and slow), the
-//!   character's ankle is held where it was when the plant began, at the source's ankle height
-//!   on the character's ground, by two-bone IK on thigh and shin (`motion::two_bone`); the
-//!   pelvis drops (smoothly) where a held foot would be out of reach, and a released foot eases
-//!   back onto its free path. The benchmark prints the skate against the source's and against
+//!   character's ankle is held where it landed, at the source's ankle height on the
+//!   character's ground, by two-bone IK on thigh and shin (`motion::two_bone`). The body
+//!   shifts horizontally (smoothly) to keep held feet put — a rig with wider hips than the
+//!   source's, turning on one foot, must move round it — so the character's path can drift
+//!   from the source's scaled one; the pelvis drops where a held foot would be out of reach,
+//!   and a released foot eases back onto its free path. The benchmark prints the skate against the source's and against
 //!   the free-feet control (`tests/bench/retarget.rs`).
 
 use std::sync::Arc;
@@ -406,6 +408,7 @@ impl Character {
         let mut src_ankle: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
         let mut plant_target: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs.len()];
         let mut drop_m = vec![0.0f32; frames];
+        let mut shift_m = vec![Vec3::ZERO; frames];
 
         let mut rotations = Vec::with_capacity(frames * n);
         let (mut src_rot, mut src_pos) = (vec![Quat::IDENTITY; CANON_COUNT], vec![Vec3::ZERO; CANON_COUNT]);
@@ -416,12 +419,14 @@ impl Character {
         let mut ik = [(Vec3::ZERO, Vec3::ZERO); 2];
         for pass in if hold { 0..2 } else { 1..2 } {
             if pass == 1 && hold {
-                for k in 0..legs.len() {
-                    // The source's ankle height maps onto the character's: its rest ankle
-                    // stands where the canonical rest ankle does, scaled.
-                    let leg = &legs[k];
-                    let y_offset = char_rest_pos[leg.foot].y - canon_rest[leg.canon_foot.index()].y * scale;
-                    plant_target[k] = plants(&src_ankle[k], &free_foot[k], y_offset, src.fps);
+                // The source's ankle height maps onto the character's: its rest ankle
+                // stands where the canonical rest ankle does, scaled.
+                let y_offsets: Vec<f32> = legs.iter().map(|leg| char_rest_pos[leg.foot].y - canon_rest[leg.canon_foot.index()].y * scale).collect();
+                (plant_target, shift_m) = hold_plan(&src_ankle, &free_foot, &y_offsets, src.fps);
+                for hips in free_hip.iter_mut() {
+                    for (h, shift) in hips.iter_mut().zip(&shift_m) {
+                        *h += *shift;
+                    }
                 }
                 drop_m = pelvis_drop(&legs, &free_hip, &plant_target, src.fps);
             }
@@ -435,7 +440,7 @@ impl Character {
             // Hips target: the character's rest hips moved as the source's hips move from
             // theirs, scaled by the ratio of hip heights (leg lengths), lowered where a held
             // foot would otherwise be out of reach.
-            let target = self.hips_rest + lift + (src_pos[Canon::Hips.index()] - canon_hips) * scale - Vec3::Y * drop_m[f];
+            let target = self.hips_rest + lift + (src_pos[Canon::Hips.index()] - canon_hips) * scale - Vec3::Y * drop_m[f] + shift_m[f];
             for &i in &order {
                 let j = &self.skeleton.joints[i];
                 let parent = j.parent.filter(|&q| q < i);
@@ -550,46 +555,80 @@ const PLANT_SPEED_CM_S: f32 = 30.0;
 /// Time over which a released foot is eased from where it was held back to its free path, s.
 const RELEASE_S: f32 = 0.15;
 
-/// Where the character's ankle is held on each frame: on each run of frames on which the
-/// source's ankle (`src`, scaled to the character) is planted, horizontally where the
-/// character's own free ankle (`free`) is on the run's first frame, at the source's ankle
-/// height plus `y_offset` (the character's ground); after the run the target eases back onto
-/// the free path over [`RELEASE_S`] (no jump on release).
-fn plants(src: &[Vec3], free: &[Vec3], y_offset: f32, fps: f32) -> Vec<Option<Vec3>> {
-    let frames = src.len().min(free.len());
-    let mut out = vec![None; frames];
+/// The source ankle's planted frames: within [`PLANT_HEIGHT_M`] of its floor and slower than
+/// [`PLANT_SPEED_CM_S`] (`src` at the character's size).
+fn planted_frames(src: &[Vec3], fps: f32) -> Vec<bool> {
+    let frames = src.len();
     let heights: Vec<f32> = src.iter().map(|p| p.y).collect();
-    let Some(floor) = motion::floor_height(&heights) else { return out };
-    let planted = |f: usize| {
-        let (a, b) = (f.saturating_sub(1), (f + 1).min(frames - 1));
-        let span = (b - a).max(1) as f32;
-        let speed_cm_s = Vec3::new(src[b].x - src[a].x, 0.0, src[b].z - src[a].z).length() * fps * 100.0 / span;
-        src[f].y - floor < PLANT_HEIGHT_M && speed_cm_s < PLANT_SPEED_CM_S
-    };
-    let release = ((RELEASE_S * fps).round() as usize).max(1);
-    let mut f = 0;
-    while f < frames {
-        if !planted(f) {
-            f += 1;
-            continue;
+    let Some(floor) = motion::floor_height(&heights) else { return vec![false; frames] };
+    (0..frames)
+        .map(|f| {
+            let (a, b) = (f.saturating_sub(1), (f + 1).min(frames - 1));
+            let span = (b - a).max(1) as f32;
+            let speed_cm_s = Vec3::new(src[b].x - src[a].x, 0.0, src[b].z - src[a].z).length() * fps * 100.0 / span;
+            src[f].y - floor < PLANT_HEIGHT_M && speed_cm_s < PLANT_SPEED_CM_S
+        })
+        .collect()
+}
+
+/// Where each held ankle goes, and how far the whole body moves horizontally to keep it
+/// there. A foot is anchored where it lands (its free position moved by the body's shift so
+/// far); while feet are anchored the body shifts so they stay put (a rig with wider hips than
+/// the source's turning on one foot must move its body round it, as a person would); the
+/// shift is smoothed over ±[`RELEASE_S`] and the IK takes up what is left. Anchors sit at the
+/// source's ankle height plus `y_offsets[k]` (the character's ground); a released foot eases
+/// back onto its (shifted) free path over [`RELEASE_S`].
+fn hold_plan(src: &[Vec<Vec3>], free: &[Vec<Vec3>], y_offsets: &[f32], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3>) {
+    let legs = src.len();
+    let frames = src.iter().chain(free).map(|t| t.len()).min().unwrap_or(0);
+    let planted: Vec<Vec<bool>> = src.iter().map(|t| planted_frames(&t[..frames], fps)).collect();
+    let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
+    let mut anchor: Vec<Option<Vec3>> = vec![None; legs];
+    let mut shift = vec![Vec3::ZERO; frames];
+    let mut offset = Vec3::ZERO;
+    let mut anchors: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs];
+    for f in 0..frames {
+        let mut sum = Vec3::ZERO;
+        let mut count = 0;
+        for k in 0..legs {
+            if planted[k][f] {
+                let a = *anchor[k].get_or_insert(flat(free[k][f]) + offset);
+                sum += a - flat(free[k][f]);
+                count += 1;
+                anchors[k][f] = Some(a);
+            } else {
+                anchor[k] = None;
+            }
         }
-        let start = free[f];
-        let mut held = start;
-        while f < frames && planted(f) {
-            held = Vec3::new(start.x, src[f].y + y_offset, start.z);
-            out[f] = Some(held);
-            f += 1;
+        if count > 0 {
+            offset = sum / count as f32;
         }
-        // Ease out: the held point slides back onto the free path (smoothstep), unless a new
-        // plant starts first.
-        let released = f;
-        while f < frames && f - released < release && !planted(f) {
-            let s = (f - released + 1) as f32 / (release + 1) as f32;
-            out[f] = Some(held.lerp(free[f], s * s * (3.0 - 2.0 * s)));
-            f += 1;
+        shift[f] = offset;
+    }
+    let w = ((RELEASE_S * fps).round() as usize).max(1);
+    let smooth: Vec<Vec3> = (0..frames)
+        .map(|f| {
+            let r = f.saturating_sub(w)..(f + w + 1).min(frames);
+            let len = r.len() as f32;
+            shift[r].iter().copied().sum::<Vec3>() / len
+        })
+        .collect();
+    let release = w;
+    let mut targets: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs];
+    for k in 0..legs {
+        let mut last: Option<(Vec3, usize)> = None;
+        for f in 0..frames {
+            if let Some(a) = anchors[k][f] {
+                let held = Vec3::new(a.x, src[k][f].y + y_offsets[k], a.z);
+                targets[k][f] = Some(held);
+                last = Some((held, f));
+            } else if let Some((held, end)) = last.filter(|(_, end)| f - end <= release) {
+                let s = (f - end) as f32 / (release + 1) as f32;
+                targets[k][f] = Some(held.lerp(free[k][f] + smooth[f], s * s * (3.0 - 2.0 * s)));
+            }
         }
     }
-    out
+    (targets, smooth)
 }
 
 /// How far the pelvis drops on each frame so every held foot is within reach of its hip
