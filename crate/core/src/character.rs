@@ -434,80 +434,80 @@ impl Character {
             for t in tracks.iter_mut() {
                 t.values.clear();
             }
-        for f in 0..frames {
-            src.local_translations_into(f, &mut src_t);
-            motion::local_to_world(canon, src.frame_rotations(f), &src_t, &mut src_rot, &mut src_pos);
-            // Hips target: the character's rest hips moved as the source's hips move from
-            // theirs, scaled by the ratio of hip heights (leg lengths), lowered where a held
-            // foot would otherwise be out of reach.
-            let target = self.hips_rest + lift + (src_pos[Canon::Hips.index()] - canon_hips) * scale - Vec3::Y * drop_m[f] + shift_m[f];
-            for &i in &order {
-                let j = &self.skeleton.joints[i];
-                let parent = j.parent.filter(|&q| q < i);
-                let (pg, pp) = parent.map(|q| (g[q], p[q])).unwrap_or((Quat::IDENTITY, Vec3::ZERO));
-                local[i] = match canon_of[i] {
-                    Some(c) => {
-                        let world = match transfer {
-                            Transfer::Conjugate => src_rot[c.index()] * self.reference[c.index()],
-                            Transfer::DirectionOnly => {
-                                // Swing the reference so the bone points where the source's does.
-                                let (a, b) = direction_bone(c);
-                                let rest_dir = canon_rest[b.index()] - canon_rest[a.index()];
-                                let from = rest_dir.try_normalize();
-                                let to = (src_rot[c.index()] * rest_dir).try_normalize();
-                                let swing = match (from, to) {
-                                    (Some(f), Some(t)) => Quat::from_rotation_arc(f, t),
-                                    _ => Quat::IDENTITY,
-                                };
-                                swing * self.reference[c.index()]
-                            }
-                        };
-                        (pg.inverse() * world).normalize()
+            for f in 0..frames {
+                src.local_translations_into(f, &mut src_t);
+                motion::local_to_world(canon, src.frame_rotations(f), &src_t, &mut src_rot, &mut src_pos);
+                // Hips target: the character's rest hips moved as the source's hips move from
+                // theirs, scaled by the ratio of leg lengths, lowered where a held foot would
+                // otherwise be out of reach and shifted to keep held feet put.
+                let target = self.hips_rest + lift + (src_pos[Canon::Hips.index()] - canon_hips) * scale - Vec3::Y * drop_m[f] + shift_m[f];
+                for &i in &order {
+                    let j = &self.skeleton.joints[i];
+                    let parent = j.parent.filter(|&q| q < i);
+                    let (pg, pp) = parent.map(|q| (g[q], p[q])).unwrap_or((Quat::IDENTITY, Vec3::ZERO));
+                    local[i] = match canon_of[i] {
+                        Some(c) => {
+                            let world = match transfer {
+                                Transfer::Conjugate => src_rot[c.index()] * self.reference[c.index()],
+                                Transfer::DirectionOnly => {
+                                    // Swing the reference so the bone points where the source's does.
+                                    let (a, b) = direction_bone(c);
+                                    let rest_dir = canon_rest[b.index()] - canon_rest[a.index()];
+                                    let from = rest_dir.try_normalize();
+                                    let to = (src_rot[c.index()] * rest_dir).try_normalize();
+                                    let swing = match (from, to) {
+                                        (Some(f), Some(t)) => Quat::from_rotation_arc(f, t),
+                                        _ => Quat::IDENTITY,
+                                    };
+                                    swing * self.reference[c.index()]
+                                }
+                            };
+                            (pg.inverse() * world).normalize()
+                        }
+                        None => j.rest_rotation,
+                    };
+                    g[i] = pg * local[i];
+                    let t = if i == hips {
+                        pg.inverse() * (target - pp)
+                    } else if let Some((jp, rel)) = detached[i] {
+                        pg.inverse() * (p[jp] + g[jp] * rel - pp)
+                    } else {
+                        j.rest_offset
+                    };
+                    if track_of[i] != usize::MAX {
+                        tracks[track_of[i]].values.push(t);
                     }
-                    None => j.rest_rotation,
-                };
-                g[i] = pg * local[i];
-                let t = if i == hips {
-                    pg.inverse() * (target - pp)
-                } else if let Some((jp, rel)) = detached[i] {
-                    pg.inverse() * (p[jp] + g[jp] * rel - pp)
-                } else {
-                    j.rest_offset
-                };
-                if track_of[i] != usize::MAX {
-                    tracks[track_of[i]].values.push(t);
-                }
-                p[i] = pp + pg * t;
-                // Held foot: the thigh swings its knee, then the shin its ankle, onto the
-                // two-bone solution (the foot keeps its own world rotation).
-                let k = leg_of[i];
-                if pass == 1 && k != usize::MAX {
-                    if let Some(goal) = plant_target[k][f] {
-                        let leg = &legs[k];
-                        let (bone, aim) = if i == leg.hip {
-                            let knee_now = g[i] * leg.thigh_local;
-                            ik[k] = motion::two_bone(p[i], goal, leg.thigh_m, leg.shin_m, knee_now);
-                            (knee_now, ik[k].0 - p[i])
-                        } else {
-                            (g[i] * leg.shin_local, ik[k].1 - p[i])
-                        };
-                        if let (Some(a), Some(b)) = (bone.try_normalize(), aim.try_normalize()) {
-                            g[i] = (Quat::from_rotation_arc(a, b) * g[i]).normalize();
-                            local[i] = (pg.inverse() * g[i]).normalize();
+                    p[i] = pp + pg * t;
+                    // Held foot: the thigh swings its knee, then the shin its ankle, onto the
+                    // two-bone solution (the foot keeps its own world rotation).
+                    let k = leg_of[i];
+                    if pass == 1 && k != usize::MAX {
+                        if let Some(goal) = plant_target[k][f] {
+                            let leg = &legs[k];
+                            let (bone, aim) = if i == leg.hip {
+                                let knee_now = g[i] * leg.thigh_local;
+                                ik[k] = motion::two_bone(p[i], goal, leg.thigh_m, leg.shin_m, knee_now);
+                                (knee_now, ik[k].0 - p[i])
+                            } else {
+                                (g[i] * leg.shin_local, ik[k].1 - p[i])
+                            };
+                            if let (Some(a), Some(b)) = (bone.try_normalize(), aim.try_normalize()) {
+                                g[i] = (Quat::from_rotation_arc(a, b) * g[i]).normalize();
+                                local[i] = (pg.inverse() * g[i]).normalize();
+                            }
                         }
                     }
                 }
-            }
-            if pass == 0 {
-                for (k, leg) in legs.iter().enumerate() {
-                    free_foot[k].push(p[leg.foot]);
-                    free_hip[k].push(p[leg.hip]);
-                    src_ankle[k].push(src_pos[leg.canon_foot.index()] * scale);
+                if pass == 0 {
+                    for (k, leg) in legs.iter().enumerate() {
+                        free_foot[k].push(p[leg.foot]);
+                        free_hip[k].push(p[leg.hip]);
+                        src_ankle[k].push(src_pos[leg.canon_foot.index()] * scale);
+                    }
+                } else {
+                    rotations.extend_from_slice(&local);
                 }
-            } else {
-                rotations.extend_from_slice(&local);
             }
-        }
         }
         Ok(Clip {
             name: format!("{} on {}", src.name, self.name),
@@ -755,6 +755,29 @@ mod tests {
                 assert!((*x - *y).length() < 1e-4, "frame {f}: {x} vs {y}");
             }
         }
+    }
+
+    #[test]
+    fn held_foot_stays_put_while_its_free_path_slides() {
+        // Left source ankle planted (on its floor, still) for frames 0..30, then lifted; the
+        // character's free left ankle slides 1 cm a frame; the right foot swings (fast).
+        let fps = 30.0;
+        let src_l: Vec<Vec3> = (0..60).map(|f| Vec3::new(0.2, if f < 30 { 0.08 } else { 0.3 }, 0.0)).collect();
+        let src_r: Vec<Vec3> = (0..60).map(|f| Vec3::new(-0.2 + 0.02 * f as f32, 0.3, 0.0)).collect();
+        let free_l: Vec<Vec3> = (0..60).map(|f| Vec3::new(0.5 + 0.01 * f as f32, 0.1, 0.0)).collect();
+        let free_r: Vec<Vec3> = (0..60).map(|_| Vec3::new(-0.5, 0.4, 0.0)).collect();
+        let (targets, shift) = hold_plan(&[src_l.clone(), src_r], &[free_l.clone(), free_r], &[0.02, 0.02], fps);
+        for f in 0..30 {
+            let t = targets[0][f].expect("held while planted");
+            assert!((t - Vec3::new(0.5, 0.1, 0.0)).length() < 1e-5, "frame {f}: {t}");
+            assert!(targets[1][f].is_none());
+        }
+        // The body moves back by the slide (before smoothing: exactly), so the leg can reach.
+        assert!((shift[15].x + 0.15).abs() < 0.02, "{}", shift[15]);
+        // Released: eased back onto the (shifted) free path, then free.
+        assert!(targets[0][31].is_some() && targets[0][59].is_none());
+        let step = (targets[0][31].unwrap() - targets[0][30].unwrap_or(targets[0][29].unwrap())).length();
+        assert!(step < 0.05, "no jump on release: {step}");
     }
 
     #[test]
