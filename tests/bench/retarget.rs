@@ -2,12 +2,14 @@
 //! move) onto Xbot and RobotExpressive, by the product's conjugation and by the direction-only
 //! control. Per case: bone direction error (median, p95), forearm/hand twist error (median,
 //! p95) for both, foot skate of the character vs the source (mean cm/s; the acceptance item
-//! is character ≤ source + 1 cm/s), and the time to retarget per 1000 frames.
+//! is character ≤ source + 1 cm/s) and vs the control with the feet not held by IK, the
+//! largest horizontal drift of the hips that holding the feet causes, and the time to
+//! retarget per 1000 frames.
 //! `cargo bench -p odori-tests --bench retarget`.
 
 use std::time::Instant;
 
-use odori_core::character::{report, Character, Transfer};
+use odori_core::character::{report, Character, RetargetOptions, Transfer};
 use odori_core::humanoid::HumanoidMap;
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::Clip;
@@ -26,11 +28,12 @@ fn main() {
         sources.push((m, map));
     }
     println!("retarget: {} sources (2 CMU salsa, {move_count} built-in moves)", sources.len());
-    println!("{:<22} {:<34} {:>7} {:>7} | {:>7} {:>7} | {:>8} {:>8} | {:>7} {:>7} {:>7} | {:>8}", "character", "source", "dir.med", "dir.p95", "tw.med", "tw.p95", "ctl.med", "ctl.p95", "skate", "src", "Δ cm/s", "ms/1k f");
+    println!("{:<22} {:<34} {:>7} {:>7} | {:>7} {:>7} | {:>8} {:>8} | {:>7} {:>7} {:>7} {:>7} {:>7} | {:>8}", "character", "source", "dir.med", "dir.p95", "tw.med", "tw.p95", "ctl.med", "ctl.p95", "skate", "src", "Δ cm/s", "free", "drift m", "ms/1k f");
     for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
         let im = import_bytes(file, &read(file), &ImportOptions::default()).unwrap_or_else(|e| panic!("{e}"));
         let ch = Character::from_imported(file, &im).unwrap_or_else(|e| panic!("{e}"));
         let mut worse = 0;
+        let mut free_worse = 0;
         let mut deltas = Vec::new();
         for (clip, map) in &sources {
             let t0 = Instant::now();
@@ -38,6 +41,15 @@ fn main() {
             let ms = t0.elapsed().as_secs_f64() * 1000.0 * 1000.0 / clip.frame_count() as f64;
             let r = report(clip, map, &ch, &out);
             let c = report(clip, map, &ch, &ch.retarget_with(clip, map, Transfer::DirectionOnly).unwrap());
+            let free_clip = ch.retarget_options(clip, map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
+            let free = report(clip, map, &ch, &free_clip);
+            // How far holding the feet moves the body off the free (scaled source) path, m.
+            let hips = ch.map.get(odori_core::humanoid::Canon::Hips).unwrap();
+            let drift_m = (0..out.frame_count()).map(|f| {
+                let d = out.world_positions(f)[hips] - free_clip.world_positions(f)[hips];
+                (d.x * d.x + d.z * d.z).sqrt()
+            }).fold(0.0f32, f32::max);
+            free_worse += usize::from(free.skate_mean_cm_s - free.source_skate_mean_cm_s > 1.0);
             let delta = r.skate_mean_cm_s - r.source_skate_mean_cm_s;
             deltas.push(delta);
             if delta > 1.0 {
@@ -45,7 +57,7 @@ fn main() {
             }
             let name: String = clip.name.chars().take(34).collect();
             println!(
-                "{:<22} {:<34} {:>6.2}° {:>6.2}° | {:>6.2}° {:>6.2}° | {:>7.2}° {:>7.2}° | {:>7.2} {:>7.2} {:>+7.2} | {:>8.2}",
+                "{:<22} {:<34} {:>6.2}° {:>6.2}° | {:>6.2}° {:>6.2}° | {:>7.2}° {:>7.2}° | {:>7.2} {:>7.2} {:>+7.2} {:>7.2} {:>7.2} | {:>8.2}",
                 file.trim_start_matches("gltf/"),
                 name,
                 r.direction_median_rad.to_degrees(),
@@ -57,14 +69,17 @@ fn main() {
                 r.skate_mean_cm_s,
                 r.source_skate_mean_cm_s,
                 delta,
+                free.skate_mean_cm_s,
+                drift_m,
                 ms
             );
         }
         deltas.sort_by(f32::total_cmp);
         println!(
-            "{file}: A-pose swing {:.1}°, hip height {:.3} m; skate worse than source + 1 cm/s in {worse} of {} cases (median Δ {:+.2} cm/s)",
+            "{file}: A-pose swing {:.1}°, hip height {:.3} m, leg length {:.3} m; skate worse than source + 1 cm/s in {worse} of {} cases (median Δ {:+.2} cm/s; feet not held: {free_worse})",
             ch.arm_swing_rad.to_degrees(),
             ch.hip_height_m(),
+            ch.leg_length_m(),
             deltas.len(),
             deltas[deltas.len() / 2]
         );

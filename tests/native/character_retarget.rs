@@ -5,7 +5,7 @@
 //! (not humanoid, no skin, limbs missing) refused with messages naming what is wrong.
 
 use odori_core::builtin::demo_clip;
-use odori_core::character::{report, Character, CharacterError, Transfer};
+use odori_core::character::{report, Character, CharacterError, RetargetOptions, Transfer};
 use odori_core::export::gltf::{glb, GlbOptions};
 use odori_core::humanoid::{Canon, HumanoidMap};
 use odori_core::import::{import_bytes, ImportOptions, Imported};
@@ -53,8 +53,7 @@ fn characters_follow_the_source_twist_included() {
             );
             assert!(r.direction_median_rad.to_degrees() < 2.0 && r.direction_p95_rad.to_degrees() < 6.0, "{file}: {r:?}");
             assert!(r.twist_p95_rad.to_degrees() < 2.0, "{file}: twist {r:?}");
-            // Foot skate is printed, not asserted: planted feet are not yet held by IK (see
-            // tests/bench/retarget.rs for the figures against the source).
+            // Foot skate is asserted on other clips (`held_feet_skate_no_more_than_the_source`).
             // The control loses roll: conjugation must be clearly better where the source rolls.
             assert!(control.twist_p95_rad > r.twist_p95_rad + 0.05, "{file}: control {control:?} vs {r:?}");
         }
@@ -101,3 +100,51 @@ fn bad_characters_are_refused_naming_what_is_missing() {
     assert!(e.to_string().contains("leftHand, rightLowerLeg"), "{e}");
 }
 
+
+
+/// Planted feet held by IK (spec §L): foot skate of the character against the source's + 1
+/// cm/s, on clips the benchmark does not print (it takes every 20th built-in move from the
+/// first; these are every 20th from the 10th, the built-in demo dance, and CMU modern, Indian
+/// and martial-arts capture where the benchmark has salsa), with the free-feet control.
+/// - Xbot (a rig in the source's proportions): every clip within the acceptance.
+/// - Both characters: fewer cases above the acceptance with the feet held than free, and a
+///   lower total skate. (RobotExpressive, hips 3.7× wider than the source's at its size, does
+///   not meet the acceptance on every clip: the figures are printed.)
+#[test]
+fn held_feet_skate_no_more_than_the_source() {
+    let mut sources: Vec<(Clip, HumanoidMap)> =
+        odori_core::library::builtin_clips().into_iter().skip(10).step_by(20).chain([demo_clip()]).map(|c| {
+            let map = HumanoidMap::from_skeleton(&c.skeleton);
+            (c, map)
+        }).collect();
+    assert!(sources.len() >= 10, "{} built-in clips", sources.len());
+    // CMU capture of other styles than the benchmark's salsa (20 s of each).
+    for rel in ["mocap/cmu-modern/005_01.bvh", "mocap/cmu-indian/indian_04.bvh", "mocap/cmu-martial/martial_04.bvh"] {
+        let im = import_bytes(rel, &read(rel), &ImportOptions { fps_override: fps_override_for(rel), ..Default::default() }).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        let c = &im.clips[0];
+        let frames = c.frame_count().min((20.0 * c.fps) as usize);
+        sources.push((c.slice(0, frames, rel), im.humanoid));
+    }
+    for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
+        let (_, ch) = character(file);
+        let (mut worse, mut free_worse, mut xbot_worse, mut held_sum, mut free_sum) = (Vec::new(), 0, 0, 0.0, 0.0);
+        for (clip, map) in &sources {
+            let r = report(clip, map, &ch, &ch.retarget(clip, map).unwrap());
+            let free = ch.retarget_options(clip, map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
+            let f = report(clip, map, &ch, &free);
+            println!("{file} ← '{}': skate held {:.2} cm/s, free {:.2}, source {:.2}", clip.name, r.skate_mean_cm_s, f.skate_mean_cm_s, r.source_skate_mean_cm_s);
+            if r.skate_mean_cm_s > r.source_skate_mean_cm_s + 1.0 {
+                worse.push(format!("{}: {:.2} vs source {:.2}", clip.name, r.skate_mean_cm_s, r.source_skate_mean_cm_s));
+                if file.contains("Xbot") {
+                    xbot_worse += 1;
+                }
+            }
+            free_worse += usize::from(f.skate_mean_cm_s > f.source_skate_mean_cm_s + 1.0);
+            held_sum += r.skate_mean_cm_s;
+            free_sum += f.skate_mean_cm_s;
+        }
+        println!("{file}: {} of {} worse than source + 1 cm/s held, {free_worse} free", worse.len(), sources.len());
+        assert_eq!(xbot_worse, 0, "{file}: skate above the source's + 1 cm/s: {worse:#?}");
+        assert!(worse.len() < free_worse && held_sum < free_sum, "{file}: held {} cases (skate sum {held_sum:.1}) vs free {free_worse} ({free_sum:.1}): {worse:#?}", worse.len());
+    }
+}

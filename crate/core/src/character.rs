@@ -15,11 +15,16 @@
 //!   world rotation of the next mapped bone down the chain already includes it (folded).
 //!   Character joints no canonical bone maps to (extra spine joints, fingers, twist helpers)
 //!   keep their rest rotation and follow their parent.
-//! - Root: the hips follow the source's hips scaled by the ratio of hip heights.
-//! - Not done here: holding planted feet with two-bone IK (`motion::two_bone`). Tracking the
-//!   source's scaled ankle with it was tried and made RobotExpressive's skate worse (its
-//!   thigh:shin proportions put the targets out of reach); the benchmark prints the foot skate
-//!   this leaves against the source's (`tests/bench/retarget.rs`).
+//! - Root: the hips follow the source's hips scaled by the ratio of leg lengths (thigh +
+//!   shin), raised by what the rig's bent rest legs gain when straightened.
+//! - Planted feet: where the source's ankle is planted (near its floor and slow), the
+//!   character's ankle is held where it landed, at the source's ankle height on the
+//!   character's ground, by two-bone IK on thigh and shin (`motion::two_bone`). The body
+//!   shifts horizontally (smoothly) to keep held feet put — a rig with wider hips than the
+//!   source's, turning on one foot, must move round it — so the character's path can drift
+//!   from the source's scaled one; the pelvis drops where a held foot would be out of reach,
+//!   and a released foot eases back onto its free path. The benchmark prints the skate against the source's and against
+//!   the free-feet control (`tests/bench/retarget.rs`).
 
 use std::sync::Arc;
 
@@ -148,6 +153,26 @@ fn hip_height(map: &HumanoidMap, rest_pos: &[Vec3]) -> f32 {
     }
 }
 
+/// Mean length of the two legs (thigh plus shin bone, hip joint to ankle), metres (at least
+/// 1 mm): the size the root's motion scales by. It is the hip height once the legs are
+/// straightened into the reference pose, which a rig standing with bent or splayed legs at
+/// rest (RobotExpressive) is not.
+fn leg_length(map: &HumanoidMap, rest_pos: &[Vec3]) -> f32 {
+    let mut sum = 0.0;
+    let mut n = 0;
+    for (ul, ll, foot) in [(Canon::LeftUpperLeg, Canon::LeftLowerLeg, Canon::LeftFoot), (Canon::RightUpperLeg, Canon::RightLowerLeg, Canon::RightFoot)] {
+        if let (Some(a), Some(b), Some(c)) = (map.get(ul), map.get(ll), map.get(foot)) {
+            sum += (rest_pos[b] - rest_pos[a]).length() + (rest_pos[c] - rest_pos[b]).length();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        1.0
+    } else {
+        (sum / n as f32).max(1e-3)
+    }
+}
+
 /// The canonical joint below `c` on its chain toward the head or the hands (for a bone whose
 /// canonical child the rig lacks: a spine without a chest points at the neck).
 fn next_down(c: Canon) -> Option<Canon> {
@@ -175,6 +200,8 @@ pub struct Character {
     /// that scales the root's motion (a rig whose hips joint sits high in the body, as
     /// RobotExpressive's `Body` does, is not taken for long-legged).
     hip_height_m: f32,
+    /// Mean leg length (thigh + shin), metres: what the root's motion scales by.
+    leg_length_m: f32,
     /// Rest world position of the hips joint.
     hips_rest: Vec3,
     /// How far the character's upper arms were swung to reach the T-pose, radians (0 for a
@@ -244,13 +271,26 @@ impl Character {
             reference[c.index()] = (swing * rest_rot[j]).normalize();
         }
         let hip_height_m = hip_height(&map, &rest_pos);
+        let leg_length_m = leg_length(&map, &rest_pos);
         let hips_rest = map.get(Canon::Hips).map(|j| rest_pos[j]).unwrap_or(Vec3::ZERO);
-        Character { name: name.to_string(), skeleton, mesh, map, reference, hip_height_m, hips_rest, arm_swing_rad }
+        Character { name: name.to_string(), skeleton, mesh, map, reference, hip_height_m, leg_length_m, hips_rest, arm_swing_rad }
     }
 
     /// Height of the hip (thigh) joints above the ankles in the rest pose, metres.
     pub fn hip_height_m(&self) -> f32 {
         self.hip_height_m
+    }
+
+    /// Mean leg length (thigh + shin bones), metres: the root's motion is scaled by the ratio
+    /// of this to the source's.
+    pub fn leg_length_m(&self) -> f32 {
+        self.leg_length_m
+    }
+
+    /// The factor from the canonical skeleton's size to this character's (leg lengths).
+    pub fn scale_from_canonical(&self) -> f32 {
+        let canon = canonical_skeleton();
+        self.leg_length_m / leg_length(&HumanoidMap::from_skeleton(&canon), &canon.rest_positions())
     }
 
     /// The motion of `clip` (any humanoid clip; `clip_map` its mapping) played by this
@@ -262,6 +302,12 @@ impl Character {
     /// [`Character::retarget`] with a choice of transfer (the direction-only one is the
     /// benchmark's control).
     pub fn retarget_with(&self, clip: &Clip, clip_map: &HumanoidMap, transfer: Transfer) -> Result<Clip, CharacterError> {
+        self.retarget_options(clip, clip_map, &RetargetOptions { transfer, hold_feet: true })
+    }
+
+    /// [`Character::retarget`] with every choice spelled out (the benchmark's controls).
+    pub fn retarget_options(&self, clip: &Clip, clip_map: &HumanoidMap, options: &RetargetOptions) -> Result<Clip, CharacterError> {
+        let transfer = options.transfer;
         let status = clip_map.status(&clip.skeleton, Some(clip));
         if let HumanoidStatus::NotHumanoid { reason } = status {
             return Err(CharacterError::SourceNotHumanoid { clip: clip.name.clone(), reason });
@@ -272,7 +318,10 @@ impl Character {
         let canon = &src.skeleton;
         let canon_rest = canon.rest_positions();
         let canon_map = HumanoidMap::from_skeleton(canon);
-        let scale = self.hip_height_m / hip_height(&canon_map, &canon_rest);
+        let scale = self.leg_length_m / leg_length(&canon_map, &canon_rest);
+        // Legs straightened into the reference pose reach lower than a rig's bent rest legs
+        // did: the hips rise by the difference, so straight legs stand on the rest ankles.
+        let lift = Vec3::Y * (self.leg_length_m - self.hip_height_m);
         let canon_hips = canon_rest[Canon::Hips.index()];
         let (char_rest_rot, char_rest_pos) = motion::rest_world(&self.skeleton);
         let n = self.skeleton.len();
@@ -322,57 +371,143 @@ impl Character {
             track_of[j] = k;
         }
 
+        // The legs for planted-foot IK: thigh, shin and foot joints, bone lengths, and each
+        // bone's vector in its joint's own frame (to swing the posed bone onto the IK's).
+        let legs: Vec<Leg> = [
+            (Canon::LeftUpperLeg, Canon::LeftLowerLeg, Canon::LeftFoot),
+            (Canon::RightUpperLeg, Canon::RightLowerLeg, Canon::RightFoot),
+        ]
+        .into_iter()
+        .filter_map(|(a, b, c)| {
+            let (hip, knee, foot) = (self.map.get(a)?, self.map.get(b)?, self.map.get(c)?);
+            let thigh = char_rest_pos[knee] - char_rest_pos[hip];
+            let shin = char_rest_pos[foot] - char_rest_pos[knee];
+            Some(Leg {
+                canon_foot: c,
+                hip,
+                knee,
+                foot,
+                thigh_m: thigh.length(),
+                shin_m: shin.length(),
+                thigh_local: char_rest_rot[hip].inverse() * thigh,
+                shin_local: char_rest_rot[knee].inverse() * shin,
+            })
+        })
+        .collect();
+        let mut leg_of = vec![usize::MAX; n];
+        for (k, leg) in legs.iter().enumerate() {
+            leg_of[leg.hip] = k;
+            leg_of[leg.knee] = k;
+        }
+        // Pass 0 poses the character freely and records where its feet and hips go and where
+        // the source's ankles are; the plants and the pelvis drop follow from those; pass 1
+        // poses again with the feet held.
+        let hold = options.hold_feet && legs.len() == 2 && frames > 1;
+        let mut free_foot: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
+        let mut free_hip: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
+        let mut src_ankle: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
+        let mut plant_target: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs.len()];
+        let mut drop_m = vec![0.0f32; frames];
+        let mut shift_m = vec![Vec3::ZERO; frames];
+
         let mut rotations = Vec::with_capacity(frames * n);
         let (mut src_rot, mut src_pos) = (vec![Quat::IDENTITY; CANON_COUNT], vec![Vec3::ZERO; CANON_COUNT]);
         let mut src_t = Vec::with_capacity(CANON_COUNT);
         let mut g = vec![Quat::IDENTITY; n];
         let mut p = vec![Vec3::ZERO; n];
         let mut local = vec![Quat::IDENTITY; n];
-        for f in 0..frames {
-            src.local_translations_into(f, &mut src_t);
-            motion::local_to_world(canon, src.frame_rotations(f), &src_t, &mut src_rot, &mut src_pos);
-            // Hips target: the character's rest hips moved as the source's hips move from
-            // theirs, scaled by the ratio of hip heights (leg lengths).
-            let target = self.hips_rest + (src_pos[Canon::Hips.index()] - canon_hips) * scale;
-            for &i in &order {
-                let j = &self.skeleton.joints[i];
-                let parent = j.parent.filter(|&q| q < i);
-                let (pg, pp) = parent.map(|q| (g[q], p[q])).unwrap_or((Quat::IDENTITY, Vec3::ZERO));
-                local[i] = match canon_of[i] {
-                    Some(c) => {
-                        let world = match transfer {
-                            Transfer::Conjugate => src_rot[c.index()] * self.reference[c.index()],
-                            Transfer::DirectionOnly => {
-                                // Swing the reference so the bone points where the source's does.
-                                let (a, b) = direction_bone(c);
-                                let rest_dir = canon_rest[b.index()] - canon_rest[a.index()];
-                                let from = rest_dir.try_normalize();
-                                let to = (src_rot[c.index()] * rest_dir).try_normalize();
-                                let swing = match (from, to) {
-                                    (Some(f), Some(t)) => Quat::from_rotation_arc(f, t),
-                                    _ => Quat::IDENTITY,
-                                };
-                                swing * self.reference[c.index()]
-                            }
-                        };
-                        (pg.inverse() * world).normalize()
+        let mut ik = [(Vec3::ZERO, Vec3::ZERO); 2];
+        for pass in if hold { 0..2 } else { 1..2 } {
+            if pass == 1 && hold {
+                // The source's ankle height maps onto the character's: its rest ankle
+                // stands where the canonical rest ankle does, scaled.
+                let y_offsets: Vec<f32> = legs.iter().map(|leg| char_rest_pos[leg.foot].y - canon_rest[leg.canon_foot.index()].y * scale).collect();
+                (plant_target, shift_m) = hold_plan(&src_ankle, &free_foot, &y_offsets, src.fps);
+                for hips in free_hip.iter_mut() {
+                    for (h, shift) in hips.iter_mut().zip(&shift_m) {
+                        *h += *shift;
                     }
-                    None => j.rest_rotation,
-                };
-                g[i] = pg * local[i];
-                let t = if i == hips {
-                    pg.inverse() * (target - pp)
-                } else if let Some((jp, rel)) = detached[i] {
-                    pg.inverse() * (p[jp] + g[jp] * rel - pp)
-                } else {
-                    j.rest_offset
-                };
-                if track_of[i] != usize::MAX {
-                    tracks[track_of[i]].values.push(t);
                 }
-                p[i] = pp + pg * t;
+                drop_m = pelvis_drop(&legs, &free_hip, &plant_target, src.fps);
             }
-            rotations.extend_from_slice(&local);
+            rotations.clear();
+            for t in tracks.iter_mut() {
+                t.values.clear();
+            }
+            for f in 0..frames {
+                src.local_translations_into(f, &mut src_t);
+                motion::local_to_world(canon, src.frame_rotations(f), &src_t, &mut src_rot, &mut src_pos);
+                // Hips target: the character's rest hips moved as the source's hips move from
+                // theirs, scaled by the ratio of leg lengths, lowered where a held foot would
+                // otherwise be out of reach and shifted to keep held feet put.
+                let target = self.hips_rest + lift + (src_pos[Canon::Hips.index()] - canon_hips) * scale - Vec3::Y * drop_m[f] + shift_m[f];
+                for &i in &order {
+                    let j = &self.skeleton.joints[i];
+                    let parent = j.parent.filter(|&q| q < i);
+                    let (pg, pp) = parent.map(|q| (g[q], p[q])).unwrap_or((Quat::IDENTITY, Vec3::ZERO));
+                    local[i] = match canon_of[i] {
+                        Some(c) => {
+                            let world = match transfer {
+                                Transfer::Conjugate => src_rot[c.index()] * self.reference[c.index()],
+                                Transfer::DirectionOnly => {
+                                    // Swing the reference so the bone points where the source's does.
+                                    let (a, b) = direction_bone(c);
+                                    let rest_dir = canon_rest[b.index()] - canon_rest[a.index()];
+                                    let from = rest_dir.try_normalize();
+                                    let to = (src_rot[c.index()] * rest_dir).try_normalize();
+                                    let swing = match (from, to) {
+                                        (Some(f), Some(t)) => Quat::from_rotation_arc(f, t),
+                                        _ => Quat::IDENTITY,
+                                    };
+                                    swing * self.reference[c.index()]
+                                }
+                            };
+                            (pg.inverse() * world).normalize()
+                        }
+                        None => j.rest_rotation,
+                    };
+                    g[i] = pg * local[i];
+                    let t = if i == hips {
+                        pg.inverse() * (target - pp)
+                    } else if let Some((jp, rel)) = detached[i] {
+                        pg.inverse() * (p[jp] + g[jp] * rel - pp)
+                    } else {
+                        j.rest_offset
+                    };
+                    if track_of[i] != usize::MAX {
+                        tracks[track_of[i]].values.push(t);
+                    }
+                    p[i] = pp + pg * t;
+                    // Held foot: the thigh swings its knee, then the shin its ankle, onto the
+                    // two-bone solution (the foot keeps its own world rotation).
+                    let k = leg_of[i];
+                    if pass == 1 && k != usize::MAX {
+                        if let Some(goal) = plant_target[k][f] {
+                            let leg = &legs[k];
+                            let (bone, aim) = if i == leg.hip {
+                                let knee_now = g[i] * leg.thigh_local;
+                                ik[k] = motion::two_bone(p[i], goal, leg.thigh_m, leg.shin_m, knee_now);
+                                (knee_now, ik[k].0 - p[i])
+                            } else {
+                                (g[i] * leg.shin_local, ik[k].1 - p[i])
+                            };
+                            if let (Some(a), Some(b)) = (bone.try_normalize(), aim.try_normalize()) {
+                                g[i] = (Quat::from_rotation_arc(a, b) * g[i]).normalize();
+                                local[i] = (pg.inverse() * g[i]).normalize();
+                            }
+                        }
+                    }
+                }
+                if pass == 0 {
+                    for (k, leg) in legs.iter().enumerate() {
+                        free_foot[k].push(p[leg.foot]);
+                        free_hip[k].push(p[leg.hip]);
+                        src_ankle[k].push(src_pos[leg.canon_foot.index()] * scale);
+                    }
+                } else {
+                    rotations.extend_from_slice(&local);
+                }
+            }
         }
         Ok(Clip {
             name: format!("{} on {}", src.name, self.name),
@@ -383,6 +518,140 @@ impl Character {
             translations: tracks,
         })
     }
+}
+
+/// Choices of [`Character::retarget_options`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RetargetOptions {
+    pub transfer: Transfer,
+    /// Hold the character's foot where the source's foot is planted (two-bone IK, the
+    /// pelvis lowered to reach); off only as a control.
+    pub hold_feet: bool,
+}
+
+impl Default for RetargetOptions {
+    fn default() -> Self {
+        RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true }
+    }
+}
+
+/// One leg of the character for planted-foot IK.
+struct Leg {
+    canon_foot: Canon,
+    hip: usize,
+    knee: usize,
+    foot: usize,
+    thigh_m: f32,
+    shin_m: f32,
+    thigh_local: Vec3,
+    shin_local: Vec3,
+}
+
+/// A source ankle counts as planted within this height of its floor (spec §J's foot-contact
+/// band) ...
+const PLANT_HEIGHT_M: f32 = 0.05;
+/// ... and below this horizontal speed (at the character's size), cm/s.
+const PLANT_SPEED_CM_S: f32 = 30.0;
+/// Time over which a released foot is eased from where it was held back to its free path, s.
+const RELEASE_S: f32 = 0.15;
+
+/// The source ankle's planted frames: within [`PLANT_HEIGHT_M`] of its floor and slower than
+/// [`PLANT_SPEED_CM_S`] (`src` at the character's size).
+fn planted_frames(src: &[Vec3], fps: f32) -> Vec<bool> {
+    let frames = src.len();
+    let heights: Vec<f32> = src.iter().map(|p| p.y).collect();
+    let Some(floor) = motion::floor_height(&heights) else { return vec![false; frames] };
+    (0..frames)
+        .map(|f| {
+            let (a, b) = (f.saturating_sub(1), (f + 1).min(frames - 1));
+            let span = (b - a).max(1) as f32;
+            let speed_cm_s = Vec3::new(src[b].x - src[a].x, 0.0, src[b].z - src[a].z).length() * fps * 100.0 / span;
+            src[f].y - floor < PLANT_HEIGHT_M && speed_cm_s < PLANT_SPEED_CM_S
+        })
+        .collect()
+}
+
+/// Where each held ankle goes, and how far the whole body moves horizontally to keep it
+/// there. A foot is anchored where it lands (its free position moved by the body's shift so
+/// far); while feet are anchored the body shifts so they stay put (a rig with wider hips than
+/// the source's turning on one foot must move its body round it, as a person would); the
+/// shift is smoothed over ±[`RELEASE_S`] and the IK takes up what is left. Anchors sit at the
+/// source's ankle height plus `y_offsets[k]` (the character's ground); a released foot eases
+/// back onto its (shifted) free path over [`RELEASE_S`].
+fn hold_plan(src: &[Vec<Vec3>], free: &[Vec<Vec3>], y_offsets: &[f32], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3>) {
+    let legs = src.len();
+    let frames = src.iter().chain(free).map(|t| t.len()).min().unwrap_or(0);
+    let planted: Vec<Vec<bool>> = src.iter().map(|t| planted_frames(&t[..frames], fps)).collect();
+    let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
+    let mut anchor: Vec<Option<Vec3>> = vec![None; legs];
+    let mut shift = vec![Vec3::ZERO; frames];
+    let mut offset = Vec3::ZERO;
+    let mut anchors: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs];
+    for f in 0..frames {
+        let mut sum = Vec3::ZERO;
+        let mut count = 0;
+        for k in 0..legs {
+            if planted[k][f] {
+                let a = *anchor[k].get_or_insert(flat(free[k][f]) + offset);
+                sum += a - flat(free[k][f]);
+                count += 1;
+                anchors[k][f] = Some(a);
+            } else {
+                anchor[k] = None;
+            }
+        }
+        if count > 0 {
+            offset = sum / count as f32;
+        }
+        shift[f] = offset;
+    }
+    let w = ((RELEASE_S * fps).round() as usize).max(1);
+    let smooth: Vec<Vec3> = (0..frames)
+        .map(|f| {
+            let r = f.saturating_sub(w)..(f + w + 1).min(frames);
+            let len = r.len() as f32;
+            shift[r].iter().copied().sum::<Vec3>() / len
+        })
+        .collect();
+    let release = w;
+    let mut targets: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs];
+    for k in 0..legs {
+        let mut last: Option<(Vec3, usize)> = None;
+        for f in 0..frames {
+            if let Some(a) = anchors[k][f] {
+                let held = Vec3::new(a.x, src[k][f].y + y_offsets[k], a.z);
+                targets[k][f] = Some(held);
+                last = Some((held, f));
+            } else if let Some((held, end)) = last.filter(|(_, end)| f - end <= release) {
+                let s = (f - end) as f32 / (release + 1) as f32;
+                targets[k][f] = Some(held.lerp(free[k][f] + smooth[f], s * s * (3.0 - 2.0 * s)));
+            }
+        }
+    }
+    (targets, smooth)
+}
+
+/// How far the pelvis drops on each frame so every held foot is within reach of its hip
+/// (legs nearly straight at most), smoothed so the body does not bob: a running maximum then
+/// a running mean over ±[`RELEASE_S`].
+fn pelvis_drop(legs: &[Leg], hips: &[Vec<Vec3>], targets: &[Vec<Option<Vec3>>], fps: f32) -> Vec<f32> {
+    let frames = targets.first().map_or(0, |t| t.len());
+    let mut raw = vec![0.0f32; frames];
+    for (k, leg) in legs.iter().enumerate() {
+        let reach = (leg.thigh_m + leg.shin_m) * 0.995;
+        for f in 0..frames {
+            let Some(goal) = targets[k][f] else { continue };
+            let d = goal - hips[k][f];
+            let across = Vec3::new(d.x, 0.0, d.z).length();
+            // Lowering the hip by y brings it to |d + y·Y| = reach: y = −d.y − √(reach² − across²).
+            let y = if across < reach { -d.y - (reach * reach - across * across).sqrt() } else { -d.y };
+            raw[f] = raw[f].max(y.max(0.0));
+        }
+    }
+    let w = ((RELEASE_S * fps).round() as usize).max(1);
+    let window = |f: usize| f.saturating_sub(w)..(f + w + 1).min(frames);
+    let held: Vec<f32> = (0..frames).map(|f| raw[window(f)].iter().copied().fold(0.0, f32::max)).collect();
+    (0..frames).map(|f| held[window(f)].iter().sum::<f32>() / window(f).len() as f32).collect()
 }
 
 /// Compares a retargeted clip with its canonical source (same frame count and rate).
@@ -403,7 +672,7 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
     let feet = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
     let mut src_tracks: Vec<Vec<Vec3>> = (0..4).map(|_| Vec::with_capacity(frames)).collect();
     let mut out_tracks: Vec<Vec<Vec3>> = (0..4).map(|_| Vec::with_capacity(frames)).collect();
-    let scale = character.hip_height_m / hip_height(&HumanoidMap::from_skeleton(&canon), &canon_rest);
+    let scale = character.scale_from_canonical();
     for f in 0..frames {
         src.local_translations_into(f, &mut st);
         motion::local_to_world(&src.skeleton, src.frame_rotations(f), &st, &mut sr, &mut sp);
@@ -450,7 +719,7 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
         motion::mean_p95(&all)
     };
     // The source's skate is measured at the character's size (its positions scaled by the
-    // ratio of hip heights), so the two figures compare.
+    // ratio of leg lengths), so the two figures compare.
     let (source_skate_mean_cm_s, source_skate_p95_cm_s) = skate(&src_tracks, src.fps);
     let (skate_mean_cm_s, skate_p95_cm_s) = skate(&out_tracks, out.fps);
     RetargetReport {
@@ -478,13 +747,37 @@ mod tests {
         let map = HumanoidMap::from_skeleton(&sk);
         let ch = Character::build("body", sk.clone(), builtin_body(&sk), map.clone());
         assert!(ch.arm_swing_rad < 1e-3);
-        let out = ch.retarget(&demo, &map).unwrap();
+        // Feet free: the held feet would (rightly) differ from the source's sliding ones.
+        let out = ch.retarget_options(&demo, &map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
         for f in [0, 50, 120] {
             let (a, b) = (demo.world_positions(f), out.world_positions(f));
             for (x, y) in a.iter().zip(&b) {
                 assert!((*x - *y).length() < 1e-4, "frame {f}: {x} vs {y}");
             }
         }
+    }
+
+    #[test]
+    fn held_foot_stays_put_while_its_free_path_slides() {
+        // Left source ankle planted (on its floor, still) for frames 0..30, then lifted; the
+        // character's free left ankle slides 1 cm a frame; the right foot swings (fast).
+        let fps = 30.0;
+        let src_l: Vec<Vec3> = (0..60).map(|f| Vec3::new(0.2, if f < 30 { 0.08 } else { 0.3 }, 0.0)).collect();
+        let src_r: Vec<Vec3> = (0..60).map(|f| Vec3::new(-0.2 + 0.02 * f as f32, 0.3, 0.0)).collect();
+        let free_l: Vec<Vec3> = (0..60).map(|f| Vec3::new(0.5 + 0.01 * f as f32, 0.1, 0.0)).collect();
+        let free_r: Vec<Vec3> = (0..60).map(|_| Vec3::new(-0.5, 0.4, 0.0)).collect();
+        let (targets, shift) = hold_plan(&[src_l.clone(), src_r], &[free_l.clone(), free_r], &[0.02, 0.02], fps);
+        for f in 0..30 {
+            let t = targets[0][f].expect("held while planted");
+            assert!((t - Vec3::new(0.5, 0.1, 0.0)).length() < 1e-5, "frame {f}: {t}");
+            assert!(targets[1][f].is_none());
+        }
+        // The body moves back by the slide (before smoothing: exactly), so the leg can reach.
+        assert!((shift[15].x + 0.15).abs() < 0.02, "{}", shift[15]);
+        // Released: eased back onto the (shifted) free path, then free.
+        assert!(targets[0][31].is_some() && targets[0][59].is_none());
+        let step = (targets[0][31].unwrap() - targets[0][30].unwrap_or(targets[0][29].unwrap())).length();
+        assert!(step < 0.05, "no jump on release: {step}");
     }
 
     #[test]
@@ -500,7 +793,8 @@ mod tests {
         let map = HumanoidMap::from_skeleton(&sk);
         let ch = Character::build("a-pose", sk.clone(), builtin_body(&sk), map);
         assert!((ch.arm_swing_rad - 0.8).abs() < 1e-3, "{}", ch.arm_swing_rad);
-        let out = ch.retarget(&demo, &HumanoidMap::from_skeleton(&demo.skeleton)).unwrap();
+        // Feet free: held feet bend the legs away from the source's directions, as they should.
+        let out = ch.retarget_options(&demo, &HumanoidMap::from_skeleton(&demo.skeleton), &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
         for f in [0, 50, 120] {
             let (a, b) = (demo.world_positions(f), out.world_positions(f));
             for (s, c) in Canon::links() {
