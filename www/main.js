@@ -140,6 +140,9 @@ async function main() {
   // 1–2 s on this kind of machine).
   const choreographer = await loadMoves($("#status"));
   choreo = new ChoreoPanel($("#dance"), { choreographer, library, player, songPlayer, panel, messages });
+  choreo.onRecut = (id, bpm) => session.recut(id, bpm);
+  const danceSettings = () => ({ rho: Number($("#dance-rho").value), musicWeight: Number($("#dance-music").value) });
+  choreo.onChange = (view) => session.syncDance(choreographer, view, danceSettings());
   // Files opened while the moves were being made join the dance library now.
   for (const c of waitingForDance.splice(0)) choreo.addClip(c);
   const songPanel = new SongPanel($("#song"), {
@@ -162,6 +165,24 @@ async function main() {
         applyCorrection: (c) => songPanel.correct(c),
         tag: (id, tags) => textPanel.animator.tagClip(library, id, tags),
         animate: (text) => { $("#text-input").value = text; textPanel.run(); },
+        dance: (doc) => {
+          for (const s of doc.sources) {
+            for (const [clip, bpm] of s.cutTemposBpm || []) {
+              const id = [...session.clipRefs].find(([, r]) => r.source === s.id && r.clip === clip)?.[0];
+              if (id != null) { try { choreographer.recutClip(id, bpm); } catch (e) { messages.error(`Dance: ${e.message}`); } }
+            }
+          }
+          const st = doc.dance.settings;
+          $("#dance-rho").value = String(st.rho);
+          $("#dance-music").value = String(st.fill.musicWeight);
+          try { choreographer.setRho(st.rho); choreographer.setMusicWeight(st.fill.musicWeight); } catch (e) { messages.error(`Dance: ${e.message}`); }
+          session.restoreDance(doc, choreographer, (bar, seg, pinned) => {
+            try { choreographer.set(bar, seg); if (!pinned) choreographer.unpin(bar); } catch (e) { messages.error(`Dance: bar ${bar + 1}: ${e.message}`); }
+          });
+          choreo.refreshClips();
+          choreo.refresh();
+          choreo.renderDance();
+        },
       });
     }
     if (!restored || !restored.song) await loadDemoSong(songPanel, messages, session);

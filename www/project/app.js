@@ -14,9 +14,17 @@
 // and reload the page, so one rebuild path serves all of them. Save as writes `Project.save()`
 // through the File System Access API where the browser has it, a download otherwise.
 //
-// Not mirrored yet: the dance bars (pins, search rounds, generate) live in the Choreographer,
-// whose segments are numbered, not keyed by `MoveKey`; the Project's undo history holds the
-// mirrored edits, while the page's Undo button stays the Choreographer's.
+// The dance: after every change the Choreographer panel shows (Set, Unpin, Generate, undo/redo,
+// a shared link), each bar's state is compared with the Project's and the differences are
+// applied by stable key (`MoveKey`: the built-in move, or the source clip, its cut tempo and
+// the count the segment starts on, `Choreographer.firstCount`), so the Project holds exactly the
+// dance on screen (a generated bar is set, then unpinned: the Project never generates on its
+// own). A restore sets those keys back into the Choreographer. Re-cutting a clip and ρ and the
+// music weight are mirrored too.
+//
+// Not mirrored yet: a bar's open search (shown and liked candidates: they are the page
+// Choreographer's rounds, which the Project would have to replay). The Project's undo history
+// holds the mirrored edits; the page's Undo button stays the Choreographer's.
 import { ProjectStore, openStore } from "./store.js";
 import { saveBytes, pickFile, fileNameFor, isOdoriFile } from "./file.js";
 
@@ -113,6 +121,63 @@ export class ProjectSession {
     this.mirror("the tags", (p) => p.setTags(ref, tags));
   }
 
+  /** The stable key of Choreographer segment `seg` (undefined when it has none in the project). */
+  keyOf(choreographer, seg) {
+    const s = choreographer.segment(seg);
+    if (!s) return undefined;
+    if (s.builtin) return { kind: "builtin", move: s.builtin };
+    const cut = choreographer.cutClips().find((c) => c.clip.clip === s.clip);
+    const ref = cut && this.clipRefs.get(cut.id);
+    const first = choreographer.firstCount(seg);
+    if (!ref || first == null) return undefined;
+    return { kind: "cut", clip: ref, cutTempoBpm: cut.clip.tempoDetected ? null : cut.clip.tempoBpm, firstCount: first };
+  }
+
+  /** Makes the Project's dance the one the Choreographer holds (see the top of this file). */
+  syncDance(choreographer, view, settings) {
+    if (this.replaying || !this.project || !view.length) return;
+    const bars = this.project.doc().dance.bars;
+    if (bars.length !== view.length) return; // the Project's grid differs (mid-correction): next time
+    const same = (a, b) => JSON.stringify(a) === JSON.stringify(b);
+    const ops = [];
+    view.forEach((v, i) => {
+      const want = v.state.kind;
+      const key = want === "empty" ? null : this.keyOf(choreographer, v.state.segment);
+      if (want !== "empty" && !key) return;
+      const have = bars[i];
+      if (have.state === want && (want === "empty" || same(have.move, key))) return;
+      if (want === "empty") { ops.push((p) => p.clear(i)); return; }
+      ops.push((p) => { p.set(i, key); if (want === "generated") p.unpin(i); });
+    });
+    const st = this.project.doc().dance.settings;
+    if (settings && Math.abs(st.rho - settings.rho) > 1e-6) ops.push((p) => p.setRho(settings.rho));
+    if (settings && Math.abs(st.fill.musicWeight - settings.musicWeight) > 1e-6) ops.push((p) => p.setMusicWeight(settings.musicWeight));
+    if (ops.length) this.mirror("the dance", (p) => { for (const op of ops) op(p); });
+  }
+
+  /** A clip re-cut at `tempoBpm` (undefined: its detected tempo). */
+  recut(clipId, tempoBpm) {
+    const ref = this.clipRefs.get(clipId);
+    if (ref) this.mirror("the clip's new cut", (p) => p.setClipTempo(ref, tempoBpm));
+  }
+
+  /** Sets the restored dance into the Choreographer (`setState(bar, segment, pinned)`). */
+  restoreDance(doc, choreographer, setState) {
+    const byKey = new Map();
+    for (let i = 0; i < choreographer.segmentCount; i++) {
+      const k = this.keyOf(choreographer, i);
+      if (k) byKey.set(JSON.stringify(k), i);
+    }
+    let lost = 0;
+    doc.dance.bars.forEach((b, i) => {
+      if (b.state === "empty" || !b.move) return;
+      const seg = byKey.get(JSON.stringify(b.move));
+      if (seg == null) { lost++; return; }
+      setState(i, seg, b.state === "pinned");
+    });
+    if (lost) this.messages.error(`${lost} bar${lost > 1 ? "s" : ""} of the dance name a move this page no longer has: left empty.`);
+  }
+
   /** A library clip removed by the person: its file leaves the project when none of its clips stay. */
   clipRemoved(clipId) {
     const ref = this.clipRefs.get(clipId);
@@ -127,7 +192,7 @@ export class ProjectSession {
    * bytes, options)` → import report; `loadSong(fileName, bytes | undefined)` → the page's
    * `Song` once analysed; `tag(clipId, tags)`; `animate(text)`.
    */
-  async replay(doc, { importSource, loadSong, applyCorrection, tag, animate }) {
+  async replay(doc, { importSource, loadSong, applyCorrection, tag, animate, dance }) {
     this.replaying = true;
     try {
       for (const s of doc.sources) {
@@ -149,6 +214,7 @@ export class ProjectSession {
         if (id != null) tag(id, t.tags);
       }
       if (doc.texts.length) animate(doc.texts[doc.texts.length - 1]);
+      if (dance) dance(doc);
     } finally {
       this.replaying = false;
     }

@@ -28,7 +28,7 @@ export class SongPanel {
     $("#song-earlier").addEventListener("click", (ev) => this.correct({ nudgeSecs: ev.shiftKey ? -0.05 : -0.01 }));
     $("#song-later").addEventListener("click", (ev) => this.correct({ nudgeSecs: ev.shiftKey ? 0.05 : 0.01 }));
     $("#song-downbeat").addEventListener("click", () => this.correct({ firstDownbeatSecs: this.player.position() }));
-    $("#song-reset").addEventListener("click", () => { if (this.song) { this.setGrid(this.song.reset()); if (this.onCorrect) this.onCorrect(null); } });
+    $("#song-reset").addEventListener("click", () => { if (this.song) { const g = this.song.reset(); if (this.onCorrect) this.onCorrect(null); this.setGrid(g); } });
     $("#song-metronome").addEventListener("change", (ev) => { this.player.metronome = ev.target.checked; });
     $("#song-tap").addEventListener("click", () => this.tap());
     this.canvas.addEventListener("click", (ev) => {
@@ -71,8 +71,10 @@ export class SongPanel {
   correct(correction) {
     if (!this.song) return;
     try {
-      this.setGrid(this.song.correct(correction));
+      const grid = this.song.correct(correction);
+      // The project first, so the dance mirrored on the new grid finds the same bars there.
       if (this.onCorrect) this.onCorrect(correction);
+      this.setGrid(grid);
     } catch (e) {
       this.messages.error(`${this.name}: ${e.message}`);
       this.setGrid(this.grid);
