@@ -126,11 +126,11 @@ export class ProjectSession {
     const s = choreographer.segment(seg);
     if (!s) return undefined;
     if (s.builtin) return { kind: "builtin", move: s.builtin };
-    const cut = choreographer.cutClips().find((c) => c.clip.clip === s.clip);
+    const cut = choreographer.cutClips().find((c) => c.clip === s.clip);
     const ref = cut && this.clipRefs.get(cut.id);
     const first = choreographer.firstCount(seg);
     if (!ref || first == null) return undefined;
-    return { kind: "cut", clip: ref, cutTempoBpm: cut.clip.tempoDetected ? null : cut.clip.tempoBpm, firstCount: first };
+    return { kind: "cut", clip: ref, cutTempoBpm: cut.tempoDetected ? null : cut.tempoBpm, firstCount: first };
   }
 
   /** Makes the Project's dance the one the Choreographer holds (see the top of this file). */
