@@ -144,7 +144,7 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       assert.ok(made.keys.every(([s, m]) => s !== "empty" && m), "every bar of the project's dance has a move");
       assert.ok(made.keys.some(([, m]) => m.kind === "cut") || made.keys.some(([, m]) => m.kind === "builtin"));
       assert.deepEqual(made.sources.map((s) => s[0]), ["salsa_10.bvh", "RobotExpressive.glb"]);
-      assert.deepEqual(made.sources[0][2].fpsOverride, 60);
+      assert.equal(made.sources[0][2].fps_override, 60);
       assert.equal(made.corrections.length, 1, "the grid correction is in the project");
       assert.deepEqual(made.texts, ["サルサして、喜ぶ。"]);
       assert.equal(made.textRows[0], "salsa_10");

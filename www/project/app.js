@@ -136,6 +136,11 @@ export class ProjectSession {
   /** Makes the Project's dance the one the Choreographer holds (see the top of this file). */
   syncDance(choreographer, view, settings) {
     if (this.replaying || !this.project || !view.length) return;
+    // Whatever happens here, the panel that called goes on.
+    try { this.syncDanceNow(choreographer, view, settings); } catch (e) { this.messages.error(`Project: the dance is not kept in the project: ${e.message}`); }
+  }
+
+  syncDanceNow(choreographer, view, settings) {
     const bars = this.project.doc().dance.bars;
     if (bars.length !== view.length) return; // the Project's grid differs (mid-correction): next time
     const same = (a, b) => JSON.stringify(a) === JSON.stringify(b);
@@ -198,7 +203,9 @@ export class ProjectSession {
       for (const s of doc.sources) {
         const bytes = this.project.blob(s.blob);
         if (!bytes) { this.messages.error(`${s.fileName}: its bytes are missing from the project`); continue; }
-        const report = importSource(s.fileName, bytes, s.options && s.options.fpsOverride ? { fpsOverride: s.options.fpsOverride } : {});
+        // The core's ImportOptions, as the document keeps them (snake_case).
+        const o = s.options || {};
+        const report = importSource(s.fileName, bytes, o.fps_override ? { fpsOverride: o.fps_override } : {});
         if (report) this.mapClips(s.id, report);
       }
       if (doc.song) {
