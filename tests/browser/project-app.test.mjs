@@ -3,7 +3,8 @@
 // Search twice, Generate, tag a clip, animate a text → reload → everything is back (the dance's
 // joint positions equal at 5 times, the grid equal, the bars' states and keys equal, the tags,
 // the text table, the library; the Project's undo history back). Then the project's `.odori`
-// bytes (what Save as writes) are dropped on the app in a fresh browser profile → identical.
+// bytes (what Save as writes) are dropped on the app in a fresh browser profile → identical;
+// New project gives an empty one, and Recent brings the opened one back, identical.
 //
 // Everything goes through the page's own controls; `window.odori` is only read from.
 import { test, before, after } from "node:test";
@@ -182,6 +183,18 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       await waitReady(fresh.page);
       const opened = await snapshot(fresh.page);
       assertSame(made, opened, "opened in a fresh profile");
+      // New project: an empty one (the demo song only); the opened one stays in Recent and
+      // comes back from there.
+      const openedId = await fresh.page.evaluate(() => window.odori.project.store.projectId);
+      await Promise.all([fresh.page.waitForNavigation({ timeout: 60000 }), fresh.page.click("#project-new")]);
+      await waitReady(fresh.page);
+      const empty = await fresh.page.evaluate(() => ({ doc: window.odori.project.project.doc(), recent: [...document.querySelectorAll("#project-recent option")].map((o) => o.value) }));
+      assert.deepEqual(empty.doc.sources, [], "a new project has no files");
+      assert.ok(empty.doc.dance.bars.every((b) => b.state === "empty"), "a new project has no dance");
+      assert.ok(empty.recent.includes(openedId), `the opened project is in Recent: ${empty.recent}`);
+      await Promise.all([fresh.page.waitForNavigation({ timeout: 60000 }), fresh.page.selectOption("#project-recent", openedId)]);
+      await waitReady(fresh.page);
+      assertSame(made, await snapshot(fresh.page), "picked from Recent");
       console.log(`${backend}: .odori ${(b64.length * 3 / 4 / 1024).toFixed(0)} KiB; ${made.states.length} bars, ${made.library.length} library clips restored`);
     } catch (e) {
       console.log(logs.slice(-40).join("\n"));
