@@ -186,6 +186,7 @@ async function main() {
       });
     }
     if (!restored || !restored.song) await loadDemoSong(songPanel, messages, session);
+    performance.mark("odori:project-ready");
     document.body.dataset.project = "ready";
   });
   await session.bindButtons({ newButton: $("#project-new"), openButton: $("#project-open"), saveButton: $("#project-save"), recent: $("#project-recent") });

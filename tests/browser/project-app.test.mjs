@@ -152,12 +152,15 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       assert.ok(made.library.includes("salsa_10") && made.library.length >= 2, `imported clips in the library: ${made.library}`);
       assert.ok(made.canUndo);
       const undoneBefore = await undoProbe(page);
+      const cost = await page.evaluate(() => { const s = window.odori.project.store.stats; return { ms: s.mainThreadMs.slice().sort((a, b) => a - b), writes: s.writes, bytes: s.lastManifestBytes }; });
 
       // Reload: everything is back.
       await page.reload();
       await waitReady(page);
       const back = await snapshot(page);
       assertSame(made, back, "after a reload");
+      const restoreMs = await page.evaluate(() => performance.getEntriesByName("odori:project-ready")[0].startTime);
+      console.log(`${backend}: autosave main-thread cost per write in the app: median ${cost.ms[cost.ms.length >> 1].toFixed(2)} ms, max ${cost.ms[cost.ms.length - 1].toFixed(2)} ms over ${cost.writes} writes (manifest ${cost.bytes} bytes); reload → project rebuilt in ${restoreMs.toFixed(0)} ms`);
       assert.deepEqual(back.messages, [], "no error while restoring");
       assert.ok(back.canUndo, "the project's history is back");
       assert.equal(await undoProbe(page), undoneBefore, "undo gives the same project as before the reload");
