@@ -1,5 +1,5 @@
 // Odori app bootstrap: loads the wasm engine, opens the viewer, wires the UI modules.
-import init, { Library, Viewer, Song, DemoSong, TextAnimator, Choreographer, version } from "./pkg/odori.js";
+import init, { Library, Viewer, Song, DemoSong, TextAnimator, Choreographer, Project, version } from "./pkg/odori.js";
 import { LibraryPanel } from "./ui/library-panel.js";
 import { Player } from "./ui/player.js";
 import { FileLoader } from "./ui/files.js";
@@ -13,6 +13,7 @@ import { TextPanel } from "./ui/text-panel.js";
 import { ChoreoPanel } from "./ui/choreo-panel.js";
 import { ExportPanel } from "./ui/export-panel.js";
 import { installShare } from "./share.js";
+import { ProjectSession } from "./project/app.js";
 
 const t0 = performance.now();
 const $ = (sel) => document.querySelector(sel);
@@ -32,6 +33,10 @@ async function main() {
   const backend = params.get("backend") || "auto";
   bindPage(messages);
   fitCanvas(canvas);
+  // The project (what the person made, autosaved): read back from IndexedDB while the 3D
+  // view starts; every edit below is mirrored into it (www/project/app.js).
+  const session = new ProjectSession({ Project, messages, library });
+  const sessionReady = session.start();
   let viewer;
   try {
     viewer = await Viewer.create(canvas, { backend });
@@ -61,26 +66,33 @@ async function main() {
       if (choreo && choreo.danceId === id) choreo.danceId = null;
       if (textPanel && textPanel.clipId === id) textPanel.clipId = null;
       library.remove(id);
+      session.clipRemoved(id);
       if (player.clip === id) player.clear();
       messages.info(`${info.name} removed from the library${choreo && choreo.clips?.some((c) => c.id === id) ? " (its dance moves stay in the dance library)" : ""}`);
     },
   });
+  const imported = (report) => {
+    for (const c of report.clips) {
+      if (searchClient) searchClient.add(c.id); else waitingForSearch.push(c.id);
+      if (choreo) choreo.addClip(c); else waitingForDance.push(c);
+    }
+    panel.refresh();
+    const first = report.clips[0];
+    if (first) {
+      panel.select(first.id);
+    }
+  };
+  const restored = await sessionReady;
   const loader = new FileLoader({
     library,
     messages,
     status: $("#status"),
     fpsInput: $("#fps-override"),
-    onImported: (report) => {
-      for (const c of report.clips) {
-        if (searchClient) searchClient.add(c.id); else waitingForSearch.push(c.id);
-        if (choreo) choreo.addClip(c); else waitingForDance.push(c);
-      }
-      panel.refresh();
-      const first = report.clips[0];
-      if (first) {
-        panel.select(first.id);
-      }
+    onImported: (report, src) => {
+      if (src) session.addSource(src.fileName, src.bytes, src.options, report);
+      imported(report);
     },
+    onFiles: (files) => session.takeProjectFiles(files),
   });
   loader.bindInput($("#file-input"));
   const exporter = new ExportPanel({
@@ -121,22 +133,66 @@ async function main() {
   searchPanel.clipChanged(); // the clip was selected before the panel existed
   await nextTask();
   textPanel = new TextPanel($("#text"), { animator: new TextAnimator(), library, panel, messages, player });
+  textPanel.onTag = (id, tags) => session.setTags(id, tags);
+  textPanel.onText = (text) => session.setTexts([text]);
   await nextTask();
   // The 420 built-in moves, a slice per task (building them at once blocked the page for
   // 1–2 s on this kind of machine).
   const choreographer = await loadMoves($("#status"));
   choreo = new ChoreoPanel($("#dance"), { choreographer, library, player, songPlayer, panel, messages });
+  choreo.onRecut = (id, bpm) => session.recut(id, bpm);
+  const danceSettings = () => ({ rho: Number($("#dance-rho").value), musicWeight: Number($("#dance-music").value) });
+  choreo.onChange = (view) => session.syncDance(choreographer, view, danceSettings());
   // Files opened while the moves were being made join the dance library now.
   for (const c of waitingForDance.splice(0)) choreo.addClip(c);
-  const songPanel = new SongPanel($("#song"), { player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars, grid.beatTimesSecs) });
+  const songPanel = new SongPanel($("#song"), {
+    player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars, grid.beatTimesSecs),
+    onCorrect: (c) => (c ? session.correctGrid(c) : session.resetGrid()),
+  });
   songPanel.attachTransport(player);
   player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
-  bindSongInput($("#song-input"), songPanel, messages);
-  // The built-in demo song, analysed like any file (WebAudio envelope → core), in a task of its own.
-  const demoSong = nextTask().then(() => loadDemoSong(songPanel, messages));
+  bindSongInput($("#song-input"), songPanel, messages, session);
+  // The project's song (the built-in demo song for a new project, which then becomes its song),
+  // analysed like any file (WebAudio envelope → core), in a task of its own; then the rest of
+  // the project is rebuilt through the panels.
+  const demoSong = nextTask().then(async () => {
+    if (restored) {
+      await session.replay(restored, {
+        importSource: (fileName, bytes, options) => {
+          try { const r = library.importFile(fileName, bytes, options); imported(r); return r; } catch (e) { messages.error(e.message); return null; }
+        },
+        loadSong: (fileName, bytes) => (bytes ? loadSongBytes(fileName, bytes, songPanel, messages, null) : loadDemoSong(songPanel, messages, null)),
+        applyCorrection: (c) => songPanel.correct(c),
+        tag: (id, tags) => textPanel.animator.tagClip(library, id, tags),
+        animate: (text) => { $("#text-input").value = text; textPanel.run(); },
+        dance: (doc) => {
+          for (const s of doc.sources) {
+            for (const [clip, bpm] of s.cutTemposBpm || []) {
+              const id = [...session.clipRefs].find(([, r]) => r.source === s.id && r.clip === clip)?.[0];
+              if (id != null) { try { choreographer.recutClip(id, bpm); } catch (e) { messages.error(`Dance: ${e.message}`); } }
+            }
+          }
+          const st = doc.dance.settings;
+          $("#dance-rho").value = String(st.rho);
+          $("#dance-music").value = String(st.fill.musicWeight);
+          try { choreographer.setRho(st.rho); choreographer.setMusicWeight(st.fill.musicWeight); } catch (e) { messages.error(`Dance: ${e.message}`); }
+          session.restoreDance(doc, choreographer, (bar, seg, pinned) => {
+            try { choreographer.set(bar, seg); if (!pinned) choreographer.unpin(bar); } catch (e) { messages.error(`Dance: bar ${bar + 1}: ${e.message}`); }
+          });
+          choreo.refreshClips();
+          choreo.refresh();
+          choreo.renderDance();
+        },
+      });
+    }
+    if (!restored || !restored.song) await loadDemoSong(songPanel, messages, session);
+    performance.mark("odori:project-ready");
+    document.body.dataset.project = "ready";
+  });
+  await session.bindButtons({ newButton: $("#project-new"), openButton: $("#project-open"), saveButton: $("#project-save"), recent: $("#project-recent") });
   // Share by link: a button beside Generate; a #dance=… link is applied once the bars are in.
   const share = installShare({ choreo, messages, songReady: demoSong });
-  Object.assign(odori, { song: songPanel, search: searchPanel, searchClient, text: textPanel, choreo, share });
+  Object.assign(odori, { song: songPanel, search: searchPanel, searchClient, text: textPanel, choreo, share, project: session });
   document.body.dataset.ready = "1";
 }
 
@@ -197,9 +253,10 @@ function bindPage(messages) {
   });
 }
 
+/** The song's analysis and the envelope it was made from (the project keeps the envelope). */
 async function analyse(buffer) {
   const env = await rmsEnvelope(buffer);
-  return Song.fromEnvelope(env.hopSecs, env.bands);
+  return { song: Song.fromEnvelope(env.hopSecs, env.bands), env };
 }
 
 /** The demo song's samples, synthesised in a worker (the main thread stays free). */
@@ -224,38 +281,52 @@ function renderDemoSong(sampleRateHz) {
   });
 }
 
-async function loadDemoSong(songPanel, messages) {
+/** Loads the built-in demo song; with `session`, it becomes the project's song. True when loaded. */
+async function loadDemoSong(songPanel, messages, session) {
   try {
     const demo = await renderDemoSong(44100);
     const buffer = bufferFromSamples(demo.samples, demo.sampleRateHz);
-    songPanel.load(await analyse(buffer), "Demo song (built-in)", buffer);
+    const { song, env } = await analyse(buffer);
+    songPanel.load(song, DEMO_SONG_NAME, buffer);
+    if (session) session.setSong(DEMO_SONG_NAME, undefined, env);
     document.body.dataset.song = "demo";
+    return true;
   } catch (e) {
     messages.error(`The demo song could not be made: ${e.message}`);
+    return false;
   }
 }
 
-function bindSongInput(input, songPanel, messages) {
+const DEMO_SONG_NAME = "Demo song (built-in)";
+
+/** Decodes and analyses a song file's bytes; with `session`, it becomes the project's song. */
+async function loadSongBytes(fileName, bytes, songPanel, messages, session) {
+  const status = document.querySelector("#status");
+  try {
+    status.textContent = `Decoding ${fileName}…`;
+    const buffer = await decodeSong(bytes, fileName);
+    status.textContent = `Analysing ${fileName}…`;
+    const { song, env } = await analyse(buffer);
+    songPanel.load(song, fileName, buffer);
+    if (session) session.setSong(fileName, bytes, env);
+    messages.info(`${fileName}: ${song.grid().bars.length} bars at ${song.grid().bpm.toFixed(1)} BPM`);
+    document.body.dataset.song = fileName;
+    return true;
+  } catch (e) {
+    const text = e.message.startsWith(fileName) ? e.message : `${fileName}: ${e.message}`;
+    messages.error(text);
+    return false;
+  } finally {
+    status.textContent = "";
+  }
+}
+
+function bindSongInput(input, songPanel, messages, session) {
   input.addEventListener("change", async () => {
     const file = input.files[0];
     input.value = "";
     if (!file) return;
-    const status = document.querySelector("#status");
-    try {
-      status.textContent = `Decoding ${file.name}…`;
-      const bytes = new Uint8Array(await file.arrayBuffer());
-      const buffer = await decodeSong(bytes, file.name);
-      status.textContent = `Analysing ${file.name}…`;
-      const song = await analyse(buffer);
-      songPanel.load(song, file.name, buffer);
-      messages.info(`${file.name}: ${song.grid().bars.length} bars at ${song.grid().bpm.toFixed(1)} BPM`);
-      document.body.dataset.song = file.name;
-    } catch (e) {
-      const text = e.message.startsWith(file.name) ? e.message : `${file.name}: ${e.message}`;
-      messages.error(text);
-    } finally {
-      status.textContent = "";
-    }
+    await loadSongBytes(file.name, new Uint8Array(await file.arrayBuffer()), songPanel, messages, session);
   });
 }
 

@@ -1,12 +1,13 @@
 // Offline: the app keeps working with no network. Network first (so a new build is always
 // picked up when online), the cache when the network fails. Everything the app needs to
 // start is cached at install; anything else it fetches is cached as it goes.
-const CACHE = "odori-v1";
+const CACHE = "odori-v2";
 const SHELL = [
   "./", "./index.html", "./style.css", "./favicon.svg", "./main.js", "./search-worker.js", "./demo-song-worker.js",
   "./ui/messages.js", "./ui/library-panel.js", "./ui/player.js", "./ui/files.js", "./ui/song-panel.js",
   "./ui/search-panel.js", "./ui/text-panel.js", "./ui/choreo-panel.js", "./ui/export-panel.js",
   "./audio/rms.js", "./audio/song-player.js", "./search/client.js", "./share.js",
+  "./project/store.js", "./project/file.js", "./project/app.js", "./vendor/idb.js",
   "./pkg/odori.js", "./pkg/odori_bg.wasm",
 ];
 

@@ -5,8 +5,8 @@
 // is killed is there after a restart; Save as bytes open identical in a fresh profile; a
 // simulated quota error is reported and nothing is lost; a second tab is told and never writes.
 //
-// The page drives the Project handle and www/project/store.js directly (the app's panels do
-// not use the Project handle yet).
+// The page drives the Project handle and www/project/store.js directly, without the app's
+// panels (the app itself is tested in project-app.test.mjs).
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { spawn } from "node:child_process";

@@ -162,6 +162,7 @@ export class ChoreoPanel {
     let r;
     try {
       r = this.choreographer.recutClip(id, bpm);
+      if (this.onRecut) this.onRecut(id, bpm);
     } catch (e) {
       this.messages.error(`Dance: ${e.message}`);
       return;
@@ -197,6 +198,7 @@ export class ChoreoPanel {
   refresh() {
     const view = this.choreographer.view();
     this.view = view;
+    if (this.onChange) this.onChange(view);
     const total = view.length ? view[view.length - 1].bar.endSecs : 1;
     // Spec §J readout on the bar row: where the dance is weak (off the beat, or a rough join).
     let q = null;

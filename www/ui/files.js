@@ -6,8 +6,8 @@
 const ACCEPT = /\.(bvh|glb|gltf)$/i;
 
 export class FileLoader {
-  constructor({ library, messages, status, fpsInput, onImported }) {
-    Object.assign(this, { library, messages, status, fpsInput, onImported });
+  constructor({ library, messages, status, fpsInput, onImported, onFiles }) {
+    Object.assign(this, { library, messages, status, fpsInput, onImported, onFiles });
     this.queue = Promise.resolve();
   }
 
@@ -32,6 +32,7 @@ export class FileLoader {
   }
 
   openAll(files) {
+    if (this.onFiles) files = this.onFiles(files);
     const fps = Number(this.fpsInput.value);
     const options = { fpsOverride: fps > 0 ? fps : undefined };
     if (files.length) this.fpsInput.value = "";
@@ -86,7 +87,7 @@ export class FileLoader {
       const how = options.fpsOverride ? ` (played at ${options.fpsOverride} fps, as stated for this import)` : "";
       this.messages.info(`${file.name}: ${n} clip${n === 1 ? "" : "s"} added${how}`);
       this.status.textContent = "";
-      this.onImported(report);
+      this.onImported(report, { fileName: file.name, bytes, options });
       return report;
     } catch (e) {
       this.status.textContent = "";

@@ -5,7 +5,8 @@
 const TAP_GAP_SECS = 2.5;
 
 export class SongPanel {
-  constructor(root, { player, onGrid, messages }) {
+  constructor(root, { player, onGrid, messages, onCorrect }) {
+    this.onCorrect = onCorrect; // (correction | null for a reset) after one the song took
     this.root = root;
     this.player = player;        // SongPlayer
     this.onGrid = onGrid;        // called with the new grid after every change
@@ -27,7 +28,7 @@ export class SongPanel {
     $("#song-earlier").addEventListener("click", (ev) => this.correct({ nudgeSecs: ev.shiftKey ? -0.05 : -0.01 }));
     $("#song-later").addEventListener("click", (ev) => this.correct({ nudgeSecs: ev.shiftKey ? 0.05 : 0.01 }));
     $("#song-downbeat").addEventListener("click", () => this.correct({ firstDownbeatSecs: this.player.position() }));
-    $("#song-reset").addEventListener("click", () => { if (this.song) this.setGrid(this.song.reset()); });
+    $("#song-reset").addEventListener("click", () => { if (this.song) { const g = this.song.reset(); if (this.onCorrect) this.onCorrect(null); this.setGrid(g); } });
     $("#song-metronome").addEventListener("change", (ev) => { this.player.metronome = ev.target.checked; });
     $("#song-tap").addEventListener("click", () => this.tap());
     this.canvas.addEventListener("click", (ev) => {
@@ -70,7 +71,10 @@ export class SongPanel {
   correct(correction) {
     if (!this.song) return;
     try {
-      this.setGrid(this.song.correct(correction));
+      const grid = this.song.correct(correction);
+      // The project first, so the dance mirrored on the new grid finds the same bars there.
+      if (this.onCorrect) this.onCorrect(correction);
+      this.setGrid(grid);
     } catch (e) {
       this.messages.error(`${this.name}: ${e.message}`);
       this.setGrid(this.grid);

@@ -32,6 +32,7 @@ export class TextPanel {
     const info = this.library.clip(id);
     try {
       this.animator.tagClip(this.library, id, tags);
+      if (this.onTag) this.onTag(id, tags);
       this.messages.info(`${info.name} can now be called by: ${tags.join(", ")}`);
       this.$("#text-tags").value = "";
     } catch (e) { this.messages.error(`Text: ${info.name}: ${e.message}`); }
@@ -41,6 +42,7 @@ export class TextPanel {
     const text = this.$("#text-input").value;
     try {
       this.show(this.animator.animate(this.library, text, this.clipId ?? undefined));
+      if (this.onText) this.onText(text);
     } catch (e) {
       this.messages.error(`Text: ${e.message}`);
       this.root.dataset.rows = "0";

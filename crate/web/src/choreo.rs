@@ -195,6 +195,20 @@ impl Choreographer {
         index_arg("segment", index).ok().and_then(|i| self.lib.segment(i)).map(to_js).unwrap_or(JsValue::UNDEFINED)
     }
 
+    /// For a segment cut from an imported clip, the count (0-based, among the clip's counts) it
+    /// starts on; undefined for a built-in move or an unknown segment. With the clip and its cut
+    /// tempo it makes the segment's stable key (`MoveKey`), how the page mirrors its dance into
+    /// a `Project` (the same rule as the project's own library).
+    #[wasm_bindgen(js_name = firstCount)]
+    pub fn first_count(&self, segment: usize) -> Option<u32> {
+        let seg = self.lib.segment(segment)?;
+        if seg.builtin.is_some() {
+            return None;
+        }
+        let beats = &self.lib.clips().get(seg.clip)?.beat_frames;
+        beats.iter().position(|b| b.round().max(0.0) == seg.start_frame).map(|i| i as u32)
+    }
+
     /// Each bar: `{ bar, state: { kind, segment? }, tau, candidates, liked, shownCount, rounds }`.
     #[wasm_bindgen(unchecked_return_type = "BarView[]")]
     pub fn view(&self) -> JsValue {
