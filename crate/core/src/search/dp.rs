@@ -97,7 +97,7 @@ pub(crate) struct Engine {
     c0: Col,
     d_prev: Vec<f32>,
     d_cur: Vec<f32>,
-    buf: Vec<(u32, f32)>,
+    tmp: Vec<(f32, u32)>,
     /// Column the segment started at (no path starts before it).
     from: usize,
     /// Frame distances started.
@@ -113,7 +113,7 @@ impl Engine {
             c0: Col::default(),
             d_prev: vec![UNSET; rows],
             d_cur: vec![UNSET; rows],
-            buf: Vec::new(),
+            tmp: Vec::new(),
             from: 0,
             distances: 0,
         }
@@ -226,28 +226,40 @@ impl Engine {
                 self.c0.off.push(self.c0.ent.len() as u32);
                 continue;
             }
-            self.buf.clear();
-            for &(c, s) in diag {
-                self.buf.push((s, c + 2.0 * d));
-            }
-            for &(c, s) in hor {
-                self.buf.push((s, c + (2.0 * dh + d)));
-            }
-            for &(c, s) in ver {
-                self.buf.push((s, c + (2.0 * dv + d)));
-            }
-            // Sort by start, then cost; keep an entry only if it is cheaper than every entry
-            // starting no later (the Pareto front).
-            self.buf.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            // Merge the three fronts (each sorted by start) by start, the cheapest first on
+            // equal starts, keeping an entry only if it is cheaper than every entry starting
+            // no later (the Pareto front).
+            let (mut a, mut b, mut v) = (0usize, 0usize, 0usize);
             let mut best = f32::INFINITY;
-            for &(s, c) in &self.buf {
+            loop {
+                let sa = diag.get(a).map_or(u32::MAX, |e| e.1);
+                let sb = hor.get(b).map_or(u32::MAX, |e| e.1);
+                let sv = ver.get(v).map_or(u32::MAX, |e| e.1);
+                let s = sa.min(sb).min(sv);
+                if s == u32::MAX {
+                    break;
+                }
+                let mut c = f32::INFINITY;
+                if sa == s {
+                    c = c.min(diag[a].0 + 2.0 * d);
+                    a += 1;
+                }
+                if sb == s {
+                    c = c.min(hor[b].0 + (2.0 * dh + d));
+                    b += 1;
+                }
+                if sv == s {
+                    c = c.min(ver[v].0 + (2.0 * dv + d));
+                    v += 1;
+                }
                 if c < best {
                     best = c;
                     if prune.is_none_or(|p| p.excess(c, s as usize, i, j) <= 0.0) {
-                        self.c0.ent.push((c, s));
+                        self.tmp.push((c, s));
                     }
                 }
             }
+            hull(&mut self.tmp, prune.map_or(f32::INFINITY, |p| p.tau), &mut self.c0.ent);
             self.c0.off.push(self.c0.ent.len() as u32);
         }
         if hi == rows {
@@ -269,6 +281,53 @@ impl Engine {
         }
         best
     }
+}
+
+/// Keeps, of a cell's Pareto front (`front`, by start ascending: cost falls as the start gets
+/// later), only the entries that can be the best for some completion, appending them to `out`
+/// (by start ascending) and clearing `front`.
+///
+/// Every entry of a cell shares the same completions: remaining weight w ≥ 0 and cost r ≥ 0.
+/// With W the weight used so far, an entry's final distance is `(c + r) / (W + w)`, the slope
+/// from (−w, −r) to the point (W, c); the least slope from a point below and left of every
+/// entry is reached on the lower convex hull of the points, so an entry strictly above the
+/// hull is never the best (a relative margin keeps near-collinear ones, so rounding never
+/// drops a tie). And with τ finite, of two entries the earlier-starting one (A) is useless
+/// when `(c_A − c_B) / (W_A − W_B) > τ`: A's distance is a weighted mean of B's and that
+/// slope, so it is worse than B's or above τ; on the hull these slopes grow with W, so the
+/// hull is cut at the first edge steeper than τ.
+fn hull(front: &mut Vec<(f32, u32)>, tau: f32, out: &mut Vec<(f32, u32)>) {
+    if front.len() <= 1 {
+        out.append(front);
+        return;
+    }
+    // Points by W ascending = start descending: x = −start, y = cost (both rising).
+    let base = out.len();
+    for &(c, s) in front.iter().rev() {
+        let (x, y) = (-(s as f64), c as f64);
+        if let Some(&(c1, s1)) = out.get(base..).and_then(|o| o.last()) {
+            // The τ rule against the last kept (later-starting) entry, with a margin.
+            let (x1, y1) = (-(s1 as f64), c1 as f64);
+            if (y - y1) > (tau as f64) * (x - x1) * (1.0 + 1e-4) + 1e-6 {
+                continue;
+            }
+        }
+        while out.len() >= base + 2 {
+            let (c2, s2) = out[out.len() - 1];
+            let (c1, s1) = out[out.len() - 2];
+            let (x1, y1, x2, y2) = (-(s1 as f64), c1 as f64, -(s2 as f64), c2 as f64);
+            // Is point 2 strictly above the chord from 1 to the new point?
+            let above = (y2 - y1) * (x - x1) - (y - y1) * (x2 - x1);
+            if above > 1e-5 * (y.abs() + 1e-6) * (x - x1) {
+                out.pop();
+            } else {
+                break;
+            }
+        }
+        out.push((c, s));
+    }
+    out[base..].reverse();
+    front.clear();
 }
 
 /// A frame distance needed exactly: the cached value, or computed now (an abandoned one is
