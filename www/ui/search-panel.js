@@ -219,7 +219,7 @@ export function shortfallText(s) {
   const head = `. Fewer than the ${s.asked} asked: the library has ${n(s.admissibleEnds)} admissible match ends`;
   if (s.threshold != null) {
     const over = s.admissibleEnds - s.endsWithinThreshold;
-    return `${head}; ${n(over)} are over the threshold ${s.threshold}; of the ${n(s.endsWithinThreshold)} within it, those not shown overlap a shown match by more than half`;
+    return `${head}; ${n(over)} are over the threshold ${+s.threshold.toPrecision(6)}; of the ${n(s.endsWithinThreshold)} within it, those not shown overlap a shown match by more than half`;
   }
   return `${head}, and every one not shown overlaps a shown match by more than half (the library is short for this query)`;
 }
