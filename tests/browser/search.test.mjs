@@ -56,6 +56,28 @@ test("search: query by dragging, results, overlay of two figures, plot", async (
     });
     assert.ok(plotColoured.red > 50 && plotColoured.green > 50 && plotColoured.blue > 50, JSON.stringify(plotColoured));
     await page.screenshot({ path: join(artifacts, "search-page.png") });
+    // The library is split across workers and merged exactly: the same answer as one index in
+    // the page, and the plain DP agrees.
+    const cmp = await page.evaluate(async (query) => {
+      const { SearchIndex } = await import("./pkg/odori.js");
+      const { library, searchClient } = window.odori;
+      const one = new SearchIndex();
+      for (const id of searchClient.features.keys()) one.addFromLibrary(library, id);
+      const params = { maxResults: 12 };
+      const key = (o) => o.matches.map((m) => `${m.clipId}:${m.startFrame}-${m.endFrame}:${m.distance.toFixed(5)}`).join(" ");
+      const merged = await searchClient.search(query, params);
+      return { workers: searchClient.workers.filter((w) => w.frames > 0).length, merged: key(merged), one: key(one.search(query, params)), plain: key(one.searchPlain(query, params)) };
+    }, { clipId: await page.evaluate(() => window.odori.search.range.clipId), startFrame: Math.round(q.startSecs * 60), endFrame: Math.round(q.endSecs * 60) + 1 });
+    assert.ok(cmp.workers >= 1, JSON.stringify(cmp));
+    assert.equal(cmp.merged, cmp.one, "merged workers vs one index");
+    assert.equal(cmp.one, cmp.plain, "fast vs plain");
+    // Fewer than asked under a tight threshold: the summary says how many exist and why.
+    await page.fill("#search-threshold", "0.001");
+    await page.click("#search-go");
+    await page.waitForFunction(() => ["done", "error"].includes(document.querySelector("#search").dataset.state) && /Fewer than/.test(document.querySelector("#search-summary").textContent), null, { timeout: 120000 });
+    const summary = await page.textContent("#search-summary");
+    assert.match(summary, /admissible match ends/, summary);
+    assert.match(summary, /over the threshold 0.001/, summary);
     assert.deepEqual(logs.filter((l) => l.startsWith("[pageerror]")), []);
   } finally {
     await browser.close();

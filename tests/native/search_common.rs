@@ -59,67 +59,94 @@ pub fn real_index() -> FeatureIndex {
 /// A reference match: (clip, start, end inclusive, distance).
 pub type RefMatch = (usize, usize, usize, f32);
 
-/// Spec §C from the text: g(i,j) = min{g(i−1,j)+d, g(i−1,j−1)+2d, g(i,j−1)+d} (first wins ties),
-/// g(1,j) = d(1,j), G carried along; score g/(I + span) with span in [ceil(I·lo), floor(I·hi)];
-/// candidates best first; each taken one's start re-chosen for its end by brute force (a DP
-/// from every admissible start up to its own on its own, the one with the least score wins,
-/// ties to the later start); kept if it overlaps no kept match; the kept ones sorted by their
-/// scores.
+/// Brute force, from the text of spec §C: for every start s of every clip, the DP run from
+/// (0, s) alone with the symmetric slope-constrained steps (P = 1) — start cell 2·d, diagonal
+/// + 2·d(i, j), through (i, j−1): + (2·d(i, j−1) + d(i, j)), through (i−1, j): + (2·d(i−1, j) +
+/// d(i, j)) — gives the least cost C(s, e) of every (s, e) pair on its own; an end's match is
+/// the start with the least C(s, e) / (I + span) (ties to the earlier start); ends are taken
+/// best first by (distance, clip, end), each unless it shares more than half of the shorter
+/// span with one already taken in its clip, up to maxResults and within the threshold.
 /// Full matrices, nothing clever.
 pub fn reference_search(index: &FeatureIndex, query: &ClipFeatures, params: &SearchParams) -> Vec<RefMatch> {
-    let q = &query.features(params.origin).data;
-    let rows = q.len() / FRAME_FLOATS;
-    let min_span = ((rows as f32 * params.min_span_ratio).ceil() as usize).max(1);
-    let max_span = ((rows as f32 * params.max_span_ratio).floor() as usize).max(min_span);
+    let mut ends = reference_ends(index, query, params);
     let threshold = params.threshold.unwrap_or(f32::INFINITY);
-    let d = |a: &[f32], b: &[f32]| -> f32 { ref_distance(params, a, b) };
-    let mut cands: Vec<RefMatch> = Vec::new();
-    for (ci, clip) in index.clips.iter().enumerate() {
-        let t = &clip.features(params.origin).data;
-        let cols = t.len() / FRAME_FLOATS;
-        let mut g = vec![vec![0f32; cols]; rows];
-        let mut gs = vec![vec![0usize; cols]; rows];
-        for j in 0..cols {
-            let tj = &t[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS];
-            for i in 0..rows {
-                let dd = d(&q[i * FRAME_FLOATS..(i + 1) * FRAME_FLOATS], tj);
-                if i == 0 {
-                    g[0][j] = dd;
-                    gs[0][j] = j;
-                    continue;
-                }
-                let mut best = (g[i - 1][j] + dd, gs[i - 1][j]);
-                if j > 0 {
-                    for cand in [(g[i - 1][j - 1] + 2.0 * dd, gs[i - 1][j - 1]), (g[i][j - 1] + dd, gs[i][j - 1])] {
-                        if cand.0 < best.0 {
-                            best = cand;
-                        }
-                    }
-                }
-                g[i][j] = best.0;
-                gs[i][j] = best.1;
-            }
-            let start = gs[rows - 1][j];
-            let span = j - start + 1;
-            let score = g[rows - 1][j] / (rows + span) as f32;
-            if span >= min_span && span <= max_span && score <= threshold {
-                cands.push((ci, start, j, score));
-            }
-        }
-    }
-    cands.sort_by(|a, b| a.3.total_cmp(&b.3).then(a.0.cmp(&b.0)).then(a.2.cmp(&b.2)));
+    ends.retain(|e| e.3 <= threshold);
+    ends.sort_by(|a, b| a.3.total_cmp(&b.3).then(a.0.cmp(&b.0)).then(a.2.cmp(&b.2)));
     let mut out: Vec<RefMatch> = Vec::new();
-    for c in cands {
+    for c in ends {
         if out.len() >= params.max_results {
             break;
         }
-        let t = &index.clips[c.0].features(params.origin).data;
-        let m = best_start(params, q, t, c, min_span, max_span);
-        if out.iter().all(|o| o.0 != m.0 || m.2 < o.1 || m.1 > o.2) {
-            out.push(m);
+        if out.iter().all(|o| !ref_conflict(o, &c)) {
+            out.push(c);
         }
     }
-    out.sort_by(|a, b| a.3.total_cmp(&b.3).then(a.0.cmp(&b.0)).then(a.2.cmp(&b.2)));
+    out
+}
+
+/// Whether two spans of one clip share more than half of the shorter one's frames.
+pub fn ref_conflict(a: &RefMatch, b: &RefMatch) -> bool {
+    if a.0 != b.0 {
+        return false;
+    }
+    let shared = (a.2.min(b.2) + 1).saturating_sub(a.1.max(b.1));
+    let shorter = (a.2 - a.1 + 1).min(b.2 - b.1 + 1);
+    2 * shared > shorter
+}
+
+/// Every end of every clip with its match (least distance over every start), by brute force.
+pub fn reference_ends(index: &FeatureIndex, query: &ClipFeatures, params: &SearchParams) -> Vec<RefMatch> {
+    let q = &query.features(params.origin).data;
+    let rows = q.len() / FRAME_FLOATS;
+    let max_span = 2 * (rows - 1) + 1;
+    let mut out = Vec::new();
+    for (ci, clip) in index.clips.iter().enumerate() {
+        let t = &clip.features(params.origin).data;
+        let cols = t.len() / FRAME_FLOATS;
+        let mut best: Vec<Option<(f32, usize, f32)>> = vec![None; cols];
+        // Every frame distance once (the starts share them).
+        let dm: Vec<Vec<f32>> = (0..rows)
+            .map(|i| (0..cols).map(|j| ref_distance(params, &q[i * FRAME_FLOATS..(i + 1) * FRAME_FLOATS], &t[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS])).collect())
+            .collect();
+        for s in 0..cols {
+            let n = max_span.min(cols - s);
+            let d: Vec<&[f32]> = dm.iter().map(|row| &row[s..s + n]).collect();
+            let mut g = vec![vec![f32::INFINITY; n]; rows];
+            g[0][0] = 2.0 * d[0][0];
+            for k in 0..n {
+                for i in 1..rows {
+                    let mut v = f32::INFINITY;
+                    if k >= 1 {
+                        v = v.min(g[i - 1][k - 1] + 2.0 * d[i][k]);
+                    }
+                    if k >= 2 {
+                        v = v.min(g[i - 1][k - 2] + (2.0 * d[i][k - 1] + d[i][k]));
+                    }
+                    if k >= 1 && i >= 2 {
+                        v = v.min(g[i - 2][k - 1] + (2.0 * d[i - 1][k] + d[i][k]));
+                    }
+                    g[i][k] = v;
+                }
+            }
+            for k in 0..n {
+                let c = g[rows - 1][k];
+                if !c.is_finite() {
+                    continue;
+                }
+                let score = c / (rows + k + 1) as f32;
+                let e = s + k;
+                // Starts are visited in increasing order: strict < keeps the earlier on ties.
+                if best[e].is_none_or(|b| score < b.0) {
+                    best[e] = Some((score, s, c));
+                }
+            }
+        }
+        for (e, b) in best.iter().enumerate() {
+            if let Some((score, s, _)) = b {
+                out.push((ci, *s, e, *score));
+            }
+        }
+    }
     out
 }
 
@@ -138,45 +165,6 @@ pub fn ref_distance(params: &SearchParams, a: &[f32], b: &[f32]) -> f32 {
         s += (r[0] + r[2]) + (r[1] + r[3]);
     }
     s
-}
-
-/// For candidate `(clip, start, end, _)`: the forward DP run from each admissible start
-/// `s ≤ start` alone (row 0 entered only at column s), the one with the least `g / (I + span)`.
-fn best_start(params: &SearchParams, q: &[f32], t: &[f32], cand: RefMatch, min_span: usize, max_span: usize) -> RefMatch {
-    let (clip, latest, end) = (cand.0, cand.1, cand.2);
-    let rows = q.len() / FRAME_FLOATS;
-    let lo = (end + 1).saturating_sub(max_span);
-    let dm: Vec<Vec<f32>> = (0..rows)
-        .map(|i| (lo..=end).map(|j| ref_distance(params, &q[i * FRAME_FLOATS..(i + 1) * FRAME_FLOATS], &t[j * FRAME_FLOATS..(j + 1) * FRAME_FLOATS])).collect())
-        .collect();
-    let mut best: RefMatch = (clip, end, end, f32::INFINITY);
-    for s in (lo..=end).rev() {
-        let span = end + 1 - s;
-        if span < min_span || span > max_span || s > latest {
-            continue;
-        }
-        let (c0, n) = (s - lo, end + 1 - s);
-        let mut g = vec![vec![f32::INFINITY; n]; rows];
-        for c in 0..n {
-            for i in 0..rows {
-                let dd = dm[i][c0 + c];
-                g[i][c] = if i == 0 {
-                    if c == 0 { dd } else { f32::INFINITY }
-                } else {
-                    let mut v = g[i - 1][c] + dd;
-                    if c > 0 {
-                        v = v.min(g[i - 1][c - 1] + 2.0 * dd).min(g[i][c - 1] + dd);
-                    }
-                    v
-                };
-            }
-        }
-        let score = g[rows - 1][n - 1] / (rows + span) as f32;
-        if score < best.3 {
-            best = (clip, s, end, score);
-        }
-    }
-    best
 }
 
 /// Left/right mirror of normalised hip-origin features: swap the sides, negate the lateral axis

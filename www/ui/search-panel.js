@@ -138,7 +138,7 @@ export class SearchPanel {
     });
     this.$("#search-results tbody").replaceChildren(...rows);
     const skipped = out.skipped.length ? `; skipped: ${out.skipped.map((s) => `${s.name} (${s.reason})`).join(", ")}` : "";
-    this.$("#search-summary").textContent = `${out.matches.length} ${out.matches.length === 1 ? "match" : "matches"} in ${ms.toFixed(0)} ms over ${out.stats.framesSearched} frames${skipped}`;
+    this.$("#search-summary").textContent = `${out.matches.length} ${out.matches.length === 1 ? "match" : "matches"} in ${ms.toFixed(0)} ms over ${out.stats.framesSearched} frames${skipped}${shortfallText(out.shortfall)}`;
   }
 
   hipsAt(id, frame) {
@@ -212,4 +212,17 @@ export class SearchPanel {
     }
     this.root.dataset.plotted = joint;
   }
+}
+
+/** Why fewer matches than asked are shown (spec §C: every admissible end has a match; the rest
+ * are over the threshold or overlap a shown match by more than half). */
+export function shortfallText(s) {
+  if (!s) return "";
+  const n = (x) => x.toLocaleString("en");
+  const head = `. Fewer than the ${s.asked} asked: the library has ${n(s.admissibleEnds)} admissible match ends`;
+  if (s.threshold != null) {
+    const over = s.admissibleEnds - s.endsWithinThreshold;
+    return `${head}; ${n(over)} are over the threshold ${+s.threshold.toPrecision(6)}; of the ${n(s.endsWithinThreshold)} within it, those not shown overlap a shown match by more than half`;
+  }
+  return `${head}, and every one not shown overlaps a shown match by more than half (the library is short for this query)`;
 }

@@ -33,6 +33,7 @@ error_kinds! {
     "gpu": "no WebGPU/WebGL2 adapter, device or canvas surface",
     "not-humanoid": "the clip does not map onto the canonical humanoid",
     "search": "search by example failed (bad query or parameters)",
+    "query-too-long": "search: the query's shortest admissible match (half its length) is longer than every clip",
     "cancelled": "search cancelled by its progress callback",
     "callback": "a progress callback threw: the work stopped (the message is the callback's)",
     "music": "song analysis failed (bad envelope, samples or correction)",

@@ -19,6 +19,7 @@ use crate::library::Library;
 fn search_err(e: search::SearchError) -> OdoriError {
     let kind = match e {
         search::SearchError::Cancelled { .. } => "cancelled",
+        search::SearchError::QueryTooLong { .. } => "query-too-long",
         _ => "search",
     };
     OdoriError::new(kind, e.to_string())
@@ -58,8 +59,31 @@ struct JsParams {
     weights: Option<Vec<f32>>,
     threshold: Option<f32>,
     max_results: Option<usize>,
-    min_span_ratio: Option<f32>,
-    max_span_ratio: Option<f32>,
+}
+
+impl JsParams {
+    fn decode(params: JsValue) -> Result<SearchParams, OdoriError> {
+        let p: JsParams = from_js(params, "search params", &["preset", "weights", "threshold", "maxResults"])?;
+        let mut sp = SearchParams::preset(p.preset.unwrap_or(BodyPreset::WholeBody));
+        if let Some(w) = p.weights {
+            if w.len() != CANON_COUNT {
+                return Err(OdoriError::new("bad-argument", format!("weights: {} values given, one per canonical joint (21) needed", w.len())));
+            }
+            sp.weights.copy_from_slice(&w);
+        }
+        sp.threshold = p.threshold;
+        if let Some(m) = p.max_results {
+            sp.max_results = m;
+        }
+        Ok(sp)
+    }
+}
+
+/// Which search runs.
+#[derive(Clone, Copy)]
+enum Method {
+    Fast,
+    Plain,
 }
 
 #[derive(Serialize)]
@@ -143,43 +167,77 @@ impl SearchIndex {
     }
 
     /// Searches every indexed clip for the query (`{ clipId, startFrame, endFrame }`, frames
-    /// at `fps`, end exclusive) with `{ preset?, weights?, threshold?, maxResults?,
-    /// minSpanRatio?, maxSpanRatio? }`. `progress(framesDone, framesTotal)` is called between
-    /// chunks; returning `false` cancels (throws kind "cancelled"); a callback that throws stops
-    /// the search too, which then throws kind "callback" carrying the callback's message. Returns
-    /// `{ matches: [{ clipId, clipName, startFrame, endFrame, lengthFrames, startSecs, endSecs,
-    /// distance, path }], skipped, stats }`, best first, non-overlapping. The distance is the
-    /// DP cost divided by the path's total step weight (spec §C), and a match spans between
-    /// `minSpanRatio` (½) and `maxSpanRatio` (2) times the query's length. Ends are found and
-    /// ranked by the DP of spec §C; each match then starts where its distance is least for its
-    /// end (the same recurrence run backwards), and `path` is that warping path.
+    /// at `fps`, end exclusive) with `{ preset?, weights?, threshold?, maxResults? }`.
+    /// `progress(framesDone, framesTotal)` is called between chunks; returning `false` cancels
+    /// (throws kind "cancelled"); a callback that throws stops
+    /// the search too, which then throws kind "callback" carrying the callback's message. Returns `{ matches: [{ clipId, clipIndex, clipName,
+    /// startFrame, endFrame, lengthFrames, startSecs, endSecs, distance, cost, path }],
+    /// skipped, stats, shortfall }`, best first.
+    ///
+    /// The rule (spec §C): a match is a warping path of the symmetric slope-constrained steps
+    /// (P = 1), so it spans between about ½ and 2 times the query; its distance is its cost
+    /// divided by its total step weight (query frames + span); for each end the match is the
+    /// path of least distance over every start; results are the best ends, each kept unless
+    /// it shares more than half of the shorter span with a better one in the same clip, up to
+    /// `maxResults` and within `threshold`. `shortfall` (null when enough came back) says how
+    /// many admissible match ends the library has and how many are within the threshold, so
+    /// the rest were left out for overlapping a shown match.
     pub fn search(
         &self,
         #[wasm_bindgen(unchecked_param_type = "SearchQuery")] query: JsValue,
         #[wasm_bindgen(unchecked_param_type = "SearchParamsJs | undefined")] params: JsValue,
         progress: Option<js_sys::Function>,
     ) -> Result<JsValue, OdoriError> {
+        let query = self.query(query)?;
+        self.run(&query, params, progress, Method::Fast)
+    }
+
+    /// The plain DP (every cell computed, nothing pruned): the same arguments and results as
+    /// `search`, for benchmarks and as the reference the fast search is checked against.
+    #[wasm_bindgen(js_name = searchPlain)]
+    pub fn search_plain(
+        &self,
+        #[wasm_bindgen(unchecked_param_type = "SearchQuery")] query: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "SearchParamsJs | undefined")] params: JsValue,
+        progress: Option<js_sys::Function>,
+    ) -> Result<JsValue, OdoriError> {
+        let query = self.query(query)?;
+        self.run(&query, params, progress, Method::Plain)
+    }
+
+    /// The normalised features (hip origin, body heights, flat `frames × 21 × 3`) of a query
+    /// range of an indexed clip, for `searchFeatures` in other indexes (the app splits the
+    /// library over several workers and sends every one the same query).
+    #[wasm_bindgen(js_name = queryFeatures)]
+    pub fn query_features(&self, #[wasm_bindgen(unchecked_param_type = "SearchQuery")] query: JsValue) -> Result<Float32Array, OdoriError> {
+        let q = self.query(query)?;
+        Ok(Float32Array::from(q.features(Origin::Hips).data.as_slice()))
+    }
+
+    /// `search` with the query given as normalised features from `queryFeatures`.
+    #[wasm_bindgen(js_name = searchFeatures)]
+    pub fn search_features(
+        &self,
+        features: Float32Array,
+        #[wasm_bindgen(unchecked_param_type = "SearchParamsJs | undefined")] params: JsValue,
+        progress: Option<js_sys::Function>,
+    ) -> Result<JsValue, OdoriError> {
+        let data = features.to_vec();
+        if data.is_empty() || data.len() % (CANON_COUNT * 3) != 0 || data.iter().any(|x| !x.is_finite()) {
+            return Err(OdoriError::new("bad-argument", format!("query features: {} values is not a whole number of finite 21-joint frames", data.len())));
+        }
+        let query = ClipFeatures::new("query", DEFAULT_INDEX_FPS, MotionFeatures { origin: Origin::Hips, data });
+        self.run(&query, params, progress, Method::Fast)
+    }
+
+    fn query(&self, query: JsValue) -> Result<ClipFeatures, OdoriError> {
         let q: JsQuery = from_js(query, "query", &["clipId", "startFrame", "endFrame"])?;
-        let p: JsParams = from_js(params, "search params", &["preset", "weights", "threshold", "maxResults", "minSpanRatio", "maxSpanRatio"])?;
-        let mut sp = SearchParams::preset(p.preset.unwrap_or(BodyPreset::WholeBody));
-        if let Some(w) = p.weights {
-            if w.len() != CANON_COUNT {
-                return Err(OdoriError::new("bad-argument", format!("weights: {} values given, one per canonical joint (21) needed", w.len())));
-            }
-            sp.weights.copy_from_slice(&w);
-        }
-        sp.threshold = p.threshold;
-        if let Some(m) = p.max_results {
-            sp.max_results = m;
-        }
-        if let Some(r) = p.min_span_ratio {
-            sp.min_span_ratio = r;
-        }
-        if let Some(r) = p.max_span_ratio {
-            sp.max_span_ratio = r;
-        }
         let k = self.position(q.clip_id)?;
-        let query = self.index.query_range(k, q.start_frame, q.end_frame).map_err(search_err)?;
+        self.index.query_range(k, q.start_frame, q.end_frame).map_err(search_err)
+    }
+
+    fn run(&self, query: &ClipFeatures, params: JsValue, progress: Option<js_sys::Function>, method: Method) -> Result<JsValue, OdoriError> {
+        let sp = JsParams::decode(params)?;
         // A callback that throws stops the search, and the caller gets an error saying so (with
         // the callback's own message): ignoring it would hide a bug in the caller's UI code.
         let mut thrown: Option<String> = None;
@@ -201,13 +259,21 @@ impl SearchIndex {
                 None => ControlFlow::Continue(()),
             }
         };
-        let out = search::search(&self.index, &query, &sp, &mut cb);
+        let out = match method {
+            Method::Fast => search::search(&self.index, query, &sp, &mut cb),
+            Method::Plain => search::search_plain(&self.index, query, &sp, &mut cb),
+        };
         if let Some(message) = thrown {
             return Err(OdoriError::new("callback", format!("the progress callback threw ({message}); the search was stopped")));
         }
         let out = out.map_err(search_err)?;
         let matches: Vec<JsMatch> = out.matches.iter().map(|m| JsMatch { clip_id: self.ids[m.clip_index], inner: m }).collect();
-        Ok(to_js(&serde_json::json!({ "matches": to_json(&matches), "skipped": to_json(&out.skipped), "stats": to_json(&out.stats) })))
+        Ok(to_js(&serde_json::json!({
+            "matches": to_json(&matches),
+            "skipped": to_json(&out.skipped),
+            "stats": to_json(&out.stats),
+            "shortfall": to_json(&out.shortfall),
+        })))
     }
 
     /// x, y, z of one canonical joint ("rightHand", ...) over an indexed clip, normalised
@@ -232,7 +298,8 @@ fn to_json<T: Serialize>(v: &T) -> serde_json::Value {
 const TS_SEARCH: &'static str = r#"
 export interface SearchQuery { clipId: number; startFrame: number; endFrame: number; }
 export type BodyPreset = "wholeBody" | "upperBody" | "lowerBody" | "arms" | "leftArm" | "rightArm" | "legs" | "feetOnly";
-export interface SearchParamsJs { preset?: BodyPreset; weights?: number[]; threshold?: number; maxResults?: number; minSpanRatio?: number; maxSpanRatio?: number; }
+export interface SearchParamsJs { preset?: BodyPreset; weights?: number[]; threshold?: number; maxResults?: number; }
+export interface SearchShortfall { asked: number; shown: number; admissibleEnds: number; endsWithinThreshold: number; threshold: number | null; }
 export interface SearchMatch { clipId: number; clipIndex: number; clipName: string; startFrame: number; endFrame: number; lengthFrames: number; startSecs: number; endSecs: number; distance: number; cost: number; path: [number, number][]; }
 export interface JointCurve { joint: string; fps: number; x: number[]; y: number[]; z: number[]; }
 "#;

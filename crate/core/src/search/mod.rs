@@ -1,32 +1,23 @@
-//! Search by example (issue 3, spec §B–C, seed 002): find where in the library a motion like
-//! the query happens, by subsequence DP matching over normalised canonical joint positions.
+//! Search by example (spec §B–C, seed 002): find where in the library a motion like the query
+//! happens, by subsequence DP matching over normalised canonical joint positions.
 //!
-//! The matching is spec §C exactly: frame distance `d(i, j) = Σ_k w_k ‖p_k(i) − q_k(j)‖`,
-//! recurrence `g(i, j) = min{g(i−1, j) + d, g(i−1, j−1) + 2d, g(i, j−1) + d}` (ties go to the
-//! first of these, in this order) with a start pointer `G` carried along the chosen
-//! predecessor, `g(1, j) = d(1, j)`, `G(1, j) = j` (a match may start anywhere). The DP itself
-//! is unconstrained; a candidate match is the path ending at target frame `j`, spanning frames
-//! `G(I, j) ..= j` (span `s = j − G + 1`), with distance `g(I, j) / (I + s)` (the path's total
-//! step weight, spec §C), kept only when its speed ratio is bounded:
-//! `ceil(I · minSpanRatio) ≤ s ≤ floor(I · maxSpanRatio)` (defaults ½ and 2), and when its
-//! distance is at or below the threshold. Candidates are taken best first — sorted by
-//! (distance, clip, end frame) — up to `maxResults`, skipping any whose match would overlap one
-//! already taken in the same clip.
+//! The rule is spec §C (revised): frame distance `d(i, j) = Σ_k w_k ‖p_k(i) − q_k(j)‖`; a match
+//! is a warping path from (first query frame, s) to (last query frame, e) made of the symmetric
+//! slope-constrained steps of Sakoe and Chiba (P = 1) — diagonal with weight 2·d, or one row and
+//! two columns (or two rows and one column) through the middle cell with 2·d(middle) + d — from a
+//! start cell of weight 2, so every path's step weights add up to `I + span` and its span
+//! `e − s + 1` lies in `[⌈(I−1)/2⌉ + 1, 2I − 1]` by construction. Its distance is its cost
+//! divided by `I + span` (the weighted mean frame distance along it). For each end the match is
+//! the admissible path of least distance over every start (ties to the earlier start). Results
+//! are ends best first — by (distance, clip, end) — each kept unless its span shares more than
+//! half of the shorter span's frames with a result already kept in the same clip, up to
+//! `maxResults`, and within the threshold if one is set. So fewer than `maxResults` come back
+//! only when every other admissible end is over the threshold or overlaps a shown match
+//! ([`Shortfall`] says which).
 //!
-//! *The start of a taken match is re-chosen for its end* (the product's decision, like the
-//! normalisation): the forward DP picks each cell's predecessor by raw cost, and raw cost
-//! favours short paths, so where the query's opening is slow or still its best path squeezes
-//! that opening onto a few frames and starts late (measured on real mocap: 0.3–0.9 s late in
-//! 8 of 50 warped queries). The same recurrence run backwards from the end gives the least cost
-//! `c(s)` of a path from every start `s` to that end; the match takes the start with the least
-//! distance `c(s) / (I + span)` among the admissible spans starting no later than the
-//! candidate (a later start can only be worse), and that path. So a match contains its
-//! candidate's span, and its distance is never above the candidate's. The matches are listed
-//! best first by these distances, and each carries its warping path.
-//!
-//! [`search`] is the fast exact search (lower bounds and early abandoning, see `fast.rs`);
-//! [`search_plain`] computes every cell and is kept as the reference and benchmark baseline.
-//! Both return the same results.
+//! [`search`] is the fast exact search (lower bounds, early abandoning, a k-th-best bound, see
+//! `fast.rs`); [`search_plain`] computes every cell (the benchmark baseline). Both return the
+//! same results, and the tests check both against brute force (every start evaluated alone).
 
 mod dp;
 mod fast;
@@ -45,7 +36,7 @@ use crate::normalize::Origin;
 
 pub use features::{ClipFeatures, FeatureIndex, JointCurve, MotionFeatures, SkippedClip, DEFAULT_INDEX_FPS, FRAME_FLOATS};
 pub use presets::BodyPreset;
-pub use results::{SearchMatch, SearchOutcome, SearchStats};
+pub use results::{SearchMatch, SearchOutcome, SearchStats, Shortfall};
 
 /// Order in which a frame distance sums its joints: extremities first, so that early
 /// abandoning (which stops summing once the partial sum is too large) stops soon. The joints
@@ -64,8 +55,8 @@ pub const DISTANCE_ORDER: [Canon; CANON_COUNT] = {
 pub enum SearchError {
     #[error("the query is empty: pick at least one frame")]
     EmptyQuery,
-    #[error("the query is {query_frames} frames long, longer than every clip in the library (the longest has {longest_frames} frames)")]
-    QueryTooLong { query_frames: usize, longest_frames: usize },
+    #[error("the query is {query_frames} frames long: its shortest admissible match ({min_span_frames} frames, half its length) is longer than every clip in the library (the longest has {longest_frames} frames)")]
+    QueryTooLong { query_frames: usize, min_span_frames: usize, longest_frames: usize },
     #[error("all joint weights are zero: choose a body part or give at least one joint a weight above 0")]
     AllWeightsZero,
     #[error("joint weight for {joint} is {value}: weights must be finite and not negative")]
@@ -98,12 +89,6 @@ pub struct SearchParams {
     pub threshold: Option<f32>,
     /// Most matches to return (≥ 1).
     pub max_results: usize,
-    /// A match spans at least `ceil(queryFrames · minSpanRatio)` frames (default 0.5:
-    /// the library motion is at most twice as fast as the query). In (0, 1].
-    pub min_span_ratio: f32,
-    /// A match spans at most `floor(queryFrames · maxSpanRatio)` frames (default 2: at most
-    /// twice as slow). ≥ 1.
-    pub max_span_ratio: f32,
 }
 
 impl Default for SearchParams {
@@ -113,15 +98,13 @@ impl Default for SearchParams {
 }
 
 impl SearchParams {
-    /// Parameters for a preset, with threshold none, 10 results, span ratio ½ – 2.
+    /// Parameters for a preset, with threshold none, 10 results.
     pub fn preset(preset: BodyPreset) -> SearchParams {
         SearchParams {
             weights: preset.weights(),
             origin: preset.origin(),
             threshold: None,
             max_results: 10,
-            min_span_ratio: 0.5,
-            max_span_ratio: 2.0,
         }
     }
 
@@ -143,20 +126,14 @@ impl SearchParams {
         if self.max_results == 0 {
             return Err(SearchError::BadParam { name: "maxResults", value: 0.0, why: "must be at least 1" });
         }
-        if !(self.min_span_ratio > 0.0 && self.min_span_ratio <= 1.0) {
-            return Err(SearchError::BadParam { name: "minSpanRatio", value: self.min_span_ratio, why: "must be in (0, 1]" });
-        }
-        if !(self.max_span_ratio >= 1.0 && self.max_span_ratio.is_finite()) {
-            return Err(SearchError::BadParam { name: "maxSpanRatio", value: self.max_span_ratio, why: "must be finite and ≥ 1" });
-        }
         Ok(())
     }
 
-    /// Shortest and longest span (frames) a match of a `query_frames`-frame query may have.
-    pub fn span_bounds(&self, query_frames: usize) -> (usize, usize) {
-        let lo = ((query_frames as f32 * self.min_span_ratio).ceil() as usize).max(1);
-        let hi = ((query_frames as f32 * self.max_span_ratio).floor() as usize).max(lo);
-        (lo, hi)
+    /// Shortest and longest span (frames) of an admissible match of a `query_frames`-frame
+    /// query: the steps advance one row for one or two columns, or two rows for one column.
+    pub fn span_bounds(query_frames: usize) -> (usize, usize) {
+        let r = query_frames.saturating_sub(1);
+        (r.div_ceil(2) + 1, 2 * r + 1)
     }
 }
 
@@ -168,7 +145,7 @@ pub struct SearchProgress {
     pub frames_done: usize,
     /// Library frames in total.
     pub frames_total: usize,
-    /// Matches found so far (candidates at or below the current bound, before overlap removal).
+    /// Match ends found so far within the current bound (before overlap removal).
     pub candidates: usize,
 }
 
@@ -198,10 +175,10 @@ impl<'q> Prepared<'q> {
             return Err(SearchError::EmptyLibrary { skipped: index.skipped.len() });
         }
         let longest = index.clips.iter().map(ClipFeatures::frame_count).max().unwrap_or(0);
-        if query_frames > longest {
-            return Err(SearchError::QueryTooLong { query_frames, longest_frames: longest });
+        let (min_span, max_span) = SearchParams::span_bounds(query_frames);
+        if min_span > longest {
+            return Err(SearchError::QueryTooLong { query_frames, min_span_frames: min_span, longest_frames: longest });
         }
-        let (min_span, max_span) = params.span_bounds(query_frames);
         Ok(Prepared {
             groups: lanes::weighted_groups(&params.weights),
             query_lanes: query.lanes(params.origin),

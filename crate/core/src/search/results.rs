@@ -1,6 +1,5 @@
-//! Search results: candidate match ends, the best-first non-overlapping selection, and each
-//! selected match's start, distance and warping path, re-chosen for its end by a backward DP
-//! over its admissible spans (so the scan itself keeps only two DP columns).
+//! Search results: the least-distance match for each end (found by `dp.rs`), the best-first
+//! non-overlapping selection of spec §C, and each selected match's warping path.
 
 use std::cmp::Ordering;
 
@@ -9,26 +8,43 @@ use serde::{Deserialize, Serialize};
 use super::features::{FeatureIndex, SkippedClip};
 use super::{Prepared, LANE_FLOATS};
 
-/// A match end found by the DP: the path ending at `end_frame` of clip `clip`.
+/// The match ending at `end` of clip `clip`: the least-distance admissible path into that end
+/// over every start.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Candidate {
     pub clip: usize,
     pub start: usize,
     /// Inclusive.
     pub end: usize,
-    /// Normalised distance `g / (I + span)`.
+    /// Distance `cost / (I + span)`.
     pub score: f32,
-    /// Raw DP cost `g(I, end)`.
+    /// Cost of the path (step weights of spec §C).
     pub cost: f32,
 }
 
-fn order(a: &Candidate, b: &Candidate) -> Ordering {
+/// Best first: distance, then clip, then end.
+pub(crate) fn order(a: &Candidate, b: &Candidate) -> Ordering {
     a.score.total_cmp(&b.score).then(a.clip.cmp(&b.clip)).then(a.end.cmp(&b.end))
 }
 
-/// Best first, skipping any candidate whose forward span overlaps one already taken in the same
-/// clip, up to `max_results`: the cheap estimate of [`select_matches`] (which spans the
-/// re-chosen starts) that the fast search uses to lower its bound as it goes.
+/// The non-overlap rule of spec §C: two spans of one clip conflict when they share more than
+/// half of the shorter one's frames.
+pub(crate) fn conflicts(a: (usize, usize, usize), b: (usize, usize, usize)) -> bool {
+    if a.0 != b.0 {
+        return false;
+    }
+    let lo = a.1.max(b.1);
+    let hi = a.2.min(b.2);
+    if hi < lo {
+        return false;
+    }
+    let shared = hi - lo + 1;
+    let shorter = (a.2 - a.1 + 1).min(b.2 - b.1 + 1);
+    2 * shared > shorter
+}
+
+/// The candidates spec §C takes: best first, each kept unless it conflicts with one already
+/// kept, up to `max_results`. A candidate's fate depends only on the better candidates.
 pub(crate) fn select(pool: &mut [Candidate], max_results: usize) -> Vec<Candidate> {
     pool.sort_by(order);
     let mut taken: Vec<Candidate> = Vec::new();
@@ -36,57 +52,101 @@ pub(crate) fn select(pool: &mut [Candidate], max_results: usize) -> Vec<Candidat
         if taken.len() >= max_results {
             break;
         }
-        if taken.iter().all(|t| t.clip != c.clip || c.end < t.start || c.start > t.end) {
+        if !taken.iter().any(|t| conflicts((t.clip, t.start, t.end), (c.clip, c.start, c.end))) {
             taken.push(*c);
         }
     }
     taken
 }
 
-/// A selected match: the DP's candidate end, with the start, cost, distance and path that
-/// [`refine`] re-chose for that end.
+/// A selected match with its warping path.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Refined {
     pub clip: usize,
     pub start: usize,
     pub end: usize,
-    /// Raw cost of the re-chosen path.
     pub cost: f32,
-    /// `cost / (I + span)`.
     pub score: f32,
     pub path: Vec<[u32; 2]>,
 }
 
-/// The final selection. Candidates are taken best first by the forward DP's distance (the rule
-/// of spec §C); `take` turns a candidate into its match ([`refine`]; the fast search first
-/// checks the candidate is the full DP's own, and returns `None` if not), which is kept when
-/// its span overlaps no match already kept in the same clip, up to `max_results`. A
-/// candidate's fate depends only on the better candidates. The matches come back best first by
-/// their own (re-chosen) distance.
-pub(crate) fn select_matches(
-    pool: &mut [Candidate],
-    max_results: usize,
-    take: &mut dyn FnMut(&Candidate) -> Option<Refined>,
-) -> Vec<Refined> {
-    pool.sort_by(order);
-    let mut taken: Vec<Refined> = Vec::new();
-    for c in pool.iter() {
-        if taken.len() >= max_results {
-            break;
-        }
-        // The re-chosen start is never after the candidate's own, so a candidate overlapping a
-        // kept match cannot be kept (and need not be checked or refined).
-        if taken.iter().any(|t| t.clip == c.clip && c.end >= t.start && c.start <= t.end) {
-            continue;
-        }
-        let Some(m) = take(c) else { continue };
-        if std::env::var("ODORI_DEBUG").is_ok() { eprintln!("refined {:?} -> {}..={} {}", c, m.start, m.end, m.score); }
-        if taken.iter().all(|t| t.clip != m.clip || m.end < t.start || m.start > t.end) {
-            taken.push(m);
+/// [`select`], each taken candidate with its warping path.
+pub(crate) fn select_matches(index: &FeatureIndex, prep: &Prepared, pool: &mut [Candidate]) -> Vec<Refined> {
+    select(pool, prep.max_results).iter().map(|c| Refined { clip: c.clip, start: c.start, end: c.end, cost: c.cost, score: c.score, path: path(index, prep, c) }).collect()
+}
+
+/// The least-cost path from (0, start) to (last query frame, end) by the steps of spec §C
+/// (the DP run from that start alone, with back pointers), as unit steps: a compound step
+/// lists its middle cell.
+pub(crate) fn path(index: &FeatureIndex, prep: &Prepared, c: &Candidate) -> Vec<[u32; 2]> {
+    let target = index.clips[c.clip].lanes(prep.origin);
+    let rows = prep.query_frames;
+    let cols = c.end + 1 - c.start;
+    let d: Vec<f32> = (0..cols)
+        .flat_map(|k| {
+            let t = &target[(c.start + k) * LANE_FLOATS..(c.start + k + 1) * LANE_FLOATS];
+            (0..rows).map(move |i| prep.d(i, t))
+        })
+        .collect();
+    let at = |i: usize, k: usize| d[k * rows + i];
+    let mut g = vec![f32::INFINITY; rows * cols];
+    // 0 none, 1 diagonal, 2 through (i, k−1), 3 through (i−1, k).
+    let mut from = vec![0u8; rows * cols];
+    g[0] = 2.0 * at(0, 0);
+    for k in 0..cols {
+        for i in 1..rows {
+            let mut best = f32::INFINITY;
+            let mut how = 0u8;
+            if k >= 1 {
+                let v = g[(k - 1) * rows + i - 1] + 2.0 * at(i, k);
+                if v < best {
+                    best = v;
+                    how = 1;
+                }
+            }
+            if k >= 2 {
+                let v = g[(k - 2) * rows + i - 1] + (2.0 * at(i, k - 1) + at(i, k));
+                if v < best {
+                    best = v;
+                    how = 2;
+                }
+            }
+            if k >= 1 && i >= 2 {
+                let v = g[(k - 1) * rows + i - 2] + (2.0 * at(i - 1, k) + at(i, k));
+                if v < best {
+                    best = v;
+                    how = 3;
+                }
+            }
+            g[k * rows + i] = best;
+            from[k * rows + i] = how;
         }
     }
-    taken.sort_by(|a, b| a.score.total_cmp(&b.score).then(a.clip.cmp(&b.clip)).then(a.end.cmp(&b.end)));
-    taken
+    let (mut i, mut k) = (rows - 1, cols - 1);
+    let mut rev = vec![[i as u32, (c.start + k) as u32]];
+    while i > 0 {
+        match from[k * rows + i] {
+            1 => {
+                i -= 1;
+                k -= 1;
+            }
+            2 => {
+                rev.push([i as u32, (c.start + k - 1) as u32]);
+                i -= 1;
+                k -= 2;
+            }
+            3 => {
+                rev.push([(i - 1) as u32, (c.start + k) as u32]);
+                i -= 2;
+                k -= 1;
+            }
+            // The candidate came from a finite path from this start, so one exists.
+            _ => break,
+        }
+        rev.push([i as u32, (c.start + k) as u32]);
+    }
+    rev.reverse();
+    rev
 }
 
 /// One match.
@@ -128,9 +188,6 @@ pub struct SearchStats {
     pub cells_total: u64,
     /// Frame distances actually started (each may have been abandoned part-way).
     pub distances_computed: u64,
-    /// Whether the fast search had to scan again with a higher fixed bound, or fell back to the
-    /// plain DP (see `fast.rs`).
-    pub rescanned: bool,
 }
 
 /// A search's answer.
@@ -143,10 +200,39 @@ pub struct SearchOutcome {
     pub skipped: Vec<SkippedClip>,
     /// Work counters.
     pub stats: SearchStats,
+    /// Set when fewer matches than asked came back: how many admissible ones exist and why
+    /// they are not shown.
+    pub shortfall: Option<Shortfall>,
 }
 
-/// Turns selected matches into the answer.
-pub(crate) fn finish(index: &FeatureIndex, selected: Vec<Refined>, stats: SearchStats) -> SearchOutcome {
+/// Why fewer matches came back than were asked for (spec §C, the k-results guarantee): every
+/// other admissible end of the library is over the threshold or its match overlaps a shown
+/// one by more than half of the shorter span.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Shortfall {
+    /// `maxResults`.
+    pub asked: usize,
+    /// Matches returned.
+    pub shown: usize,
+    /// Ends in the library where an admissible match can end (each has one).
+    pub admissible_ends: u64,
+    /// Of those, the ends whose match is within the threshold (all of them without one).
+    pub ends_within_threshold: u64,
+    /// The threshold, if one was set.
+    pub threshold: Option<f32>,
+}
+
+/// Turns selected matches into the answer. `within` is the number of ends whose match is
+/// within the threshold (exact whenever the answer is short: see `fast.rs`).
+pub(crate) fn finish(index: &FeatureIndex, prep: &Prepared, selected: Vec<Refined>, stats: SearchStats, within: u64) -> SearchOutcome {
+    let shortfall = (selected.len() < prep.max_results).then(|| Shortfall {
+        asked: prep.max_results,
+        shown: selected.len(),
+        admissible_ends: index.clips.iter().map(|c| (c.frame_count() + 1).saturating_sub(prep.min_span) as u64).sum(),
+        ends_within_threshold: within,
+        threshold: prep.threshold.is_finite().then_some(prep.threshold),
+    });
     let matches = selected
         .into_iter()
         .map(|m| {
@@ -166,102 +252,5 @@ pub(crate) fn finish(index: &FeatureIndex, selected: Vec<Refined>, stats: Search
             }
         })
         .collect();
-    SearchOutcome { matches, skipped: index.skipped.clone(), stats }
-}
-
-/// The start re-chosen for the end of candidate `c` (see the module docs of `search`): the DP
-/// of spec §C run backwards from (last query frame, `c.end`) over the columns an admissible
-/// span can reach gives, for every start `s`, the least cost `c(s)` of a path from (0, `s`) to
-/// that end (the same paths and step weights as the forward DP, including its rule that row 0
-/// is only ever entered as a new start); the start with the least normalised distance
-/// `c(s) / (I + span)` among the admissible spans is taken (ties to the later start), with its
-/// path. Only starts up to the candidate's own are compared: a later start costs at least the
-/// forward DP's least cost `g(I, end)` over a shorter span, so its distance is always larger;
-/// leaving them out makes that hold despite rounding, so a match always contains its
-/// candidate's span. `None` only if no admissible start has a finite cost.
-pub(crate) fn refine(index: &FeatureIndex, prep: &Prepared, cand: &Candidate) -> Option<Refined> {
-    let (clip, end) = (cand.clip, cand.end);
-    let target = index.clips[clip].lanes(prep.origin);
-    let rows = prep.query_frames;
-    let lo = (end + 1).saturating_sub(prep.max_span);
-    let cols = end + 1 - lo;
-    // step[i * cols + c]: 1 = down (i+1, j), 2 = diagonal (i+1, j+1), 3 = right (i, j+1), 0 = none.
-    let mut step = vec![0u8; rows * cols];
-    let mut h_next = vec![f32::INFINITY; rows]; // column j + 1
-    let mut d_next = vec![0f32; rows];
-    let mut h = vec![f32::INFINITY; rows];
-    let mut d = vec![0f32; rows];
-    let mut c0 = vec![f32::INFINITY; cols]; // c(s) for s = lo + c
-    for c in (0..cols).rev() {
-        let j = lo + c;
-        let t = &target[j * LANE_FLOATS..(j + 1) * LANE_FLOATS];
-        for (i, di) in d.iter_mut().enumerate() {
-            *di = prep.d(i, t);
-        }
-        for i in (0..rows).rev() {
-            if i == rows - 1 && c == cols - 1 {
-                h[i] = 0.0;
-                continue;
-            }
-            let mut best = f32::INFINITY;
-            let mut s = 0u8;
-            if i + 1 < rows {
-                let v = h[i + 1] + d[i + 1];
-                if v < best {
-                    best = v;
-                    s = 1;
-                }
-                if c + 1 < cols {
-                    let v = h_next[i + 1] + 2.0 * d_next[i + 1];
-                    if v < best {
-                        best = v;
-                        s = 2;
-                    }
-                }
-            }
-            if i > 0 && c + 1 < cols {
-                let v = h_next[i] + d_next[i];
-                if v < best {
-                    best = v;
-                    s = 3;
-                }
-            }
-            h[i] = best;
-            step[i * cols + c] = s;
-        }
-        c0[c] = d[0] + h[0];
-        std::mem::swap(&mut h, &mut h_next);
-        std::mem::swap(&mut d, &mut d_next);
-    }
-    let latest = cand.start;
-    let mut best = (f32::INFINITY, f32::INFINITY, end);
-    for c in (0..cols).rev() {
-        let span = cols - c;
-        if span < prep.min_span || span > prep.max_span || lo + c > latest || !c0[c].is_finite() {
-            continue;
-        }
-        let score = c0[c] / (rows + span) as f32;
-        if score < best.0 {
-            best = (score, c0[c], lo + c);
-        }
-    }
-    let (score, cost, start) = best;
-    if !score.is_finite() {
-        return None;
-    }
-    let (mut i, mut c) = (0usize, start - lo);
-    let mut path = vec![[0u32, start as u32]];
-    while !(i == rows - 1 && c == cols - 1) {
-        match step[i * cols + c] {
-            1 => i += 1,
-            2 => {
-                i += 1;
-                c += 1;
-            }
-            3 => c += 1,
-            _ => unreachable!("every cell with a finite cost has a next step"),
-        }
-        path.push([i as u32, (lo + c) as u32]);
-    }
-    Some(Refined { clip, start, end, cost, score, path })
+    SearchOutcome { matches, skipped: index.skipped.clone(), stats, shortfall }
 }
