@@ -2,13 +2,14 @@
 // Analyses a song, generates a dance of the engine's built-in moves to it and writes the
 // dance's joint positions as JSON — all in Node, with the npm package `odori`.
 //
-//   node dance.mjs [song.wav] [out.json]
+//   node dance.mjs [song.wav] [out.json | out.bvh]
 //
 // With no song, the engine's own demo song (rendered by the engine) is used. Node has no
 // audio decoder, so the song is a WAV file (PCM 16/24/32-bit or float; convert other formats
 // first, e.g. `ffmpeg -i song.ogg song.wav`). The output: { fps, bpm, bars, joints, bones,
 // frames: [[x, y, z, …] per frame] } in metres, Y up.
-// (BVH output plugs in here once the engine exports BVH: see writeDance below.)
+// An output path ending in .bvh writes the dance as BVH instead (the engine's canonical skeleton,
+// centimetres), for Blender and other tools.
 import { readFileSync, writeFileSync } from "node:fs";
 import { fileURLToPath } from "node:url";
 import { initSync, Library, Song, DemoSong, Choreographer, version } from "odori";
@@ -46,9 +47,14 @@ export function decodeWav(bytes) {
   throw new Error("WAV file has no data chunk");
 }
 
-/** Writes the dance: joint positions as JSON (BVH export will plug in here). */
+/** Writes the dance: BVH when the path ends in .bvh, joint positions as JSON otherwise. */
 function writeDance(path, library, clipId, grid) {
   const info = library.clip(clipId);
+  if (path.toLowerCase().endsWith(".bvh")) {
+    const bvh = library.exportBvh(clipId);
+    writeFileSync(path, bvh);
+    return { frames: { length: info.frames }, joints: library.jointNames(clipId), bytes: bvh.length };
+  }
   const fps = 30;
   const frames = [];
   for (let f = 0; f * (1 / fps) <= info.durationSecs; f++) frames.push(Array.from(library.jointPositions(clipId, f / fps), (x) => Math.round(x * 1e4) / 1e4));

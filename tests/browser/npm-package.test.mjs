@@ -62,7 +62,15 @@ test("(a) the Node example runs from the installed package: song → dance → j
   const b = JSON.parse(readFileSync(join(dir, "wav.json"), "utf8"));
   assert.equal(b.bars, a.bars);
   assert.deepEqual(b.frames, a.frames, "the WAV of the demo song gives the same dance");
-  console.log(out1.trim(), "|", out2.trim());
+  // And as BVH: it re-imports into the engine with the dance's frame count and skeleton.
+  const out3 = sh("node", ["dance.mjs", "", "demo.bvh"], dir);
+  const bvh = readFileSync(join(dir, "demo.bvh"));
+  assert.ok(bvh.toString("latin1").startsWith("HIERARCHY"), "not a BVH file");
+  const lib = new pkg.Library();
+  const back = lib.importFile("demo.bvh", new Uint8Array(bvh)).clips[0];
+  assert.ok(Math.abs(back.durationSecs - a.durationSecs) < 0.05, `BVH ${back.durationSecs} s vs ${a.durationSecs} s`);
+  assert.equal(back.humanoid.kind, "complete", "the exported skeleton maps onto the humanoid again");
+  console.log(out1.trim(), "|", out2.trim(), "|", out3.trim());
 });
 
 test("every Node example of pkg/README.md runs against the installed package", () => {
