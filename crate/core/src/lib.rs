@@ -12,6 +12,7 @@ pub mod character;
 pub mod choreo;
 pub mod clip;
 pub mod export;
+pub mod history;
 pub mod humanoid;
 pub mod import;
 pub mod library;

@@ -26,6 +26,7 @@
 //! [`undo`]: Choreography::undo
 //! [`redo`]: Choreography::redo
 
+use crate::history::History;
 use std::collections::BTreeSet;
 
 use serde::{Deserialize, Serialize};
@@ -206,8 +207,8 @@ fn check_bars(bars: &[Bar]) -> Result<(), ChoreoError> {
 #[serde(rename_all = "camelCase")]
 pub struct Choreography {
     doc: Doc,
-    undo: Vec<Doc>,
-    redo: Vec<Doc>,
+    #[serde(flatten)]
+    history: History<Doc>,
 }
 
 impl Choreography {
@@ -216,7 +217,7 @@ impl Choreography {
     pub fn new(bars: Vec<Bar>) -> Result<Self, ChoreoError> {
         check_bars(&bars)?;
         let n = bars.len();
-        Ok(Self { doc: Doc { bars, states: vec![BarState::Empty; n], sessions: vec![None; n], settings: Settings::default() }, undo: Vec::new(), redo: Vec::new() })
+        Ok(Self { doc: Doc { bars, states: vec![BarState::Empty; n], sessions: vec![None; n], settings: Settings::default() }, history: History::default() })
     }
 
     /// A choreography in a given state, with no undo history: how a document that keeps its
@@ -227,7 +228,7 @@ impl Choreography {
         let n = bars.len();
         states.resize(n, BarState::Empty);
         sessions.resize(n, None);
-        Ok(Self { doc: Doc { bars, states, sessions, settings }, undo: Vec::new(), redo: Vec::new() })
+        Ok(Self { doc: Doc { bars, states, sessions, settings }, history: History::default() })
     }
 
     /// Every bar's feedback session (`None`: no search open).
@@ -272,7 +273,7 @@ impl Choreography {
     /// segments and the candidates a search liked.
     pub fn segments_in_use(&self) -> BTreeSet<usize> {
         let mut out = BTreeSet::new();
-        for d in std::iter::once(&self.doc).chain(&self.undo).chain(&self.redo) {
+        for d in std::iter::once(&self.doc).chain(&self.history.undo).chain(&self.history.redo) {
             out.extend(d.states.iter().filter_map(BarState::segment));
             out.extend(d.sessions.iter().flatten().flat_map(|s| s.liked.iter().copied()));
         }
@@ -286,7 +287,7 @@ impl Choreography {
     pub fn remap_segments(&mut self, remap: &[Option<usize>]) {
         let map = |s: usize| remap.get(s).copied().flatten();
         let map_list = |v: &mut Vec<usize>| *v = v.iter().filter_map(|&s| map(s)).collect();
-        for d in std::iter::once(&mut self.doc).chain(self.undo.iter_mut()).chain(self.redo.iter_mut()) {
+        for d in std::iter::once(&mut self.doc).chain(self.history.undo.iter_mut()).chain(self.history.redo.iter_mut()) {
             for st in d.states.iter_mut() {
                 *st = match *st {
                     BarState::Empty => BarState::Empty,
@@ -343,11 +344,7 @@ impl Choreography {
     }
 
     fn record(&mut self) {
-        self.undo.push(self.doc.clone());
-        if self.undo.len() > UNDO_LIMIT {
-            self.undo.remove(0);
-        }
-        self.redo.clear();
+        self.history.record(self.doc.clone(), UNDO_LIMIT);
     }
 
     /// The bar's current candidates, opening its search (first round, τ = 1) when none is
@@ -535,32 +532,20 @@ impl Choreography {
 
     /// Undoes the last edit; `false` when there is none.
     pub fn undo(&mut self) -> bool {
-        match self.undo.pop() {
-            Some(prev) => {
-                self.redo.push(std::mem::replace(&mut self.doc, prev));
-                true
-            }
-            None => false,
-        }
+        self.history.undo(&mut self.doc)
     }
 
     /// Redoes the last undone edit; `false` when there is none.
     pub fn redo(&mut self) -> bool {
-        match self.redo.pop() {
-            Some(next) => {
-                self.undo.push(std::mem::replace(&mut self.doc, next));
-                true
-            }
-            None => false,
-        }
+        self.history.redo(&mut self.doc)
     }
 
     pub fn can_undo(&self) -> bool {
-        !self.undo.is_empty()
+        self.history.can_undo()
     }
 
     pub fn can_redo(&self) -> bool {
-        !self.redo.is_empty()
+        self.history.can_redo()
     }
 
     /// The whole dance as one canonical clip; frame 0 is song time 0.

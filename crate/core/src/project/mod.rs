@@ -20,6 +20,7 @@ pub mod blob;
 pub mod derive;
 pub mod file;
 
+use crate::history::History;
 use std::collections::BTreeSet;
 
 use serde::{Deserialize, Serialize};
@@ -256,8 +257,7 @@ pub struct SourceReport {
 #[derive(Debug, Default)]
 pub struct Project {
     doc: ProjectDoc,
-    undo: Vec<ProjectDoc>,
-    redo: Vec<ProjectDoc>,
+    history: History<ProjectDoc>,
     blobs: BlobStore,
     /// Blobs the document refers to that were absent when it was opened.
     missing: Vec<MissingBlob>,
@@ -268,7 +268,7 @@ pub struct Project {
 /// the derived state is rebuilt from those.
 impl PartialEq for Project {
     fn eq(&self, other: &Self) -> bool {
-        self.doc == other.doc && self.undo == other.undo && self.redo == other.redo && self.blobs == other.blobs
+        self.doc == other.doc && self.history == other.history && self.blobs == other.blobs
     }
 }
 
@@ -320,7 +320,7 @@ impl Project {
     /// A project from parts read back from a file or a store (history included). `missing`
     /// names what the document refers to that was not there.
     pub(crate) fn from_parts(doc: ProjectDoc, undo: Vec<ProjectDoc>, redo: Vec<ProjectDoc>, blobs: BlobStore, missing: Vec<MissingBlob>) -> Self {
-        Self { doc, undo, redo, blobs, missing, derived: Derived::default() }
+        Self { doc, history: History::from_parts(undo, redo), blobs, missing, derived: Derived::default() }
     }
 
     pub fn doc(&self) -> &ProjectDoc {
@@ -332,11 +332,11 @@ impl Project {
     }
 
     pub fn undo_history(&self) -> &[ProjectDoc] {
-        &self.undo
+        &self.history.undo
     }
 
     pub fn redo_history(&self) -> &[ProjectDoc] {
-        &self.redo
+        &self.history.redo
     }
 
     /// Items the document names whose bytes were missing when it was opened.
@@ -346,12 +346,12 @@ impl Project {
 
     /// Every blob the document or its history refers to.
     pub fn referenced_blobs(&self) -> BTreeSet<BlobHash> {
-        std::iter::once(&self.doc).chain(&self.undo).chain(&self.redo).flat_map(|d| d.blobs().cloned().collect::<Vec<_>>()).collect()
+        std::iter::once(&self.doc).chain(&self.history.undo).chain(&self.history.redo).flat_map(|d| d.blobs().cloned().collect::<Vec<_>>()).collect()
     }
 
     /// The derived state, brought up to date with the document.
     pub fn derived(&mut self) -> &Derived {
-        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
         &self.derived
     }
 
@@ -361,11 +361,7 @@ impl Project {
             return false;
         }
         let prev = std::mem::replace(&mut self.doc, doc);
-        self.undo.push(prev);
-        if self.undo.len() > UNDO_LIMIT {
-            self.undo.remove(0);
-        }
-        self.redo.clear();
+        self.history.record(prev, UNDO_LIMIT);
         let keep = self.referenced_blobs();
         self.blobs.retain(&keep);
         true
@@ -373,32 +369,20 @@ impl Project {
 
     /// Undoes the last edit; `false` when there is none.
     pub fn undo(&mut self) -> bool {
-        match self.undo.pop() {
-            Some(prev) => {
-                self.redo.push(std::mem::replace(&mut self.doc, prev));
-                true
-            }
-            None => false,
-        }
+        self.history.undo(&mut self.doc)
     }
 
     /// Redoes the last undone edit; `false` when there is none.
     pub fn redo(&mut self) -> bool {
-        match self.redo.pop() {
-            Some(next) => {
-                self.undo.push(std::mem::replace(&mut self.doc, next));
-                true
-            }
-            None => false,
-        }
+        self.history.redo(&mut self.doc)
     }
 
     pub fn can_undo(&self) -> bool {
-        !self.undo.is_empty()
+        self.history.can_undo()
     }
 
     pub fn can_redo(&self) -> bool {
-        !self.redo.is_empty()
+        self.history.can_redo()
     }
 
     /// Renames the project. Undoable.
@@ -473,7 +457,7 @@ impl Project {
         }
         // Try the cut on the derived state of the new document before committing it.
         let saved_doc = std::mem::replace(&mut self.doc, doc.clone());
-        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
         let info = self.derived.clip(clip).cloned();
         self.doc = saved_doc;
         let info = info.ok_or(ProjectError::NoSuchClip { source_id: clip.source.0, file_name: source.file_name.clone(), clip: clip.clip, clips: 0 })?;
@@ -575,7 +559,7 @@ impl Project {
                 return Err(ProjectError::Incomplete { count: self.missing.len(), first: m.what.clone() });
             }
         }
-        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
         let mut ch = self.derived.choreography(&self.doc)?;
         let out = f(&mut ch, self.derived.library())?;
         let mut doc = self.doc.clone();
@@ -592,7 +576,7 @@ impl Project {
 
     /// Search: likes `liked` (from the current round) and returns the next round.
     pub fn search(&mut self, bar: usize, liked: &[MoveKey]) -> Result<Vec<MoveKey>, ProjectError> {
-        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
         let liked = self.derived.indices_of(liked)?;
         let round = self.dance_edit(|ch, lib| ch.search(lib, bar, &liked))?;
         Ok(self.derived.keys_of(&round))
@@ -605,7 +589,7 @@ impl Project {
 
     /// Pins a move to a bar.
     pub fn set(&mut self, bar: usize, key: &MoveKey) -> Result<(), ProjectError> {
-        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
         let seg = self.derived.indices_of(std::slice::from_ref(key))?[0];
         self.dance_edit(|ch, lib| ch.set(lib, bar, seg))
     }
@@ -643,7 +627,7 @@ impl Project {
     /// The whole dance as one canonical clip; frame 0 is song time 0. Bars whose move cannot
     /// be found (a missing source) stand neutral.
     pub fn render_dance(&mut self, options: &crate::choreo::RenderOptions) -> Result<Clip, ProjectError> {
-        self.derived.update(&self.doc, &self.undo, &self.redo, &self.blobs);
+        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
         let ch = self.derived.choreography(&self.doc)?;
         let mut clip = ch.render(self.derived.library(), options);
         clip.name = "Dance".into();
