@@ -11,7 +11,7 @@ import assert from "node:assert/strict";
 import { join } from "node:path";
 import { readFileSync, writeFileSync } from "node:fs";
 import { chromium } from "playwright-core";
-import { startServer, launch, openApp, artifacts, data, root, BACKENDS } from "./harness.mjs";
+import { startServer, launch, openApp, waitUntil, artifacts, data, root, BACKENDS } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -296,6 +296,13 @@ for (const [name, size, mobile] of [["phone", { width: 390, height: 844 }, true]
       let all = [];
       for (const tab of panels) {
         if (tab) await tab.click();
+        // Every 2D canvas shown (timelines, plots) is drawn at its own size once its panel shows,
+        // not left at the size it had while hidden (the search timeline was, on a phone).
+        await waitUntil(() => page.evaluate(() => [...document.querySelectorAll("#search-timeline, #song canvas")].every((c) => {
+          if (c.clientWidth === 0) return true;
+          const dpr = Math.min(devicePixelRatio || 1, 2);
+          return [Math.round(c.clientWidth), Math.round(c.clientWidth * dpr)].includes(c.width);
+        })), { what: `${name}: every shown canvas drawn at its own width` });
         all = all.concat(await page.evaluate(controlsReport));
         if (tab) await page.screenshot({ path: join(artifacts, `usable-${name}-${(await tab.textContent()).toLowerCase()}.png`), fullPage: true });
       }

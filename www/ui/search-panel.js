@@ -2,6 +2,7 @@
 // its timeline) or the whole clip, choose a body part or per-joint weights, search every clip
 // in a worker, list the matches; a match plays overlaid on the query, aligned along the
 // warping path, beside a plot of one joint's x, y, z over time.
+import { redrawOnResize } from "./canvas.js";
 const JOINTS = ["hips", "spine", "chest", "neck", "head", "leftShoulder", "leftUpperArm", "leftForearm", "leftHand",
   "rightShoulder", "rightUpperArm", "rightForearm", "rightHand", "leftUpperLeg", "leftLowerLeg", "leftFoot", "leftToe",
   "rightUpperLeg", "rightLowerLeg", "rightFoot", "rightToe"];
@@ -55,6 +56,8 @@ export class SearchPanel {
       if (tr) this.show(this.results[Number(tr.dataset.k)]);
     });
     const tl = $("#search-timeline");
+    redrawOnResize(tl, () => this.drawTimeline());
+    redrawOnResize($("#search-plot"), () => this.plot());
     let drag = null;
     const secsAt = (ev) => {
       const c = this.library.clip(this.player.clip);

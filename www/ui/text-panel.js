@@ -2,6 +2,7 @@
 // it joins the previous element, start time) shown as a table and as tracks on a timeline,
 // and the joined animation plays. Each element's clip can be swapped for another with the
 // same tag.
+import { redrawOnResize } from "./canvas.js";
 const JOIN_COLOURS = { initial: "#9a9cab", connection: "#7fb6ff", transition: "#f2731a", composition: "#4fd18b" };
 
 export class TextPanel {
@@ -81,6 +82,11 @@ export class TextPanel {
 
   drawTracks(r) {
     const c = this.$("#text-tracks");
+    if (!this.tracksObserved) {
+      this.tracksObserved = true;
+      redrawOnResize(c, () => this.lastTracks && this.drawTracks(this.lastTracks));
+    }
+    this.lastTracks = r;
     const rowH = 18;
     c.style.height = `${Math.max(1, r.elements.length) * rowH + 16}px`;
     const w = (c.width = c.clientWidth || 300), h = (c.height = c.clientHeight || 60);
