@@ -254,6 +254,7 @@ export class OdoriPlayer extends HTMLElement {
   #attachMs = 0;
   #drag = null;
   #loadToken = 0;
+  #silent = false; // the song may not play at all yet (autoplay policy): the clock is our own
   #dressed = null; // id of the clip drawn when the motion is put on a character
   #dressClips = []; // clips made for the character (removed when it changes)
   #dressToken = 0;
@@ -271,8 +272,16 @@ export class OdoriPlayer extends HTMLElement {
     this.$ = (sel) => root.querySelector(sel);
     this.$(".play").addEventListener("click", () => (this.paused ? this.play() : this.pause()));
     this.$(".unmute").addEventListener("click", () => {
-      if (this.#audio) this.#audio.muted = false;
+      const a = this.#audio;
       this.$(".unmute").hidden = true;
+      if (!a) return;
+      a.muted = false;
+      if (this.#silent) {
+        // The figure kept time by itself: the song joins it there (this click is the gesture).
+        a.currentTime = this.currentTime;
+        this.#silent = false;
+        if (this.#playing) a.play().catch((e) => this.#fail(e));
+      }
     });
     const seek = this.$(".seek");
     seek.addEventListener("input", () => { this.currentTime = Number(seek.value); });
@@ -323,7 +332,7 @@ export class OdoriPlayer extends HTMLElement {
 
   /** Playback position in seconds: the song's when there is music, else the clip's. */
   get currentTime() {
-    if (this.#audio) return this.#audio.currentTime;
+    if (this.#audio && !this.#silent) return this.#audio.currentTime;
     if (!this.#playing) return this.#offsetSecs;
     return this.#offsetSecs + (performance.now() - this.#startMs) / 1000;
   }
@@ -410,7 +419,7 @@ export class OdoriPlayer extends HTMLElement {
     this.#updateButton();
     if (this.#state === "idle") this.#load();
     if (this.#state !== "ready" || !this.#viewer) return;
-    if (this.#audio) {
+    if (this.#audio && !this.#silent) {
       try {
         await this.#audio.play();
       } catch (e) {
@@ -418,8 +427,19 @@ export class OdoriPlayer extends HTMLElement {
         // Autoplay with sound is blocked here: start muted, offer to unmute.
         this.#audio.muted = true;
         this.$(".unmute").hidden = false;
-        await this.#audio.play();
+        try {
+          await this.#audio.play();
+        } catch (e2) {
+          if (e2.name !== "NotAllowedError") throw e2;
+          // Not even muted playback is allowed (a strict autoplay policy): the figure keeps
+          // time by itself, and Unmute (a gesture) brings the song in at that time.
+          this.#silent = true;
+          this.#offsetSecs = this.#audio.currentTime;
+          this.#startMs = performance.now();
+        }
       }
+    } else if (this.#silent) {
+      this.#startMs = performance.now();
     } else {
       if (this.#clip && !this.loop && this.#offsetSecs >= this.#clip.durationSecs) this.#offsetSecs = 0;
       this.#startMs = performance.now();
@@ -429,7 +449,7 @@ export class OdoriPlayer extends HTMLElement {
 
   /** Pauses; the figure stays on the current pose. */
   pause() {
-    if (!this.#audio && this.#playing) this.#offsetSecs = this.currentTime;
+    if ((!this.#audio || this.#silent) && this.#playing) this.#offsetSecs = this.currentTime;
     this.#playing = false;
     this.#audio?.pause();
     cancelAnimationFrame(this.#raf);
@@ -575,6 +595,7 @@ export class OdoriPlayer extends HTMLElement {
   #setupAudio() {
     if (this.#audio && this.#ownAudio) { this.#audio.pause(); this.#audio.removeAttribute("src"); this.#audio.load(); }
     this.#audio = null;
+    this.#silent = false;
     if (this.#songUrl) { URL.revokeObjectURL(this.#songUrl); this.#songUrl = null; }
     // A `music` attribute wins; else a project plays its own song.
     const music = this.music || this.#project?.musicUrl;
@@ -600,7 +621,7 @@ export class OdoriPlayer extends HTMLElement {
     a.addEventListener("ended", () => { this.pause(); this.#event("ended", {}); });
     // An <audio> of the page can be played and paused by its own controls: follow it.
     a.addEventListener("play", () => { if (!this.#playing) { this.#playing = true; this.#updateButton(); this.#tick(); } });
-    a.addEventListener("pause", () => { if (this.#playing && !a.ended) { this.#playing = false; this.#updateButton(); } });
+    a.addEventListener("pause", () => { if (this.#playing && !a.ended && !this.#silent) { this.#playing = false; this.#updateButton(); } });
     a.addEventListener("seeked", () => this.#drawNow());
   }
 
@@ -742,6 +763,10 @@ export class OdoriPlayer extends HTMLElement {
     let song = this.currentTime;
     const dur = this.#clip.durationSecs;
     let clipTime;
+    if (this.#silent && this.#playing && song >= this.duration) {
+      // The song's end on our own clock (no `ended` event comes from a song that never played).
+      if (this.loop) { this.#offsetSecs = 0; this.#startMs = performance.now(); song = 0; } else { this.#offsetSecs = song = this.duration; this.pause(); this.#event("ended", {}); }
+    }
     if (this.#project) {
       // A project's dance is rendered on the song's own time line: frame time is song time.
       clipTime = Math.min(song, dur);
