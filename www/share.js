@@ -152,14 +152,14 @@ const fmt = (s) => `${Math.floor(s / 60)}:${String(Math.round(s % 60)).padStart(
  */
 function askForSong(song, messages) {
   return new Promise((resolve) => {
+    // Styled in style.css (the page's CSP allows no inline style).
     const box = document.createElement("div");
     box.id = "share-song";
     box.setAttribute("role", "dialog");
     box.setAttribute("aria-labelledby", "share-song-title");
-    box.style.cssText = "position:fixed;left:50%;top:20%;transform:translateX(-50%);z-index:50;background:#1d2027;color:#eee;border:1px solid #567;border-radius:8px;padding:1em 1.2em;max-width:32em;box-shadow:0 6px 30px #000a";
     box.innerHTML = `<p id="share-song-title"></p>
       <p><label>Song file: <input id="share-song-input" type="file" accept="audio/*,.mp3,.ogg,.wav,.flac,.m4a"></label></p>
-      <p id="share-song-problem" role="alert" style="color:#f99"></p>
+      <p id="share-song-problem" role="alert"></p>
       <button id="share-song-cancel" type="button">Cancel</button>`;
     box.querySelector("#share-song-title").textContent =
       `This dance link is on the song “${song.name}” (${fmt(song.durationSecs)}). The song is not in the link: choose that file on your machine to see the dance.`;

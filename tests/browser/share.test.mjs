@@ -110,6 +110,7 @@ test("a dance on a song file: the link names the song; a fresh page asks for it,
     const ctx = await browser.newContext({ viewport: { width: 1280, height: 800 } });
     const fresh = await ctx.newPage();
     fresh.on("pageerror", (e) => logs.push(`[pageerror] ${e.message}`));
+    fresh.on("console", (m) => logs.push(`[${m.type()}] ${m.text()}`));
     await fresh.goto(link);
     await fresh.waitForFunction(() => document.body.dataset.shared === "asking-song", null, { timeout: 90000 });
     assert.match(await fresh.textContent("#share-song"), /Kevin_MacLeod_-_Vibe_Ace\.hq\.ogg/);
@@ -129,6 +130,7 @@ test("a dance on a song file: the link names the song; a fresh page asks for it,
     assert.deepEqual(await danceOf(fresh), original, "same bars, same moves, same pinned/generated");
     await ctx.close();
     assert.ok(!logs.some((l) => l.includes("[pageerror]")), logs.join("\n"));
+    assert.ok(!logs.some((l) => /Content Security Policy/i.test(l)), `the song chooser works under the page's CSP: ${logs.filter((l) => /Content Security/i.test(l)).join("\n")}`);
   } finally {
     await browser.close();
   }
