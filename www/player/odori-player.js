@@ -89,7 +89,8 @@ const AUDIO_TYPES = { mp3: "audio/mpeg", ogg: "audio/ogg", oga: "audio/ogg", opu
  * A `.odori` project as the player plays it: its dance rendered into a library of the full
  * engine (frame time is song time), and its own song as the music (the file as saved; the
  * demo song is synthesised again by the engine, the same samples the grid was found on).
- * Returns `{ library, clip, musicUrl }`; `musicUrl` is an object URL the caller revokes.
+ * Returns `{ library, clip, musicUrl, demoSong }`; `musicUrl` is an object URL the caller
+ * revokes, null for the demo song (`demoSong`: made by `demoSongUrl`, after the first pose).
  * Throws the engine's typed errors (`not-odori`, `truncated`, `corrupt`, `newer-version`, …),
  * and `no-dance` when the project holds no dance to play.
  */
@@ -120,8 +121,7 @@ function openProject(engine, fileName, bytes) {
       const ext = (doc.song.fileName.split(".").pop() || "").toLowerCase();
       musicUrl = URL.createObjectURL(new Blob([audio], AUDIO_TYPES[ext] ? { type: AUDIO_TYPES[ext] } : {}));
     } else {
-      const demo = engine.DemoSong.render(44100);
-      try { musicUrl = URL.createObjectURL(wavFromSamples(demo.samples, demo.sampleRateHz)); } finally { demo.free(); }
+      musicUrl = null; // the demo song: synthesised later (it takes a while), see demoSongUrl
     }
     // The project's character (an imported skinned humanoid), when it has one.
     let characterClip = null, characterName = null;
@@ -136,13 +136,19 @@ function openProject(engine, fileName, bytes) {
         characterName = source.fileName;
       }
     }
-    return { library, clip, musicUrl, name: doc.name || fileName, songName: doc.song.fileName, characterClip, characterName };
+    return { library, clip, musicUrl, demoSong: !doc.song.audio, name: doc.name || fileName, songName: doc.song.fileName, characterClip, characterName };
   } catch (e) {
     library.free();
     throw Object.assign(e, { file: e.file || fileName });
   } finally {
     project.free();
   }
+}
+
+/** The engine's demo song (the same samples a project's grid was found on), as a WAV object URL. */
+function demoSongUrl(engine) {
+  const demo = engine.DemoSong.render(44100);
+  try { return URL.createObjectURL(wavFromSamples(demo.samples, demo.sampleRateHz)); } finally { demo.free(); }
 }
 
 /** Does this browser have WebGPU or WebGL2 at all? Probed once per page. */
@@ -259,6 +265,7 @@ export class OdoriPlayer extends HTMLElement {
   #dressClips = []; // clips made for the character (removed when it changes)
   #dressToken = 0;
   #project = null; // { name, songName, musicUrl } when src is a .odori project
+  #pendingDemo = false; // a project on the demo song whose song is not synthesised yet
   #songUrl = null; // object URL of the project's song, revoked when replaced
   /** The last drawn frame: { songTimeSecs, clipTimeSecs } (for tests and sync checks). */
   lastFrame = null;
@@ -419,6 +426,7 @@ export class OdoriPlayer extends HTMLElement {
     this.#updateButton();
     if (this.#state === "idle") this.#load();
     if (this.#state !== "ready" || !this.#viewer) return;
+    this.#ensureMusic();
     if (this.#audio && !this.#silent) {
       try {
         await this.#audio.play();
@@ -552,11 +560,14 @@ export class OdoriPlayer extends HTMLElement {
       this.#library?.free();
       this.#library = null;
       this.#project = null;
+      this.#pendingDemo = false;
       let clip;
       if (projectSource) {
         const opened = openProject(engine, name, bytes);
         this.#library = opened.library;
         this.#project = { name: opened.name, songName: opened.songName, musicUrl: opened.musicUrl, characterClip: opened.characterClip, characterName: opened.characterName };
+        // The demo song is synthesised once the first pose is up (or at play()), not before.
+        this.#pendingDemo = opened.demoSong && !this.music;
         clip = opened.clip;
       } else {
         this.#library = new engine.Library();
@@ -590,6 +601,20 @@ export class OdoriPlayer extends HTMLElement {
     } catch (e) {
       if (token === this.#loadToken) this.#fail(e);
     }
+  }
+
+  /** A project on the demo song: its song is made now (once), and becomes the clock. */
+  #ensureMusic() {
+    if (!this.#pendingDemo || !this.#project) return;
+    this.#pendingDemo = false;
+    this.#project.musicUrl = demoSongUrl(this.#engine);
+    try {
+      this.#setupAudio();
+    } catch (e) {
+      this.#fail(e);
+      return;
+    }
+    this.$(".seek").max = String(this.duration || this.#clip.durationSecs);
   }
 
   #setupAudio() {
@@ -659,7 +684,14 @@ export class OdoriPlayer extends HTMLElement {
         this.#event("firstpose", { ms: this.timings.firstPoseMs, backend: viewer.backend });
       }
       this.#showPoster();
-      if (this.#playing || this.#resume) this.play();
+      if (this.#pendingDemo) {
+        // Let the first pose reach the screen before the demo song is synthesised (~0.5 s of
+        // the main thread), then play if asked.
+        requestAnimationFrame(() => requestAnimationFrame(() => {
+          this.#ensureMusic();
+          if (this.#viewer === viewer && (this.#playing || this.#resume)) this.play();
+        }));
+      } else if (this.#playing || this.#resume) this.play();
     })();
     try { await this.#acquiring; } finally { this.#acquiring = null; }
   }
