@@ -23,10 +23,11 @@ export interface OdoriPlayerClip {
   durationSecs: number;
 }
 
-/** With a `.odori` src: the project's name and its song's file name. */
+/** With a `.odori` src: the project's name, its song's file name, and its character's file (or null). */
 export interface OdoriPlayerProject {
   name: string;
   song: string;
+  character: string | null;
 }
 
 /** The player's own events (its `progress` and `error` are CustomEvents, as <model-viewer>'s). */
