@@ -190,8 +190,14 @@ async function main() {
     document.body.dataset.project = "ready";
   });
   await session.bindButtons({ newButton: $("#project-new"), openButton: $("#project-open"), saveButton: $("#project-save"), recent: $("#project-recent") });
-  // Share by link: a button beside Generate; a #dance=… link is applied once the bars are in.
-  const share = installShare({ choreo, messages, songReady: demoSong });
+  // Share by link: a button beside Generate; a #dance=… link is applied once the bars are in
+  // (a link on a song file asks for the file, checks its hash, and loads it as any song).
+  const share = installShare({
+    choreo, messages, songReady: demoSong,
+    song: () => (document.body.dataset.song === "demo" ? { demo: true }
+      : { name: songPanel.name, durationSecs: songPlayer.duration, sha256: session.project?.doc().song?.audio }),
+    loadSong: (fileName, bytes) => loadSongBytes(fileName, bytes, songPanel, messages, session),
+  });
   Object.assign(odori, { song: songPanel, search: searchPanel, searchClient, text: textPanel, choreo, share, project: session });
   document.body.dataset.ready = "1";
 }

@@ -44,3 +44,25 @@ export function addPlayer(parent: HTMLElement, src: string, audio: HTMLAudioElem
   console.log(gpu, player.duration, player.paused);
   return player;
 }
+
+/** Plays a project saved by the app (`.odori`) on a character of the page's choosing. */
+export function addProjectPlayer(parent: HTMLElement, odoriUrl: string, characterGlbUrl?: string): OdoriPlayer {
+  const player = document.createElement("odori-player");
+  player.src = odoriUrl; // its dance, on its own song
+  player.setAttribute("character", characterGlbUrl ?? "builtin");
+  OdoriPlayer.seekStepSecs = 2;
+  player.addEventListener("load", (e) => {
+    const project = e.detail.project;
+    if (project) console.log(`${project.name} on ${project.song}`);
+  });
+  player.addEventListener("error", (e) => {
+    const kind: OdoriErrorKind | "load" = e.detail.kind;
+    console.error(kind === "not-odori" ? `${odoriUrl} is not a project` : e.detail.message);
+  });
+  player.addEventListener("ended", () => {
+    const pose: Float32Array | null = player.jointPositions();
+    if (pose) console.log(`ended with the head at y = ${pose[1].toFixed(2)} m`);
+  });
+  parent.append(player);
+  return player;
+}

@@ -6,7 +6,8 @@
 //    (RobotExpressive, 464 KB) in headless Chromium (WebGL2 for both: model-viewer has no
 //    WebGPU path; ours also on WebGPU), median of N cold page loads; plus the time from
 //    navigation start, which counts model-viewer's script (it carries three.js) and our
-//    engine fetch alike.
+//    engine fetch alike; and the same for a `.odori` project (a dance generated on the demo
+//    song, and on a song file), for which the player fetches the full engine.
 // Not a test. Run after `./dev build`: node tests/bench/embed.mjs [runs]
 import { readFileSync, statSync } from "node:fs";
 import { gzipSync } from "node:zlib";
@@ -47,6 +48,18 @@ const PAGES = {
     p.addEventListener("error", (e) => { window.result = { error: e.detail.message }; });
     document.body.append(p);
   </script>`,
+  // A .odori project (made below through the API): the player fetches the full engine for it.
+  ...Object.fromEntries(["demo", "song"].map((k) => [`/project-${k}.html`, `<!doctype html><body style="margin:0"><script type="module">
+    import { OdoriPlayer } from "/pkg/player/odori-player.js";
+    OdoriPlayer.backend = new URLSearchParams(location.search).get("backend");
+    const p = document.createElement("odori-player");
+    p.setAttribute("src", "/${k}.odori"); p.setAttribute("loading", "eager");
+    p.style.cssText = "width:640px;height:480px;display:block";
+    p.addEventListener("firstpose", (e) => { window.result = { attachToFirstMs: e.detail.ms, sinceNavMs: performance.now(), backend: e.detail.backend }; });
+    p.addEventListener("error", (e) => { window.result = { error: e.detail.message }; });
+    document.body.append(p);
+  </script>`])),
+  "/maker.html": "<!doctype html><title>maker</title>",
   "/mv.html": `<!doctype html><body style="margin:0"><script type="module">
     import "/mv/model-viewer.min.js";
     await customElements.whenDefined("model-viewer");
@@ -69,7 +82,10 @@ const ORIGIN = `http://${ORIGIN_HOST}`;
 const external = new Set();
 const TYPES = { ".js": "text/javascript", ".wasm": "application/wasm", ".html": "text/html", ".glb": "model/gltf-binary" };
 
-async function measure(backend, pageName) {
+const PROJECTS = {};
+const SONG = join(data, "music", "Kevin_MacLeod_-_Vibe_Ace.hq.ogg");
+
+async function measure(backend, pageName, work) {
   const { browser, page } = await launch(backend);
   try {
     // Anything else (model-viewer may reach for a CDN) fails at once: no internet here, and a
@@ -80,12 +96,15 @@ async function measure(backend, pageName) {
       let body;
       if (PAGES[path]) body = PAGES[path];
       else if (path === "/robot.glb") body = readFileSync(GLB);
+      else if (PROJECTS[path]) body = PROJECTS[path];
+      else if (path.startsWith("/audio/")) body = readFileSync(join(root, "www", path));
       else if (path.startsWith("/mv/")) body = readFileSync(MV);
       else if (path.startsWith("/pkg/")) body = readFileSync(join(root, path));
       else return route.fulfill({ status: 404, body: "" });
       return route.fulfill({ status: 200, contentType: TYPES[extname(path)] || "application/octet-stream", body });
     });
     await page.goto(`${ORIGIN}${pageName}?backend=${backend}`);
+    if (work) return await work(page);
     await page.waitForFunction(() => window.result, null, { timeout: 120000 });
     return await page.evaluate(() => window.result);
   } finally {
@@ -93,9 +112,36 @@ async function measure(backend, pageName) {
   }
 }
 
+/** Two projects with a generated dance, made through the API: on the demo song, and on a song file. */
+for (const [key, songFile] of [["demo", null], ["song", SONG]]) {
+  const b64 = await measure("webgl2", "/maker.html", (page) => page.evaluate(async (songB64) => {
+    const engine = await import("/pkg/odori.js");
+    await engine.default();
+    const { rmsEnvelope } = await import("/audio/rms.js");
+    const { bufferFromSamples, decodeSong } = await import("/audio/song-player.js");
+    const p = new engine.Project();
+    if (songB64) {
+      const bytes = Uint8Array.from(atob(songB64), (c) => c.charCodeAt(0));
+      const env = await rmsEnvelope(await decodeSong(bytes, "song.ogg"));
+      p.setSong("song.ogg", bytes, env.hopSecs, env.bands, undefined);
+    } else {
+      const demo = engine.DemoSong.render(44100);
+      const env = await rmsEnvelope(bufferFromSamples(demo.samples, demo.sampleRateHz));
+      p.setSong("Demo song (built-in)", undefined, env.hopSecs, env.bands, undefined);
+    }
+    p.generate();
+    const saved = p.save();
+    let bin = "";
+    for (let i = 0; i < saved.length; i += 0x8000) bin += String.fromCharCode.apply(null, saved.subarray(i, i + 0x8000));
+    return btoa(bin);
+  }, songFile ? readFileSync(songFile).toString("base64") : null));
+  PROJECTS[`/${key}.odori`] = Buffer.from(b64, "base64");
+}
+
 const median = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length / 2)]; };
-console.log(`\ntime to the first drawn pose, ${RUNS} cold page loads each, median (GLB ${kb(statSync(GLB).size)}):`);
-const rows = [["odori player", "webgl2", "/odori.html"], [`model-viewer ${mvVersion}`, "webgl2", "/mv.html"], ["odori player", "webgpu", "/odori.html"]];
+console.log(`\ntime to the first drawn pose, ${RUNS} cold page loads each, median (GLB ${kb(statSync(GLB).size)}; .odori projects: demo song ${kb(PROJECTS["/demo.odori"].length)}, song file ${kb(PROJECTS["/song.odori"].length)}, whose player also fetches the full engine):`);
+const rows = [["odori player", "webgl2", "/odori.html"], [`model-viewer ${mvVersion}`, "webgl2", "/mv.html"], ["odori player", "webgpu", "/odori.html"],
+  [`.odori, demo song`, "webgl2", "/project-demo.html"], [`.odori, song file`, "webgl2", "/project-song.html"]];
 const results = {};
 for (const [label, backend, path] of rows) {
   const rs = [];

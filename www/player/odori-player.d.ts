@@ -1,9 +1,9 @@
 // Types of `odori/player`: the <odori-player> custom element.
-import type { Library, ImportReport } from "./odori_player.js";
+import type { Library, ImportReport, OdoriErrorKind } from "./odori_player.js";
 
 /** Detail of the `error` event. `kind` is an OdoriErrorKind, or "load" for a network/media failure. */
 export interface OdoriPlayerErrorDetail {
-  kind: string;
+  kind: OdoriErrorKind | "load";
   message: string;
   file?: string;
 }
@@ -23,9 +23,16 @@ export interface OdoriPlayerClip {
   durationSecs: number;
 }
 
+/** With a `.odori` src: the project's name, its song's file name, and its character's file (or null). */
+export interface OdoriPlayerProject {
+  name: string;
+  song: string;
+  character: string | null;
+}
+
 /** The player's own events (its `progress` and `error` are CustomEvents, as <model-viewer>'s). */
 export interface OdoriPlayerEventMap {
-  load: CustomEvent<{ clip: OdoriPlayerClip }>;
+  load: CustomEvent<{ clip: OdoriPlayerClip; project?: OdoriPlayerProject }>;
   progress: CustomEvent<OdoriPlayerProgressDetail>;
   error: CustomEvent<OdoriPlayerErrorDetail>;
   ended: CustomEvent<Record<string, never>>;
@@ -35,16 +42,23 @@ export interface OdoriPlayerEventMap {
 /**
  * `<odori-player src="dance.glb" animation-name="Dance" music="song.ogg" autoplay loop camera-controls poster="poster.png">`
  *
- * Attributes: `src` (GLB/glTF with animation or BVH; none: the engine's built-in routine), `music`
- * (audio URL or `#id` of an `<audio>`: its clock drives the figure), `animation-name`, `character`
- * ("auto" | "stick"), `autoplay`, `loop`, `camera-controls`, `poster`, `loading` ("lazy" | "eager"),
- * `backend` ("auto" | "webgpu" | "webgl2").
+ * Attributes: `src` (GLB/glTF with animation, BVH, or a `.odori` project: its dance on its own
+ * song; none: the engine's built-in routine), `music` (audio URL or `#id` of an `<audio>`: its
+ * clock drives the figure), `animation-name`, `character` ("auto" | "stick" | "builtin" | URL of
+ * a skinned humanoid GLB), `autoplay`, `loop`, `camera-controls`, `poster`, `loading`
+ * ("lazy" | "eager"), `backend` ("auto" | "webgpu" | "webgl2").
  */
 export declare class OdoriPlayer extends HTMLElement {
   /** Where the player build's .wasm is, when a bundler moved it (default: beside odori_player.js). */
   static wasmUrl: string | URL | undefined;
+  /** The full engine's module (`odori.js`), loaded only for a `.odori` src; default `../odori.js`. */
+  static fullEngineUrl: string | URL | undefined;
+  /** The full engine's .wasm, when a bundler moved it (default: beside its module). */
+  static fullEngineWasmUrl: string | URL | undefined;
   /** How far outside the viewport (CSS margin) a player loads and keeps its GPU context. */
   static nearMargin: string;
+  /** Seconds the arrow keys seek (on the player or its slider). */
+  static seekStepSecs: number;
   /** Graphics back end for players without a `backend` attribute. */
   static backend: "auto" | "webgpu" | "webgl2";
   static readonly observedAttributes: string[];
@@ -64,6 +78,10 @@ export declare class OdoriPlayer extends HTMLElement {
   readonly gpuContext: "webgpu" | "webgl2" | null;
   readonly audioElement: HTMLMediaElement | null;
   readonly clip: OdoriPlayerClip | null;
+  /** With a `.odori` src: the project playing, else null. */
+  readonly project: OdoriPlayerProject | null;
+  /** The figure's points (metres; x, y, z each) at `clipTimeSecs` (default: the pose last drawn); null before loading. */
+  jointPositions(clipTimeSecs?: number): Float32Array | null;
   /** The last drawn frame. */
   lastFrame: { songTimeSecs: number; clipTimeSecs: number } | null;
   /** Milliseconds from attach to the engine + source being ready and to the first drawn pose. */
@@ -78,7 +96,7 @@ export declare class OdoriPlayer extends HTMLElement {
   addEventListener(type: string, listener: EventListenerOrEventListenerObject, options?: boolean | AddEventListenerOptions): void;
 }
 
-/** Turns a source's bytes into clips (the seam where `.odori` projects plug in). */
+/** Turns a motion file's bytes into clips (a `.odori` project is refused: the element opens those with the full engine). */
 export declare function importSource(library: Library, fileName: string, bytes: Uint8Array): ImportReport;
 
 declare global {

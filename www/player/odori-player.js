@@ -8,6 +8,12 @@
 // "webgl2"). Methods play(), pause(); properties currentTime, duration, paused; events load,
 // progress, error, ended.
 //
+// `src` is a motion file (GLB/glTF with animation, BVH) or a `.odori` project. A project's
+// dance is rendered from its moves by the full engine (pkg/odori.js), loaded only for such a
+// source: the choreography (built-in moves, cutting the project's own files into moves) is
+// what the player build leaves out to stay small, and a baked copy of the dance in the file
+// would be a second truth to keep in step. The project's own song becomes the music clock.
+//
 // Why it is shaped this way:
 // - The engine is fetched only when the element comes near the viewport (IntersectionObserver),
 //   or at once with loading="eager"; every player on a page shares the one engine module.
@@ -20,6 +26,7 @@
 // - Autoplay with sound is often blocked: the player then starts muted and shows "Unmute".
 
 let enginePromise = null;
+let fullEnginePromise = null;
 let graphicsProbe = null;
 
 /** Loads (once per page) the player build of the engine. */
@@ -31,6 +38,117 @@ function loadEngine() {
     return engine;
   });
   return enginePromise;
+}
+
+/**
+ * Loads (once per page, and only for a `.odori` source) the full engine: a project's dance is
+ * made of the engine's built-in moves and of moves cut from the project's own files, so
+ * rendering it needs the choreography the player build leaves out. The specifier is computed,
+ * not literal, so a bundler does not pull the full engine into a player bundle: when it moved
+ * the files, say where they are with `OdoriPlayer.fullEngineUrl` / `fullEngineWasmUrl`.
+ */
+function loadFullEngine() {
+  fullEnginePromise ??= (async () => {
+    // Not a literal in new URL(): vite would copy the module as an asset into every bundle.
+    const beside = "../odori.js";
+    const url = OdoriPlayer.fullEngineUrl ?? new URL(beside, import.meta.url).href;
+    const engine = await import(/* @vite-ignore */ String(url));
+    const wasm = OdoriPlayer.fullEngineWasmUrl;
+    await engine.default(wasm ? { module_or_path: wasm } : undefined);
+    return engine;
+  })();
+  fullEnginePromise.catch(() => { fullEnginePromise = null; });
+  return fullEnginePromise;
+}
+
+/** A `.odori` project: by its name, or by its bytes (a zip whose first entry is manifest.json). */
+function isProject(fileName, bytes) {
+  if (/\.odori$/i.test(fileName)) return true;
+  if (!bytes || bytes.length < 30 || bytes[0] !== 0x50 || bytes[1] !== 0x4b || bytes[2] !== 3 || bytes[3] !== 4) return false;
+  const nameLen = bytes[26] | (bytes[27] << 8);
+  return new TextDecoder().decode(bytes.subarray(30, 30 + nameLen)) === "manifest.json";
+}
+
+/** Mono PCM (±1) as a 16-bit WAV file, for an <audio> element (the demo song is synthesised). */
+function wavFromSamples(samples, sampleRateHz) {
+  const rate = Math.round(sampleRateHz);
+  const buf = new ArrayBuffer(44 + samples.length * 2);
+  const v = new DataView(buf);
+  const text = (at, s) => { for (let i = 0; i < s.length; i++) v.setUint8(at + i, s.charCodeAt(i)); };
+  text(0, "RIFF"); v.setUint32(4, 36 + samples.length * 2, true); text(8, "WAVE");
+  text(12, "fmt "); v.setUint32(16, 16, true); v.setUint16(20, 1, true); v.setUint16(22, 1, true);
+  v.setUint32(24, rate, true); v.setUint32(28, rate * 2, true); v.setUint16(32, 2, true); v.setUint16(34, 16, true);
+  text(36, "data"); v.setUint32(40, samples.length * 2, true);
+  for (let i = 0; i < samples.length; i++) v.setInt16(44 + i * 2, Math.round(Math.max(-1, Math.min(1, samples[i])) * 32767), true);
+  return new Blob([buf], { type: "audio/wav" });
+}
+
+const AUDIO_TYPES = { mp3: "audio/mpeg", ogg: "audio/ogg", oga: "audio/ogg", opus: "audio/ogg", wav: "audio/wav", flac: "audio/flac", m4a: "audio/mp4", aac: "audio/aac", webm: "audio/webm" };
+
+/**
+ * A `.odori` project as the player plays it: its dance rendered into a library of the full
+ * engine (frame time is song time), and its own song as the music (the file as saved; the
+ * demo song is synthesised again by the engine, the same samples the grid was found on).
+ * Returns `{ library, clip, musicUrl, demoSong }`; `musicUrl` is an object URL the caller
+ * revokes, null for the demo song (`demoSong`: made by `demoSongUrl`, after the first pose).
+ * Throws the engine's typed errors (`not-odori`, `truncated`, `corrupt`, `newer-version`, …),
+ * and `no-dance` when the project holds no dance to play.
+ */
+function openProject(engine, fileName, bytes) {
+  let project;
+  try {
+    project = engine.Project.open(bytes);
+  } catch (e) {
+    // The engine's typed error (kind, message); the page also wants to know which file.
+    throw Object.assign(e, { file: e.file || fileName, message: e.message.startsWith(fileName) ? e.message : `${fileName}: ${e.message}` });
+  }
+  const library = new engine.Library();
+  try {
+    const doc = project.doc();
+    // Kinds from the engine's own list (errorKinds()), so a page handles one vocabulary.
+    if (!doc.song) {
+      throw Object.assign(new Error(`${fileName}: the project has no song, so no dance to play`), { name: "OdoriError", kind: "no-song", file: fileName });
+    }
+    if (!(doc.dance?.bars || []).some((b) => b.state !== "empty")) {
+      throw Object.assign(new Error(`${fileName}: the project's dance is empty (no bar holds a move)`), { name: "OdoriError", kind: "choreo", file: fileName });
+    }
+    const id = project.renderDance(library, undefined);
+    const clip = library.clip(id);
+    let musicUrl;
+    if (doc.song.audio) {
+      const audio = project.blob(doc.song.audio);
+      if (!audio) throw Object.assign(new Error(`${fileName}: the song "${doc.song.fileName}" is missing from the project`), { name: "OdoriError", kind: "missing-blob", file: fileName });
+      const ext = (doc.song.fileName.split(".").pop() || "").toLowerCase();
+      musicUrl = URL.createObjectURL(new Blob([audio], AUDIO_TYPES[ext] ? { type: AUDIO_TYPES[ext] } : {}));
+    } else {
+      musicUrl = null; // the demo song: synthesised later (it takes a while), see demoSongUrl
+    }
+    // The project's character (an imported skinned humanoid), when it has one.
+    let characterClip = null, characterName = null;
+    const source = doc.character && doc.sources.find((x) => x.id === doc.character.source);
+    const characterBytes = source && project.blob(source.blob);
+    if (characterBytes) {
+      const o = source.options || {};
+      const options = Object.fromEntries(Object.entries({ fpsOverride: o.fps_override, unitScale: o.unit_scale, gltfFps: o.gltf_fps }).filter(([, v]) => v !== null && v !== undefined));
+      const character = library.importFile(source.fileName, characterBytes, options).clips[doc.character.clip];
+      if (character) {
+        characterClip = library.putOnCharacter(clip.id, character.id).id;
+        characterName = source.fileName;
+      }
+    }
+    return { library, clip, musicUrl, demoSong: !doc.song.audio, name: doc.name || fileName, songName: doc.song.fileName, characterClip, characterName };
+  } catch (e) {
+    library.free();
+    throw Object.assign(e, { file: e.file || fileName });
+  } finally {
+    project.free();
+  }
+}
+
+/** The engine's demo song (the same samples a project's grid was found on), as a WAV object URL. */
+function demoSongUrl(engine) {
+  const demo = engine.DemoSong.render(44100);
+  try { return URL.createObjectURL(wavFromSamples(demo.samples, demo.sampleRateHz)); } finally { demo.free(); }
 }
 
 /** Does this browser have WebGPU or WebGL2 at all? Probed once per page. */
@@ -55,14 +173,12 @@ function graphicsAvailable() {
 }
 
 /**
- * Turns a source's bytes into clips in the library and returns the import report. The one
- * place a new kind of source plugs in: `.odori` projects (issue #10) go here.
+ * Turns a motion file's bytes (GLB/glTF, BVH) into clips in the library and returns the import
+ * report. `.odori` projects are opened by the element itself (they need the full engine).
  */
 export function importSource(library, fileName, bytes) {
-  if (/\.odori$/i.test(fileName)) {
-    const e = new Error(`${fileName}: .odori projects cannot be played by this version of the player yet`);
-    Object.assign(e, { name: "OdoriError", kind: "unsupported", file: fileName });
-    throw e;
+  if (isProject(fileName, bytes)) {
+    throw Object.assign(new Error(`${fileName}: a .odori project is played by <odori-player src>, not imported as motion`), { name: "OdoriError", kind: "bad-argument", file: fileName });
   }
   return library.importFile(fileName, bytes, {});
 }
@@ -106,8 +222,17 @@ const fmt = (s) => {
 export class OdoriPlayer extends HTMLElement {
   /** Where the player build's .wasm is, when a bundler moved it (default: beside odori_player.js). */
   static wasmUrl = undefined;
+  /**
+   * Where the full engine's module is (needed only for a `.odori` src), when a bundler moved
+   * it (default: `../odori.js` beside the player build, as in the npm package).
+   */
+  static fullEngineUrl = undefined;
+  /** Where the full engine's .wasm is, when a bundler moved it (default: beside its module). */
+  static fullEngineWasmUrl = undefined;
   /** How far outside the viewport (CSS margin) a player loads and keeps its GPU context. */
   static nearMargin = "100px";
+  /** Seconds the arrow keys seek (on the player or its slider). */
+  static seekStepSecs = 5;
   /** Graphics back end for players without a `backend` attribute: "auto" | "webgpu" | "webgl2". */
   static backend = "auto";
 
@@ -135,6 +260,13 @@ export class OdoriPlayer extends HTMLElement {
   #attachMs = 0;
   #drag = null;
   #loadToken = 0;
+  #silent = false; // the song may not play at all yet (autoplay policy): the clock is our own
+  #dressed = null; // id of the clip drawn when the motion is put on a character
+  #dressClips = []; // clips made for the character (removed when it changes)
+  #dressToken = 0;
+  #project = null; // { name, songName, musicUrl } when src is a .odori project
+  #pendingDemo = false; // a project on the demo song whose song is not synthesised yet
+  #songUrl = null; // object URL of the project's song, revoked when replaced
   /** The last drawn frame: { songTimeSecs, clipTimeSecs } (for tests and sync checks). */
   lastFrame = null;
   /** Milliseconds from attach to the first drawn pose (and to the engine/source being ready). */
@@ -147,17 +279,50 @@ export class OdoriPlayer extends HTMLElement {
     this.$ = (sel) => root.querySelector(sel);
     this.$(".play").addEventListener("click", () => (this.paused ? this.play() : this.pause()));
     this.$(".unmute").addEventListener("click", () => {
-      if (this.#audio) this.#audio.muted = false;
+      const a = this.#audio;
       this.$(".unmute").hidden = true;
+      if (!a) return;
+      a.muted = false;
+      if (this.#silent) {
+        // The figure kept time by itself: the song joins it there (this click is the gesture).
+        a.currentTime = this.currentTime;
+        this.#silent = false;
+        if (this.#playing) a.play().catch((e) => this.#fail(e));
+      }
     });
     const seek = this.$(".seek");
     seek.addEventListener("input", () => { this.currentTime = Number(seek.value); });
+    // The slider's own arrow step would be its 0.01 s resolution: seek by SEEK_STEP_SECS instead.
+    seek.addEventListener("keydown", (ev) => {
+      const to = this.#seekKey(ev.key);
+      if (to === null) return;
+      ev.preventDefault();
+      this.currentTime = to;
+    });
     this.addEventListener("keydown", (ev) => {
-      // Space on the host or the canvas; buttons and the slider handle their own keys.
+      // Keys on the host or the canvas; buttons and the slider handle their own.
       const inner = ev.composedPath()[0];
       if (inner !== this && inner?.tagName !== "CANVAS") return;
-      if (ev.code === "Space" || ev.key === "k") { ev.preventDefault(); this.paused ? this.play() : this.pause(); }
+      if (ev.code === "Space" || ev.key === "Enter" || ev.key === "k") {
+        ev.preventDefault();
+        this.paused ? this.play() : this.pause();
+        return;
+      }
+      // Arrows on the canvas turn the camera (camera-controls); on the host they seek.
+      if (inner === this) {
+        const to = this.#seekKey(ev.key);
+        if (to !== null) { ev.preventDefault(); this.currentTime = to; }
+      }
     });
+  }
+
+  /** Where a seek key takes the clock (seconds), or null when it is not one. */
+  #seekKey(key) {
+    const now = this.currentTime;
+    const end = Number.isFinite(this.duration) ? this.duration : now;
+    const step = OdoriPlayer.seekStepSecs;
+    const to = { ArrowLeft: now - step, ArrowDown: now - step, ArrowRight: now + step, ArrowUp: now + step, Home: 0, End: end }[key];
+    return to === undefined ? null : Math.max(0, Math.min(end, to));
   }
 
   // ---- attributes ----
@@ -174,7 +339,7 @@ export class OdoriPlayer extends HTMLElement {
 
   /** Playback position in seconds: the song's when there is music, else the clip's. */
   get currentTime() {
-    if (this.#audio) return this.#audio.currentTime;
+    if (this.#audio && !this.#silent) return this.#audio.currentTime;
     if (!this.#playing) return this.#offsetSecs;
     return this.#offsetSecs + (performance.now() - this.#startMs) / 1000;
   }
@@ -201,6 +366,18 @@ export class OdoriPlayer extends HTMLElement {
   get audioElement() { return this.#audio; }
   /** The clip being played (ClipInfo), or null. */
   get clip() { return this.#clip; }
+  /** With a `.odori` src: `{ name, song }` of the project playing, else null. */
+  get project() { return this.#project ? { name: this.#project.name, song: this.#project.songName, character: this.#project.characterName } : null; }
+
+  /**
+   * Joint positions (metres; x, y, z per point) of the figure at `clipTimeSecs` of its clip
+   * (default: the pose last drawn), or null before loading: what the player shows, for pages
+   * that attach things to the dancer, and for tests.
+   */
+  jointPositions(clipTimeSecs = this.lastFrame?.clipTimeSecs ?? 0) {
+    if (!this.#library || !this.#clip) return null;
+    return this.#library.jointPositions(this.#clip.id, clipTimeSecs);
+  }
 
   // ---- lifecycle ----
   connectedCallback() {
@@ -232,7 +409,7 @@ export class OdoriPlayer extends HTMLElement {
     if (oldValue === value) return;
     if (name === "poster") this.#showPoster();
     if (name === "loop" && this.#audio && this.#ownAudio) this.#audio.loop = this.loop;
-    if (name === "character") this.#drawNow();
+    if (name === "character" && this.#state === "ready") this.#dress().then(() => { this.#frame(); this.#drawNow(); });
     if (name === "camera-controls" && this.#canvas) this.#bindCamera(this.#canvas);
     if ((name === "src" || name === "music" || name === "animation-name") && this.#state !== "idle") {
       this.pause();
@@ -249,7 +426,8 @@ export class OdoriPlayer extends HTMLElement {
     this.#updateButton();
     if (this.#state === "idle") this.#load();
     if (this.#state !== "ready" || !this.#viewer) return;
-    if (this.#audio) {
+    this.#ensureMusic();
+    if (this.#audio && !this.#silent) {
       try {
         await this.#audio.play();
       } catch (e) {
@@ -257,8 +435,19 @@ export class OdoriPlayer extends HTMLElement {
         // Autoplay with sound is blocked here: start muted, offer to unmute.
         this.#audio.muted = true;
         this.$(".unmute").hidden = false;
-        await this.#audio.play();
+        try {
+          await this.#audio.play();
+        } catch (e2) {
+          if (e2.name !== "NotAllowedError") throw e2;
+          // Not even muted playback is allowed (a strict autoplay policy): the figure keeps
+          // time by itself, and Unmute (a gesture) brings the song in at that time.
+          this.#silent = true;
+          this.#offsetSecs = this.#audio.currentTime;
+          this.#startMs = performance.now();
+        }
       }
+    } else if (this.#silent) {
+      this.#startMs = performance.now();
     } else {
       if (this.#clip && !this.loop && this.#offsetSecs >= this.#clip.durationSecs) this.#offsetSecs = 0;
       this.#startMs = performance.now();
@@ -268,7 +457,7 @@ export class OdoriPlayer extends HTMLElement {
 
   /** Pauses; the figure stays on the current pose. */
   pause() {
-    if (!this.#audio && this.#playing) this.#offsetSecs = this.currentTime;
+    if ((!this.#audio || this.#silent) && this.#playing) this.#offsetSecs = this.currentTime;
     this.#playing = false;
     this.#audio?.pause();
     cancelAnimationFrame(this.#raf);
@@ -315,13 +504,13 @@ export class OdoriPlayer extends HTMLElement {
     img.hidden = !url || (this.#viewer !== null && this.lastFrame !== null);
   }
 
-  async #fetchBytes(url) {
+  async #fetchBytes(url, progress = true) {
     const res = await fetch(url);
     if (!res.ok) throw Object.assign(new Error(`${url}: HTTP ${res.status} ${res.statusText}`), { kind: "load", file: url });
     const total = Number(res.headers.get("content-length")) || 0;
     if (!res.body || !total) {
       const bytes = new Uint8Array(await res.arrayBuffer());
-      this.#event("progress", { totalProgress: 1 });
+      if (progress) this.#event("progress", { totalProgress: 1 });
       return bytes;
     }
     const reader = res.body.getReader();
@@ -332,7 +521,7 @@ export class OdoriPlayer extends HTMLElement {
       if (done) break;
       parts.push(value);
       got += value.length;
-      this.#event("progress", { totalProgress: Math.min(1, got / total) });
+      if (progress) this.#event("progress", { totalProgress: Math.min(1, got / total) });
     }
     const bytes = new Uint8Array(got);
     let at = 0;
@@ -357,32 +546,55 @@ export class OdoriPlayer extends HTMLElement {
         return;
       }
       const src = this.src;
-      const [engine, bytes] = await Promise.all([loadEngine(), src ? this.#fetchBytes(src) : null]);
+      const name = src ? decodeURIComponent(new URL(src, document.baseURI).pathname.split("/").pop() || "source") : "built-in";
+      // A project named .odori goes straight to the full engine; one found by its bytes
+      // (a URL without the extension) after the fetch.
+      const [engineGuess, bytes] = await Promise.all([isProject(name, null) ? loadFullEngine() : loadEngine(), src ? this.#fetchBytes(src) : null]);
+      const projectSource = bytes !== null && isProject(name, bytes);
+      const engine = projectSource ? await loadFullEngine() : engineGuess;
       if (token !== this.#loadToken) return;
       this.timings.engineMs = performance.now() - this.#attachMs;
+      // A viewer belongs to one engine's module: switching engines needs a fresh context.
+      if (this.#engine && this.#engine !== engine) this.#release();
       this.#engine = engine;
       this.#library?.free();
-      this.#library = new engine.Library();
-      let clips;
-      if (bytes) {
-        const name = decodeURIComponent(new URL(src, document.baseURI).pathname.split("/").pop() || "source");
-        clips = importSource(this.#library, name, bytes).clips;
+      this.#library = null;
+      this.#project = null;
+      this.#pendingDemo = false;
+      let clip;
+      if (projectSource) {
+        const opened = openProject(engine, name, bytes);
+        this.#library = opened.library;
+        this.#project = { name: opened.name, songName: opened.songName, musicUrl: opened.musicUrl, characterClip: opened.characterClip, characterName: opened.characterName };
+        // The demo song is synthesised once the first pose is up (or at play()), not before.
+        this.#pendingDemo = opened.demoSong && !this.music;
+        clip = opened.clip;
       } else {
-        // No src: the engine's own step-touch routine.
-        clips = [this.#library.addBuiltinDemo()];
-        this.#event("progress", { totalProgress: 1 });
-      }
-      const wanted = this.getAttribute("animation-name");
-      const clip = wanted ? clips.find((c) => c.name === wanted) : clips[0];
-      if (!clip) {
-        throw Object.assign(new Error(`${src || "built-in"}: no animation named "${wanted}" (it has: ${clips.map((c) => c.name).join(", ") || "none"})`), { kind: "not-found", file: src });
+        this.#library = new engine.Library();
+        let clips;
+        if (bytes) {
+          clips = importSource(this.#library, name, bytes).clips;
+        } else {
+          // No src: the engine's own step-touch routine.
+          clips = [this.#library.addBuiltinDemo()];
+          this.#event("progress", { totalProgress: 1 });
+        }
+        const wanted = this.getAttribute("animation-name");
+        clip = wanted ? clips.find((c) => c.name === wanted) : clips[0];
+        if (!clip) {
+          throw Object.assign(new Error(`${src || "built-in"}: no animation named "${wanted}" (it has: ${clips.map((c) => c.name).join(", ") || "none"})`), { kind: "not-found", file: src });
+        }
       }
       this.#clip = clip;
+      this.#dressClips = [];
+      this.#dressed = null;
+      await this.#dress();
+      if (token !== this.#loadToken) return;
       this.#setupAudio();
       this.#offsetSecs = 0;
       this.#state = "ready";
       this.$(".seek").max = String(this.duration || clip.durationSecs);
-      this.#event("load", { clip });
+      this.#event("load", this.#project ? { clip, project: this.project } : { clip });
       // Autoplay starts once a GPU context is held (when near the viewport).
       if (this.autoplay) this.#resume = true;
       if (this.#near) await this.#acquire();
@@ -391,10 +603,29 @@ export class OdoriPlayer extends HTMLElement {
     }
   }
 
+  /** A project on the demo song: its song is made now (once), and becomes the clock. */
+  #ensureMusic() {
+    if (!this.#pendingDemo || !this.#project) return;
+    this.#pendingDemo = false;
+    this.#project.musicUrl = demoSongUrl(this.#engine);
+    try {
+      this.#setupAudio();
+    } catch (e) {
+      this.#fail(e);
+      return;
+    }
+    this.$(".seek").max = String(this.duration || this.#clip.durationSecs);
+  }
+
   #setupAudio() {
     if (this.#audio && this.#ownAudio) { this.#audio.pause(); this.#audio.removeAttribute("src"); this.#audio.load(); }
     this.#audio = null;
-    const music = this.music;
+    this.#silent = false;
+    if (this.#songUrl) { URL.revokeObjectURL(this.#songUrl); this.#songUrl = null; }
+    // A `music` attribute wins; else a project plays its own song.
+    const music = this.music || this.#project?.musicUrl;
+    if (this.#project && !this.music) this.#songUrl = this.#project.musicUrl;
+    else if (this.#project) URL.revokeObjectURL(this.#project.musicUrl);
     if (!music) return;
     if (music.startsWith("#")) {
       const el = document.getElementById(music.slice(1));
@@ -410,11 +641,12 @@ export class OdoriPlayer extends HTMLElement {
     }
     const a = this.#audio;
     a.addEventListener("loadedmetadata", () => { this.$(".seek").max = String(a.duration || 0); });
-    a.addEventListener("error", () => this.#fail(Object.assign(new Error(`${music}: the song cannot be played (${a.error?.message || "media error " + a.error?.code})`), { kind: "load", file: music })));
+    const label = this.music || `${this.src}: the project's song "${this.#project?.songName}"`;
+    a.addEventListener("error", () => this.#fail(Object.assign(new Error(`${label}: the song cannot be played (${a.error?.message || "media error " + a.error?.code})`), { kind: "load", file: this.music || this.src })));
     a.addEventListener("ended", () => { this.pause(); this.#event("ended", {}); });
     // An <audio> of the page can be played and paused by its own controls: follow it.
     a.addEventListener("play", () => { if (!this.#playing) { this.#playing = true; this.#updateButton(); this.#tick(); } });
-    a.addEventListener("pause", () => { if (this.#playing && !a.ended) { this.#playing = false; this.#updateButton(); } });
+    a.addEventListener("pause", () => { if (this.#playing && !a.ended && !this.#silent) { this.#playing = false; this.#updateButton(); } });
     a.addEventListener("seeked", () => this.#drawNow());
   }
 
@@ -445,14 +677,21 @@ export class OdoriPlayer extends HTMLElement {
       }
       this.#viewer = viewer;
       this.#bindCamera(canvas);
-      viewer.frameFigures(this.#library, this.#figures(0));
+      this.#frame();
       this.#drawNow();
       if (this.timings.firstPoseMs === undefined) {
         this.timings.firstPoseMs = performance.now() - this.#attachMs;
         this.#event("firstpose", { ms: this.timings.firstPoseMs, backend: viewer.backend });
       }
       this.#showPoster();
-      if (this.#playing || this.#resume) this.play();
+      if (this.#pendingDemo) {
+        // Let the first pose reach the screen before the demo song is synthesised (~0.5 s of
+        // the main thread), then play if asked.
+        requestAnimationFrame(() => requestAnimationFrame(() => {
+          this.#ensureMusic();
+          if (this.#viewer === viewer && (this.#playing || this.#resume)) this.play();
+        }));
+      } else if (this.#playing || this.#resume) this.play();
     })();
     try { await this.#acquiring; } finally { this.#acquiring = null; }
   }
@@ -480,7 +719,61 @@ export class OdoriPlayer extends HTMLElement {
 
   #figures(clipTimeSecs) {
     const style = this.getAttribute("character") === "stick" ? "stick" : "auto";
-    return [{ clip: this.#clip.id, timeSecs: clipTimeSecs, style }];
+    return [{ clip: this.#dressed ?? this.#clip.id, timeSecs: clipTimeSecs, style }];
+  }
+
+  /** Frames the camera on the figure (after a load or a change of character). */
+  #frame() {
+    if (this.#viewer && this.#clip) this.#viewer.frameFigures(this.#library, this.#figures(0));
+  }
+
+  /**
+   * Puts the motion on the `character` the attribute names: "auto" (the source's own mesh,
+   * else a stick figure), "stick", "builtin" (the engine's built-in body: the clip exported as
+   * GLB with that body and read back, so the player build needs nothing more), or the URL of a
+   * skinned humanoid GLB/glTF (retargeted with the engine's putOnCharacter, spec §L). A
+   * character that cannot be used is reported (`error` event, with the engine's kind) and the
+   * dance goes on without it: nothing else is lost.
+   */
+  async #dress() {
+    const token = ++this.#dressToken;
+    const library = this.#library;
+    for (const id of this.#dressClips) library.remove(id);
+    this.#dressClips = [];
+    this.#dressed = null;
+    const want = (this.getAttribute("character") || "auto").trim();
+    // "auto" on a project: the project's own character, if it has one.
+    if (want === "auto" && this.#project?.characterClip != null) this.#dressed = this.#project.characterClip;
+    if (want === "auto" || want === "stick" || !this.#clip) return;
+    const clip = this.#clip;
+    try {
+      if (want === "builtin") {
+        const glb = library.exportGlb(clip.id, { character: "builtin" });
+        const report = library.importFile("built-in body.glb", glb, { gltfFps: clip.fps });
+        this.#dressClips = report.clips.map((c) => c.id);
+        this.#dressed = report.clips[0].id;
+        return;
+      }
+      const url = new URL(want, document.baseURI).href;
+      const name = decodeURIComponent(new URL(url).pathname.split("/").pop() || "character");
+      const bytes = await this.#fetchBytes(url, false);
+      if (token !== this.#dressToken || library !== this.#library) return;
+      const report = library.importFile(name, bytes, {});
+      this.#dressClips = report.clips.map((c) => c.id);
+      const character = report.clips.find((c) => c.hasMesh) ?? report.clips[0];
+      if (!character) throw Object.assign(new Error(`${name}: no character in the file`), { kind: "character-no-skin", file: name });
+      const worn = library.putOnCharacter(clip.id, character.id);
+      this.#dressClips.push(worn.id);
+      this.#dressed = worn.id;
+    } catch (e) {
+      if (token !== this.#dressToken) return;
+      for (const id of this.#dressClips) library.remove(id);
+      this.#dressClips = [];
+      this.#dressed = null;
+      const detail = { kind: e.kind || "load", message: `character="${want}": ${e.message || e}`, file: e.file || want };
+      this.#message(detail.message);
+      this.#event("error", detail);
+    }
   }
 
   #fitCanvas(canvas) {
@@ -502,7 +795,14 @@ export class OdoriPlayer extends HTMLElement {
     let song = this.currentTime;
     const dur = this.#clip.durationSecs;
     let clipTime;
-    if (this.#audio) {
+    if (this.#silent && this.#playing && song >= this.duration) {
+      // The song's end on our own clock (no `ended` event comes from a song that never played).
+      if (this.loop) { this.#offsetSecs = 0; this.#startMs = performance.now(); song = 0; } else { this.#offsetSecs = song = this.duration; this.pause(); this.#event("ended", {}); }
+    }
+    if (this.#project) {
+      // A project's dance is rendered on the song's own time line: frame time is song time.
+      clipTime = Math.min(song, dur);
+    } else if (this.#audio) {
       // The dance repeats under the song.
       clipTime = dur > 0 ? song % dur : 0;
     } else if (this.loop) {
@@ -519,6 +819,7 @@ export class OdoriPlayer extends HTMLElement {
     const seek = this.$(".seek");
     if (this.shadowRoot.activeElement !== seek) seek.value = String(this.#audio || !this.loop ? song : clipTime);
     this.$(".time").textContent = fmt(song);
+    seek.setAttribute("aria-valuetext", `${fmt(song)} of ${fmt(this.duration)}`);
     if (!this.#viewer) return;
     try {
       this.#viewer.draw(this.#library, this.#figures(clipTime));

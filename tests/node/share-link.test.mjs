@@ -1,0 +1,101 @@
+// Share links (www/share.js) in Node with the real engine: a dance generated on the demo song
+// is written as a link and rebuilt in a second Choreographer, by stable move keys (version 2)
+// and from an old version-1 link (segment indices); a song file's identity (a name outside
+// ASCII, length, SHA-256) survives the link; damaged links name what is wrong. The browser
+// test (tests/browser/share.test.mjs) does the same through the app.
+import { test } from "node:test";
+import assert from "node:assert/strict";
+import { createHash } from "node:crypto";
+import { readFileSync, existsSync } from "node:fs";
+import { fileURLToPath } from "node:url";
+import { dirname, join } from "node:path";
+import { danceLink, parseDanceHash, applyDance, sha256Hex } from "../../www/share.js";
+
+const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
+const data = join(root, "..", "shared", "data");
+if (!existsSync(data)) throw new Error(`../shared/data is missing: these tests read the shared real data beside the repository (${data})`);
+const pkg = await import(join(root, "pkg", "odori.js"));
+pkg.initSync({ module: readFileSync(join(root, "pkg", "odori_bg.wasm")) });
+const { Song, DemoSong, Choreographer } = pkg;
+
+const demo = DemoSong.render(44100);
+const grid = Song.fromSamples([demo.samples], demo.sampleRateHz).grid();
+const BASE = "https://example.org/odori/?backend=webgl2";
+
+function choreographer() {
+  const ch = new Choreographer();
+  ch.setBars(grid.bars);
+  while (ch.prepareTable(512) < 1) { /* the join table, a slice at a time */ }
+  return ch;
+}
+const dance = (ch) => ch.view().map((v) => ({ kind: v.state.kind, segment: v.state.segment ?? null }));
+
+test("a dance on the demo song: link (moves by key) → a fresh choreographer → the same dance; version-1 links still open", () => {
+  // Empty bars travel too: a dance with two pinned bars and nothing else opens as it was.
+  const half = choreographer();
+  half.set(1, half.candidates(1)[2]);
+  half.set(6, half.candidates(6)[4]);
+  const halfLink = parseDanceHash(new URL(danceLink(half, { demo: true }, BASE)).hash);
+  assert.equal(halfLink.items.filter((it) => it.kind === "empty").length, halfLink.bars - 2);
+  const half2 = choreographer();
+  applyDance(half2, halfLink);
+  assert.deepEqual(dance(half2), dance(half));
+
+  const a = choreographer();
+  a.set(1, a.candidates(1)[2]);
+  a.set(6, a.candidates(6)[4]);
+  a.generate();
+  const original = dance(a);
+  const link = danceLink(a, { demo: true }, BASE);
+  const url = new URL(link);
+  assert.equal(url.search, "?backend=webgl2");
+  const parsed = parseDanceHash(url.hash);
+  assert.deepEqual([parsed.version, parsed.song, parsed.bars], ["2", { demo: true }, original.length]);
+  assert.equal(parsed.items[1].kind, "pinned");
+  assert.deepEqual(Object.keys(parsed.items[1].move).sort(), ["arms", "energy", "mirrored", "step"]);
+  assert.equal(parsed.items[2].kind, "generated");
+  const b = choreographer();
+  assert.deepEqual(applyDance(b, parsed), [], "generation gives the same moves: no bar set by hand");
+  assert.deepEqual(dance(b), original);
+  console.log(`demo-song link: ${link.length} characters for ${original.length} bars`);
+
+  // A version-1 link of the same dance (segment indices in base 36) opens the same.
+  const v1 = `#dance=1.demo.${original.length}.` + original.map((d) => (d.kind === "empty" ? "-" : (d.kind === "pinned" ? "p" : "g") + d.segment.toString(36))).join(".");
+  const c = choreographer();
+  applyDance(c, parseDanceHash(v1));
+  assert.deepEqual(dance(c), original);
+});
+
+test("a song file's identity survives the link; the hash is the file's SHA-256", async () => {
+  const bytes = new Uint8Array(readFileSync(join(data, "music", "sorohanro_-_solo-trumpet-06.hq.ogg")));
+  const sha = await sha256Hex(bytes);
+  assert.equal(sha, createHash("sha256").update(bytes).digest("hex"));
+  const a = choreographer();
+  a.generate();
+  const song = { name: "トランペット solo #6 (take 2).ogg", durationSecs: 12.3456, sha256: sha };
+  const parsed = parseDanceHash(new URL(danceLink(a, song, BASE)).hash);
+  assert.deepEqual(parsed.song, { name: song.name, durationSecs: 12.346, sha256: sha });
+  // A song not known well enough (no hash) cannot be linked; nor a dance with no bars.
+  assert.throws(() => danceLink(a, { name: "x.ogg", durationSecs: 3 }, BASE), /not known well enough/);
+  const empty = new Choreographer();
+  assert.throws(() => danceLink(empty, { demo: true }, BASE), /no dance yet/);
+});
+
+test("damaged links are refused with what is wrong", () => {
+  const cases = [
+    ["#dance=3.demo.1.-", /version 3/],
+    ["#dance=2.demo.3.-.-", /says 3 bars and holds 2/],
+    ["#dance=2.demo.2.-.pstepTouch~swing", /damaged at bar 2/],
+    ["#dance=2.demo.1.xstepTouch~swing~low~R", /damaged at bar 1/],
+    ["#dance=2.song.1.-", /its song \("song"\)/],
+    ["#dance=2.file~bmFtZQ~1000~abc.1.-", /its song/],
+    ["#dance=1.file~bmFtZQ~1000~" + "0".repeat(64) + ".1.-", /its song/],
+  ];
+  for (const [hash, message] of cases) assert.throws(() => parseDanceHash(hash), message, hash);
+  assert.equal(parseDanceHash("#other"), null);
+  // A key this engine does not have, and a link for another number of bars.
+  const ch = choreographer();
+  const n = ch.view().length;
+  assert.throws(() => applyDance(ch, parseDanceHash(`#dance=2.demo.${n}.` + Array(n).fill("pmoonwalk~swing~low~R").join("."))), /bar 1: the move "moonwalk~swing~low~R" is not among this engine's built-in moves/);
+  assert.throws(() => applyDance(ch, parseDanceHash("#dance=2.demo.2.-.-")), /made for 2 bars/);
+});
