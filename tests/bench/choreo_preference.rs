@@ -24,7 +24,46 @@ const TARGETS: usize = 64;
 const ROUNDS: usize = 5;
 const LIKES: usize = 2;
 
+/// The figures of one run.
+pub struct Figures {
+    pub targets: usize,
+    pub segments: usize,
+    /// Mean over targets of Spearman's ρ between Sim(target, ·) and −perceptual distance.
+    pub agreement: f32,
+    /// Mean best-shown distance per round, guided and random likes.
+    pub guided_curve: Vec<f32>,
+    pub random_curve: Vec<f32>,
+    /// Mean over targets of the guided best distance's fall from round 1 to round 5.
+    pub mean_fall: f32,
+    /// Targets where guided likes end closer than random ones, equal, and farther.
+    pub wins: usize,
+    pub ties: usize,
+    pub losses: usize,
+}
+
+#[allow(dead_code)]
 fn main() {
+    let f = measure();
+    let rho = Settings::default().rho;
+    println!("preference test (spec §J), {} targets, {} segments, {LIKES} likes per round, ρ {rho}:", f.targets, f.segments);
+    println!("  agreement of the search's Sim with the perceptual distance: Spearman {:.3} (mean over the targets)", f.agreement);
+    println!("  round:                 {}", (1..=ROUNDS).map(|r| format!("{r:>7}")).collect::<String>());
+    println!("  best shown, guided:    {}", f.guided_curve.iter().map(|v| format!("{v:>7.4}")).collect::<String>());
+    println!("  best shown, random:    {}", f.random_curve.iter().map(|v| format!("{v:>7.4}")).collect::<String>());
+    println!(
+        "  round 5 vs round 1 (guided): mean fall {:.1} % (goal ≥ 20 %), fall of the mean {:.1} %; guided closer than random on {}/{} targets ({:.0} %, goal ≥ 75 %), equal on {}, farther on {}",
+        100.0 * f.mean_fall,
+        100.0 * (1.0 - f.guided_curve[ROUNDS - 1] / f.guided_curve[0].max(1e-9)),
+        f.wins,
+        f.targets,
+        100.0 * f.wins as f32 / f.targets.max(1) as f32,
+        f.ties,
+        f.losses
+    );
+}
+
+/// Runs the preference test on the real library.
+pub fn measure() -> Figures {
     let mut lib = SegmentLibrary::builtin();
     for rel in all_bvh().into_iter().filter(|r| r.contains("cmu-salsa") || r.contains("cmu-indian")) {
         let opts = ImportOptions { fps_override: fps_override_for(&rel), ..Default::default() };
@@ -48,7 +87,7 @@ fn main() {
     let targets: Vec<usize> = (0..TARGETS).map(|i| (i * lib.len()) / TARGETS + 3).filter(|&t| t < lib.len()).collect();
     let mut guided_curve = vec![0.0f32; ROUNDS];
     let mut random_curve = vec![0.0f32; ROUNDS];
-    let (mut falls, mut wins, mut ties) = (Vec::new(), 0, 0);
+    let (mut falls, mut wins, mut ties, mut losses) = (Vec::new(), 0, 0, 0);
     let mut x = 0x5DEE_CE66_Du64;
     for &t in &targets {
         let intensity = lib.segments()[t].intensity01;
@@ -98,6 +137,8 @@ fn main() {
             wins += 1;
         } else if g[ROUNDS - 1] == r[ROUNDS - 1] {
             ties += 1;
+        } else {
+            losses += 1;
         }
     }
     // How well the similarity the search uses agrees with the perceptual distance: per target,
@@ -109,19 +150,8 @@ fn main() {
         let near: Vec<f32> = others.iter().map(|&c| -dist(t, c)).collect();
         spearman(&sim, &near)
     }).sum::<f32>() / targets.len() as f32;
-    println!("preference test (spec §J), {} targets, {} segments, {LIKES} likes per round, ρ {}:", targets.len(), lib.len(), settings.rho);
-    println!("  agreement of the search's Sim with the perceptual distance: Spearman {agreement:.3} (mean over the targets)");
-    println!("  round:                 {}", (1..=ROUNDS).map(|r| format!("{r:>7}")).collect::<String>());
-    println!("  best shown, guided:    {}", guided_curve.iter().map(|v| format!("{v:>7.4}")).collect::<String>());
-    println!("  best shown, random:    {}", random_curve.iter().map(|v| format!("{v:>7.4}")).collect::<String>());
     let mean_fall = falls.iter().sum::<f32>() / falls.len().max(1) as f32;
-    println!(
-        "  round 5 vs round 1 (guided): mean fall {:.1} % (goal ≥ 20 %), fall of the mean {:.1} %; guided closer than random on {wins}/{} targets ({:.0} %, goal ≥ 75 %), equal on {ties}",
-        100.0 * mean_fall,
-        100.0 * (1.0 - guided_curve[ROUNDS - 1] / guided_curve[0].max(1e-9)),
-        targets.len(),
-        100.0 * wins as f32 / targets.len().max(1) as f32
-    );
+    Figures { targets: targets.len(), segments: lib.len(), agreement, guided_curve, random_curve, mean_fall, wins, ties, losses }
 }
 
 /// Spearman's rank correlation (no tie correction: the values are continuous).
