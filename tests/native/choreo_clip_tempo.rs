@@ -6,7 +6,16 @@
 //! 60..=150 per minute and hold at least one 4-count segment.
 //!
 //! Ignored for now: it fails on salsa_10/25 (79.5 vs 124.1), the open acceptance item; run it
-//! with `--ignored` to see every clip's tempo.
+//! with `--ignored` to see every clip's tempo. What was found: the whole-body joint speed of
+//! salsa_01, salsa_16 and salsa_25 has no periodicity at all between 3 and 130 frames (its
+//! autocorrelation, slow trend removed, falls steadily from lag 3), so `detect_beats` finds no
+//! peak and falls back to 15 frames, and the parabolic refinement on that slope moves it to
+//! 15.5 or 14.5 frames: their 116.1 and 124.1 are the fallback, not a detection (so are the many
+//! 116.1 / 124.1 tempos of the modern-dance clips), and salsa_01/16 "agree" by falling back
+//! alike. Only salsa_10 has a peak (23 frames, 79.5 per minute). Two rules were tried and
+//! dropped: a comb of the autocorrelation over 8 s choosing among the range (all supports are
+//! at noise level on these clips) and a kinetic-beat grid scored against its half-count shift
+//! (free over the range it wanders: salsa_01/16 at 82 vs 63.5).
 
 use odori_core::choreo::{SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
