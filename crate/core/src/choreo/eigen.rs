@@ -7,7 +7,9 @@
 //! iteration on k + 3 vectors finished by a Rayleigh–Ritz step that diagonalises the projected
 //! (k + 3)² matrix with the same Jacobi ([`top_eigen`]) — about 20 times cheaper than a full
 //! Jacobi of the 30 × 30 covariance, with the same top axes to float precision for any
-//! segment whose k-th and (k + 4)-th eigenvalues differ. Deterministic. Similarity follows Li & Prabhakaran's k-weighted angular
+//! segment whose k-th and (k + 4)-th eigenvalues differ. Deterministic. The moments are about
+//! the segment's mean ([`Signature::of`]) or, as Li & Prabhakaran take the raw matrix's SVD,
+//! about zero ([`Signature::of_uncentred`], what the segment library uses). Similarity follows Li & Prabhakaran's k-weighted angular
 //! similarity (kWAS): Sim(a, b) = ½ Σ_{i<k} (λ̂ᵃᵢ + λ̂ᵇᵢ) · |uᵃᵢ · uᵇᵢ| with λ̂ the top-k
 //! eigenvalues scaled to sum to 1 (so Sim(a, a) = 1 and Sim ∈ [0, 1]); D = 1 − Sim.
 
@@ -209,18 +211,32 @@ pub struct Signature {
 
 impl Signature {
     /// Signature of `frames` feature vectors of `dims` values each (frame-major), keeping `k`
-    /// axes. The covariance is centred on the segment's mean.
+    /// axes. The covariance is centred on the segment's mean (only how the features vary).
     pub fn of(features: &[f32], dims: usize, k: usize) -> Signature {
+        Self::of_moments(features, dims, k, true)
+    }
+
+    /// Signature of the raw (frames × features) matrix, as Li & Prabhakaran take it: the
+    /// principal axes of its second moments about zero (the right singular vectors of the
+    /// matrix), not about the segment's mean, so where the motion is (its mean) counts as well
+    /// as how it varies.
+    pub fn of_uncentred(features: &[f32], dims: usize, k: usize) -> Signature {
+        Self::of_moments(features, dims, k, false)
+    }
+
+    fn of_moments(features: &[f32], dims: usize, k: usize, centred: bool) -> Signature {
         let frames = if dims == 0 { 0 } else { features.len() / dims };
         let k = k.min(dims);
         let mut mean = vec![0.0f64; dims];
-        for f in 0..frames {
-            for d in 0..dims {
-                mean[d] += features[f * dims + d] as f64;
+        if centred {
+            for f in 0..frames {
+                for d in 0..dims {
+                    mean[d] += features[f * dims + d] as f64;
+                }
             }
-        }
-        for m in mean.iter_mut() {
-            *m /= frames.max(1) as f64;
+            for m in mean.iter_mut() {
+                *m /= frames.max(1) as f64;
+            }
         }
         let mut cov = vec![0.0f64; dims * dims];
         let mut row = vec![0.0f64; dims];
@@ -346,5 +362,21 @@ mod tests {
         assert!((a.similarity(&a) - 1.0).abs() < 1e-4);
         assert!(a.similarity(&b) < 0.2, "{}", a.similarity(&b));
         assert!((a.similarity(&b) - b.similarity(&a)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn uncentred_signatures_see_where_the_motion_is_and_its_sign() {
+        // The same sway about two opposite offsets, with a constant last feature: centred
+        // signatures cannot tell them apart; uncentred ones can, and keep the sign (a plain
+        // |cos| of the mean would not).
+        let dims = 3;
+        let at = |offset: f32| -> Vec<f32> { (0..40).flat_map(|f| [offset + 0.1 * (f as f32 * 0.4).sin(), 0.05 * (f as f32 * 0.7).cos(), 1.0]).collect() };
+        let (a, b, c) = (at(0.8), at(-0.8), at(0.7));
+        let centred = |x: &[f32]| Signature::of(x, dims, 2);
+        assert!(centred(&a).similarity(&centred(&b)) > 0.99);
+        let un = |x: &[f32]| Signature::of_uncentred(x, dims, 2);
+        let (sa, sb, sc) = (un(&a), un(&b), un(&c));
+        assert!((sa.similarity(&sa) - 1.0).abs() < 1e-4);
+        assert!(sa.similarity(&sc) > sa.similarity(&sb) + 0.2, "near {} vs opposite {}", sa.similarity(&sc), sa.similarity(&sb));
     }
 }

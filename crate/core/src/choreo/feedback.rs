@@ -3,8 +3,11 @@
 //! Each round shows [`CANDIDATES_PER_ROUND`] segments, chosen one at a time:
 //! m_{n+1} = argmax_{m ∈ U \ S_n} ρ · rel(q, m) + (1 − ρ) · Φ(m, S_n, L) with
 //! Φ = τ · min_{m_i ∈ S_n} D(m, m_i) + (1 − τ) · max_{m_j ∈ L} Sim(m, m_j),
-//! rel(q, m) = 1 − |music intensity of the bar − motion intensity of m| (both 0..1), S_n every
-//! segment already shown for the bar (never shown again) and L the ones the person liked.
+//! rel(q, m) = 1 − |music intensity of the bar − motion intensity of m| (both 0..1), L the
+//! segments the person liked, and S_n the segments already shown for the bar: none is shown
+//! again, and in the min D term S_n counts those shown and not liked (plus this round's picks),
+//! so a like draws the search toward its neighbours instead of repelling it (the product's
+//! decision; see `next_round`).
 //! τ starts at 1 and is multiplied by 19/20 at every Search. Where the spec is silent: with
 //! nothing shown yet the min over S_n counts as 1 (all candidates equally new), with nothing
 //! liked the max over L counts as 0, and ties go to the lower segment index.
@@ -64,10 +67,16 @@ impl FeedbackSession {
                 is_shown[s] = true;
             }
         }
-        // min D to the shown set, and max Sim to the liked set, for every segment.
+        // min D to the shown set, and max Sim to the liked set, for every segment. A liked
+        // candidate stays out of U (never shown again) but does not push its neighbours away:
+        // with D = 1 − Sim, a neighbour's τ · D loses more than its (1 − τ) · Sim gains while
+        // τ > ½ (the first 13 rounds), so counting liked ones in the min would make every like
+        // repel the search from what was liked.
         let mut min_d = vec![1.0f32; m];
         for &s in &self.shown {
-            update_min_d(lib, &mut min_d, s);
+            if !self.liked.contains(&s) {
+                update_min_d(lib, &mut min_d, s);
+            }
         }
         let mut max_sim = vec![0.0f32; m];
         for &l in &self.liked {
