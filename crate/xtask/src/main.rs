@@ -57,6 +57,10 @@ struct PlayerSettings {
 struct PlayerRelease {
     cargo_profile: String,
     wasm_opt: Vec<String>,
+    /// Minify the player's JavaScript (the bindings and the element) with esbuild from
+    /// node_modules: the download is the point of the player build.
+    #[serde(default)]
+    minify_js: bool,
 }
 
 #[derive(Deserialize)]
@@ -232,6 +236,19 @@ fn build_web(dev: bool, only: Option<&str>) {
         for f in files.flatten().filter(|f| f.path().is_file()) {
             std::fs::copy(f.path(), player_dir.join(f.file_name())).unwrap_or_else(|e| fail(format!("copy {}: {e}", f.path().display())));
         }
+        if !dev && player.release.as_ref().is_some_and(|r| r.minify_js) {
+            let esbuild = root.join("node_modules/.bin/esbuild");
+            if !esbuild.exists() {
+                fail("node_modules/.bin/esbuild is missing: run npm install (./dev setup does)");
+            }
+            let js = std::fs::read_dir(&player_dir).unwrap_or_else(|e| fail(format!("{}: {e}", player_dir.display())));
+            for f in js.flatten().map(|f| f.path()).filter(|p| p.extension().is_some_and(|e| e == "js")) {
+                let before = std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0);
+                run(Command::new(&esbuild).arg(&f).args(["--minify", "--format=esm", "--target=es2022", "--log-level=warning", "--allow-overwrite"]).arg(format!("--outfile={}", f.display())));
+                let after = std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0);
+                eprintln!("xtask: {} minified: {before} -> {after} bytes", f.display());
+            }
+        }
     }
 
     // 4. package.json for npm consumers: `odori` is the full engine, `odori/player` the element
@@ -241,27 +258,71 @@ fn build_web(dev: bool, only: Option<&str>) {
         .and_then(|s| s.rsplit(['@', '#']).next().map(str::to_string))
         .unwrap_or_else(|| "0.0.0".into());
     let pname = &player.out_name;
-    let pkg = serde_json::json!({
-        "name": settings.package.npm_name,
-        "version": version,
-        "description": settings.package.description,
-        "license": "MIT OR Apache-2.0",
-        "type": "module",
-        "main": format!("{name}.js"),
-        "module": format!("{name}.js"),
-        "types": format!("{name}.d.ts"),
-        "exports": {
-            ".": { "types": format!("./{name}.d.ts"), "default": format!("./{name}.js") },
-            "./player": { "types": format!("./{player_rel}/odori-player.d.ts"), "default": format!("./{player_rel}/odori-player.js") },
-            "./player/engine": { "types": format!("./{player_rel}/{pname}.d.ts"), "default": format!("./{player_rel}/{pname}.js") },
-            format!("./{name}_bg.wasm"): format!("./{name}_bg.wasm"),
-            format!("./player/{pname}_bg.wasm"): format!("./{player_rel}/{pname}_bg.wasm"),
-            "./package.json": "./package.json"
-        },
-        "files": [format!("{name}_bg.wasm"), format!("{name}.js"), format!("{name}.d.ts"), format!("{name}_bg.wasm.d.ts"), format!("{player_rel}/"), "README.md"],
-        "sideEffects": ["./snippets/*", format!("./{player_rel}/odori-player.js")],
-        "keywords": ["dance", "motion", "animation", "bvh", "gltf", "wasm", "webgpu", "web-component"]
-    });
+    // A struct, not `json!`: serde_json's map sorts keys, and in an `exports` condition object
+    // "types" must come before "default" (the first matching condition wins).
+    #[derive(serde::Serialize)]
+    struct Cond {
+        types: String,
+        default: String,
+    }
+    #[derive(serde::Serialize)]
+    #[serde(untagged)]
+    enum Entry {
+        Cond(Cond),
+        Path(String),
+    }
+    /// A map written in the order given.
+    struct Ordered(Vec<(String, Entry)>);
+    impl serde::Serialize for Ordered {
+        fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+            use serde::ser::SerializeMap;
+            let mut m = s.serialize_map(Some(self.0.len()))?;
+            for (k, v) in &self.0 {
+                m.serialize_entry(k, v)?;
+            }
+            m.end()
+        }
+    }
+    let cond = |types: String, default: String| Entry::Cond(Cond { types, default });
+    let exports = Ordered(vec![
+        (".".into(), cond(format!("./{name}.d.ts"), format!("./{name}.js"))),
+        ("./player".into(), cond(format!("./{player_rel}/odori-player.d.ts"), format!("./{player_rel}/odori-player.js"))),
+        ("./player/engine".into(), cond(format!("./{player_rel}/{pname}.d.ts"), format!("./{player_rel}/{pname}.js"))),
+        (format!("./{name}_bg.wasm"), Entry::Path(format!("./{name}_bg.wasm"))),
+        (format!("./player/{pname}_bg.wasm"), Entry::Path(format!("./{player_rel}/{pname}_bg.wasm"))),
+        ("./package.json".into(), Entry::Path("./package.json".into())),
+    ]);
+    #[derive(serde::Serialize)]
+    #[serde(rename_all = "camelCase")]
+    struct Package<'a> {
+        name: &'a str,
+        version: String,
+        description: &'a str,
+        license: &'a str,
+        #[serde(rename = "type")]
+        kind: &'a str,
+        main: String,
+        module: String,
+        types: String,
+        exports: Ordered,
+        files: Vec<String>,
+        side_effects: Vec<String>,
+        keywords: Vec<&'a str>,
+    }
+    let pkg = Package {
+        name: &settings.package.npm_name,
+        version,
+        description: &settings.package.description,
+        license: "MIT OR Apache-2.0",
+        kind: "module",
+        main: format!("{name}.js"),
+        module: format!("{name}.js"),
+        types: format!("{name}.d.ts"),
+        exports,
+        files: vec![format!("{name}_bg.wasm"), format!("{name}.js"), format!("{name}.d.ts"), format!("{name}_bg.wasm.d.ts"), format!("{player_rel}/"), "README.md".into()],
+        side_effects: vec!["./snippets/*".into(), format!("./{player_rel}/odori-player.js")],
+        keywords: vec!["dance", "motion", "animation", "bvh", "gltf", "wasm", "webgpu", "web-component"],
+    };
     std::fs::write(out_dir.join("package.json"), serde_json::to_string_pretty(&pkg).unwrap() + "\n").expect("write package.json");
     eprintln!("xtask: pkg/ ready (full engine in {}, player in {})", out_dir.display(), player_dir.display());
 
