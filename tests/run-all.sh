@@ -5,7 +5,16 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
-step() { printf '\n\033[1m== %s\033[0m\n' "$*"; }
+# Each step says how long the one before it took, and the end gives the total (the test run's
+# budget is 20 minutes on this machine kind).
+started=$SECONDS
+last=$SECONDS
+step() {
+  [ "$last" = "$started" ] || printf '   (%d s)\n' $((SECONDS - last))
+  last=$SECONDS
+  printf '\n\033[1m== %s\033[0m\n' "$*"
+}
+trap 'rc=$?; [ $rc -ne 0 ] || printf "   (%d s)\n\ntests: all passed in %d min %d s\n" $((SECONDS - last)) $(((SECONDS - started) / 60)) $(((SECONDS - started) % 60))' EXIT
 
 if [ ! -d ../shared/data ]; then
   echo "tests: ../shared/data is missing. The real-data tests need the shared data beside the repository (../shared/data)." >&2
