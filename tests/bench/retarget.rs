@@ -35,6 +35,7 @@ fn main() {
         let mut worse = 0;
         let mut free_worse = 0;
         let mut deltas = Vec::new();
+        let mut dir_p95 = Vec::new();
         for (clip, map) in &sources {
             let t0 = Instant::now();
             let out = ch.retarget(clip, map).unwrap();
@@ -52,6 +53,7 @@ fn main() {
             free_worse += usize::from(free.skate_mean_cm_s - free.source_skate_mean_cm_s > 1.0);
             let delta = r.skate_mean_cm_s - r.source_skate_mean_cm_s;
             deltas.push(delta);
+            dir_p95.push(r.direction_p95_rad.to_degrees());
             if delta > 1.0 {
                 worse += 1;
             }
@@ -75,13 +77,16 @@ fn main() {
             );
         }
         deltas.sort_by(f32::total_cmp);
+        dir_p95.sort_by(f32::total_cmp);
         println!(
-            "{file}: A-pose swing {:.1}°, hip height {:.3} m, leg length {:.3} m; skate worse than source + 1 cm/s in {worse} of {} cases (median Δ {:+.2} cm/s; feet not held: {free_worse})",
+            "{file}: A-pose swing {:.1}°, hip height {:.3} m, leg length {:.3} m; skate worse than source + 1 cm/s in {worse} of {} cases (median Δ {:+.2} cm/s; feet not held: {free_worse}); direction p95 per case: median {:.2}°, worst {:.2}°",
             ch.arm_swing_rad.to_degrees(),
             ch.hip_height_m(),
             ch.leg_length_m(),
             deltas.len(),
-            deltas[deltas.len() / 2]
+            deltas[deltas.len() / 2],
+            dir_p95[dir_p95.len() / 2],
+            dir_p95[dir_p95.len() - 1]
         );
     }
 }

@@ -51,7 +51,14 @@ fn characters_follow_the_source_twist_included() {
                 r.skate_mean_cm_s,
                 r.source_skate_mean_cm_s
             );
-            assert!(r.direction_median_rad.to_degrees() < 2.0 && r.direction_p95_rad.to_degrees() < 6.0, "{file}: {r:?}");
+            // The transfer itself (feet free): every bone follows the source's direction. With
+            // the feet held, the legs bend away from it where IK holds a planted foot or keeps a
+            // swing foot's height while the pelvis drops (as they must): most bones still
+            // follow exactly, and the legs' share stays bounded.
+            let free = report(clip, map, &ch, &ch.retarget_options(clip, map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap());
+            println!("  feet free: direction median {:.2}° p95 {:.2}°", free.direction_median_rad.to_degrees(), free.direction_p95_rad.to_degrees());
+            assert!(free.direction_median_rad.to_degrees() < 1.0 && free.direction_p95_rad.to_degrees() < 2.0, "{file}: feet free {free:?}");
+            assert!(r.direction_median_rad.to_degrees() < 2.0 && r.direction_p95_rad.to_degrees() < 12.0, "{file}: {r:?}");
             assert!(r.twist_p95_rad.to_degrees() < 2.0, "{file}: twist {r:?}");
             // Foot skate is asserted on other clips (`held_feet_skate_no_more_than_the_source`).
             // The control loses roll: conjugation must be clearly better where the source rolls.

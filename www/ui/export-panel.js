@@ -2,8 +2,8 @@
 // *Character*: any imported skinned humanoid (glTF); *Put on* plays the clip on screen (the
 // dance, a text animation, a move, a BVH) on it as a new library clip, drawn skinned.
 // Export the clip on screen (an imported clip, a text animation, the composed dance) as a GLB
-// (with the character's mesh, or the built-in body for the engine's own skeleton) or a BVH
-// file, through the engine's exporters; the browser downloads the bytes. Errors go to the
+// (with the character's mesh, or the built-in body for the engine's own skeleton), a VRM
+// animation (.vrma, for VRM avatars) or a BVH file, through the engine's exporters; the browser downloads the bytes. Errors go to the
 // message list with the engine's words; nothing in the library changes.
 export class ExportPanel {
   constructor({ button, format, character, putOn, library, player, messages, onAdded }) {
@@ -51,9 +51,9 @@ export class ExportPanel {
     const id = this.player.clip;
     if (id == null) { this.messages.warning("Export: select a clip first."); return null; }
     const info = this.library.clip(id);
-    const kind = this.format.value === "bvh" ? "bvh" : "glb";
+    const kind = ["bvh", "vrma"].includes(this.format.value) ? this.format.value : "glb";
     try {
-      const bytes = kind === "bvh" ? this.library.exportBvh(id) : this.library.exportGlb(id);
+      const bytes = kind === "bvh" ? this.library.exportBvh(id) : kind === "vrma" ? this.library.exportVrma(id) : this.library.exportGlb(id);
       const name = `${info.name.replace(/[^\p{L}\p{N}_.-]+/gu, "_") || "odori"}.${kind}`;
       const url = URL.createObjectURL(new Blob([bytes], { type: kind === "bvh" ? "text/plain" : "model/gltf-binary" }));
       const a = document.createElement("a");

@@ -60,7 +60,8 @@ fn smooth(x: f32) -> f32 {
 
 /// Lowest joint height of a pose with the root at the origin.
 pub fn lowest_point(skeleton: &Skeleton, local: &[Quat]) -> f32 {
-    skeleton.posed_at_origin(local).iter().map(|p| p.y).fold(f32::MAX, f32::min)
+    let n = skeleton.len();
+    crate::motion::lowest_height(skeleton, local, Vec3::ZERO, &mut vec![Quat::IDENTITY; n], &mut vec![Vec3::ZERO; n])
 }
 
 /// A few bars of the built-in demo dance: step-touch side to side with a bounce on every

@@ -22,8 +22,9 @@
 //!   character's ground, by two-bone IK on thigh and shin (`motion::two_bone`). The body
 //!   shifts horizontally (smoothly) to keep held feet put — a rig with wider hips than the
 //!   source's, turning on one foot, must move round it — so the character's path can drift
-//!   from the source's scaled one; the pelvis drops where a held foot would be out of reach,
-//!   and a released foot eases back onto its free path. The benchmark prints the skate against the source's and against
+//!   from the source's scaled one; the pelvis drops where a held foot would be out of reach
+//!   (a foot not held then keeps its free path by IK, so the drop does not drag a step down
+//!   onto the floor), and a released foot eases back onto its free path. The benchmark prints the skate against the source's and against
 //!   the free-feet control (`tests/bench/retarget.rs`).
 
 use std::sync::Arc;
@@ -429,6 +430,19 @@ impl Character {
                     }
                 }
                 drop_m = pelvis_drop(&legs, &free_hip, &plant_target, src.fps);
+                // A foot not held, where the pelvis drops for the other, keeps its (shifted)
+                // free path by IK: lowering the body must not lower the step with it — a
+                // swing foot dragged down to the floor slides on it (the skate the source does
+                // not have), and a standing one sinks into it. A rig much wider or longer in
+                // the leg than the source drops most often (RobotExpressive); a rig in the
+                // source's proportions rarely drops at all.
+                for (k, targets) in plant_target.iter_mut().enumerate() {
+                    for (f, t) in targets.iter_mut().enumerate() {
+                        if t.is_none() && drop_m[f] > 1e-4 {
+                            *t = Some(free_foot[k][f] + shift_m[f]);
+                        }
+                    }
+                }
             }
             rotations.clear();
             for t in tracks.iter_mut() {

@@ -143,18 +143,13 @@ impl Clip {
         v
     }
 
-    /// World matrices of every joint at `frame` (for skinning).
+    /// World matrices of every joint at `frame` (for skinning): the motion kernel's forward
+    /// kinematics, each joint's world rotation and position made one rigid matrix.
     pub fn world_matrices_into(&self, frame: usize, out: &mut Vec<Mat4>) {
-        let local = self.frame_rotations(frame);
-        out.clear();
-        for (i, j) in self.skeleton.joints.iter().enumerate() {
-            let m = Mat4::from_rotation_translation(local[i], self.local_translation(i, frame));
-            let w = match j.parent {
-                None => m,
-                Some(p) => out[p] * m,
-            };
-            out.push(w);
-        }
+        let mut trans = Vec::with_capacity(self.skeleton.len());
+        self.local_translations_into(frame, &mut trans);
+        let mut pos = Vec::with_capacity(self.skeleton.len());
+        self.skeleton.forward_kinematics(self.frame_rotations(frame), &trans, &mut pos, Some(out));
     }
 
     /// World positions of every frame, frame-major (`frame_count * joints`).

@@ -96,6 +96,18 @@ impl Canon {
         }
     }
 
+    /// The VRM 1.0 humanoid bone this joint is (`VRMC_vrm` / `VRMC_vrm_animation`):
+    /// the canonical names are VRM's but for the forearms (`leftLowerArm`) and toes (`leftToes`).
+    pub fn vrm_name(self) -> &'static str {
+        match self {
+            Canon::LeftForearm => "leftLowerArm",
+            Canon::RightForearm => "rightLowerArm",
+            Canon::LeftToe => "leftToes",
+            Canon::RightToe => "rightToes",
+            c => c.name(),
+        }
+    }
+
     /// Parent in the canonical tree (`None` for the hips).
     pub fn parent(self) -> Option<Canon> {
         use Canon::*;

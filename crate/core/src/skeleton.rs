@@ -66,53 +66,36 @@ impl Skeleton {
     }
 
     /// Forward kinematics of one pose given local rotations and translations (one per joint):
-    /// world positions into `positions`, and world matrices into `matrices` when given.
-    pub fn forward_kinematics(&self, local_rotations: &[Quat], local_translations: &[Vec3], positions: &mut Vec<Vec3>, mut matrices: Option<&mut Vec<Mat4>>) {
+    /// world positions into `positions`, and world matrices into `matrices` when given (the
+    /// motion kernel's [`crate::motion::local_to_world`]).
+    pub fn forward_kinematics(&self, local_rotations: &[Quat], local_translations: &[Vec3], positions: &mut Vec<Vec3>, matrices: Option<&mut Vec<Mat4>>) {
         let n = self.len().min(local_rotations.len()).min(local_translations.len());
+        let mut rots = vec![Quat::IDENTITY; n];
         positions.clear();
-        let mut rots: Vec<Quat> = Vec::with_capacity(n);
-        if let Some(m) = matrices.as_deref_mut() {
+        positions.resize(n, Vec3::ZERO);
+        crate::motion::local_to_world(self, local_rotations, local_translations, &mut rots, positions);
+        if let Some(m) = matrices {
             m.clear();
-        }
-        for i in 0..n {
-            let (r, p) = match self.joints[i].parent {
-                None => (local_rotations[i], local_translations[i]),
-                Some(p) => (rots[p] * local_rotations[i], positions[p] + rots[p] * local_translations[i]),
-            };
-            rots.push(r);
-            positions.push(p);
-            if let Some(m) = matrices.as_deref_mut() {
-                m.push(Mat4::from_rotation_translation(r, p));
-            }
+            m.extend(rots.iter().zip(positions.iter()).map(|(r, p)| Mat4::from_rotation_translation(*r, *p)));
         }
     }
 
     /// Forward kinematics of one pose without allocating (for hot loops): each joint stands
     /// at its parent's position plus its rest offset turned by the parent's world rotation;
     /// a joint without a parent (or listed before it) stands at `root`. Writes the world
-    /// rotations and positions of the first `min(joints, local, rot, pos)` joints.
+    /// rotations and positions of the first `min(joints, local, rot, pos)` joints (the
+    /// motion kernel's [`crate::motion::local_to_world_at`]).
     pub fn pose_into(&self, local: &[Quat], root: Vec3, rot: &mut [Quat], pos: &mut [Vec3]) {
-        let n = self.len().min(local.len()).min(rot.len()).min(pos.len());
-        for (i, j) in self.joints.iter().enumerate().take(n) {
-            match j.parent {
-                Some(p) if p < i => {
-                    rot[i] = rot[p] * local[i];
-                    pos[i] = pos[p] + rot[p] * j.rest_offset;
-                }
-                _ => {
-                    rot[i] = local[i];
-                    pos[i] = root;
-                }
-            }
-        }
+        crate::motion::local_to_world_at(self, local, root, rot, pos);
     }
 
     /// World positions of a pose given only local rotations: rest offsets for every joint and
     /// the root at the origin.
     pub fn posed_at_origin(&self, local_rotations: &[Quat]) -> Vec<Vec3> {
-        let offsets: Vec<Vec3> = self.joints.iter().map(|j| if j.parent.is_some() { j.rest_offset } else { Vec3::ZERO }).collect();
-        let mut out = Vec::with_capacity(self.len());
-        self.forward_kinematics(local_rotations, &offsets, &mut out, None);
+        let n = self.len().min(local_rotations.len());
+        let mut rot = vec![Quat::IDENTITY; n];
+        let mut out = vec![Vec3::ZERO; n];
+        crate::motion::local_to_world_at(self, local_rotations, Vec3::ZERO, &mut rot, &mut out);
         out
     }
 

@@ -55,6 +55,7 @@ error_kinds! {
     "export-not-finite": "export: a position or rotation is not a finite number",
     "export-skeleton-mismatch": "export: the motion does not fit the character's skeleton",
     "export-needs-canonical": "export: this export needs a clip on the canonical humanoid",
+    "export-not-humanoid": "export: VRM animation needs a humanoid clip (the message says why this one is not)",
     "character-no-skin": "character: the file has no skinned mesh",
     "character-not-humanoid": "character: the rig does not map onto the canonical humanoid",
     "character-missing-limbs": "character: the rig lacks limbs the motion needs (named in the message)",

@@ -1,9 +1,9 @@
 //! Export from the library (spec §M): any clip (an imported one, a text animation, a
-//! composed dance) as GLB or BVH bytes, returned to JS as a `Uint8Array`; and any humanoid
+//! composed dance) as GLB, VRM animation (`.vrma`) or BVH bytes, returned to JS as a `Uint8Array`; and any humanoid
 //! clip put on an imported character (spec §L), so it is drawn and exported on that body.
 
 use odori_core::character::Character;
-use odori_core::export::{bvh::bvh, gltf::{glb, GlbOptions}};
+use odori_core::export::{bvh::bvh, gltf::{glb, GlbOptions}, vrma::vrma};
 use odori_core::humanoid::HumanoidMap;
 use odori_core::import::SkinnedMesh;
 use odori_core::library::body::builtin_body;
@@ -27,6 +27,8 @@ struct JsExportOptions {
 }
 
 const KNOWN: &[&str] = &["character", "startSecs", "endSecs"];
+/// Options of the exports that write no mesh (VRMA): a range only.
+const KNOWN_RANGE: &[&str] = &["startSecs", "endSecs"];
 
 fn ranged(clip: &Clip, o: &JsExportOptions) -> JsResult<Clip> {
     if o.start_secs.is_none() && o.end_secs.is_none() {
@@ -80,6 +82,19 @@ impl Library {
             other => return Err(OdoriError::new("bad-argument", format!("export options: character must be \"auto\", \"builtin\" or \"none\", got \"{other}\""))),
         };
         Ok(glb(&clip.skeleton, &[&clip], &GlbOptions { mesh })?)
+    }
+
+    /// The clip as a VRM animation (`.vrma`: glTF binary with `VRMC_vrm_animation`): the
+    /// canonical humanoid in T-pose, rotations on every humanoid bone, translation on the hips
+    /// only; a clip on another humanoid rig is carried onto the canonical skeleton first.
+    /// `options`: `{ startSecs?, endSecs? }`. A clip that is not humanoid throws an
+    /// `OdoriError` of kind `export-not-humanoid` saying why.
+    #[wasm_bindgen(js_name = exportVrma)]
+    pub fn export_vrma(&self, id: u32, #[wasm_bindgen(unchecked_param_type = "VrmaExportOptions | undefined")] options: JsValue) -> Result<Vec<u8>, OdoriError> {
+        let o: JsExportOptions = from_js(options, "VRMA export options", KNOWN_RANGE)?;
+        let e = self.entry(id)?;
+        let clip = ranged(&e.clip, &o)?;
+        Ok(vrma(&clip, &e.humanoid)?)
     }
 
     /// The clip as a BVH file (its own skeleton, centimetres, `Zrotation Xrotation Yrotation`).

@@ -132,6 +132,11 @@ export interface ExportOptions {
   startSecs?: number;
   endSecs?: number;
 }
+/** Options of `exportVrma`: a stretch of the clip, seconds. */
+export interface VrmaExportOptions {
+  startSecs?: number;
+  endSecs?: number;
+}
 export interface ViewerOptions {
   /** "auto" (WebGPU if available, else WebGL2), "webgpu" or "webgl2". */
   backend?: "auto" | "webgpu" | "webgl2";

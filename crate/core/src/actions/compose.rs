@@ -107,8 +107,7 @@ fn effector_track(clip: &Clip, part: BodyPart) -> (Vec<Vec3>, Vec<Vec3>) {
 }
 
 fn hermite(v0: Vec3, m0: Vec3, v1: Vec3, m1: Vec3, u: f32) -> Vec3 {
-    let (u2, u3) = (u * u, u * u * u);
-    v0 * (2.0 * u3 - 3.0 * u2 + 1.0) + m0 * (u3 - 2.0 * u2 + u) + v1 * (-2.0 * u3 + 3.0 * u2) + m1 * (u3 - u2)
+    Vec3::from_array(crate::motion::hermite(v0.to_array(), m0.to_array(), v1.to_array(), m1.to_array(), u))
 }
 
 /// The sway of `joint` in `clip` over frames `[from, to]`: rotation vectors (relative to the

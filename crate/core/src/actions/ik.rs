@@ -15,21 +15,9 @@ use crate::skeleton::Skeleton;
 /// joints at their rest offsets).
 pub fn forward(skeleton: &Skeleton, local: &[Quat], root: Vec3) -> (Vec<Quat>, Vec<Vec3>) {
     let n = skeleton.len().min(local.len());
-    let mut rot: Vec<Quat> = Vec::with_capacity(n);
-    let mut pos: Vec<Vec3> = Vec::with_capacity(n);
-    for i in 0..n {
-        let j = &skeleton.joints[i];
-        match j.parent {
-            Some(p) if p < i => {
-                rot.push(rot[p] * local[i]);
-                pos.push(pos[p] + rot[p] * j.rest_offset);
-            }
-            _ => {
-                rot.push(local[i]);
-                pos.push(if i == 0 { root } else { j.rest_offset });
-            }
-        }
-    }
+    let mut rot = vec![Quat::IDENTITY; n];
+    let mut pos = vec![Vec3::ZERO; n];
+    crate::motion::local_to_world_at(skeleton, local, root, &mut rot, &mut pos);
     (rot, pos)
 }
 

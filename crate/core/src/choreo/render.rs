@@ -161,16 +161,6 @@ pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], opt
     }
 }
 
-fn hermite(p0: [f32; 4], m0: [f32; 4], p1: [f32; 4], m1: [f32; 4], s: f32) -> [f32; 4] {
-    let s2 = s * s;
-    let s3 = s2 * s;
-    let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
-    let h10 = s3 - 2.0 * s2 + s;
-    let h01 = -2.0 * s3 + 3.0 * s2;
-    let h11 = s3 - s2;
-    std::array::from_fn(|i| h00 * p0[i] + h10 * m0[i] + h01 * p1[i] + h11 * m1[i])
-}
-
 /// Rewrites frames `j - n .. j + n` by cubic Hermite interpolation between frame `j - n - 1`
 /// and frame `j + n`, with the velocities of the untouched frames outside.
 fn join_at(rotations: &mut [Quat], roots: &mut [Vec3], j: usize, n: usize) {
@@ -194,7 +184,7 @@ fn join_at(rotations: &mut [Quat], roots: &mut [Vec3], j: usize, n: usize) {
         let m1: [f32; 4] = std::array::from_fn(|i| (v4(qb1)[i] - v4(qb)[i]) * span);
         for f in a + 1..b {
             let s = (f - a) as f32 / span;
-            let h = hermite(v4(qa), m0, v4(qb), m1, s);
+            let h = crate::motion::hermite(v4(qa), m0, v4(qb), m1, s);
             rotations[f * CANON_COUNT + joint] = Quat::from_array(h).normalize();
         }
     }
@@ -204,7 +194,7 @@ fn join_at(rotations: &mut [Quat], roots: &mut [Vec3], j: usize, n: usize) {
     let m1 = (roots[b + 1] - pb) * span;
     for f in a + 1..b {
         let s = (f - a) as f32 / span;
-        let h = hermite([pa.x, pa.y, pa.z, 0.0], [m0.x, m0.y, m0.z, 0.0], [pb.x, pb.y, pb.z, 0.0], [m1.x, m1.y, m1.z, 0.0], s);
+        let h = crate::motion::hermite([pa.x, pa.y, pa.z, 0.0], [m0.x, m0.y, m0.z, 0.0], [pb.x, pb.y, pb.z, 0.0], [m1.x, m1.y, m1.z, 0.0], s);
         roots[f] = Vec3::new(h[0], h[1], h[2]);
     }
 }

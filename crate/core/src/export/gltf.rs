@@ -34,13 +34,13 @@ pub struct GlbOptions<'a> {
 }
 
 /// Collects the binary chunk: every piece starts on a 4-byte boundary.
-struct Bin {
+pub(super) struct Bin {
     bytes: Vec<u8>,
     views: Vec<json::buffer::View>,
     accessors: Vec<json::Accessor>,
 }
 
-enum Kind {
+pub(super) enum Kind {
     Scalar,
     Vec3,
     Vec4,
@@ -67,7 +67,7 @@ impl Bin {
         json::Index::new(self.views.len() as u32 - 1)
     }
 
-    fn accessor(
+    pub(super) fn accessor(
         &mut self,
         data: &[u8],
         count: usize,
@@ -105,7 +105,7 @@ impl Bin {
     }
 }
 
-fn f32_bytes(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
+pub(super) fn f32_bytes(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
     values.into_iter().flat_map(f32::to_le_bytes).collect()
 }
 
@@ -237,31 +237,8 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
     let (rest_rot, rest_pos) = motion::rest_world(skeleton);
     let (rest_m, rest_inv): (Vec<Mat4>, Vec<Mat4>) = rest_rot.iter().zip(&rest_pos).map(|(r, p)| motion::rigid(*r, *p)).unzip();
 
-    let mut root = json::Root {
-        asset: json::Asset { generator: Some(format!("Odori {}", env!("CARGO_PKG_VERSION"))), ..Default::default() },
-        ..Default::default()
-    };
-    let mut bin = Bin { bytes: Vec::new(), views: Vec::new(), accessors: Vec::new() };
-
-    // Joint nodes: node i is joint i.
-    let mut children: Vec<Vec<json::Index<json::Node>>> = vec![Vec::new(); n];
-    for (i, j) in skeleton.joints.iter().enumerate() {
-        if let Some(p) = j.parent {
-            children[p].push(json::Index::new(i as u32));
-        }
-    }
-    for (i, j) in skeleton.joints.iter().enumerate() {
-        let r = j.rest_rotation.normalize();
-        root.nodes.push(json::Node {
-            name: Some(j.name.clone()),
-            translation: (j.rest_offset != Vec3::ZERO).then(|| j.rest_offset.to_array()),
-            rotation: (r != Quat::IDENTITY).then(|| json::scene::UnitQuaternion(r.to_array())),
-            children: (!children[i].is_empty()).then(|| std::mem::take(&mut children[i])),
-            ..Default::default()
-        });
-    }
-    let mut scene_nodes: Vec<json::Index<json::Node>> =
-        skeleton.joints.iter().enumerate().filter(|(_, j)| j.parent.is_none()).map(|(i, _)| json::Index::new(i as u32)).collect();
+    let (mut root, mut bin) = start();
+    let mut scene_nodes = joint_nodes(&mut root, skeleton);
 
     // Mesh, materials and skin.
     if let Some(mesh) = options.mesh.filter(|m| !m.parts.is_empty()) {
@@ -332,8 +309,48 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
         scene_nodes.push(json::Index::new(root.nodes.len() as u32 - 1));
     }
 
-    // Animations.
+    animations(&mut root, &mut bin, clips, |_| true)?;
+    finish(root, bin, scene_nodes)
+}
+
+/// A fresh document and an empty binary chunk.
+pub(super) fn start() -> (json::Root, Bin) {
+    let root = json::Root {
+        asset: json::Asset { generator: Some(format!("Odori {}", env!("CARGO_PKG_VERSION"))), ..Default::default() },
+        ..Default::default()
+    };
+    (root, Bin { bytes: Vec::new(), views: Vec::new(), accessors: Vec::new() })
+}
+
+/// One node per joint (node i is joint i) with its rest translation and rotation, children
+/// linked; returns the roots, for the scene.
+pub(super) fn joint_nodes(root: &mut json::Root, skeleton: &Skeleton) -> Vec<json::Index<json::Node>> {
+    let n = skeleton.len();
+    let mut children: Vec<Vec<json::Index<json::Node>>> = vec![Vec::new(); n];
+    for (i, j) in skeleton.joints.iter().enumerate() {
+        if let Some(p) = j.parent {
+            children[p].push(json::Index::new(i as u32));
+        }
+    }
+    for (i, j) in skeleton.joints.iter().enumerate() {
+        let r = j.rest_rotation.normalize();
+        root.nodes.push(json::Node {
+            name: Some(j.name.clone()),
+            translation: (j.rest_offset != Vec3::ZERO).then(|| j.rest_offset.to_array()),
+            rotation: (r != Quat::IDENTITY).then(|| json::scene::UnitQuaternion(r.to_array())),
+            children: (!children[i].is_empty()).then(|| std::mem::take(&mut children[i])),
+            ..Default::default()
+        });
+    }
+    skeleton.joints.iter().enumerate().filter(|(_, j)| j.parent.is_none()).map(|(i, _)| json::Index::new(i as u32)).collect()
+}
+
+/// One animation per clip (LINEAR samplers, one shared time accessor per clip): a rotation
+/// channel for every joint, a translation channel for each animated translation whose joint
+/// `translate` accepts.
+pub(super) fn animations(root: &mut json::Root, bin: &mut Bin, clips: &[&Clip], translate: impl Fn(usize) -> bool) -> Result<(), ExportError> {
     for clip in clips {
+        let n = clip.skeleton.len();
         let frames = clip.frame_count();
         let times: Vec<f32> = (0..frames).map(|f| f as f32 / clip.fps).collect();
         if times.windows(2).any(|w| w[1] <= w[0]) {
@@ -373,14 +390,18 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
                 prev = q;
                 data.extend(f32_bytes(q.to_array()));
             }
-            push(&mut bin, j, data, Kind::Vec4, json::animation::Property::Rotation);
+            push(bin, j, data, Kind::Vec4, json::animation::Property::Rotation);
         }
-        for t in &clip.translations {
-            push(&mut bin, t.joint, f32_bytes(t.values.iter().flat_map(|v| v.to_array())), Kind::Vec3, json::animation::Property::Translation);
+        for t in clip.translations.iter().filter(|t| translate(t.joint)) {
+            push(bin, t.joint, f32_bytes(t.values.iter().flat_map(|v| v.to_array())), Kind::Vec3, json::animation::Property::Translation);
         }
         root.animations.push(json::Animation { extensions: None, extras: Default::default(), channels, name: Some(clip.name.clone()), samplers });
     }
+    Ok(())
+}
 
+/// The scene over `scene_nodes`, the buffer, and the GLB container around both chunks.
+pub(super) fn finish(mut root: json::Root, mut bin: Bin, scene_nodes: Vec<json::Index<json::Node>>) -> Result<Vec<u8>, ExportError> {
     while !bin.bytes.len().is_multiple_of(4) {
         bin.bytes.push(0);
     }

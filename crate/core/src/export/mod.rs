@@ -1,5 +1,5 @@
-//! Exporters (spec §M), beside the importers: GLB through `gltf-json` (the `gltf` crate's own
-//! JSON types, so no JSON is assembled by hand) and BVH. Both take a skeleton, the clips on it
+//! Exporters (spec §M), beside the importers: GLB and VRM animation (`.vrma`) through
+//! `gltf-json` (the `gltf` crate's own JSON types, so no JSON is assembled by hand) and BVH. Both take a skeleton, the clips on it
 //! and, for GLB, the character's skinned mesh, and give bytes: nothing touches a filesystem,
 //! so the same code serves the npm package (`Uint8Array`) and native tools.
 //!
@@ -9,6 +9,7 @@
 
 pub mod bvh;
 pub mod gltf;
+pub mod vrma;
 
 use thiserror::Error;
 
@@ -27,6 +28,8 @@ pub enum ExportError {
     NotFinite { clip: String, frame: usize, joint: String },
     #[error("mesh part {part}: {message}")]
     BadMesh { part: usize, message: String },
+    #[error("clip '{clip}' is not humanoid, so it has no VRM humanoid bones to animate: {reason}")]
+    NotHumanoid { clip: String, reason: String },
     #[error("could not encode the file: {message}")]
     Encode { message: String },
 }
@@ -41,6 +44,7 @@ impl ExportError {
             ExportError::BadClip { .. } => "export-bad-clip",
             ExportError::NotFinite { .. } => "export-not-finite",
             ExportError::BadMesh { .. } => "export-bad-mesh",
+            ExportError::NotHumanoid { .. } => "export-not-humanoid",
             ExportError::Encode { .. } => "export-encode",
         }
     }

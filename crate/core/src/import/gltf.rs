@@ -312,12 +312,8 @@ impl Sampled {
                 let b0 = self.values[3 * k + 2];
                 let a1 = self.values[3 * (k + 1)];
                 let v1 = self.values[3 * (k + 1) + 1];
-                let (s2, s3) = (s * s, s * s * s);
-                let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
-                let h10 = s3 - 2.0 * s2 + s;
-                let h01 = -2.0 * s3 + 3.0 * s2;
-                let h11 = s3 - s2;
-                let out: [f32; 4] = std::array::from_fn(|i| h00 * v0[i] + h10 * dt * b0[i] + h01 * v1[i] + h11 * dt * a1[i]);
+                // glTF's tangents are per second: scaled by the key interval.
+                let out = crate::motion::hermite(v0, b0.map(|x| dt * x), v1, a1.map(|x| dt * x), s);
                 if is_quat {
                     Quat::from_array(out).normalize().to_array()
                 } else {

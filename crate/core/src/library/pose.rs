@@ -282,8 +282,7 @@ pub fn solve_legs(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32
 pub fn lowest_height(skeleton: &Skeleton, local: &[Quat; CANON_COUNT], root: Vec3) -> f32 {
     let mut rot = [Quat::IDENTITY; CANON_COUNT];
     let mut pos = [Vec3::ZERO; CANON_COUNT];
-    skeleton.pose_into(local, root, &mut rot, &mut pos);
-    pos[..skeleton.len().min(CANON_COUNT)].iter().map(|p| p.y).fold(f32::MAX, f32::min)
+    crate::motion::lowest_height(skeleton, local, root, &mut rot, &mut pos)
 }
 
 #[cfg(test)]

@@ -1,10 +1,13 @@
 //! The motion kernel: the one forward kinematics of the engine (local rotations and
-//! translations to world rotations and positions, into buffers the caller owns), rest-pose
-//! transforms, and the quaternion hygiene every writer of keyframes needs (unit length, sign
-//! continuity). New code (export, the built-in body, retargeting) uses only this; older
-//! modules that still carry their own loop are listed in `notes` of the export work and move
-//! here one at a time (see `Skeleton::forward_kinematics`, `Clip::world_positions_into`,
-//! which already call it).
+//! translations to world rotations and positions, into buffers the caller owns; or rotations
+//! only, every joint at its rest offset), rest-pose transforms, the lowest point of a pose,
+//! the one cubic Hermite curve, two-bone IK, floor and foot-skate measures, and the
+//! quaternion hygiene every writer of keyframes needs (unit length, sign continuity).
+//! `Skeleton::forward_kinematics` / `pose_into` / `posed_at_origin`, `Clip::world_positions_into`
+//! / `world_matrices_into`, `actions::ik::forward`, the lowest points of `builtin.rs` and
+//! `library/pose.rs`, the choreography's joins, the text actions' sway and the glTF
+//! importer's CUBICSPLINE sampler all call it (`tests/native/motion_kernel.rs` checks each
+//! against the copy it replaced: the same bits, or within 1e-5 for the world matrices).
 
 use glam::{Mat4, Quat, Vec3};
 
@@ -25,20 +28,36 @@ pub fn local_to_world(
     world_positions: &mut [Vec3],
 ) -> usize {
     let n = skeleton.len().min(local_rotations.len()).min(local_translations.len()).min(world_rotations.len()).min(world_positions.len());
+    fk(skeleton, n, local_rotations, |i| local_translations[i], world_rotations, world_positions);
+    n
+}
+
+/// [`local_to_world`] of a pose whose joints all keep their rest offsets, the root (any joint
+/// without a parent before it) standing at `root`: the common case of a pose given by
+/// rotations only. Returns the number of joints written.
+pub fn local_to_world_at(skeleton: &Skeleton, local_rotations: &[Quat], root: Vec3, world_rotations: &mut [Quat], world_positions: &mut [Vec3]) -> usize {
+    let n = skeleton.len().min(local_rotations.len()).min(world_rotations.len()).min(world_positions.len());
+    let joints = &skeleton.joints;
+    fk(skeleton, n, local_rotations, |i| if joints[i].parent.is_some_and(|p| p < i) { joints[i].rest_offset } else { root }, world_rotations, world_positions);
+    n
+}
+
+/// The one forward-kinematics loop: joint `i`'s local translation comes from `translation(i)`.
+#[inline(always)]
+fn fk(skeleton: &Skeleton, n: usize, local_rotations: &[Quat], translation: impl Fn(usize) -> Vec3, world_rotations: &mut [Quat], world_positions: &mut [Vec3]) {
     for (i, j) in skeleton.joints.iter().enumerate().take(n) {
         match j.parent {
             Some(p) if p < i => {
                 let pr = world_rotations[p];
                 world_rotations[i] = pr * local_rotations[i];
-                world_positions[i] = world_positions[p] + pr * local_translations[i];
+                world_positions[i] = world_positions[p] + pr * translation(i);
             }
             _ => {
                 world_rotations[i] = local_rotations[i];
-                world_positions[i] = local_translations[i];
+                world_positions[i] = translation(i);
             }
         }
     }
-    n
 }
 
 /// World rotations and positions of the skeleton's rest pose (rest rotations and offsets).
@@ -49,6 +68,14 @@ pub fn rest_world(skeleton: &Skeleton) -> (Vec<Quat>, Vec<Vec3>) {
     let mut pos = vec![Vec3::ZERO; skeleton.len()];
     local_to_world(skeleton, &local_r, &local_t, &mut rot, &mut pos);
     (rot, pos)
+}
+
+/// Height of the lowest joint of a pose given by rotations (rest offsets, the root at
+/// `root`), using `rot` and `pos` as scratch (so a hot loop need not allocate); `f32::MAX`
+/// for no joint.
+pub fn lowest_height(skeleton: &Skeleton, local_rotations: &[Quat], root: Vec3, rot: &mut [Quat], pos: &mut [Vec3]) -> f32 {
+    let n = local_to_world_at(skeleton, local_rotations, root, rot, pos);
+    pos[..n].iter().map(|p| p.y).fold(f32::MAX, f32::min)
 }
 
 /// The rigid world matrix of a joint and its exact inverse (built from the rotation and
@@ -66,6 +93,19 @@ pub fn sign_continuous(previous: Quat, q: Quat) -> Quat {
     } else {
         q
     }
+}
+
+/// Cubic Hermite interpolation at `s` in 0..1 between `p0` and `p1` with tangents `m0`, `m1`
+/// (already multiplied by the interval's length): the one curve of the engine (glTF
+/// CUBICSPLINE sampling, the choreography's joins, the text actions' sway residual).
+pub fn hermite<const N: usize>(p0: [f32; N], m0: [f32; N], p1: [f32; N], m1: [f32; N], s: f32) -> [f32; N] {
+    let s2 = s * s;
+    let s3 = s2 * s;
+    let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+    let h10 = s3 - 2.0 * s2 + s;
+    let h01 = -2.0 * s3 + 3.0 * s2;
+    let h11 = s3 - s2;
+    std::array::from_fn(|i| h00 * p0[i] + h10 * m0[i] + h01 * p1[i] + h11 * m1[i])
 }
 
 /// Two-bone IK: the middle joint (knee, elbow) and the end (ankle, wrist) of a chain from

@@ -1,0 +1,232 @@
+//! The motion kernel (`odori_core::motion`) in place of the copies it replaced: the forward
+//! kinematics of `Skeleton::forward_kinematics`, `pose_into`, `posed_at_origin`,
+//! `Clip::world_matrices_into`, `actions::ik::forward`, the lowest-point functions of
+//! `builtin.rs` and `library/pose.rs`, and the Hermite curve of the choreography's joins. Each
+//! removed copy is kept here, as it was, as the reference; on real clips (CMU salsa's 43-joint
+//! BVH rig, Xbot's and RobotExpressive's glTF rigs with rest rotations, the built-in moves) the
+//! kernel gives the same bits (the same arithmetic in the same order) — or, for the world
+//! matrices, which the copy built as a product of matrices and the kernel builds from the
+//! world rotation and position, the same within 1e-5.
+
+use glam::{Mat4, Quat, Vec3};
+use odori_core::import::{import_bytes, ImportOptions};
+use odori_core::library::pose::lowest_height;
+use odori_core::{Clip, Skeleton};
+use odori_tests::{fps_override_for, read};
+
+/// `Skeleton::forward_kinematics` before the kernel.
+fn old_forward_kinematics(sk: &Skeleton, local_rotations: &[Quat], local_translations: &[Vec3], positions: &mut Vec<Vec3>, mut matrices: Option<&mut Vec<Mat4>>) {
+    let n = sk.len().min(local_rotations.len()).min(local_translations.len());
+    positions.clear();
+    let mut rots: Vec<Quat> = Vec::with_capacity(n);
+    if let Some(m) = matrices.as_deref_mut() {
+        m.clear();
+    }
+    for i in 0..n {
+        let (r, p) = match sk.joints[i].parent {
+            None => (local_rotations[i], local_translations[i]),
+            Some(p) => (rots[p] * local_rotations[i], positions[p] + rots[p] * local_translations[i]),
+        };
+        rots.push(r);
+        positions.push(p);
+        if let Some(m) = matrices.as_deref_mut() {
+            m.push(Mat4::from_rotation_translation(r, p));
+        }
+    }
+}
+
+/// `Skeleton::pose_into` before the kernel.
+fn old_pose_into(sk: &Skeleton, local: &[Quat], root: Vec3, rot: &mut [Quat], pos: &mut [Vec3]) {
+    let n = sk.len().min(local.len()).min(rot.len()).min(pos.len());
+    for (i, j) in sk.joints.iter().enumerate().take(n) {
+        match j.parent {
+            Some(p) if p < i => {
+                rot[i] = rot[p] * local[i];
+                pos[i] = pos[p] + rot[p] * j.rest_offset;
+            }
+            _ => {
+                rot[i] = local[i];
+                pos[i] = root;
+            }
+        }
+    }
+}
+
+/// `Clip::world_matrices_into` before the kernel (a product of local matrices).
+fn old_world_matrices(clip: &Clip, frame: usize) -> Vec<Mat4> {
+    let local = clip.frame_rotations(frame);
+    let mut trans = Vec::new();
+    clip.local_translations_into(frame, &mut trans);
+    let mut out: Vec<Mat4> = Vec::new();
+    for (i, j) in clip.skeleton.joints.iter().enumerate() {
+        let m = Mat4::from_rotation_translation(local[i], trans[i]);
+        let w = match j.parent {
+            None => m,
+            Some(p) => out[p] * m,
+        };
+        out.push(w);
+    }
+    out
+}
+
+/// `actions::ik::forward` before the kernel.
+fn old_ik_forward(sk: &Skeleton, local: &[Quat], root: Vec3) -> (Vec<Quat>, Vec<Vec3>) {
+    let n = sk.len().min(local.len());
+    let mut rot: Vec<Quat> = Vec::with_capacity(n);
+    let mut pos: Vec<Vec3> = Vec::with_capacity(n);
+    for i in 0..n {
+        let j = &sk.joints[i];
+        match j.parent {
+            Some(p) if p < i => {
+                rot.push(rot[p] * local[i]);
+                pos.push(pos[p] + rot[p] * j.rest_offset);
+            }
+            _ => {
+                rot.push(local[i]);
+                pos.push(if i == 0 { root } else { j.rest_offset });
+            }
+        }
+    }
+    (rot, pos)
+}
+
+/// The choreography's Hermite before the kernel.
+fn old_hermite(p0: [f32; 4], m0: [f32; 4], p1: [f32; 4], m1: [f32; 4], s: f32) -> [f32; 4] {
+    let s2 = s * s;
+    let s3 = s2 * s;
+    let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+    let h10 = s3 - 2.0 * s2 + s;
+    let h01 = -2.0 * s3 + 3.0 * s2;
+    let h11 = s3 - s2;
+    std::array::from_fn(|i| h00 * p0[i] + h10 * m0[i] + h01 * p1[i] + h11 * m1[i])
+}
+
+/// The glTF importer's CUBICSPLINE value before the kernel (tangents scaled by `dt` inside).
+fn old_cubic(v0: [f32; 4], b0: [f32; 4], v1: [f32; 4], a1: [f32; 4], dt: f32, s: f32) -> [f32; 4] {
+    let (s2, s3) = (s * s, s * s * s);
+    let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+    let h10 = s3 - 2.0 * s2 + s;
+    let h01 = -2.0 * s3 + 3.0 * s2;
+    let h11 = s3 - s2;
+    std::array::from_fn(|i| h00 * v0[i] + h10 * dt * b0[i] + h01 * v1[i] + h11 * dt * a1[i])
+}
+
+/// Real clips on four rigs: CMU salsa (BVH), Xbot and RobotExpressive (glTF rest rotations,
+/// several roots for the robot), and every 10th built-in move (canonical).
+fn clips() -> Vec<Clip> {
+    let mut out = Vec::new();
+    let rel = "mocap/cmu-salsa/salsa_01.bvh";
+    let im = import_bytes(rel, &read(rel), &ImportOptions { fps_override: fps_override_for(rel), ..Default::default() }).unwrap();
+    out.push(im.clips[0].slice(0, 600, "salsa_01 (10 s)"));
+    for rel in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
+        let im = import_bytes(rel, &read(rel), &ImportOptions::default()).unwrap();
+        out.extend(im.clips.into_iter().take(4));
+    }
+    out.extend(odori_core::library::builtin_clips().into_iter().step_by(10));
+    out
+}
+
+#[test]
+fn forward_kinematics_pose_and_lowest_points_are_bit_identical() {
+    let clips = clips();
+    assert!(clips.len() >= 20, "{} clips", clips.len());
+    let (mut frames, mut joints) = (0usize, 0usize);
+    for clip in &clips {
+        let sk = &*clip.skeleton;
+        let n = sk.len();
+        let mut trans = Vec::new();
+        let (mut pa, mut pb, mut ma, mut mb) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for f in (0..clip.frame_count()).step_by(3) {
+            let local = clip.frame_rotations(f);
+            clip.local_translations_into(f, &mut trans);
+            sk.forward_kinematics(local, &trans, &mut pa, Some(&mut ma));
+            old_forward_kinematics(sk, local, &trans, &mut pb, Some(&mut mb));
+            assert_eq!(pa, pb, "'{}' frame {f}: forward_kinematics positions", clip.name);
+            assert_eq!(ma, mb, "'{}' frame {f}: forward_kinematics matrices", clip.name);
+
+            let root = clip.root_translation(f);
+            let (mut ra, mut qa) = (vec![Quat::IDENTITY; n], vec![Vec3::ZERO; n]);
+            let (mut rb, mut qb) = (vec![Quat::IDENTITY; n], vec![Vec3::ZERO; n]);
+            sk.pose_into(local, root, &mut ra, &mut qa);
+            old_pose_into(sk, local, root, &mut rb, &mut qb);
+            assert_eq!((&ra, &qa), (&rb, &qb), "'{}' frame {f}: pose_into", clip.name);
+
+            // posed_at_origin and builtin::lowest_point: rest offsets, root at the origin.
+            let offsets: Vec<Vec3> = sk.joints.iter().map(|j| if j.parent.is_some() { j.rest_offset } else { Vec3::ZERO }).collect();
+            let mut origin = Vec::new();
+            old_forward_kinematics(sk, local, &offsets, &mut origin, None);
+            assert_eq!(sk.posed_at_origin(local), origin, "'{}' frame {f}: posed_at_origin", clip.name);
+            let lowest = origin.iter().map(|p| p.y).fold(f32::MAX, f32::min);
+            assert_eq!(odori_core::builtin::lowest_point(sk, local).to_bits(), lowest.to_bits(), "'{}' frame {f}: lowest_point", clip.name);
+            frames += 1;
+            joints += n;
+        }
+    }
+    println!("forward kinematics: {frames} frames, {joints} joints of {} clips, bit-identical", clips.len());
+}
+
+#[test]
+fn canonical_pose_helpers_are_bit_identical() {
+    // ik::forward and library::pose::lowest_height take canonical poses.
+    let mut checked = 0;
+    for clip in odori_core::library::builtin_clips().into_iter().step_by(7) {
+        let sk = &*clip.skeleton;
+        for f in (0..clip.frame_count()).step_by(5) {
+            let local = clip.frame_rotations(f);
+            let root = clip.root_translation(f);
+            assert_eq!(odori_core::actions::ik::forward(sk, local, root), old_ik_forward(sk, local, root), "'{}' frame {f}: ik::forward", clip.name);
+            let arr: [Quat; odori_core::humanoid::CANON_COUNT] = local.try_into().unwrap();
+            let (mut rot, mut pos) = ([Quat::IDENTITY; 21], [Vec3::ZERO; 21]);
+            old_pose_into(sk, local, root, &mut rot, &mut pos);
+            let old = pos.iter().map(|p| p.y).fold(f32::MAX, f32::min);
+            assert_eq!(lowest_height(sk, &arr, root).to_bits(), old.to_bits(), "'{}' frame {f}: lowest_height", clip.name);
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "{checked} poses");
+}
+
+#[test]
+fn world_matrices_match_the_matrix_product_within_1e5() {
+    let mut worst = 0.0f32;
+    let mut out = Vec::new();
+    for clip in clips() {
+        for f in (0..clip.frame_count()).step_by(5) {
+            clip.world_matrices_into(f, &mut out);
+            let old = old_world_matrices(&clip, f);
+            assert_eq!(out.len(), old.len());
+            for (a, b) in out.iter().zip(&old) {
+                for (x, y) in a.to_cols_array().iter().zip(b.to_cols_array()) {
+                    worst = worst.max((x - y).abs() / y.abs().max(1.0));
+                }
+            }
+        }
+    }
+    println!("world matrices: worst difference from the matrix product {worst:e} (relative, metres above 1)");
+    assert!(worst < 1e-5, "{worst}");
+}
+
+#[test]
+fn one_hermite_curve() {
+    // The kernel's curve is the joins' copy bit for bit, and the importer's CUBICSPLINE (which
+    // scaled the tangents inside the sum) within 1e-5, over a grid of values and tangents.
+    let mut worst = 0.0f32;
+    let mut k = 0u32;
+    let mut next = || {
+        k = k.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (k >> 8) as f32 / (1u32 << 24) as f32 * 4.0 - 2.0
+    };
+    for _ in 0..2000 {
+        let v: [[f32; 4]; 4] = std::array::from_fn(|_| std::array::from_fn(|_| next()));
+        let s = (next() + 2.0) / 4.0;
+        let dt = (next() + 2.0) / 4.0 + 0.01;
+        let a = odori_core::motion::hermite(v[0], v[1], v[2], v[3], s);
+        assert_eq!(a.map(f32::to_bits), old_hermite(v[0], v[1], v[2], v[3], s).map(f32::to_bits));
+        let c = odori_core::motion::hermite(v[0], v[1].map(|x| dt * x), v[2], v[3].map(|x| dt * x), s);
+        let o = old_cubic(v[0], v[1], v[2], v[3], dt, s);
+        for (x, y) in c.iter().zip(o) {
+            worst = worst.max((x - y).abs());
+        }
+    }
+    assert!(worst < 1e-5, "{worst}");
+}
