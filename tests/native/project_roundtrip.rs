@@ -71,6 +71,7 @@ fn salsa_clip(p: &Project) -> Option<ClipRef> {
 /// One random edit; on error the document must be unchanged.
 fn random_edit(p: &mut Project, rng: &mut Rng, log: &mut Vec<String>) {
     let bars = p.doc().dance.bars.len();
+    assert!(bars > 0, "the song's bars are always there");
     let before = p.doc().clone();
     let bar = rng.below(bars.min(12));
     let op = rng.below(17);
@@ -151,7 +152,9 @@ fn random_edit_sequences_round_trip_identically() {
         let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed);
         let mut p = Project::new();
         p.set_name(&format!("seed {seed}"));
-        p.set_song("Vibe_Ace.ogg", Some(song_bytes), env, AnalysisOptions::default()).expect("song");
+        // As the app starts a project: its first song is not an undo step (undoing it would
+        // leave no bars to edit).
+        p.set_initial_song("Vibe_Ace.ogg", Some(song_bytes), env, AnalysisOptions::default()).expect("song");
         let mut log = Vec::new();
         for _ in 0..ops {
             random_edit(&mut p, &mut rng, &mut log);
@@ -311,4 +314,84 @@ fn a_missing_blob_opens_the_rest_and_names_what_is_gone() {
     q.render_dance(&RenderOptions::default()).expect("render");
     let again = project::open(&project::save(&q).unwrap()).unwrap();
     assert_eq!(again.missing.len(), 1);
+}
+
+// ---- the project as the page's engine (the Project drives the page) ----
+
+/// Looking at a bar's candidates is not an edit (no undo step) but the open search is kept
+/// and saved; a new project's first song starts its history; Search is an edit; one undo
+/// takes a whole Generate back.
+#[test]
+fn looking_is_not_an_edit_and_one_undo_takes_a_generate_back() {
+    let (_, env) = song();
+    let mut p = Project::new();
+    p.set_initial_song("Demo song (built-in)", None, env, AnalysisOptions::default()).expect("song");
+    assert!(!p.can_undo(), "a new project's first song is where its history starts");
+    let shown = p.candidates(2).expect("candidates");
+    assert_eq!(shown.len(), 6, "six candidates");
+    assert!(!p.can_undo(), "opening a bar's search is not an undo step");
+    assert!(p.doc().dance.bars[2].search.is_some(), "the open search is kept in the document");
+    let q = project::open(&project::save(&p).expect("save")).expect("open").project;
+    assert_eq!(q.doc().dance.bars[2].search.as_ref().map(|s| s.round.clone()), Some(shown.clone()), "the open round comes back from the file");
+    let next = p.search(2, &shown[..1]).expect("search");
+    assert_eq!(next.len(), 6);
+    assert!(p.can_undo(), "Search (liking) is an edit");
+    p.set(4, &next[0]).expect("set");
+    let before = p.doc().dance.clone();
+    let r = p.generate().expect("generate");
+    assert!(r.filled > 1, "Generate filled {} bars", r.filled);
+    assert!(p.doc().dance.bars.iter().all(|b| b.state != BarKind::Empty), "every bar filled");
+    assert!(p.undo(), "undo");
+    assert_eq!(p.doc().dance, before, "one undo takes the whole Generate back");
+    assert!(p.redo());
+    assert!(p.doc().dance.bars.iter().all(|b| b.state != BarKind::Empty), "redo brings it back");
+}
+
+/// The built-in moves made a slice at a time (as the page does, between frames) give the
+/// same library — same segments, same keys — and the same dance as made at once.
+#[test]
+fn builtin_moves_made_in_slices_give_the_same_library_and_dance() {
+    let (_, env) = song();
+    let mut sliced = Project::new();
+    let mut slices = 1;
+    while sliced.load_builtin(37) < 1.0 {
+        slices += 1;
+    }
+    assert!(slices >= 10, "420 moves in slices of 37: {slices} slices");
+    let mut at_once = Project::new();
+    for p in [&mut sliced, &mut at_once] {
+        p.set_song("Vibe_Ace.ogg", None, env, AnalysisOptions::default()).expect("song");
+        p.add_source("salsa_10.bvh", bvh(), ImportOptions { fps_override: Some(60.0), ..Default::default() }).expect("bvh");
+        p.generate().expect("generate");
+    }
+    assert_eq!(sliced.doc(), at_once.doc(), "same dance by keys");
+    let n = sliced.segment_library().len();
+    assert_eq!(n, at_once.segment_library().len());
+    for i in 0..n {
+        assert_eq!(sliced.derived().key(i).cloned(), at_once.derived().key(i).cloned(), "key of segment {i}");
+    }
+    assert_eq!(dance_poses(&mut sliced), dance_poses(&mut at_once), "same joint positions");
+}
+
+/// A library copied from another (the project starts each rebuild from a copy of the built-in
+/// library) never shares a revision with it once they differ: a join table built for one is
+/// refused by the other.
+#[test]
+fn a_table_built_for_one_copy_is_refused_by_another_that_changed() {
+    use odori_core::choreo::{SegmentLibrary, SegmentOptions};
+    let im = odori_core::import::import_bytes("salsa_10.bvh", bvh(), &ImportOptions { fps_override: Some(60.0), ..Default::default() }).expect("import");
+    let base = SegmentLibrary::builtin();
+    let (mut x, mut y) = (base.clone(), base.clone());
+    assert_eq!(x.len(), base.len());
+    x.add_clip(&im.clips[0], &im.humanoid, &im.status, &SegmentOptions { tempo_bpm: Some(100.0), ..Default::default() }).expect("cut x");
+    y.add_clip(&im.clips[0], &im.humanoid, &im.status, &SegmentOptions { tempo_bpm: Some(120.0), ..Default::default() }).expect("cut y");
+    assert_ne!(x.revision(), y.revision(), "diverged copies have distinct revisions");
+    let penalty = odori_core::choreo::FillWeights::default().repeat_penalty;
+    let mut builder = x.table_builder(penalty);
+    while !builder.step(4096).is_done() {}
+    let table = builder.finish().expect("table");
+    assert!(!y.install_table(table), "x's table refused by y");
+    let mut builder = x.table_builder(penalty);
+    while !builder.step(4096).is_done() {}
+    assert!(x.install_table(builder.finish().expect("table")), "and taken by x");
 }
