@@ -395,3 +395,67 @@ fn a_table_built_for_one_copy_is_refused_by_another_that_changed() {
     while !builder.step(4096).is_done() {}
     assert!(x.install_table(builder.finish().expect("table")), "and taken by x");
 }
+
+/// The manifest a schema-1 build wrote for `p`: the history as whole documents.
+fn manifest_v1(p: &Project) -> Vec<u8> {
+    let current: serde_json::Value = serde_json::from_slice(&project::file::manifest_json(p)).expect("manifest");
+    let mut v = current.clone();
+    v["schemaVersion"] = 1.into();
+    v["undo"] = serde_json::to_value(p.undo_history()).unwrap();
+    v["redo"] = serde_json::to_value(p.redo_history()).unwrap();
+    serde_json::to_vec(&v).unwrap()
+}
+
+/// The history kept as changes (schema 2): a long session's manifest — what autosave writes
+/// after every edit — against the same history as whole documents (schema 1, the control, in
+/// the same run); both read back to the same project, and a schema-1 manifest still opens
+/// (migrated) to the same project with the same history.
+#[test]
+fn history_as_changes_is_smaller_and_reads_back_the_same() {
+    let (song_bytes, env) = song();
+    let mut printed = Vec::new();
+    for seed in [11u64, 12, 13] {
+        let mut rng = Rng(0x5DEE_CE66_D1CE_4E5B ^ seed);
+        let mut p = Project::new();
+        p.set_initial_song("Vibe_Ace.ogg", Some(song_bytes), env, AnalysisOptions::default()).expect("song");
+        // About ten minutes of work: an edit every five seconds.
+        let mut log = Vec::new();
+        for _ in 0..120 {
+            random_edit(&mut p, &mut rng, &mut log);
+        }
+        let v2 = project::file::manifest_json(&p);
+        let v1 = manifest_v1(&p);
+        let get = |h: &project::BlobHash| p.blobs().get(h).cloned();
+        let from_v2 = project::file::from_manifest(&v2, get).expect("v2 manifest reads back");
+        assert_eq!(from_v2.migrated_from, None);
+        assert!(from_v2.project == p, "seed {seed}: v2 manifest → the same project, history included\n{}", log.join("\n"));
+        let from_v1 = project::file::from_manifest(&v1, get).expect("v1 manifest reads back");
+        assert_eq!(from_v1.migrated_from, Some(1));
+        assert!(from_v1.project == p, "seed {seed}: v1 manifest (migrated) → the same project");
+        assert!(v2.len() < v1.len(), "seed {seed}: changes ({} bytes) are not smaller than whole documents ({} bytes)", v2.len(), v1.len());
+        printed.push(format!(
+            "seed {seed}: 120 edits, {} undo + {} redo steps: manifest {:.1} KB as changes vs {:.1} KB as whole documents ({:.1}x smaller)",
+            p.undo_history().len(),
+            p.redo_history().len(),
+            v2.len() as f64 / 1e3,
+            v1.len() as f64 / 1e3,
+            v1.len() as f64 / v2.len() as f64
+        ));
+    }
+    for line in printed {
+        println!("{line}");
+    }
+}
+
+/// A change that does not fit its base is refused with a typed error, never a panic.
+#[test]
+fn a_history_change_that_does_not_fit_is_a_typed_error() {
+    let p = sample_project();
+    let mut m: serde_json::Value = serde_json::from_slice(&project::file::manifest_json(&p)).unwrap();
+    assert!(m["undo"].as_array().is_some_and(|u| !u.is_empty()), "the sample has history");
+    m["undo"][0] = serde_json::json!({ "a": 3 });
+    let bytes = serde_json::to_vec(&m).unwrap();
+    let err = project::file::from_manifest(&bytes, |h| p.blobs().get(h).cloned()).err().expect("refused");
+    assert!(matches!(err, FileError::BadProject { .. }), "{err:?}");
+    assert!(err.to_string().contains("history step"), "{err}");
+}
