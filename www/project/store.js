@@ -214,8 +214,10 @@ export class ProjectStore {
       // Nothing is lost: the project is in memory, the last good copy is still stored, and the
       // next edit tries again.
       this.dirty = true;
+      const said = this.lastError;
       this.lastError = describe(err);
-      this.hooks.onError?.(`Not saved in the browser: ${this.lastError}. Your work is kept in this tab; use Save as to keep a file.`, err);
+      // Said once until it changes or storage works again (not one more error per edit).
+      if (this.lastError !== said) this.hooks.onError?.(`Not saved in the browser: ${this.lastError}. Your work is kept in this tab; use Save as to keep a file.`, err);
     }
   }
 
