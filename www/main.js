@@ -1,5 +1,5 @@
 // Odori app bootstrap: loads the wasm engine, opens the viewer, wires the UI modules.
-import init, { Library, Viewer, Song, DemoSong, TextAnimator, Project, version } from "./pkg/odori.js";
+import init, { Library, Viewer, Song, DemoSong, TextAnimator, Project, tempoLimits, version } from "./pkg/odori.js";
 import { LibraryPanel } from "./ui/library-panel.js";
 import { Player } from "./ui/player.js";
 import { FileLoader } from "./ui/files.js";
@@ -33,6 +33,10 @@ async function main() {
   const params = new URLSearchParams(location.search);
   const backend = params.get("backend") || "auto";
   bindPage(messages);
+  // The tempo fields' ranges are the engine's (one place: odori_core::choreo / music::grid).
+  const limits = tempoLimits();
+  Object.assign($("#dance-clip-bpm"), { min: String(limits.moveMinBpm), max: String(limits.moveMaxBpm) });
+  Object.assign($("#song-bpm"), { min: String(limits.songMinBpm), max: String(limits.songMaxBpm) });
   fitCanvas(canvas);
   // The project (what the person made, autosaved): read back from IndexedDB while the 3D
   // view starts; every edit below is an edit of it, and undo/redo is its history

@@ -64,7 +64,7 @@ pub enum SegmentError {
     NotHumanoid { name: String, reason: String },
     #[error("clip '{name}' is {duration_secs:.2} s long and holds only {beats} beat(s) at {tempo_bpm:.0} counts per minute: a segment needs 4 counts (5 beats)")]
     TooShort { name: String, duration_secs: f32, beats: usize, tempo_bpm: f32 },
-    #[error("clip '{name}': stated tempo {tempo_bpm} BPM is outside 30..=300")]
+    #[error("clip '{name}': stated tempo {tempo_bpm} BPM is outside {min}..={max}", min = super::MIN_MOVE_BPM, max = super::MAX_MOVE_BPM)]
     BadTempo { name: String, tempo_bpm: f32 },
     #[error("clip '{name}' is invalid: {message}")]
     Invalid { name: String, message: String },
@@ -326,7 +326,7 @@ impl SegmentLibrary {
         }
         clip.validate().map_err(|e| SegmentError::Invalid { name: name.clone(), message: e.to_string() })?;
         if let Some(t) = options.tempo_bpm {
-            if !(30.0..=300.0).contains(&t) {
+            if !(super::MIN_MOVE_BPM..=super::MAX_MOVE_BPM).contains(&t) {
                 return Err(SegmentError::BadTempo { name, tempo_bpm: t });
             }
         }
@@ -463,7 +463,7 @@ impl SegmentLibrary {
             return Err(SegmentError::BuiltinClip { name });
         }
         if let Some(t) = options.tempo_bpm {
-            if !(30.0..=300.0).contains(&t) {
+            if !(super::MIN_MOVE_BPM..=super::MAX_MOVE_BPM).contains(&t) {
                 return Err(SegmentError::BadTempo { name, tempo_bpm: t });
             }
         }
