@@ -1,6 +1,12 @@
 //! `Project`: one handle over the core's project (spec §K) — everything a person made, every
 //! edit with undo/redo, `.odori` save and open, and the manifest + blobs that autosave writes
 //! to IndexedDB. Moves are named by stable keys (`MoveKey`), never by segment numbers.
+//!
+//! It is also the page's engine (the app holds no other state of the work): `importInto` /
+//! `clipsInto` show a source's clips in a `Library` from the project's own parse, and the
+//! dance methods by segment number (`danceView`, `candidateSegments`, `searchSegments`,
+//! `setSegment`, `segment`, `previewSegment`, `quality`, `prepareTable`, `loadBuiltin`) let a
+//! panel work on the project's segment library while every edit is kept by key in the project.
 
 use js_sys::{Array, Float32Array, Function, Uint8Array};
 use odori_core::choreo::{segment_clip, RenderOptions, TableBuilder};
