@@ -1,5 +1,5 @@
 // Odori app bootstrap: loads the wasm engine, opens the viewer, wires the UI modules.
-import init, { Library, Viewer, Song, DemoSong, TextAnimator, Choreographer, Project, version } from "./pkg/odori.js";
+import init, { Library, Viewer, Song, DemoSong, TextAnimator, Project, tempoLimits, version } from "./pkg/odori.js";
 import { LibraryPanel } from "./ui/library-panel.js";
 import { Player } from "./ui/player.js";
 import { FileLoader } from "./ui/files.js";
@@ -14,6 +14,7 @@ import { ChoreoPanel } from "./ui/choreo-panel.js";
 import { ExportPanel } from "./ui/export-panel.js";
 import { installShare } from "./share.js";
 import { ProjectSession } from "./project/app.js";
+import { ProjectDance } from "./project/dance.js";
 
 const t0 = performance.now();
 const $ = (sel) => document.querySelector(sel);
@@ -32,9 +33,14 @@ async function main() {
   const params = new URLSearchParams(location.search);
   const backend = params.get("backend") || "auto";
   bindPage(messages);
+  // The tempo fields' ranges are the engine's (one place: odori_core::choreo / music::grid).
+  const limits = tempoLimits();
+  Object.assign($("#dance-clip-bpm"), { min: String(limits.moveMinBpm), max: String(limits.moveMaxBpm) });
+  Object.assign($("#song-bpm"), { min: String(limits.songMinBpm), max: String(limits.songMaxBpm) });
   fitCanvas(canvas);
   // The project (what the person made, autosaved): read back from IndexedDB while the 3D
-  // view starts; every edit below is mirrored into it (www/project/app.js).
+  // view starts; every edit below is an edit of it, and undo/redo is its history
+  // (www/project/app.js).
   const session = new ProjectSession({ Project, messages, library });
   const sessionReady = session.start();
   let viewer;
@@ -68,7 +74,8 @@ async function main() {
       library.remove(id);
       session.clipRemoved(id);
       if (player.clip === id) player.clear();
-      messages.info(`${info.name} removed from the library${choreo && choreo.clips?.some((c) => c.id === id) ? " (its dance moves stay in the dance library)" : ""}`);
+      messages.info(`${info.name} removed from the library${choreo && choreo.clips?.some((c) => c.id === id) ? " (bars dancing its moves are emptied; Undo brings it all back)" : ""}`);
+      if (choreo) { choreo.refreshClips(); choreo.refresh(); }
     },
   });
   const imported = (report) => {
@@ -88,10 +95,9 @@ async function main() {
     messages,
     status: $("#status"),
     fpsInput: $("#fps-override"),
-    onImported: (report, src) => {
-      if (src) session.addSource(src.fileName, src.bytes, src.options, report);
-      imported(report);
-    },
+    // The project parses the file (once) and shows its clips in the library.
+    importer: (fileName, bytes, options) => session.importFile(fileName, bytes, options),
+    onImported: (report) => imported(report),
     onFiles: (files) => session.takeProjectFiles(files),
   });
   loader.bindInput($("#file-input"));
@@ -138,11 +144,14 @@ async function main() {
   await nextTask();
   // The 420 built-in moves, a slice per task (building them at once blocked the page for
   // 1–2 s on this kind of machine).
-  const choreographer = await loadMoves($("#status"));
-  choreo = new ChoreoPanel($("#dance"), { choreographer, library, player, songPlayer, panel, messages });
-  choreo.onRecut = (id, bpm) => session.recut(id, bpm);
-  const danceSettings = () => ({ rho: Number($("#dance-rho").value), musicWeight: Number($("#dance-music").value) });
-  choreo.onChange = (view) => session.syncDance(choreographer, view, danceSettings());
+  // The dance panel's engine is the project (www/project/dance.js).
+  const dance = await loadMoves($("#status"), new ProjectDance(session));
+  choreo = new ChoreoPanel($("#dance"), { choreographer: dance, library, player, songPlayer, panel, messages });
+  // Undo/redo buttons follow the project's history, whatever edit made it.
+  session.onEdited = () => {
+    $("#dance-undo").disabled = !session.project.canUndo();
+    $("#dance-redo").disabled = !session.project.canRedo();
+  };
   // Files opened while the moves were being made join the dance library now.
   for (const c of waitingForDance.splice(0)) choreo.addClip(c);
   const songPanel = new SongPanel($("#song"), {
@@ -152,40 +161,54 @@ async function main() {
   songPanel.attachTransport(player);
   player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
   bindSongInput($("#song-input"), songPanel, messages, session);
-  // The project's song (the built-in demo song for a new project, which then becomes its song),
-  // analysed like any file (WebAudio envelope → core), in a task of its own; then the rest of
-  // the project is rebuilt through the panels.
+  // How the page shows the project's document (after undo/redo, and a stored project opened):
+  // these hooks display only, they never edit the project (www/project/app.js, `reconcile`).
+  session.view = {
+    addClips: (report) => imported(report),
+    removeClips: (ids) => {
+      for (const id of ids) {
+        if (searchClient) searchClient.remove(id);
+        if (textPanel && textPanel.clipId === id) textPanel.clipId = null;
+        library.remove(id);
+        if (player.clip === id) player.clear();
+      }
+      panel.refresh();
+    },
+    loadSong: (fileName, bytes) => (bytes ? loadSongBytes(fileName, bytes, songPanel, messages, null) : loadDemoSong(songPanel, messages, null)),
+    showCorrections: (list) => {
+      if (!songPanel.song) return;
+      try {
+        let g = songPanel.song.reset();
+        for (const c of list) g = songPanel.song.correct(c);
+        songPanel.setGrid(g);
+      } catch (e) { messages.error(`${songPanel.name}: ${e.message}`); }
+    },
+    retag: (pairs) => {
+      // A TextAnimator cannot forget a tag: a new one is given the document's tags.
+      textPanel.animator = new TextAnimator();
+      for (const [id, tags] of pairs) {
+        try { textPanel.animator.tagClip(library, id, tags); } catch (e) { messages.error(`Text: ${e.message}`); }
+      }
+    },
+    animate: (text) => { $("#text-input").value = text; textPanel.run(); },
+    dance: (doc) => {
+      const st = doc.dance.settings;
+      $("#dance-rho").value = String(st.rho);
+      $("#dance-music").value = String(st.fill.musicWeight);
+      choreo.refreshClips();
+      choreo.refresh();
+    },
+  };
+  // The project's song (the built-in demo song for a new project, which then becomes its
+  // song), analysed like any file (WebAudio envelope → core), in a task of its own; a stored
+  // project is shown from its document (its files, song, grid, tags, texts; the dance panel
+  // reads its bars and open searches from the project).
   const demoSong = nextTask().then(async () => {
     if (restored) {
-      await session.replay(restored, {
-        importSource: (fileName, bytes, options) => {
-          try { const r = library.importFile(fileName, bytes, options); imported(r); return r; } catch (e) { messages.error(e.message); return null; }
-        },
-        loadSong: (fileName, bytes) => (bytes ? loadSongBytes(fileName, bytes, songPanel, messages, null) : loadDemoSong(songPanel, messages, null)),
-        applyCorrection: (c) => songPanel.correct(c),
-        tag: (id, tags) => textPanel.animator.tagClip(library, id, tags),
-        animate: (text) => { $("#text-input").value = text; textPanel.run(); },
-        dance: (doc) => {
-          for (const s of doc.sources) {
-            for (const [clip, bpm] of s.cutTemposBpm || []) {
-              const id = [...session.clipRefs].find(([, r]) => r.source === s.id && r.clip === clip)?.[0];
-              if (id != null) { try { choreographer.recutClip(id, bpm); } catch (e) { messages.error(`Dance: ${e.message}`); } }
-            }
-          }
-          const st = doc.dance.settings;
-          $("#dance-rho").value = String(st.rho);
-          $("#dance-music").value = String(st.fill.musicWeight);
-          try { choreographer.setRho(st.rho); choreographer.setMusicWeight(st.fill.musicWeight); } catch (e) { messages.error(`Dance: ${e.message}`); }
-          session.restoreDance(doc, choreographer, (bar, seg, pinned) => {
-            try { choreographer.set(bar, seg); if (!pinned) choreographer.unpin(bar); } catch (e) { messages.error(`Dance: bar ${bar + 1}: ${e.message}`); }
-          });
-          choreo.refreshClips();
-          choreo.refresh();
-          choreo.renderDance();
-        },
-      });
+      await session.reconcile();
+      choreo.renderDance();
     }
-    if (!restored || !restored.song) await loadDemoSong(songPanel, messages, session);
+    if (!session.project.doc().song) await loadDemoSong(songPanel, messages, session);
     performance.mark("odori:project-ready");
     document.body.dataset.project = "ready";
   });
@@ -202,10 +225,9 @@ async function main() {
   document.body.dataset.ready = "1";
 }
 
-/** A Choreographer with its built-in moves added in slices of about SLICE_MS each. */
-async function loadMoves(status) {
+/** The dance engine (the project) with its built-in moves made in slices of about SLICE_MS each. */
+async function loadMoves(status, choreographer) {
   const SLICE_MS = 30;
-  const choreographer = Choreographer.loading();
   let count = 8;
   for (;;) {
     const t = performance.now();
@@ -293,8 +315,9 @@ async function loadDemoSong(songPanel, messages, session) {
     const demo = await renderDemoSong(44100);
     const buffer = bufferFromSamples(demo.samples, demo.sampleRateHz);
     const { song, env } = await analyse(buffer);
-    songPanel.load(song, DEMO_SONG_NAME, buffer);
+    // The project first: the dance panel reads its bars from the project's grid.
     if (session) session.setSong(DEMO_SONG_NAME, undefined, env);
+    songPanel.load(song, DEMO_SONG_NAME, buffer);
     document.body.dataset.song = "demo";
     return true;
   } catch (e) {
@@ -313,8 +336,8 @@ async function loadSongBytes(fileName, bytes, songPanel, messages, session) {
     const buffer = await decodeSong(bytes, fileName);
     status.textContent = `Analysing ${fileName}…`;
     const { song, env } = await analyse(buffer);
-    songPanel.load(song, fileName, buffer);
     if (session) session.setSong(fileName, bytes, env);
+    songPanel.load(song, fileName, buffer);
     messages.info(`${fileName}: ${song.grid().bars.length} bars at ${song.grid().bpm.toFixed(1)} BPM`);
     document.body.dataset.song = fileName;
     return true;

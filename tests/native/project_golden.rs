@@ -13,7 +13,8 @@ const GOLDEN: &[u8] = include_bytes!("../golden/project_v1.odori");
 fn golden_v1_opens_with_everything_in_it() {
     let opened = project::open(GOLDEN).expect("the golden v1 file opens");
     assert!(opened.missing.is_empty(), "{:?}", opened.missing);
-    assert_eq!(opened.migrated_from, None);
+    // Schema 2 keeps the history as changes: the v1 file (whole documents) is migrated.
+    assert_eq!(opened.migrated_from, Some(1));
     let mut p = opened.project;
     let doc = p.doc().clone();
     assert_eq!(doc.name, "golden v1");

@@ -71,6 +71,7 @@ fn salsa_clip(p: &Project) -> Option<ClipRef> {
 /// One random edit; on error the document must be unchanged.
 fn random_edit(p: &mut Project, rng: &mut Rng, log: &mut Vec<String>) {
     let bars = p.doc().dance.bars.len();
+    assert!(bars > 0, "the song's bars are always there");
     let before = p.doc().clone();
     let bar = rng.below(bars.min(12));
     let op = rng.below(17);
@@ -151,7 +152,9 @@ fn random_edit_sequences_round_trip_identically() {
         let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed);
         let mut p = Project::new();
         p.set_name(&format!("seed {seed}"));
-        p.set_song("Vibe_Ace.ogg", Some(song_bytes), env, AnalysisOptions::default()).expect("song");
+        // As the app starts a project: its first song is not an undo step (undoing it would
+        // leave no bars to edit).
+        p.set_initial_song("Vibe_Ace.ogg", Some(song_bytes), env, AnalysisOptions::default()).expect("song");
         let mut log = Vec::new();
         for _ in 0..ops {
             random_edit(&mut p, &mut rng, &mut log);
@@ -311,4 +314,148 @@ fn a_missing_blob_opens_the_rest_and_names_what_is_gone() {
     q.render_dance(&RenderOptions::default()).expect("render");
     let again = project::open(&project::save(&q).unwrap()).unwrap();
     assert_eq!(again.missing.len(), 1);
+}
+
+// ---- the project as the page's engine (the Project drives the page) ----
+
+/// Looking at a bar's candidates is not an edit (no undo step) but the open search is kept
+/// and saved; a new project's first song starts its history; Search is an edit; one undo
+/// takes a whole Generate back.
+#[test]
+fn looking_is_not_an_edit_and_one_undo_takes_a_generate_back() {
+    let (_, env) = song();
+    let mut p = Project::new();
+    p.set_initial_song("Demo song (built-in)", None, env, AnalysisOptions::default()).expect("song");
+    assert!(!p.can_undo(), "a new project's first song is where its history starts");
+    let shown = p.candidates(2).expect("candidates");
+    assert_eq!(shown.len(), 6, "six candidates");
+    assert!(!p.can_undo(), "opening a bar's search is not an undo step");
+    assert!(p.doc().dance.bars[2].search.is_some(), "the open search is kept in the document");
+    let q = project::open(&project::save(&p).expect("save")).expect("open").project;
+    assert_eq!(q.doc().dance.bars[2].search.as_ref().map(|s| s.round.clone()), Some(shown.clone()), "the open round comes back from the file");
+    let next = p.search(2, &shown[..1]).expect("search");
+    assert_eq!(next.len(), 6);
+    assert!(p.can_undo(), "Search (liking) is an edit");
+    p.set(4, &next[0]).expect("set");
+    let before = p.doc().dance.clone();
+    let r = p.generate().expect("generate");
+    assert!(r.filled > 1, "Generate filled {} bars", r.filled);
+    assert!(p.doc().dance.bars.iter().all(|b| b.state != BarKind::Empty), "every bar filled");
+    assert!(p.undo(), "undo");
+    assert_eq!(p.doc().dance, before, "one undo takes the whole Generate back");
+    assert!(p.redo());
+    assert!(p.doc().dance.bars.iter().all(|b| b.state != BarKind::Empty), "redo brings it back");
+}
+
+/// The built-in moves made a slice at a time (as the page does, between frames) give the
+/// same library — same segments, same keys — and the same dance as made at once.
+#[test]
+fn builtin_moves_made_in_slices_give_the_same_library_and_dance() {
+    let (_, env) = song();
+    let mut sliced = Project::new();
+    let mut slices = 1;
+    while sliced.load_builtin(37) < 1.0 {
+        slices += 1;
+    }
+    assert!(slices >= 10, "420 moves in slices of 37: {slices} slices");
+    let mut at_once = Project::new();
+    for p in [&mut sliced, &mut at_once] {
+        p.set_song("Vibe_Ace.ogg", None, env, AnalysisOptions::default()).expect("song");
+        p.add_source("salsa_10.bvh", bvh(), ImportOptions { fps_override: Some(60.0), ..Default::default() }).expect("bvh");
+        p.generate().expect("generate");
+    }
+    assert_eq!(sliced.doc(), at_once.doc(), "same dance by keys");
+    let n = sliced.segment_library().len();
+    assert_eq!(n, at_once.segment_library().len());
+    for i in 0..n {
+        assert_eq!(sliced.derived().key(i).cloned(), at_once.derived().key(i).cloned(), "key of segment {i}");
+    }
+    assert_eq!(dance_poses(&mut sliced), dance_poses(&mut at_once), "same joint positions");
+}
+
+/// A library copied from another (the project starts each rebuild from a copy of the built-in
+/// library) never shares a revision with it once they differ: a join table built for one is
+/// refused by the other.
+#[test]
+fn a_table_built_for_one_copy_is_refused_by_another_that_changed() {
+    use odori_core::choreo::{SegmentLibrary, SegmentOptions};
+    let im = odori_core::import::import_bytes("salsa_10.bvh", bvh(), &ImportOptions { fps_override: Some(60.0), ..Default::default() }).expect("import");
+    let base = SegmentLibrary::builtin();
+    let (mut x, mut y) = (base.clone(), base.clone());
+    assert_eq!(x.len(), base.len());
+    x.add_clip(&im.clips[0], &im.humanoid, &im.status, &SegmentOptions { tempo_bpm: Some(100.0), ..Default::default() }).expect("cut x");
+    y.add_clip(&im.clips[0], &im.humanoid, &im.status, &SegmentOptions { tempo_bpm: Some(120.0), ..Default::default() }).expect("cut y");
+    assert_ne!(x.revision(), y.revision(), "diverged copies have distinct revisions");
+    let penalty = odori_core::choreo::FillWeights::default().repeat_penalty;
+    let mut builder = x.table_builder(penalty);
+    while !builder.step(4096).is_done() {}
+    let table = builder.finish().expect("table");
+    assert!(!y.install_table(table), "x's table refused by y");
+    let mut builder = x.table_builder(penalty);
+    while !builder.step(4096).is_done() {}
+    assert!(x.install_table(builder.finish().expect("table")), "and taken by x");
+}
+
+/// The manifest a schema-1 build wrote for `p`: the history as whole documents.
+fn manifest_v1(p: &Project) -> Vec<u8> {
+    let current: serde_json::Value = serde_json::from_slice(&project::file::manifest_json(p)).expect("manifest");
+    let mut v = current.clone();
+    v["schemaVersion"] = 1.into();
+    v["undo"] = serde_json::to_value(p.undo_history()).unwrap();
+    v["redo"] = serde_json::to_value(p.redo_history()).unwrap();
+    serde_json::to_vec(&v).unwrap()
+}
+
+/// The history kept as changes (schema 2): a long session's manifest — what autosave writes
+/// after every edit — against the same history as whole documents (schema 1, the control, in
+/// the same run); both read back to the same project, and a schema-1 manifest still opens
+/// (migrated) to the same project with the same history.
+#[test]
+fn history_as_changes_is_smaller_and_reads_back_the_same() {
+    let (song_bytes, env) = song();
+    let mut printed = Vec::new();
+    for seed in [11u64, 12, 13] {
+        let mut rng = Rng(0x5DEE_CE66_D1CE_4E5B ^ seed);
+        let mut p = Project::new();
+        p.set_initial_song("Vibe_Ace.ogg", Some(song_bytes), env, AnalysisOptions::default()).expect("song");
+        // About ten minutes of work: an edit every five seconds.
+        let mut log = Vec::new();
+        for _ in 0..120 {
+            random_edit(&mut p, &mut rng, &mut log);
+        }
+        let v2 = project::file::manifest_json(&p);
+        let v1 = manifest_v1(&p);
+        let get = |h: &project::BlobHash| p.blobs().get(h).cloned();
+        let from_v2 = project::file::from_manifest(&v2, get).expect("v2 manifest reads back");
+        assert_eq!(from_v2.migrated_from, None);
+        assert!(from_v2.project == p, "seed {seed}: v2 manifest → the same project, history included\n{}", log.join("\n"));
+        let from_v1 = project::file::from_manifest(&v1, get).expect("v1 manifest reads back");
+        assert_eq!(from_v1.migrated_from, Some(1));
+        assert!(from_v1.project == p, "seed {seed}: v1 manifest (migrated) → the same project");
+        assert!(v2.len() < v1.len(), "seed {seed}: changes ({} bytes) are not smaller than whole documents ({} bytes)", v2.len(), v1.len());
+        printed.push(format!(
+            "seed {seed}: 120 edits, {} undo + {} redo steps: manifest {:.1} KB as changes vs {:.1} KB as whole documents ({:.1}x smaller)",
+            p.undo_history().len(),
+            p.redo_history().len(),
+            v2.len() as f64 / 1e3,
+            v1.len() as f64 / 1e3,
+            v1.len() as f64 / v2.len() as f64
+        ));
+    }
+    for line in printed {
+        println!("{line}");
+    }
+}
+
+/// A change that does not fit its base is refused with a typed error, never a panic.
+#[test]
+fn a_history_change_that_does_not_fit_is_a_typed_error() {
+    let p = sample_project();
+    let mut m: serde_json::Value = serde_json::from_slice(&project::file::manifest_json(&p)).unwrap();
+    assert!(m["undo"].as_array().is_some_and(|u| !u.is_empty()), "the sample has history");
+    m["undo"][0] = serde_json::json!({ "a": 3 });
+    let bytes = serde_json::to_vec(&m).unwrap();
+    let err = project::file::from_manifest(&bytes, |h| p.blobs().get(h).cloned()).err().expect("refused");
+    assert!(matches!(err, FileError::BadProject { .. }), "{err:?}");
+    assert!(err.to_string().contains("history step"), "{err}");
 }

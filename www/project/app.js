@@ -1,30 +1,27 @@
 // The app's project session: what a person makes in the page is held in one wasm `Project`
 // (spec §K) and autosaved to IndexedDB by `ProjectStore` (store.js).
 //
-// Design (the least invasive path that is real): the panels keep their own handles for display
-// (`Library`, `Song`, `TextAnimator`, `Choreographer`), and every edit they make is mirrored
-// into the Project through the hooks below — imported files (name, bytes as given, import
-// options), the song (bytes, or none for the built-in demo song, plus the envelope the page
-// computed), every grid correction and reset, clip tags and texts. Each mirrored edit
-// schedules an autosave. On start-up the last project is read back from IndexedDB and the page
-// is rebuilt from it by replaying its document through the same panels: the motion files are
-// imported again from their stored bytes with their options, the song is decoded and analysed
-// again and its corrections applied in order, tags and texts are applied again. New project,
-// Open… (.odori, also dropped on the page) and a Recent pick switch the stored "last project"
-// and reload the page, so one rebuild path serves all of them. Save as writes `Project.save()`
-// through the File System Access API where the browser has it, a download otherwise.
+// The Project drives the page. Every edit is an operation on it, made once: an imported file is
+// parsed by the project, which shows the same clips in the page's `Library` (the viewer's clip
+// store) and cuts its humanoid clips into its own dance library; the dance panel's engine is
+// the project (`ProjectDance`, dance.js: bars, searches and Generate are project edits by
+// stable keys); the song, its grid corrections, tags and texts are project edits too. The
+// page's Undo/Redo (the dance panel's buttons, Ctrl+Z / Ctrl+Shift+Z / Ctrl+Y) are the
+// project's history, so one undo takes back the last edit whatever made it, a whole Generate
+// included. The page holds only what it displays: after an undo or redo, and when a stored
+// project is opened, `reconcile` brings the display in line with the project's document —
+// clips of files added or gone, the song and its grid, tags, texts, the dance settings — and
+// the dance panel reads the rest (bars, open searches with their shown and liked candidates)
+// from the project itself.
 //
-// The dance: after every change the Choreographer panel shows (Set, Unpin, Generate, undo/redo,
-// a shared link), each bar's state is compared with the Project's and the differences are
-// applied by stable key (`MoveKey`: the built-in move, or the source clip, its cut tempo and
-// the count the segment starts on, `Choreographer.firstCount`), so the Project holds exactly the
-// dance on screen (a generated bar is set, then unpinned: the Project never generates on its
-// own). A restore sets those keys back into the Choreographer. Re-cutting a clip and ρ and the
-// music weight are mirrored too.
+// Edits made while a stored project is being shown (the second or so after a reload) are
+// project edits like any other: nothing the person does then is dropped (the display hooks of
+// `reconcile` never call back into the session).
 //
-// Not mirrored yet: a bar's open search (shown and liked candidates: they are the page
-// Choreographer's rounds, which the Project would have to replay). The Project's undo history
-// holds the mirrored edits; the page's Undo button stays the Choreographer's.
+// New project, Open… (.odori, also dropped on the page) and a Recent pick switch the stored
+// "last project" and reload the page, so one rebuild path serves all of them. Save as writes
+// `Project.save()` through the File System Access API where the browser has it, a download
+// otherwise.
 import { ProjectStore, openStore } from "./store.js";
 import { saveBytes, pickFile, fileNameFor, isOdoriFile } from "./file.js";
 
@@ -33,7 +30,7 @@ const LAST_KEY = "odori.lastProject";
 export class ProjectSession {
   /**
    * @param {{ Project, messages, library }} deps `Project`: the wasm class; `library`: the page's
-   *   `Library` (its clip ids are mapped to the Project's `{ source, clip }`).
+   *   `Library` (the clips the project shows; their ids are mapped to the Project's `{ source, clip }`).
    */
   constructor({ Project, messages, library }) {
     Object.assign(this, { Project, messages, library });
@@ -41,8 +38,12 @@ export class ProjectSession {
     this.store = null;
     /** Library clip id → the Project's ClipRef. */
     this.clipRefs = new Map();
-    /** True while the page is being rebuilt from the project (edits are not mirrored then). */
-    this.replaying = false;
+    /** What the page shows of the document (see `reconcile`). */
+    this.shown = { sources: new Map(), song: null, corrections: "[]", tags: "[]", texts: "[]" };
+    /** Called after every edit (undo/redo buttons). */
+    this.onEdited = null;
+    /** The display hooks `reconcile` uses (set by the page, see main.js). */
+    this.view = null;
   }
 
   /** Opens the store and the last project (or a new one). Returns the project's document. */
@@ -79,15 +80,18 @@ export class ProjectSession {
     return restored;
   }
 
+  /** After every edit: autosave, and the undo/redo buttons. */
   edited() {
     if (this.store) this.store.schedule();
+    if (this.onEdited) this.onEdited();
   }
 
-  /** Runs a mirrored edit; a refusal is reported, never thrown into the panel that made it. */
+  /** Runs a project edit; a refusal is reported, never thrown into the panel that made it. */
   mirror(what, f) {
-    if (this.replaying || !this.project) return undefined;
+    if (!this.project) return undefined;
     try {
       const r = f(this.project);
+      this.markShown();
       this.edited();
       return r;
     } catch (e) {
@@ -96,19 +100,48 @@ export class ProjectSession {
     }
   }
 
-  /** An imported motion file (the page's import `report` maps its clip ids to the Project's). */
-  addSource(fileName, bytes, options, report) {
-    const r = this.mirror(`${fileName}`, (p) => p.addSource(fileName, bytes, options && options.fpsOverride ? { fpsOverride: options.fpsOverride } : undefined));
-    if (r) this.mapClips(r.id, report);
+  /** Records that the page shows the document as it is (after an edit the page made itself). */
+  markShown() {
+    const doc = this.project.doc();
+    this.shown.song = songKey(doc.song);
+    this.shown.corrections = JSON.stringify(doc.song ? doc.song.corrections : []);
+    this.shown.tags = JSON.stringify(doc.tags);
+    this.shown.texts = JSON.stringify(doc.texts);
+  }
+
+  /**
+   * Imports a motion file: the project parses it once and shows its clips in the page's
+   * library. Returns the library's import report (throws the importer's error).
+   */
+  importFile(fileName, bytes, options) {
+    const report = this.project.importInto(this.library, fileName, bytes, options && options.fpsOverride ? { fpsOverride: options.fpsOverride } : undefined);
+    this.mapClips(report.source, report);
+    this.edited();
+    return report;
   }
 
   mapClips(sourceId, report) {
     report.clips.forEach((c, k) => this.clipRefs.set(c.id, { source: sourceId, clip: k }));
+    this.shown.sources.set(sourceId, report.clips.map((c) => c.id));
+  }
+
+  /** The project's facts about a library clip (`ClipInfo` with its cut), if it is a project clip. */
+  projectClip(clipId) {
+    const ref = this.clipRefs.get(clipId);
+    return ref && this.project.clips().find((c) => c.clip.source === ref.source && c.clip.clip === ref.clip);
+  }
+
+  /** The library id showing a project clip (`{ source, clip }`), if shown. */
+  libraryId(ref) {
+    for (const [id, r] of this.clipRefs) if (r.source === ref.source && r.clip === ref.clip) return id;
+    return undefined;
   }
 
   /** The song: its bytes (undefined for the built-in demo song) and its RMS envelope. */
   setSong(fileName, bytes, env) {
-    this.mirror(`the song ${fileName}`, (p) => p.setSong(fileName, bytes, env.hopSecs, env.bands, undefined));
+    // A new project's first song (the demo song) starts its history: undo never takes it away.
+    const first = !this.project.doc().song;
+    this.mirror(`the song ${fileName}`, (p) => p.setSong(fileName, bytes, env.hopSecs, env.bands, undefined, !first));
   }
 
   correctGrid(correction) { this.mirror("the grid correction", (p) => p.correctGrid(correction)); }
@@ -121,110 +154,91 @@ export class ProjectSession {
     this.mirror("the tags", (p) => p.setTags(ref, tags));
   }
 
-  /** The stable key of Choreographer segment `seg` (undefined when it has none in the project). */
-  keyOf(choreographer, seg) {
-    const s = choreographer.segment(seg);
-    if (!s) return undefined;
-    if (s.builtin) return { kind: "builtin", move: s.builtin };
-    const cut = choreographer.cutClips().find((c) => c.clip === s.clip);
-    const ref = cut && this.clipRefs.get(cut.id);
-    const first = choreographer.firstCount(seg);
-    if (!ref || first == null) return undefined;
-    return { kind: "cut", clip: ref, cutTempoBpm: cut.tempoDetected ? null : cut.tempoBpm, firstCount: first };
-  }
-
-  /** Makes the Project's dance the one the Choreographer holds (see the top of this file). */
-  syncDance(choreographer, view, settings) {
-    if (this.replaying || !this.project || !view.length) return;
-    // Whatever happens here, the panel that called goes on.
-    try { this.syncDanceNow(choreographer, view, settings); } catch (e) { this.messages.error(`Project: the dance is not kept in the project: ${e.message}`); }
-  }
-
-  syncDanceNow(choreographer, view, settings) {
-    const bars = this.project.doc().dance.bars;
-    if (bars.length !== view.length) return; // the Project's grid differs (mid-correction): next time
-    const same = (a, b) => JSON.stringify(a) === JSON.stringify(b);
-    const ops = [];
-    view.forEach((v, i) => {
-      const want = v.state.kind;
-      const key = want === "empty" ? null : this.keyOf(choreographer, v.state.segment);
-      if (want !== "empty" && !key) return;
-      const have = bars[i];
-      if (have.state === want && (want === "empty" || same(have.move, key))) return;
-      if (want === "empty") { ops.push((p) => p.clear(i)); return; }
-      ops.push((p) => { p.set(i, key); if (want === "generated") p.unpin(i); });
-    });
-    const st = this.project.doc().dance.settings;
-    if (settings && Math.abs(st.rho - settings.rho) > 1e-6) ops.push((p) => p.setRho(settings.rho));
-    if (settings && Math.abs(st.fill.musicWeight - settings.musicWeight) > 1e-6) ops.push((p) => p.setMusicWeight(settings.musicWeight));
-    if (ops.length) this.mirror("the dance", (p) => { for (const op of ops) op(p); });
-  }
-
-  /** A clip re-cut at `tempoBpm` (undefined: its detected tempo). */
-  recut(clipId, tempoBpm) {
-    const ref = this.clipRefs.get(clipId);
-    if (ref) this.mirror("the clip's new cut", (p) => p.setClipTempo(ref, tempoBpm));
-  }
-
-  /** Sets the restored dance into the Choreographer (`setState(bar, segment, pinned)`). */
-  restoreDance(doc, choreographer, setState) {
-    const byKey = new Map();
-    for (let i = 0; i < choreographer.segmentCount; i++) {
-      const k = this.keyOf(choreographer, i);
-      if (k) byKey.set(JSON.stringify(k), i);
-    }
-    let lost = 0;
-    doc.dance.bars.forEach((b, i) => {
-      if (b.state === "empty" || !b.move) return;
-      const seg = byKey.get(JSON.stringify(b.move));
-      if (seg == null) { lost++; return; }
-      setState(i, seg, b.state === "pinned");
-    });
-    if (lost) this.messages.error(`${lost} bar${lost > 1 ? "s" : ""} of the dance name a move this page no longer has: left empty.`);
-  }
-
   /** A library clip removed by the person: its file leaves the project when none of its clips stay. */
   clipRemoved(clipId) {
     const ref = this.clipRefs.get(clipId);
     if (!ref) return;
     this.clipRefs.delete(clipId);
-    if ([...this.clipRefs.values()].some((r) => r.source === ref.source)) return;
+    const ids = (this.shown.sources.get(ref.source) || []).filter((id) => id !== clipId);
+    this.shown.sources.set(ref.source, ids);
+    if (ids.length) return;
+    this.shown.sources.delete(ref.source);
     this.mirror("removing the file", (p) => p.removeSource(ref.source));
   }
 
+  /** Undo: the project's last edit, whatever made it; the page then shows the document. */
+  undo() { return this.step((p) => p.undo()); }
+  redo() { return this.step((p) => p.redo()); }
+
+  step(f) {
+    if (!this.project || !f(this.project)) return false;
+    this.edited();
+    this.reconcile().catch((e) => this.messages.error(`Project: ${e.message}`));
+    return true;
+  }
+
   /**
-   * Rebuilds the page from `doc` through the panels' own entry points: `importSource(fileName,
-   * bytes, options)` → import report; `loadSong(fileName, bytes | undefined)` → the page's
-   * `Song` once analysed; `tag(clipId, tags)`; `animate(text)`.
+   * Brings the page's display in line with the project's document (after undo/redo, and when
+   * a stored project is opened) through `this.view`'s hooks, which only display:
+   * `addClips(report)`, `removeClips(ids)`, `loadSong(fileName, bytes | undefined)` → true when
+   * shown, `showCorrections(list)`, `retag(tags by library id)`, `animate(text)`, `dance(doc)`.
    */
-  async replay(doc, { importSource, loadSong, applyCorrection, tag, animate, dance }) {
-    this.replaying = true;
-    try {
-      for (const s of doc.sources) {
-        const bytes = this.project.blob(s.blob);
-        if (!bytes) { this.messages.error(`${s.fileName}: its bytes are missing from the project`); continue; }
-        // The core's ImportOptions, as the document keeps them (snake_case).
-        const o = s.options || {};
-        const report = importSource(s.fileName, bytes, o.fps_override ? { fpsOverride: o.fps_override } : {});
-        if (report) this.mapClips(s.id, report);
-      }
-      if (doc.song) {
-        const bytes = doc.song.audio ? this.project.blob(doc.song.audio) : undefined;
-        if (doc.song.audio && !bytes) this.messages.error(`${doc.song.fileName}: the song's audio is missing from the project`);
-        else {
-          const loaded = await loadSong(doc.song.fileName, bytes);
-          if (loaded) for (const c of doc.song.corrections) applyCorrection(c);
-        }
-      }
-      for (const t of doc.tags) {
-        const id = [...this.clipRefs].find(([, r]) => r.source === t.clip.source && r.clip === t.clip.clip)?.[0];
-        if (id != null) tag(id, t.tags);
-      }
-      if (doc.texts.length) animate(doc.texts[doc.texts.length - 1]);
-      if (dance) dance(doc);
-    } finally {
-      this.replaying = false;
+  reconcile() {
+    // One at a time, in order (a song decode is awaited inside).
+    this.reconciling = (this.reconciling || Promise.resolve()).then(() => this.reconcileNow());
+    return this.reconciling;
+  }
+
+  async reconcileNow() {
+    const v = this.view;
+    if (!v) return;
+    const doc = this.project.doc();
+    const inDoc = new Set(doc.sources.map((s) => s.id));
+    for (const [source, ids] of [...this.shown.sources]) {
+      if (inDoc.has(source)) continue;
+      this.shown.sources.delete(source);
+      for (const id of ids) this.clipRefs.delete(id);
+      v.removeClips(ids);
     }
+    for (const s of doc.sources) {
+      if (this.shown.sources.has(s.id)) continue;
+      try {
+        const report = this.project.clipsInto(this.library, s.id);
+        this.mapClips(s.id, report);
+        v.addClips(report);
+      } catch (e) {
+        this.shown.sources.set(s.id, []);
+        this.messages.error(e.message);
+      }
+    }
+    const key = songKey(doc.song);
+    if (doc.song && key !== this.shown.song) {
+      const bytes = doc.song.audio ? this.project.blob(doc.song.audio) : undefined;
+      if (doc.song.audio && !bytes) this.messages.error(`${doc.song.fileName}: the song's audio is missing from the project`);
+      else {
+        this.shown.song = key;
+        this.shown.corrections = "[]";
+        if (!(await v.loadSong(doc.song.fileName, bytes))) this.shown.song = null;
+      }
+    }
+    // The document may have moved on while the song was decoded: show the latest.
+    const now = this.project.doc();
+    const corrections = JSON.stringify(now.song ? now.song.corrections : []);
+    if (now.song && this.shown.song === songKey(now.song) && corrections !== this.shown.corrections) {
+      this.shown.corrections = corrections;
+      v.showCorrections(now.song.corrections);
+    }
+    const tags = JSON.stringify(now.tags);
+    if (tags !== this.shown.tags) {
+      this.shown.tags = tags;
+      v.retag(now.tags.map((t) => [this.libraryId(t.clip), t.tags]).filter(([id]) => id != null));
+    }
+    const texts = JSON.stringify(now.texts);
+    if (texts !== this.shown.texts) {
+      this.shown.texts = texts;
+      if (now.texts.length) v.animate(now.texts[now.texts.length - 1]);
+    }
+    v.dance(now);
   }
 
   /** Switches the page to another stored project (or a new one, `null`) by reloading. */
@@ -304,4 +318,9 @@ export class ProjectSession {
     for (const f of odori) f.arrayBuffer().then((b) => this.openBytes(f.name, new Uint8Array(b)));
     return files.filter((f) => !isOdoriFile(f));
   }
+}
+
+/** What identifies the song shown (not its corrections). */
+function songKey(song) {
+  return song ? JSON.stringify([song.fileName, song.audio, song.envelope, song.options]) : null;
 }

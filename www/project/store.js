@@ -11,7 +11,11 @@
 // - one tab per project: a Web Lock held while the project is open; a second tab is told and
 //   never writes (it can still Save as);
 // - storage full or refused: the error is reported, work continues in memory, the next edit
-//   tries again.
+//   tries again;
+// - blobs no project refers to any more (a file whose import fell out of the undo history, a
+//   song replaced long ago) are deleted, after the pointer switch, never before: a crash
+//   between the two leaves an extra blob, never a missing one. A blob this tab believes stored
+//   is checked in the write's own transaction (another tab's collection may have taken it).
 import { openDB } from "../vendor/idb.js";
 
 const DB_NAME = "odori";
@@ -57,6 +61,8 @@ export class ProjectStore {
     this.projectId = null;
     this.project = null;
     this.storedBlobs = new Set();
+    /** Blobs the project's last stored manifest refers to (what a later write may drop). */
+    this.lastHashes = new Set();
     this.timer = 0;
     this.writing = null;
     this.dirty = false;
@@ -106,6 +112,7 @@ export class ProjectStore {
     await Promise.all(hashes.map(async (h) => { const b = await tx.store.get(h); if (b) blobs.set(h, b); }));
     const project = ProjectClass.fromManifest(m.bytes, (h) => blobs.get(h));
     for (const h of blobs.keys()) this.storedBlobs.add(h);
+    this.lastHashes = new Set(hashes);
     return { project, missing: project.missing() };
   }
 
@@ -116,6 +123,7 @@ export class ProjectStore {
   async attach(project, id = null) {
     await this.detach();
     this.project = project;
+    if (!id) this.lastHashes = new Set();
     this.projectId = id || newId();
     this.readOnly = false;
     localStorage.setItem(LAST_KEY, this.projectId);
@@ -165,14 +173,25 @@ export class ProjectStore {
     // The synchronous part on the main thread: the manifest and the blobs not yet stored.
     const manifest = this.project.manifest();
     const name = this.project.doc().name || "Untitled";
-    const fresh = this.project.blobHashes().filter((h) => !this.storedBlobs.has(h));
+    const hashes = this.project.blobHashes();
+    const fresh = hashes.filter((h) => !this.storedBlobs.has(h));
     const blobs = fresh.map((h) => [h, this.project.blob(h)]);
     this.stats.mainThreadMs.push(performance.now() - t0);
     const id = this.projectId;
+    const project = this.project;
     try {
-      // 1. the blobs and the new manifest, in one transaction;
+      // 1. the blobs and the new manifest, in one transaction (a blob believed stored is
+      //    checked there, and written again if another tab's collection took it);
       const tx = this.db.transaction(["blobs", "manifests"], "readwrite");
-      for (const [h, bytes] of blobs) tx.objectStore("blobs").put(bytes, h);
+      const store = tx.objectStore("blobs");
+      for (const [h, bytes] of blobs) store.put(bytes, h);
+      const known = hashes.filter((h) => this.storedBlobs.has(h));
+      const present = await Promise.all(known.map((h) => store.getKey(h)));
+      known.forEach((h, k) => {
+        if (present[k] !== undefined) return;
+        const bytes = project.blob(h);
+        if (bytes) { store.put(bytes, h); blobs.push([h, bytes]); }
+      });
       const keyReq = tx.objectStore("manifests").add({ projectId: id, bytes: manifest, savedAt: Date.now() });
       const [newKey] = await Promise.all([keyReq, tx.done]);
       // 2. only then, the pointer moves to it, and the previous copy goes.
@@ -181,6 +200,11 @@ export class ProjectStore {
       await tx2.objectStore("projects").put({ id, name, manifestKey: newKey, updatedAt: Date.now() });
       if (prev && prev.manifestKey !== newKey) await tx2.objectStore("manifests").delete(prev.manifestKey);
       await tx2.done;
+      // 3. after the switch: blobs the previous copy referred to and this one does not.
+      const now = new Set(hashes);
+      const dropped = [...this.lastHashes].filter((h) => !now.has(h));
+      this.lastHashes = now;
+      if (dropped.length) await this.collect(dropped);
       for (const [h, bytes] of blobs) { this.storedBlobs.add(h); this.stats.blobsWritten += 1; this.stats.blobBytesWritten += bytes.length; }
       this.stats.writes += 1;
       this.stats.lastManifestBytes = manifest.length;
@@ -190,19 +214,51 @@ export class ProjectStore {
       // Nothing is lost: the project is in memory, the last good copy is still stored, and the
       // next edit tries again.
       this.dirty = true;
+      const said = this.lastError;
       this.lastError = describe(err);
-      this.hooks.onError?.(`Not saved in the browser: ${this.lastError}. Your work is kept in this tab; use Save as to keep a file.`, err);
+      // Said once until it changes or storage works again (not one more error per edit).
+      if (this.lastError !== said) this.hooks.onError?.(`Not saved in the browser: ${this.lastError}. Your work is kept in this tab; use Save as to keep a file.`, err);
     }
   }
 
-  /** Forgets a stored project (its blobs stay while another project uses them). */
+  /**
+   * Deletes the blobs of `candidates` that no stored project's current manifest refers to
+   * (blobs are shared by hash between projects). Returns how many went.
+   */
+  async collect(candidates) {
+    try {
+      const tx = this.db.transaction(["projects", "manifests", "blobs"], "readwrite");
+      const inUse = new Set();
+      for (const rec of await tx.objectStore("projects").getAll()) {
+        const m = await tx.objectStore("manifests").get(rec.manifestKey);
+        if (!m) continue;
+        const doc = JSON.parse(new TextDecoder().decode(m.bytes));
+        for (const h of Object.keys(doc.blobs || {})) inUse.add(h);
+      }
+      const gone = candidates.filter((h) => !inUse.has(h));
+      for (const h of gone) { tx.objectStore("blobs").delete(h); this.storedBlobs.delete(h); }
+      await tx.done;
+      this.stats.blobsCollected = (this.stats.blobsCollected || 0) + gone.length;
+      return gone.length;
+    } catch (err) {
+      // An extra blob costs space, never work: say so quietly and go on.
+      console.warn("odori: stored blobs not collected:", err);
+      return 0;
+    }
+  }
+
+  /** Forgets a stored project; its blobs go unless another project uses them. */
   async remove(id) {
     const tx = this.db.transaction(["projects", "manifests"], "readwrite");
     const rec = await tx.objectStore("projects").get(id);
+    let hashes = [];
     if (rec) {
+      const m = await tx.objectStore("manifests").get(rec.manifestKey);
+      if (m) hashes = Object.keys(JSON.parse(new TextDecoder().decode(m.bytes)).blobs || {});
       await tx.objectStore("manifests").delete(rec.manifestKey);
       await tx.objectStore("projects").delete(id);
     }
     await tx.done;
+    if (hashes.length) await this.collect(hashes);
   }
 }

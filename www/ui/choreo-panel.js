@@ -1,6 +1,8 @@
 // Composing a dance (paper 000): the song's bars in a row (pinned, generated, empty), a bar's
 // 6 candidates playing side by side in sync with that bar of the music, Set / Search /
 // Generate, τ and ρ, undo/redo, and the whole dance played with the music.
+import { tempoLimits } from "../pkg/odori.js";
+
 const CHIP_COLOURS = ["#f9b25a", "#5cd3ea", "#c79cf5", "#b5e96b", "#f38aa9", "#9dc2fb"];
 const SPACING = 1.3;
 /** Target time of one slice of the join-table build, so frames keep coming. */
@@ -155,8 +157,9 @@ export class ChoreoPanel {
     if (!c) return;
     const text = this.$("#dance-clip-bpm").value.trim();
     const bpm = text === "" ? undefined : Number(text);
-    if (bpm !== undefined && !(bpm >= 30 && bpm <= 300)) {
-      this.messages.error(`Dance: ${c.name}: a clip's tempo must be 30 to 300 counts per minute (got “${text}”)`);
+    const { moveMinBpm: lo, moveMaxBpm: hi } = tempoLimits(); // the engine's limits, one place
+    if (bpm !== undefined && !(bpm >= lo && bpm <= hi)) {
+      this.messages.error(`Dance: ${c.name}: a clip's tempo must be ${lo} to ${hi} counts per minute (got “${text}”)`);
       return;
     }
     let r;

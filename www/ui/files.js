@@ -6,8 +6,10 @@
 const ACCEPT = /\.(bvh|glb|gltf)$/i;
 
 export class FileLoader {
-  constructor({ library, messages, status, fpsInput, onImported, onFiles }) {
-    Object.assign(this, { library, messages, status, fpsInput, onImported, onFiles });
+  constructor({ library, messages, status, fpsInput, onImported, onFiles, importer }) {
+    // `importer(fileName, bytes, options)` → import report: who parses the file (the app's
+    // project, which shows its clips in the library); the library's own import otherwise.
+    Object.assign(this, { library, messages, status, fpsInput, onImported, onFiles, importer });
     this.queue = Promise.resolve();
   }
 
@@ -81,7 +83,7 @@ export class FileLoader {
       await new Promise((r) => requestAnimationFrame(() => setTimeout(r, 0)));
       const bvh = /\.bvh$/i.test(file.name);
       const options = fpsOverride && bvh ? { fpsOverride } : {};
-      const report = this.library.importFile(file.name, bytes, options);
+      const report = this.importer ? this.importer(file.name, bytes, options) : this.library.importFile(file.name, bytes, options);
       for (const w of report.warnings) this.messages.warning(`${file.name}: ${w}`);
       const n = report.clips.length;
       const how = options.fpsOverride ? ` (played at ${options.fpsOverride} fps, as stated for this import)` : "";

@@ -3,13 +3,18 @@
 // in a worker, list the matches; a match plays overlaid on the query, aligned along the
 // warping path, beside a plot of one joint's x, y, z over time.
 import { redrawOnResize } from "./canvas.js";
-const JOINTS = ["hips", "spine", "chest", "neck", "head", "leftShoulder", "leftUpperArm", "leftForearm", "leftHand",
-  "rightShoulder", "rightUpperArm", "rightForearm", "rightHand", "leftUpperLeg", "leftLowerLeg", "leftFoot", "leftToe",
-  "rightUpperLeg", "rightLowerLeg", "rightFoot", "rightToe"];
-const PRESETS = { wholeBody: JOINTS, upperBody: JOINTS.slice(1, 13), lowerBody: [0, 13, 14, 15, 16, 17, 18, 19, 20].map((i) => JOINTS[i]),
-  arms: JOINTS.slice(5, 13), leftArm: JOINTS.slice(5, 9), rightArm: JOINTS.slice(9, 13), legs: JOINTS.slice(13),
-  feetOnly: ["leftFoot", "leftToe", "rightFoot", "rightToe"] };
-const ARM_PRESETS = new Set(["arms", "leftArm", "rightArm"]);
+import { bodyVocabulary } from "../pkg/odori.js";
+
+// The canonical joints and the body-part presets come from the engine (one place for the
+// vocabulary, crate/core: humanoid::Canon, search::BodyPreset), read once the engine is loaded.
+let vocabulary = null;
+function vocab() {
+  if (!vocabulary) {
+    const v = bodyVocabulary();
+    vocabulary = { joints: v.joints, presets: new Map(v.presets.map((p) => [p.name, p])) };
+  }
+  return vocabulary;
+}
 
 export class SearchPanel {
   constructor(root, { client, library, player, messages }) {
@@ -25,19 +30,19 @@ export class SearchPanel {
 
   buildWeights() {
     const box = this.$("#search-weights");
-    for (const j of JOINTS) {
+    for (const j of vocab().joints) {
       const label = document.createElement("label");
       label.innerHTML = `<span>${j}</span><input type="range" min="0" max="2" step="0.1" value="1" data-joint="${j}">`;
       box.append(label);
     }
     const plotJoint = this.$("#plot-joint");
-    for (const j of JOINTS) plotJoint.append(new Option(j, j, j === "rightHand", j === "rightHand"));
+    for (const j of vocab().joints) plotJoint.append(new Option(j, j, j === "rightHand", j === "rightHand"));
   }
 
   weights() { return [...this.root.querySelectorAll("#search-weights input")].map((i) => Number(i.value)); }
 
   applyPreset(name) {
-    const on = new Set(PRESETS[name]);
+    const on = new Set(vocab().presets.get(name)?.joints ?? []);
     for (const i of this.root.querySelectorAll("#search-weights input")) i.value = on.has(i.dataset.joint) ? "1" : "0";
   }
 
@@ -108,7 +113,7 @@ export class SearchPanel {
     const preset = this.$("#search-preset").value;
     const threshold = this.$("#search-threshold").value === "" ? undefined : Number(this.$("#search-threshold").value);
     const params = { weights: this.weights(), maxResults: Number(this.$("#search-max").value) || 10, ...(threshold != null ? { threshold } : {}) };
-    if (ARM_PRESETS.has(preset)) params.preset = preset;
+    if (vocab().presets.get(preset)?.shoulders) params.preset = preset;
     const bar = this.$("#search-progress");
     bar.hidden = false; bar.value = 0;
     this.$("#search-cancel").hidden = false;

@@ -344,6 +344,23 @@ impl Choreographer {
     }
 }
 
+/// The tempo limits, from the one place the engine keeps them: `{ moveMinBpm, moveMaxBpm }`
+/// (a clip's stated tempo, counts per minute) and `{ songMinBpm, songMaxBpm }` (a song's
+/// corrected grid). The page's tempo fields and messages use them.
+#[wasm_bindgen(js_name = tempoLimits, unchecked_return_type = "{ moveMinBpm: number; moveMaxBpm: number; songMinBpm: number; songMaxBpm: number }")]
+pub fn tempo_limits() -> JsValue {
+    #[derive(Serialize)]
+    #[serde(rename_all = "camelCase")]
+    struct Limits {
+        move_min_bpm: f32,
+        move_max_bpm: f32,
+        song_min_bpm: f32,
+        song_max_bpm: f32,
+    }
+    use odori_core::music::grid::{MAX_GRID_BPM, MIN_GRID_BPM};
+    to_js(&Limits { move_min_bpm: odori_core::choreo::MIN_MOVE_BPM, move_max_bpm: odori_core::choreo::MAX_MOVE_BPM, song_min_bpm: MIN_GRID_BPM, song_max_bpm: MAX_GRID_BPM })
+}
+
 #[wasm_bindgen(typescript_custom_section)]
 const TS_CHOREO: &'static str = r#"
 export interface BarView { bar: Bar; state: { kind: "empty" | "pinned" | "generated"; segment?: number }; tau: number; candidates: number[]; liked: number[]; shownCount: number; rounds: number; }

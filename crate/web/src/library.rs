@@ -3,7 +3,7 @@
 use std::rc::Rc;
 
 use odori_core::humanoid::{Canon, HumanoidMap};
-use odori_core::import::{import_bytes, Format, ImportOptions, SkinnedMesh};
+use odori_core::import::{import_bytes, Format, ImportOptions, Imported, SkinnedMesh};
 use odori_core::{builtin, Clip, HumanoidStatus};
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
@@ -114,6 +114,22 @@ impl Library {
         self.push(clip, format, map, status, None)
     }
 
+    /// Adds every clip of an imported file; returns the `ImportReport` (clips with their ids).
+    #[cfg_attr(not(feature = "authoring"), allow(dead_code))]
+    pub(crate) fn add_imported(&mut self, file_name: &str, im: &Imported) -> JsValue {
+        let format = match im.format {
+            Format::Bvh => "bvh",
+            Format::Gltf => "gltf",
+        };
+        let mesh = im.mesh.clone().map(|m| (self.next_id, Rc::new(m)));
+        let first = self.entries.len();
+        for clip in &im.clips {
+            self.push(clip.clone(), format, im.humanoid.clone(), im.status.clone(), mesh.clone());
+        }
+        let report = ImportReport { file: file_name, clips: self.entries[first..].iter().map(info).collect(), warnings: im.warnings.clone() };
+        to_js(&report)
+    }
+
     pub(crate) fn entry(&self, id: u32) -> JsResult<&Entry> {
         self.entries.iter().find(|e| e.id == id).ok_or_else(|| OdoriError::new("not-found", format!("no clip with id {id} in the library")))
     }
@@ -154,17 +170,7 @@ impl Library {
         }
         // Option ranges are checked by the core (`ImportOptions::validate`): one rule, one message.
         let im = import_bytes(file_name, bytes, &opts)?;
-        let format = match im.format {
-            Format::Bvh => "bvh",
-            Format::Gltf => "gltf",
-        };
-        let mesh = im.mesh.map(|m| (self.next_id, Rc::new(m)));
-        let first = self.entries.len();
-        for clip in im.clips {
-            self.push(clip, format, im.humanoid.clone(), im.status.clone(), mesh.clone());
-        }
-        let report = ImportReport { file: file_name, clips: self.entries[first..].iter().map(info).collect(), warnings: im.warnings };
-        Ok(to_js(&report))
+        Ok(self.add_imported(file_name, &im))
     }
 
     /// Every clip, in the order they were added.

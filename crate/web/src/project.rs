@@ -1,9 +1,15 @@
 //! `Project`: one handle over the core's project (spec §K) — everything a person made, every
 //! edit with undo/redo, `.odori` save and open, and the manifest + blobs that autosave writes
 //! to IndexedDB. Moves are named by stable keys (`MoveKey`), never by segment numbers.
+//!
+//! It is also the page's engine (the app holds no other state of the work): `importInto` /
+//! `clipsInto` show a source's clips in a `Library` from the project's own parse, and the
+//! dance methods by segment number (`danceView`, `candidateSegments`, `searchSegments`,
+//! `setSegment`, `segment`, `previewSegment`, `quality`, `prepareTable`, `loadBuiltin`) let a
+//! panel work on the project's segment library while every edit is kept by key in the project.
 
 use js_sys::{Array, Float32Array, Function, Uint8Array};
-use odori_core::choreo::RenderOptions;
+use odori_core::choreo::{segment_clip, RenderOptions, TableBuilder};
 use odori_core::music::{AnalysisOptions, GridCorrection, RmsEnvelope};
 use odori_core::project::{self, BlobHash, Camera, ClipRef, MoveKey, Project as CoreProject};
 use odori_core::ImportOptions;
@@ -31,6 +37,18 @@ pub struct Project {
     inner: CoreProject,
     /// Bumped by every change, so the host knows when to autosave.
     revision: u32,
+    /// The filling's transition table being built in slices (see `prepareTable`).
+    builder: Option<TableBuilder>,
+}
+
+/// A bar or segment index from JS: anything but a whole number ≥ 0 is refused with the value
+/// given (a `usize` parameter would wrap −1 to 4294967295).
+fn index_arg(what: &str, value: f64) -> Result<usize, OdoriError> {
+    if value.is_finite() && value >= 0.0 && value.fract() == 0.0 && value <= f64::from(u32::MAX) {
+        Ok(value as usize)
+    } else {
+        Err(OdoriError::new("bad-argument", format!("{what} {value} is not an index (a whole number from 0)")))
+    }
 }
 
 impl Default for Project {
@@ -46,7 +64,7 @@ impl Project {
     }
 
     fn opened(o: project::Opened) -> Project {
-        Project { inner: o.project, revision: 0 }
+        Project { inner: o.project, revision: 0, builder: None }
     }
 }
 
@@ -55,7 +73,7 @@ impl Project {
     /// An empty project.
     #[wasm_bindgen(constructor)]
     pub fn new() -> Project {
-        Project { inner: CoreProject::new(), revision: 0 }
+        Project { inner: CoreProject::new(), revision: 0, builder: None }
     }
 
     /// Opens an `.odori` file. Throws an `OdoriError` whose `kind` names the problem
@@ -172,16 +190,21 @@ impl Project {
 
     /// Sets the song: file name, its bytes as given (undefined for the demo song), the RMS
     /// envelope the host computed (`hopSecs`, one `Float32Array` per band) and analysis
-    /// options.
+    /// options. `record: false`: no undo step (the song a new project starts with).
     #[wasm_bindgen(js_name = setSong)]
-    pub fn set_song(&mut self, file_name: &str, audio: Option<Vec<u8>>, hop_secs: f32, bands: Array, options: JsValue) -> Result<(), OdoriError> {
+    pub fn set_song(&mut self, file_name: &str, audio: Option<Vec<u8>>, hop_secs: f32, bands: Array, options: JsValue, record: Option<bool>) -> Result<(), OdoriError> {
         let options: AnalysisOptions = from_js(options, "analysis options", &["beatsPerBar", "minBpm", "maxBpm", "priorBpm", "priorOctaves", "tightness"])?;
         let bands = bands
             .iter()
             .enumerate()
             .map(|(i, v)| v.dyn_into::<Float32Array>().map(|a| a.to_vec()).map_err(|_| OdoriError::new("bad-argument", format!("bands[{i}] must be a Float32Array"))))
             .collect::<Result<Vec<_>, _>>()?;
-        self.inner.set_song(file_name, audio.as_deref(), &RmsEnvelope { hop_secs, bands }, options)?;
+        let env = RmsEnvelope { hop_secs, bands };
+        if record == Some(false) {
+            self.inner.set_initial_song(file_name, audio.as_deref(), &env, options)?;
+        } else {
+            self.inner.set_song(file_name, audio.as_deref(), &env, options)?;
+        }
         Ok(self.changed(()))
     }
 
@@ -307,6 +330,169 @@ impl Project {
     #[wasm_bindgen(js_name = canRedo)]
     pub fn can_redo(&self) -> bool {
         self.inner.can_redo()
+    }
+
+    /// Imports a motion file into the project (as `addSource`) and shows its clips in
+    /// `library`: the file is parsed once, and the library holds the very clips the project
+    /// cuts. Returns the library's `ImportReport` with `source` (the project's source id).
+    #[wasm_bindgen(js_name = importInto)]
+    pub fn import_into(&mut self, library: &mut Library, file_name: &str, bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "ImportOptions | undefined")] options: JsValue) -> Result<JsValue, OdoriError> {
+        let o: JsImportOptions = from_js(options, "import options", &["fpsOverride", "unitScale", "gltfFps"])?;
+        let options = ImportOptions { fps_override: o.fps_override, unit_scale: o.unit_scale, gltf_fps: o.gltf_fps.unwrap_or(ImportOptions::default().gltf_fps) };
+        let r = self.inner.add_source(file_name, bytes, options)?;
+        self.changed(());
+        self.clips_into(library, r.id.0)
+    }
+
+    /// Shows a source's clips in `library` (a restored project, or an import brought back by
+    /// undo/redo): the library's `ImportReport` with `source`. Throws "missing-blob" when the
+    /// source's bytes are missing, the importer's error when they do not read.
+    #[wasm_bindgen(js_name = clipsInto)]
+    pub fn clips_into(&mut self, library: &mut Library, source: u32) -> Result<JsValue, OdoriError> {
+        let id = project::SourceId(source);
+        let file_name = self.inner.doc().source(id).map(|s| s.file_name.clone()).ok_or_else(|| OdoriError::new("not-found", format!("there is no source {source} in the project")))?;
+        let imported = match self.inner.imported(id) {
+            None => return Err(OdoriError::new("missing-blob", format!("{file_name}: its bytes are missing from the project"))),
+            Some(r) => r?,
+        };
+        let report = library.add_imported(&file_name, &imported);
+        js_sys::Reflect::set(&report, &JsValue::from_str("source"), &JsValue::from(source)).map_err(|_| OdoriError::new("bad-argument", "report"))?;
+        Ok(report)
+    }
+
+    /// Makes up to `count` more built-in moves of the dance library; returns the fraction
+    /// made (1: all). Call between frames until 1, so the page never blocks for all 420.
+    #[wasm_bindgen(js_name = loadBuiltin)]
+    pub fn load_builtin(&mut self, count: u32) -> f32 {
+        self.inner.load_builtin(count as usize)
+    }
+
+    /// Builds the filling's transition table over the project's segment library in slices
+    /// of up to `columns` segments; returns the fraction done (1: ready). Needed again after
+    /// the library changes; `generate` builds what is left in one go otherwise.
+    #[wasm_bindgen(js_name = prepareTable)]
+    pub fn prepare_table(&mut self, columns: u32) -> f32 {
+        let penalty = self.inner.fill_weights().repeat_penalty;
+        let lib = self.inner.segment_library();
+        if lib.cached_table(penalty).is_some() {
+            self.builder = None;
+            return 1.0;
+        }
+        let stale = self.builder.as_ref().is_none_or(|b| b.revision() != lib.revision() || b.repeat_penalty() != penalty);
+        if stale {
+            self.builder = Some(lib.table_builder(penalty));
+        }
+        let Some(builder) = self.builder.as_mut() else { return 0.0 };
+        let progress = builder.step(columns.max(1) as usize);
+        if !progress.is_done() {
+            return progress.fraction().min(0.999);
+        }
+        if let Some(table) = self.builder.take().and_then(TableBuilder::finish) {
+            // Refused (false) when the library changed meanwhile: the next call starts again.
+            if !self.inner.segment_library().install_table(table) {
+                return 0.0;
+            }
+        }
+        1.0
+    }
+
+    /// Whether the transition table is ready (Generate then takes milliseconds).
+    #[wasm_bindgen(getter, js_name = tableReady)]
+    pub fn table_ready(&mut self) -> bool {
+        let penalty = self.inner.fill_weights().repeat_penalty;
+        self.inner.segment_library().cached_table(penalty).is_some()
+    }
+
+    /// Number of segments in the project's dance library.
+    #[wasm_bindgen(getter, js_name = segmentCount)]
+    pub fn segment_count(&mut self) -> usize {
+        self.inner.segment_library().len()
+    }
+
+    /// One segment's facts (`{ index, name, source, tempoBpm, intensity01, retired, ... }`).
+    pub fn segment(&mut self, index: f64) -> JsValue {
+        let lib = self.inner.segment_library();
+        index_arg("segment", index).ok().and_then(|i| lib.segment(i)).map(to_js).unwrap_or(JsValue::UNDEFINED)
+    }
+
+    /// The stable key (`MoveKey`) of segment `index` now, or undefined.
+    #[wasm_bindgen(js_name = keyOf)]
+    pub fn key_of(&mut self, index: f64) -> JsValue {
+        let d = self.inner.derived();
+        index_arg("segment", index).ok().and_then(|i| d.key(i)).map(to_js).unwrap_or(JsValue::UNDEFINED)
+    }
+
+    /// Each bar by segment numbers of the current library, for display: `BarView[]` (empty
+    /// without a song).
+    #[wasm_bindgen(js_name = danceView, unchecked_return_type = "BarView[]")]
+    pub fn dance_view(&mut self) -> JsValue {
+        match self.inner.choreography() {
+            Ok(ch) => to_js(&ch.view()),
+            Err(_) => to_js(&Vec::<u8>::new()),
+        }
+    }
+
+    fn keys_of(&mut self, segments: &[f64], what: &str) -> Result<Vec<MoveKey>, OdoriError> {
+        let d = self.inner.derived();
+        segments
+            .iter()
+            .map(|&x| {
+                let i = index_arg(what, x)?;
+                d.key(i).cloned().ok_or_else(|| OdoriError::new("not-found", format!("no segment {i} in the library")))
+            })
+            .collect()
+    }
+
+    fn indices_of(&mut self, keys: &[MoveKey]) -> Vec<u32> {
+        let d = self.inner.derived();
+        keys.iter().filter_map(|k| d.index_of(k)).map(|i| i as u32).collect()
+    }
+
+    /// `candidates` by segment numbers (not an edit: no undo step).
+    #[wasm_bindgen(js_name = candidateSegments)]
+    pub fn candidate_segments(&mut self, bar: f64) -> Result<Vec<u32>, OdoriError> {
+        let bar = index_arg("bar", bar)?;
+        let keys = self.inner.candidates(bar)?;
+        self.changed(());
+        Ok(self.indices_of(&keys))
+    }
+
+    /// `search` by segment numbers: likes `liked`, returns the next round.
+    #[wasm_bindgen(js_name = searchSegments)]
+    pub fn search_segments(&mut self, bar: f64, liked: Vec<f64>) -> Result<Vec<u32>, OdoriError> {
+        let bar = index_arg("bar", bar)?;
+        let liked = self.keys_of(&liked, "liked segment")?;
+        let keys = self.inner.search(bar, &liked)?;
+        self.changed(());
+        Ok(self.indices_of(&keys))
+    }
+
+    /// `set` by segment number: pins segment `segment` to bar `bar`.
+    #[wasm_bindgen(js_name = setSegment)]
+    pub fn set_segment(&mut self, bar: f64, segment: f64) -> Result<(), OdoriError> {
+        let bar = index_arg("bar", bar)?;
+        let key = self.keys_of(&[segment], "segment")?.remove(0);
+        self.inner.set(bar, &key)?;
+        Ok(self.changed(()))
+    }
+
+    /// Quality of the dance as it stands (spec §J; as `Choreographer.quality`).
+    pub fn quality(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
+        let ch = self.inner.choreography()?;
+        let bars = ch.bars();
+        let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..4).map(move |k| b.start_secs + b.duration_secs() * k as f32 / 4.0)).collect());
+        let clip = ch.render(self.inner.segment_library(), &RenderOptions::default());
+        let q = odori_core::choreo::dance_quality(&clip, bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
+        Ok(to_js(&q))
+    }
+
+    /// One segment time-resampled to `durationSecs` (a candidate preview) into `library`.
+    #[wasm_bindgen(js_name = previewSegment)]
+    pub fn preview_segment(&mut self, library: &mut Library, segment: f64, duration_secs: f32, replace: Option<u32>) -> Result<u32, OdoriError> {
+        let segment = index_arg("segment", segment)?;
+        let mut clip = segment_clip(self.inner.segment_library(), segment, duration_secs, 60.0).ok_or_else(|| OdoriError::new("not-found", format!("no segment {segment} in the library")))?;
+        clip.source = "candidate".into();
+        Ok(library.insert_clip(clip, "dance", replace))
     }
 
     /// Renders the dance into `library` (replacing clip `replace`) for the viewer; frame time

@@ -303,3 +303,31 @@ export interface SearchShortfall { asked: number; shown: number; admissibleEnds:
 export interface SearchMatch { clipId: number; clipIndex: number; clipName: string; startFrame: number; endFrame: number; lengthFrames: number; startSecs: number; endSecs: number; distance: number; cost: number; path: [number, number][]; }
 export interface JointCurve { joint: string; fps: number; x: number[]; y: number[]; z: number[]; }
 "#;
+
+/// One body-part preset as the page offers it (`bodyVocabulary`).
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct PresetInfo {
+    name: BodyPreset,
+    joints: Vec<&'static str>,
+    /// Normalised about the shoulders (the arm-only presets, spec §B.1), else the hips.
+    shoulders: bool,
+}
+
+/// The canonical skeleton's vocabulary, from the one place the engine keeps it: `{ joints:
+/// string[] (the 21 canonical joints, camelCase, in index order), presets: { name, joints,
+/// shoulders }[] (body parts, in UI order) }`. The page builds its joint lists and body-part
+/// choices from it instead of copying them.
+#[wasm_bindgen(js_name = bodyVocabulary, unchecked_return_type = "{ joints: string[]; presets: { name: BodyPreset; joints: string[]; shoulders: boolean }[] }")]
+pub fn body_vocabulary() -> JsValue {
+    #[derive(Serialize)]
+    struct Vocabulary {
+        joints: Vec<&'static str>,
+        presets: Vec<PresetInfo>,
+    }
+    let presets = BodyPreset::ALL
+        .iter()
+        .map(|&p| PresetInfo { name: p, joints: p.joints().into_iter().map(Canon::name).collect(), shoulders: matches!(p.origin(), Origin::Shoulders) })
+        .collect();
+    to_js(&Vocabulary { joints: Canon::ALL.iter().map(|c| c.name()).collect(), presets })
+}

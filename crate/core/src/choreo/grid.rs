@@ -9,7 +9,7 @@ use crate::bars::Bar;
 #[derive(Debug, Error, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "camelCase")]
 pub enum GridError {
-    #[error("tempo {bpm} BPM is outside 30..=300")]
+    #[error("tempo {bpm} BPM is outside {min}..={max}", min = super::MIN_MOVE_BPM, max = super::MAX_MOVE_BPM)]
     BadTempo { bpm: f32 },
     #[error("the song is {duration_secs:.2} s long after the first downbeat at {first_downbeat_secs:.2} s, shorter than one bar of {bar_secs:.2} s: there is no bar to dance")]
     ShorterThanABar { duration_secs: f32, first_downbeat_secs: f32, bar_secs: f32 },
@@ -26,7 +26,7 @@ pub fn bars_from_tempo(
     first_downbeat_secs: f32,
     intensity: impl Fn(f32, f32) -> f32,
 ) -> Result<Vec<Bar>, GridError> {
-    if !(30.0..=300.0).contains(&bpm) {
+    if !(super::MIN_MOVE_BPM..=super::MAX_MOVE_BPM).contains(&bpm) {
         return Err(GridError::BadTempo { bpm });
     }
     if !(1..=16).contains(&beats_per_bar) {

@@ -4,6 +4,13 @@
 //! editable document with undo/redo that the web layer drives. Everything here is
 //! deterministic: the same library, bars and commands give the same dance.
 
+/// Slowest and fastest tempo, in counts per minute, at which a move is cut or bars are laid
+/// out from a stated tempo: the one place these limits live (cutting and re-cutting clips,
+/// [`bars_from_tempo`], and the page's tempo fields through the web crate's `tempoLimits()`).
+pub const MIN_MOVE_BPM: f32 = 30.0;
+/// See [`MIN_MOVE_BPM`].
+pub const MAX_MOVE_BPM: f32 = 300.0;
+
 pub mod document;
 pub mod eigen;
 pub mod feedback;

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use super::{decode_envelope, BarDoc, BarKind, BlobHash, BlobStore, ClipRef, DanceDoc, MoveKey, ProjectDoc, ProjectError, SearchDoc, SongDoc, Source, SourceId};
-use crate::choreo::{BarState, Choreography, ClipSummary, FeedbackSession, SegmentLibrary, SegmentOptions};
+use crate::choreo::{BarState, BuiltinLoader, Choreography, ClipSummary, FeedbackSession, SegmentLibrary, SegmentOptions};
 use crate::humanoid::HumanoidStatus;
 use crate::import::{import_bytes, ImportError, ImportOptions, Imported};
 use crate::music::{analyze, SongGrid};
@@ -70,7 +70,7 @@ pub(crate) fn song_grid(song: &SongDoc, blobs: &BlobStore) -> Result<SongGrid, P
 }
 
 /// State derived from a project's document (see the module doc).
-#[derive(Debug, Default)]
+#[derive(Default)]
 pub struct Derived {
     /// Imported files by (hash, file name, options).
     imports: HashMap<String, Arc<Imported>>,
@@ -84,9 +84,55 @@ pub struct Derived {
     clips: Vec<ClipInfo>,
     grid_spec: Option<String>,
     grid: Option<Result<SongGrid, ProjectError>>,
+    /// The built-in library, made once (in slices with [`Derived::load_builtin`], or at once
+    /// on first need); every rebuild starts from a copy of it.
+    builtin: Option<SegmentLibrary>,
+    /// The built-in library being made in slices.
+    builtin_loading: Option<(SegmentLibrary, BuiltinLoader)>,
+}
+
+impl std::fmt::Debug for Derived {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Derived")
+            .field("segments", &self.lib.len())
+            .field("clips", &self.clips.len())
+            .field("grid", &self.grid)
+            .field("builtin_ready", &self.builtin.is_some())
+            .finish()
+    }
 }
 
 impl Derived {
+    /// Makes up to `count` more of the built-in moves (the library every rebuild starts
+    /// from), so a page need not block for all of them at once; returns the fraction made
+    /// (1: ready).
+    pub(crate) fn load_builtin(&mut self, count: usize) -> f32 {
+        if self.builtin.is_some() {
+            return 1.0;
+        }
+        let (lib, loader) = self.builtin_loading.get_or_insert_with(|| (SegmentLibrary::new(), BuiltinLoader::new()));
+        let p = lib.load_builtin(loader, count);
+        if p >= 1.0 {
+            self.builtin = self.builtin_loading.take().map(|(lib, _)| lib);
+            return 1.0;
+        }
+        p
+    }
+
+    /// A copy of the built-in library (made at once when [`Derived::load_builtin`] has not
+    /// finished it).
+    fn builtin_library(&mut self) -> SegmentLibrary {
+        while self.load_builtin(usize::MAX) < 1.0 {}
+        self.builtin.clone().unwrap_or_else(SegmentLibrary::builtin)
+    }
+
+    /// The file a source was imported from, as imported (parsed once per session: the page
+    /// shows the same clips the project cuts).
+    pub(crate) fn imported_source(&mut self, src: &Source, blobs: &BlobStore) -> Option<Result<Arc<Imported>, ImportError>> {
+        let bytes = blobs.get(&src.blob)?.clone();
+        Some(self.import(&src.blob, &src.file_name, &bytes, &src.options))
+    }
+
     /// Imports a file (or returns the copy imported before).
     pub(crate) fn import(&mut self, hash: &BlobHash, file_name: &str, bytes: &[u8], options: &ImportOptions) -> Result<Arc<Imported>, ImportError> {
         let key = format!("{hash}|{file_name}|{}", serde_json::to_string(options).unwrap_or_default());
@@ -160,7 +206,7 @@ impl Derived {
             let (lib, keys, clips) = (std::mem::take(&mut self.lib), std::mem::take(&mut self.keys), std::mem::take(&mut self.clips));
             return self.cut_sources(&doc.sources[from_source..], blobs, referenced, old_cuts, lib, keys, clips);
         }
-        let lib = SegmentLibrary::builtin();
+        let lib = self.builtin_library();
         let keys: Vec<MoveKey> = lib
             .segments()
             .iter()

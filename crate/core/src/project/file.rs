@@ -10,6 +10,13 @@
 //! problem, and the caller keeps its open project. A blob the manifest names but the file
 //! lacks is not fatal: the rest opens and [`Opened::missing`] names what is gone. Older schema
 //! versions go through [`migrate`] step by step.
+//!
+//! The history is kept compactly (schema 2): each undo/redo state is written as the change
+//! from its neighbour nearer the current document ([`json_diff`]: changed object fields and
+//! array elements only, by position), not as a whole document. An edit changes a bar or a
+//! field, so a step costs a few hundred bytes instead of the whole dance; the manifest that
+//! autosave writes after every edit stays small however long the session. Schema 1 (whole
+//! documents) is read through the migration step.
 
 use std::collections::BTreeMap;
 use std::io::{Cursor, Read, Write};
@@ -24,7 +31,7 @@ use super::{BlobHash, BlobStore, Project, ProjectDoc};
 
 /// The schema version this build writes. Bump it with a step in [`migrate`] and a golden file
 /// of the old version in `tests/golden/`.
-pub const CURRENT_SCHEMA_VERSION: u32 = 1;
+pub const CURRENT_SCHEMA_VERSION: u32 = 2;
 /// The oldest schema version this build opens.
 pub const OLDEST_SCHEMA_VERSION: u32 = 1;
 /// The value of the manifest's `format` field.
@@ -107,8 +114,12 @@ struct Manifest {
     /// The program that wrote it (informative).
     generator: String,
     project: ProjectDoc,
-    undo: Vec<ProjectDoc>,
-    redo: Vec<ProjectDoc>,
+    /// Undo states, oldest first, each as [`json_diff`] from the state after it (the last one:
+    /// from `project`).
+    undo: Vec<serde_json::Value>,
+    /// Redo states, as stacked (the next redo last), each as [`json_diff`] from the state after
+    /// it (the last one: from `project`).
+    redo: Vec<serde_json::Value>,
     /// Every blob the file holds, with its size (informative; the archive is the truth).
     blobs: BTreeMap<BlobHash, usize>,
 }
@@ -122,8 +133,8 @@ pub fn manifest_json(project: &Project) -> Vec<u8> {
         schema_version: CURRENT_SCHEMA_VERSION,
         generator: concat!("odori ", env!("CARGO_PKG_VERSION")).into(),
         project: project.doc().clone(),
-        undo: project.undo_history().to_vec(),
-        redo: project.redo_history().to_vec(),
+        undo: diff_chain(project.doc(), project.undo_history()),
+        redo: diff_chain(project.doc(), project.redo_history()),
         blobs,
     };
     serde_json::to_vec(&m).unwrap_or_default()
@@ -203,8 +214,143 @@ fn read_error(size_bytes: usize, what: &str, e: std::io::Error) -> FileError {
 
 /// The steps from each schema version to the next: `MIGRATIONS[v - OLDEST_SCHEMA_VERSION]`
 /// rewrites a version-`v` manifest (as JSON) into version `v + 1` (a renamed field, a new
-/// field's default...). Version 1 is the first, so there is none yet.
-const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[];
+/// field's default...).
+const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes];
+
+/// 1 → 2: the undo and redo stacks, whole documents in schema 1, as changes (see the module
+/// doc). A stack that is not a list of objects is left for the reader to refuse.
+fn history_as_changes(m: &mut serde_json::Value) {
+    let Some(current) = m.get("project").cloned() else { return };
+    for stack in ["undo", "redo"] {
+        let Some(serde_json::Value::Array(states)) = m.get(stack).cloned() else { continue };
+        let mut next = current.clone();
+        let mut out = vec![serde_json::Value::Null; states.len()];
+        for (i, state) in states.iter().enumerate().rev() {
+            out[i] = json_diff(&next, state);
+            next = state.clone();
+        }
+        m[stack] = serde_json::Value::Array(out);
+    }
+}
+
+/// A stack of states (oldest first) as changes, each from the state after it (the last from
+/// `current`).
+fn diff_chain(current: &ProjectDoc, states: &[ProjectDoc]) -> Vec<serde_json::Value> {
+    let mut next = serde_json::to_value(current).unwrap_or_default();
+    let mut out = vec![serde_json::Value::Null; states.len()];
+    for (i, state) in states.iter().enumerate().rev() {
+        let v = serde_json::to_value(state).unwrap_or_default();
+        out[i] = json_diff(&next, &v);
+        next = v;
+    }
+    out
+}
+
+/// The states of [`diff_chain`] back from their changes.
+fn undiff_chain(current: &ProjectDoc, changes: &[serde_json::Value]) -> Result<Vec<ProjectDoc>, FileError> {
+    let bad = |message: String| FileError::BadProject { message };
+    let mut next = serde_json::to_value(current).map_err(|e| bad(e.to_string()))?;
+    let mut out = Vec::with_capacity(changes.len());
+    for (i, change) in changes.iter().enumerate().rev() {
+        next = json_patch(&next, change).map_err(|m| bad(format!("history step {}: {m}", i + 1)))?;
+        out.push(serde_json::from_value(next.clone()).map_err(|e| bad(format!("history step {}: {e}", i + 1)))?);
+    }
+    out.reverse();
+    Ok(out)
+}
+
+/// The change that turns `base` into `target`, as JSON: `{}` (no change), `{"=": value}`
+/// (replaced), `{"o": {field: change}, "d": [fields removed]}` (an object's changed fields) or
+/// `{"a": length, "i": {"index": change}}` (an array's changed elements, by position).
+pub fn json_diff(base: &serde_json::Value, target: &serde_json::Value) -> serde_json::Value {
+    use serde_json::{json, Map, Value};
+    if base == target {
+        return json!({});
+    }
+    match (base, target) {
+        (Value::Object(b), Value::Object(t)) => {
+            let mut o = Map::new();
+            for (k, tv) in t {
+                match b.get(k) {
+                    Some(bv) if bv == tv => {}
+                    Some(bv) => {
+                        o.insert(k.clone(), json_diff(bv, tv));
+                    }
+                    None => {
+                        o.insert(k.clone(), json!({ "=": tv }));
+                    }
+                }
+            }
+            let d: Vec<&String> = b.keys().filter(|k| !t.contains_key(*k)).collect();
+            if d.is_empty() {
+                json!({ "o": o })
+            } else {
+                json!({ "o": o, "d": d })
+            }
+        }
+        (Value::Array(b), Value::Array(t)) => {
+            let mut i = Map::new();
+            for (n, tv) in t.iter().enumerate() {
+                match b.get(n) {
+                    Some(bv) if bv == tv => {}
+                    Some(bv) => {
+                        i.insert(n.to_string(), json_diff(bv, tv));
+                    }
+                    None => {
+                        i.insert(n.to_string(), json!({ "=": tv }));
+                    }
+                }
+            }
+            json!({ "a": t.len(), "i": i })
+        }
+        _ => json!({ "=": target }),
+    }
+}
+
+/// Applies a [`json_diff`] change to `base`; a change that does not fit it is refused with why.
+pub fn json_patch(base: &serde_json::Value, change: &serde_json::Value) -> Result<serde_json::Value, String> {
+    use serde_json::Value;
+    let Value::Object(c) = change else { return Err(format!("a change must be an object, not {change}")) };
+    if let Some(v) = c.get("=") {
+        return Ok(v.clone());
+    }
+    if let Some(fields) = c.get("o") {
+        let (Value::Object(b), Value::Object(fields)) = (base, fields) else { return Err("an object change on something that is not an object".into()) };
+        let mut out = b.clone();
+        if let Some(Value::Array(gone)) = c.get("d") {
+            for k in gone {
+                if let Some(k) = k.as_str() {
+                    out.remove(k);
+                }
+            }
+        }
+        for (k, fc) in fields {
+            let v = json_patch(b.get(k).unwrap_or(&Value::Null), fc)?;
+            out.insert(k.clone(), v);
+        }
+        return Ok(Value::Object(out));
+    }
+    if let Some(len) = c.get("a") {
+        let Value::Array(b) = base else { return Err("an array change on something that is not an array".into()) };
+        let len = len.as_u64().ok_or("an array length that is not a whole number")? as usize;
+        if len > b.len() + c.get("i").and_then(|i| i.as_object()).map_or(0, |i| i.len()) {
+            return Err(format!("an array of {len} elements from {} and fewer changes", b.len()));
+        }
+        let mut out: Vec<Value> = (0..len).map(|n| b.get(n).cloned().unwrap_or(Value::Null)).collect();
+        if let Some(Value::Object(items)) = c.get("i") {
+            for (k, ic) in items {
+                let n: usize = k.parse().map_err(|_| format!("array index {k:?}"))?;
+                let slot = out.get_mut(n).ok_or_else(|| format!("array index {n} past the length {len}"))?;
+                *slot = json_patch(slot, ic)?;
+            }
+        }
+        return Ok(Value::Array(out));
+    }
+    if c.is_empty() {
+        return Ok(base.clone());
+    }
+    Err("a change that is none of {}, =, o, a".into())
+}
 
 /// Brings a manifest of schema `from` up to [`CURRENT_SCHEMA_VERSION`], one step at a time.
 pub fn migrate(value: &mut serde_json::Value, from: u32) -> Result<(), FileError> {
@@ -248,9 +394,11 @@ fn read_manifest(manifest: &[u8], blob: impl Fn(&BlobHash) -> Option<Arc<[u8]>>,
     let migrated_from = (found < CURRENT_SCHEMA_VERSION).then_some(found);
     migrate(&mut value, found)?;
     let m: Manifest = serde_json::from_value(value).map_err(|e| FileError::BadProject { message: e.to_string() })?;
+    let undo = undiff_chain(&m.project, &m.undo)?;
+    let redo = undiff_chain(&m.project, &m.redo)?;
     let mut store = BlobStore::default();
     let mut missing = Vec::new();
-    for d in std::iter::once(&m.project).chain(&m.undo).chain(&m.redo) {
+    for d in std::iter::once(&m.project).chain(&undo).chain(&redo) {
         for (hash, what) in named_blobs(d) {
             if store.contains(&hash) || missing.iter().any(|x: &MissingBlob| x.hash == hash) {
                 continue;
@@ -262,7 +410,7 @@ fn read_manifest(manifest: &[u8], blob: impl Fn(&BlobHash) -> Option<Arc<[u8]>>,
             }
         }
     }
-    let project = Project::from_parts(m.project, m.undo, m.redo, store, missing.clone());
+    let project = Project::from_parts(m.project, undo, redo, store, missing.clone());
     Ok(Opened { project, missing, migrated_from })
 }
 

@@ -367,6 +367,39 @@ impl Project {
         true
     }
 
+    /// Sets `doc` as the current state without recording an undo step: for what is not an
+    /// edit (opening a bar's search to look at its candidates), kept and saved all the same.
+    fn set_unrecorded(&mut self, doc: ProjectDoc) {
+        self.doc = doc;
+    }
+
+    /// Makes up to `count` more built-in moves of the dance library (see
+    /// [`Derived::load_builtin`]); returns the fraction made. Optional: the library is made
+    /// at once when first needed otherwise.
+    pub fn load_builtin(&mut self, count: usize) -> f32 {
+        self.derived.load_builtin(count)
+    }
+
+    /// The dance as a [`crate::choreo::Choreography`] over the derived segment library
+    /// ([`Project::segment_library`]): what a page shows (bars, states, searches by segment
+    /// number). Edits go through the project's own methods, never through this copy.
+    pub fn choreography(&mut self) -> Result<crate::choreo::Choreography, ProjectError> {
+        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
+        self.derived.choreography(&self.doc)
+    }
+
+    /// The segment library derived from the document (built-in moves and the cut clips).
+    pub fn segment_library(&mut self) -> &crate::choreo::SegmentLibrary {
+        self.derived().library()
+    }
+
+    /// A source's file as imported (parsed once; `None`: no such source or its bytes are
+    /// missing), so a host shows the very clips the project cuts without parsing them again.
+    pub fn imported(&mut self, source: SourceId) -> Option<Result<std::sync::Arc<crate::import::Imported>, ImportError>> {
+        let src = self.doc.source(source)?.clone();
+        self.derived.imported_source(&src, &self.blobs)
+    }
+
     /// Undoes the last edit; `false` when there is none.
     pub fn undo(&mut self) -> bool {
         self.history.undo(&mut self.doc)
@@ -385,11 +418,13 @@ impl Project {
         self.history.can_redo()
     }
 
-    /// Renames the project. Undoable.
+    /// Renames the project. A label, not an edit of the work: kept and saved, not an undo
+    /// step (a new project is named before its song is set; undoing the name would take the
+    /// song away with it).
     pub fn set_name(&mut self, name: &str) {
         let mut doc = self.doc.clone();
         doc.name = name.to_string();
-        self.commit(doc);
+        self.set_unrecorded(doc);
     }
 
     /// Imports a motion file (BVH, glTF, GLB): refused with the importer's error when the
@@ -473,13 +508,27 @@ impl Project {
     /// analysis fails. The dance keeps bar `i`'s state while the new grid has a bar `i`.
     /// Undoable.
     pub fn set_song(&mut self, file_name: &str, audio: Option<&[u8]>, envelope: &RmsEnvelope, options: AnalysisOptions) -> Result<(), ProjectError> {
+        self.song_change(true, file_name, audio, envelope, options)
+    }
+
+    /// [`Project::set_song`] without an undo step: the song a new project starts with (the
+    /// built-in demo song) is where its history begins, not an edit to take back.
+    pub fn set_initial_song(&mut self, file_name: &str, audio: Option<&[u8]>, envelope: &RmsEnvelope, options: AnalysisOptions) -> Result<(), ProjectError> {
+        self.song_change(false, file_name, audio, envelope, options)
+    }
+
+    fn song_change(&mut self, record: bool, file_name: &str, audio: Option<&[u8]>, envelope: &RmsEnvelope, options: AnalysisOptions) -> Result<(), ProjectError> {
         let grid = crate::music::analyze(envelope, &options)?;
         let mut doc = self.doc.clone();
         let audio = audio.map(|a| self.blobs.put(a));
         let envelope = self.blobs.put(&encode_envelope(envelope));
         doc.song = Some(SongDoc { file_name: file_name.to_string(), audio, envelope, options, corrections: Vec::new() });
         doc.dance.bars.resize(grid.bars.len(), BarDoc::default());
-        self.commit(doc);
+        if record {
+            self.commit(doc);
+        } else {
+            self.set_unrecorded(doc);
+        }
         Ok(())
     }
 
@@ -554,6 +603,11 @@ impl Project {
     /// Runs a choreography command on the dance (see [`crate::choreo::Choreography`]) and keeps
     /// the result by keys.
     fn dance_edit<R>(&mut self, f: impl FnOnce(&mut crate::choreo::Choreography, &crate::choreo::SegmentLibrary) -> Result<R, ChoreoError>) -> Result<R, ProjectError> {
+        self.dance_change(true, f)
+    }
+
+    /// [`Project::dance_edit`], recorded in the history or not (`record`).
+    fn dance_change<R>(&mut self, record: bool, f: impl FnOnce(&mut crate::choreo::Choreography, &crate::choreo::SegmentLibrary) -> Result<R, ChoreoError>) -> Result<R, ProjectError> {
         if let Some(m) = self.missing.first() {
             if self.doc.sources.iter().any(|s| self.missing.iter().any(|m| m.hash == s.blob)) {
                 return Err(ProjectError::Incomplete { count: self.missing.len(), first: m.what.clone() });
@@ -564,13 +618,18 @@ impl Project {
         let out = f(&mut ch, self.derived.library())?;
         let mut doc = self.doc.clone();
         doc.dance = self.derived.dance_doc(&ch);
-        self.commit(doc);
+        if record {
+            self.commit(doc);
+        } else {
+            self.set_unrecorded(doc);
+        }
         Ok(out)
     }
 
-    /// The bar's current candidates, opening its search when none is open.
+    /// The bar's current candidates, opening its search when none is open. Looking at a bar
+    /// is not an edit: no undo step is recorded (the open search is kept and saved).
     pub fn candidates(&mut self, bar: usize) -> Result<Vec<MoveKey>, ProjectError> {
-        let round = self.dance_edit(|ch, lib| ch.candidates(lib, bar))?;
+        let round = self.dance_change(false, |ch, lib| ch.candidates(lib, bar))?;
         Ok(self.derived.keys_of(&round))
     }
 
