@@ -55,7 +55,7 @@
 use std::ops::ControlFlow;
 
 use super::dp::{Engine, Prune};
-use super::filter::{Filter, Mark};
+use super::filter::{Bound, Filter, Mark};
 use super::features::FeatureIndex;
 use super::lanes::{box_box, push_box, BOX_FLOATS};
 use super::results::{finish, order, select_matches, Candidate, SearchOutcome, SearchStats};
@@ -80,6 +80,9 @@ pub(crate) fn run(
     let all: Vec<(usize, usize, usize)> =
         index.clips.iter().enumerate().map(|(ci, c)| (ci, 0, c.frame_count())).filter(|s| s.2 >= prep.min_span).collect();
     let tau0 = prep.threshold.min(seed);
+    if std::env::var("ODORI_BOUND_STATS").is_ok() {
+        bound_stats(index, prep, &bounds);
+    }
     let (mut pool, mut stats) = if tau0.is_finite() {
         // Two passes: the one-value filter finds the ends that can be within τ (and lowers τ),
         // then the exact front DP runs on those ends' windows only.
@@ -183,9 +186,9 @@ fn filter_pass(
             // Stored values may have been summed with any τ since τ0: the margin scales with it.
             let margin = filter_margin(prep, tau0);
             for j in b0..b1 {
-                let hi = (j + prep.max_span - 1).min(cols - 1);
-                let cols_bound = if hi > j { fneg[hi + 1 - b0] - fneg[j + 1 - b0] } else { 0.0 };
-                if let Some(m) = filter.column(prep, target, j, tau, &rest, margin - cols_bound) {
+                let last = (j + prep.max_span - 1).min(cols - 1);
+                let bound = Bound { margin, rest: &rest, fneg: &fneg, base: b0, last };
+                if let Some(m) = filter.column(prep, target, j, tau, &bound) {
                     let score = m.cost / (rows + m.end + 1 - m.start) as f32;
                     upper.push(Candidate { clip: ci, start: m.start, end: m.end, score, cost: m.cost });
                     marks.push((ci, m));
@@ -401,4 +404,32 @@ fn scan(
     pool.retain(|c| c.score <= tau);
     stats.distances_computed = eng.distances;
     Ok((pool, stats, tau))
+}
+
+fn bound_stats(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) {
+    use super::lanes::point_box;
+    let clip = &index.clips[0];
+    let target = clip.lanes(prep.origin);
+    let cols = target.len() / LANE_FLOATS;
+    let mut qboxes: Vec<f32> = Vec::new();
+    for ch in prep.query_lanes.chunks(QCHUNK * LANE_FLOATS) {
+        push_box(ch, &mut qboxes);
+    }
+    let mut qb4: Vec<f32> = Vec::new();
+    for ch in prep.query_lanes.chunks(4 * LANE_FLOATS) {
+        push_box(ch, &mut qb4);
+    }
+    let (mut ex, mut lb, mut pb, mut pb4) = (vec![], vec![], vec![], vec![]);
+    for j in (0..cols).step_by(97) {
+        let t = &target[j * LANE_FLOATS..(j + 1) * LANE_FLOATS];
+        ex.push((0..prep.query_frames).map(|i| prep.d(i, t)).fold(f32::INFINITY, f32::min));
+        lb.push(bounds.clips[0].lbc[j / CHUNK]);
+        pb.push(qboxes.chunks_exact(BOX_FLOATS).map(|b| point_box(t, b, &prep.groups)).fold(f32::INFINITY, f32::min));
+        pb4.push(qb4.chunks_exact(BOX_FLOATS).map(|b| point_box(t, b, &prep.groups)).fold(f32::INFINITY, f32::min));
+    }
+    for (name, v) in [("exact", &mut ex), ("lbc", &mut lb), ("pointbox8", &mut pb), ("pointbox4", &mut pb4)] {
+        v.sort_by(f32::total_cmp);
+        let n = v.len();
+        eprintln!("{name}: p10 {:.3} p25 {:.3} p50 {:.3} p75 {:.3} p90 {:.3}", v[n / 10], v[n / 4], v[n / 2], v[3 * n / 4], v[9 * n / 10]);
+    }
 }

@@ -61,6 +61,15 @@ pub(crate) struct Mark {
     pub start: usize,
 }
 
+/// The lower bounds of the rest of a path, for one block of columns (see [`Filter::column`]).
+pub(crate) struct Bound<'a> {
+    pub margin: f32,
+    pub rest: &'a [f32],
+    pub fneg: &'a [f32],
+    pub base: usize,
+    pub last: usize,
+}
+
 /// The one-value DP over one clip segment.
 pub(crate) struct Filter {
     rows: usize,
@@ -92,10 +101,13 @@ impl Filter {
         self.from = from;
     }
 
-    /// Column `j`. A value `v` at row i is kept when `v ≤ budget − rest[i]` (`budget` holds the
-    /// rounding margin less the column bound). Returns the end's mark when row I−1 is kept.
+    /// Column `j`. A value `v` at row i is kept when `v + rest[i] + cols(i) ≤ margin`, where
+    /// `cols(i)` bounds the columns still to come: a path at row i has `R = I − 1 − i` rows left
+    /// and so enters at most `2R` more columns (and none past `bound.last`), each adding at
+    /// least `min(0, c − τ)`; `bound.fneg[k]` is the running sum of those from column
+    /// `bound.base` (`fneg[0] = 0` before it). Returns the end's mark when row I−1 is kept.
     #[inline]
-    pub(crate) fn column(&mut self, prep: &Prepared, target: &[f32], j: usize, tau: f32, rest: &[f32], budget: f32) -> Option<Mark> {
+    pub(crate) fn column(&mut self, prep: &Prepared, target: &[f32], j: usize, tau: f32, bound: &Bound) -> Option<Mark> {
         let rows = self.rows;
         let t = &target[j * LANE_FLOATS..(j + 1) * LANE_FLOATS];
         std::mem::swap(&mut self.c2, &mut self.c1);
@@ -111,11 +123,19 @@ impl Filter {
             self.c2.kill();
         }
         let (c0, c1, c2) = (&mut self.c0, &self.c1, &self.c2);
+        let rest = bound.rest;
+        let here = bound.fneg[j + 1 - bound.base];
+        // margin − cols(i): the budget of row i before its row bound.
+        let budget = |i: usize| -> f32 {
+            let last = (j + 2 * (rows - 1 - i)).min(bound.last);
+            let cols = if last > j { bound.fneg[last + 1 - bound.base] - here } else { 0.0 };
+            bound.margin - cols
+        };
         let mut lo = usize::MAX;
         let mut hi = 0usize;
         // Row 0: a new start, value 2(d − τ).
         {
-            let limit = tau + (budget - rest[0]) / 2.0;
+            let limit = tau + (budget(0) - rest[0]) / 2.0;
             if limit >= 0.0 {
                 self.distances += 1;
                 let d = prep.d_abandon(0, t, limit);
@@ -142,7 +162,7 @@ impl Filter {
         let r_lo = r_lo.max(1);
         let r_hi = r_hi.min(rows);
         for i in r_lo..r_hi {
-            let b = budget - rest[i];
+            let b = budget(i) - rest[i];
             let va = c1.at(i - 1);
             let mut vh = c2.at(i - 1);
             let mut vv = if i >= 2 { c1.at(i - 2) } else { f32::INFINITY };
@@ -213,7 +233,7 @@ impl Filter {
             c0.lo = lo;
             c0.hi = hi;
         }
-        (c0.hi == rows && c0.v[rows - 1] <= budget)
+        (c0.hi == rows && c0.v[rows - 1] <= bound.margin)
             .then(|| Mark { end: j, value: c0.v[rows - 1], tau, cost: c0.c[rows - 1], start: c0.s[rows - 1] as usize })
     }
 }
