@@ -57,7 +57,7 @@ use std::ops::ControlFlow;
 use super::dp::{Engine, Prune};
 use super::filter::{Bound, Filter, Mark};
 use super::features::FeatureIndex;
-use super::lanes::{box_box, push_box, BOX_FLOATS};
+use super::lanes::{box_box, point_box, push_box, BOX_FLOATS};
 use super::results::{finish, order, select_matches, Candidate, SearchOutcome, SearchStats};
 use super::{Prepared, SearchError, SearchProgress, LANE_FLOATS};
 
@@ -80,9 +80,6 @@ pub(crate) fn run(
     let all: Vec<(usize, usize, usize)> =
         index.clips.iter().enumerate().map(|(ci, c)| (ci, 0, c.frame_count())).filter(|s| s.2 >= prep.min_span).collect();
     let tau0 = prep.threshold.min(seed);
-    if std::env::var("ODORI_BOUND_STATS").is_ok() {
-        bound_stats(index, prep, &bounds);
-    }
     let (mut pool, mut stats) = if tau0.is_finite() {
         // Two passes: the one-value filter finds the ends that can be within τ (and lowers τ),
         // then the exact front DP runs on those ends' windows only.
@@ -145,6 +142,33 @@ fn block_bounds(cb: &ClipBounds, nq: usize, tau: f32, b0: usize, wend: usize, rq
     }
 }
 
+/// Row bounds that respect the slope limit (an envelope in the spirit of LB_Keogh's): a path
+/// at row i and a column of the block `b0 .. b0 + BLOCK` reaches row `i' = i + Δ` at a column
+/// no later than `b0 + BLOCK − 1 + 2Δ` (and never past `wend − 1`), so row i' adds at least the
+/// least bound of the target chunks up to that column. `rest[i] = Σ_{i' > i} (that − τ)`; `pm`
+/// is scratch (prefix minima over the window's chunks, per query frame).
+fn slope_rest(pb: &[f32], rows: usize, tau: f32, b0: usize, wend: usize, pm: &mut Vec<f32>, rest: &mut [f32]) {
+    let t0 = b0 / CHUNK;
+    let nt = (wend - 1) / CHUNK + 1 - t0;
+    pm.clear();
+    pm.extend_from_slice(&pb[t0 * rows..(t0 + 1) * rows]);
+    for k in 1..nt {
+        let t = t0 + k;
+        for i in 0..rows {
+            let m = pm[(k - 1) * rows + i].min(pb[t * rows + i]);
+            pm.push(m);
+        }
+    }
+    for (i, r) in rest.iter_mut().enumerate() {
+        let mut s = 0.0f32;
+        for ip in i + 1..rows {
+            let reach = (b0 + BLOCK - 1 + 2 * (ip - i)).min(wend - 1);
+            s += pm[(reach / CHUNK - t0) * rows + ip] - tau;
+        }
+        *r = s;
+    }
+}
+
 /// The marks of the one-value pass (`filter.rs`) over `segments` (whole clips), τ starting at
 /// `tau0` and lowered after each block to the far-set bound of the real paths found.
 type FilterResult = (Vec<(usize, Mark)>, f32, SearchStats);
@@ -170,10 +194,18 @@ fn filter_pass(
     let mut upper_seen = 0usize;
     let mut done = 0usize;
     let mut filter = Filter::new(rows);
+    let mut pb: Vec<f32> = Vec::new();
+    let mut pm: Vec<f32> = Vec::new();
     for &(ci, from, to) in segments {
         let target = index.clips[ci].lanes(prep.origin);
         let cols = target.len() / LANE_FLOATS;
         let cb = &bounds.clips[ci];
+        // Row bounds per query frame (not per query chunk): `pb[t · rows + i]` bounds d(i, ·)
+        // over target chunk t (the frame's distance to the chunk's boxes).
+        pb.clear();
+        for bx in index.clips[ci].chunk_boxes(prep.origin).chunks_exact(BOX_FLOATS) {
+            pb.extend((0..rows).map(|i| point_box(prep.ql(i), bx, &prep.groups)));
+        }
         filter.reset(from);
         for b0 in (from..to).step_by(BLOCK) {
             let p = SearchProgress { frames_done: done + b0 - from, frames_total: total, candidates: marks.len() };
@@ -183,6 +215,7 @@ fn filter_pass(
             let b1 = (b0 + BLOCK).min(to);
             let wend = (b0 + BLOCK + prep.max_span - 1).min(cols);
             block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
+            slope_rest(&pb, rows, tau, b0, wend, &mut pm, &mut rest);
             // Stored values may have been summed with any τ since τ0: the margin scales with it.
             let margin = filter_margin(prep, tau0);
             for j in b0..b1 {
@@ -406,30 +439,3 @@ fn scan(
     Ok((pool, stats, tau))
 }
 
-fn bound_stats(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) {
-    use super::lanes::point_box;
-    let clip = &index.clips[0];
-    let target = clip.lanes(prep.origin);
-    let cols = target.len() / LANE_FLOATS;
-    let mut qboxes: Vec<f32> = Vec::new();
-    for ch in prep.query_lanes.chunks(QCHUNK * LANE_FLOATS) {
-        push_box(ch, &mut qboxes);
-    }
-    let mut qb4: Vec<f32> = Vec::new();
-    for ch in prep.query_lanes.chunks(4 * LANE_FLOATS) {
-        push_box(ch, &mut qb4);
-    }
-    let (mut ex, mut lb, mut pb, mut pb4) = (vec![], vec![], vec![], vec![]);
-    for j in (0..cols).step_by(97) {
-        let t = &target[j * LANE_FLOATS..(j + 1) * LANE_FLOATS];
-        ex.push((0..prep.query_frames).map(|i| prep.d(i, t)).fold(f32::INFINITY, f32::min));
-        lb.push(bounds.clips[0].lbc[j / CHUNK]);
-        pb.push(qboxes.chunks_exact(BOX_FLOATS).map(|b| point_box(t, b, &prep.groups)).fold(f32::INFINITY, f32::min));
-        pb4.push(qb4.chunks_exact(BOX_FLOATS).map(|b| point_box(t, b, &prep.groups)).fold(f32::INFINITY, f32::min));
-    }
-    for (name, v) in [("exact", &mut ex), ("lbc", &mut lb), ("pointbox8", &mut pb), ("pointbox4", &mut pb4)] {
-        v.sort_by(f32::total_cmp);
-        let n = v.len();
-        eprintln!("{name}: p10 {:.3} p25 {:.3} p50 {:.3} p75 {:.3} p90 {:.3}", v[n / 10], v[n / 4], v[n / 2], v[3 * n / 4], v[9 * n / 10]);
-    }
-}
