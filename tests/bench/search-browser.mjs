@@ -77,7 +77,6 @@ try {
     }
     out["in feetTop10"] = time("in", { preset: "feetOnly", maxResults: 10 });
     return { tIndex, ...out };
-  });
   }, !process.env.ODORI_BENCH_NO_PLAIN);
   console.log(`one hour from ${label}: index build (216,000 + clip frames): ${out.tIndex.toFixed(0)} ms`);
   for (const [k, v] of Object.entries(out).filter(([k]) => k !== "tIndex")) {

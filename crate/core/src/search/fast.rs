@@ -196,17 +196,23 @@ fn filter_pass(
     let mut filter = Filter::new(rows);
     let mut pb: Vec<f32> = Vec::new();
     let mut pm: Vec<f32> = Vec::new();
+    let mut have: Vec<bool> = Vec::new();
     for &(ci, from, to) in segments {
         let target = index.clips[ci].lanes(prep.origin);
         let cols = target.len() / LANE_FLOATS;
         let cb = &bounds.clips[ci];
         // Row bounds per query frame (not per query chunk): `pb[t · rows + i]` bounds d(i, ·)
         // over target chunk t (the frame's distance to the chunk's boxes).
+        // Built lazily, chunk by chunk, for the blocks where paths live past the first row
+        // (where only a few columns start a path, the chunk bounds already settle it).
+        let boxes = index.clips[ci].chunk_boxes(prep.origin);
+        let nchunks = boxes.len() / BOX_FLOATS;
         pb.clear();
-        for bx in index.clips[ci].chunk_boxes(prep.origin).chunks_exact(BOX_FLOATS) {
-            pb.extend((0..rows).map(|i| point_box(prep.ql(i), bx, &prep.groups)));
-        }
+        pb.resize(nchunks * rows, 0.0);
+        have.clear();
+        have.resize(nchunks, false);
         filter.reset(from);
+        filter.busy = true;
         for b0 in (from..to).step_by(BLOCK) {
             let p = SearchProgress { frames_done: done + b0 - from, frames_total: total, candidates: marks.len() };
             if progress(p).is_break() {
@@ -215,7 +221,19 @@ fn filter_pass(
             let b1 = (b0 + BLOCK).min(to);
             let wend = (b0 + BLOCK + prep.max_span - 1).min(cols);
             block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
-            slope_rest(&pb, rows, tau, b0, wend, &mut pm, &mut rest);
+            if filter.busy {
+                for t in b0 / CHUNK..=(wend - 1) / CHUNK {
+                    if !have[t] {
+                        have[t] = true;
+                        let bx = &boxes[t * BOX_FLOATS..(t + 1) * BOX_FLOATS];
+                        for (i, r) in pb[t * rows..(t + 1) * rows].iter_mut().enumerate() {
+                            *r = point_box(prep.ql(i), bx, &prep.groups);
+                        }
+                    }
+                }
+                slope_rest(&pb, rows, tau, b0, wend, &mut pm, &mut rest);
+            }
+            filter.busy = false;
             // Stored values may have been summed with any τ since τ0: the margin scales with it.
             let margin = filter_margin(prep, tau0);
             for j in b0..b1 {

@@ -81,6 +81,9 @@ pub(crate) struct Filter {
     from: usize,
     /// Frame distances started.
     pub distances: u64,
+    /// Set when a cell past the first row is kept (the caller clears it): only then are the
+    /// costlier row bounds worth building.
+    pub busy: bool,
 }
 
 /// Not yet computed (features are finite, so no distance is NaN).
@@ -88,7 +91,7 @@ const UNSET: f32 = f32::NAN;
 
 impl Filter {
     pub(crate) fn new(rows: usize) -> Filter {
-        Filter { rows, c0: Col::new(rows), c1: Col::new(rows), c2: Col::new(rows), d_prev: vec![UNSET; rows], d_cur: vec![UNSET; rows], from: 0, distances: 0 }
+        Filter { rows, c0: Col::new(rows), c1: Col::new(rows), c2: Col::new(rows), d_prev: vec![UNSET; rows], d_cur: vec![UNSET; rows], from: 0, distances: 0, busy: false }
     }
 
     /// Starts a new segment at column `from`.
@@ -232,6 +235,7 @@ impl Filter {
         if lo < hi {
             c0.lo = lo;
             c0.hi = hi;
+            self.busy |= hi > 1;
         }
         (c0.hi == rows && c0.v[rows - 1] <= bound.margin)
             .then(|| Mark { end: j, value: c0.v[rows - 1], tau, cost: c0.c[rows - 1], start: c0.s[rows - 1] as usize })
