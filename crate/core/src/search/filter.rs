@@ -110,6 +110,8 @@ impl Filter {
     /// least `min(0, c − τ)`; `bound.fneg[k]` is the running sum of those from column
     /// `bound.base` (`fneg[0] = 0` before it). Returns the end's mark when row I−1 is kept.
     #[inline]
+    // Row i indexes three columns' arrays, the cached distances and the bounds at once.
+    #[allow(clippy::needless_range_loop)]
     pub(crate) fn column(&mut self, prep: &Prepared, target: &[f32], j: usize, tau: f32, bound: &Bound) -> Option<Mark> {
         let rows = self.rows;
         let t = &target[j * LANE_FLOATS..(j + 1) * LANE_FLOATS];
