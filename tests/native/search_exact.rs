@@ -250,3 +250,37 @@ fn k_results_guarantee() {
         assert!(within > out.matches.len(), "the others overlap the shown ones");
     }
 }
+
+/// The fast search's first pass lowers τ as it goes and keeps values summed under earlier,
+/// higher τ; its marks are then re-checked under the final τ. Long clips where the good matches
+/// lie late (after a long stretch of unrelated motion) make τ fall a long way during the pass:
+/// the results must still be the brute force's.
+#[test]
+fn falling_bound_over_long_clips_keeps_exactness() {
+    let mut rng = Rng(0xFA11_0016);
+    let phrase = random_motion(&mut rng, 50);
+    let mut index = FeatureIndex::new();
+    for k in 0..2 {
+        // Unrelated motion first, then the phrase repeated at varying speeds.
+        let mut data = random_motion(&mut rng, 900 + 300 * k);
+        for _ in 0..14 {
+            let frames = 35 + rng.usize(30);
+            data.extend(warped_query(&mut rng, &phrase, 0, frames));
+        }
+        index.add_features(features(&format!("long{k}"), data));
+    }
+    for round in 0..8 {
+        let rows = 16 + rng.usize(24);
+        let at = rng.usize(8);
+        let query = features("query", warped_query(&mut rng, &phrase, at, rows));
+        let mut params = SearchParams { max_results: [1, 4, 12, 30][round % 4], ..SearchParams::preset(BodyPreset::ALL[round % BodyPreset::ALL.len()]) };
+        if round >= 6 {
+            let all = reference_search(&index, &query, &params);
+            params.threshold = all.get(all.len() / 2).map(|r| r.3);
+        }
+        let reference = reference_search(&index, &query, &params);
+        let fast = search(&index, &query, &params, &mut no_progress()).unwrap();
+        assert_same(&format!("long clips, round {round} ({rows} frames, k {})", params.max_results), &fast, &reference, (&query, &index, &params));
+        assert!(!fast.matches.is_empty(), "round {round}: the phrase is in the library");
+    }
+}

@@ -222,12 +222,21 @@ impl SearchIndex {
         #[wasm_bindgen(unchecked_param_type = "SearchParamsJs | undefined")] params: JsValue,
         progress: Option<js_sys::Function>,
     ) -> Result<JsValue, OdoriError> {
-        let data = features.to_vec();
-        if data.is_empty() || data.len() % (CANON_COUNT * 3) != 0 || data.iter().any(|x| !x.is_finite()) {
-            return Err(OdoriError::new("bad-argument", format!("query features: {} values is not a whole number of finite 21-joint frames", data.len())));
-        }
-        let query = ClipFeatures::new("query", DEFAULT_INDEX_FPS, MotionFeatures { origin: Origin::Hips, data });
+        let query = feature_query(features)?;
         self.run(&query, params, progress, Method::Fast)
+    }
+
+    /// `searchPlain` with the query given as normalised features from `queryFeatures` (the
+    /// benchmark's baseline for a query from outside the index).
+    #[wasm_bindgen(js_name = searchPlainFeatures)]
+    pub fn search_plain_features(
+        &self,
+        features: Float32Array,
+        #[wasm_bindgen(unchecked_param_type = "SearchParamsJs | undefined")] params: JsValue,
+        progress: Option<js_sys::Function>,
+    ) -> Result<JsValue, OdoriError> {
+        let query = feature_query(features)?;
+        self.run(&query, params, progress, Method::Plain)
     }
 
     fn query(&self, query: JsValue) -> Result<ClipFeatures, OdoriError> {
@@ -330,4 +339,13 @@ pub fn body_vocabulary() -> JsValue {
         .map(|&p| PresetInfo { name: p, joints: p.joints().into_iter().map(Canon::name).collect(), shoulders: matches!(p.origin(), Origin::Shoulders) })
         .collect();
     to_js(&Vocabulary { joints: Canon::ALL.iter().map(|c| c.name()).collect(), presets })
+}
+
+/// A query given as normalised features (flat `frames × 21 × 3`, hip origin), checked.
+fn feature_query(features: Float32Array) -> Result<ClipFeatures, OdoriError> {
+    let data = features.to_vec();
+    if data.is_empty() || data.len() % (CANON_COUNT * 3) != 0 || data.iter().any(|x| !x.is_finite()) {
+        return Err(OdoriError::new("bad-argument", format!("query features: {} values is not a whole number of finite 21-joint frames", data.len())));
+    }
+    Ok(ClipFeatures::new("query", DEFAULT_INDEX_FPS, MotionFeatures { origin: Origin::Hips, data }))
 }

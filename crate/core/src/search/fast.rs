@@ -5,6 +5,13 @@
 //! arrays, O(query) memory per column), re-derived for the slope-constrained steps and the
 //! per-end normalisation of spec §C.
 //!
+//! It runs in two passes once τ is finite: `filter.rs` first computes one value per cell (the
+//! least `Σ w(d − τ)` into it, pruned with the bounds below), which marks every end that can
+//! have a match within τ and lowers τ from real paths; then the front DP of `dp.rs` runs, pruned
+//! at the final τ, only on the windows (`maxSpan` columns) before the marked ends. An end is
+//! reported only from a window that holds every admissible start of it, so its least distance
+//! and start are the whole clip's.
+//!
 //! # Why it returns exactly what the plain DP returns
 //!
 //! *The test.* A path's distance is ≤ τ exactly when `Σ w·(d − τ) ≤ 0` over its frame pairs
@@ -48,8 +55,9 @@
 use std::ops::ControlFlow;
 
 use super::dp::{Engine, Prune};
+use super::filter::{Bound, Filter, Mark};
 use super::features::FeatureIndex;
-use super::lanes::{box_box, push_box, BOX_FLOATS};
+use super::lanes::{box_box, point_box, push_box, BOX_FLOATS};
 use super::results::{finish, order, select_matches, Candidate, SearchOutcome, SearchStats};
 use super::{Prepared, SearchError, SearchProgress, LANE_FLOATS};
 
@@ -71,11 +79,186 @@ pub(crate) fn run(
     let (seed, probed) = if prep.max_results > PROBE_MAX_RESULTS { (f32::INFINITY, 0) } else { probe(index, prep, &bounds) };
     let all: Vec<(usize, usize, usize)> =
         index.clips.iter().enumerate().map(|(ci, c)| (ci, 0, c.frame_count())).filter(|s| s.2 >= prep.min_span).collect();
-    let (mut pool, mut stats, _) = scan(index, prep, &bounds, &all, seed, true, progress)?;
+    let tau0 = prep.threshold.min(seed);
+    let (mut pool, mut stats) = if tau0.is_finite() {
+        // Two passes: the one-value filter finds the ends that can be within τ (and lowers τ),
+        // then the exact front DP runs on those ends' windows only.
+        let (marks, tau, filtered) = filter_pass(index, prep, &bounds, &all, tau0, progress)?;
+        // Sums were formed with τ values up to τ0: their rounding scales with it.
+        let margin = filter_margin(prep, tau0);
+        let wmin = (prep.query_frames + prep.min_span) as f32;
+        let mut segments: Vec<(usize, usize, usize)> = Vec::new();
+        for &(ci, m) in &marks {
+            // The value was summed with a τ no lower than the final one; every path into the
+            // end weighs at least I + minSpan, so this is a lower bound under the final τ.
+            if m.value + (m.tau - tau) * wmin > margin {
+                continue;
+            }
+            let from = (m.end + 1).saturating_sub(prep.max_span);
+            match segments.last_mut() {
+                Some(last) if last.0 == ci && from <= last.2 => last.2 = last.2.max(m.end + 1),
+                _ => segments.push((ci, from, m.end + 1)),
+            }
+        }
+        let total = index.total_frames();
+        let mut pass2 = |p: SearchProgress| progress(SearchProgress { frames_done: total, frames_total: total, candidates: p.candidates });
+        let (pool, exact, _) = scan(index, prep, &bounds, &segments, tau, false, true, &mut pass2)?;
+        let stats = SearchStats { distances_computed: filtered.distances_computed + exact.distances_computed, ..filtered };
+        (pool, stats)
+    } else {
+        let (pool, stats, _) = scan(index, prep, &bounds, &all, seed, true, true, progress)?;
+        (pool, stats)
+    };
     stats.distances_computed += probed;
     let within = pool.len() as u64;
     let selected = select_matches(index, prep, &mut pool);
     Ok(finish(index, prep, selected, stats, within))
+}
+
+/// Rounding margin of the one-value pass whose τ started at `tau`: for any path that ends
+/// within τ, every sum the test forms is at most about `4·τ·(I + maxSpan)` in magnitude, and
+/// f32 sums of a few hundred terms stay well within 1e-4 of that.
+fn filter_margin(prep: &Prepared, tau: f32) -> f32 {
+    1e-4 * 4.0 * tau * (prep.query_frames + prep.max_span) as f32 + 1e-6
+}
+
+/// Row bounds (`rest[i]`: Σ over the rows after i of their bound less τ) and the running sums
+/// of the column bounds' negative parts (`fneg`) for the block starting at `b0`, whose paths
+/// reach no column at or after `wend`.
+#[allow(clippy::too_many_arguments)]
+fn block_bounds(cb: &ClipBounds, nq: usize, tau: f32, b0: usize, wend: usize, rq: &mut [f32], rest: &mut [f32], fneg: &mut Vec<f32>) {
+    cb.row_bounds(nq, b0, wend, rq);
+    let mut acc = 0.0f32;
+    for i in (0..rest.len()).rev() {
+        rest[i] = acc;
+        acc += rq[i / QCHUNK] - tau;
+    }
+    fneg.clear();
+    fneg.push(0.0);
+    let mut acc = 0.0f32;
+    for j in b0..wend {
+        acc += (cb.lbc[j / CHUNK] - tau).min(0.0);
+        fneg.push(acc);
+    }
+}
+
+/// Row bounds that respect the slope limit (an envelope in the spirit of LB_Keogh's): a path
+/// at row i and a column of the block `b0 .. b0 + BLOCK` reaches row `i' = i + Δ` at a column
+/// no later than `b0 + BLOCK − 1 + 2Δ` (and never past `wend − 1`), so row i' adds at least the
+/// least bound of the target chunks up to that column. `rest[i] = Σ_{i' > i} (that − τ)`; `pm`
+/// is scratch (prefix minima over the window's chunks, per query frame).
+fn slope_rest(pb: &[f32], rows: usize, tau: f32, b0: usize, wend: usize, pm: &mut Vec<f32>, rest: &mut [f32]) {
+    let t0 = b0 / CHUNK;
+    let nt = (wend - 1) / CHUNK + 1 - t0;
+    pm.clear();
+    pm.extend_from_slice(&pb[t0 * rows..(t0 + 1) * rows]);
+    for k in 1..nt {
+        let t = t0 + k;
+        for i in 0..rows {
+            let m = pm[(k - 1) * rows + i].min(pb[t * rows + i]);
+            pm.push(m);
+        }
+    }
+    for (i, r) in rest.iter_mut().enumerate() {
+        let mut s = 0.0f32;
+        for ip in i + 1..rows {
+            let reach = (b0 + BLOCK - 1 + 2 * (ip - i)).min(wend - 1);
+            s += pm[(reach / CHUNK - t0) * rows + ip] - tau;
+        }
+        *r = s;
+    }
+}
+
+/// The marks of the one-value pass (`filter.rs`) over `segments` (whole clips), τ starting at
+/// `tau0` and lowered after each block to the far-set bound of the real paths found.
+type FilterResult = (Vec<(usize, Mark)>, f32, SearchStats);
+
+fn filter_pass(
+    index: &FeatureIndex,
+    prep: &Prepared,
+    bounds: &Bounds,
+    segments: &[(usize, usize, usize)],
+    tau0: f32,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<FilterResult, SearchError> {
+    let rows = prep.query_frames;
+    let total: usize = segments.iter().map(|s| s.2 - s.1).sum();
+    let mut stats = SearchStats { frames_searched: total, cells_total: total as u64 * rows as u64, ..Default::default() };
+    let nq = bounds.nq;
+    let mut rq = vec![0f32; nq];
+    let mut rest = vec![0f32; rows];
+    let mut fneg: Vec<f32> = Vec::new();
+    let mut tau = tau0;
+    let mut marks: Vec<(usize, Mark)> = Vec::new();
+    let mut upper: Vec<Candidate> = Vec::new();
+    let mut upper_seen = 0usize;
+    let mut done = 0usize;
+    let mut filter = Filter::new(rows);
+    let mut pb: Vec<f32> = Vec::new();
+    let mut pm: Vec<f32> = Vec::new();
+    let mut have: Vec<bool> = Vec::new();
+    for &(ci, from, to) in segments {
+        let target = index.clips[ci].lanes(prep.origin);
+        let cols = target.len() / LANE_FLOATS;
+        let cb = &bounds.clips[ci];
+        // Row bounds per query frame (not per query chunk): `pb[t · rows + i]` bounds d(i, ·)
+        // over target chunk t (the frame's distance to the chunk's boxes).
+        // Built lazily, chunk by chunk, for the blocks where paths live past the first row
+        // (where only a few columns start a path, the chunk bounds already settle it).
+        let boxes = index.clips[ci].chunk_boxes(prep.origin);
+        let nchunks = boxes.len() / BOX_FLOATS;
+        pb.clear();
+        pb.resize(nchunks * rows, 0.0);
+        have.clear();
+        have.resize(nchunks, false);
+        filter.reset(from);
+        filter.busy = true;
+        for b0 in (from..to).step_by(BLOCK) {
+            let p = SearchProgress { frames_done: done + b0 - from, frames_total: total, candidates: marks.len() };
+            if progress(p).is_break() {
+                return Err(SearchError::Cancelled { frames_done: done + b0 - from, frames_total: total });
+            }
+            let b1 = (b0 + BLOCK).min(to);
+            let wend = (b0 + BLOCK + prep.max_span - 1).min(cols);
+            block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
+            if filter.busy {
+                for t in b0 / CHUNK..=(wend - 1) / CHUNK {
+                    if !have[t] {
+                        have[t] = true;
+                        let bx = &boxes[t * BOX_FLOATS..(t + 1) * BOX_FLOATS];
+                        for (i, r) in pb[t * rows..(t + 1) * rows].iter_mut().enumerate() {
+                            *r = point_box(prep.ql(i), bx, &prep.groups);
+                        }
+                    }
+                }
+                slope_rest(&pb, rows, tau, b0, wend, &mut pm, &mut rest);
+            }
+            filter.busy = false;
+            // Stored values may have been summed with any τ since τ0: the margin scales with it.
+            let margin = filter_margin(prep, tau0);
+            for j in b0..b1 {
+                let last = (j + prep.max_span - 1).min(cols - 1);
+                let bound = Bound { margin, rest: &rest, fneg: &fneg, base: b0, last };
+                if let Some(m) = filter.column(prep, target, j, tau, &bound) {
+                    let score = m.cost / (rows + m.end + 1 - m.start) as f32;
+                    upper.push(Candidate { clip: ci, start: m.start, end: m.end, score, cost: m.cost });
+                    marks.push((ci, m));
+                }
+            }
+            if upper.len() > upper_seen && upper.len() >= prep.max_results {
+                if let Some(kth) = far_bound(&mut upper, prep.max_results, prep.max_span) {
+                    if kth < tau {
+                        tau = kth;
+                        upper.retain(|c| c.score <= tau);
+                    }
+                }
+                upper_seen = upper.len();
+            }
+        }
+        done += to - from;
+    }
+    stats.distances_computed = filter.distances;
+    Ok((marks, tau, stats))
 }
 
 /// The k-th distance of a far set (see the module docs) picked best first from `pool`, if it
@@ -188,7 +371,7 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
         let cols = index.clips[ci].frame_count();
         segments.push((ci, b0.saturating_sub(prep.max_span), (b0 + BLOCK + prep.max_span).min(cols)));
     }
-    let Ok((mut pool, stats, _)) = scan(index, prep, bounds, &segments, f32::INFINITY, false, &mut |_| ControlFlow::Continue(())) else {
+    let Ok((mut pool, stats, _)) = scan(index, prep, bounds, &segments, f32::INFINITY, false, false, &mut |_| ControlFlow::Continue(())) else {
         return (f32::INFINITY, 0);
     };
     (far_bound(&mut pool, k, prep.max_span).unwrap_or(f32::INFINITY), stats.distances_computed)
@@ -198,7 +381,10 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
 type ScanResult = (Vec<Candidate>, SearchStats, f32);
 
 /// The pruned DP over `segments` (clip, first column, end column), τ starting at the lower of
-/// the threshold and `seed`, lowered after each block when `lower`.
+/// the threshold and `seed`, lowered after each block when `lower`. With `exact`, only ends
+/// whose every admissible start lies in the segment are kept (their least distance is then the
+/// whole clip's); without, every end found is kept (a real path: an upper bound, for τ).
+#[allow(clippy::too_many_arguments)]
 fn scan(
     index: &FeatureIndex,
     prep: &Prepared,
@@ -206,6 +392,7 @@ fn scan(
     segments: &[(usize, usize, usize)],
     seed: f32,
     lower: bool,
+    exact: bool,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<ScanResult, SearchError> {
     let rows = prep.query_frames;
@@ -237,19 +424,7 @@ fn scan(
             if prune {
                 // Row bounds: the nearest clip chunk, over the columns this block's paths can
                 // reach (an end is at most maxSpan − 1 columns after any column of its path).
-                cb.row_bounds(nq, b0, wend, &mut rq);
-                let mut acc = 0.0f32;
-                for i in (0..rows).rev() {
-                    rest[i] = acc;
-                    acc += rq[i / QCHUNK] - tau;
-                }
-                fneg.clear();
-                fneg.push(0.0);
-                let mut acc = 0.0f32;
-                for j in b0..wend {
-                    acc += (cb.lbc[j / CHUNK] - tau).min(0.0);
-                    fneg.push(acc);
-                }
+                block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
             }
             for j in b0..b1 {
                 let found = if prune {
@@ -260,7 +435,7 @@ fn scan(
                     eng.column(prep, target, j, None)
                 };
                 if let Some((score, start, cost)) = found {
-                    if score <= tau {
+                    if score <= tau && (!exact || from == 0 || j + 1 >= from + prep.max_span) {
                         pool.push(Candidate { clip: ci, start, end: j, score, cost });
                     }
                 }
@@ -281,3 +456,4 @@ fn scan(
     stats.distances_computed = eng.distances;
     Ok((pool, stats, tau))
 }
+

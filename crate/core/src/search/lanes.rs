@@ -282,7 +282,6 @@ pub fn push_box(frames: &[f32], out: &mut Vec<f32>) {
 /// `Σ_k w_k dist(frame_k, box_k)` over the weighted groups: a lower bound of the frame
 /// distance from `frame` to any frame whose joints all lie in their boxes.
 #[inline]
-#[cfg_attr(not(test), allow(dead_code))]
 pub fn point_box(frame: &[f32], bx: &[f32], groups: &[(usize, [f32; LANES])]) -> f32 {
     let mut s = 0.0f32;
     for (g, w) in groups {

@@ -21,6 +21,7 @@
 
 mod dp;
 mod fast;
+mod filter;
 mod features;
 mod lanes;
 mod presets;
