@@ -577,10 +577,10 @@ pub(crate) fn lock_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, en
 
 /// Height an ankle clears, above the line between where it lifted and where it lands, while
 /// a foot steps during a join, metres (a short real step; the spec §J contact band is 5 cm).
-const STEP_CLEARANCE_M: f32 = 0.10;
+const STEP_CLEARANCE_M: f32 = 0.08;
 /// Longest lift (and set-down) at each end of a step, seconds: the foot rises and lowers
 /// straight, and travels only while clear of the floor.
-const STEP_RAMP_SECS: f32 = 0.1;
+const STEP_RAMP_SECS: f32 = 0.15;
 /// A planted foot with less than this to go to where it lands next slides instead of
 /// stepping, metres.
 const SLIDE_M: f32 = 0.005;
