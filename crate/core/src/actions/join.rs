@@ -584,6 +584,8 @@ const STEP_RAMP_SECS: f32 = 0.15;
 /// A planted foot with less than this to go to where it lands next slides instead of
 /// stepping, metres.
 const SLIDE_M: f32 = 0.005;
+/// Longest step, seconds: a foot that finds no contact ahead within it rejoins the animation.
+const MAX_STEP_SECS: f32 = 0.6;
 /// Length of a step a planted foot is forced into when the leg can no longer reach it, s.
 const FORCED_STEP_SECS: f32 = 0.3;
 /// A held foot further from its hip than the leg's length plus this is out of reach: the
@@ -643,10 +645,15 @@ pub(crate) fn step_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, en
     let next_contact = |s: usize, from: usize| (from..frames).find(|&g| contacts[g][s]);
     // A step from frame `f0` (foot at `from`) to the next contact after `f`.
     let plan_step = |s: usize, f: usize, f0: usize, from: Vec3, from_rot: Quat, lift: bool, min_len: usize| -> FootState {
+        // A foot with no contact ahead for long (a dance that slides its feet) steps for at
+        // most MAX_STEP_SECS and then follows the animation again.
+        let longest = ((MAX_STEP_SECS * fps) as usize).max(min_len);
         let f1 = match next_contact(s, f) {
-            Some(g) if g >= f0 + min_len => g,
-            _ => (f0 + min_len.max(forced)).max(end.min(frames - 1)).min(frames - 1),
-        };
+            Some(g) if g >= f0 + min_len && g <= f0 + longest => g,
+            Some(g) if g > f0 + longest => f0 + longest,
+            _ => (f0 + min_len.max(forced)).max(end.min(frames - 1)).min(f0 + longest),
+        }
+        .min(frames - 1);
         let then_free = f1 >= end || !contacts[f1][s];
         FootState::Step { from, from_rot, f0, f1: f1.max(f0 + 1), lift, then_free }
     };
@@ -670,7 +677,7 @@ pub(crate) fn step_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, en
             break;
         }
         let root = out.translations[0].values[f];
-        let (_, raw_pos) = frame_world(out, f);
+        let (raw_rot, raw_pos) = frame_world(out, f);
         let mut targets: [Option<(Vec3, Quat)>; 2] = [None, None];
         for ft in Foot::BOTH {
             let s = ft.index();
@@ -684,6 +691,10 @@ pub(crate) fn step_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, en
                 } else if (hold - hip).length() > leg_len[s] + REACH_SLACK_M {
                     state[s] = plan_step(s, f + forced, f.saturating_sub(1), hold, rot, true, forced);
                 }
+            }
+            // A foot that lands inside the blend is held from there.
+            if matches!(state[s], FootState::Free) && f < end && contacts[f][s] {
+                state[s] = FootState::Planted { at: raw_at, rot: raw_rot[ft.ankle().index()] };
             }
             targets[s] = match state[s] {
                 FootState::Free => None,
