@@ -581,6 +581,8 @@ const STEP_CLEARANCE_M: f32 = 0.08;
 /// Longest lift (and set-down) at each end of a step, seconds: the foot rises and lowers
 /// straight, and travels only while clear of the floor.
 const STEP_RAMP_SECS: f32 = 0.15;
+/// Share of a lift (or set-down) ramp before the foot starts (after it ends) travelling.
+const STEP_TRAVEL_IN_RAMP: f32 = 0.7;
 /// A planted foot with less than this to go to where it lands next slides instead of
 /// stepping, metres.
 const SLIDE_M: f32 = 0.005;
@@ -709,7 +711,11 @@ pub(crate) fn step_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, en
                     // Ramps: straight up at a lift, straight down at the landing.
                     let r1 = if far { (ramp_frames / len).min(0.35) } else { 0.0 };
                     let r0 = if far && lift { r1 } else { 0.0 };
-                    let travel = smooth((u - r0) / (1.0 - r0 - r1).max(1e-3));
+                    // Travel starts once the lift has carried the ankle most of the way up (7/10
+                    // of the ramp: 6.3 cm of the 8) and ends as late into the set-down, so a short
+                    // step does not cross in a few frames.
+                    let (t0, t1) = (STEP_TRAVEL_IN_RAMP * r0, STEP_TRAVEL_IN_RAMP * r1);
+                    let travel = smooth((u - t0) / (1.0 - t0 - t1).max(1e-3));
                     let env = if far { (if r0 > 0.0 { u / r0 } else { 1.0 }).min(if r1 > 0.0 { (1.0 - u) / r1 } else { 1.0 }).min(1.0) } else { 0.0 };
                     let base = from.lerp(dest, travel);
                     let y = if f >= f1 { dest.y } else { (base.y + STEP_CLEARANCE_M * smooth(env)).max(raw_at.y) };
