@@ -14,7 +14,7 @@ export PATH="$HOME/.cargo/bin:$PATH"
 secs=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(import_bvh import_gltf music_envelope text_parse)
+[ ${#targets[@]} -gt 0 ] || targets=(import_bvh import_gltf music_envelope text_parse project_open)
 
 if [ "$secs" = 0 ]; then
   echo "fuzz: skipped (0 s asked); the corpus is replayed by 'cargo test --test fuzz_corpus'."
@@ -36,14 +36,22 @@ fi
 max_len_for() {
   case "$1" in
     music_envelope) echo 4096 ;;
+    project_open) echo 131072 ;;
     *) echo 65536 ;;
+  esac
+}
+# The .odori reader is also seeded with the reviewed golden project (tests/golden/, 103 KB: read
+# in place rather than copied into the corpus, hence its 128 KiB input length).
+extra_seeds_for() {
+  case "$1" in
+    project_open) echo tests/golden ;;
   esac
 }
 for t in "${targets[@]}"; do
   mkdir -p "fuzz/corpus-work/$t" "fuzz/artifacts/$t"
   echo "== fuzz $t for ${secs}s"
   log=$(mktemp)
-  if ! nice -n 15 cargo +nightly fuzz run -s none -a "$t" "fuzz/corpus-work/$t" "fuzz/corpus/$t" -- \
+  if ! nice -n 15 cargo +nightly fuzz run -s none -a "$t" "fuzz/corpus-work/$t" "fuzz/corpus/$t" $(extra_seeds_for "$t") -- \
       -max_total_time="$secs" -rss_limit_mb=2048 -malloc_limit_mb=2048 -max_len="$(max_len_for "$t")" -timeout=10 \
       -artifact_prefix="fuzz/artifacts/$t/" -print_final_stats=1 >"$log" 2>&1; then
     tail -40 "$log"
