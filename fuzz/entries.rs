@@ -65,3 +65,9 @@ pub fn text_parse(data: &[u8]) {
         }
     });
 }
+
+/// The `.odori` project reader on the bytes (a zip of a JSON manifest and content-addressed
+/// blobs; every check of `project::file::open` on hostile input).
+pub fn project_open(data: &[u8]) {
+    let _ = odori_core::project::file::open(data);
+}

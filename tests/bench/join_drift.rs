@@ -1,96 +1,90 @@
 //! Issue #14 figures: foot drift at serial joins over EVERY ordered pair of the built-in
 //! actions, joined as Transition and as Connection, measured independently of the join's own
-//! contact detector (spec §J foot skate: a foot joint — ankle or toe — is on the floor while
-//! within 5 cm of its floor, the 1st percentile of its height over the clip; its drift is the
-//! largest horizontal distance from where it touched down, over each stay on the floor). The
-//! control is the same measure on the two actions alone: the join's share is what the joined
-//! animation adds to the worse of the two. Goal (issue #14): < 2 cm at every pair.
-//! `cargo bench -p odori-tests --bench join_drift`.
+//! contact detection ([`odori_tests::foot_stay_drift_cm`], after spec §J foot skate: a foot
+//! joint — ankle or toe — is on the floor while within 5 cm of its floor, the 1st percentile
+//! of its height over the clip; its drift is the largest horizontal distance from where it
+//! touched down, over each stay on the floor). The join's share is what the joined animation
+//! adds to the worse of the two actions alone, all measured on the joined animation's floors
+//! ([`odori_tests::join_added_drift_cm`]). Printed for the join as shipped (foot locking
+//! and stepping) and, as the control, for the same join with `foot_lock: false` (the blend
+//! alone). Beside it the join jump (spec §J) around the blend, as a ratio to the actions' own
+//! 95th percentile, so smoother feet do not come at the price of a jerk. Goal (issue #14):
+//! < 2 cm at every pair. `cargo bench -p odori-tests --bench join_drift`.
 
 use std::time::Instant;
 
-use glam::Vec3;
 use odori_core::actions::{join_serial, ActionLibrary, JoinKind, JoinOptions};
-use odori_core::humanoid::Canon;
 use odori_core::Clip;
+use odori_tests::{foot_stay_drift_cm, join_added_drift_cm, join_jump_ratio};
 
-/// Contact: within this height of the joint's floor, metres (spec §J).
-const CONTACT_M: f32 = 0.05;
+fn percentile(v: &[f32], q: f32) -> f32 {
+    let mut v = v.to_vec();
+    v.sort_by(f32::total_cmp);
+    v.get(((v.len().max(1) - 1) as f32 * q).round() as usize).copied().unwrap_or(0.0)
+}
 
-/// Largest drift of any foot joint during any stay on the floor, centimetres.
-fn drift_cm(clip: &Clip) -> f32 {
-    let joints = [Canon::LeftFoot, Canon::RightFoot, Canon::LeftToe, Canon::RightToe];
-    let all = clip.all_world_positions();
-    let n = clip.joint_count();
-    let frames = clip.frame_count();
-    let mut worst = 0.0f32;
-    for j in joints {
-        let heights: Vec<f32> = (0..frames).map(|f| all[f * n + j.index()].y).collect();
-        let mut sorted = heights.clone();
-        sorted.sort_by(f32::total_cmp);
-        let floor = sorted[(sorted.len() as f32 * 0.01) as usize];
-        let mut anchor: Option<Vec3> = None;
-        for f in 0..frames {
-            let p = all[f * n + j.index()];
-            if heights[f] <= floor + CONTACT_M {
-                let a = *anchor.get_or_insert(p);
-                worst = worst.max(Vec3::new(p.x - a.x, 0.0, p.z - a.z).length());
-            } else {
-                anchor = None;
+struct Figures {
+    added_cm: Vec<f32>,
+    joined_cm: Vec<f32>,
+    jump: Vec<f32>,
+    rows: Vec<(f32, f32, String)>,
+    failed: usize,
+}
+
+fn run(actions: &[(String, Clip)], kind: JoinKind, foot_lock: bool) -> Figures {
+    let mut fig = Figures { added_cm: Vec::new(), joined_cm: Vec::new(), jump: Vec::new(), rows: Vec::new(), failed: 0 };
+    let opts = JoinOptions { foot_lock, ..JoinOptions::default() };
+    for (na, a) in actions {
+        for (nb, b) in actions {
+            match join_serial(a, b, kind, &opts) {
+                Ok((c, rep)) => {
+                    let (added, d) = join_added_drift_cm(&c, a, b);
+                    let tail = (0.5 * c.fps) as usize;
+                    fig.jump.push(join_jump_ratio(&c, [a, b], rep.window_start_frame.saturating_sub(1), rep.window_end_frame + tail));
+                    fig.joined_cm.push(d);
+                    fig.added_cm.push(added);
+                    fig.rows.push((added, d, format!("{na} → {nb}")));
+                }
+                Err(e) => {
+                    fig.failed += 1;
+                    println!("  {na} → {nb}: {e}");
+                }
             }
         }
     }
-    worst * 100.0
-}
-
-fn percentile(v: &mut [f32], q: f32) -> f32 {
-    v.sort_by(f32::total_cmp);
-    v[((v.len() - 1) as f32 * q).round() as usize]
+    fig.rows.sort_by(|x, y| y.0.total_cmp(&x.0));
+    fig
 }
 
 fn main() {
     let lib = ActionLibrary::builtin();
     let actions: Vec<(String, Clip)> = lib.entries.iter().filter(|e| e.builtin).map(|e| (e.name.clone(), e.clip_for(2.2))).collect();
-    let alone: Vec<f32> = actions.iter().map(|(_, c)| drift_cm(c)).collect();
+    let alone: Vec<f32> = actions.iter().map(|(_, c)| foot_stay_drift_cm(c)).collect();
     println!("join drift over every ordered pair of {} built-in actions ({} pairs per kind)", actions.len(), actions.len() * actions.len());
-    println!("foot joints: ankles and toes; contact: within {:.0} cm of the joint's 1st-percentile height; drift: horizontal, from touch-down", CONTACT_M * 100.0);
+    println!("foot joints: ankles and toes; contact: within 5 cm of the joint's 1st-percentile height; drift: horizontal, from touch-down");
+    println!("actions alone, each on its own floor: max {:.2} cm; a join's share is the joined clip's drift less the worse source's, all on the joined clip's floors", alone.iter().copied().fold(0.0, f32::max));
     for kind in [JoinKind::Transition, JoinKind::Connection] {
-        let t0 = Instant::now();
-        let mut joined_cm = Vec::new();
-        let mut added_cm = Vec::new();
-        let mut rows = Vec::new();
-        let mut failed = 0;
-        for (i, (na, a)) in actions.iter().enumerate() {
-            for (k, (nb, b)) in actions.iter().enumerate() {
-                match join_serial(a, b, kind, &JoinOptions::default()) {
-                    Ok((c, _)) => {
-                        let d = drift_cm(&c);
-                        let added = (d - alone[i].max(alone[k])).max(0.0);
-                        joined_cm.push(d);
-                        added_cm.push(added);
-                        rows.push((added, d, format!("{na} → {nb}")));
-                    }
-                    Err(e) => {
-                        failed += 1;
-                        println!("  {na} → {nb}: {e}");
-                    }
-                }
+        for foot_lock in [true, false] {
+            let t0 = Instant::now();
+            let f = run(&actions, kind, foot_lock);
+            let secs = t0.elapsed().as_secs_f64();
+            let over = f.added_cm.iter().filter(|&&d| d >= 2.0).count();
+            println!(
+                "{kind:?} {}: {} pairs in {secs:.1} s ({} failed); drift added by the join: max {:.2} cm, p95 {:.2} cm, {over} pairs ≥ 2 cm | whole joined animation: max {:.2} cm, p95 {:.2} cm | join jump ratio: max {:.2}, p95 {:.2}, median {:.2}",
+                if foot_lock { "with foot locking" } else { "CONTROL, blend alone (foot_lock off)" },
+                f.added_cm.len(),
+                f.failed,
+                percentile(&f.added_cm, 1.0),
+                percentile(&f.added_cm, 0.95),
+                percentile(&f.joined_cm, 1.0),
+                percentile(&f.joined_cm, 0.95),
+                percentile(&f.jump, 1.0),
+                percentile(&f.jump, 0.95),
+                percentile(&f.jump, 0.5),
+            );
+            for (added, d, label) in f.rows.iter().take(if foot_lock { 5 } else { 3 }) {
+                println!("    worst: {label:<28} +{added:.2} cm (joined {d:.2} cm)");
             }
-        }
-        let secs = t0.elapsed().as_secs_f64();
-        rows.sort_by(|x, y| y.0.total_cmp(&x.0));
-        let over = added_cm.iter().filter(|&&d| d >= 2.0).count();
-        let n = added_cm.len();
-        println!(
-            "{kind:?}: {n} pairs in {secs:.1} s ({failed} failed); drift added by the join: max {:.2} cm, p95 {:.2} cm, {over} pairs ≥ 2 cm | whole joined animation: max {:.2} cm, p95 {:.2} cm | control, actions alone: max {:.2} cm",
-            percentile(&mut added_cm, 1.0),
-            percentile(&mut added_cm.clone(), 0.95),
-            percentile(&mut joined_cm, 1.0),
-            percentile(&mut joined_cm.clone(), 0.95),
-            alone.iter().copied().fold(0.0, f32::max),
-        );
-        for (added, d, label) in rows.iter().take(8) {
-            println!("    worst: {label:<28} +{added:.2} cm (joined {d:.2} cm)");
         }
     }
 }

@@ -35,17 +35,11 @@ fn skate_cm_per_s(clip: &Clip) -> (f32, f32) {
     (mean, p95)
 }
 
-/// Findings of issue 17 (reported to the actions team, not yet fixed): by the independent
-/// measure these joins add skate. Listed so that any other join adding skate fails the test,
-/// and so that each entry must be removed once the join is fixed.
-const KNOWN: [(&str, &str); 6] = [
-    ("walk -> rejoice", "lock raises"),
-    ("run -> rejoice", "lock raises"),
-    ("run -> sit", "lock raises"),
-    ("run -> stand", "lock raises"),
-    ("turn -> stand", "above its sources"),
-    ("sit -> bow", "above its sources"),
-];
+/// Joins known to add skate. Issue 17 listed six (walk/run -> rejoice, run -> sit, run ->
+/// stand: locking raised the mean; turn -> stand, sit -> bow: above their sources); the
+/// stepping foot lock of issue 14 fixed them all, so the list is empty and any join that adds
+/// skate fails the test. An entry added here must be removed once its join is fixed.
+const KNOWN: &[(&str, &str)] = &[];
 
 #[test]
 fn joins_of_every_pair_of_builtin_actions_add_no_foot_skate() {

@@ -51,3 +51,13 @@ fn music_envelope_corpus() {
 fn text_parse_corpus() {
     replay("text_parse", entries::text_parse);
 }
+
+#[test]
+fn project_open_corpus() {
+    replay("project_open", entries::project_open);
+    // The reviewed golden project seeds the fuzzer in place (tests/fuzz.sh); it opens.
+    let golden = std::fs::read(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("golden/project_v1.odori")).expect("tests/golden/project_v1.odori");
+    assert!(odori_core::project::file::open(&golden).is_ok(), "the golden project no longer opens");
+    entries::project_open(&golden);
+}
+

@@ -1,18 +1,20 @@
 //! Two-bone inverse kinematics for the legs (spec §I): during a join the planted foot stays
 //! where it is and the hip and knee angles come from IK.
 //!
-//! Analytic: the knee bends about its own hinge (the upper leg's X axis, the axis the knee
-//! flexes about on the canonical skeleton) until hip-to-ankle distance equals hip-to-target,
-//! then the thigh swings to point the ankle at the target; the foot keeps its world
-//! orientation so it stays flat. Unreachable targets stretch the leg straight toward them.
+//! The knee and ankle positions come from the engine's one analytic two-bone solver,
+//! [`crate::motion::two_bone`] (law of cosines, bending toward the knee's present side, or
+//! forward for a straight leg); the thigh and shin are then turned onto them by the shortest
+//! arcs, so their twist is kept; the foot takes the world orientation asked for (its own by
+//! default, so it stays flat). Unreachable targets stretch the leg straight toward them.
 
 use glam::{Quat, Vec3};
 
 use crate::actions::contact::Foot;
+use crate::motion::two_bone;
 use crate::skeleton::Skeleton;
 
 /// World rotations and positions of one pose of `skeleton` (root translation given, other
-/// joints at their rest offsets).
+/// joints at their rest offsets), by [`crate::motion::local_to_world_at`].
 pub fn forward(skeleton: &Skeleton, local: &[Quat], root: Vec3) -> (Vec<Quat>, Vec<Vec3>) {
     let n = skeleton.len().min(local.len());
     let mut rot = vec![Quat::IDENTITY; n];
@@ -22,41 +24,42 @@ pub fn forward(skeleton: &Skeleton, local: &[Quat], root: Vec3) -> (Vec<Quat>, V
 }
 
 /// Moves the ankle of `foot` to `target` by changing the hip and knee rotations of `local`
-/// (canonical skeleton, root at `root`). Returns the remaining distance, metres (0 when the
-/// target is reachable).
+/// (canonical skeleton, root at `root`), keeping the foot's world orientation. Returns the
+/// remaining distance, metres (0 when the target is reachable).
 pub fn solve_leg(skeleton: &Skeleton, local: &mut [Quat], root: Vec3, foot: Foot, target: Vec3) -> f32 {
+    solve_leg_oriented(skeleton, local, root, foot, target, None)
+}
+
+/// As [`solve_leg`], and the foot ends with world orientation `foot_world` when given (a
+/// planted foot keeps the orientation it landed with, so its toe does not swivel either).
+pub fn solve_leg_oriented(skeleton: &Skeleton, local: &mut [Quat], root: Vec3, foot: Foot, target: Vec3, foot_world: Option<Quat>) -> f32 {
     let [hip, knee, ankle] = foot.chain().map(|c| c.index());
-    if local.len() <= ankle || skeleton.len() <= ankle {
+    if local.len() <= ankle || skeleton.len() <= ankle || !target.is_finite() {
         return f32::INFINITY;
     }
     let hip_parent = skeleton.joints[hip].parent.unwrap_or(0);
-    for _ in 0..3 {
-        let (rot, pos) = forward(skeleton, local, root);
-        let (h, k, a) = (pos[hip], pos[knee], pos[ankle]);
-        let foot_world = rot[ankle];
-        let l1 = (k - h).length();
-        let l2 = (a - k).length();
-        if l1 < 1e-5 || l2 < 1e-5 {
-            return (a - target).length();
-        }
-        let want = (target - h).length().clamp((l1 - l2).abs() + 1e-4, l1 + l2 - 1e-4);
-        let have = (a - h).length();
-        let interior = |d: f32| ((l1 * l1 + l2 * l2 - d * d) / (2.0 * l1 * l2)).clamp(-1.0, 1.0).acos();
-        let delta = interior(have) - interior(want);
-        // Knee: more flexion about the thigh's X axis shrinks the interior angle.
-        local[knee] = (Quat::from_rotation_x(delta) * local[knee]).normalize();
-        // Thigh: point the ankle at the target.
-        let (rot2, pos2) = forward(skeleton, local, root);
-        let from = (pos2[ankle] - pos2[hip]).normalize_or_zero();
-        let to = (target - pos2[hip]).normalize_or_zero();
-        if from != Vec3::ZERO && to != Vec3::ZERO {
-            let w_thigh = Quat::from_rotation_arc(from, to) * rot2[hip];
-            local[hip] = (rot2[hip_parent].inverse() * w_thigh).normalize();
-        }
-        // Foot keeps its world orientation.
-        let (rot3, _) = forward(skeleton, local, root);
-        local[ankle] = (rot3[knee].inverse() * foot_world).normalize();
+    let (rot, pos) = forward(skeleton, local, root);
+    let (h, k, a) = (pos[hip], pos[knee], pos[ankle]);
+    let foot_world = foot_world.unwrap_or(rot[ankle]);
+    let (l1, l2) = ((k - h).length(), (a - k).length());
+    if l1 < 1e-5 || l2 < 1e-5 {
+        return (a - target).length();
     }
+    // Bend toward the side the knee is on now; a straight leg bends forward (the hips' +Z,
+    // the way a knee flexes on the canonical skeleton).
+    let along = (a - h).normalize_or_zero();
+    let side = (k - h) - along * (k - h).dot(along);
+    let pole = side + rot[hip_parent] * Vec3::Z * 0.01;
+    let (k2, a2) = two_bone(h, target, l1, l2, pole);
+    // Thigh onto the new knee, shin onto the new ankle, each by the shortest arc.
+    let thigh = (Quat::from_rotation_arc((k - h) / l1, ((k2 - h) / l1).normalize_or_zero()) * rot[hip]).normalize();
+    local[hip] = (rot[hip_parent].inverse() * thigh).normalize();
+    let shin0 = thigh * local[knee];
+    let dir0 = (shin0 * skeleton.joints[ankle].rest_offset).normalize_or_zero();
+    let dir1 = (a2 - k2).normalize_or_zero();
+    let shin = if dir0 != Vec3::ZERO && dir1 != Vec3::ZERO { (Quat::from_rotation_arc(dir0, dir1) * shin0).normalize() } else { shin0 };
+    local[knee] = (thigh.inverse() * shin).normalize();
+    local[ankle] = (shin.inverse() * foot_world).normalize();
     let (_, pos) = forward(skeleton, local, root);
     (pos[ankle] - target).length()
 }

@@ -9,23 +9,28 @@
 //!   the joint angles blend to motion 2's switch pose over a gap with a smooth time-varying
 //!   weight, then motion 2 plays on.
 //! * **Transition** (overlap): both motions keep playing while the weight goes 0 → 1. When
-//!   both are cycles (walk → run), the switch frames are the same foot landing in both; the
+//!   both are gait cycles (walk → run; one foot landing at a time), the switch frames are the same foot landing in both; the
 //!   foot-up and foot-down keyframes of one cycle of each are paired (longest common
 //!   subsequence of the event kinds) and the interval between paired keyframes is
 //!   time-warped, its length blended with the weight, so the cycles stay in step. Otherwise
 //!   ("run, then kick") the overlap is a fixed blend of the two playing motions.
 //! * **Alignment.** Motion 2 is turned about the vertical so its heading matches motion 1 at
 //!   the switch, and moved so a foot planted in both is in the same place (else the hips).
-//! * **Foot locking.** From the start of the blend, a foot in contact keeps its world
-//!   position (legs by [`crate::actions::ik::solve_leg`]); a foot that lifts off during the
-//!   blend, or after it in motion 2, is released: while it is in the air its leg angles blend
-//!   back from the IK solution to motion 2's own.
+//! * **Foot locking** (`step_feet`). From the start of the blend, a foot in contact
+//!   (found from the motions' own contacts: sole near the floor and barely moving, so it
+//!   works on imported clips as on built-in ones) keeps its place and orientation on the
+//!   floor, legs by two-bone IK ([`crate::actions::ik::solve_leg_oriented`], on
+//!   [`crate::motion::two_bone`]). A foot that lifts, that is in the air when the blend
+//!   starts, or whose leg can no longer reach its hold *steps*: straight up, across clear of
+//!   the floor, straight down where the animation next puts it on the floor. After the blend,
+//!   a foot rejoins motion 2 at its first landing there. So no foot near the floor slides: a
+//!   blend that would drag a foot along the floor (run → sit) lifts it over instead.
 
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::actions::contact::{detect_contacts, ContactEvent, ContactEventKind, Contacts, Foot};
-use crate::actions::ik::{forward, solve_leg};
+use crate::actions::ik::{forward, solve_leg, solve_leg_oriented};
 use crate::actions::procedural::smooth;
 use crate::actions::ActionError;
 use crate::clip::{Clip, TranslationTrack};
@@ -186,13 +191,21 @@ fn cycle_knots(ca: &Contacts, cb: &Contacts, na: usize, nb: usize, search: usize
         if next_a.frame + 2 > na {
             continue;
         }
+        // A gait lands one foot at a time. A landing on both feet together (a hop, a jump)
+        // is not a cycle to align: taken for one, it would put the switch before the jump.
+        let alternates = |ev: &[ContactEvent], from: usize, to: usize| {
+            !ev.iter().any(|x| x.kind == ContactEventKind::Down && x.foot != e.foot && (x.frame.abs_diff(from) < MIN_KEY_GAP || x.frame.abs_diff(to) < MIN_KEY_GAP))
+        };
+        if !alternates(&ev_a, e.frame, next_a.frame) {
+            return None;
+        }
         // Motion 2: its first landing of the same foot (within the search window) and the next.
         let (m, first_b) = ev_b.iter().enumerate().find(|(_, x)| x.kind == ContactEventKind::Down && x.foot == e.foot)?;
         if first_b.frame > search.max(1) * 2 {
             return None;
         }
         let next_b = ev_b[m + 1..].iter().find(|x| x.kind == ContactEventKind::Down && x.foot == e.foot)?;
-        if next_b.frame + 2 > nb {
+        if next_b.frame + 2 > nb || !alternates(&ev_b, first_b.frame, next_b.frame) {
             return None;
         }
         // Pair the keyframes in between by the longest common subsequence of their kinds.
@@ -450,7 +463,7 @@ pub fn join_serial(a: &Clip, b: &Clip, kind: JoinKind, opts: &JoinOptions) -> Re
     let mut out = if opts.foot_lock { render(true) } else { plain.clone() };
     let contacts: Vec<[bool; 2]> = plan.iter().map(|p| p.contact).collect();
     let anchored_drift = planted_drift_cm(&out, &contacts, window_start, window_end);
-    let locked_frames = if opts.foot_lock { lock_feet(&mut out, &contacts, window_start, window_end) } else { 0 };
+    let locked_frames = if opts.foot_lock { step_feet(&mut out, &contacts, window_start, window_end) } else { 0 };
     let report = JoinReport {
         kind,
         cyclic,
@@ -560,6 +573,170 @@ pub(crate) fn lock_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, en
         }
     }
     ik_frames
+}
+
+/// Height an ankle clears, above the line between where it lifted and where it lands, while
+/// a foot steps during a join, metres (a short real step; the spec §J contact band is 5 cm).
+const STEP_CLEARANCE_M: f32 = 0.08;
+/// Longest lift (and set-down) at each end of a step, seconds: the foot rises and lowers
+/// straight, and travels only while clear of the floor.
+const STEP_RAMP_SECS: f32 = 0.15;
+/// Share of a lift (or set-down) ramp before the foot starts (after it ends) travelling.
+const STEP_TRAVEL_IN_RAMP: f32 = 0.7;
+/// A planted foot with less than this to go to where it lands next slides instead of
+/// stepping, metres.
+const SLIDE_M: f32 = 0.005;
+/// Longest step, seconds: a foot that finds no contact ahead within it rejoins the animation.
+const MAX_STEP_SECS: f32 = 0.6;
+/// Length of a step a planted foot is forced into when the leg can no longer reach it, s.
+const FORCED_STEP_SECS: f32 = 0.3;
+/// A held foot further from its hip than the leg's length plus this is out of reach: the
+/// straightened leg would drag it (metres; half the 1 cm a foot may slip before it steps).
+const REACH_SLACK_M: f32 = 0.005;
+
+/// What a foot is doing in [`step_feet`].
+#[derive(Clone, Copy, Debug)]
+enum FootState {
+    /// Following the animation as rendered (no IK).
+    Free,
+    /// Held where it landed, with the orientation it landed with.
+    Planted { at: Vec3, rot: Quat },
+    /// Lifting at `from` (frame `f0`), landing at the animation's own place at `f1`.
+    Step { from: Vec3, from_rot: Quat, f0: usize, f1: usize, lift: bool, then_free: bool },
+}
+
+/// World positions and rotations of a frame of `clip` as it stands.
+fn frame_world(clip: &Clip, f: usize) -> (Vec<Quat>, Vec<Vec3>) {
+    let n = CANON_COUNT;
+    forward(&clip.skeleton, &clip.rotations[f * n..(f + 1) * n], clip.translations[0].values[f])
+}
+
+/// Foot locking at a join (spec §I), from `start` (the first blended frame) until every foot
+/// has rejoined the animation after `end`.
+///
+/// A foot in contact (`contacts`: found from height near the floor and low speed in the
+/// motions joined) is held where it landed — position on the ground plane and orientation —
+/// with the leg by two-bone IK; its height follows the animation so the heel can rise. A
+/// foot that lifts, that is in the air when the join starts, or whose leg can no longer reach
+/// its hold, *steps*: it rises straight up, travels clear of the floor and sets down straight
+/// where the animation puts it at its next contact (a foot in the air that the blend would
+/// otherwise drag along the floor lifts over it instead). Inside the blend it is held there
+/// again; after the blend, where the animation's own feet no longer slide, it simply follows
+/// the animation from that landing on. Returns the frames changed.
+pub(crate) fn step_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, end: usize) -> usize {
+    let n = CANON_COUNT;
+    let frames = out.frame_count().min(contacts.len()).min(out.translations.first().map_or(0, |t| t.values.len()));
+    if start >= frames {
+        return 0;
+    }
+    let sk = out.skeleton.clone();
+    let fps = out.fps.max(1.0);
+    let ramp_frames = (STEP_RAMP_SECS * fps).max(1.0);
+    let forced = ((FORCED_STEP_SECS * fps).round() as usize).max(2);
+    // The floor under each ankle (spec §J: its 1st-percentile height): a foot in the air
+    // lower than the contact band above it lifts before it travels.
+    let all = out.all_world_positions();
+    let floors: [f32; 2] = Foot::BOTH.map(|ft| {
+        let h: Vec<f32> = (0..frames).map(|f| all[f * n + ft.ankle().index()].y).collect();
+        crate::motion::floor_height(&h).unwrap_or(0.0)
+    });
+    let leg_len: [f32; 2] = Foot::BOTH.map(|ft| {
+        let [_, knee, ankle] = ft.chain().map(|c| c.index());
+        sk.joints[knee].rest_offset.length() + sk.joints[ankle].rest_offset.length()
+    });
+    let next_contact = |s: usize, from: usize| (from..frames).find(|&g| contacts[g][s]);
+    // A step from frame `f0` (foot at `from`) to the next contact after `f`.
+    let plan_step = |s: usize, f: usize, f0: usize, from: Vec3, from_rot: Quat, lift: bool, min_len: usize| -> FootState {
+        // A foot with no contact ahead for long (a dance that slides its feet) steps for at
+        // most MAX_STEP_SECS and then follows the animation again.
+        let longest = ((MAX_STEP_SECS * fps) as usize).max(min_len);
+        let f1 = match next_contact(s, f) {
+            Some(g) if g >= f0 + min_len && g <= f0 + longest => g,
+            Some(g) if g > f0 + longest => f0 + longest,
+            _ => (f0 + min_len.max(forced)).max(end.min(frames - 1)).min(f0 + longest),
+        }
+        .min(frames - 1);
+        let then_free = f1 >= end || !contacts[f1][s];
+        FootState::Step { from, from_rot, f0, f1: f1.max(f0 + 1), lift, then_free }
+    };
+    let mut state: [FootState; 2] = [FootState::Free; 2];
+    {
+        let (rot0, pos0) = frame_world(out, start.saturating_sub(1));
+        for ft in Foot::BOTH {
+            let s = ft.index();
+            let (at, rot) = (pos0[ft.ankle().index()], rot0[ft.ankle().index()]);
+            state[s] = if contacts[start][s] {
+                FootState::Planted { at, rot }
+            } else {
+                let lift = at.y < floors[s] + 0.05;
+                plan_step(s, start, start.saturating_sub(1), at, rot, lift, 1)
+            };
+        }
+    }
+    let mut changed = 0;
+    for f in start..frames {
+        if f >= end && state.iter().all(|s| matches!(s, FootState::Free)) {
+            break;
+        }
+        let root = out.translations[0].values[f];
+        let (raw_rot, raw_pos) = frame_world(out, f);
+        let mut targets: [Option<(Vec3, Quat)>; 2] = [None, None];
+        for ft in Foot::BOTH {
+            let s = ft.index();
+            let raw_at = raw_pos[ft.ankle().index()];
+            // Lift-off: a held foot that is no longer in contact steps to its next contact.
+            if let FootState::Planted { at, rot } = state[s] {
+                let hip = raw_pos[ft.chain()[0].index()];
+                let hold = Vec3::new(at.x, raw_at.y, at.z);
+                if !contacts[f][s] {
+                    state[s] = plan_step(s, f, f.saturating_sub(1), hold, rot, true, 1);
+                } else if (hold - hip).length() > leg_len[s] + REACH_SLACK_M {
+                    state[s] = plan_step(s, f + forced, f.saturating_sub(1), hold, rot, true, forced);
+                }
+            }
+            // A foot that lands inside the blend is held from there.
+            if matches!(state[s], FootState::Free) && f < end && contacts[f][s] {
+                state[s] = FootState::Planted { at: raw_at, rot: raw_rot[ft.ankle().index()] };
+            }
+            targets[s] = match state[s] {
+                FootState::Free => None,
+                FootState::Planted { at, rot } => Some((Vec3::new(at.x, raw_at.y, at.z), rot)),
+                FootState::Step { from, from_rot, f0, f1, lift, then_free } => {
+                    let (dest_rot, dest_pos) = frame_world(out, f1);
+                    let dest = dest_pos[ft.ankle().index()];
+                    let dest_rot = dest_rot[ft.ankle().index()];
+                    let len = (f1 - f0) as f32;
+                    let u = ((f - f0) as f32 / len).clamp(0.0, 1.0);
+                    let far = Vec3::new(dest.x - from.x, 0.0, dest.z - from.z).length() > SLIDE_M;
+                    // Ramps: straight up at a lift, straight down at the landing.
+                    let r1 = if far { (ramp_frames / len).min(0.35) } else { 0.0 };
+                    let r0 = if far && lift { r1 } else { 0.0 };
+                    // Travel starts once the lift has carried the ankle most of the way up (7/10
+                    // of the ramp: 6.3 cm of the 8) and ends as late into the set-down, so a short
+                    // step does not cross in a few frames.
+                    let (t0, t1) = (STEP_TRAVEL_IN_RAMP * r0, STEP_TRAVEL_IN_RAMP * r1);
+                    let travel = smooth((u - t0) / (1.0 - t0 - t1).max(1e-3));
+                    let env = if far { (if r0 > 0.0 { u / r0 } else { 1.0 }).min(if r1 > 0.0 { (1.0 - u) / r1 } else { 1.0 }).min(1.0) } else { 0.0 };
+                    let base = from.lerp(dest, travel);
+                    let y = if f >= f1 { dest.y } else { (base.y + STEP_CLEARANCE_M * smooth(env)).max(raw_at.y) };
+                    if f >= f1 {
+                        state[s] = if then_free { FootState::Free } else { FootState::Planted { at: dest, rot: dest_rot } };
+                    }
+                    Some((Vec3::new(base.x, y, base.z), from_rot.slerp(dest_rot, travel).normalize()))
+                }
+            };
+        }
+        let local: &mut [Quat] = &mut out.rotations[f * n..(f + 1) * n];
+        let mut any = false;
+        for ft in Foot::BOTH {
+            if let Some((t, r)) = targets[ft.index()] {
+                solve_leg_oriented(&sk, local, root, ft, t, Some(r));
+                any = true;
+            }
+        }
+        changed += any as usize;
+    }
+    changed
 }
 
 #[cfg(test)]
