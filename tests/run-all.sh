@@ -8,9 +8,9 @@ export PATH="$HOME/.cargo/bin:$PATH"
 # Each step says how long the one before it took, and the end gives the total (the test run's
 # budget is 20 minutes on this machine kind).
 started=$SECONDS
-last=$SECONDS
+last=
 step() {
-  [ "$last" = "$started" ] || printf '   (%d s)\n' $((SECONDS - last))
+  [ -z "$last" ] || printf '   (%d s)\n' $((SECONDS - last))
   last=$SECONDS
   printf '\n\033[1m== %s\033[0m\n' "$*"
 }
