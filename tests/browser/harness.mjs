@@ -164,3 +164,27 @@ export function startStaticServer({ port = 0, overrides = {} } = {}) {
     });
   });
 }
+
+const CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-dev-shm-usage"];
+
+/** Our own Chromium process on a profile directory (so a test can kill it), driven over CDP; `console` adds the page's console to `logs`. */
+export async function startChromium(profile, backend, { console: withConsole = false } = {}) {
+  const proc = spawn("/usr/bin/chromium", [...CHROMIUM_FLAGS, ...BACKENDS[backend].flags, `--user-data-dir=${profile}`, "--remote-debugging-port=0", "about:blank"], { stdio: ["ignore", "ignore", "pipe"], detached: true });
+  const ws = await new Promise((resolve, reject) => {
+    let err = "";
+    proc.stderr.on("data", (d) => {
+      err += d;
+      const m = err.match(/DevTools listening on (ws:\/\/\S+)/);
+      if (m) resolve(m[1]);
+    });
+    proc.on("exit", (code) => reject(new Error(`chromium exited (${code}): ${err.slice(-2000)}`)));
+    setTimeout(() => reject(new Error("chromium did not start in 30 s")), 30000);
+  });
+  const browser = await chromium.connectOverCDP(ws);
+  const context = browser.contexts()[0];
+  const page = context.pages()[0] || (await context.newPage());
+  const logs = [];
+  page.on("pageerror", (e) => logs.push(`[pageerror] ${e.message}`));
+  if (withConsole) page.on("console", (m) => logs.push(`[${m.type()}] ${m.text()}`));
+  return { proc, browser, context, page, logs };
+}

@@ -9,39 +9,15 @@
 // panels (the app itself is tested in project-app.test.mjs).
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
-import { spawn } from "node:child_process";
 import { mkdtempSync, readFileSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
-import { chromium } from "playwright-core";
-import { startServer, data, BACKENDS } from "./harness.mjs";
-
-const FLAGS = ["--headless", "--no-sandbox", "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-dev-shm-usage"];
+import { startServer, startChromium, data, BACKENDS } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
 after(() => server && server.stop());
 
-/** Our own Chromium process on a profile directory (so the test can kill it), driven over CDP. */
-async function startChromium(profile, backend) {
-  const proc = spawn("/usr/bin/chromium", [...FLAGS, ...BACKENDS[backend].flags, `--user-data-dir=${profile}`, "--remote-debugging-port=0", "about:blank"], { stdio: ["ignore", "ignore", "pipe"], detached: true });
-  const ws = await new Promise((resolve, reject) => {
-    let err = "";
-    proc.stderr.on("data", (d) => {
-      err += d;
-      const m = err.match(/DevTools listening on (ws:\/\/\S+)/);
-      if (m) resolve(m[1]);
-    });
-    proc.on("exit", (code) => reject(new Error(`chromium exited (${code}): ${err.slice(-2000)}`)));
-    setTimeout(() => reject(new Error("chromium did not start in 30 s")), 30000);
-  });
-  const browser = await chromium.connectOverCDP(ws);
-  const context = browser.contexts()[0];
-  const page = context.pages()[0] || (await context.newPage());
-  const logs = [];
-  page.on("pageerror", (e) => logs.push(`[pageerror] ${e.message}`));
-  return { proc, browser, context, page, logs };
-}
 
 function kill(proc) {
   return new Promise((resolve) => {
