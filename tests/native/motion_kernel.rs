@@ -7,6 +7,10 @@
 //! kernel gives the same bits (the same arithmetic in the same order) — or, for the world
 //! matrices, which the copy built as a product of matrices and the kernel builds from the
 //! world rotation and position, the same within 1e-5.
+//! One two-bone IK solver: `motion::two_bone_rotations` in place of the joins' leg IK
+//! (`actions::ik::solve_leg`) and of the retargeting's own swing of thigh and shin
+//! (`character.rs`), both kept here as they were: the same rotations within 1e-4 rad and the
+//! same ankle within 1e-5 m, on the legs of the canonical rig, Xbot and RobotExpressive.
 
 use glam::{Mat4, Quat, Vec3};
 use odori_core::import::{import_bytes, ImportOptions};
@@ -229,4 +233,109 @@ fn one_hermite_curve() {
         }
     }
     assert!(worst < 1e-5, "{worst}");
+}
+
+/// `actions::ik::solve_leg_oriented` before the kernel's rotation solver (positions from FK,
+/// the thigh and shin turned inline), canonical skeleton, left or right leg.
+fn old_solve_leg(sk: &Skeleton, local: &mut [Quat], root: Vec3, [hip, knee, ankle]: [usize; 3], target: Vec3) -> f32 {
+    let hip_parent = sk.joints[hip].parent.unwrap_or(0);
+    let (rot, pos) = odori_core::actions::ik::forward(sk, local, root);
+    let (h, k, a) = (pos[hip], pos[knee], pos[ankle]);
+    let foot_world = rot[ankle];
+    let (l1, l2) = ((k - h).length(), (a - k).length());
+    let along = (a - h).normalize_or_zero();
+    let side = (k - h) - along * (k - h).dot(along);
+    let pole = side + rot[hip_parent] * Vec3::Z * 0.01;
+    let (k2, a2) = odori_core::motion::two_bone(h, target, l1, l2, pole);
+    let thigh = (Quat::from_rotation_arc((k - h) / l1, ((k2 - h) / l1).normalize_or_zero()) * rot[hip]).normalize();
+    local[hip] = (rot[hip_parent].inverse() * thigh).normalize();
+    let shin0 = thigh * local[knee];
+    let dir0 = (shin0 * sk.joints[ankle].rest_offset).normalize_or_zero();
+    let dir1 = (a2 - k2).normalize_or_zero();
+    let shin = if dir0 != Vec3::ZERO && dir1 != Vec3::ZERO { (Quat::from_rotation_arc(dir0, dir1) * shin0).normalize() } else { shin0 };
+    local[knee] = (thigh.inverse() * shin).normalize();
+    local[ankle] = (shin.inverse() * foot_world).normalize();
+    let (_, pos) = odori_core::actions::ik::forward(sk, local, root);
+    (pos[ankle] - target).length()
+}
+
+/// The retargeting's held-foot IK before the kernel's rotation solver (`character.rs`): the
+/// thigh (world rotation `thigh`, at `hip`) swung onto the two-bone knee, then the shin (its
+/// world rotation `shin` from the transfer) onto the ankle from where the turned thigh puts
+/// the knee. Returns the new world rotations of thigh and shin, and the ankle.
+fn old_retarget_leg(hip: Vec3, thigh: Quat, thigh_local: Vec3, shin: Quat, shin_local: Vec3, goal: Vec3) -> (Quat, Quat, Vec3) {
+    let knee_now = thigh * thigh_local;
+    let ik = odori_core::motion::two_bone(hip, goal, thigh_local.length(), shin_local.length(), knee_now);
+    let swing = |g: Quat, bone: Vec3, aim: Vec3| match (bone.try_normalize(), aim.try_normalize()) {
+        (Some(a), Some(b)) => (Quat::from_rotation_arc(a, b) * g).normalize(),
+        _ => g,
+    };
+    let thigh = swing(thigh, knee_now, ik.0 - hip);
+    let knee = hip + thigh * thigh_local;
+    let shin = swing(shin, shin * shin_local, ik.1 - knee);
+    (thigh, shin, knee + shin * shin_local)
+}
+
+#[test]
+fn one_two_bone_solver_for_joins_and_retargeting() {
+    use odori_core::actions::ik::solve_leg;
+    use odori_core::actions::Foot;
+    use odori_core::humanoid::{Canon, HumanoidMap};
+    let mut k = 7u32;
+    let mut next = || {
+        k = k.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (k >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+    };
+    let (mut worst_rad, mut worst_m, mut cases) = (0.0f32, 0.0f32, 0);
+    // The joins' leg IK on the canonical skeleton: poses of the built-in moves, targets near
+    // the ankle (reachable) and far (stretched).
+    let canon = odori_core::builtin::canonical_skeleton();
+    for clip in odori_core::library::builtin_clips().into_iter().step_by(25) {
+        for f in (0..clip.frame_count()).step_by(17) {
+            let root = clip.root_translation(f);
+            for foot in [Foot::Left, Foot::Right] {
+                let chain = foot.chain().map(|c| c.index());
+                let (_, pos) = odori_core::actions::ik::forward(&canon, clip.frame_rotations(f), root);
+                let reach = if cases % 5 == 0 { 1.5 } else { 0.2 };
+                let target = pos[chain[2]] + Vec3::new(next(), next(), next()) * reach;
+                let mut a = clip.frame_rotations(f).to_vec();
+                let mut b = a.clone();
+                let ea = solve_leg(&canon, &mut a, root, foot, target);
+                let eb = old_solve_leg(&canon, &mut b, root, chain, target);
+                for j in chain {
+                    worst_rad = worst_rad.max(a[j].angle_between(b[j]));
+                }
+                worst_m = worst_m.max((ea - eb).abs());
+                cases += 1;
+            }
+        }
+    }
+    // The retargeting's held legs on real rigs: each leg at rest turned by random rotations.
+    for rel in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
+        let im = import_bytes(rel, &read(rel), &ImportOptions::default()).unwrap();
+        let sk = &im.skeleton;
+        let map = HumanoidMap::from_skeleton(sk);
+        let (rest_rot, rest_pos) = odori_core::motion::rest_world(sk);
+        for (a, b, c) in [(Canon::LeftUpperLeg, Canon::LeftLowerLeg, Canon::LeftFoot), (Canon::RightUpperLeg, Canon::RightLowerLeg, Canon::RightFoot)] {
+            let (hip, knee, foot) = (map.get(a).unwrap(), map.get(b).unwrap(), map.get(c).unwrap());
+            let thigh_local = rest_rot[hip].inverse() * (rest_pos[knee] - rest_pos[hip]);
+            let shin_local = rest_rot[knee].inverse() * (rest_pos[foot] - rest_pos[knee]);
+            let leg = thigh_local.length() + shin_local.length();
+            for _ in 0..500 {
+                let turn = |v: [f32; 3]| Quat::from_scaled_axis(Vec3::from_array(v) * 0.8);
+                let thigh = (turn([next(), next(), next()]) * rest_rot[hip]).normalize();
+                let shin = (turn([next(), next(), next()]) * rest_rot[knee]).normalize();
+                let goal = rest_pos[hip] + Vec3::new(next() * 0.5, -0.3 - next().abs() * 0.9, next() * 0.5) * leg;
+                let (t0, s0, end0) = old_retarget_leg(rest_pos[hip], thigh, thigh_local, shin, shin_local, goal);
+                let new = odori_core::motion::two_bone_rotations(rest_pos[hip], thigh, thigh_local, shin_local, |_| shin, goal, thigh * thigh_local);
+                worst_rad = worst_rad.max(t0.angle_between(new.upper)).max(s0.angle_between(new.lower));
+                let end = rest_pos[hip] + new.upper * thigh_local + new.lower * shin_local;
+                worst_m = worst_m.max((end - end0).length()).max((end - new.end).length());
+                cases += 1;
+            }
+        }
+    }
+    println!("two-bone IK: {cases} cases, worst rotation difference {worst_rad:e} rad, worst ankle difference {worst_m:e} m");
+    assert!(cases > 2000, "{cases}");
+    assert!(worst_rad < 1e-4 && worst_m < 1e-5, "{worst_rad} rad, {worst_m} m");
 }

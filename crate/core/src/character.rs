@@ -384,6 +384,7 @@ impl Character {
             let thigh = char_rest_pos[knee] - char_rest_pos[hip];
             let shin = char_rest_pos[foot] - char_rest_pos[knee];
             Some(Leg {
+                canon_knee: b,
                 canon_foot: c,
                 hip,
                 knee,
@@ -411,13 +412,29 @@ impl Character {
         let mut drop_m = vec![0.0f32; frames];
         let mut shift_m = vec![Vec3::ZERO; frames];
 
+        // The world rotation the transfer gives the character's joint of canonical bone `c`.
+        let canon_world = |c: Canon, src_rot: &[Quat]| -> Quat {
+            match transfer {
+                Transfer::Conjugate => src_rot[c.index()] * self.reference[c.index()],
+                Transfer::DirectionOnly => {
+                    // Swing the reference so the bone points where the source's does.
+                    let (a, b) = direction_bone(c);
+                    let rest_dir = canon_rest[b.index()] - canon_rest[a.index()];
+                    let swing = match (rest_dir.try_normalize(), (src_rot[c.index()] * rest_dir).try_normalize()) {
+                        (Some(f), Some(t)) => Quat::from_rotation_arc(f, t),
+                        _ => Quat::IDENTITY,
+                    };
+                    swing * self.reference[c.index()]
+                }
+            }
+        };
         let mut rotations = Vec::with_capacity(frames * n);
         let (mut src_rot, mut src_pos) = (vec![Quat::IDENTITY; CANON_COUNT], vec![Vec3::ZERO; CANON_COUNT]);
         let mut src_t = Vec::with_capacity(CANON_COUNT);
         let mut g = vec![Quat::IDENTITY; n];
         let mut p = vec![Vec3::ZERO; n];
         let mut local = vec![Quat::IDENTITY; n];
-        let mut ik = [(Vec3::ZERO, Vec3::ZERO); 2];
+        let mut ik_shin = [Quat::IDENTITY; 2];
         for pass in if hold { 0..2 } else { 1..2 } {
             if pass == 1 && hold {
                 // The source's ankle height maps onto the character's: its rest ankle
@@ -460,24 +477,7 @@ impl Character {
                     let parent = j.parent.filter(|&q| q < i);
                     let (pg, pp) = parent.map(|q| (g[q], p[q])).unwrap_or((Quat::IDENTITY, Vec3::ZERO));
                     local[i] = match canon_of[i] {
-                        Some(c) => {
-                            let world = match transfer {
-                                Transfer::Conjugate => src_rot[c.index()] * self.reference[c.index()],
-                                Transfer::DirectionOnly => {
-                                    // Swing the reference so the bone points where the source's does.
-                                    let (a, b) = direction_bone(c);
-                                    let rest_dir = canon_rest[b.index()] - canon_rest[a.index()];
-                                    let from = rest_dir.try_normalize();
-                                    let to = (src_rot[c.index()] * rest_dir).try_normalize();
-                                    let swing = match (from, to) {
-                                        (Some(f), Some(t)) => Quat::from_rotation_arc(f, t),
-                                        _ => Quat::IDENTITY,
-                                    };
-                                    swing * self.reference[c.index()]
-                                }
-                            };
-                            (pg.inverse() * world).normalize()
-                        }
+                        Some(c) => (pg.inverse() * canon_world(c, &src_rot)).normalize(),
                         None => j.rest_rotation,
                     };
                     g[i] = pg * local[i];
@@ -492,23 +492,24 @@ impl Character {
                         tracks[track_of[i]].values.push(t);
                     }
                     p[i] = pp + pg * t;
-                    // Held foot: the thigh swings its knee, then the shin its ankle, onto the
-                    // two-bone solution (the foot keeps its own world rotation).
+                    // Held foot: thigh and shin turned onto the two-bone solution by the
+                    // kernel's solver, at the thigh; the shin (turned from the world rotation
+                    // the transfer gives it) is set when its turn comes. The foot keeps its
+                    // own world rotation.
                     let k = leg_of[i];
                     if pass == 1 && k != usize::MAX {
                         if let Some(goal) = plant_target[k][f] {
                             let leg = &legs[k];
-                            let (bone, aim) = if i == leg.hip {
+                            if i == leg.hip {
+                                let shin_before = canon_world(leg.canon_knee, &src_rot);
                                 let knee_now = g[i] * leg.thigh_local;
-                                ik[k] = motion::two_bone(p[i], goal, leg.thigh_m, leg.shin_m, knee_now);
-                                (knee_now, ik[k].0 - p[i])
+                                let solved = motion::two_bone_rotations(p[i], g[i], leg.thigh_local, leg.shin_local, |_| shin_before, goal, knee_now);
+                                g[i] = solved.upper;
+                                ik_shin[k] = solved.lower;
                             } else {
-                                (g[i] * leg.shin_local, ik[k].1 - p[i])
-                            };
-                            if let (Some(a), Some(b)) = (bone.try_normalize(), aim.try_normalize()) {
-                                g[i] = (Quat::from_rotation_arc(a, b) * g[i]).normalize();
-                                local[i] = (pg.inverse() * g[i]).normalize();
+                                g[i] = ik_shin[k];
                             }
+                            local[i] = (pg.inverse() * g[i]).normalize();
                         }
                     }
                 }
@@ -551,6 +552,7 @@ impl Default for RetargetOptions {
 
 /// One leg of the character for planted-foot IK.
 struct Leg {
+    canon_knee: Canon,
     canon_foot: Canon,
     hip: usize,
     knee: usize,

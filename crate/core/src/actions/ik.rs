@@ -1,16 +1,16 @@
 //! Two-bone inverse kinematics for the legs (spec §I): during a join the planted foot stays
 //! where it is and the hip and knee angles come from IK.
 //!
-//! The knee and ankle positions come from the engine's one analytic two-bone solver,
-//! [`crate::motion::two_bone`] (law of cosines, bending toward the knee's present side, or
-//! forward for a straight leg); the thigh and shin are then turned onto them by the shortest
-//! arcs, so their twist is kept; the foot takes the world orientation asked for (its own by
-//! default, so it stays flat). Unreachable targets stretch the leg straight toward them.
+//! The thigh and shin come from the engine's one two-bone solver,
+//! [`crate::motion::two_bone_rotations`] (law of cosines, bending toward the knee's present
+//! side, or forward for a straight leg; each bone turned by the shortest arc, so its twist is
+//! kept); the foot takes the world orientation asked for (its own by default, so it stays
+//! flat). Unreachable targets stretch the leg straight toward them.
 
 use glam::{Quat, Vec3};
 
 use crate::actions::contact::Foot;
-use crate::motion::two_bone;
+use crate::motion::two_bone_rotations;
 use crate::skeleton::Skeleton;
 
 /// World rotations and positions of one pose of `skeleton` (root translation given, other
@@ -50,16 +50,12 @@ pub fn solve_leg_oriented(skeleton: &Skeleton, local: &mut [Quat], root: Vec3, f
     let along = (a - h).normalize_or_zero();
     let side = (k - h) - along * (k - h).dot(along);
     let pole = side + rot[hip_parent] * Vec3::Z * 0.01;
-    let (k2, a2) = two_bone(h, target, l1, l2, pole);
-    // Thigh onto the new knee, shin onto the new ankle, each by the shortest arc.
-    let thigh = (Quat::from_rotation_arc((k - h) / l1, ((k2 - h) / l1).normalize_or_zero()) * rot[hip]).normalize();
-    local[hip] = (rot[hip_parent].inverse() * thigh).normalize();
-    let shin0 = thigh * local[knee];
-    let dir0 = (shin0 * skeleton.joints[ankle].rest_offset).normalize_or_zero();
-    let dir1 = (a2 - k2).normalize_or_zero();
-    let shin = if dir0 != Vec3::ZERO && dir1 != Vec3::ZERO { (Quat::from_rotation_arc(dir0, dir1) * shin0).normalize() } else { shin0 };
-    local[knee] = (thigh.inverse() * shin).normalize();
-    local[ankle] = (shin.inverse() * foot_world).normalize();
+    // Thigh onto the new knee, shin (carried by the thigh) onto the new ankle.
+    let knee_local = local[knee];
+    let legs = two_bone_rotations(h, rot[hip], skeleton.joints[knee].rest_offset, skeleton.joints[ankle].rest_offset, |thigh| thigh * knee_local, target, pole);
+    local[hip] = (rot[hip_parent].inverse() * legs.upper).normalize();
+    local[knee] = (legs.upper.inverse() * legs.lower).normalize();
+    local[ankle] = (legs.lower.inverse() * foot_world).normalize();
     let (_, pos) = forward(skeleton, local, root);
     (pos[ankle] - target).length()
 }

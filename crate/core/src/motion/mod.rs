@@ -124,6 +124,44 @@ pub fn two_bone(root: Vec3, target: Vec3, l1: f32, l2: f32, pole: Vec3) -> (Vec3
     (root + dir * a + side * h, end)
 }
 
+/// A two-bone chain turned onto the solution of [`two_bone`]: the upper and lower joints' new
+/// world rotations, and where the middle joint and the end now are.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TwoBonePose {
+    pub upper: Quat,
+    pub lower: Quat,
+    pub middle: Vec3,
+    pub end: Vec3,
+}
+
+/// Two-bone IK on rotations, the one solver of the engine (planted feet in joins, held feet in
+/// retargeting): the chain's upper joint stands at `root` with world rotation `upper`, and its
+/// bone to the middle joint is `upper_bone` in the joint's own frame; the lower joint's bone to
+/// the end is `lower_bone` in its own frame, and `lower_before(new_upper)` gives the lower
+/// joint's world rotation before it turns (its local rotation carried by the turned upper
+/// joint, or a world rotation a retargeting has already chosen). The middle and end positions
+/// come from [`two_bone`] (bending toward `pole`, a direction); each joint is then turned by
+/// the shortest arc from where its bone points onto them, so each keeps its twist about its
+/// own bone (a knee's roll, a shin's).
+pub fn two_bone_rotations(
+    root: Vec3,
+    upper: Quat,
+    upper_bone: Vec3,
+    lower_bone: Vec3,
+    lower_before: impl FnOnce(Quat) -> Quat,
+    target: Vec3,
+    pole: Vec3,
+) -> TwoBonePose {
+    let (middle, end) = two_bone(root, target, upper_bone.length(), lower_bone.length(), pole);
+    let swing = |world: Quat, bone: Vec3, aim: Vec3| match ((world * bone).try_normalize(), aim.try_normalize()) {
+        (Some(a), Some(b)) => (Quat::from_rotation_arc(a, b) * world).normalize(),
+        _ => world,
+    };
+    let upper = swing(upper, upper_bone, middle - root);
+    let lower = swing(lower_before(upper), lower_bone, end - middle);
+    TwoBonePose { upper, lower, middle, end }
+}
+
 /// The floor under a joint over a clip: the 1st percentile of its heights (spec §J), so a few
 /// noisy frames below the real floor do not set it. `None` for no finite height.
 pub fn floor_height(heights_m: &[f32]) -> Option<f32> {
