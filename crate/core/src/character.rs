@@ -375,20 +375,22 @@ impl Character {
         // The legs for planted-foot IK: thigh, shin and foot joints, bone lengths, and each
         // bone's vector in its joint's own frame (to swing the posed bone onto the IK's).
         let legs: Vec<Leg> = [
-            (Canon::LeftUpperLeg, Canon::LeftLowerLeg, Canon::LeftFoot),
-            (Canon::RightUpperLeg, Canon::RightLowerLeg, Canon::RightFoot),
+            (Canon::LeftUpperLeg, Canon::LeftLowerLeg, Canon::LeftFoot, Canon::LeftToe),
+            (Canon::RightUpperLeg, Canon::RightLowerLeg, Canon::RightFoot, Canon::RightToe),
         ]
         .into_iter()
-        .filter_map(|(a, b, c)| {
+        .filter_map(|(a, b, c, d)| {
             let (hip, knee, foot) = (self.map.get(a)?, self.map.get(b)?, self.map.get(c)?);
             let thigh = char_rest_pos[knee] - char_rest_pos[hip];
             let shin = char_rest_pos[foot] - char_rest_pos[knee];
             Some(Leg {
                 canon_knee: b,
                 canon_foot: c,
+                canon_toe: d,
                 hip,
                 knee,
                 foot,
+                toe: self.map.get(d).filter(|&t| t != foot),
                 thigh_m: thigh.length(),
                 shin_m: shin.length(),
                 thigh_local: char_rest_rot[hip].inverse() * thigh,
@@ -401,13 +403,23 @@ impl Character {
             leg_of[leg.hip] = k;
             leg_of[leg.knee] = k;
         }
-        // Pass 0 poses the character freely and records where its feet and hips go and where
-        // the source's ankles are; the plants and the pelvis drop follow from those; pass 1
-        // poses again with the feet held.
+        // Pass 0 poses the character freely and records where its feet (ankles and toes) and
+        // hips go and where the source's are; the plants and the pelvis drop follow from
+        // those; pass 1 poses again with the feet held.
         let hold = options.hold_feet && legs.len() == 2 && frames > 1;
-        let mut free_foot: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
+        let mut feet: Vec<FootTracks> = legs
+            .iter()
+            .map(|leg| FootTracks {
+                src_ankle: Vec::with_capacity(frames),
+                src_toe: Vec::new(),
+                free_ankle: Vec::with_capacity(frames),
+                free_toe: Vec::new(),
+                // The source's ankle height maps onto the character's: its rest ankle stands
+                // where the canonical rest ankle does, scaled.
+                y_offset: char_rest_pos[leg.foot].y - canon_rest[leg.canon_foot.index()].y * scale,
+            })
+            .collect();
         let mut free_hip: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
-        let mut src_ankle: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
         let mut plant_target: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs.len()];
         let mut drop_m = vec![0.0f32; frames];
         let mut shift_m = vec![Vec3::ZERO; frames];
@@ -437,10 +449,7 @@ impl Character {
         let mut ik_shin = [Quat::IDENTITY; 2];
         for pass in if hold { 0..2 } else { 1..2 } {
             if pass == 1 && hold {
-                // The source's ankle height maps onto the character's: its rest ankle
-                // stands where the canonical rest ankle does, scaled.
-                let y_offsets: Vec<f32> = legs.iter().map(|leg| char_rest_pos[leg.foot].y - canon_rest[leg.canon_foot.index()].y * scale).collect();
-                (plant_target, shift_m) = hold_plan(&src_ankle, &free_foot, &y_offsets, src.fps);
+                (plant_target, shift_m) = hold_plan(&feet, src.fps);
                 for hips in free_hip.iter_mut() {
                     for (h, shift) in hips.iter_mut().zip(&shift_m) {
                         *h += *shift;
@@ -456,7 +465,7 @@ impl Character {
                 for (k, targets) in plant_target.iter_mut().enumerate() {
                     for (f, t) in targets.iter_mut().enumerate() {
                         if t.is_none() && drop_m[f] > 1e-4 {
-                            *t = Some(free_foot[k][f] + shift_m[f]);
+                            *t = Some(feet[k].free_ankle[f] + shift_m[f]);
                         }
                     }
                 }
@@ -515,9 +524,14 @@ impl Character {
                 }
                 if pass == 0 {
                     for (k, leg) in legs.iter().enumerate() {
-                        free_foot[k].push(p[leg.foot]);
+                        let t = &mut feet[k];
+                        t.free_ankle.push(p[leg.foot]);
+                        t.src_ankle.push(src_pos[leg.canon_foot.index()] * scale);
+                        if let Some(toe) = leg.toe {
+                            t.free_toe.push(p[toe]);
+                            t.src_toe.push(src_pos[leg.canon_toe.index()] * scale);
+                        }
                         free_hip[k].push(p[leg.hip]);
-                        src_ankle[k].push(src_pos[leg.canon_foot.index()] * scale);
                     }
                 } else {
                     rotations.extend_from_slice(&local);
@@ -554,9 +568,12 @@ impl Default for RetargetOptions {
 struct Leg {
     canon_knee: Canon,
     canon_foot: Canon,
+    canon_toe: Canon,
     hip: usize,
     knee: usize,
     foot: usize,
+    /// The toe joint, when the rig has one (a foot can then turn on its ball).
+    toe: Option<usize>,
     thigh_m: f32,
     shin_m: f32,
     thigh_local: Vec3,
@@ -571,7 +588,7 @@ const PLANT_SPEED_CM_S: f32 = 30.0;
 /// Time over which a released foot is eased from where it was held back to its free path, s.
 const RELEASE_S: f32 = 0.15;
 
-/// The source ankle's planted frames: within [`PLANT_HEIGHT_M`] of its floor and slower than
+/// The source joint's planted frames: within [`PLANT_HEIGHT_M`] of its floor and slower than
 /// [`PLANT_SPEED_CM_S`] (`src` at the character's size).
 fn planted_frames(src: &[Vec3], fps: f32) -> Vec<bool> {
     let frames = src.len();
@@ -587,64 +604,127 @@ fn planted_frames(src: &[Vec3], fps: f32) -> Vec<bool> {
         .collect()
 }
 
-/// Where each held ankle goes, and how far the whole body moves horizontally to keep it
-/// there. A foot is anchored where it lands (its free position moved by the body's shift so
-/// far); while feet are anchored the body shifts so they stay put (a rig with wider hips than
-/// the source's turning on one foot must move its body round it, as a person would); the
-/// shift is smoothed over ±[`RELEASE_S`] and the IK takes up what is left. Anchors sit at the
-/// source's ankle height plus `y_offsets[k]` (the character's ground); a released foot eases
-/// back onto its (shifted) free path over [`RELEASE_S`].
-fn hold_plan(src: &[Vec<Vec3>], free: &[Vec<Vec3>], y_offsets: &[f32], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3>) {
-    let legs = src.len();
-    let frames = src.iter().chain(free).map(|t| t.len()).min().unwrap_or(0);
-    let planted: Vec<Vec<bool>> = src.iter().map(|t| planted_frames(&t[..frames], fps)).collect();
+/// One leg's tracks for [`hold_plan`]: the source's ankle and toe (at the character's size) and
+/// the character's free ankle and toe (pass 0: the transfer alone), per frame; the toe tracks
+/// are empty for a rig without toes. `y_offset` takes the source's ankle height onto the
+/// character's ground.
+struct FootTracks {
+    src_ankle: Vec<Vec3>,
+    src_toe: Vec<Vec3>,
+    free_ankle: Vec<Vec3>,
+    free_toe: Vec<Vec3>,
+    y_offset: f32,
+}
+
+/// The point a planted foot stands on: the ankle (a flat foot, or one turning on its heel) or
+/// the toe joint (the heel raised: turning on the ball of the foot).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Contact {
+    Ankle,
+    Toe,
+}
+
+/// Where each held ankle goes, and how far the whole body moves horizontally to keep held
+/// feet put.
+/// - A foot is held while the source's ankle is planted, or else its toe (the heel raised);
+///   that joint is the foot's contact point, and it stays where it is. A foot turning on its
+///   ball so holds the ball, its ankle circling round it as the foot turns (the character's
+///   foot keeps the transfer's world rotation) — not the ankle, which would swing the ball
+///   (and a rig's longer foot swings it farther) round the ankle, nor nothing, which would
+///   leave the foot to the character's free path: a rig with wider hips than the source's
+///   sweeps its feet farther round when the body turns (pivot turns).
+/// - Each hold starts where the foot is (its free path moved by the body, or where it was
+///   being eased to), so landing never jumps; a foot that changes point (heel down, heel up)
+///   keeps its place.
+/// - While feet are held the body shifts so they stay put (a rig turning on one foot must
+///   move its body round it, as a person would); the shift is smoothed over ±[`RELEASE_S`]
+///   and the IK takes up what is left. The shift is planned first, with each foot landing
+///   where the running (unsmoothed) shift puts it; then the feet are planned again, landing
+///   where the smoothed shift — the body's real path — puts them.
+/// - Targets sit at the source's ankle height plus `y_offset` (the character's ground); a
+///   released foot eases back onto its (shifted) free path over [`RELEASE_S`].
+fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3>) {
+    let legs = feet.len();
+    let frames = feet.iter().flat_map(|t| [t.src_ankle.len(), t.free_ankle.len()]).min().unwrap_or(0);
     let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
-    let mut anchor: Vec<Option<Vec3>> = vec![None; legs];
-    let mut shift = vec![Vec3::ZERO; frames];
-    let mut offset = Vec3::ZERO;
-    let mut anchors: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs];
-    for f in 0..frames {
-        let mut sum = Vec3::ZERO;
-        let mut count = 0;
-        for k in 0..legs {
-            if planted[k][f] {
-                let a = *anchor[k].get_or_insert(flat(free[k][f]) + offset);
-                sum += a - flat(free[k][f]);
-                count += 1;
-                anchors[k][f] = Some(a);
-            } else {
-                anchor[k] = None;
-            }
-        }
-        if count > 0 {
-            offset = sum / count as f32;
-        }
-        shift[f] = offset;
-    }
-    let w = ((RELEASE_S * fps).round() as usize).max(1);
-    let smooth: Vec<Vec3> = (0..frames)
-        .map(|f| {
-            let r = f.saturating_sub(w)..(f + w + 1).min(frames);
-            let len = r.len() as f32;
-            shift[r].iter().copied().sum::<Vec3>() / len
+    let contact: Vec<Vec<Option<Contact>>> = feet
+        .iter()
+        .map(|t| {
+            let ankle = planted_frames(&t.src_ankle[..frames], fps);
+            let has_toe = t.src_toe.len() >= frames && t.free_toe.len() >= frames;
+            let toe = if has_toe { planted_frames(&t.src_toe[..frames], fps) } else { vec![false; frames] };
+            (0..frames).map(|f| if ankle[f] { Some(Contact::Ankle) } else if toe[f] { Some(Contact::Toe) } else { None }).collect()
         })
         .collect();
-    let release = w;
-    let mut targets: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs];
-    for k in 0..legs {
-        let mut last: Option<(Vec3, usize)> = None;
+    // The character's toe from its ankle, horizontal, as its foot is turned on each frame.
+    let toe_from_ankle = |k: usize, f: usize| -> Vec3 {
+        let t = &feet[k];
+        if t.free_toe.len() > f {
+            flat(t.free_toe[f] - t.free_ankle[f])
+        } else {
+            Vec3::ZERO
+        }
+    };
+    let w = ((RELEASE_S * fps).round() as usize).max(1);
+    let smooth = |shift: &[Vec3]| -> Vec<Vec3> {
+        (0..frames)
+            .map(|f| {
+                let r = f.saturating_sub(w)..(f + w + 1).min(frames);
+                let len = r.len() as f32;
+                shift[r].iter().copied().sum::<Vec3>() / len
+            })
+            .collect()
+    };
+    let mut body: Option<Vec<Vec3>> = None;
+    let mut targets: Vec<Vec<Option<Vec3>>> = Vec::new();
+    for plan in 0..2 {
+        targets = vec![vec![None; frames]; legs];
+        let mut shift = vec![Vec3::ZERO; frames];
+        let mut offset = Vec3::ZERO;
+        // Per leg: the contact point held now (which, where), and the last held target.
+        let mut point: Vec<Option<(Contact, Vec3)>> = vec![None; legs];
+        let mut last: Vec<Option<(Vec3, usize)>> = vec![None; legs];
         for f in 0..frames {
-            if let Some(a) = anchors[k][f] {
-                let held = Vec3::new(a.x, src[k][f].y + y_offsets[k], a.z);
-                targets[k][f] = Some(held);
-                last = Some((held, f));
-            } else if let Some((held, end)) = last.filter(|(_, end)| f - end <= release) {
-                let s = (f - end) as f32 / (release + 1) as f32;
-                targets[k][f] = Some(held.lerp(free[k][f] + smooth[f], s * s * (3.0 - 2.0 * s)));
+            // Where the body is: the first plan's smoothed shift; in the first, the running
+            // shift so far.
+            let body_at = body.as_ref().map_or(offset, |b| b[f]);
+            let (mut sum, mut count) = (Vec3::ZERO, 0);
+            for k in 0..legs {
+                let t = &feet[k];
+                let free = t.free_ankle[f] + body_at;
+                let Some(c) = contact[k][f] else {
+                    point[k] = None;
+                    if let Some((held, end)) = last[k].filter(|(_, end)| f - end <= w) {
+                        let s = (f - end) as f32 / (w + 1) as f32;
+                        targets[k][f] = Some(held.lerp(free, motion::smoothstep(s)));
+                    }
+                    continue;
+                };
+                let lead = if c == Contact::Toe { toe_from_ankle(k, f) } else { Vec3::ZERO };
+                let p = match point[k] {
+                    Some((c0, p)) if c0 == c => p,
+                    // Lands, or changes point: where the ankle was on the previous frame (its
+                    // target, or where the body put it).
+                    _ => flat(f.checked_sub(1).and_then(|g| targets[k][g]).unwrap_or(free)) + lead,
+                };
+                point[k] = Some((c, p));
+                let ankle = p - lead;
+                let target = Vec3::new(ankle.x, t.src_ankle[f].y + t.y_offset, ankle.z);
+                targets[k][f] = Some(target);
+                last[k] = Some((target, f));
+                sum += ankle - flat(t.free_ankle[f]);
+                count += 1;
             }
+            if count > 0 {
+                offset = sum / count as f32;
+            }
+            shift[f] = offset;
+        }
+        if plan == 0 {
+            body = Some(smooth(&shift));
         }
     }
-    (targets, smooth)
+    (targets, body.unwrap_or_else(|| vec![Vec3::ZERO; frames]))
 }
 
 /// How far the pelvis drops on each frame so every held foot is within reach of its hip
@@ -773,19 +853,28 @@ mod tests {
         }
     }
 
+    fn tracks(src_ankle: Vec<Vec3>, src_toe: Vec<Vec3>, free_ankle: Vec<Vec3>, free_toe: Vec<Vec3>) -> FootTracks {
+        FootTracks { src_ankle, src_toe, free_ankle, free_toe, y_offset: 0.02 }
+    }
+
     #[test]
     fn held_foot_stays_put_while_its_free_path_slides() {
         // Left source ankle planted (on its floor, still) for frames 0..30, then lifted; the
-        // character's free left ankle slides 1 cm a frame; the right foot swings (fast).
+        // character's free left ankle slides 1 cm a frame. The right source ankle swings in
+        // the air, then from frame 30 brushes along its floor at 60 cm/s.
         let fps = 30.0;
         let src_l: Vec<Vec3> = (0..60).map(|f| Vec3::new(0.2, if f < 30 { 0.08 } else { 0.3 }, 0.0)).collect();
-        let src_r: Vec<Vec3> = (0..60).map(|f| Vec3::new(-0.2 + 0.02 * f as f32, 0.3, 0.0)).collect();
+        let src_r: Vec<Vec3> = (0..60).map(|f| Vec3::new(-0.2 + 0.02 * f as f32, if f < 30 { 0.3 } else { 0.08 }, 0.0)).collect();
         let free_l: Vec<Vec3> = (0..60).map(|f| Vec3::new(0.5 + 0.01 * f as f32, 0.1, 0.0)).collect();
         let free_r: Vec<Vec3> = (0..60).map(|_| Vec3::new(-0.5, 0.4, 0.0)).collect();
-        let (targets, shift) = hold_plan(&[src_l.clone(), src_r], &[free_l.clone(), free_r], &[0.02, 0.02], fps);
+        let feet = [tracks(src_l, Vec::new(), free_l, Vec::new()), tracks(src_r, Vec::new(), free_r, Vec::new())];
+        let (targets, shift) = hold_plan(&feet, fps);
+        // Held where it stands at the start (its free path moved by the body), at the source's
+        // ankle height on the character's ground.
+        let anchor = Vec3::new(0.5 + shift[0].x, 0.1, shift[0].z);
         for f in 0..30 {
             let t = targets[0][f].expect("held while planted");
-            assert!((t - Vec3::new(0.5, 0.1, 0.0)).length() < 1e-5, "frame {f}: {t}");
+            assert!((t - anchor).length() < 1e-5, "frame {f}: {t} vs {anchor}");
             assert!(targets[1][f].is_none());
         }
         // The body moves back by the slide (before smoothing: exactly), so the leg can reach.
@@ -794,6 +883,37 @@ mod tests {
         assert!(targets[0][31].is_some() && targets[0][59].is_none());
         let step = (targets[0][31].unwrap() - targets[0][30].unwrap_or(targets[0][29].unwrap())).length();
         assert!(step < 0.05, "no jump on release: {step}");
+        // The brushing foot (on its floor but moving) is not held.
+        assert!((30..60).all(|f| targets[1][f].is_none()));
+    }
+
+    #[test]
+    fn a_foot_turning_on_its_ball_holds_the_ball() {
+        // The source's heel is up (ankle 12 cm above its floor) and its toe planted, for
+        // frames 10..50; the character's foot turns about the vertical a little each frame
+        // (its toe circles its ankle), so its ankle must circle the held toe.
+        let fps = 60.0;
+        let frames = 60;
+        let src_ankle: Vec<Vec3> = (0..frames).map(|f| Vec3::new(0.0, if (10..50).contains(&f) { 0.2 } else { 0.08 + 0.3 * (f as f32 * 0.3).sin().abs() }, 0.0)).collect();
+        let src_toe: Vec<Vec3> = (0..frames).map(|f| Vec3::new(0.0, if (10..50).contains(&f) { 0.02 } else { 0.3 }, 0.15)).collect();
+        let turn = |f: usize| Quat::from_rotation_y(0.02 * f as f32);
+        let free_ankle: Vec<Vec3> = (0..frames).map(|_| Vec3::new(0.3, 0.25, 0.0)).collect();
+        let free_toe: Vec<Vec3> = (0..frames).map(|f| free_ankle[f] + turn(f) * Vec3::new(0.0, -0.1, 0.2)).collect();
+        let idle = |y: f32| (0..frames).map(|_| Vec3::new(-0.3, y, 0.0)).collect::<Vec<_>>();
+        let feet = [tracks(src_ankle, src_toe, free_ankle.clone(), free_toe.clone()), tracks(idle(0.5), Vec::new(), idle(0.5), Vec::new())];
+        let (targets, _) = hold_plan(&feet, fps);
+        let toe_at = |f: usize| {
+            let a = targets[0][f].expect("on its ball");
+            let v = free_toe[f] - free_ankle[f];
+            Vec3::new(a.x + v.x, 0.0, a.z + v.z)
+        };
+        let ball = toe_at(12);
+        for f in 12..50 {
+            assert!((toe_at(f) - ball).length() < 1e-5, "frame {f}: ball {} vs {ball}", toe_at(f));
+        }
+        // The ankle does move: round the ball.
+        let (a, b) = (targets[0][12].unwrap(), targets[0][49].unwrap());
+        assert!((Vec3::new(a.x - b.x, 0.0, a.z - b.z)).length() > 0.05, "{a} {b}");
     }
 
     #[test]

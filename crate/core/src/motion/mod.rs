@@ -108,6 +108,13 @@ pub fn hermite<const N: usize>(p0: [f32; N], m0: [f32; N], p1: [f32; N], m1: [f3
     std::array::from_fn(|i| h00 * p0[i] + h10 * m0[i] + h01 * p1[i] + h11 * m1[i])
 }
 
+/// Smoothstep: 0..1 onto 0..1 with zero slope at both ends (`x` clamped), the one easing
+/// curve of the engine (joins, procedural and built-in moves, retargeting's released feet).
+pub fn smoothstep(x: f32) -> f32 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
 /// Two-bone IK: the middle joint (knee, elbow) and the end (ankle, wrist) of a chain from
 /// `root` with bone lengths `l1`, `l2` reaching for `target`, bending towards `pole`. A target
 /// out of reach is pulled in along the line from the root.
