@@ -8,6 +8,8 @@ use glam::{EulerRot, Quat, Vec3};
 
 use crate::clip::{Clip, TranslationTrack};
 use crate::humanoid::{Canon, CANON_COUNT};
+// 0..1 → 0..1 with zero slope at both ends: the motion kernel's one easing curve.
+use crate::motion::smoothstep as smooth;
 use crate::skeleton::{Joint, Skeleton};
 
 /// Rest offsets of the canonical skeleton (T-pose, facing +Z, the figure's left on +X),
@@ -52,11 +54,6 @@ pub fn canonical_skeleton() -> Skeleton {
     }
 }
 
-fn smooth(x: f32) -> f32 {
-    // 0..1 → 0..1 with zero slope at both ends.
-    let x = x.clamp(0.0, 1.0);
-    x * x * (3.0 - 2.0 * x)
-}
 
 /// Lowest joint height of a pose with the root at the origin.
 pub fn lowest_point(skeleton: &Skeleton, local: &[Quat]) -> f32 {

@@ -19,7 +19,9 @@
 //!   shin), raised by what the rig's bent rest legs gain when straightened.
 //! - Planted feet: where the source's ankle is planted (near its floor and slow), the
 //!   character's ankle is held where it landed, at the source's ankle height on the
-//!   character's ground, by two-bone IK on thigh and shin (`motion::two_bone`). The body
+//!   character's ground; where only the source's toe is planted (the heel up: turning on the
+//!   ball of the foot, as in pivot turns) the character's toe is held and its ankle circles
+//!   round it. The legs reach by the kernel's two-bone IK (`motion::two_bone_rotations`). The body
 //!   shifts horizontally (smoothly) to keep held feet put — a rig with wider hips than the
 //!   source's, turning on one foot, must move round it — so the character's path can drift
 //!   from the source's scaled one; the pelvis drops where a held foot would be out of reach

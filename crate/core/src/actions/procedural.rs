@@ -155,11 +155,8 @@ impl Pose {
     }
 }
 
-/// Smoothstep 0..1 with zero slope at both ends.
-pub fn smooth(x: f32) -> f32 {
-    let x = x.clamp(0.0, 1.0);
-    x * x * (3.0 - 2.0 * x)
-}
+/// Smoothstep 0..1 with zero slope at both ends: the motion kernel's one easing curve.
+pub use crate::motion::smoothstep as smooth;
 
 /// Key poses interpolated with a Catmull-Rom spline (zero slope at the first and last key).
 #[derive(Clone, Debug)]

@@ -11,6 +11,8 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::pose::KeyPose;
+// Smoothstep 0..1: the motion kernel's one easing curve.
+use crate::motion::smoothstep as smooth01;
 
 /// A leg, hip and torso pattern (the "step").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -346,10 +348,6 @@ fn arm_targets(arms: Arms, t: f32, amp: f32) -> (Vec3, Vec3, f32) {
     }
 }
 
-fn smooth01(x: f32) -> f32 {
-    let x = x.clamp(0.0, 1.0);
-    x * x * (3.0 - 2.0 * x)
-}
 
 /// The key pose of a move at `t_counts` (0..=4): leg keys interpolated on the half count, arms
 /// evaluated with a small lag (follow-through), secondary motion added.

@@ -146,7 +146,7 @@ pub fn interpolate_channel(keys: &[KeyPose], spacing: f32, t: f32, channel: impl
 }
 
 /// Two-bone IK lives in the motion kernel.
-pub use crate::motion::two_bone;
+pub use crate::motion::{two_bone, two_bone_rotations};
 
 /// Rotation taking `from` to `to` (both any length).
 fn arc(from: Vec3, to: Vec3) -> Quat {
@@ -225,15 +225,13 @@ pub fn solve_upper(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f3
         let sh_p = chest_p + world[Chest.index()] * off(sh);
         let ua_p = sh_p + world[sh.index()] * off(ua);
         let chest = world[Chest.index()];
-        let l1 = off(fa).length();
-        let l2 = off(hand).length();
         // Elbows bend down, back and out.
         let pole = chest * Vec3::new(s * 0.4, -1.0, -0.5);
-        let (elbow, wrist) = two_bone(ua_p, ua_p + chest * target, l1, l2, pole);
-        let wq = arc(world[sh.index()] * off(fa), elbow - ua_p) * world[sh.index()];
+        // Upper arm and forearm by the kernel's two-bone solver, each from its parent's frame.
+        let arm = two_bone_rotations(ua_p, world[sh.index()], off(fa), off(hand), |upper| upper, ua_p + chest * target, pole);
+        let (wq, fq) = (arm.upper, arm.lower);
         local[ua.index()] = world[sh.index()].inverse() * wq;
         world[ua.index()] = wq;
-        let fq = arc(wq * off(hand), wrist - elbow) * wq;
         local[fa.index()] = wq.inverse() * fq;
         world[fa.index()] = fq;
         local[hand.index()] = Quat::IDENTITY;
@@ -257,13 +255,11 @@ pub fn solve_legs(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32
     {
         let hip_p = root + hips_q * off(ul);
         let ankle = Vec3::new(target.x, ANKLE_HEIGHT + target.y.max(0.0), target.z);
-        let l1 = off(ll).length();
-        let l2 = off(foot).length();
         let facing = Quat::from_rotation_y(pose.hips_yaw + s * pose.feet_yaw);
         let pole = facing * Vec3::new(s * 0.15, 0.0, 1.0);
-        let (knee, ank) = two_bone(hip_p, ankle, l1, l2, pole);
-        let uq = arc(hips_q * off(ll), knee - hip_p) * hips_q;
-        let lq = arc(uq * off(foot), ank - knee) * uq;
+        // Thigh and shin by the kernel's two-bone solver, each from its parent's frame.
+        let leg = two_bone_rotations(hip_p, hips_q, off(ll), off(foot), |upper| upper, ankle, pole);
+        let (knee, ank, uq, lq) = (leg.middle, leg.end, leg.upper, leg.lower);
         // Foot flat (toe along the facing on the floor) or pointed (toe along the shin).
         let flat = facing * off(toe);
         let shin = (ank - knee).normalize_or_zero() * off(toe).length();

@@ -1,8 +1,10 @@
 //! The motion kernel: the one forward kinematics of the engine (local rotations and
 //! translations to world rotations and positions, into buffers the caller owns; or rotations
 //! only, every joint at its rest offset), rest-pose transforms, the lowest point of a pose,
-//! the one cubic Hermite curve, two-bone IK, floor and foot-skate measures, and the
-//! quaternion hygiene every writer of keyframes needs (unit length, sign continuity).
+//! the one cubic Hermite curve and the one smoothstep, two-bone IK (positions, and the
+//! rotations of the chain: the joins' leg IK and the retargeting's held feet both use
+//! [`two_bone_rotations`]), floor and foot-skate measures, and the quaternion hygiene every
+//! writer of keyframes needs (unit length, sign continuity).
 //! `Skeleton::forward_kinematics` / `pose_into` / `posed_at_origin`, `Clip::world_positions_into`
 //! / `world_matrices_into`, `actions::ik::forward`, the lowest points of `builtin.rs` and
 //! `library/pose.rs`, the choreography's joins, the text actions' sway and the glTF
