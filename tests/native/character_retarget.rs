@@ -115,8 +115,10 @@ fn bad_characters_are_refused_naming_what_is_missing() {
 /// and martial-arts capture where the benchmark has salsa), with the free-feet control.
 /// - Xbot (a rig in the source's proportions): every clip within the acceptance.
 /// - Both characters: fewer cases above the acceptance with the feet held than free, and a
-///   lower total skate. (RobotExpressive, hips 3.7× wider than the source's at its size, does
-///   not meet the acceptance on every clip: the figures are printed.)
+///   lower total skate.
+/// - RobotExpressive (hips 3.7× wider than the source's at its size): only the clips in
+///   `KNOWN` above the acceptance; the test fails when another joins them, or when one of them
+///   is fixed (then it leaves the list).
 #[test]
 fn held_feet_skate_no_more_than_the_source() {
     let mut sources: Vec<(Clip, HumanoidMap)> =
@@ -132,9 +134,11 @@ fn held_feet_skate_no_more_than_the_source() {
         let frames = c.frame_count().min((20.0 * c.fps) as usize);
         sources.push((c.slice(0, frames, rel), im.humanoid));
     }
+    // Indian dance (foot stamps and turns on a wide base): 88 cm/s against the source's 69.
+    const KNOWN: [&str; 1] = ["mocap/cmu-indian/indian_04.bvh"];
     for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
         let (_, ch) = character(file);
-        let (mut worse, mut free_worse, mut xbot_worse, mut held_sum, mut free_sum) = (Vec::new(), 0, 0, 0.0, 0.0);
+        let (mut worse, mut worse_names, mut free_worse, mut xbot_worse, mut held_sum, mut free_sum) = (Vec::new(), Vec::new(), 0, 0, 0.0, 0.0);
         for (clip, map) in &sources {
             let r = report(clip, map, &ch, &ch.retarget(clip, map).unwrap());
             let free = ch.retarget_options(clip, map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
@@ -142,6 +146,7 @@ fn held_feet_skate_no_more_than_the_source() {
             println!("{file} ← '{}': skate held {:.2} cm/s, free {:.2}, source {:.2}", clip.name, r.skate_mean_cm_s, f.skate_mean_cm_s, r.source_skate_mean_cm_s);
             if r.skate_mean_cm_s > r.source_skate_mean_cm_s + 1.0 {
                 worse.push(format!("{}: {:.2} vs source {:.2}", clip.name, r.skate_mean_cm_s, r.source_skate_mean_cm_s));
+                worse_names.push(clip.name.clone());
                 if file.contains("Xbot") {
                     xbot_worse += 1;
                 }
@@ -152,6 +157,9 @@ fn held_feet_skate_no_more_than_the_source() {
         }
         println!("{file}: {} of {} worse than source + 1 cm/s held, {free_worse} free", worse.len(), sources.len());
         assert_eq!(xbot_worse, 0, "{file}: skate above the source's + 1 cm/s: {worse:#?}");
+        if file.contains("RobotExpressive") {
+            assert_eq!(worse_names, KNOWN, "{file}: the clips above the source's skate + 1 cm/s changed: {worse:#?}");
+        }
         assert!(worse.len() < free_worse && held_sum < free_sum, "{file}: held {} cases (skate sum {held_sum:.1}) vs free {free_worse} ({free_sum:.1}): {worse:#?}", worse.len());
     }
 }
