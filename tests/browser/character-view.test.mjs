@@ -106,6 +106,19 @@ for (const backend of ["webgl2", "webgpu"]) {
       console.log(`${backend}: figure time vs song clock over ${lags.length} frames: median ${(median * 1000).toFixed(1)} ms, max ${(lags.at(-1) * 1000).toFixed(1)} ms`);
       assert.ok(median < 2 / 60, `figure time lags the song by ${(median * 1000).toFixed(1)} ms (median)`);
       await page.screenshot({ path: join(artifacts, `${backend}-character-dance-xbot.png`) });
+      // What a change of the dance costs the view: the whole dance retargeted once (then only
+      // sampled each frame). Printed, not asserted.
+      const cost = await page.evaluate(() => {
+        const { choreo, viewer, library, player } = window.odori;
+        player.pause();
+        choreo.renderDance(); // a new revision of the dance clip
+        const t0 = performance.now();
+        viewer.figureJoints(library, choreo.danceId, 0);
+        const t1 = performance.now();
+        viewer.figureJoints(library, choreo.danceId, 1);
+        return { first: t1 - t0, again: performance.now() - t1, secs: library.clip(choreo.danceId).durationSecs };
+      });
+      console.log(`${backend}: the ${cost.secs.toFixed(0)} s dance put on Xbot for the view in ${cost.first.toFixed(0)} ms; a pose after that ${cost.again.toFixed(2)} ms`);
       // Paused at a moment: Xbot's skin covers the joints the viewer says it posed.
       await page.evaluate(() => { const p = window.odori.player; p.pause(); p.time = 2.0; p.drawNow(); });
       const fig = await page.evaluate(([id]) => window.odori.viewer.figureJoints(window.odori.library, id, 2.0), [danceId]);
