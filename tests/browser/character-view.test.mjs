@@ -138,7 +138,19 @@ for (const backend of ["webgl2", "webgpu"]) {
       const cands = await page.evaluate(() => { const p = window.odori.player; p.pause(); p.time = 0.5; p.drawNow(); return window.odori.viewer.lastDrawn(); });
       assert.equal(cands.length, 6);
       assert.ok(cands.every((d) => d.body === "character"), `candidates: ${JSON.stringify(cands)}`);
-      await canvasPixels(page, `${backend}-character-candidates-xbot.png`);
+      // Each skinned candidate takes a wash of its chip's colour: the first (orange) is
+      // drawn orange where its joints are, the second (teal) is not.
+      const shot = await canvasPixels(page, `${backend}-character-candidates-xbot.png`);
+      const candJoints = await page.evaluate(() => {
+        const { viewer, library, player } = window.odori;
+        return player.figures().map((f) => {
+          const j = viewer.figureJoints(library, f.clip, f.timeSecs);
+          return j.positions.map((v, k) => v + (f.offset ? f.offset[k % 3] : 0));
+        });
+      });
+      const first = coverage(shot, await projected(page, candJoints[0]), isOrange);
+      const second = coverage(shot, await projected(page, candJoints[1]), isOrange);
+      assert.ok(first.hit >= first.inside * 0.5 && second.hit <= second.inside * 0.2, `orange at ${first.hit}/${first.inside} joints of candidate 1, ${second.hit}/${second.inside} of candidate 2`);
       // A text animation is drawn on it; so is everything on the built-in body.
       await page.fill("#text-input", "Taro runs, then kicks the ball.");
       await page.click("#text-go");

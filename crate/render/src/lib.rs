@@ -75,6 +75,9 @@ pub struct MeshHandle(usize);
 pub struct MeshDraw<'a> {
     pub mesh: MeshHandle,
     pub palette: &'a [Mat4],
+    /// Linear RGB(A) multiplying the mesh's colours: white draws it as it is; several figures
+    /// on one character (the six candidates) are told apart by their figure colours.
+    pub tint: [f32; 4],
 }
 
 struct GpuMesh {
@@ -90,6 +93,7 @@ struct GpuMesh {
 
 struct PaletteSlot {
     buffer: wgpu::Buffer,
+    tint: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
 
@@ -178,7 +182,10 @@ impl Renderer {
         });
         let palette_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("palette"),
-            entries: &[uniform_entry(wgpu::ShaderStages::VERTEX)],
+            entries: &[
+                uniform_entry(wgpu::ShaderStages::VERTEX),
+                wgpu::BindGroupLayoutEntry { binding: 1, ..uniform_entry(wgpu::ShaderStages::FRAGMENT) },
+            ],
         });
         let texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("base colour"),
@@ -446,12 +453,18 @@ impl Renderer {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
+            let tint = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tint"),
+                size: 16,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
             let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("palette"),
                 layout: &self.palette_layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }, wgpu::BindGroupEntry { binding: 1, resource: tint.as_entire_binding() }],
             });
-            self.palettes.push(PaletteSlot { buffer, bind_group });
+            self.palettes.push(PaletteSlot { buffer, tint, bind_group });
         }
     }
 
@@ -507,6 +520,7 @@ impl Renderer {
         for (slot, m) in drawable.iter().enumerate() {
             let n = m.palette.len().min(MAX_PALETTE);
             self.queue.write_buffer(&self.palettes[slot].buffer, 0, bytemuck::cast_slice(&m.palette[..n]));
+            self.queue.write_buffer(&self.palettes[slot].tint, 0, bytemuck::cast_slice(&m.tint));
         }
 
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });

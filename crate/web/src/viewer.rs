@@ -490,7 +490,10 @@ impl Viewer {
         let specs = parse_figures(figures)?;
         // Poses first (positions for sticks, palettes for meshes).
         let mut sticks: Vec<(Vec<Vec3>, &Entry, [f32; 4])> = Vec::new();
-        let mut palettes: Vec<(MeshHandle, Vec<Mat4>)> = Vec::new();
+        let mut palettes: Vec<(MeshHandle, Vec<Mat4>, [f32; 4])> = Vec::new();
+        // One figure is drawn as it is; several (candidates, overlays) each take a wash of
+        // their figure colour, so a skinned candidate matches its chip as a stick one does.
+        let several = specs.len() > 1;
         let mut drawn: Vec<Drawn> = Vec::with_capacity(specs.len());
         // Where the figures are now (for a camera following travelling figures).
         let (mut now_lo, mut now_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
@@ -533,7 +536,8 @@ impl Viewer {
                 Some((h, mesh, _, body)) => {
                     let shift = Mat4::from_translation(off);
                     let pal = mesh.palette.iter().map(|(j, bind)| shift * self.mats[*j] * *bind).collect();
-                    palettes.push((h, pal));
+                    let tint = if several { color.map(|c| 0.35 + 0.65 * c) } else { [1.0; 4] };
+                    palettes.push((h, pal, tint));
                     drawn.push(Drawn { clip: s.clip, time_secs: s.time_secs, body });
                 }
                 None => {
@@ -555,7 +559,7 @@ impl Viewer {
                 head: e.head,
             })
             .collect();
-        let meshes: Vec<MeshDraw> = palettes.iter().map(|(h, p)| MeshDraw { mesh: *h, palette: p }).collect();
+        let meshes: Vec<MeshDraw> = palettes.iter().map(|(h, p, tint)| MeshDraw { mesh: *h, palette: p, tint: *tint }).collect();
         self.last_drawn = drawn;
         if let Some(y) = self.follow_y {
             // Track the travelling figures on the ground plane.

@@ -4,6 +4,8 @@ struct Palette {
     m: array<mat4x4<f32>, 256>,
 };
 @group(1) @binding(0) var<uniform> palette: Palette;
+// Multiplies the mesh's colours (white: as it is; figure colours tell candidates apart).
+@group(1) @binding(1) var<uniform> tint: vec4<f32>;
 // The part's base-colour texture (white 1×1 when it has none), multiplying its colour.
 @group(2) @binding(0) var base_tex: texture_2d<f32>;
 @group(2) @binding(1) var base_sampler: sampler;
@@ -39,6 +41,6 @@ fn vs_main(
 
 @fragment
 fn fs_main(i: VOut) -> @location(0) vec4<f32> {
-    let base = i.color.rgb * textureSample(base_tex, base_sampler, i.uv).rgb;
+    let base = i.color.rgb * textureSample(base_tex, base_sampler, i.uv).rgb * tint.rgb;
     return vec4<f32>(shade(normalize(i.normal), base), 1.0);
 }
