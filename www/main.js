@@ -106,6 +106,7 @@ async function main() {
     onAdded: (info) => { if (searchClient) searchClient.add(info.id); else waitingForSearch.push(info.id); panel.refresh(); panel.select(info.id); },
   });
   loader.bindDrop(document.body, $("#drop"));
+  $("#stick-figure").addEventListener("change", (ev) => player.setStick(ev.target.checked));
 
   // The app opens on the engine's own demo clip: something moves with no file. Only what the
   // first pose needs runs before it; the rest waits for it (see `afterFirstPose`).

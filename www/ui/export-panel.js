@@ -1,23 +1,27 @@
 // Put the clip on screen on a character, and export it.
-// *Character*: any imported skinned humanoid (glTF); *Put on* plays the clip on screen (the
-// dance, a text animation, a move, a BVH) on it as a new library clip, drawn skinned.
+// *Character*: the built-in body or any imported skinned humanoid (glTF): the viewer draws the
+// dance, the candidates and text animations on it (`onCharacter`; *Stick* draws stick figures
+// again); *Put on* plays the clip on screen (the dance, a text animation, a move, a BVH) on an
+// imported one as a new library clip, drawn skinned.
 // Export the clip on screen (an imported clip, a text animation, the composed dance) as a GLB
 // (with the character's mesh, or the built-in body for the engine's own skeleton), a VRM
 // animation (.vrma, for VRM avatars) or a BVH file, through the engine's exporters; the browser downloads the bytes. Errors go to the
 // message list with the engine's words; nothing in the library changes.
 export class ExportPanel {
-  constructor({ button, format, character, putOn, library, player, messages, onAdded }) {
+  constructor({ button, format, character, putOn, library, player, messages, onAdded, onCharacter }) {
     this.library = library;
     this.player = player;
     this.messages = messages;
     this.format = format;
     this.character = character;
     this.onAdded = onAdded;
+    this.onCharacter = onCharacter;
     button.addEventListener("click", () => this.exportSelected());
     if (character && putOn) {
       character.addEventListener("focus", () => this.refreshCharacters());
       character.addEventListener("pointerdown", () => this.refreshCharacters());
       putOn.addEventListener("click", () => this.putOnCharacter());
+      character.addEventListener("change", () => this.characterChanged());
       this.refreshCharacters();
     }
   }
@@ -27,15 +31,33 @@ export class ExportPanel {
     const keep = this.character.value;
     const seen = new Set();
     const items = this.library.clips().filter((c) => c.hasMesh && c.humanoid.kind !== "notHumanoid" && c.format === "gltf" && !seen.has(c.source) && seen.add(c.source));
-    this.character.replaceChildren(new Option(items.length ? "Character…" : "Character: import a skinned glTF", ""));
+    this.character.replaceChildren(new Option("Stick figures", ""), new Option("Built-in body", "builtin"));
     for (const c of items) this.character.append(new Option(c.source.replace(/^.*[\\/]/, ""), String(c.id)));
     if ([...this.character.options].some((o) => o.value === keep)) this.character.value = keep;
   }
 
+  /** The chosen body: "builtin", a character's clip id, or null (stick figures). */
+  chosen() {
+    const v = this.character.value;
+    return v === "builtin" ? "builtin" : v ? Number(v) : null;
+  }
+
+  /** The viewer draws on the chosen body; one that cannot dance is refused with the engine's words. */
+  characterChanged() {
+    try {
+      this.player.setCharacter(this.chosen());
+      if (this.onCharacter) this.onCharacter(this.chosen());
+    } catch (e) {
+      this.messages.error(`Character: ${e.message}`);
+      const had = this.player.viewer.character;
+      this.character.value = had == null ? "" : String(had);
+    }
+  }
+
   putOnCharacter() {
     const id = this.player.clip;
-    const character = Number(this.character.value);
-    if (id == null || !this.character.value) { this.messages.warning("Put on: choose a character (an imported skinned glTF) and a clip."); return null; }
+    const character = this.chosen();
+    if (id == null || typeof character !== "number") { this.messages.warning("Put on: choose a character (an imported skinned glTF) and a clip."); return null; }
     try {
       const info = this.library.putOnCharacter(id, character);
       this.messages.info(`${info.name}: ready (drawn on the character; Export gives it with the character's mesh)`);
@@ -53,7 +75,10 @@ export class ExportPanel {
     const info = this.library.clip(id);
     const kind = ["bvh", "vrma"].includes(this.format.value) ? this.format.value : "glb";
     try {
-      const bytes = kind === "bvh" ? this.library.exportBvh(id) : kind === "vrma" ? this.library.exportVrma(id) : this.library.exportGlb(id);
+      // A clip with no mesh of its own goes out on the character it is drawn on.
+      const onCharacter = typeof this.chosen() === "number" && !info.hasMesh && info.humanoid.kind !== "notHumanoid";
+      const bytes = kind === "bvh" ? this.library.exportBvh(id) : kind === "vrma" ? this.library.exportVrma(id)
+        : this.library.exportGlb(id, onCharacter ? { character: this.chosen() } : undefined);
       const name = `${info.name.replace(/[^\p{L}\p{N}_.-]+/gu, "_") || "odori"}.${kind}`;
       const url = URL.createObjectURL(new Blob([bytes], { type: kind === "bvh" ? "text/plain" : "model/gltf-binary" }));
       const a = document.createElement("a");

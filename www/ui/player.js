@@ -16,6 +16,7 @@ export class Player {
     this.compare = null;
     this.onTick = null;
     this.drawnOnce = false;
+    this.stick = false;         // stick figures even when a character is chosen
     this.withSong = false;      // does Play also play the song?
     this.listeners = [];        // called with the transport state after every change
     playButton.addEventListener("click", () => this.toggle());
@@ -43,9 +44,28 @@ export class Player {
   }
 
   figures() {
-    if (this.compare) return this.compare.figures(this.time);
+    const style = this.stick ? { style: "stick" } : {};
+    if (this.compare) return this.compare.figures(this.time).map((f) => ({ ...f, ...style }));
     const ids = [this.clip, ...this.overlays.filter((id) => id !== this.clip)];
-    return ids.map((id) => ({ clip: id, timeSecs: this.time }));
+    return ids.map((id) => ({ clip: id, timeSecs: this.time, ...style }));
+  }
+
+  /**
+   * The body humanoid clips without a mesh of their own are drawn on: "builtin", an imported
+   * character's clip id, or null (stick figures). Throws the engine's error when that
+   * character cannot dance (the view keeps its body).
+   */
+  setCharacter(character) {
+    this.viewer.setCharacter(this.library, character);
+    this.reframe();
+    this.drawNow();
+  }
+
+  /** Stick figures instead of the character (one click away), or the character again. */
+  setStick(on) {
+    this.stick = on;
+    this.reframe();
+    this.drawNow();
   }
 
   /** Plays a comparison: `{ duration, figures(t) }` (the search's overlay view). */

@@ -3,7 +3,10 @@
 //! and, per frame, a camera and what to draw.
 //!
 //! Works on WebGPU and on WebGL2 (wgpu's GL backend): no storage buffers, palettes in a 16 KiB
-//! uniform block (256 joints), WGSL compiled by naga for either.
+//! uniform block (256 joints), WGSL compiled by naga for either. A part with a base-colour
+//! texture samples it (group 2) with the file's sampler; until its image arrives (the caller
+//! decodes it and fills [`Renderer::texture_target`]) and for untextured parts, a 1×1 white
+//! texture stands in, so the material's colour alone shows.
 
 mod camera;
 pub use camera::OrbitCamera;
@@ -47,6 +50,7 @@ struct MeshVertex {
     joints: [u32; 4],
     weights: [f32; 4],
     color: [f32; 4],
+    uv: [f32; 2],
 }
 
 /// One stick figure to draw this frame.
@@ -71,17 +75,25 @@ pub struct MeshHandle(usize);
 pub struct MeshDraw<'a> {
     pub mesh: MeshHandle,
     pub palette: &'a [Mat4],
+    /// Linear RGB(A) multiplying the mesh's colours: white draws it as it is; several figures
+    /// on one character (the six candidates) are told apart by their figure colours.
+    pub tint: [f32; 4],
 }
 
 struct GpuMesh {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
-    index_count: u32,
+    /// (index range, texture) per part: drawn one call each, so each can bind its texture.
+    parts: Vec<(std::ops::Range<u32>, Option<usize>)>,
     palette_len: usize,
+    /// The mesh's textures: their samplers, and bind groups once their images are in.
+    samplers: Vec<odori_core::import::Sampler>,
+    textures: Vec<Option<wgpu::BindGroup>>,
 }
 
 struct PaletteSlot {
     buffer: wgpu::Buffer,
+    tint: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
 
@@ -110,6 +122,9 @@ pub struct Renderer {
     camera_buffer: wgpu::Buffer,
     camera_bg: wgpu::BindGroup,
     palette_layout: wgpu::BindGroupLayout,
+    texture_layout: wgpu::BindGroupLayout,
+    /// The 1×1 white texture untextured parts (and textures still loading) are drawn with.
+    white: wgpu::BindGroup,
     line_pipeline: wgpu::RenderPipeline,
     figure_pipeline: wgpu::RenderPipeline,
     mesh_pipeline: wgpu::RenderPipeline,
@@ -167,7 +182,31 @@ impl Renderer {
         });
         let palette_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("palette"),
-            entries: &[uniform_entry(wgpu::ShaderStages::VERTEX)],
+            entries: &[
+                uniform_entry(wgpu::ShaderStages::VERTEX),
+                wgpu::BindGroupLayoutEntry { binding: 1, ..uniform_entry(wgpu::ShaderStages::FRAGMENT) },
+            ],
+        });
+        let texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("base colour"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
         });
         let camera_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("camera"),
@@ -187,7 +226,7 @@ impl Renderer {
         });
         let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("mesh"),
-            bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout)],
+            bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout), Some(&texture_layout)],
             immediate_size: 0,
         });
         let depth_state = Some(wgpu::DepthStencilState {
@@ -251,7 +290,7 @@ impl Renderer {
             &[Some(wgpu::VertexBufferLayout {
                 array_stride: std::mem::size_of::<MeshVertex>() as u64,
                 step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4],
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x2],
             })],
             wgpu::PrimitiveTopology::TriangleList,
             None,
@@ -269,12 +308,30 @@ impl Renderer {
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let white_tex = device.create_texture_with_data(
+            &queue,
+            &wgpu::TextureDescriptor {
+                label: Some("white"),
+                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: TEXTURE_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            &[255, 255, 255, 255],
+        );
+        let white = texture_bind_group(&device, &texture_layout, &white_tex, &odori_core::import::Sampler::default());
         Renderer {
             device,
             queue,
             camera_buffer,
             camera_bg,
             palette_layout,
+            texture_layout,
+            white,
             line_pipeline,
             figure_pipeline,
             mesh_pipeline,
@@ -305,8 +362,10 @@ impl Renderer {
         }
         let mut vertices = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
+        let mut parts = Vec::with_capacity(mesh.parts.len());
         for part in &mesh.parts {
             let base = vertices.len() as u32;
+            let textured = part.texture.filter(|t| *t < mesh.textures.len() && part.uvs.len() == part.positions.len());
             for k in 0..part.positions.len() {
                 let j = part.joints[k];
                 vertices.push(MeshVertex {
@@ -315,9 +374,12 @@ impl Renderer {
                     joints: [j[0] as u32, j[1] as u32, j[2] as u32, j[3] as u32],
                     weights: part.weights[k],
                     color: part.color,
+                    uv: if textured.is_some() { part.uvs[k] } else { [0.0, 0.0] },
                 });
             }
+            let start = indices.len() as u32;
             indices.extend(part.indices.iter().map(|i| i + base));
+            parts.push((start..indices.len() as u32, textured));
         }
         if indices.is_empty() {
             return Err(RenderError::EmptyMesh);
@@ -332,8 +394,38 @@ impl Renderer {
             contents: bytemuck::cast_slice(&indices),
             usage: wgpu::BufferUsages::INDEX,
         });
-        self.meshes.push(GpuMesh { vertices: vb, indices: ib, index_count: indices.len() as u32, palette_len: mesh.palette.len() });
+        self.meshes.push(GpuMesh {
+            vertices: vb,
+            indices: ib,
+            parts,
+            palette_len: mesh.palette.len(),
+            samplers: mesh.textures.iter().map(|t| t.sampler).collect(),
+            textures: vec![None; mesh.textures.len()],
+        });
         Ok(MeshHandle(self.meshes.len() - 1))
+    }
+
+    /// A `width` × `height` sRGB RGBA8 texture for texture `texture` of an uploaded mesh
+    /// (bound with that texture's sampler from now on), for the caller to fill: with
+    /// `queue().write_texture`, or on the web `copy_external_image_to_texture` from a decoded
+    /// image (usable as a copy destination and a render attachment, as WebGPU asks of that
+    /// copy). `None` for a mesh or texture that does not exist.
+    pub fn texture_target(&mut self, mesh: MeshHandle, texture: usize, width: u32, height: u32) -> Option<wgpu::Texture> {
+        let sampler = *self.meshes.get(mesh.0)?.samplers.get(texture)?;
+        let max = self.device.limits().max_texture_dimension_2d;
+        let tex = self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("base colour"),
+            size: wgpu::Extent3d { width: width.clamp(1, max), height: height.clamp(1, max), depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: TEXTURE_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let bg = texture_bind_group(&self.device, &self.texture_layout, &tex, &sampler);
+        self.meshes[mesh.0].textures[texture] = Some(bg);
+        Some(tex)
     }
 
     fn ensure_depth(&mut self, width: u32, height: u32) {
@@ -361,12 +453,18 @@ impl Renderer {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
+            let tint = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tint"),
+                size: 16,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
             let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("palette"),
                 layout: &self.palette_layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }, wgpu::BindGroupEntry { binding: 1, resource: tint.as_entire_binding() }],
             });
-            self.palettes.push(PaletteSlot { buffer, bind_group });
+            self.palettes.push(PaletteSlot { buffer, tint, bind_group });
         }
     }
 
@@ -422,6 +520,7 @@ impl Renderer {
         for (slot, m) in drawable.iter().enumerate() {
             let n = m.palette.len().min(MAX_PALETTE);
             self.queue.write_buffer(&self.palettes[slot].buffer, 0, bytemuck::cast_slice(&m.palette[..n]));
+            self.queue.write_buffer(&self.palettes[slot].tint, 0, bytemuck::cast_slice(&m.tint));
         }
 
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
@@ -455,7 +554,11 @@ impl Renderer {
                     pass.set_bind_group(1, &self.palettes[slot].bind_group, &[]);
                     pass.set_vertex_buffer(0, g.vertices.slice(..));
                     pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..g.index_count, 0, 0..1);
+                    for (range, tex) in &g.parts {
+                        let bg = tex.and_then(|t| g.textures.get(t)).and_then(Option::as_ref).unwrap_or(&self.white);
+                        pass.set_bind_group(2, bg, &[]);
+                        pass.draw_indexed(range.clone(), 0, 0..1);
+                    }
                 }
             }
             if !self.scratch.is_empty() {
@@ -466,6 +569,36 @@ impl Renderer {
         }
         self.queue.submit([encoder.finish()]);
     }
+}
+
+/// Base-colour textures are sRGB-encoded (glTF): sampled as linear colour.
+const TEXTURE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// glTF sampler codes → wgpu. Mipmapped minifications sample the one level there is.
+fn texture_bind_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, tex: &wgpu::Texture, s: &odori_core::import::Sampler) -> wgpu::BindGroup {
+    let filter = |code: Option<u32>| match code {
+        Some(9728) | Some(9984) | Some(9986) => wgpu::FilterMode::Nearest,
+        _ => wgpu::FilterMode::Linear,
+    };
+    let wrap = |code: u32| match code {
+        33071 => wgpu::AddressMode::ClampToEdge,
+        33648 => wgpu::AddressMode::MirrorRepeat,
+        _ => wgpu::AddressMode::Repeat,
+    };
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("base colour"),
+        address_mode_u: wrap(s.wrap_s),
+        address_mode_v: wrap(s.wrap_t),
+        mag_filter: filter(s.mag_filter),
+        min_filter: filter(s.min_filter),
+        ..Default::default()
+    });
+    let view = tex.create_view(&Default::default());
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("base colour"),
+        layout,
+        entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) }, wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&sampler) }],
+    })
 }
 
 /// Distinct figure colours (linear RGB): orange, teal, violet, lime, rose, sky, amber, mint.

@@ -9,6 +9,8 @@ use odori_core::import::SkinnedMesh;
 use odori_core::library::body::builtin_body;
 use odori_core::retarget::is_canonical;
 use odori_core::Clip;
+use std::rc::Rc;
+
 use serde::Deserialize;
 use wasm_bindgen::prelude::*;
 
@@ -19,11 +21,20 @@ use crate::library::Library;
 #[serde(rename_all = "camelCase", default, deny_unknown_fields)]
 struct JsExportOptions {
     /// "auto" (default): the clip's own character when it has one, else the built-in body
-    /// when the clip is on the canonical skeleton; "builtin"; "none" (skeleton only).
-    character: Option<String>,
+    /// when the clip is on the canonical skeleton; "builtin"; "none" (skeleton only); or the
+    /// id of an imported character's clip: the motion put on that character (as the viewer
+    /// draws it with `setCharacter`).
+    character: Option<CharacterChoice>,
     /// Export only this stretch of the clip, seconds (a range of bars of a dance).
     start_secs: Option<f32>,
     end_secs: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum CharacterChoice {
+    Named(String),
+    Clip(u32),
 }
 
 const KNOWN: &[&str] = &["character", "startSecs", "endSecs"];
@@ -47,6 +58,18 @@ fn ranged(clip: &Clip, o: &JsExportOptions) -> JsResult<Clip> {
     Ok(clip.slice(f0, f1, clip.name.clone()))
 }
 
+impl Library {
+    /// The character of clip `id` (an imported skinned humanoid glTF) ready to play humanoid
+    /// motion, with the library's shared mesh (its id lets the viewer upload it once). One
+    /// path for *Put on*, export on a character and the viewer's chosen character.
+    pub(crate) fn character_of(&self, id: u32) -> JsResult<(Character, Option<(u32, Rc<SkinnedMesh>)>)> {
+        let ch = self.entry(id)?;
+        let character = Character::from_parts(&ch.clip.source, ch.clip.skeleton.clone(), ch.mesh.as_ref().map(|(_, m)| m.as_ref()), &ch.humanoid, &ch.status)
+            .map_err(|e| OdoriError::new(e.kind(), e.to_string()))?;
+        Ok((character, ch.mesh.clone()))
+    }
+}
+
 #[wasm_bindgen]
 impl Library {
     /// The clip as a GLB file (glTF 2.0 binary): its skeleton as nodes, the character's mesh
@@ -56,10 +79,22 @@ impl Library {
     pub fn export_glb(&self, id: u32, #[wasm_bindgen(unchecked_param_type = "ExportOptions | undefined")] options: JsValue) -> Result<Vec<u8>, OdoriError> {
         let o: JsExportOptions = from_js(options, "export options", KNOWN)?;
         let e = self.entry(id)?;
+        let named = match &o.character {
+            Some(CharacterChoice::Clip(ch)) => {
+                // On an imported character: the clip put on it first (the viewer's path), then
+                // exported with the character's mesh and skin.
+                let (character, _) = self.character_of(*ch)?;
+                let on = character.retarget(&e.clip, &e.humanoid).map_err(|err| OdoriError::new(err.kind(), err.to_string()))?;
+                let clip = ranged(&on, &o)?;
+                return Ok(glb(&clip.skeleton, &[&clip], &GlbOptions { mesh: Some(&character.mesh) })?);
+            }
+            Some(CharacterChoice::Named(s)) => s.as_str(),
+            None => "auto",
+        };
         let clip = ranged(&e.clip, &o)?;
         let canonical = is_canonical(&clip.skeleton);
         let body: Option<SkinnedMesh>;
-        let mesh: Option<&SkinnedMesh> = match o.character.as_deref().unwrap_or("auto") {
+        let mesh: Option<&SkinnedMesh> = match named {
             "auto" => match &e.mesh {
                 Some((_, m)) => Some(m.as_ref()),
                 None if canonical => {
@@ -79,7 +114,7 @@ impl Library {
                 ))
             }
             "none" => None,
-            other => return Err(OdoriError::new("bad-argument", format!("export options: character must be \"auto\", \"builtin\" or \"none\", got \"{other}\""))),
+            other => return Err(OdoriError::new("bad-argument", format!("export options: character must be \"auto\", \"builtin\", \"none\" or a character's clip id, got \"{other}\""))),
         };
         Ok(glb(&clip.skeleton, &[&clip], &GlbOptions { mesh })?)
     }
@@ -115,10 +150,7 @@ impl Library {
     /// what is missing; the library is left as it was.
     #[wasm_bindgen(js_name = putOnCharacter, unchecked_return_type = "ClipInfo")]
     pub fn put_on_character(&mut self, clip_id: u32, character_id: u32) -> Result<JsValue, OdoriError> {
-        let ch = self.entry(character_id)?;
-        let character = Character::from_parts(&ch.clip.source, ch.clip.skeleton.clone(), ch.mesh.as_ref().map(|(_, m)| m.as_ref()), &ch.humanoid, &ch.status)
-            .map_err(|e| OdoriError::new(e.kind(), e.to_string()))?;
-        let mesh = ch.mesh.clone();
+        let (character, mesh) = self.character_of(character_id)?;
         let src = self.entry(clip_id)?;
         let map: HumanoidMap = src.humanoid.clone();
         let out = character.retarget(&src.clip, &map).map_err(|e| OdoriError::new(e.kind(), e.to_string()))?;

@@ -122,12 +122,26 @@ export interface FigureSpec {
   color?: [number, number, number];
   /** Added to every joint, metres (side-by-side layouts). */
   offset?: [number, number, number];
-  /** "auto": the skinned character when the clip has one, else a stick figure. */
+  /** "auto": the clip's own skinned character when it has one, else the viewer's chosen character (`setCharacter`), else a stick figure. */
   style?: "auto" | "stick" | "mesh";
 }
+/** How a figure was drawn: its own mesh, the chosen imported character, the built-in body, or a stick figure. */
+export type FigureBody = "own" | "character" | "builtin" | "stick";
+export interface DrawnFigure {
+  clip: number;
+  timeSecs: number;
+  body: FigureBody;
+}
+export interface FigureJoints {
+  /** Joint names of the skeleton the figure is posed on (the character's rig when on one). */
+  names: string[];
+  /** World positions, x, y, z per joint, metres. */
+  positions: number[];
+  body: FigureBody;
+}
 export interface ExportOptions {
-  /** GLB only. "auto": the clip's own character, else the built-in body for canonical clips; "builtin"; "none": skeleton only. */
-  character?: "auto" | "builtin" | "none";
+  /** GLB only. "auto": the clip's own character, else the built-in body for canonical clips; "builtin"; "none": skeleton only; or an imported character's clip id: the motion put on that character. */
+  character?: "auto" | "builtin" | "none" | number;
   /** Export only this stretch of the clip, seconds. */
   startSecs?: number;
   endSecs?: number;

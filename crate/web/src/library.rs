@@ -21,6 +21,9 @@ pub(crate) struct Entry {
     pub mesh: Option<(u32, Rc<SkinnedMesh>)>,
     pub bones: Vec<(usize, usize)>,
     pub head: Option<usize>,
+    /// Changes whenever the clip under this id changes (a dance or text animation made
+    /// again keeps its id): the viewer's character cache is keyed by it.
+    pub rev: u64,
 }
 
 #[derive(Serialize)]
@@ -80,6 +83,7 @@ fn info(e: &Entry) -> ClipInfo<'_> {
 pub struct Library {
     pub(crate) entries: Vec<Entry>,
     next_id: u32,
+    next_rev: u64,
 }
 
 impl Default for Library {
@@ -94,8 +98,14 @@ impl Library {
         self.next_id += 1;
         let bones = if status.is_humanoid() { humanoid.figure_bones(&clip.skeleton) } else { clip.skeleton.bones() };
         let head = humanoid.get(Canon::Head).filter(|_| status.is_humanoid());
-        self.entries.push(Entry { id, clip, format, humanoid, status, mesh, bones, head });
+        let rev = self.bump_rev();
+        self.entries.push(Entry { id, clip, format, humanoid, status, mesh, bones, head, rev });
         id
+    }
+
+    fn bump_rev(&mut self) -> u64 {
+        self.next_rev += 1;
+        self.next_rev
     }
 
     /// Adds a clip the engine made (text animation, a generated dance); with `replace`, it
@@ -108,7 +118,8 @@ impl Library {
             let id = self.entries[old].id;
             let bones = if status.is_humanoid() { map.figure_bones(&clip.skeleton) } else { clip.skeleton.bones() };
             let head = map.get(Canon::Head);
-            self.entries[old] = Entry { id, clip, format, humanoid: map, status, mesh: None, bones, head };
+            let rev = self.bump_rev();
+            self.entries[old] = Entry { id, clip, format, humanoid: map, status, mesh: None, bones, head, rev };
             return id;
         }
         self.push(clip, format, map, status, None)
@@ -140,7 +151,7 @@ impl Library {
     /// An empty library.
     #[wasm_bindgen(constructor)]
     pub fn new() -> Library {
-        Library { entries: Vec::new(), next_id: 1 }
+        Library { entries: Vec::new(), next_id: 1, next_rev: 0 }
     }
 
     /// Adds the engine's own demo clip; returns its `ClipInfo`.

@@ -1,11 +1,25 @@
 //! `Viewer`: the wgpu renderer on a canvas, fed from a `Library` once per frame.
+//!
+//! A chosen character (`setCharacter`: the built-in body or an imported skinned humanoid)
+//! plays every humanoid clip that has no mesh of its own — the dance, the six candidates, text
+//! animations, BVH moves — through the core's retargeting (the path *Put on* and export on a
+//! character take), so the figure on screen is what an export gives. The retargeted clips are
+//! kept per library clip and made again when that clip changes (its revision) or the
+//! character does; a figure drawn with style "stick" is the stick figure as before.
 
+use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
+use std::rc::Rc;
 
 use glam::{Mat4, Quat, Vec3};
+use odori_core::builtin::canonical_skeleton;
+use odori_core::character::Character;
+use odori_core::import::{MeshTexture, SkinnedMesh};
+use odori_core::library::body::builtin_body;
+use odori_core::retarget::{is_canonical, to_canonical};
 use odori_core::Clip;
 use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, Renderer, FIGURE_COLORS};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 use web_sys::HtmlCanvasElement;
 
@@ -26,6 +40,43 @@ struct FigureSpec {
     color: Option<[f32; 3]>,
     offset: Option<[f32; 3]>,
     style: Option<String>,
+}
+
+/// Mesh key of the built-in body in the viewer's uploads (library mesh ids count up from 1).
+const BUILTIN_MESH_KEY: u32 = u32::MAX;
+
+/// What clips without a mesh of their own are drawn on.
+enum Body {
+    /// Each clip as it is: its own mesh, or a stick figure.
+    Stick,
+    /// The engine's built-in body (humanoid clips carried onto the canonical skeleton first).
+    Builtin { mesh: Rc<SkinnedMesh> },
+    /// An imported character (library clip `id`), with its shared mesh.
+    Imported { id: u32, character: Box<Character>, mesh_key: u32, mesh: Rc<SkinnedMesh> },
+}
+
+/// A library clip on the chosen body, at the clip's revision `rev`.
+struct OnBody {
+    rev: u64,
+    clip: Option<Rc<Clip>>,
+}
+
+/// How one figure was last drawn (`lastDrawn`, for tests and labels).
+#[derive(Serialize, Clone)]
+#[serde(rename_all = "camelCase")]
+struct Drawn {
+    clip: u32,
+    time_secs: f32,
+    /// "own" (the clip's own mesh), "character" (an imported character), "builtin" or "stick".
+    body: &'static str,
+}
+
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct FigureJoints {
+    names: Vec<String>,
+    positions: Vec<f32>,
+    body: &'static str,
 }
 
 /// Local pose of a clip at a time (interpolated), then world positions.
@@ -54,10 +105,108 @@ pub struct Viewer {
     /// Following travelling figures: the camera's height above the ground while its target
     /// tracks the figures' centre on the ground plane each frame (see `frameFigures`).
     follow_y: Option<f32>,
+    /// Base-colour images decoded by the browser, waiting to be copied into their textures
+    /// at the next draw; and how many are still being decoded.
+    decoded: Rc<RefCell<Vec<(MeshHandle, usize, web_sys::ImageBitmap)>>>,
+    decoding: Rc<Cell<usize>>,
+    body: Body,
+    /// Library clips on `body`, by clip id.
+    on_body: HashMap<u32, OnBody>,
+    last_drawn: Vec<Drawn>,
 }
 
 fn gpu_err(msg: impl Into<String>) -> OdoriError {
     OdoriError::new("gpu", msg)
+}
+
+impl Viewer {
+    /// Clip `e` on the chosen body: `Some((clip to pose, mesh key, mesh, body name))`, or `None`
+    /// when it is drawn as it is (no body chosen, a mesh of its own, or not humanoid).
+    fn on_body(&mut self, e: &Entry) -> Option<(Rc<Clip>, u32, Rc<SkinnedMesh>, &'static str)> {
+        if e.mesh.is_some() {
+            return None;
+        }
+        let (key, mesh, name) = match &self.body {
+            Body::Stick => return None,
+            Body::Builtin { mesh } => (BUILTIN_MESH_KEY, mesh.clone(), "builtin"),
+            Body::Imported { mesh_key, mesh, .. } => (*mesh_key, mesh.clone(), "character"),
+        };
+        if let Some(c) = self.on_body.get(&e.id).filter(|c| c.rev == e.rev) {
+            return c.clip.clone().map(|c| (c, key, mesh, name));
+        }
+        // Made once per clip revision (a whole dance takes a moment; each frame then only samples).
+        let clip = match &self.body {
+            Body::Stick => None,
+            Body::Builtin { .. } if !e.status.is_humanoid() => None,
+            Body::Builtin { .. } if is_canonical(&e.clip.skeleton) => Some(Rc::new(e.clip.clone())),
+            Body::Builtin { .. } => Some(Rc::new(to_canonical(&e.clip, &e.humanoid, e.clip.fps))),
+            // A clip that is not humanoid (the Fox's, a prop) stays a stick figure.
+            Body::Imported { character, .. } => character.retarget(&e.clip, &e.humanoid).ok().map(Rc::new),
+        };
+        self.on_body.insert(e.id, OnBody { rev: e.rev, clip: clip.clone() });
+        clip.map(|c| (c, key, mesh, name))
+    }
+
+    /// The uploaded mesh under `key`, uploading it the first time (`None`: drawn as sticks).
+    fn mesh_handle(&mut self, key: u32, mesh: &SkinnedMesh) -> Option<MeshHandle> {
+        if let Some(h) = self.meshes.get(&key) {
+            return *h;
+        }
+        let h = self.renderer.upload_mesh(mesh).ok();
+        if let Some(h) = h {
+            for (i, t) in mesh.textures.iter().enumerate() {
+                self.decode_texture(h, i, t);
+            }
+        }
+        self.meshes.insert(key, h);
+        h
+    }
+
+    /// Decodes a base-colour image with the browser's own decoders (`createImageBitmap`: PNG
+    /// and JPEG, off the main thread, nothing added to the wasm); the texture is filled at
+    /// the first draw after it is ready. A broken image leaves the part its base colour.
+    fn decode_texture(&self, mesh: MeshHandle, index: usize, t: &MeshTexture) {
+        let Some(window) = web_sys::window() else { return };
+        let parts = js_sys::Array::of1(&js_sys::Uint8Array::from(t.image.as_slice()));
+        let bag = web_sys::BlobPropertyBag::new();
+        bag.set_type(&t.mime_type);
+        let Ok(blob) = web_sys::Blob::new_with_u8_array_sequence_and_options(&parts, &bag) else { return };
+        let opts = web_sys::ImageBitmapOptions::new();
+        // The texels as stored: glTF colour is straight alpha, sRGB-encoded.
+        opts.set_premultiply_alpha(web_sys::PremultiplyAlpha::None);
+        opts.set_color_space_conversion(web_sys::ColorSpaceConversion::None);
+        let Ok(promise) = window.create_image_bitmap_with_blob_and_image_bitmap_options(&blob, &opts) else { return };
+        let (out, decoding) = (self.decoded.clone(), self.decoding.clone());
+        decoding.set(decoding.get() + 1);
+        wasm_bindgen_futures::spawn_local(async move {
+            match wasm_bindgen_futures::JsFuture::from(promise).await {
+                Ok(bmp) => out.borrow_mut().push((mesh, index, bmp.unchecked_into())),
+                Err(e) => web_sys::console::warn_2(&JsValue::from_str(&format!("texture {index} could not be decoded; its base colour is drawn:")), &e),
+            }
+            decoding.set(decoding.get() - 1);
+        });
+    }
+
+    /// Copies decoded images into their textures.
+    fn take_decoded(&mut self) {
+        let ready: Vec<_> = self.decoded.borrow_mut().drain(..).collect();
+        for (mesh, index, bmp) in ready {
+            let Some(tex) = self.renderer.texture_target(mesh, index, bmp.width(), bmp.height()) else { continue };
+            let size = wgpu::Extent3d { width: tex.width(), height: tex.height(), depth_or_array_layers: 1 };
+            self.renderer.queue().copy_external_image_to_texture(
+                &wgpu::CopyExternalImageSourceInfo { source: wgpu::ExternalImageSource::ImageBitmap(bmp), origin: wgpu::Origin2d::ZERO, flip_y: false },
+                wgpu::CopyExternalImageDestInfo {
+                    texture: &tex,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                    color_space: wgpu::PredefinedColorSpace::Srgb,
+                    premultiplied_alpha: false,
+                },
+                size,
+            );
+        }
+    }
 }
 
 #[wasm_bindgen]
@@ -143,6 +292,11 @@ impl Viewer {
             trans: Vec::new(),
             mats: Vec::new(),
             follow_y: None,
+            decoded: Rc::new(RefCell::new(Vec::new())),
+            decoding: Rc::new(Cell::new(0)),
+            body: Body::Stick,
+            on_body: HashMap::new(),
+            last_drawn: Vec::new(),
         })
     }
 
@@ -180,6 +334,86 @@ impl Viewer {
         self.camera.zoom(steps);
     }
 
+    /// The body that plays every humanoid clip without a mesh of its own (the dance, the
+    /// candidates, text animations, moves): `"builtin"` (the engine's own body), the id of an
+    /// imported skinned humanoid glTF clip (its character), or `null`/`undefined` (stick
+    /// figures, as before). A character that cannot dance (no skin, not humanoid, missing
+    /// limbs) throws an `OdoriError` (`character-*`) naming what is missing, and the viewer
+    /// keeps the body it had. Clips with their own mesh keep it; a figure of style "stick"
+    /// is always the stick figure.
+    #[wasm_bindgen(js_name = setCharacter)]
+    pub fn set_character(
+        &mut self,
+        library: &Library,
+        #[wasm_bindgen(unchecked_param_type = "number | \"builtin\" | null | undefined")] character: JsValue,
+    ) -> Result<(), OdoriError> {
+        let body = if character.is_null() || character.is_undefined() {
+            Body::Stick
+        } else if character.as_string().as_deref() == Some("builtin") {
+            match &self.body {
+                Body::Builtin { mesh } => Body::Builtin { mesh: mesh.clone() },
+                _ => Body::Builtin { mesh: Rc::new(builtin_body(&canonical_skeleton())) },
+            }
+        } else if let Some(id) = character.as_f64().filter(|v| v.fract() == 0.0 && *v >= 0.0 && *v <= u32::MAX as f64) {
+            let id = id as u32;
+            if matches!(&self.body, Body::Imported { id: have, .. } if *have == id) {
+                return Ok(());
+            }
+            let (character, mesh) = library.character_of(id)?;
+            // `character_of` has checked the skin: the library's mesh is there.
+            let (mesh_key, mesh) = mesh.ok_or_else(|| OdoriError::new("character-no-skin", format!("clip {id} has no skinned mesh")))?;
+            Body::Imported { id, character: Box::new(character), mesh_key, mesh }
+        } else {
+            return Err(OdoriError::new("bad-argument", format!("setCharacter: expected \"builtin\", a character's clip id or null, got {character:?}")));
+        };
+        self.body = body;
+        self.on_body.clear();
+        Ok(())
+    }
+
+    /// The body chosen with `setCharacter`: "builtin", the character's clip id, or `null`.
+    #[wasm_bindgen(getter, unchecked_return_type = "number | \"builtin\" | null")]
+    pub fn character(&self) -> JsValue {
+        match &self.body {
+            Body::Stick => JsValue::NULL,
+            Body::Builtin { .. } => JsValue::from_str("builtin"),
+            Body::Imported { id, .. } => JsValue::from(*id),
+        }
+    }
+
+    /// World joint positions of clip `clip` at `timeSecs` as the viewer draws it (style
+    /// "auto"): on the chosen body when it plays that clip, else the clip's own skeleton.
+    /// `{ names, positions (x, y, z per joint, metres), body }`; `body` as in `lastDrawn`.
+    #[wasm_bindgen(js_name = figureJoints, unchecked_return_type = "FigureJoints")]
+    pub fn figure_joints(&mut self, library: &Library, clip: u32, time_secs: f32) -> Result<JsValue, OdoriError> {
+        let e = library.entry(clip)?;
+        if !time_secs.is_finite() {
+            return Err(OdoriError::new("bad-argument", format!("figureJoints: time {time_secs} s is not a finite number")));
+        }
+        let on = self.on_body(e);
+        let (c, body): (&Clip, &'static str) = match &on {
+            Some((c, _, _, body)) => (c.as_ref(), *body),
+            None => (&e.clip, if e.mesh.is_some() { "own" } else { "stick" }),
+        };
+        let positions = pose_at(c, time_secs).iter().flat_map(|p| p.to_array()).collect();
+        let names = c.skeleton.joints.iter().map(|j| j.name.clone()).collect();
+        Ok(crate::error::to_js(&FigureJoints { names, positions, body }))
+    }
+
+    /// Base-colour images still being decoded (a texture shows from the first draw after
+    /// this reaches 0).
+    #[wasm_bindgen(getter, js_name = texturesLoading)]
+    pub fn textures_loading(&self) -> usize {
+        self.decoding.get() + self.decoded.borrow().len()
+    }
+
+    /// How each figure of the last `draw` was drawn: `[{ clip, timeSecs, body }]`, body
+    /// "own" (the clip's mesh), "character", "builtin" or "stick".
+    #[wasm_bindgen(js_name = lastDrawn, unchecked_return_type = "DrawnFigure[]")]
+    pub fn last_drawn(&self) -> JsValue {
+        crate::error::to_js(&self.last_drawn)
+    }
+
     /// Where a world point lands on the canvas, in canvas pixels from the top left
     /// (`[x, y]`), or `undefined` when it is behind the camera. For labels and tests.
     pub fn project(&self, x: f32, y: f32, z: f32) -> Option<Vec<f32>> {
@@ -211,10 +445,13 @@ impl Viewer {
         for s in &specs {
             let e = library.entry(s.clip)?;
             let off = Vec3::from(s.offset.unwrap_or([0.0; 3]));
-            let frames = e.clip.frame_count();
+            // Framed as drawn: on the chosen body (a character's size differs from the clip's).
+            let on = if s.style.as_deref() == Some("stick") { None } else { self.on_body(e) };
+            let clip: &Clip = on.as_ref().map(|o| &*o.0).unwrap_or(&e.clip);
+            let frames = clip.frame_count();
             for (k, m) in moments.iter_mut().enumerate() {
-                let t = (k as f32 / (SAMPLES - 1) as f32) * (frames.saturating_sub(1)) as f32 / e.clip.fps;
-                for p in pose_at(&e.clip, t) {
+                let t = (k as f32 / (SAMPLES - 1) as f32) * (frames.saturating_sub(1)) as f32 / clip.fps;
+                for p in pose_at(clip, t) {
                     lo = lo.min(p + off);
                     hi = hi.max(p + off);
                     m.0 = m.0.min(p + off);
@@ -253,7 +490,11 @@ impl Viewer {
         let specs = parse_figures(figures)?;
         // Poses first (positions for sticks, palettes for meshes).
         let mut sticks: Vec<(Vec<Vec3>, &Entry, [f32; 4])> = Vec::new();
-        let mut palettes: Vec<(MeshHandle, Vec<Mat4>)> = Vec::new();
+        let mut palettes: Vec<(MeshHandle, Vec<Mat4>, [f32; 4])> = Vec::new();
+        // One figure is drawn as it is; several (candidates, overlays) each take a wash of
+        // their figure colour, so a skinned candidate matches its chip as a stick one does.
+        let several = specs.len() > 1;
+        let mut drawn: Vec<Drawn> = Vec::with_capacity(specs.len());
         // Where the figures are now (for a camera following travelling figures).
         let (mut now_lo, mut now_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         for (i, s) in specs.iter().enumerate() {
@@ -264,31 +505,47 @@ impl Viewer {
             if !matches!(style, "auto" | "stick" | "mesh") {
                 return Err(OdoriError::new("bad-argument", format!("figure style must be auto, stick or mesh, not '{style}'")));
             }
-            e.clip.sample_into(s.time_secs, &mut self.rot, &mut self.trans);
+            // The clip's own mesh, else the chosen body, else a stick figure.
+            let own = match (&e.mesh, style) {
+                (Some((key, mesh)), "auto" | "mesh") => {
+                    let (key, mesh) = (*key, mesh.clone());
+                    self.mesh_handle(key, &mesh).map(|h| (h, mesh, None, "own"))
+                }
+                _ => None,
+            };
+            let skinned = match own {
+                Some(o) => Some(o),
+                None if style != "stick" => match self.on_body(e) {
+                    Some((clip, key, mesh, body)) => self.mesh_handle(key, &mesh).map(|h| (h, mesh, Some(clip), body)),
+                    None => None,
+                },
+                None => None,
+            };
+            let posed: &Clip = match &skinned {
+                Some((_, _, Some(c), _)) => c.as_ref(),
+                _ => &e.clip,
+            };
+            posed.sample_into(s.time_secs, &mut self.rot, &mut self.trans);
             let mut pos = Vec::new();
-            e.clip.skeleton.forward_kinematics(&self.rot, &self.trans, &mut pos, Some(&mut self.mats));
+            posed.skeleton.forward_kinematics(&self.rot, &self.trans, &mut pos, Some(&mut self.mats));
             for p in &pos {
                 now_lo = now_lo.min(*p + off);
                 now_hi = now_hi.max(*p + off);
             }
-            let handle = match (&e.mesh, style) {
-                (Some((mesh_id, mesh)), "auto" | "mesh") => *self
-                    .meshes
-                    .entry(*mesh_id)
-                    .or_insert_with(|| self.renderer.upload_mesh(mesh).ok()),
-                _ => None,
-            };
-            match (handle, &e.mesh) {
-                (Some(h), Some((_, mesh))) => {
+            match skinned {
+                Some((h, mesh, _, body)) => {
                     let shift = Mat4::from_translation(off);
                     let pal = mesh.palette.iter().map(|(j, bind)| shift * self.mats[*j] * *bind).collect();
-                    palettes.push((h, pal));
+                    let tint = if several { color.map(|c| 0.35 + 0.65 * c) } else { [1.0; 4] };
+                    palettes.push((h, pal, tint));
+                    drawn.push(Drawn { clip: s.clip, time_secs: s.time_secs, body });
                 }
-                _ => {
+                None => {
                     for p in pos.iter_mut() {
                         *p += off;
                     }
                     sticks.push((pos, e, color));
+                    drawn.push(Drawn { clip: s.clip, time_secs: s.time_secs, body: "stick" });
                 }
             }
         }
@@ -302,7 +559,8 @@ impl Viewer {
                 head: e.head,
             })
             .collect();
-        let meshes: Vec<MeshDraw> = palettes.iter().map(|(h, p)| MeshDraw { mesh: *h, palette: p }).collect();
+        let meshes: Vec<MeshDraw> = palettes.iter().map(|(h, p, tint)| MeshDraw { mesh: *h, palette: p, tint: *tint }).collect();
+        self.last_drawn = drawn;
         if let Some(y) = self.follow_y {
             // Track the travelling figures on the ground plane.
             if now_lo.x <= now_hi.x {
@@ -319,6 +577,7 @@ impl Viewer {
             }
             _ => return Ok(()),
         };
+        self.take_decoded();
         let view = frame.texture.create_view(&wgpu::TextureViewDescriptor { format: Some(self.view_format), ..Default::default() });
         self.renderer.render(&view, self.config.width, self.config.height, &self.camera, &figures, &meshes);
         self.renderer.queue().present(frame);

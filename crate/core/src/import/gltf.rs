@@ -27,6 +27,39 @@ pub struct MeshPart {
     pub indices: Vec<u32>,
     /// Linear RGBA base colour of the material.
     pub color: [f32; 4],
+    /// The material's base-colour texture (an index into [`SkinnedMesh::textures`]), which
+    /// multiplies `color`; `uvs` are its texture coordinates (the set the material names),
+    /// one per vertex. Empty and `None` for an untextured part.
+    #[serde(default)]
+    pub texture: Option<usize>,
+    #[serde(default)]
+    pub uvs: Vec<[f32; 2]>,
+}
+
+/// How a texture is sampled (glTF's sampler codes: 9728 nearest, 9729 linear, the mipmap
+/// minifications; 33071 clamp, 33648 mirrored repeat, 10497 repeat).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Sampler {
+    pub mag_filter: Option<u32>,
+    pub min_filter: Option<u32>,
+    pub wrap_s: u32,
+    pub wrap_t: u32,
+}
+
+impl Default for Sampler {
+    fn default() -> Self {
+        Sampler { mag_filter: None, min_filter: None, wrap_s: 10497, wrap_t: 10497 }
+    }
+}
+
+/// A base-colour texture as the file holds it: the encoded image (PNG or JPEG; decoding is
+/// the drawing side's, the browser's decoders in the app) and its sampler.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MeshTexture {
+    /// `image/png` or `image/jpeg`.
+    pub mime_type: String,
+    pub image: Vec<u8>,
+    pub sampler: Sampler,
 }
 
 /// A character's drawable parts, skinned to the clip skeleton.
@@ -39,6 +72,9 @@ pub struct SkinnedMesh {
     pub parts: Vec<MeshPart>,
     /// (skeleton joint, bind matrix) per palette slot.
     pub palette: Vec<(usize, Mat4)>,
+    /// Base-colour textures the parts refer to.
+    #[serde(default)]
+    pub textures: Vec<MeshTexture>,
 }
 
 fn gerr(file: &str, message: impl Into<String>) -> ImportError {
@@ -546,6 +582,39 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
     finish(Format::Gltf, file, skeleton, clips, mesh, warnings)
 }
 
+/// A texture's embedded image (in a buffer view, or a `data:` URI) and sampler; `None` for
+/// an image in an outside file or of a type the drawing side cannot decode.
+fn read_texture(tex: &gltf::Texture<'_>, data: &[Vec<u8>]) -> Option<MeshTexture> {
+    let s = tex.sampler();
+    let sampler = Sampler {
+        mag_filter: s.mag_filter().map(|f| f.as_gl_enum()),
+        min_filter: s.min_filter().map(|f| f.as_gl_enum()),
+        wrap_s: s.wrap_s().as_gl_enum(),
+        wrap_t: s.wrap_t().as_gl_enum(),
+    };
+    let (mime_type, image) = match tex.source().source() {
+        gltf::image::Source::View { view, mime_type } => {
+            let buf = data.get(view.buffer().index())?;
+            (mime_type.to_string(), buf.get(view.offset()..view.offset().checked_add(view.length())?)?.to_vec())
+        }
+        gltf::image::Source::Uri { uri, mime_type } => {
+            let rest = uri.strip_prefix("data:")?;
+            let (head, body) = rest.split_once(";base64,")?;
+            (mime_type.unwrap_or(head).to_string(), decode_base64(body)?)
+        }
+    };
+    // The file's word for the type, checked against the bytes themselves.
+    let sniffed = if image.starts_with(b"\x89PNG\r\n\x1a\n") {
+        "image/png"
+    } else if image.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        "image/jpeg"
+    } else {
+        return None;
+    };
+    let _ = mime_type;
+    Some(MeshTexture { mime_type: sniffed.to_string(), image, sampler })
+}
+
 fn read_meshes(
     file: &str,
     data: &[Vec<u8>],
@@ -557,7 +626,8 @@ fn read_meshes(
 ) -> Result<Option<SkinnedMesh>, ImportError> {
     let get = |b: gltf::Buffer<'_>| data.get(b.index()).map(|d| d.as_slice());
     let mut mesh = SkinnedMesh::default();
-    let mut textured = false;
+    // glTF texture index → index in `mesh.textures` (each image is kept once).
+    let mut texture_of: HashMap<usize, Option<usize>> = HashMap::new();
     for n in nodes {
         let Some(m) = n.mesh() else { continue };
         // Palette slots this node's vertices refer to.
@@ -635,12 +705,29 @@ fn read_meshes(
                 (vec![[slot_base as u16, 0, 0, 0]; nv], vec![[1.0, 0.0, 0.0, 0.0]; nv])
             };
             let pbr = prim.material().pbr_metallic_roughness();
-            textured |= pbr.base_color_texture().is_some();
-            mesh.parts.push(MeshPart { positions, normals, joints, weights, indices, color: pbr.base_color_factor() });
+            let mut part = MeshPart { positions, normals, joints, weights, indices, color: pbr.base_color_factor(), ..Default::default() };
+            if let Some(info) = pbr.base_color_texture() {
+                let uvs: Vec<[f32; 2]> = r.read_tex_coords(info.tex_coord()).map(|t| t.into_f32().collect()).unwrap_or_default();
+                let tex = info.texture();
+                let slot = *texture_of.entry(tex.index()).or_insert_with(|| {
+                    let t = read_texture(&tex, data);
+                    if t.is_none() {
+                        warnings.push(format!("texture {} is not an embedded PNG or JPEG image and is not drawn", tex.index()));
+                    }
+                    t.map(|t| {
+                        mesh.textures.push(t);
+                        mesh.textures.len() - 1
+                    })
+                });
+                if uvs.len() == nv && slot.is_some() {
+                    part.texture = slot;
+                    part.uvs = uvs;
+                } else if slot.is_some() {
+                    warnings.push(format!("mesh '{}' has a texture but no TEXCOORD_{} for its {nv} vertices; its base colour is used", m.name().unwrap_or("?"), info.tex_coord()));
+                }
+            }
+            mesh.parts.push(part);
         }
-    }
-    if textured {
-        warnings.push("textures are not drawn; the material's base colour is used".into());
     }
     Ok(if mesh.parts.is_empty() { None } else { Some(mesh) })
 }

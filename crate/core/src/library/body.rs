@@ -96,7 +96,7 @@ pub fn builtin_body(skeleton: &Skeleton) -> SkinnedMesh {
     for (c, a, b, r) in bones {
         capsule(&mut part, a, b, r, c.index() as u16);
     }
-    SkinnedMesh { parts: vec![part], palette }
+    SkinnedMesh { parts: vec![part], palette, textures: Vec::new() }
 }
 
 #[cfg(test)]

@@ -4,11 +4,17 @@ struct Palette {
     m: array<mat4x4<f32>, 256>,
 };
 @group(1) @binding(0) var<uniform> palette: Palette;
+// Multiplies the mesh's colours (white: as it is; figure colours tell candidates apart).
+@group(1) @binding(1) var<uniform> tint: vec4<f32>;
+// The part's base-colour texture (white 1×1 when it has none), multiplying its colour.
+@group(2) @binding(0) var base_tex: texture_2d<f32>;
+@group(2) @binding(1) var base_sampler: sampler;
 
 struct VOut {
     @builtin(position) pos: vec4<f32>,
     @location(0) normal: vec3<f32>,
     @location(1) color: vec4<f32>,
+    @location(2) uv: vec2<f32>,
 };
 
 @vertex
@@ -18,6 +24,7 @@ fn vs_main(
     @location(2) joints: vec4<u32>,
     @location(3) weights: vec4<f32>,
     @location(4) color: vec4<f32>,
+    @location(5) uv: vec2<f32>,
 ) -> VOut {
     let skin = palette.m[min(joints.x, MAX_PALETTE - 1u)] * weights.x
              + palette.m[min(joints.y, MAX_PALETTE - 1u)] * weights.y
@@ -28,10 +35,12 @@ fn vs_main(
     o.pos = cam.view_proj * world;
     o.normal = normalize((skin * vec4<f32>(n, 0.0)).xyz);
     o.color = color;
+    o.uv = uv;
     return o;
 }
 
 @fragment
 fn fs_main(i: VOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(shade(normalize(i.normal), i.color.rgb), 1.0);
+    let base = i.color.rgb * textureSample(base_tex, base_sampler, i.uv).rgb * tint.rgb;
+    return vec4<f32>(shade(normalize(i.normal), base), 1.0);
 }
