@@ -27,9 +27,23 @@ cargo run -q -p xtask -- check-core-deps
 step "native tests (cargo test: the core, its real-data integration tests, the build tool)"
 cargo test -q
 
-step "short fuzz run (${ODORI_FUZZ_SECS:-10} s per target; ./dev fuzz runs long)"
-bash tests/fuzz.sh "${ODORI_FUZZ_SECS:-10}"
-
-step "wasm package in Node and the app in headless Chromium (WebGL2 and WebGPU)"
+# The Node and browser tests run two files at a time (each file its own Chromium; much of their
+# time is spent waiting on the page), and the short fuzz run goes beside them at low priority
+# (tests/fuzz.sh runs libFuzzer under nice), taking the cores they leave idle. Its report is
+# printed after them.
+step "wasm package in Node and the app in headless Chromium (WebGL2 and WebGPU), two files at a time; beside them the short fuzz run (${ODORI_FUZZ_SECS:-10} s per target; ./dev fuzz runs long)"
 cargo build -q -p xtask
-node --test --test-reporter=spec tests/node/ tests/browser/
+fuzz_log=$(mktemp)
+( fuzz_started=$SECONDS; rc=0; bash tests/fuzz.sh "${ODORI_FUZZ_SECS:-10}" || rc=$?; echo "fuzz: took $((SECONDS - fuzz_started)) s beside the browser tests"; exit $rc ) >"$fuzz_log" 2>&1 &
+fuzz=$!
+trap 'kill $fuzz 2>/dev/null || true' INT TERM
+node_rc=0
+node --test --test-concurrency=2 --test-reporter=spec tests/node/ tests/browser/ || node_rc=$?
+
+step "short fuzz run (ran beside the browser tests; this is the wait for it to end)"
+fuzz_rc=0
+wait $fuzz || fuzz_rc=$?
+cat "$fuzz_log"
+rm -f "$fuzz_log"
+[ $node_rc -eq 0 ] || { echo "tests: the Node or browser tests failed (above)"; exit $node_rc; }
+[ $fuzz_rc -eq 0 ] || { echo "tests: the fuzz run failed (above)"; exit $fuzz_rc; }

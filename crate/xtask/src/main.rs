@@ -193,6 +193,45 @@ fn build_wasm(root: &Path, settings: &Settings, profile: &ProfileSettings, featu
     (raw, opt)
 }
 
+/// The player build: the same crate with the player's features, its own folder, the element's
+/// files beside it, and in release its own cargo profile, wasm-opt flags and minified JS.
+fn build_player_package(root: &Path, settings: &Settings, profile: &ProfileSettings, dev: bool) {
+    let player = &settings.player;
+    let player_dir = root.join(&player.out_dir);
+    let mut args = Vec::new();
+    if player.no_default_features {
+        args.push("--no-default-features".to_string());
+    }
+    if !player.features.is_empty() {
+        args.push("--features".into());
+        args.push(player.features.join(","));
+    }
+    // In release, the player may use its own cargo profile and wasm-opt flags.
+    let own = match (&player.release, dev) {
+        (Some(r), false) => Some(ProfileSettings { cargo_profile: r.cargo_profile.clone(), wasm_opt: r.wasm_opt.clone(), keep_debug_names: profile.keep_debug_names }),
+        _ => None,
+    };
+    build_wasm(root, settings, own.as_ref().unwrap_or(profile), &args, &player_dir, &player.out_name);
+    let element = root.join(&player.element);
+    let files = std::fs::read_dir(&element).unwrap_or_else(|e| fail(format!("{}: {e}", element.display())));
+    for f in files.flatten().filter(|f| f.path().is_file()) {
+        std::fs::copy(f.path(), player_dir.join(f.file_name())).unwrap_or_else(|e| fail(format!("copy {}: {e}", f.path().display())));
+    }
+    if !dev && player.release.as_ref().is_some_and(|r| r.minify_js) {
+        let esbuild = root.join("node_modules/.bin/esbuild");
+        if !esbuild.exists() {
+            fail("node_modules/.bin/esbuild is missing: run npm install (./dev setup does)");
+        }
+        let js = std::fs::read_dir(&player_dir).unwrap_or_else(|e| fail(format!("{}: {e}", player_dir.display())));
+        for f in js.flatten().map(|f| f.path()).filter(|p| p.extension().is_some_and(|e| e == "js")) {
+            let before = std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0);
+            run(Command::new(&esbuild).arg(&f).args(["--minify", "--format=esm", "--target=es2022", "--log-level=warning", "--allow-overwrite"]).arg(format!("--outfile={}", f.display())));
+            let after = std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0);
+            eprintln!("xtask: {} minified: {before} -> {after} bytes", f.display());
+        }
+    }
+}
+
 fn build_web(dev: bool, only: Option<&str>) {
     let root = root();
     let settings: Settings = toml::from_str(&std::fs::read_to_string(root.join("wasm-pack.toml")).expect("wasm-pack.toml"))
@@ -208,48 +247,27 @@ fn build_web(dev: bool, only: Option<&str>) {
     let out_dir = root.join(&settings.package.out_dir);
     let name = &settings.package.out_name;
 
-    // The full engine: the crate's default features.
-    if build_full {
-        build_wasm(&root, &settings, profile, &[], &out_dir, name);
-    }
-
-    // The player build: other features, its own folder, the element's files beside it.
+    // The two builds run side by side: they use different cargo profiles (release and
+    // release-player), so different folders and locks under target/, and each spends long
+    // stretches on one core (the fat-LTO link, wasm-bindgen, much of wasm-opt) that the other
+    // fills (this machine kind has 2 cores).
+    // A dev build uses one profile for both (one output file), so there they run one after the other.
+    let side_by_side = settings.player.release.as_ref().is_some_and(|r| !dev && r.cargo_profile != profile.cargo_profile);
+    std::thread::scope(|scope| {
+        // The full engine: the crate's default features.
+        let full = (build_full && side_by_side).then(|| scope.spawn(|| build_wasm(&root, &settings, profile, &[], &out_dir, name)));
+        if build_full && !side_by_side {
+            build_wasm(&root, &settings, profile, &[], &out_dir, name);
+        }
+        if build_player {
+            build_player_package(&root, &settings, profile, dev);
+        }
+        if let Some(full) = full {
+            full.join().unwrap_or_else(|_| fail("the full engine's build panicked"));
+        }
+    });
     let player = &settings.player;
     let player_dir = root.join(&player.out_dir);
-    if build_player {
-        let mut args = Vec::new();
-        if player.no_default_features {
-            args.push("--no-default-features".to_string());
-        }
-        if !player.features.is_empty() {
-            args.push("--features".into());
-            args.push(player.features.join(","));
-        }
-        // In release, the player may use its own cargo profile and wasm-opt flags.
-        let own = match (&player.release, dev) {
-            (Some(r), false) => Some(ProfileSettings { cargo_profile: r.cargo_profile.clone(), wasm_opt: r.wasm_opt.clone(), keep_debug_names: profile.keep_debug_names }),
-            _ => None,
-        };
-        build_wasm(&root, &settings, own.as_ref().unwrap_or(profile), &args, &player_dir, &player.out_name);
-        let element = root.join(&player.element);
-        let files = std::fs::read_dir(&element).unwrap_or_else(|e| fail(format!("{}: {e}", element.display())));
-        for f in files.flatten().filter(|f| f.path().is_file()) {
-            std::fs::copy(f.path(), player_dir.join(f.file_name())).unwrap_or_else(|e| fail(format!("copy {}: {e}", f.path().display())));
-        }
-        if !dev && player.release.as_ref().is_some_and(|r| r.minify_js) {
-            let esbuild = root.join("node_modules/.bin/esbuild");
-            if !esbuild.exists() {
-                fail("node_modules/.bin/esbuild is missing: run npm install (./dev setup does)");
-            }
-            let js = std::fs::read_dir(&player_dir).unwrap_or_else(|e| fail(format!("{}: {e}", player_dir.display())));
-            for f in js.flatten().map(|f| f.path()).filter(|p| p.extension().is_some_and(|e| e == "js")) {
-                let before = std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0);
-                run(Command::new(&esbuild).arg(&f).args(["--minify", "--format=esm", "--target=es2022", "--log-level=warning", "--allow-overwrite"]).arg(format!("--outfile={}", f.display())));
-                let after = std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0);
-                eprintln!("xtask: {} minified: {before} -> {after} bytes", f.display());
-            }
-        }
-    }
 
     // 4. package.json for npm consumers: `odori` is the full engine, `odori/player` the element
     //    with the player build (the path of the player folder inside the package).
