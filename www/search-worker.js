@@ -4,6 +4,8 @@
 import init, { SearchIndex } from "./pkg/odori.js";
 
 let index = null;
+/** Stored index parts not yet taken (part number → bytes). */
+const reserves = new Map();
 const ready = init().then(() => { index = new SearchIndex(); });
 
 self.onmessage = async (ev) => {
@@ -11,8 +13,24 @@ self.onmessage = async (ev) => {
   const m = ev.data;
   try {
     if (m.type === "add") {
-      index.addFeatures(m.id, m.name, m.positions);
-      self.postMessage({ type: "added", id: m.id, clipCount: index.clipCount });
+      index.addFeatures(m.id, m.name, m.positions, m.key);
+      self.postMessage({ type: "added", token: m.token, id: m.id, clipCount: index.clipCount, totalFrames: index.totalFrames });
+    } else if (m.type === "reserve") {
+      // A part of a stored index (www/project/index-store.js), kept as bytes until the
+      // library's clips of the same content arrive ("load").
+      reserves.set(m.part, m.bytes);
+      self.postMessage({ type: "reserved", token: m.token });
+    } else if (m.type === "drop") {
+      reserves.delete(m.part);
+    } else if (m.type === "load") {
+      // The clips of a stored part whose content keys are given, under the library's ids.
+      const added = Array.from(index.addBytes(reserves.get(m.part), m.keys, m.ids));
+      self.postMessage({ type: "loaded", token: m.token, added, totalFrames: index.totalFrames });
+    } else if (m.type === "toBytes") {
+      const bytes = index.toBytes();
+      self.postMessage({ type: "bytes", token: m.token, bytes, keys: index.clipKeys, ids: Array.from(index.clipIds), frames: index.totalFrames, heapBytes: index.heapBytes }, [bytes.buffer]);
+    } else if (m.type === "memory") {
+      self.postMessage({ type: "memory", token: m.token, heapBytes: index.heapBytes, frames: index.totalFrames });
     } else if (m.type === "remove") {
       index.remove(m.id);
     } else if (m.type === "queryFeatures") {
