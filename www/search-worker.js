@@ -8,9 +8,11 @@ let index = null;
 const reserves = new Map();
 const ready = init().then(() => { index = new SearchIndex(); });
 
-self.onmessage = async (ev) => {
-  await ready;
-  const m = ev.data;
+// Messages are handled one after another, in order, even when one waits (reading a stored part).
+let queue = ready;
+self.onmessage = (ev) => { queue = queue.then(() => handle(ev.data)); };
+
+async function handle(m) {
   try {
     if (m.type === "add") {
       index.addFeatures(m.id, m.name, m.positions, m.key);
@@ -18,7 +20,8 @@ self.onmessage = async (ev) => {
     } else if (m.type === "reserve") {
       // A part of a stored index (www/project/index-store.js), kept as bytes until the
       // library's clips of the same content arrive ("load").
-      reserves.set(m.part, m.bytes);
+      // Stored as a Blob: IndexedDB hands it over without reading it; it is read here.
+      reserves.set(m.part, m.bytes instanceof Blob ? new Uint8Array(await m.bytes.arrayBuffer()) : m.bytes);
       self.postMessage({ type: "reserved", token: m.token });
     } else if (m.type === "drop") {
       reserves.delete(m.part);
@@ -49,4 +52,4 @@ self.onmessage = async (ev) => {
   } catch (e) {
     self.postMessage({ type: "error", token: m.token, kind: e.kind || "error", message: e.message || String(e) });
   }
-};
+}

@@ -93,8 +93,9 @@ test("search index: stored in IndexedDB, reopened instead of rebuilt, same resul
     await page.evaluate(async (key) => {
       const store = await (await import("./project/index-store.js")).IndexStore.open();
       const rec = await store.get(key);
-      const b = rec.parts[0].bytes;
+      const b = new Uint8Array(await rec.parts[0].bytes.arrayBuffer());
       b[b.length >> 1] ^= 0x40;
+      rec.parts[0].bytes = new Blob([b]);
       await store.db.put("indexes", rec);
     }, saved2.savedKey);
     await reopen(page);

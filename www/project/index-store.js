@@ -23,7 +23,7 @@ export class IndexStore {
     try {
       const db = await openDB(DB_NAME, DB_VERSION, {
         upgrade(db) {
-          // key → { key, parts: [{ bytes: Uint8Array, keys: string[], frames }], clips, frames, bytes, savedAt }
+          // key → { key, parts: [{ bytes: Blob, keys: string[], frames }], clips, frames, bytes, savedAt }
           // (records are large: the savedAt index lists them without reading them)
           db.createObjectStore("indexes", { keyPath: "key" }).createIndex("savedAt", "savedAt");
           // key → { key, clipKeys, savedAt }: which clips each record holds, read without its bytes.
@@ -62,10 +62,13 @@ export class IndexStore {
   async put(key, parts) {
     const rec = {
       key,
-      parts,
+      // Blobs: a read hands out handles at once and the search workers read the bytes
+      // themselves, in parallel and off the page's thread (a Uint8Array would be copied out of
+      // the database on the page's thread first).
+      parts: parts.map((p) => ({ ...p, bytes: p.bytes instanceof Blob ? p.bytes : new Blob([p.bytes]) })),
       clips: parts.reduce((a, p) => a + p.keys.length, 0),
       frames: parts.reduce((a, p) => a + p.frames, 0),
-      bytes: parts.reduce((a, p) => a + p.bytes.byteLength, 0),
+      bytes: parts.reduce((a, p) => a + (p.bytes.byteLength ?? p.bytes.size), 0),
       savedAt: Date.now(),
     };
     const tx = this.db.transaction(["indexes", "catalog"], "readwrite");

@@ -185,7 +185,7 @@ export class SearchClient {
         const n = this.parts++;
         const part = { n, worker: n % this.workers.length, keys: [...p.keys] };
         this.reserve.push(part);
-        return this.request(part.worker, { type: "reserve", part: part.n, bytes: p.bytes }, null, [p.bytes.buffer]);
+        return this.request(part.worker, { type: "reserve", part: part.n, bytes: p.bytes }, null, p.bytes instanceof Blob ? [] : [p.bytes.buffer]);
       }));
       for (const k of best.r.clipKeys) { const i = missing.indexOf(k); if (i >= 0) missing.splice(i, 1); }
       if (!missing.length) return;
