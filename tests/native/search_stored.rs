@@ -10,8 +10,9 @@ use std::cell::Cell;
 
 use common::Rng;
 use odori_core::search::{
-    clip_key, decode_index, encode_index, library_key, no_progress, open_or_build, search, search_plain, BodyPreset, ClipFeatures, FeatureIndex, Opened,
-    SearchParams, StoredClip, StoredIndex, StoredIndexError, STORED_INDEX_VERSION,
+    clip_key, decode_index, encode_index, library_key, no_progress, open_or_build, search,
+    search_plain, BodyPreset, ClipFeatures, FeatureIndex, Opened, SearchParams, StoredClip,
+    StoredIndex, StoredIndexError, STORED_INDEX_VERSION,
 };
 use odori_core::{Clip, HumanoidMap, HumanoidStatus};
 
@@ -23,26 +24,45 @@ fn build(clips: &Real) -> StoredIndex {
     let mut stored = Vec::new();
     for (n, (rel, clip, map, status)) in clips.iter().enumerate() {
         if index.add_clip(rel.clone(), clip, map, status).is_ok() {
-            stored.push(StoredClip { id: 100 + n as u32, key: clip_key(rel, clip) });
+            stored.push(StoredClip {
+                id: 100 + n as u32,
+                key: clip_key(rel, clip),
+            });
         }
     }
-    StoredIndex { index, clips: stored }
+    StoredIndex {
+        index,
+        clips: stored,
+    }
 }
 
 fn key_of(clips: &Real, index_fps: f32) -> u128 {
     // The key is computed from the library alone (no index built): every humanoid clip's key.
-    library_key(index_fps, clips.iter().filter(|c| !matches!(c.3, HumanoidStatus::NotHumanoid { .. }) && c.1.frame_count() > 0).map(|(rel, clip, ..)| clip_key(rel, clip)))
+    library_key(
+        index_fps,
+        clips
+            .iter()
+            .filter(|c| !matches!(c.3, HumanoidStatus::NotHumanoid { .. }) && c.1.frame_count() > 0)
+            .map(|(rel, clip, ..)| clip_key(rel, clip)),
+    )
 }
 
 #[test]
 fn stored_index_gives_the_same_results() {
     let clips = common::real_clips();
     let built = build(&clips);
-    let bytes = encode_index(&built);
+    let bytes = encode_index(&built.index, &built.clips);
     let back = decode_index(&bytes).expect("the stored index reads back");
     assert_eq!(back.clips, built.clips, "ids and keys kept");
-    assert_eq!(back.index.skipped, built.index.skipped, "skipped clips kept");
-    assert_eq!(back.library_key(), key_of(&clips, built.index.fps), "the library key is computable from the clips alone");
+    assert_eq!(
+        back.index.skipped, built.index.skipped,
+        "skipped clips kept"
+    );
+    assert_eq!(
+        back.library_key(),
+        key_of(&clips, built.index.fps),
+        "the library key is computable from the clips alone"
+    );
     let frames = built.index.total_frames();
     println!(
         "{} clips, {} frames ({:.1} min at {} fps): {} bytes stored, {:.1} MB per hour of motion",
@@ -56,7 +76,12 @@ fn stored_index_gives_the_same_results() {
 
     // A query from outside the library: a stretch of a clip left out of a second index.
     let mut rng = Rng(0x5eed_0016);
-    let presets = [BodyPreset::WholeBody, BodyPreset::FeetOnly, BodyPreset::Arms, BodyPreset::LowerBody];
+    let presets = [
+        BodyPreset::WholeBody,
+        BodyPreset::FeetOnly,
+        BodyPreset::Arms,
+        BodyPreset::LowerBody,
+    ];
     let mut compared = 0;
     for round in 0..12 {
         let mut params = SearchParams::preset(presets[round % presets.len()]);
@@ -71,7 +96,10 @@ fn stored_index_gives_the_same_results() {
         let n = built.index.clips[c].frame_count();
         let len = 30 + rng.usize(90).min(n.saturating_sub(31));
         let start = rng.usize(n - len);
-        let query: ClipFeatures = built.index.query_range(c, start, start + len).expect("query range");
+        let query: ClipFeatures = built
+            .index
+            .query_range(c, start, start + len)
+            .expect("query range");
         let first = search(&built.index, &query, &params, &mut no_progress()).expect("search");
         if round % 2 == 1 {
             // A threshold between the best and the last distance, so it cuts.
@@ -79,11 +107,19 @@ fn stored_index_gives_the_same_results() {
             params.threshold = Some((d[0].distance + d[d.len() - 1].distance) / 2.0 + 1e-6);
         }
         let want = search(&built.index, &query, &params, &mut no_progress()).expect("search");
-        let got = search(&back.index, &query, &params, &mut no_progress()).expect("search the reopened index");
-        assert_eq!(got, want, "round {round}: the reopened index answers differently ({params:?})");
+        let got = search(&back.index, &query, &params, &mut no_progress())
+            .expect("search the reopened index");
+        assert_eq!(
+            got, want,
+            "round {round}: the reopened index answers differently ({params:?})"
+        );
         if round < 3 {
-            let plain = search_plain(&back.index, &query, &params, &mut no_progress()).expect("plain");
-            assert_eq!(plain.matches, want.matches, "round {round}: the plain DP on the reopened index differs");
+            let plain =
+                search_plain(&back.index, &query, &params, &mut no_progress()).expect("plain");
+            assert_eq!(
+                plain.matches, want.matches,
+                "round {round}: the plain DP on the reopened index differs"
+            );
         }
         assert!(!want.matches.is_empty());
         compared += 1;
@@ -94,7 +130,8 @@ fn stored_index_gives_the_same_results() {
 #[test]
 fn a_changed_library_is_detected_and_rebuilt() {
     let clips = common::real_clips();
-    let stored = encode_index(&build(&clips));
+    let first = build(&clips);
+    let stored = encode_index(&first.index, &first.clips);
     let fps = FeatureIndex::new().fps;
 
     // The same library: the stored index is used and nothing is built.
@@ -132,10 +169,25 @@ fn a_changed_library_is_detected_and_rebuilt() {
     let mut damaged = stored.clone();
     let at = damaged.len() / 3;
     damaged[at] ^= 1;
-    let (_, how) = open_or_build(Some(&damaged), key_of(&clips, fps), || Ok::<_, ()>(build(&clips))).unwrap();
-    assert!(matches!(&how, Opened::Rebuilt { why } if why.contains("corrupt")), "{how:?}");
+    let (_, how) = open_or_build(Some(&damaged), key_of(&clips, fps), || {
+        Ok::<_, ()>(build(&clips))
+    })
+    .unwrap();
+    assert!(
+        matches!(&how, Opened::Rebuilt { why } if why.contains("corrupt")),
+        "{how:?}"
+    );
     let mut other = stored.clone();
     other[8..12].copy_from_slice(&(STORED_INDEX_VERSION + 1).to_le_bytes());
-    assert_eq!(decode_index(&other).unwrap_err(), StoredIndexError::Version { found: STORED_INDEX_VERSION + 1, expected: STORED_INDEX_VERSION });
-    assert!(matches!(decode_index(&stored[..stored.len() - 3]), Err(StoredIndexError::Checksum { .. } | StoredIndexError::Truncated { .. })));
+    assert_eq!(
+        decode_index(&other).unwrap_err(),
+        StoredIndexError::Version {
+            found: STORED_INDEX_VERSION + 1,
+            expected: STORED_INDEX_VERSION
+        }
+    );
+    assert!(matches!(
+        decode_index(&stored[..stored.len() - 3]),
+        Err(StoredIndexError::Checksum { .. } | StoredIndexError::Truncated { .. })
+    ));
 }

@@ -8,7 +8,7 @@ use std::ops::ControlFlow;
 use js_sys::Float32Array;
 use odori_core::humanoid::{canonical_positions, Canon, CANON_COUNT};
 use odori_core::normalize::Origin;
-use odori_core::search::{self, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchParams, StoredClip, StoredIndex, DEFAULT_INDEX_FPS};
+use odori_core::search::{self, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchParams, StoredClip, DEFAULT_INDEX_FPS};
 use odori_core::HumanoidStatus;
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
@@ -146,11 +146,8 @@ impl SearchIndex {
     /// clip's normalised features and lower-bound boxes, with its id and content key.
     #[wasm_bindgen(js_name = toBytes)]
     pub fn to_bytes(&self) -> js_sys::Uint8Array {
-        let stored = StoredIndex {
-            index: self.index.clone(),
-            clips: self.ids.iter().zip(&self.keys).map(|(&id, &key)| StoredClip { id, key }).collect(),
-        };
-        let bytes = search::encode_index(&stored);
+        let clips: Vec<StoredClip> = self.ids.iter().zip(&self.keys).map(|(&id, &key)| StoredClip { id, key }).collect();
+        let bytes = search::encode_index(&self.index, &clips);
         js_sys::Uint8Array::from(bytes.as_slice())
     }
 

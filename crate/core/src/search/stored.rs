@@ -28,7 +28,9 @@ use xxhash_rust::xxh3::{xxh3_128, Xxh3};
 use crate::clip::Clip;
 use crate::normalize::Origin;
 
-use super::features::{ClipFeatures, FeatureIndex, MotionFeatures, SkippedClip, BOX_CHUNK_FRAMES, FRAME_FLOATS};
+use super::features::{
+    ClipFeatures, FeatureIndex, MotionFeatures, SkippedClip, BOX_CHUNK_FRAMES, FRAME_FLOATS,
+};
 use super::lanes::BOX_FLOATS;
 
 /// Version of the binary form; a reader refuses any other.
@@ -48,7 +50,11 @@ pub enum StoredIndexError {
     #[error("stored search index has version {found}; this engine reads version {expected} (it is rebuilt)")]
     Version { found: u32, expected: u32 },
     #[error("stored search index is truncated: {needed} bytes needed at offset {at}, the data has {len}")]
-    Truncated { at: usize, needed: usize, len: usize },
+    Truncated {
+        at: usize,
+        needed: usize,
+        len: usize,
+    },
     #[error("stored search index is corrupt: checksum {found:032x}, expected {expected:032x}")]
     Checksum { expected: u128, found: u128 },
     #[error("stored search index is corrupt: {what}")]
@@ -159,13 +165,21 @@ impl KeyHasher {
 }
 
 /// The index in its binary form. `clips` gives each indexed clip's id and key, in order.
+/// (Borrowed, not a [`StoredIndex`]: a large index is not copied to be written.)
 ///
 /// # Panics
 /// When `clips` and `index.clips` differ in length (a caller's bug, not bad input).
-pub fn encode_index(stored: &StoredIndex) -> Vec<u8> {
-    let StoredIndex { index, clips } = stored;
-    assert_eq!(index.clips.len(), clips.len(), "one StoredClip per indexed clip");
-    let floats: usize = index.clips.iter().map(|c| c.frame_count() * FRAME_FLOATS + c.chunk_boxes(Origin::Hips).len()).sum();
+pub fn encode_index(index: &FeatureIndex, clips: &[StoredClip]) -> Vec<u8> {
+    assert_eq!(
+        index.clips.len(),
+        clips.len(),
+        "one StoredClip per indexed clip"
+    );
+    let floats: usize = index
+        .clips
+        .iter()
+        .map(|c| c.frame_count() * FRAME_FLOATS + c.chunk_boxes(Origin::Hips).len())
+        .sum();
     let mut out = Vec::with_capacity(HEADER_BYTES + 20 + floats * 4 + index.clips.len() * 64);
     out.extend_from_slice(MAGIC);
     out.extend_from_slice(&STORED_INDEX_VERSION.to_le_bytes());
@@ -176,9 +190,13 @@ pub fn encode_index(stored: &StoredIndex) -> Vec<u8> {
         out.extend_from_slice(&(s.len() as u32).to_le_bytes());
         out.extend_from_slice(s.as_bytes());
     };
+    // Sized first and filled in place: the loop then compiles to plain stores (pushing byte
+    // by byte was most of the time for hundreds of megabytes).
     let put_f32s = |out: &mut Vec<u8>, v: &[f32]| {
-        for x in v {
-            out.extend_from_slice(&x.to_le_bytes());
+        let at = out.len();
+        out.resize(at + v.len() * 4, 0);
+        for (d, x) in out[at..].chunks_exact_mut(4).zip(v) {
+            d.copy_from_slice(&x.to_le_bytes());
         }
     };
     put_f32s(&mut out, &[index.fps]);
@@ -212,11 +230,16 @@ pub fn decode_index(bytes: &[u8]) -> Result<StoredIndex, StoredIndexError> {
     let mut r = Reader { bytes, at: 0 };
     let magic = r.take(8)?;
     if magic != MAGIC {
-        return Err(StoredIndexError::NotAnIndex { found: String::from_utf8_lossy(magic).into_owned() });
+        return Err(StoredIndexError::NotAnIndex {
+            found: String::from_utf8_lossy(magic).into_owned(),
+        });
     }
     let version = r.u32()?;
     if version != STORED_INDEX_VERSION {
-        return Err(StoredIndexError::Version { found: version, expected: STORED_INDEX_VERSION });
+        return Err(StoredIndexError::Version {
+            found: version,
+            expected: STORED_INDEX_VERSION,
+        });
     }
     let _reserved = r.u32()?;
     let expected = u128::from_le_bytes(r.take(16)?.try_into().expect("16 bytes"));
@@ -232,7 +255,9 @@ pub fn decode_index(bytes: &[u8]) -> Result<StoredIndex, StoredIndexError> {
     let (clip_count, skipped_count) = (r.u32()? as usize, r.u32()? as usize);
     let mut index = FeatureIndex::with_fps(fps);
     if index.fps != fps {
-        return Err(corrupt(format!("frame rate {fps} is not a positive number")));
+        return Err(corrupt(format!(
+            "frame rate {fps} is not a positive number"
+        )));
     }
     let mut clips = Vec::new();
     for n in 0..clip_count {
@@ -246,12 +271,25 @@ pub fn decode_index(bytes: &[u8]) -> Result<StoredIndex, StoredIndexError> {
             return Err(corrupt(format!("clip {n} (\"{name}\") has no frames")));
         }
         if same_layout && boxes_len != frames.div_ceil(BOX_CHUNK_FRAMES) * BOX_FLOATS {
-            return Err(corrupt(format!("clip {n} (\"{name}\"): {boxes_len} box values for {frames} frames")));
+            return Err(corrupt(format!(
+                "clip {n} (\"{name}\"): {boxes_len} box values for {frames} frames"
+            )));
         }
-        let data = r.f32s(frames.checked_mul(FRAME_FLOATS).ok_or_else(|| corrupt(format!("clip {n}: {frames} frames")))?)?;
+        let data = r.f32s(
+            frames
+                .checked_mul(FRAME_FLOATS)
+                .ok_or_else(|| corrupt(format!("clip {n}: {frames} frames")))?,
+        )?;
         let boxes = r.f32s(boxes_len)?;
-        let hips = MotionFeatures { origin: Origin::Hips, data };
-        let features = if same_layout { ClipFeatures::with_hip_boxes(name, clip_fps, hips, boxes) } else { ClipFeatures::new(name, clip_fps, hips) };
+        let hips = MotionFeatures {
+            origin: Origin::Hips,
+            data,
+        };
+        let features = if same_layout {
+            ClipFeatures::with_hip_boxes(name, clip_fps, hips, boxes)
+        } else {
+            ClipFeatures::new(name, clip_fps, hips)
+        };
         index.add_features(features);
         clips.push(StoredClip { id, key });
     }
@@ -261,7 +299,10 @@ pub fn decode_index(bytes: &[u8]) -> Result<StoredIndex, StoredIndexError> {
         index.skipped.push(SkippedClip { name, reason });
     }
     if r.at != bytes.len() {
-        return Err(corrupt(format!("{} bytes follow the last clip", bytes.len() - r.at)));
+        return Err(corrupt(format!(
+            "{} bytes follow the last clip",
+            bytes.len() - r.at
+        )));
     }
     Ok(StoredIndex { index, clips })
 }
@@ -275,25 +316,41 @@ struct Reader<'a> {
 impl<'a> Reader<'a> {
     fn take(&mut self, n: usize) -> Result<&'a [u8], StoredIndexError> {
         let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len());
-        let end = end.ok_or(StoredIndexError::Truncated { at: self.at, needed: n, len: self.bytes.len() })?;
+        let end = end.ok_or(StoredIndexError::Truncated {
+            at: self.at,
+            needed: n,
+            len: self.bytes.len(),
+        })?;
         let s = &self.bytes[self.at..end];
         self.at = end;
         Ok(s)
     }
     fn u32(&mut self) -> Result<u32, StoredIndexError> {
-        Ok(u32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
+        Ok(u32::from_le_bytes(
+            self.take(4)?.try_into().expect("4 bytes"),
+        ))
     }
     fn f32(&mut self) -> Result<f32, StoredIndexError> {
-        Ok(f32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
+        Ok(f32::from_le_bytes(
+            self.take(4)?.try_into().expect("4 bytes"),
+        ))
     }
     fn string(&mut self) -> Result<String, StoredIndexError> {
         let n = self.u32()? as usize;
         let at = self.at;
-        String::from_utf8(self.take(n)?.to_vec()).map_err(|_| StoredIndexError::Corrupt { what: format!("the text at offset {at} is not UTF-8") })
+        String::from_utf8(self.take(n)?.to_vec()).map_err(|_| StoredIndexError::Corrupt {
+            what: format!("the text at offset {at} is not UTF-8"),
+        })
     }
     fn f32s(&mut self, n: usize) -> Result<Vec<f32>, StoredIndexError> {
-        let b = self.take(n.checked_mul(4).ok_or(StoredIndexError::Truncated { at: self.at, needed: usize::MAX, len: self.bytes.len() })?)?;
-        Ok(b.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes"))).collect())
+        let b = self.take(n.checked_mul(4).ok_or(StoredIndexError::Truncated {
+            at: self.at,
+            needed: usize::MAX,
+            len: self.bytes.len(),
+        })?)?;
+        Ok(b.chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
+            .collect())
     }
 }
 
@@ -339,14 +396,23 @@ mod tests {
         let map = HumanoidMap::from_skeleton(&clip.skeleton);
         let mut index = FeatureIndex::new();
         index.add_features(ClipFeatures::from_clip("demo", &clip, &map));
-        index.skipped.push(SkippedClip { name: "fox".into(), reason: "not humanoid".into() });
-        StoredIndex { index, clips: vec![StoredClip { id: 7, key: clip_key("demo", &clip) }] }
+        index.skipped.push(SkippedClip {
+            name: "fox".into(),
+            reason: "not humanoid".into(),
+        });
+        StoredIndex {
+            index,
+            clips: vec![StoredClip {
+                id: 7,
+                key: clip_key("demo", &clip),
+            }],
+        }
     }
 
     #[test]
     fn bytes_read_back_exactly() {
         let s = demo_index();
-        let bytes = encode_index(&s);
+        let bytes = encode_index(&s.index, &s.clips);
         let back = decode_index(&bytes).expect("reads back");
         assert_eq!(back.clips, s.clips);
         assert_eq!(back.index.skipped, s.index.skipped);
@@ -354,26 +420,48 @@ mod tests {
         assert_eq!(a.features(Origin::Hips), b.features(Origin::Hips));
         assert_eq!(a.chunk_boxes(Origin::Hips), b.chunk_boxes(Origin::Hips));
         assert_eq!((a.name.as_str(), a.fps), (b.name.as_str(), b.fps));
-        assert_eq!(encode_index(&back), bytes, "encoding is deterministic");
+        assert_eq!(
+            encode_index(&back.index, &back.clips),
+            bytes,
+            "encoding is deterministic"
+        );
     }
 
     #[test]
     fn every_damage_is_a_typed_error() {
-        let bytes = encode_index(&demo_index());
+        let bytes = {
+            let d = demo_index();
+            encode_index(&d.index, &d.clips)
+        };
         // Every truncation is an error, never a panic.
         for n in (0..bytes.len()).step_by(97).chain([bytes.len() - 1]) {
-            assert!(decode_index(&bytes[..n]).is_err(), "truncated to {n} bytes was read");
+            assert!(
+                decode_index(&bytes[..n]).is_err(),
+                "truncated to {n} bytes was read"
+            );
         }
         let mut v = bytes.clone();
         v[8] = 2;
-        assert_eq!(decode_index(&v).unwrap_err(), StoredIndexError::Version { found: 2, expected: STORED_INDEX_VERSION });
+        assert_eq!(
+            decode_index(&v).unwrap_err(),
+            StoredIndexError::Version {
+                found: 2,
+                expected: STORED_INDEX_VERSION
+            }
+        );
         let mut v = bytes.clone();
         v[0] = b'X';
-        assert!(matches!(decode_index(&v), Err(StoredIndexError::NotAnIndex { .. })));
+        assert!(matches!(
+            decode_index(&v),
+            Err(StoredIndexError::NotAnIndex { .. })
+        ));
         for at in [HEADER_BYTES + 3, bytes.len() / 2, bytes.len() - 5] {
             let mut v = bytes.clone();
             v[at] ^= 0x10;
-            assert!(matches!(decode_index(&v), Err(StoredIndexError::Checksum { .. })), "a flipped bit at {at} went unnoticed");
+            assert!(
+                matches!(decode_index(&v), Err(StoredIndexError::Checksum { .. })),
+                "a flipped bit at {at} went unnoticed"
+            );
         }
     }
 
@@ -386,7 +474,11 @@ mod tests {
         assert_ne!(clip_key("demo", &clip), clip_key("demo", &changed));
         assert_ne!(clip_key("demo", &clip), clip_key("demo2", &clip));
         let (a, b) = (clip_key("a", &clip), clip_key("b", &clip));
-        assert_ne!(library_key(60.0, [a, b]), library_key(60.0, [b, a]), "order is part of the library");
+        assert_ne!(
+            library_key(60.0, [a, b]),
+            library_key(60.0, [b, a]),
+            "order is part of the library"
+        );
         assert_ne!(library_key(60.0, [a]), library_key(30.0, [a]));
     }
 }
