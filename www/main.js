@@ -1,5 +1,5 @@
 // Odori app bootstrap: loads the wasm engine, opens the viewer, wires the UI modules.
-import init, { Library, Viewer, Song, DemoSong, TextAnimator, Project, tempoLimits, version } from "./pkg/odori.js";
+import init, { Library, Viewer, Song, DemoSong, TextAnimator, Project, SearchIndex, tempoLimits, version } from "./pkg/odori.js";
 import { LibraryPanel } from "./ui/library-panel.js";
 import { Player } from "./ui/player.js";
 import { FileLoader } from "./ui/files.js";
@@ -8,6 +8,7 @@ import { SongPanel } from "./ui/song-panel.js";
 import { SongPlayer, decodeSong, bufferFromSamples } from "./audio/song-player.js";
 import { rmsEnvelope } from "./audio/rms.js";
 import { SearchClient } from "./search/client.js";
+import { IndexStore } from "./project/index-store.js";
 import { SearchPanel } from "./ui/search-panel.js";
 import { TextPanel } from "./ui/text-panel.js";
 import { ChoreoPanel } from "./ui/choreo-panel.js";
@@ -133,7 +134,9 @@ async function main() {
   await firstPose;
   // Each step in its own task, so the page answers input between them.
   await nextTask();
-  searchClient = new SearchClient(library);
+  // The search index is kept in IndexedDB between visits (www/project/index-store.js).
+  const indexStore = await IndexStore.open();
+  searchClient = new SearchClient(library, undefined, { store: indexStore, libraryKey: (keys) => SearchIndex.libraryKey(keys), onNote: (m) => messages.warning(m) });
   searchClient.add(demo.id);
   for (const id of waitingForSearch.splice(0)) searchClient.add(id);
   searchPanel = new SearchPanel($("#search"), { client: searchClient, library, player, messages });

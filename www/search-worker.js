@@ -4,15 +4,36 @@
 import init, { SearchIndex } from "./pkg/odori.js";
 
 let index = null;
+/** Stored index parts not yet taken (part number → bytes). */
+const reserves = new Map();
 const ready = init().then(() => { index = new SearchIndex(); });
 
-self.onmessage = async (ev) => {
-  await ready;
-  const m = ev.data;
+// Messages are handled one after another, in order, even when one waits (reading a stored part).
+let queue = ready;
+self.onmessage = (ev) => { queue = queue.then(() => handle(ev.data)); };
+
+async function handle(m) {
   try {
     if (m.type === "add") {
-      index.addFeatures(m.id, m.name, m.positions);
-      self.postMessage({ type: "added", id: m.id, clipCount: index.clipCount });
+      index.addFeatures(m.id, m.name, m.positions, m.key);
+      self.postMessage({ type: "added", token: m.token, id: m.id, clipCount: index.clipCount, totalFrames: index.totalFrames });
+    } else if (m.type === "reserve") {
+      // A part of a stored index (www/project/index-store.js), kept as bytes until the
+      // library's clips of the same content arrive ("load").
+      // Stored as a Blob: IndexedDB hands it over without reading it; it is read here.
+      reserves.set(m.part, m.bytes instanceof Blob ? new Uint8Array(await m.bytes.arrayBuffer()) : m.bytes);
+      self.postMessage({ type: "reserved", token: m.token });
+    } else if (m.type === "drop") {
+      reserves.delete(m.part);
+    } else if (m.type === "load") {
+      // The clips of a stored part whose content keys are given, under the library's ids.
+      const added = Array.from(index.addBytes(reserves.get(m.part), m.keys, m.ids));
+      self.postMessage({ type: "loaded", token: m.token, added, totalFrames: index.totalFrames });
+    } else if (m.type === "toBytes") {
+      const bytes = index.toBytes();
+      self.postMessage({ type: "bytes", token: m.token, bytes, keys: index.clipKeys, ids: Array.from(index.clipIds), frames: index.totalFrames, heapBytes: index.heapBytes }, [bytes.buffer]);
+    } else if (m.type === "memory") {
+      self.postMessage({ type: "memory", token: m.token, heapBytes: index.heapBytes, frames: index.totalFrames });
     } else if (m.type === "remove") {
       index.remove(m.id);
     } else if (m.type === "queryFeatures") {
@@ -31,4 +52,4 @@ self.onmessage = async (ev) => {
   } catch (e) {
     self.postMessage({ type: "error", token: m.token, kind: e.kind || "error", message: e.message || String(e) });
   }
-};
+}

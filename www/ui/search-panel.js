@@ -150,10 +150,10 @@ export class SearchPanel {
   }
 
   hipsAt(id, frame) {
-    const f = this.client.features.get(id);
-    const n = f.positions.length / 63;
+    const positions = this.client.positions(id);
+    const n = positions.length / 63;
     const k = Math.max(0, Math.min(n - 1, frame)) * 63;
-    return [f.positions[k], f.positions[k + 1], f.positions[k + 2]];
+    return [positions[k], positions[k + 1], positions[k + 2]];
   }
 
   show(m) {

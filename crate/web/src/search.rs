@@ -8,13 +8,30 @@ use std::ops::ControlFlow;
 use js_sys::Float32Array;
 use odori_core::humanoid::{canonical_positions, Canon, CANON_COUNT};
 use odori_core::normalize::Origin;
-use odori_core::search::{self, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchParams, DEFAULT_INDEX_FPS};
+use odori_core::search::{self, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchParams, StoredClip, DEFAULT_INDEX_FPS};
 use odori_core::HumanoidStatus;
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 
 use crate::error::{from_js, to_js, OdoriError};
 use crate::library::Library;
+
+fn stored_err(e: search::StoredIndexError) -> OdoriError {
+    let kind = match e {
+        search::StoredIndexError::Version { .. } => "index-version",
+        _ => "index-corrupt",
+    };
+    OdoriError::new(kind, e.to_string())
+}
+
+/// A content key as the page sees it: 32 hex digits.
+fn key_hex(k: u128) -> String {
+    format!("{k:032x}")
+}
+
+fn parse_key(s: &str) -> Result<u128, OdoriError> {
+    (s.len() == 32).then(|| u128::from_str_radix(s, 16).ok()).flatten().ok_or_else(|| OdoriError::new("bad-argument", format!("'{s}' is not a content key (32 hex digits)")))
+}
 
 fn search_err(e: search::SearchError) -> OdoriError {
     let kind = match e {
@@ -41,6 +58,15 @@ impl Library {
         let p = canonical_positions(&clip, &e.humanoid);
         let flat: Vec<f32> = p.iter().flat_map(|v| v.to_array()).collect();
         Ok(Float32Array::from(flat.as_slice()))
+    }
+
+    /// Content key of a clip for the stored search index (32 hex digits): a hash of its name,
+    /// frame rate, skeleton and every channel value, so a stored index can be checked against
+    /// the library without indexing it again. Pass it to `SearchIndex.addFeatures`.
+    #[wasm_bindgen(js_name = searchKey)]
+    pub fn search_key(&self, id: u32) -> Result<String, OdoriError> {
+        let e = self.entry(id)?;
+        Ok(key_hex(search::clip_key(&e.clip.name, &e.clip)))
     }
 }
 
@@ -99,6 +125,8 @@ struct JsMatch<'a> {
 pub struct SearchIndex {
     index: FeatureIndex,
     ids: Vec<u32>,
+    /// Content key per clip (see `Library.searchKey`), parallel to `ids`.
+    keys: Vec<u128>,
 }
 
 impl Default for SearchIndex {
@@ -111,7 +139,86 @@ impl Default for SearchIndex {
 impl SearchIndex {
     #[wasm_bindgen(constructor)]
     pub fn new() -> SearchIndex {
-        SearchIndex { index: FeatureIndex::new(), ids: Vec::new() }
+        SearchIndex { index: FeatureIndex::new(), ids: Vec::new(), keys: Vec::new() }
+    }
+
+    /// The index in its stored binary form (versioned, checksummed; see `fromBytes`): every
+    /// clip's normalised features and lower-bound boxes, with its id and content key.
+    #[wasm_bindgen(js_name = toBytes)]
+    pub fn to_bytes(&self) -> js_sys::Uint8Array {
+        let clips: Vec<StoredClip> = self.ids.iter().zip(&self.keys).map(|(&id, &key)| StoredClip { id, key }).collect();
+        let bytes = search::encode_index(&self.index, &clips);
+        js_sys::Uint8Array::from(bytes.as_slice())
+    }
+
+    /// An index read back from `toBytes` output, with the clip ids it was stored with. Throws
+    /// kind "index-version" for another format version and "index-corrupt" for damaged bytes.
+    #[wasm_bindgen(js_name = fromBytes)]
+    pub fn from_bytes(bytes: &[u8]) -> Result<SearchIndex, OdoriError> {
+        let s = search::decode_index(bytes).map_err(stored_err)?;
+        Ok(SearchIndex { ids: s.clips.iter().map(|c| c.id).collect(), keys: s.clips.iter().map(|c| c.key).collect(), index: s.index })
+    }
+
+    /// Adds the clips of a stored index (`toBytes`) whose content key is in `keys`, under the
+    /// id at the same place in `ids` (a reopened library gives its clips new ids). Returns the
+    /// ids of the clips added; stored clips of other keys are left out (the library no longer
+    /// has them), and ids not returned must be indexed from their features. Throws like
+    /// `fromBytes`.
+    #[wasm_bindgen(js_name = addBytes)]
+    pub fn add_bytes(&mut self, bytes: &[u8], keys: Vec<String>, ids: Vec<u32>) -> Result<Vec<u32>, OdoriError> {
+        if keys.len() != ids.len() {
+            return Err(OdoriError::new("bad-argument", format!("{} keys and {} ids: give one id per key", keys.len(), ids.len())));
+        }
+        let wanted = keys.iter().map(|k| parse_key(k)).collect::<Result<Vec<_>, _>>()?;
+        let s = search::decode_index(bytes).map_err(stored_err)?;
+        // Two clips of the same content (a file imported twice) have the same key: each
+        // stored copy goes to the next id of that key not yet given one.
+        let mut taken = vec![false; wanted.len()];
+        let mut added = Vec::new();
+        for (c, clip) in s.clips.into_iter().zip(s.index.clips) {
+            if let Some(k) = (0..wanted.len()).find(|&k| !taken[k] && wanted[k] == c.key) {
+                taken[k] = true;
+                self.remove(ids[k]);
+                self.index.clips.push(clip);
+                self.ids.push(ids[k]);
+                self.keys.push(c.key);
+                added.push(ids[k]);
+            }
+        }
+        Ok(added)
+    }
+
+    /// Key of a library (32 hex digits) from its clips' content keys in library order: what a
+    /// stored index is filed under.
+    #[wasm_bindgen(js_name = libraryKey)]
+    pub fn library_key(keys: Vec<String>) -> Result<String, OdoriError> {
+        let keys = keys.iter().map(|k| parse_key(k)).collect::<Result<Vec<_>, _>>()?;
+        Ok(key_hex(search::library_key(DEFAULT_INDEX_FPS, keys)))
+    }
+
+    /// The indexed clips' ids, in index order.
+    #[wasm_bindgen(getter, js_name = clipIds)]
+    pub fn clip_ids(&self) -> Vec<u32> {
+        self.ids.clone()
+    }
+
+    /// The indexed clips' content keys, in index order.
+    #[wasm_bindgen(getter, js_name = clipKeys)]
+    pub fn clip_keys(&self) -> Vec<String> {
+        self.keys.iter().map(|&k| key_hex(k)).collect()
+    }
+
+    /// Frames indexed, over all clips.
+    #[wasm_bindgen(getter, js_name = totalFrames)]
+    pub fn total_frames(&self) -> usize {
+        self.index.total_frames()
+    }
+
+    /// Bytes of memory the index holds now: features, boxes, and what searches built on first
+    /// use (the distance's lane layout, shoulder-origin features).
+    #[wasm_bindgen(getter, js_name = heapBytes)]
+    pub fn heap_bytes(&self) -> f64 {
+        self.index.heap_bytes() as f64
     }
 
     /// Frame rate of every indexed clip's features (query and result frames count at it).
@@ -121,16 +228,21 @@ impl SearchIndex {
     }
 
     /// Adds a clip from `Library.searchFeatures` under the library's clip id.
+    /// `key`: the clip's content key (`Library.searchKey`); without it the key is a hash of
+    /// the positions themselves.
     #[wasm_bindgen(js_name = addFeatures)]
-    pub fn add_features(&mut self, clip_id: u32, name: String, positions: Float32Array) -> Result<usize, OdoriError> {
+    pub fn add_features(&mut self, clip_id: u32, name: String, positions: Float32Array, key: Option<String>) -> Result<usize, OdoriError> {
+        let key = key.as_deref().map(parse_key).transpose()?;
         let flat = positions.to_vec();
         if flat.is_empty() || flat.len() % (CANON_COUNT * 3) != 0 {
             return Err(OdoriError::new("bad-argument", format!("features of \"{name}\": {} values is not a whole number of 21-joint frames", flat.len())));
         }
         let pts: Vec<glam::Vec3> = flat.chunks_exact(3).map(|c| glam::Vec3::new(c[0], c[1], c[2])).collect();
         self.remove(clip_id);
+        let key = key.unwrap_or_else(|| search::positions_key(&name, &pts));
         let k = self.index.add_features(ClipFeatures::new(name, DEFAULT_INDEX_FPS, MotionFeatures::from_positions(&pts)));
         self.ids.push(clip_id);
+        self.keys.push(key);
         Ok(k)
     }
 
@@ -139,7 +251,8 @@ impl SearchIndex {
     pub fn add_from_library(&mut self, library: &Library, clip_id: u32) -> Result<usize, OdoriError> {
         let f = library.search_features(clip_id)?;
         let name = library.entry(clip_id)?.clip.name.clone();
-        self.add_features(clip_id, name, f)
+        let key = library.search_key(clip_id)?;
+        self.add_features(clip_id, name, f, Some(key))
     }
 
     /// Drops a clip; false when it was not indexed.
@@ -147,6 +260,7 @@ impl SearchIndex {
         match self.ids.iter().position(|&i| i == clip_id) {
             Some(k) => {
                 self.ids.remove(k);
+                self.keys.remove(k);
                 self.index.clips.remove(k);
                 true
             }

@@ -126,6 +126,14 @@ impl ClipFeatures {
         }
     }
 
+    /// [`ClipFeatures::new`] with the hip-origin chunk boxes given instead of built (a stored
+    /// index being reopened, see `stored.rs`, which checks their length and checksum).
+    pub(crate) fn with_hip_boxes(name: impl Into<String>, fps: f32, hips: MotionFeatures, boxes: Vec<f32>) -> ClipFeatures {
+        let c = ClipFeatures::new(name, fps, hips);
+        let _ = c.boxes[0].set(boxes);
+        c
+    }
+
     /// Features of a humanoid clip: canonical positions (missing joints filled from their
     /// neighbours), normalised per spec §B by the clip's own body height.
     pub fn from_clip(name: impl Into<String>, clip: &Clip, map: &HumanoidMap) -> ClipFeatures {
@@ -136,6 +144,15 @@ impl ClipFeatures {
     /// Number of frames.
     pub fn frame_count(&self) -> usize {
         self.hips.frame_count()
+    }
+
+    /// Bytes of memory the clip's features hold now: the hip-origin features, and whatever
+    /// was built on first use (shoulder-origin features, lane layouts, boxes).
+    pub fn heap_bytes(&self) -> usize {
+        let floats = self.hips.data.len()
+            + self.shoulders.get().map_or(0, |m| m.data.len())
+            + self.boxes.iter().chain(&self.lanes).map(|l| l.get().map_or(0, Vec::len)).sum::<usize>();
+        floats * std::mem::size_of::<f32>() + self.name.len()
     }
 
     /// Duration in seconds.
@@ -301,6 +318,11 @@ impl FeatureIndex {
     /// Total frames over all clips.
     pub fn total_frames(&self) -> usize {
         self.clips.iter().map(ClipFeatures::frame_count).sum()
+    }
+
+    /// Bytes of memory the clips' features hold now (see [`ClipFeatures::heap_bytes`]).
+    pub fn heap_bytes(&self) -> usize {
+        self.clips.iter().map(ClipFeatures::heap_bytes).sum()
     }
 
     /// A query cut from a library clip: frames `start_frame..end_frame` of clip `clip_index`.

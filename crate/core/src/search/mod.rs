@@ -26,6 +26,7 @@ mod features;
 mod lanes;
 mod presets;
 mod results;
+mod stored;
 
 use std::ops::ControlFlow;
 
@@ -38,6 +39,7 @@ use crate::normalize::Origin;
 pub use features::{ClipFeatures, FeatureIndex, JointCurve, MotionFeatures, SkippedClip, DEFAULT_INDEX_FPS, FRAME_FLOATS};
 pub use presets::BodyPreset;
 pub use results::{SearchMatch, SearchOutcome, SearchStats, Shortfall};
+pub use stored::{clip_key, decode_index, encode_index, library_key, open_or_build, positions_key, Opened, StoredClip, StoredIndex, StoredIndexError, STORED_INDEX_VERSION};
 
 /// Order in which a frame distance sums its joints: extremities first, so that early
 /// abandoning (which stops summing once the partial sum is too large) stops soon. The joints
