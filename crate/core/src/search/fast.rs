@@ -485,9 +485,16 @@ impl Bounds {
     }
 }
 
-/// A first τ when there is no threshold or it is loose: the plain DP run on the few places
+/// A first τ when there is no threshold or it is loose: real paths found on the few places
 /// whose row bounds are lowest (each with `maxSpan` columns of run-up), and the far-set bound
-/// of what it finds (those paths are real, so their distances bound the ends' own from above).
+/// of their distances (real paths, so each bounds its end's least distance from above).
+///
+/// The paths come from the one-value DP of `filter.rs` with nothing pruned, which at a fixed λ
+/// finds into every end the path of least `Σ w·(d − λ)` (and carries its cost and start) —
+/// about the cost of one frame distance per cell, where the front DP costs several. Twice, as
+/// in Dinkelbach's method for least ratios: at λ = 0 (the cheapest paths), then at the far-set
+/// bound of those; a path of least `Σ w·(d − λ)` with λ at or above the least distance has a
+/// distance no higher than λ, so the second round tightens the bound.
 fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
     let k = prep.max_results;
     let nq = bounds.nq;
@@ -520,11 +527,32 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
         let cols = index.clips[ci].frame_count();
         segments.push((ci, b0.saturating_sub(prep.max_span), (b0 + BLOCK + prep.max_span).min(cols)));
     }
-    let none = SharedTau::new(f32::INFINITY);
-    let Ok((mut pool, stats, _)) = scan(index, prep, bounds, &segments, f32::INFINITY, false, false, &none, &mut |_| ControlFlow::Continue(())) else {
-        return (f32::INFINITY, 0);
-    };
-    (far_bound(&mut pool, k, prep.max_span).unwrap_or(f32::INFINITY), stats.distances_computed)
+    let rows = prep.query_frames;
+    let mut filter = Filter::new(rows);
+    let rest = vec![0f32; rows];
+    let mut pool: Vec<Candidate> = Vec::new();
+    let mut lambda = 0.0f32;
+    for _round in 0..2 {
+        for &(ci, from, to) in &segments {
+            let target = index.clips[ci].lanes(prep.origin);
+            let cols = target.len() / LANE_FLOATS;
+            // Nothing pruned: an infinite margin, zero bounds.
+            let fneg = vec![0f32; cols + 1 - from];
+            filter.reset(from);
+            for j in from..to {
+                let bound = Bound { margin: f32::INFINITY, rest: &rest, fneg: &fneg, base: from, last: (j + prep.max_span - 1).min(cols - 1) };
+                if let Some(m) = filter.column(prep, target, j, lambda, &bound) {
+                    let score = m.cost / (rows + m.end + 1 - m.start) as f32;
+                    pool.push(Candidate { clip: ci, start: m.start, end: m.end, score, cost: m.cost });
+                }
+            }
+        }
+        match far_bound(&mut pool, k, prep.max_span) {
+            Some(b) => lambda = b,
+            None => return (f32::INFINITY, filter.distances),
+        }
+    }
+    (lambda, filter.distances)
 }
 
 /// (ends with their least distance ≤ the final τ, work, final τ).
