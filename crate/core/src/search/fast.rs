@@ -108,6 +108,8 @@ pub(crate) fn run_threads(
     let parts = split(index, prep, threads.max(1));
     let shared = SharedTau::new(prep.threshold.min(seed));
     let cancel = AtomicBool::new(false);
+    // Where the calling thread's progress last stood (scaled), for the cancel error.
+    let reached = std::cell::Cell::new(0usize);
     let total = index.total_frames();
     let (first, rest) = parts.split_first().expect("split gives at least one part");
     let first_total: usize = first.iter().map(|s| s.2 - s.1).sum::<usize>().max(1);
@@ -125,6 +127,7 @@ pub(crate) fn run_threads(
         // This thread searches the first part and reports progress for all (scaled from its own).
         let mut mine = |p: SearchProgress| {
             let scaled = SearchProgress { frames_done: (p.frames_done.min(first_total) * total) / first_total, frames_total: total, candidates: p.candidates };
+            reached.set(scaled.frames_done);
             let r = progress(scaled);
             if r.is_break() {
                 cancel.store(true, Ordering::Relaxed);
@@ -136,10 +139,10 @@ pub(crate) fn run_threads(
         out
     });
     let mut pool = Vec::new();
-    let mut stats = SearchStats { frames_searched: total, cells_total: total as u64 * prep.query_frames as u64, distances_computed: probed, ..Default::default() };
+    let mut stats = SearchStats { frames_searched: total, cells_total: total as u64 * prep.query_frames as u64, distances_computed: probed };
     for r in results {
         let (p, s) = match r {
-            Err(SearchError::Cancelled { .. }) => return Err(SearchError::Cancelled { frames_done: 0, frames_total: total }),
+            Err(SearchError::Cancelled { .. }) => return Err(SearchError::Cancelled { frames_done: reached.get(), frames_total: total }),
             other => other?,
         };
         pool.extend(p);
