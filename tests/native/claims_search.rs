@@ -3,12 +3,13 @@
 //! 20 minutes of real motion (72,000 frames at 60 fps: every real BVH clip's features,
 //! concatenated over and over), for queries with and without a copy in the library, several
 //! body parts, thresholds and result counts. The one-hour figure stays in the search bench;
-//! this size keeps the plain DP within the test budget. Uses only the `search` and
-//! `search_plain` entry points, so it holds whatever the search rule becomes.
+//! this size keeps the plain DP within the test budget. Uses only the `search`, `search_threads`
+//! (the one clip cut into parts searched at once) and `search_plain` entry points, so it holds
+//! whatever the search rule becomes.
 
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::normalize::Origin;
-use odori_core::search::{no_progress, search, search_plain, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS};
+use odori_core::search::{no_progress, search, search_plain, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS};
 
 const LIBRARY_FRAMES: usize = 72_000;
 const QUERY_FRAMES: usize = 120;
@@ -98,6 +99,11 @@ fn fast_search_equals_plain_search_on_twenty_minutes_of_real_motion() {
             fast_ms += t.elapsed().as_secs_f64() * 1e3;
             assert!(!plain.matches.is_empty() || params.threshold.is_some(), "{what}: no match at all");
             assert_same(&what, &plain, &fast);
+            // The 72,000-frame clip cut into two and three parts that share τ.
+            for threads in [2, 3] {
+                let par = search_threads(&index, &query, params, threads, &mut no_progress()).expect("threaded search");
+                assert_same(&format!("{what}; {threads} threads"), &plain, &par);
+            }
             matches += plain.matches.len();
         }
     }

@@ -8,7 +8,7 @@ use odori_core::humanoid::HumanoidMap;
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::normalize::Origin;
 use odori_core::search::{
-    no_progress, search, search_plain, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchError, SearchParams, FRAME_FLOATS,
+    no_progress, search, search_plain, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchError, SearchParams, FRAME_FLOATS,
 };
 
 fn demo_index() -> FeatureIndex {
@@ -117,7 +117,7 @@ fn progress_is_reported_and_cancel_stops_the_search() {
     lib.add_features(ClipFeatures::new("long", 60.0, MotionFeatures { origin: Origin::Hips, data }));
     let q = demo.query_range(0, 0, 30).expect("range");
     let p = SearchParams::preset(BodyPreset::WholeBody);
-    for plain in [false, true] {
+    for mode in ["fast", "plain", "threads"] {
         let mut seen = Vec::new();
         let mut calls = 0;
         let mut cb = |s: odori_core::search::SearchProgress| {
@@ -129,12 +129,17 @@ fn progress_is_reported_and_cancel_stops_the_search() {
                 ControlFlow::Continue(())
             }
         };
-        let r = if plain { search_plain(&lib, &q, &p, &mut cb) } else { search(&lib, &q, &p, &mut cb) };
+        let r = match mode {
+            "plain" => search_plain(&lib, &q, &p, &mut cb),
+            // Cancelling the calling thread's progress stops every thread.
+            "threads" => search_threads(&lib, &q, &p, 2, &mut cb),
+            _ => search(&lib, &q, &p, &mut cb),
+        };
         match r {
             Err(SearchError::Cancelled { frames_done, frames_total }) => {
-                assert!(frames_done > 0 && frames_done < frames_total, "{frames_done}/{frames_total}");
+                assert!(frames_done > 0 && frames_done < frames_total, "{mode}: {frames_done}/{frames_total}");
             }
-            other => panic!("expected a cancel, got {other:?}"),
+            other => panic!("{mode}: expected a cancel, got {other:?}"),
         }
         assert!(seen.windows(2).all(|w| w[0] <= w[1]), "progress goes forward: {seen:?}");
     }

@@ -9,7 +9,7 @@ use common::{reference_search, Rng};
 use odori_core::humanoid::CANON_COUNT;
 use odori_core::normalize::Origin;
 use odori_core::search::{
-    no_progress, search, search_plain, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS,
+    no_progress, search, search_plain, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS,
 };
 
 /// Smooth random motion: each coordinate a sum of three sinusoids plus a slow random walk.
@@ -139,8 +139,12 @@ fn fast_equals_reference_on_random_motion() {
         let reference = reference_search(&index, &query, &params);
         let fast = search(&index, &query, &params, &mut no_progress()).unwrap();
         let plain = search_plain(&index, &query, &params, &mut no_progress()).unwrap();
+        // The library cut into 2–4 parts (clips split too: every clip is longer than 2·maxSpan).
+        let threads = 2 + round % 3;
+        let threaded = search_threads(&index, &query, &params, threads, &mut no_progress()).unwrap();
         let what = format!("round {round} ({rows} frames, {params:?})");
         assert_same(&format!("fast, {what}"), &fast, &reference, (&query, &index, &params));
+        assert_same(&format!("fast on {threads} threads, {what}"), &threaded, &reference, (&query, &index, &params));
         assert_same(&format!("plain, {what}"), &plain, &reference, (&query, &index, &params));
         if round % 4 != 3 {
             assert!(!reference.is_empty(), "{what}: a query cut from the library should match");
@@ -168,7 +172,11 @@ fn held_pose_finds_its_own_copy() {
     for k in [1, 5] {
         let params = SearchParams { max_results: k, ..SearchParams::default() };
         let reference = reference_search(&index, &query, &params);
-        for (name, out) in [("fast", search(&index, &query, &params, &mut no_progress()).unwrap()), ("plain", search_plain(&index, &query, &params, &mut no_progress()).unwrap())] {
+        for (name, out) in [
+            ("fast", search(&index, &query, &params, &mut no_progress()).unwrap()),
+            ("plain", search_plain(&index, &query, &params, &mut no_progress()).unwrap()),
+            ("fast on 3 threads", search_threads(&index, &query, &params, 3, &mut no_progress()).unwrap()),
+        ] {
             assert_same(name, &out, &reference, (&query, &index, &params));
             let m = out.matches.first().unwrap_or_else(|| panic!("{name}: no result"));
             assert_eq!(m.distance, 0.0, "{name}: {m:?}");
@@ -187,7 +195,11 @@ fn all_zero_features_give_results() {
     let query = features("q", vec![0.0; 20 * FRAME_FLOATS]);
     let params = SearchParams { max_results: 8, ..SearchParams::default() };
     let reference = reference_search(&index, &query, &params);
-    for out in [search(&index, &query, &params, &mut no_progress()).unwrap(), search_plain(&index, &query, &params, &mut no_progress()).unwrap()] {
+    for out in [
+        search(&index, &query, &params, &mut no_progress()).unwrap(),
+        search_plain(&index, &query, &params, &mut no_progress()).unwrap(),
+        search_threads(&index, &query, &params, 2, &mut no_progress()).unwrap(),
+    ] {
         assert_same("zeros", &out, &reference, (&query, &index, &params));
         assert_eq!(out.matches.len(), 8);
         assert!(out.matches.iter().all(|m| m.distance == 0.0));
@@ -240,7 +252,11 @@ fn k_results_guarantee() {
     let params = SearchParams { max_results: 20, threshold: reference.get(2).map(|r| r.3), ..SearchParams::default() };
     let reference = reference_search(&index, &query, &params);
     let all_ends = common::reference_ends(&index, &query, &params);
-    for out in [search(&index, &query, &params, &mut no_progress()).unwrap(), search_plain(&index, &query, &params, &mut no_progress()).unwrap()] {
+    for out in [
+        search(&index, &query, &params, &mut no_progress()).unwrap(),
+        search_plain(&index, &query, &params, &mut no_progress()).unwrap(),
+        search_threads(&index, &query, &params, 2, &mut no_progress()).unwrap(),
+    ] {
         assert_same("short", &out, &reference, (&query, &index, &params));
         let s = out.shortfall.as_ref().expect("fewer than asked");
         assert_eq!((s.asked, s.shown), (20, out.matches.len()));
@@ -281,6 +297,9 @@ fn falling_bound_over_long_clips_keeps_exactness() {
         let reference = reference_search(&index, &query, &params);
         let fast = search(&index, &query, &params, &mut no_progress()).unwrap();
         assert_same(&format!("long clips, round {round} ({rows} frames, k {})", params.max_results), &fast, &reference, (&query, &index, &params));
+        // Split into parts that share τ: a part's bound lowers the others'.
+        let threaded = search_threads(&index, &query, &params, 2 + round % 2, &mut no_progress()).unwrap();
+        assert_same(&format!("long clips on threads, round {round} ({rows} frames, k {})", params.max_results), &threaded, &reference, (&query, &index, &params));
         assert!(!fast.matches.is_empty(), "round {round}: the phrase is in the library");
     }
 }

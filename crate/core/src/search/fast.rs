@@ -79,11 +79,154 @@ pub(crate) fn run(
     let (seed, probed) = if prep.max_results > PROBE_MAX_RESULTS { (f32::INFINITY, 0) } else { probe(index, prep, &bounds) };
     let all: Vec<(usize, usize, usize)> =
         index.clips.iter().enumerate().map(|(ci, c)| (ci, 0, c.frame_count())).filter(|s| s.2 >= prep.min_span).collect();
+    let shared = SharedTau::new(prep.threshold.min(seed));
+    let (mut pool, mut stats) = run_part(index, prep, &bounds, &all, seed, &shared, progress)?;
+    stats.distances_computed += probed;
+    let within = pool.len() as u64;
+    let selected = select_matches(index, prep, &mut pool);
+    Ok(finish(index, prep, selected, stats, within))
+}
+
+/// [`run`] on `threads` threads: the library's ends are cut into `threads` runs of about equal
+/// length (a long clip may be cut too; each piece then starts `maxSpan − 1` columns early, so
+/// it holds every admissible start of its ends), each run searched on its own thread with the
+/// same probe seed, and the pools joined before the one selection. Exact for the same reasons
+/// as [`run`]: every part's τ is a proven upper bound of the whole library's k-th result (a far
+/// set inside a part is a far set of the library), so the parts share it — each lowers a
+/// common τ and reads it before every block — and every end within the final τ of its part is
+/// in the joined pool with its least distance and start. Ends are reported by one part only.
+#[cfg(not(target_arch = "wasm32"))]
+pub(crate) fn run_threads(
+    index: &FeatureIndex,
+    prep: &Prepared,
+    threads: usize,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<SearchOutcome, SearchError> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let bounds = Bounds::new(index, prep);
+    let (seed, probed) = if prep.max_results > PROBE_MAX_RESULTS { (f32::INFINITY, 0) } else { probe(index, prep, &bounds) };
+    let parts = split(index, prep, threads.max(1));
+    let shared = SharedTau::new(prep.threshold.min(seed));
+    let cancel = AtomicBool::new(false);
+    // Where the calling thread's progress last stood (scaled), for the cancel error.
+    let reached = std::cell::Cell::new(0usize);
+    let total = index.total_frames();
+    let (first, rest) = parts.split_first().expect("split gives at least one part");
+    let first_total: usize = first.iter().map(|s| s.2 - s.1).sum::<usize>().max(1);
+    let results: Vec<Result<(Vec<Candidate>, SearchStats), SearchError>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = rest
+            .iter()
+            .map(|segments| {
+                let (bounds, shared, cancel) = (&bounds, &shared, &cancel);
+                scope.spawn(move || {
+                    let mut stop = |_: SearchProgress| if cancel.load(Ordering::Relaxed) { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
+                    run_part(index, prep, bounds, segments, seed, shared, &mut stop)
+                })
+            })
+            .collect();
+        // This thread searches the first part and reports progress for all (scaled from its own).
+        let mut mine = |p: SearchProgress| {
+            let scaled = SearchProgress { frames_done: (p.frames_done.min(first_total) * total) / first_total, frames_total: total, candidates: p.candidates };
+            reached.set(scaled.frames_done);
+            let r = progress(scaled);
+            if r.is_break() {
+                cancel.store(true, Ordering::Relaxed);
+            }
+            r
+        };
+        let mut out = vec![run_part(index, prep, &bounds, first, seed, &shared, &mut mine)];
+        out.extend(handles.into_iter().map(|h| h.join().expect("search thread panicked")));
+        out
+    });
+    let mut pool = Vec::new();
+    let mut stats = SearchStats { frames_searched: total, cells_total: total as u64 * prep.query_frames as u64, distances_computed: probed };
+    for r in results {
+        let (p, s) = match r {
+            Err(SearchError::Cancelled { .. }) => return Err(SearchError::Cancelled { frames_done: reached.get(), frames_total: total }),
+            other => other?,
+        };
+        pool.extend(p);
+        stats.distances_computed += s.distances_computed;
+    }
+    let within = pool.len() as u64;
+    let selected = select_matches(index, prep, &mut pool);
+    Ok(finish(index, prep, selected, stats, within))
+}
+
+/// The library's ends cut into `parts` runs of about equal length, as filter segments
+/// (clip, first column, end column): a piece that starts inside a clip starts `maxSpan − 1`
+/// columns before its first end, and every cut lies at least `maxSpan` columns into the clip,
+/// so the piece's first column is past 0 (the passes report an end of a segment that starts
+/// past 0 only when all its admissible starts lie inside: exactly the piece's own ends).
+#[cfg(not(target_arch = "wasm32"))]
+fn split(index: &FeatureIndex, prep: &Prepared, parts: usize) -> Vec<Vec<(usize, usize, usize)>> {
+    let clips: Vec<(usize, usize)> = index.clips.iter().enumerate().map(|(ci, c)| (ci, c.frame_count())).filter(|c| c.1 >= prep.min_span).collect();
+    let total: usize = clips.iter().map(|c| c.1).sum();
+    let share = total.div_ceil(parts).max(1);
+    let mut out: Vec<Vec<(usize, usize, usize)>> = vec![Vec::new()];
+    let mut room = share;
+    for (ci, cols) in clips {
+        let mut at = 0usize;
+        while at < cols {
+            let mut to = (at + room).min(cols);
+            if to < cols {
+                // The next piece's first end must lie at least maxSpan columns in, and no
+                // piece shorter than maxSpan is left at the clip's end.
+                to = to.max(prep.max_span);
+                if cols.saturating_sub(to) < prep.max_span {
+                    to = cols;
+                }
+            }
+            let from = if at == 0 { 0 } else { at + 1 - prep.max_span };
+            out.last_mut().expect("one part").push((ci, from, to));
+            room = room.saturating_sub(to - at);
+            at = to;
+            if room == 0 && out.len() < parts {
+                out.push(Vec::new());
+                room = share;
+            }
+        }
+    }
+    out.retain(|p| !p.is_empty());
+    if out.is_empty() {
+        out.push(Vec::new());
+    }
+    out
+}
+
+/// The best τ found so far by any part of a search (see [`run_threads`]): distances are ≥ 0, so
+/// their f32 bits order like the values.
+struct SharedTau(std::sync::atomic::AtomicU32);
+
+impl SharedTau {
+    fn new(tau: f32) -> SharedTau {
+        SharedTau(std::sync::atomic::AtomicU32::new(tau.max(0.0).to_bits()))
+    }
+    fn get(&self) -> f32 {
+        f32::from_bits(self.0.load(std::sync::atomic::Ordering::Relaxed))
+    }
+    fn lower(&self, tau: f32) {
+        self.0.fetch_min(tau.max(0.0).to_bits(), std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+/// The exact search over `segments` (see [`split`]), τ starting at the lower of the threshold
+/// and `seed` and shared through `shared`: the ends of the segments whose least distance is
+/// within the final τ, with the work done.
+fn run_part(
+    index: &FeatureIndex,
+    prep: &Prepared,
+    bounds: &Bounds,
+    all: &[(usize, usize, usize)],
+    seed: f32,
+    shared: &SharedTau,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<(Vec<Candidate>, SearchStats), SearchError> {
     let tau0 = prep.threshold.min(seed);
-    let (mut pool, mut stats) = if tau0.is_finite() {
+    if tau0.is_finite() {
         // Two passes: the one-value filter finds the ends that can be within τ (and lowers τ),
         // then the exact front DP runs on those ends' windows only.
-        let (marks, tau, filtered) = filter_pass(index, prep, &bounds, &all, tau0, progress)?;
+        let (marks, tau, filtered) = filter_pass(index, prep, bounds, all, tau0, shared, progress)?;
         // Sums were formed with τ values up to τ0: their rounding scales with it.
         let margin = filter_margin(prep, tau0);
         let wmin = (prep.query_frames + prep.min_span) as f32;
@@ -102,17 +245,13 @@ pub(crate) fn run(
         }
         let total = index.total_frames();
         let mut pass2 = |p: SearchProgress| progress(SearchProgress { frames_done: total, frames_total: total, candidates: p.candidates });
-        let (pool, exact, _) = scan(index, prep, &bounds, &segments, tau, false, true, &mut pass2)?;
+        let (pool, exact, _) = scan(index, prep, bounds, &segments, tau, false, true, shared, &mut pass2)?;
         let stats = SearchStats { distances_computed: filtered.distances_computed + exact.distances_computed, ..filtered };
-        (pool, stats)
+        Ok((pool, stats))
     } else {
-        let (pool, stats, _) = scan(index, prep, &bounds, &all, seed, true, true, progress)?;
-        (pool, stats)
-    };
-    stats.distances_computed += probed;
-    let within = pool.len() as u64;
-    let selected = select_matches(index, prep, &mut pool);
-    Ok(finish(index, prep, selected, stats, within))
+        let (pool, stats, _) = scan(index, prep, bounds, all, seed, true, true, shared, progress)?;
+        Ok((pool, stats))
+    }
 }
 
 /// Rounding margin of the one-value pass whose τ started at `tau`: for any path that ends
@@ -179,6 +318,7 @@ fn filter_pass(
     bounds: &Bounds,
     segments: &[(usize, usize, usize)],
     tau0: f32,
+    shared: &SharedTau,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<FilterResult, SearchError> {
     let rows = prep.query_frames;
@@ -220,6 +360,12 @@ fn filter_pass(
             }
             let b1 = (b0 + BLOCK).min(to);
             let wend = (b0 + BLOCK + prep.max_span - 1).min(cols);
+            // Another part of the search may have lowered τ (see `run_threads`).
+            let theirs = shared.get();
+            if theirs < tau {
+                tau = theirs;
+                upper.retain(|c| c.score <= tau);
+            }
             block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
             if filter.busy {
                 for t in b0 / CHUNK..=(wend - 1) / CHUNK {
@@ -241,8 +387,13 @@ fn filter_pass(
                 let bound = Bound { margin, rest: &rest, fneg: &fneg, base: b0, last };
                 if let Some(m) = filter.column(prep, target, j, tau, &bound) {
                     let score = m.cost / (rows + m.end + 1 - m.start) as f32;
+                    // A real path: its distance bounds its end's from above, wherever it lies.
                     upper.push(Candidate { clip: ci, start: m.start, end: m.end, score, cost: m.cost });
-                    marks.push((ci, m));
+                    // Only a segment that holds every admissible start of an end marks it
+                    // (a piece of a split clip starts maxSpan − 1 columns before its ends).
+                    if from == 0 || m.end + 1 >= from + prep.max_span {
+                        marks.push((ci, m));
+                    }
                 }
             }
             if upper.len() > upper_seen && upper.len() >= prep.max_results {
@@ -250,6 +401,7 @@ fn filter_pass(
                     if kth < tau {
                         tau = kth;
                         upper.retain(|c| c.score <= tau);
+                        shared.lower(tau);
                     }
                 }
                 upper_seen = upper.len();
@@ -336,9 +488,16 @@ impl Bounds {
     }
 }
 
-/// A first τ when there is no threshold or it is loose: the plain DP run on the few places
+/// A first τ when there is no threshold or it is loose: real paths found on the few places
 /// whose row bounds are lowest (each with `maxSpan` columns of run-up), and the far-set bound
-/// of what it finds (those paths are real, so their distances bound the ends' own from above).
+/// of their distances (real paths, so each bounds its end's least distance from above).
+///
+/// The paths come from the one-value DP of `filter.rs` with nothing pruned, which at a fixed λ
+/// finds into every end the path of least `Σ w·(d − λ)` (and carries its cost and start) —
+/// about the cost of one frame distance per cell, where the front DP costs several. Twice, as
+/// in Dinkelbach's method for least ratios: at λ = 0 (the cheapest paths), then at the far-set
+/// bound of those; a path of least `Σ w·(d − λ)` with λ at or above the least distance has a
+/// distance no higher than λ, so the second round tightens the bound.
 fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
     let k = prep.max_results;
     let nq = bounds.nq;
@@ -371,10 +530,32 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
         let cols = index.clips[ci].frame_count();
         segments.push((ci, b0.saturating_sub(prep.max_span), (b0 + BLOCK + prep.max_span).min(cols)));
     }
-    let Ok((mut pool, stats, _)) = scan(index, prep, bounds, &segments, f32::INFINITY, false, false, &mut |_| ControlFlow::Continue(())) else {
-        return (f32::INFINITY, 0);
-    };
-    (far_bound(&mut pool, k, prep.max_span).unwrap_or(f32::INFINITY), stats.distances_computed)
+    let rows = prep.query_frames;
+    let mut filter = Filter::new(rows);
+    let rest = vec![0f32; rows];
+    let mut pool: Vec<Candidate> = Vec::new();
+    let mut lambda = 0.0f32;
+    for _round in 0..2 {
+        for &(ci, from, to) in &segments {
+            let target = index.clips[ci].lanes(prep.origin);
+            let cols = target.len() / LANE_FLOATS;
+            // Nothing pruned: an infinite margin, zero bounds.
+            let fneg = vec![0f32; cols + 1 - from];
+            filter.reset(from);
+            for j in from..to {
+                let bound = Bound { margin: f32::INFINITY, rest: &rest, fneg: &fneg, base: from, last: (j + prep.max_span - 1).min(cols - 1) };
+                if let Some(m) = filter.column(prep, target, j, lambda, &bound) {
+                    let score = m.cost / (rows + m.end + 1 - m.start) as f32;
+                    pool.push(Candidate { clip: ci, start: m.start, end: m.end, score, cost: m.cost });
+                }
+            }
+        }
+        match far_bound(&mut pool, k, prep.max_span) {
+            Some(b) => lambda = b,
+            None => return (f32::INFINITY, filter.distances),
+        }
+    }
+    (lambda, filter.distances)
 }
 
 /// (ends with their least distance ≤ the final τ, work, final τ).
@@ -393,6 +574,7 @@ fn scan(
     seed: f32,
     lower: bool,
     exact: bool,
+    shared: &SharedTau,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<ScanResult, SearchError> {
     let rows = prep.query_frames;
@@ -419,6 +601,8 @@ fn scan(
                 return Err(SearchError::Cancelled { frames_done: done + b0 - from, frames_total: total });
             }
             let b1 = (b0 + BLOCK).min(to);
+            // Another part of the search may have lowered τ (see `run_threads`).
+            tau = tau.min(shared.get());
             let prune = tau.is_finite();
             let wend = (b0 + BLOCK + prep.max_span - 1).min(cols);
             if prune {
@@ -445,6 +629,7 @@ fn scan(
                     if kth < tau {
                         tau = kth;
                         pool.retain(|c| c.score <= tau);
+                        shared.lower(tau);
                     }
                 }
                 pool_seen = pool.len();

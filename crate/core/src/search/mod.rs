@@ -227,6 +227,24 @@ pub fn search(
     fast::run(index, &prep, progress)
 }
 
+/// [`search`] on `threads` threads (native builds; the web app gets its parallelism from Web
+/// Workers that each hold part of the library instead): the library's ends are cut into
+/// `threads` runs of about equal length — a long clip too — searched at once, sharing the k-th
+/// best bound, and joined before the one selection. Same results as [`search`], bit for bit;
+/// `progress` is called from the calling thread only (its part's progress, scaled to the
+/// whole), and cancelling it stops every thread.
+#[cfg(not(target_arch = "wasm32"))]
+pub fn search_threads(
+    index: &FeatureIndex,
+    query: &ClipFeatures,
+    params: &SearchParams,
+    threads: usize,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<SearchOutcome, SearchError> {
+    let prep = Prepared::new(index, query, params)?;
+    fast::run_threads(index, &prep, threads, progress)
+}
+
 /// The plain subsequence DP (every cell of every clip computed): the reference the fast search
 /// must agree with, and the benchmark baseline. Same arguments and results as [`search`].
 pub fn search_plain(
