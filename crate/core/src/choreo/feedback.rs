@@ -9,9 +9,11 @@
 //! - **Sim and D on the [0, 1] scale of the library, as rel's intensities are.** Sim(m, a) is
 //!   the share of the library's segments less kWAS-similar to the anchor a than m is (m's
 //!   percentile among a's neighbours), and D(m, a) = 1 − Sim(m, a). Raw kWAS values bunch in
-//!   a narrow band (near neighbours differ by hundredths), so next to rel's full 0..1 range
-//!   and τ ≈ 1 a like could barely move the argmax; the percentile keeps kWAS's order and
-//!   gives both terms of Φ the spread of rel.
+//!   a narrow band (in the preference bench's library a segment's 1st, 10th and 50th nearest
+//!   neighbours score 0.965, 0.912 and 0.865 on average, its 600th 0.320), unlike rel's
+//!   intensities, which spread over 0..1; the percentile keeps kWAS's order and puts both
+//!   terms of Φ on rel's scale. Measured (`choreo_preference_study`), it is the larger of the
+//!   two changes here.
 //! - **τ is multiplied by 19/20 per like** (at least once per Search): one like per round is
 //!   the spec's schedule; liking two narrows as far as two rounds of one like.
 //! - **In the min D term, S_n counts those shown and not liked** (plus this round's picks);
