@@ -6,15 +6,17 @@
 //! built-in moves plus the real salsa and Indian clips; 64 targets spread over the library,
 //! each hidden (showing it counts for nothing);
 //! the bar's intensity is the target's; ρ and τ as the app's defaults. Prints, per round, the
-//! mean distance of the best candidate shown so far, and at round 5 the fall from round 1 and
-//! the share of targets where the guided person is closer than the random one (goals: ≥ 20 %
-//! and ≥ 75 %), and how well the search's similarity agrees with the perceptual distance
-//! (Spearman's rank correlation over the library). Asserts nothing. `cargo test -p odori-tests --bench choreo_preference` for a
-//! quick build.
+//! mean distance of the best candidate shown so far and eq. 9's diversity of the shown (which
+//! should fall), and at round 5 the fall from round 1 and the share of targets where the
+//! guided person is closer than a random one — one random person (a single draw, noisy), and
+//! the mean of 5 random people (the control's expected result) — goals ≥ 20 % and ≥ 75 %;
+//! and how well the search's similarity agrees with the perceptual distance (Spearman's rank
+//! correlation over the library). Asserts nothing. `cargo test -p odori-tests --bench
+//! choreo_preference` for a quick build.
 
 use glam::Vec3;
 use odori_core::choreo::quality::perceptual_distance;
-use odori_core::choreo::{FeedbackSession, SegmentLibrary, SegmentOptions, Settings, CANDIDATES_PER_ROUND};
+use odori_core::choreo::{mean_pairwise_dissimilarity, FeedbackSession, SegmentLibrary, SegmentOptions, Settings, CANDIDATES_PER_ROUND};
 use odori_core::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
 use odori_core::import::import_bytes;
 use odori_core::ImportOptions;
@@ -35,11 +37,21 @@ pub struct Figures {
     pub random_curve: Vec<f32>,
     /// Mean over targets of the guided best distance's fall from round 1 to round 5.
     pub mean_fall: f32,
-    /// Targets where guided likes end closer than random ones, equal, and farther.
+    /// Targets where guided likes end closer than random ones (one random person), equal, and
+    /// farther.
     pub wins: usize,
     pub ties: usize,
     pub losses: usize,
+    /// Targets where guided likes end closer than the mean of [`RANDOM_DRAWS`] random people
+    /// (the random person's expected result, not one lucky or unlucky draw).
+    pub wins_vs_mean: usize,
+    /// Mean over targets of eq. 9 (mean pairwise raw kWAS D of the 6 shown) per round, guided:
+    /// §F's check that the shown set narrows.
+    pub diversity: Vec<f32>,
 }
+
+/// Random people per target for [`Figures::wins_vs_mean`].
+pub const RANDOM_DRAWS: usize = 5;
 
 #[allow(dead_code)]
 fn main() {
@@ -50,6 +62,13 @@ fn main() {
     println!("  round:                 {}", (1..=ROUNDS).map(|r| format!("{r:>7}")).collect::<String>());
     println!("  best shown, guided:    {}", f.guided_curve.iter().map(|v| format!("{v:>7.4}")).collect::<String>());
     println!("  best shown, random:    {}", f.random_curve.iter().map(|v| format!("{v:>7.4}")).collect::<String>());
+    println!("  eq. 9 diversity, guided: {}", f.diversity.iter().map(|v| format!("{v:>7.4}")).collect::<String>());
+    println!(
+        "  guided closer than the mean of {RANDOM_DRAWS} random people on {}/{} targets ({:.0} %)",
+        f.wins_vs_mean,
+        f.targets,
+        100.0 * f.wins_vs_mean as f32 / f.targets.max(1) as f32
+    );
     println!(
         "  round 5 vs round 1 (guided): mean fall {:.1} % (goal ≥ 20 %), fall of the mean {:.1} %; guided closer than random on {}/{} targets ({:.0} %, goal ≥ 75 %), equal on {}, farther on {}",
         100.0 * f.mean_fall,
@@ -87,16 +106,23 @@ pub fn measure() -> Figures {
     let targets: Vec<usize> = (0..TARGETS).map(|i| (i * lib.len()) / TARGETS + 3).filter(|&t| t < lib.len()).collect();
     let mut guided_curve = vec![0.0f32; ROUNDS];
     let mut random_curve = vec![0.0f32; ROUNDS];
-    let (mut falls, mut wins, mut ties, mut losses) = (Vec::new(), 0, 0, 0);
+    let mut diversity = vec![0.0f32; ROUNDS];
+    let (mut falls, mut wins, mut ties, mut losses, mut wins_vs_mean) = (Vec::new(), 0, 0, 0, 0);
+    // The first random person of every target draws from `x` (as before the extra draws were
+    // added, so the one-person count stays comparable); the others from `y`.
     let mut x = 0x5DEE_CE66_Du64;
+    let mut y = 0x2545_F491_4F6C_DD1Du64;
     for &t in &targets {
         let intensity = lib.segments()[t].intensity01;
-        let mut best_at_round = |guided: bool| -> Vec<f32> {
+        let best_at_round = |guided: bool, x: &mut u64, diversity: &mut [f32]| -> Vec<f32> {
             let mut session = FeedbackSession::new();
             let mut round: Vec<usize> = session.next_round(&lib, intensity, settings.rho, CANDIDATES_PER_ROUND).to_vec();
             let mut best = f32::INFINITY;
             let mut out = Vec::new();
             for r in 0..ROUNDS {
+                if guided {
+                    diversity[r] += mean_pairwise_dissimilarity(&lib, &round) / targets.len() as f32;
+                }
                 // The target is hidden: the person has it in mind, it is not in the library they
                 // see, so showing it counts for nothing (otherwise ρ's intensity match, with the
                 // bar at the target's own intensity, finds it in the first round and every run
@@ -114,8 +140,8 @@ pub fn measure() -> Figures {
                     let mut pick = Vec::new();
                     let visible: Vec<usize> = round.iter().copied().filter(|&c| c != t).collect();
                     while pick.len() < LIKES.min(visible.len()) {
-                        x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                        let c = visible[(x >> 33) as usize % visible.len()];
+                        *x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                        let c = visible[(*x >> 33) as usize % visible.len()];
                         if !pick.contains(&c) {
                             pick.push(c);
                         }
@@ -126,8 +152,15 @@ pub fn measure() -> Figures {
             }
             out
         };
-        let g = best_at_round(true);
-        let r = best_at_round(false);
+        let g = best_at_round(true, &mut x, &mut diversity);
+        let r = best_at_round(false, &mut x, &mut []);
+        let mut random_final = r[ROUNDS - 1];
+        for _ in 1..RANDOM_DRAWS {
+            random_final += best_at_round(false, &mut y, &mut [])[ROUNDS - 1];
+        }
+        if g[ROUNDS - 1] < random_final / RANDOM_DRAWS as f32 {
+            wins_vs_mean += 1;
+        }
         for k in 0..ROUNDS {
             guided_curve[k] += g[k] / targets.len() as f32;
             random_curve[k] += r[k] / targets.len() as f32;
@@ -151,7 +184,7 @@ pub fn measure() -> Figures {
         spearman(&sim, &near)
     }).sum::<f32>() / targets.len() as f32;
     let mean_fall = falls.iter().sum::<f32>() / falls.len().max(1) as f32;
-    Figures { targets: targets.len(), segments: lib.len(), agreement, guided_curve, random_curve, mean_fall, wins, ties, losses }
+    Figures { targets: targets.len(), segments: lib.len(), agreement, guided_curve, random_curve, mean_fall, wins, ties, losses, wins_vs_mean, diversity }
 }
 
 /// Spearman's rank correlation (no tie correction: the values are continuous).

@@ -4,13 +4,26 @@
 //! m_{n+1} = argmax_{m ∈ U \ S_n} ρ · rel(q, m) + (1 − ρ) · Φ(m, S_n, L) with
 //! Φ = τ · min_{m_i ∈ S_n} D(m, m_i) + (1 − τ) · max_{m_j ∈ L} Sim(m, m_j),
 //! rel(q, m) = 1 − |music intensity of the bar − motion intensity of m| (both 0..1), L the
-//! segments the person liked, and S_n the segments already shown for the bar: none is shown
-//! again, and in the min D term S_n counts those shown and not liked (plus this round's picks),
-//! so a like draws the search toward its neighbours instead of repelling it (the product's
-//! decision; see `next_round`).
-//! τ starts at 1 and is multiplied by 19/20 at every Search. Where the spec is silent: with
-//! nothing shown yet the min over S_n counts as 1 (all candidates equally new), with nothing
-//! liked the max over L counts as 0, and ties go to the lower segment index.
+//! segments the person liked, and S_n the segments already shown for the bar. The product's
+//! decisions, where the spec leaves room (each measured by the `choreo_preference` bench):
+//! - **Sim and D on the [0, 1] scale of the library, as rel's intensities are.** Sim(m, a) is
+//!   the share of the library's segments less kWAS-similar to the anchor a than m is (m's
+//!   percentile among a's neighbours), and D(m, a) = 1 − Sim(m, a). Raw kWAS values bunch in
+//!   a narrow band (in the preference bench's library a segment's 1st, 10th and 50th nearest
+//!   neighbours score 0.965, 0.912 and 0.865 on average, its 600th 0.320), unlike rel's
+//!   intensities, which spread over 0..1; the percentile keeps kWAS's order and puts both
+//!   terms of Φ on rel's scale. Measured (`choreo_preference_study`), it is the larger of the
+//!   two changes here.
+//! - **τ is multiplied by 19/20 per like** (at least once per Search): one like per round is
+//!   the spec's schedule; liking two narrows as far as two rounds of one like.
+//! - **In the min D term, S_n counts those shown and not liked** (plus this round's picks);
+//!   none is ever shown again, liked or not. Counting the liked ones would make every like
+//!   repel the search from what was liked while τ > ½.
+//!
+//! Where the spec is silent: with nothing shown yet the min over S_n counts as 1 (all
+//! candidates equally new), with nothing liked the max over L counts as 0, and ties go to the
+//! lower segment index. [`mean_pairwise_dissimilarity`] (eq. 9, the method's check) stays on
+//! raw kWAS.
 
 use serde::{Deserialize, Serialize};
 
@@ -18,7 +31,7 @@ use super::segment::SegmentLibrary;
 
 /// Candidates per round.
 pub const CANDIDATES_PER_ROUND: usize = 6;
-/// τ's factor per Search (eq. 4).
+/// τ's factor per like, and at least once per Search (eq. 4).
 pub const TAU_DECAY: f32 = 19.0 / 20.0;
 
 /// The search state of one bar.
@@ -67,11 +80,11 @@ impl FeedbackSession {
                 is_shown[s] = true;
             }
         }
-        // min D to the shown set, and max Sim to the liked set, for every segment. A liked
-        // candidate stays out of U (never shown again) but does not push its neighbours away:
-        // with D = 1 − Sim, a neighbour's τ · D loses more than its (1 − τ) · Sim gains while
-        // τ > ½ (the first 13 rounds), so counting liked ones in the min would make every like
-        // repel the search from what was liked.
+        // min D to the shown set, and max Sim to the liked set, for every segment, on the
+        // percentile scale (module docs). A liked candidate stays out of U (never shown again)
+        // but does not push its neighbours away: with D = 1 − Sim, a neighbour's τ · D loses
+        // more than its (1 − τ) · Sim gains while τ > ½, so counting liked ones in the min
+        // would make every like repel the search from what was liked.
         let mut min_d = vec![1.0f32; m];
         for &s in &self.shown {
             if !self.liked.contains(&s) {
@@ -80,11 +93,9 @@ impl FeedbackSession {
         }
         let mut max_sim = vec![0.0f32; m];
         for &l in &self.liked {
-            if let Some(sig) = lib.signature(l) {
-                for (c, slot) in max_sim.iter_mut().enumerate() {
-                    if let Some(other) = lib.signature(c) {
-                        *slot = slot.max(sig.similarity(other));
-                    }
+            if l < m {
+                for (slot, p) in max_sim.iter_mut().zip(similarity_percentiles(lib, l)) {
+                    *slot = slot.max(p);
                 }
             }
         }
@@ -112,24 +123,47 @@ impl FeedbackSession {
         &self.round
     }
 
-    /// A Search: the liked candidates join L, τ ← τ · 19/20, and the next round is chosen.
+    /// A Search: the liked candidates join L, τ ← τ · (19/20)^max(1, new likes), and the
+    /// next round is chosen.
     pub fn search(&mut self, lib: &SegmentLibrary, liked: &[usize], bar_intensity: f32, rho: f32, count: usize) -> &[usize] {
+        let mut new_likes = 0;
         for &l in liked {
             if !self.liked.contains(&l) {
                 self.liked.push(l);
+                new_likes += 1;
             }
         }
-        self.tau *= TAU_DECAY;
+        self.tau *= TAU_DECAY.powi(new_likes.max(1));
         self.next_round(lib, bar_intensity, rho, count)
     }
 }
 
-fn update_min_d(lib: &SegmentLibrary, min_d: &mut [f32], shown: usize) {
-    let Some(sig) = lib.signature(shown) else { return };
-    for (c, slot) in min_d.iter_mut().enumerate() {
-        if let Some(other) = lib.signature(c) {
-            *slot = slot.min(sig.dissimilarity(other));
+/// Sim(c, anchor) for every segment c on the library's scale: the share of the other segments
+/// whose kWAS similarity to the anchor is lower than c's (ties share a rank), so 1 for the
+/// anchor's nearest and 0 for its farthest. O(m log m).
+pub fn similarity_percentiles(lib: &SegmentLibrary, anchor: usize) -> Vec<f32> {
+    let m = lib.len();
+    let sim: Vec<f32> = (0..m).map(|c| lib.similarity(anchor, c)).collect();
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by(|&a, &b| sim[a].total_cmp(&sim[b]));
+    let mut out = vec![0.0f32; m];
+    let scale = 1.0 / (m.max(2) - 1) as f32;
+    let mut below = 0;
+    for (k, &c) in order.iter().enumerate() {
+        if k > 0 && sim[c] > sim[order[k - 1]] {
+            below = k;
         }
+        out[c] = below as f32 * scale;
+    }
+    out
+}
+
+fn update_min_d(lib: &SegmentLibrary, min_d: &mut [f32], shown: usize) {
+    if shown >= lib.len() {
+        return;
+    }
+    for (slot, p) in min_d.iter_mut().zip(similarity_percentiles(lib, shown)) {
+        *slot = slot.min(1.0 - p);
     }
 }
 
@@ -148,5 +182,50 @@ pub fn mean_pairwise_dissimilarity(lib: &SegmentLibrary, set: &[usize]) -> f32 {
         0.0
     } else {
         sum / pairs as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentiles_keep_the_kwas_order_on_a_0_to_1_scale() {
+        let lib = SegmentLibrary::builtin();
+        let m = lib.len();
+        for anchor in [0, m / 3, m - 1] {
+            let p = similarity_percentiles(&lib, anchor);
+            assert_eq!(p.len(), m);
+            assert!(p.iter().all(|v| (0.0..=1.0).contains(v)));
+            assert_eq!(p.iter().cloned().fold(f32::INFINITY, f32::min), 0.0, "the farthest segment ranks 0");
+            // The anchor is its own nearest (ties with an identical twin share the rank).
+            let top = p.iter().cloned().fold(0.0f32, f32::max);
+            assert_eq!(p[anchor], top);
+            for a in (0..m).step_by(7) {
+                for b in (0..m).step_by(11) {
+                    let (sa, sb) = (lib.similarity(anchor, a), lib.similarity(anchor, b));
+                    if sa > sb {
+                        assert!(p[a] > p[b], "anchor {anchor}: sim {sa} > {sb} but percentile {} ≤ {}", p[a], p[b]);
+                    } else if sa == sb {
+                        assert_eq!(p[a], p[b]);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn tau_falls_per_like_and_at_least_once_per_search() {
+        let lib = SegmentLibrary::builtin();
+        let mut s = FeedbackSession::new();
+        let round = s.next_round(&lib, 0.5, 0.3, CANDIDATES_PER_ROUND).to_vec();
+        s.search(&lib, &round[..2], 0.5, 0.3, CANDIDATES_PER_ROUND);
+        assert!((s.tau - TAU_DECAY * TAU_DECAY).abs() < 1e-6, "two likes: τ {}", s.tau);
+        s.search(&lib, &[], 0.5, 0.3, CANDIDATES_PER_ROUND);
+        assert!((s.tau - TAU_DECAY.powi(3)).abs() < 1e-6, "no like: τ {}", s.tau);
+        // A like given again is not new.
+        s.search(&lib, &round[..1], 0.5, 0.3, CANDIDATES_PER_ROUND);
+        assert!((s.tau - TAU_DECAY.powi(4)).abs() < 1e-6, "repeated like: τ {}", s.tau);
+        assert_eq!(s.liked, round[..2].to_vec());
     }
 }

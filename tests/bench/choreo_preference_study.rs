@@ -1,0 +1,287 @@
+//! Why §F's feedback converges or not: the preference test of §J (as the `choreo_preference`
+//! bench: built-in moves + the CMU salsa and Indian clips, hidden targets, 2 likes per round, 5
+//! rounds, ρ and τ as the app's defaults) run on variants of the loop, written here on
+//! precomputed matrices so one run compares them all. Not the product's code path (that is
+//! `choreo::feedback`, measured by `choreo_preference`); a study of the decisions the spec
+//! leaves to the product:
+//! - which shown candidates enter Φ's min D (all, as the spec's S_n; or those not liked),
+//! - τ's 19/20 per Search round (the spec) or per like,
+//! - Sim and D as raw kWAS or as percentiles among the anchor's neighbours in the library,
+//! - how Sim to L is aggregated (max; max weighted by recency; the last round's likes only),
+//! - min D over this round's picks only (maximal-marginal-relevance style), and 2 of the 6
+//!   picked with τ = 0 (exploitation) before the diverse ones,
+//! - and two controls: a *perfect* similarity (1 − perceptual distance / its maximum, the
+//!   simulated person's own distance, which the search must not use) and a greedy loop (ρ = 0
+//!   throughout and τ = 0 once something is liked: every candidate the nearest unseen
+//!   neighbour of a like, no diversity at all),
+//!   the ceiling of what any similarity or schedule could reach in this test.
+//! Three disjoint sets of 64 targets (A is the `choreo_preference` bench's). Per variant:
+//! targets where the guided person ends closer than one random person (and ties, losses),
+//! closer than the mean of 5 random people, closer summed over the 5 rounds (`auc`), the mean
+//! fall of the best distance from round 1 to 5, targets whose nearest segment is already in
+//! round 1 (`r1 has NN`: no loop can improve on those), and the mean best distance at rounds
+//! 1 and 5, guided (`g`) and random (`r`). Also prints how raw kWAS spreads over a segment's neighbours next to the spread of
+//! the intensities rel compares. Asserts nothing.
+
+use glam::Vec3;
+use odori_core::choreo::quality::perceptual_distance;
+use odori_core::choreo::{feedback::relevance, SegmentLibrary, SegmentOptions, Settings};
+use odori_core::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
+use odori_core::import::import_bytes;
+use odori_core::ImportOptions;
+use odori_tests::{all_bvh, fps_override_for, read};
+
+const ROUNDS: usize = 5;
+const LIKES: usize = 2;
+const PER: usize = 6;
+
+#[derive(Clone, Copy, Debug)]
+struct V {
+    /// Φ's min D over: 0 every candidate shown (the spec's S_n), 1 those shown and not liked,
+    /// 2 this round's picks only.
+    mind: u8,
+    /// 0 per round, 1 per like
+    tau: u8,
+    /// Sim to L: 0 the max (the spec), 1 the max weighted by γ per round of the like's age, 2
+    /// the max over the last round's likes.
+    agg: u8,
+    gamma: f32,
+    /// Picks per round made with τ = 0 (once something is liked).
+    exploit: usize,
+    decay: f32,
+    /// Sim and D: 0 raw kWAS, 1 percentile among the anchor's neighbours.
+    scale: u8,
+    rho: f32,
+}
+
+fn run(v: V, sim_raw: &[f32], sim_rank: &[f32], m: usize, rel_of: &dyn Fn(usize) -> f32, retired: &[bool], rho: f32, target: usize, dist: &dyn Fn(usize) -> f32, guided: bool, seed: &mut u64) -> Vec<f32> {
+    let mut shown: Vec<usize> = Vec::new();
+    let mut liked: Vec<(usize, usize)> = Vec::new(); // (segment, round liked)
+    let mut tau = 1.0f32;
+    let mut best = f32::INFINITY;
+    let mut out = Vec::new();
+    let rel: Vec<f32> = (0..m).map(rel_of).collect();
+    let sim = if v.scale == 1 { sim_rank } else { sim_raw };
+    let rho = if v.rho >= 0.0 { v.rho } else { rho };
+    for r in 0..ROUNDS {
+        // choose the round
+        let mut is_shown: Vec<bool> = retired.to_vec();
+        for &s in &shown {
+            is_shown[s] = true;
+        }
+        let mut min_d = vec![1.0f32; m];
+        let upd = |min_d: &mut [f32], s: usize| {
+            for c in 0..m {
+                min_d[c] = min_d[c].min(1.0 - sim[s * m + c]);
+            }
+        };
+        let liked_set: Vec<usize> = liked.iter().map(|l| l.0).collect();
+        match v.mind {
+            0 => shown.iter().for_each(|&s| upd(&mut min_d, s)),
+            1 => shown.iter().filter(|s| !liked_set.contains(s)).for_each(|&s| upd(&mut min_d, s)),
+            _ => {}
+        }
+        let mut max_sim = vec![0.0f32; m];
+        for &(l, lr) in &liked {
+            let w = match v.agg {
+                0 => 1.0,
+                1 => v.gamma.powi((r - 1 - lr) as i32),
+                _ => {
+                    if lr + 1 == r {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                }
+            };
+            for c in 0..m {
+                max_sim[c] = max_sim[c].max(w * sim[l * m + c]);
+            }
+        }
+        let mut round = Vec::new();
+        for n in 0..PER {
+            let t = if n < v.exploit && !liked.is_empty() { 0.0 } else { tau };
+            let mut bestc: Option<(f32, usize)> = None;
+            for c in 0..m {
+                if is_shown[c] {
+                    continue;
+                }
+                let phi = t * min_d[c] + (1.0 - t) * max_sim[c];
+                let s = rho * rel[c] + (1.0 - rho) * phi;
+                if bestc.is_none_or(|(b, _)| s > b) {
+                    bestc = Some((s, c));
+                }
+            }
+            let Some((_, p)) = bestc else { break };
+            is_shown[p] = true;
+            shown.push(p);
+            round.push(p);
+            upd(&mut min_d, p);
+        }
+        let mut scored: Vec<(f32, usize)> = round.iter().filter(|&&c| c != target).map(|&c| (dist(c), c)).collect();
+        best = scored.iter().map(|s| s.0).fold(best, f32::min);
+        out.push(best);
+        if r + 1 == ROUNDS {
+            break;
+        }
+        let picks: Vec<usize> = if guided {
+            scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+            scored.iter().take(LIKES).map(|s| s.1).collect()
+        } else {
+            let vis: Vec<usize> = round.iter().copied().filter(|&c| c != target).collect();
+            let mut p = Vec::new();
+            while p.len() < LIKES.min(vis.len()) {
+                *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let c = vis[(*seed >> 33) as usize % vis.len()];
+                if !p.contains(&c) {
+                    p.push(c);
+                }
+            }
+            p
+        };
+        for &p in &picks {
+            liked.push((p, r));
+        }
+        tau *= match v.tau {
+            0 => v.decay,
+            _ => v.decay.powi(picks.len() as i32),
+        };
+    }
+    out
+}
+
+fn main() {
+    let mut lib = SegmentLibrary::builtin();
+    for rel in all_bvh().into_iter().filter(|r| r.contains("cmu-salsa") || r.contains("cmu-indian")) {
+        let opts = ImportOptions { fps_override: fps_override_for(&rel), ..Default::default() };
+        let imp = import_bytes(&rel, &read(&rel), &opts).unwrap();
+        for clip in &imp.clips {
+            lib.add_clip(clip, &imp.humanoid, &imp.status, &SegmentOptions::default()).unwrap();
+        }
+    }
+    let clip_pos: Vec<Vec<Vec3>> = lib.clips().iter().map(|c| canonical_positions(&c.clip, &HumanoidMap::from_skeleton(&c.clip.skeleton))).collect();
+    let seg_pos = |s: usize| -> Vec<Vec3> {
+        let seg = &lib.segments()[s];
+        let p = &clip_pos[seg.clip];
+        let frames = p.len() / CANON_COUNT;
+        let (a, b) = (seg.start_frame.round() as usize, (seg.end_frame.round() as usize).min(frames.saturating_sub(1)));
+        p[a * CANON_COUNT..(b + 1) * CANON_COUNT].to_vec()
+    };
+    let m = lib.len();
+    let positions: Vec<Vec<Vec3>> = (0..m).map(seg_pos).collect();
+    let t0 = std::time::Instant::now();
+    let mut pd = vec![0.0f32; m * m];
+    for a in 0..m {
+        for b in a + 1..m {
+            let d = perceptual_distance(&positions[a], &positions[b]).unwrap_or(f32::INFINITY);
+            pd[a * m + b] = d;
+            pd[b * m + a] = d;
+        }
+    }
+    println!("perceptual distances of {m} segments: {:.1} s", t0.elapsed().as_secs_f32());
+    let kwas: Vec<f32> = (0..m * m).map(|i| lib.similarity(i / m, i % m)).collect();
+    let pmax = pd.iter().cloned().filter(|x| x.is_finite()).fold(0.0f32, f32::max);
+    // perfect similarity: 1 − d / max
+    let perfect: Vec<f32> = pd.iter().map(|d| 1.0 - d / pmax).collect();
+    // rank percentile per anchor row: rank[a*m+c] = share of segments less similar to a than c
+    let to_rank = |sim: &[f32]| -> Vec<f32> {
+        let mut out = vec![0.0f32; m * m];
+        for a in 0..m {
+            let mut order: Vec<usize> = (0..m).collect();
+            order.sort_by(|&i, &j| sim[a * m + i].total_cmp(&sim[a * m + j]));
+            for (k, &c) in order.iter().enumerate() {
+                out[a * m + c] = k as f32 / (m - 1) as f32;
+            }
+        }
+        out
+    };
+    let kwas_rank = to_rank(&kwas);
+    let perfect_rank = to_rank(&perfect);
+    // spread of raw kWAS per anchor: similarity of the k-th nearest neighbour (mean over anchors)
+    for k in [1usize, 5, 10, 50, 100, 300, 600] {
+        let mut acc = 0.0;
+        for a in 0..m {
+            let mut row: Vec<f32> = (0..m).filter(|&c| c != a).map(|c| kwas[a * m + c]).collect();
+            row.sort_by(|x, y| y.total_cmp(x));
+            acc += row[k.min(row.len()) - 1];
+        }
+        println!("raw kWAS of a segment's {k}-th nearest neighbour (mean over segments): {:.4}", acc / m as f32);
+    }
+    let ints: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
+    let mut si = ints.clone();
+    si.sort_by(|a, b| a.total_cmp(b));
+    println!("motion intensities (0..1), quartiles: {:.3} {:.3} {:.3}", si[m / 4], si[m / 2], si[3 * m / 4]);
+    let retired: Vec<bool> = lib.segments().iter().map(|s| s.retired).collect();
+    let rho = Settings::default().rho;
+    // two target sets: the bench's 64 and a disjoint 64 (offset)
+    let set_a: Vec<usize> = (0..64).map(|i| (i * m) / 64 + 3).filter(|&t| t < m).collect();
+    let set_b: Vec<usize> = (0..64).map(|i| (i * m) / 64 + 8).filter(|&t| t < m).collect();
+    let set_c: Vec<usize> = (0..64).map(|i| (i * m) / 64 + 5).filter(|&t| t < m).collect();
+    // ceiling: round-1 contains the nearest (excl. target)?
+    let base = V { mind: 1, tau: 0, agg: 0, gamma: 1.0, exploit: 0, decay: 0.95, scale: 0, rho: -1.0 };
+    let variants: Vec<(&str, V)> = vec![
+        ("spec loop (S_n incl. liked)", V { mind: 0, ..base }),
+        ("previous (S_n not liked)", base),
+        ("+ percentile", V { scale: 1, ..base }),
+        ("+ per like", V { tau: 1, ..base }),
+        ("+ percentile + per like (app)", V { scale: 1, tau: 1, ..base }),
+        ("  ... Sim by recency γ = ½", V { scale: 1, tau: 1, agg: 1, gamma: 0.5, ..base }),
+        ("  ... min D this round only", V { scale: 1, tau: 1, mind: 2, ..base }),
+        ("  ... 2 of 6 with τ = 0", V { scale: 1, tau: 1, exploit: 2, ..base }),
+        ("greedy control (ρ = τ = 0)", V { scale: 1, exploit: 6, rho: 0.0, ..base }),
+    ];
+    for (simname, sim, rank) in [("kWAS", &kwas, &kwas_rank), ("perfect", &perfect, &perfect_rank)] {
+        for (set_name, targets) in [("A", &set_a), ("B", &set_b), ("C", &set_c)] {
+            println!("== similarity {simname}, targets {set_name} ({}) ==", targets.len());
+            for (name, v) in &variants {
+                let (mut wins, mut ties, mut losses, mut wins5, mut auc_wins) = (0, 0, 0, 0, 0);
+                let mut falls = 0.0;
+                let mut g_mean = vec![0.0; ROUNDS];
+                let mut r_mean = vec![0.0; ROUNDS];
+                let mut round1_has_nn = 0;
+                for &t in targets.iter() {
+                    let dist = |c: usize| pd[c * m + t];
+                    let inten = lib.segments()[t].intensity01;
+                    let rel_of = |c: usize| relevance(inten, lib.segments()[c].intensity01);
+                    let mut seed = 0x5DEE_CE66_Du64 ^ (t as u64 * 7919);
+                    let g = run(*v, sim, &rank, m, &rel_of, &retired, rho, t, &dist, true, &mut seed);
+                    let rs: Vec<Vec<f32>> = (0..5).map(|_| run(*v, sim, &rank, m, &rel_of, &retired, rho, t, &dist, false, &mut seed)).collect();
+                    let r0 = &rs[0];
+                    let nn = (0..m).filter(|&c| c != t && !retired[c]).map(|c| pd[c * m + t]).fold(f32::INFINITY, f32::min);
+                    if (g[0] - nn).abs() < 1e-9 {
+                        round1_has_nn += 1;
+                    }
+                    if g[ROUNDS - 1] < r0[ROUNDS - 1] {
+                        wins += 1
+                    } else if g[ROUNDS - 1] == r0[ROUNDS - 1] {
+                        ties += 1
+                    } else {
+                        losses += 1
+                    }
+                    let rmean5: f32 = rs.iter().map(|r| r[ROUNDS - 1]).sum::<f32>() / 5.0;
+                    if g[ROUNDS - 1] < rmean5 {
+                        wins5 += 1;
+                    }
+                    let auc = |x: &[f32]| x.iter().sum::<f32>();
+                    if auc(&g) < auc(r0) {
+                        auc_wins += 1;
+                    }
+                    falls += 1.0 - g[ROUNDS - 1] / g[0];
+                    for k in 0..ROUNDS {
+                        g_mean[k] += g[k] / targets.len() as f32;
+                        r_mean[k] += r0[k] / targets.len() as f32;
+                    }
+                }
+                let n = targets.len();
+                println!(
+                    "{name:<30} wins {wins:>2}/{n} ties {ties:>2} loss {losses:>2} | vs mean-of-5 {wins5:>2} | auc {auc_wins:>2} | fall {:>5.1}% | r1 has NN {round1_has_nn:>2} | g {:.4}->{:.4} r {:.4}->{:.4}",
+                    100.0 * falls / n as f32,
+                    g_mean[0],
+                    g_mean[ROUNDS - 1],
+                    r_mean[0],
+                    r_mean[ROUNDS - 1]
+                );
+            }
+        }
+    }
+}
