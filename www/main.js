@@ -106,6 +106,9 @@ async function main() {
     onAdded: (info) => { if (searchClient) searchClient.add(info.id); else waitingForSearch.push(info.id); panel.refresh(); panel.select(info.id); },
   });
   loader.bindDrop(document.body, $("#drop"));
+  // The chosen character and the clips put on it are project edits (kept, undone, saved).
+  exporter.wear = (id, character) => session.putOn(id, character);
+  exporter.onCharacter = (id) => session.setCharacter(id);
 
   // The app opens on the engine's own demo clip: something moves with no file. Only what the
   // first pose needs runs before it; the rest waits for it (see `afterFirstPose`).
@@ -191,6 +194,8 @@ async function main() {
       }
     },
     animate: (text) => { $("#text-input").value = text; textPanel.run(); },
+    addWorn: (info) => { if (searchClient) searchClient.add(info.id); else waitingForSearch.push(info.id); panel.refresh(); },
+    character: (id) => exporter.showCharacter(id),
     dance: (doc) => {
       const st = doc.dance.settings;
       $("#dance-rho").value = String(st.rho);

@@ -552,3 +552,30 @@ fn the_parsed_file_cache_forgets_a_removed_file() {
     assert_eq!(p.derived().parsed_files(), with_both, "undo brings the file back, parsed again");
     assert!(p.derived().clips().iter().any(|c| c.clip.source == glb), "its clips are back");
 }
+
+/// A group of edits (a share link applied bar by bar, then Generate) is one undo step.
+#[test]
+fn a_group_of_edits_is_one_undo_step() {
+    let mut p = sample_project();
+    let before = p.doc().clone();
+    let steps = p.undo_history().len();
+    let keys: Vec<MoveKey> = (0..3).map(|i| p.derived().key(i * 7).cloned().expect("key")).collect();
+    p.begin_group();
+    for (bar, k) in keys.iter().enumerate() {
+        p.set(bar + 1, k).expect("pin");
+    }
+    p.generate().expect("generate");
+    p.end_group();
+    assert_eq!(p.undo_history().len(), steps + 1, "the group is one undo step");
+    assert_eq!(p.doc().dance.bars.iter().filter(|b| b.state == BarKind::Pinned).count(), 3);
+    let after = p.doc().clone();
+    // Its changes in the manifest are what computing them afresh gives.
+    assert!(project::file::manifest_json(&p) == project::file::manifest_json_uncached(&p));
+    assert!(p.undo());
+    assert_eq!(p.doc(), &before, "one undo takes the whole group back");
+    assert!(p.redo());
+    assert_eq!(p.doc(), &after);
+    // After the group, edits are their own steps again.
+    p.clear(1).expect("clear");
+    assert_eq!(p.undo_history().len(), steps + 2);
+}

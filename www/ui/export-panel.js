@@ -6,6 +6,7 @@
 // animation (.vrma, for VRM avatars) or a BVH file, through the engine's exporters; the browser downloads the bytes. Errors go to the
 // message list with the engine's words; nothing in the library changes.
 export class ExportPanel {
+  /** `wear(clipId, characterId)` → ClipInfo and `onCharacter(id | null)` may be set by the page. */
   constructor({ button, format, character, putOn, library, player, messages, onAdded }) {
     this.library = library;
     this.player = player;
@@ -18,6 +19,7 @@ export class ExportPanel {
       character.addEventListener("focus", () => this.refreshCharacters());
       character.addEventListener("pointerdown", () => this.refreshCharacters());
       putOn.addEventListener("click", () => this.putOnCharacter());
+      character.addEventListener("change", () => { if (this.onCharacter) this.onCharacter(this.character.value === "" ? null : Number(this.character.value)); });
       this.refreshCharacters();
     }
   }
@@ -32,12 +34,19 @@ export class ExportPanel {
     if ([...this.character.options].some((o) => o.value === keep)) this.character.value = keep;
   }
 
+  /** Shows `id` (a library clip of a character, null: none) as the chosen character. */
+  showCharacter(id) {
+    this.refreshCharacters();
+    this.character.value = id == null ? "" : String(id);
+  }
+
   putOnCharacter() {
     const id = this.player.clip;
     const character = Number(this.character.value);
     if (id == null || !this.character.value) { this.messages.warning("Put on: choose a character (an imported skinned glTF) and a clip."); return null; }
     try {
-      const info = this.library.putOnCharacter(id, character);
+      // `wear` (the page's project) keeps it; without one, the library alone holds it.
+      const info = this.wear ? this.wear(id, character) : this.library.putOnCharacter(id, character);
       this.messages.info(`${info.name}: ready (drawn on the character; Export gives it with the character's mesh)`);
       if (this.onAdded) this.onAdded(info);
       return info;

@@ -308,6 +308,9 @@ pub struct Project {
     /// The history's changes as the manifest writes them, kept between writes (see
     /// [`file::DiffCache`]); kept in step with `history` by every method that moves it.
     pub(crate) diffs: std::sync::Mutex<file::DiffCache>,
+    /// An open group of edits ([`Project::begin_group`]): `Some(true)` once its first edit
+    /// recorded the undo step the rest join.
+    group: Option<bool>,
 }
 
 /// Two projects are the same when what a person made (document, history, blobs) is the same;
@@ -372,7 +375,7 @@ impl Project {
     /// names what the document refers to that was not there.
     pub(crate) fn from_parts(doc: ProjectDoc, undo: Vec<ProjectDoc>, redo: Vec<ProjectDoc>, blobs: BlobStore, missing: Vec<MissingBlob>) -> Self {
         let diffs = std::sync::Mutex::new(file::DiffCache::default());
-        Self { doc, history: History::from_parts(undo, redo), blobs, missing, derived: Derived::default(), diffs }
+        Self { doc, history: History::from_parts(undo, redo), blobs, missing, derived: Derived::default(), diffs, group: None }
     }
 
     pub fn doc(&self) -> &ProjectDoc {
@@ -411,6 +414,16 @@ impl Project {
     fn commit(&mut self, doc: ProjectDoc) -> bool {
         if doc == self.doc {
             return false;
+        }
+        if self.group == Some(true) {
+            // A later edit of a group: part of the group's one undo step.
+            self.doc = doc;
+            let keep = self.referenced_blobs();
+            self.blobs.retain(&keep);
+            return true;
+        }
+        if self.group.is_some() {
+            self.group = Some(true);
         }
         let prev = std::mem::replace(&mut self.doc, doc);
         let dropped = self.history.undo.len() >= UNDO_LIMIT;
@@ -459,8 +472,21 @@ impl Project {
         self.derived.imported_source(&src, &self.blobs)
     }
 
+    /// Opens a group of edits that one undo takes back (a share link applied bar by bar and
+    /// generated): every edit until [`Project::end_group`] joins the undo step of the group's
+    /// first edit. Undo, redo and the end close the group.
+    pub fn begin_group(&mut self) {
+        self.group = Some(false);
+    }
+
+    /// Closes the group [`Project::begin_group`] opened (nothing when none is open).
+    pub fn end_group(&mut self) {
+        self.group = None;
+    }
+
     /// Undoes the last edit; `false` when there is none.
     pub fn undo(&mut self) -> bool {
+        self.group = None;
         let done = self.history.undo(&mut self.doc);
         if done {
             let cache = self.diffs.get_mut().unwrap_or_else(|e| e.into_inner());
@@ -472,6 +498,7 @@ impl Project {
 
     /// Redoes the last undone edit; `false` when there is none.
     pub fn redo(&mut self) -> bool {
+        self.group = None;
         let done = self.history.redo(&mut self.doc);
         if done {
             let cache = self.diffs.get_mut().unwrap_or_else(|e| e.into_inner());
