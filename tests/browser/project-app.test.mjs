@@ -161,6 +161,7 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       await page.click("#text-go");
       await page.waitForFunction(() => document.querySelectorAll("#text-table tbody tr").length === 2);
       // Choose the robot as the character; put the salsa clip on it, then the composed dance.
+      await page.focus("#character"); // the list is filled when it is opened
       await page.selectOption("#character", { label: "RobotExpressive.glb" });
       const putOn = async (n) => {
         await page.click("#put-on");
