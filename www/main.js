@@ -108,6 +108,9 @@ async function main() {
   });
   loader.bindDrop(document.body, $("#drop"));
   $("#stick-figure").addEventListener("change", (ev) => player.setStick(ev.target.checked));
+  // The chosen character and the clips put on it are project edits (kept, undone, saved).
+  exporter.wear = (id, character) => session.putOn(id, character);
+  exporter.onCharacter = (id) => session.setCharacter(id);
 
   // The app opens on the engine's own demo clip: something moves with no file. Only what the
   // first pose needs runs before it; the rest waits for it (see `afterFirstPose`).
@@ -195,6 +198,8 @@ async function main() {
       }
     },
     animate: (text) => { $("#text-input").value = text; textPanel.run(); },
+    addWorn: (info) => { if (searchClient) searchClient.add(info.id); else waitingForSearch.push(info.id); panel.refresh(); },
+    character: (id) => exporter.showCharacter(id),
     dance: (doc) => {
       const st = doc.dance.settings;
       $("#dance-rho").value = String(st.rho);

@@ -113,8 +113,15 @@ function builtinSegments(choreographer) {
   return byToken;
 }
 
-/** Rebuilds a parsed dance in the choreographer; returns the bars that had to be set by hand. */
+/**
+ * Rebuilds a parsed dance in the choreographer; returns the bars that had to be set by hand.
+ * With a project's engine (`batch`), the whole link is one edit: one undo takes it back.
+ */
 export function applyDance(choreographer, dance) {
+  return choreographer.batch ? choreographer.batch(() => applyDanceEdits(choreographer, dance)) : applyDanceEdits(choreographer, dance);
+}
+
+function applyDanceEdits(choreographer, dance) {
   const view = choreographer.view();
   if (view.length !== dance.bars) throw new Error(`the link was made for ${dance.bars} bars; the song here has ${view.length}`);
   const count = choreographer.segmentCount;

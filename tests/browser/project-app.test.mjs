@@ -2,7 +2,9 @@
 // ends): import a BVH and a GLB from ../shared/data, open a song, correct the grid, pin 3 bars,
 // Search twice, Generate, tag a clip, animate a text → reload → everything is back (the dance's
 // joint positions equal at 5 times, the grid equal, the bars' states and keys equal, the tags,
-// the text table, the library; the Project's undo history back). Then the project's `.odori`
+// the text table, the library; the Project's undo history back; the chosen character and the
+// clips put on it — a project clip and the composed dance — with the same joint positions).
+// Then the project's `.odori`
 // bytes (what Save as writes) are dropped on the app in a fresh browser profile → identical;
 // New project gives an empty one, and Recent brings the opened one back, identical.
 //
@@ -59,6 +61,14 @@ async function snapshot(page) {
         return [...document.querySelectorAll("#library tbody tr")].map((tr) => tr.children[0].textContent).filter((n) => names.has(n));
       })(),
       canUndo: o.project.project.canUndo(),
+      character: doc.character,
+      characterShown: document.querySelector("#character").selectedOptions[0]?.textContent,
+      worn: doc.worn,
+      // The put-on clips as the library holds them (rebuilt from the project after a reload).
+      wornClips: o.project.shown.worn.map((w) => {
+        const c = w.id == null ? null : o.library.clip(w.id);
+        return c && { name: c.name, format: c.format, hasMesh: c.hasMesh, frames: c.frames, poses: [0.2, 0.5, 0.8].map((k) => Array.from(o.library.jointPositions(w.id, c.durationSecs * k))) };
+      }),
       messages: [...document.querySelectorAll("#messages li.error")].map((li) => li.textContent),
     };
   });
@@ -86,6 +96,19 @@ function assertSame(a, b, what) {
   assert.deepEqual(b.texts, a.texts);
   assert.deepEqual(b.textRows, a.textRows, `${what}: the text table`);
   assert.deepEqual(b.library, a.library, `${what}: the library`);
+  assert.deepEqual(b.character, a.character, `${what}: the chosen character`);
+  assert.equal(b.characterShown, a.characterShown, `${what}: the character shown as chosen`);
+  assert.deepEqual(b.worn, a.worn, `${what}: the put-on clips in the project`);
+  assert.equal(b.wornClips.length, a.wornClips.length, `${what}: the put-on clips in the library`);
+  a.wornClips.forEach((w, i) => {
+    const x = b.wornClips[i];
+    assert.ok(x, `${what}: put-on clip ${i + 1} is in the library`);
+    assert.deepEqual([x.name, x.format, x.hasMesh, x.frames], [w.name, w.format, w.hasMesh, w.frames], `${what}: put-on clip ${i + 1}`);
+    for (let k = 0; k < 3; k++) {
+      const d = Math.max(...w.poses[k].map((v, j) => Math.abs(v - x.poses[k][j])));
+      assert.ok(d < 1e-5, `${what}: put-on clip ${i + 1}'s joint positions at time ${k + 1} of 3 differ by ${d} m`);
+    }
+  });
   assert.equal(b.poses.length, 5);
   for (let k = 0; k < 5; k++) {
     const d = Math.max(...a.poses[k].map((v, i) => Math.abs(v - b.poses[k][i])));
@@ -137,9 +160,27 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       await page.fill("#text-input", "サルサして、喜ぶ。");
       await page.click("#text-go");
       await page.waitForFunction(() => document.querySelectorAll("#text-table tbody tr").length === 2);
+      // Choose the robot as the character; put the salsa clip on it, then the composed dance.
+      await page.focus("#character"); // the list is filled when it is opened
+      await page.selectOption("#character", { label: "RobotExpressive.glb" });
+      const putOn = async (n) => {
+        await page.click("#put-on");
+        await page.waitForFunction((k) => [...document.querySelectorAll("#messages li")].filter((li) => /ready \(drawn on the character/.test(li.textContent)).length === k, n, { timeout: 60000 });
+      };
+      await page.evaluate(() => {
+        const row = [...document.querySelectorAll("#library tbody tr")].find((tr) => tr.textContent.includes("salsa_10"));
+        row.children[0].click();
+      });
+      await putOn(1);
+      await page.evaluate(() => { window.odori.choreo.renderDance(); window.odori.panel.select(window.odori.choreo.danceId); });
+      await putOn(2);
       // The autosave (debounced) has written it all.
       await page.evaluate(() => window.odori.project.store.flush());
       const made = await snapshot(page);
+      assert.equal(made.characterShown, "RobotExpressive.glb");
+      assert.ok(made.character && made.character.clip === 0, `the character is in the project: ${JSON.stringify(made.character)}`);
+      assert.deepEqual(made.worn.map((w) => w.motion.kind), ["clip", "motion"], "a project clip and the dance (kept as a BVH) are put on");
+      assert.ok(made.wornClips.every((w) => w && w.hasMesh && w.format === "character"), `put-on clips drawn with the robot's mesh: ${JSON.stringify(made.wornClips.map((w) => w && w.name))}`);
       assert.deepEqual(made.messages, [], "no error while composing");
       assert.equal(made.keys.filter(([s]) => s === "pinned").length, 3, "3 pinned bars in the project");
       assert.ok(made.keys.every(([s, m]) => s !== "empty" && m), "every bar of the project's dance has a move");

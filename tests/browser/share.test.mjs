@@ -62,6 +62,15 @@ test("a dance's link opens the same dance in a fresh page; a damaged link is rep
     });
     assert.equal(await fresh.evaluate(() => document.body.dataset.shared), "applied", await fresh.textContent("#messages"));
     assert.deepEqual(await danceOf(fresh), original, "same bars, same moves, same pinned/generated");
+    // The link is one edit of the project: one Undo takes the whole dance back, Redo brings it.
+    await fresh.click("#dance-undo");
+    await fresh.waitForFunction(() => window.odori.choreo.view.every((v) => v.state.kind === "empty"), null, { timeout: 10000 }).catch(async (e) => {
+      throw new Error(`one undo did not take the applied link back: ${e.message}: ${JSON.stringify(await danceOf(fresh))}`);
+    });
+    assert.equal(await fresh.evaluate(() => window.odori.project.project.canUndo()), false, "applying the link was one undo step");
+    await fresh.click("#dance-redo");
+    await fresh.waitForFunction(() => window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 10000 });
+    assert.deepEqual(await danceOf(fresh), original, "redo gives the linked dance back");
     await ctx.close();
 
     // A damaged link: a clear message, the app still works.
@@ -128,6 +137,15 @@ test("a dance on a song file: the link names the song; a fresh page asks for it,
     assert.equal(await fresh.evaluate(() => document.body.dataset.song), "Kevin_MacLeod_-_Vibe_Ace.hq.ogg");
     assert.equal(await fresh.$("#share-song"), null, "the song chooser is gone");
     assert.deepEqual(await danceOf(fresh), original, "same bars, same moves, same pinned/generated");
+    // The link is one edit of the project: one Undo takes the whole dance back, Redo brings it.
+    await fresh.click("#dance-undo");
+    await fresh.waitForFunction(() => window.odori.choreo.view.every((v) => v.state.kind === "empty"), null, { timeout: 10000 }).catch(async (e) => {
+      throw new Error(`one undo did not take the applied link back: ${e.message}: ${JSON.stringify(await danceOf(fresh))}`);
+    });
+    assert.equal(await fresh.evaluate(() => window.odori.project.project.canUndo()), false, "applying the link was one undo step");
+    await fresh.click("#dance-redo");
+    await fresh.waitForFunction(() => window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 10000 });
+    assert.deepEqual(await danceOf(fresh), original, "redo gives the linked dance back");
     await ctx.close();
     assert.ok(!logs.some((l) => l.includes("[pageerror]")), logs.join("\n"));
     assert.ok(!logs.some((l) => /Content Security Policy/i.test(l)), `the song chooser works under the page's CSP: ${logs.filter((l) => /Content Security/i.test(l)).join("\n")}`);

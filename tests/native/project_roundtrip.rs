@@ -64,6 +64,21 @@ fn dance_poses(p: &mut Project) -> Vec<Vec<glam::Vec3>> {
     (0..5).map(|k| clip.world_positions((n.saturating_sub(1)) * k / 4)).collect()
 }
 
+fn robot_clip(p: &Project) -> Option<ClipRef> {
+    p.doc().sources.iter().find(|s| s.file_name.ends_with(".glb")).map(|s| ClipRef { source: s.id, clip: 0 })
+}
+
+/// Joint positions of every put-on clip at three frames.
+fn worn_poses(p: &mut Project) -> Vec<Vec<Vec<glam::Vec3>>> {
+    (0..p.doc().worn.len())
+        .map(|i| {
+            let (clip, _) = p.worn_clip(i).unwrap_or_else(|e| panic!("put-on clip {i} does not rebuild: {e}"));
+            let n = clip.frame_count();
+            (0..3).map(|k| clip.world_positions(n.saturating_sub(1) * k / 2)).collect()
+        })
+        .collect()
+}
+
 fn salsa_clip(p: &Project) -> Option<ClipRef> {
     p.doc().sources.iter().find(|s| s.file_name.ends_with(".bvh")).map(|s| ClipRef { source: s.id, clip: 0 })
 }
@@ -74,7 +89,7 @@ fn random_edit(p: &mut Project, rng: &mut Rng, log: &mut Vec<String>) {
     assert!(bars > 0, "the song's bars are always there");
     let before = p.doc().clone();
     let bar = rng.below(bars.min(12));
-    let op = rng.below(17);
+    let op = rng.below(20);
     let result: Result<(), ProjectError> = match op {
         0 if salsa_clip(p).is_none() => p.add_source("salsa_10.bvh", bvh(), ImportOptions { fps_override: Some(60.0), ..Default::default() }).map(|_| ()),
         1 if !p.doc().sources.iter().any(|s| s.file_name.ends_with(".glb")) => p.add_source("RobotExpressive.glb", glb(), ImportOptions::default()).map(|_| ()),
@@ -128,10 +143,26 @@ fn random_edit(p: &mut Project, rng: &mut Rng, log: &mut Vec<String>) {
             Some(c) => p.set_clip_tempo(c, if rng.below(3) == 0 { None } else { Some(90.0 + 10.0 * rng.below(5) as f32) }).map(|_| ()),
             None => Ok(()),
         },
-        _ => {
+        16 => {
             let c = salsa_clip(p);
             p.set_character(c)
         }
+        17 => match (robot_clip(p), salsa_clip(p)) {
+            // The character plays a clip of the project, or a move made in the page.
+            (Some(robot), Some(salsa)) if rng.below(2) == 0 => p.put_on(robot, Some(salsa), None).map(|_| ()),
+            (Some(robot), _) => {
+                let seg = rng.below(p.segment_library().len());
+                let made = odori_core::choreo::segment_clip(p.segment_library(), seg, 1.0, 30.0).expect("a segment of the library");
+                let file = odori_core::export::bvh::bvh(&made).expect("a built-in move writes as BVH");
+                p.put_on(robot, None, Some((&format!("move {seg}"), &file))).map(|_| ())
+            }
+            _ => Ok(()),
+        },
+        18 => p.set_character(robot_clip(p)),
+        _ => match p.doc().worn.len() {
+            0 => Ok(()),
+            n => p.remove_worn(rng.below(n)),
+        },
     };
     match &result {
         Ok(()) => log.push(format!("op {op} bar {bar}: ok")),
@@ -148,6 +179,7 @@ fn random_edit_sequences_round_trip_identically() {
     let ops: usize = std::env::var("PROJECT_OPS").ok().and_then(|s| s.parse().ok()).unwrap_or(30);
     let (song_bytes, env) = song();
     let mut checked_recut = false;
+    let mut worn_total = 0;
     for seed in 1..=seeds {
         let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed);
         let mut p = Project::new();
@@ -158,6 +190,9 @@ fn random_edit_sequences_round_trip_identically() {
         let mut log = Vec::new();
         for _ in 0..ops {
             random_edit(&mut p, &mut rng, &mut log);
+            // The manifest autosave writes keeps the history's changes between writes: it
+            // must be what computing every change afresh gives.
+            assert!(project::file::manifest_json(&p) == project::file::manifest_json_uncached(&p), "seed {seed}: the cached history changes differ from fresh ones\n{}", log.join("\n"));
         }
         let bytes = project::save(&p).expect("save");
         let opened = project::open(&bytes).unwrap_or_else(|e| panic!("seed {seed}: the saved file does not open: {e}\n{}", log.join("\n")));
@@ -166,6 +201,8 @@ fn random_edit_sequences_round_trip_identically() {
         assert!(q == p, "seed {seed}: the reopened project differs\n{}", log.join("\n"));
         assert_eq!(project::save(&q).expect("save again"), bytes, "seed {seed}: saving the reopened project gives other bytes");
         assert_eq!(dance_poses(&mut q), dance_poses(&mut p), "seed {seed}: the reopened dance moves differently\n{}", log.join("\n"));
+        worn_total += p.doc().worn.len();
+        assert_eq!(worn_poses(&mut q), worn_poses(&mut p), "seed {seed}: the reopened put-on clips move differently\n{}", log.join("\n"));
         assert_eq!(q.derived().grid().map(|g| g.clone().map(|g| g.beat_times_secs)), p.derived().grid().map(|g| g.clone().map(|g| g.beat_times_secs)), "seed {seed}: grid");
         // The history came along: undoing on both gives the same project and dance.
         let mut steps = 0;
@@ -186,7 +223,7 @@ fn random_edit_sequences_round_trip_identically() {
             bytes.len() as f64 / 1e6
         );
     }
-    println!("a re-cut clip was among the sequences: {checked_recut}");
+    println!("a re-cut clip was among the sequences: {checked_recut}; put-on clips at the end: {worn_total}");
 }
 
 /// A pinned move of an earlier cut survives a re-cut, a save and an open.
@@ -458,4 +495,87 @@ fn a_history_change_that_does_not_fit_is_a_typed_error() {
     let err = project::file::from_manifest(&bytes, |h| p.blobs().get(h).cloned()).err().expect("refused");
     assert!(matches!(err, FileError::BadProject { .. }), "{err:?}");
     assert!(err.to_string().contains("history step"), "{err}");
+}
+
+/// The character chosen and clips put on it are edits of the project: kept in the file, rebuilt
+/// on open (the same joint positions), taken back by undo, and gone with their source.
+#[test]
+fn the_character_and_put_on_clips_are_kept() {
+    let mut p = sample_project();
+    let glb = p.add_source("RobotExpressive.glb", glb(), ImportOptions::default()).expect("glb").id;
+    let robot = ClipRef { source: glb, clip: 0 };
+    let salsa = salsa_clip(&p).expect("the sample has a BVH");
+    p.set_character(Some(robot)).expect("character");
+    let from_clip = p.put_on(robot, Some(salsa), None).expect("put the salsa on the robot");
+    let made = odori_core::choreo::segment_clip(p.segment_library(), 3, 2.0, 30.0).expect("segment");
+    let file = odori_core::export::bvh::bvh(&made).expect("bvh");
+    let from_motion = p.put_on(robot, None, Some(("a built-in move", &file))).expect("put a move on the robot");
+    assert_eq!((from_clip, from_motion), (0, 1));
+    // A motion file that does not read is refused, nothing changed.
+    let before = p.doc().clone();
+    assert!(matches!(p.put_on(robot, None, Some(("junk", b"not a bvh"))), Err(ProjectError::Import(_))));
+    // A character that is not a skinned file is refused with the character's error.
+    assert!(matches!(p.put_on(salsa, Some(salsa), None), Err(ProjectError::Character(_))));
+    assert!(matches!(p.remove_worn(7), Err(ProjectError::NoSuchWorn { index: 7, count: 2 })));
+    assert_eq!(p.doc(), &before);
+
+    let bytes = project::save(&p).expect("save");
+    let mut q = project::open(&bytes).expect("open").project;
+    assert_eq!(q.doc().character, Some(robot));
+    assert_eq!(q.doc().worn, p.doc().worn);
+    let poses = worn_poses(&mut p);
+    assert_eq!(worn_poses(&mut q), poses, "the put-on clips rebuild to the same motion");
+    // The clip is on the character's rig, and moves.
+    let (clip, ch) = q.worn_clip(0).expect("rebuilt");
+    assert_eq!(clip.skeleton.joints.len(), ch.skeleton.joints.len());
+    assert_ne!(poses[0][0], poses[0][2], "the put-on clip moves");
+
+    // Undo takes the last put-on away; removing the GLB takes the character and both put-on clips.
+    assert!(q.undo());
+    assert_eq!(q.doc().worn.len(), 1);
+    q.remove_source(glb).expect("remove the robot");
+    assert!(q.doc().worn.is_empty() && q.doc().character.is_none());
+    assert!(q.undo() && q.doc().worn.len() == 1 && q.doc().character == Some(robot));
+}
+
+/// The project's cache of parsed files forgets a file once the document no longer names it
+/// (its bytes stay while the history needs them: undo parses it again).
+#[test]
+fn the_parsed_file_cache_forgets_a_removed_file() {
+    let mut p = sample_project();
+    let glb = p.add_source("RobotExpressive.glb", glb(), ImportOptions::default()).expect("glb").id;
+    let with_both = p.derived().parsed_files();
+    assert_eq!(with_both, p.doc().sources.len(), "one parse per source");
+    p.remove_source(glb).expect("remove");
+    assert_eq!(p.derived().parsed_files(), with_both - 1, "the removed file's parse is forgotten");
+    assert!(p.undo());
+    assert_eq!(p.derived().parsed_files(), with_both, "undo brings the file back, parsed again");
+    assert!(p.derived().clips().iter().any(|c| c.clip.source == glb), "its clips are back");
+}
+
+/// A group of edits (a share link applied bar by bar, then Generate) is one undo step.
+#[test]
+fn a_group_of_edits_is_one_undo_step() {
+    let mut p = sample_project();
+    let before = p.doc().clone();
+    let steps = p.undo_history().len();
+    let keys: Vec<MoveKey> = (0..3).map(|i| p.derived().key(i * 7).cloned().expect("key")).collect();
+    p.begin_group();
+    for (bar, k) in keys.iter().enumerate() {
+        p.set(bar + 1, k).expect("pin");
+    }
+    p.generate().expect("generate");
+    p.end_group();
+    assert_eq!(p.undo_history().len(), steps + 1, "the group is one undo step");
+    assert_eq!(p.doc().dance.bars.iter().filter(|b| b.state == BarKind::Pinned).count(), 3);
+    let after = p.doc().clone();
+    // Its changes in the manifest are what computing them afresh gives.
+    assert!(project::file::manifest_json(&p) == project::file::manifest_json_uncached(&p));
+    assert!(p.undo());
+    assert_eq!(p.doc(), &before, "one undo takes the whole group back");
+    assert!(p.redo());
+    assert_eq!(p.doc(), &after);
+    // After the group, edits are their own steps again.
+    p.clear(1).expect("clear");
+    assert_eq!(p.undo_history().len(), steps + 2);
 }

@@ -12,7 +12,9 @@
 // project is opened, `reconcile` brings the display in line with the project's document —
 // clips of files added or gone, the song and its grid, tags, texts, the dance settings — and
 // the dance panel reads the rest (bars, open searches with their shown and liked candidates)
-// from the project itself.
+// from the project itself. The chosen character and the clips put on it ("Put on") are project
+// edits too: a put-on clip is kept as its recipe (the character, and the motion's project clip
+// or, for a clip made in the page, the BVH the engine writes of it) and rebuilt from it.
 //
 // Edits made while a stored project is being shown (the second or so after a reload) are
 // project edits like any other: nothing the person does then is dropped (the display hooks of
@@ -39,7 +41,7 @@ export class ProjectSession {
     /** Library clip id → the Project's ClipRef. */
     this.clipRefs = new Map();
     /** What the page shows of the document (see `reconcile`). */
-    this.shown = { sources: new Map(), song: null, corrections: "[]", tags: "[]", texts: "[]" };
+    this.shown = { sources: new Map(), song: null, corrections: "[]", tags: "[]", texts: "[]", character: "null", worn: [] };
     /** Called after every edit (undo/redo buttons). */
     this.onEdited = null;
     /** The display hooks `reconcile` uses (set by the page, see main.js). */
@@ -107,6 +109,7 @@ export class ProjectSession {
     this.shown.corrections = JSON.stringify(doc.song ? doc.song.corrections : []);
     this.shown.tags = JSON.stringify(doc.tags);
     this.shown.texts = JSON.stringify(doc.texts);
+    this.shown.character = JSON.stringify(doc.character ?? null);
   }
 
   /**
@@ -154,8 +157,37 @@ export class ProjectSession {
     this.mirror("the tags", (p) => p.setTags(ref, tags));
   }
 
+  /** The character chosen (a library clip of a project file; null: none; "builtin" is kept as none). */
+  setCharacter(clipId) {
+    // The built-in body is not a file of the project: kept as no character (stick figures).
+    if (clipId === "builtin") clipId = null;
+    const ref = clipId == null ? undefined : this.clipRefs.get(clipId);
+    if (clipId != null && !ref) return;
+    this.mirror("the character", (p) => p.setCharacter(ref));
+  }
+
+  /**
+   * Puts library clip `motionId` on the character shown as library clip `characterId`, as a
+   * project edit (kept, undoable; rebuilt from the project after a reload). Returns the new
+   * clip's `ClipInfo`; throws why it cannot be put on (nothing changed).
+   */
+  putOn(motionId, characterId) {
+    const character = this.clipRefs.get(characterId);
+    if (!character) throw new Error("the character is not a file of the project");
+    const info = this.project.putOnInto(this.library, motionId, this.clipRefs.get(motionId), characterId, character);
+    this.shown.worn.push({ key: JSON.stringify(this.project.doc().worn[info.worn]), id: info.id });
+    this.edited();
+    return info;
+  }
+
   /** A library clip removed by the person: its file leaves the project when none of its clips stay. */
   clipRemoved(clipId) {
+    const worn = this.shown.worn.findIndex((w) => w.id === clipId);
+    if (worn >= 0) {
+      this.shown.worn.splice(worn, 1);
+      this.mirror("removing the put-on clip", (p) => p.removeWorn(worn));
+      return;
+    }
     const ref = this.clipRefs.get(clipId);
     if (!ref) return;
     this.clipRefs.delete(clipId);
@@ -181,7 +213,8 @@ export class ProjectSession {
    * Brings the page's display in line with the project's document (after undo/redo, and when
    * a stored project is opened) through `this.view`'s hooks, which only display:
    * `addClips(report)`, `removeClips(ids)`, `loadSong(fileName, bytes | undefined)` → true when
-   * shown, `showCorrections(list)`, `retag(tags by library id)`, `animate(text)`, `dance(doc)`.
+   * shown, `showCorrections(list)`, `retag(tags by library id)`, `addWorn(ClipInfo)` (a clip
+   * put on the character), `character(library id | null)`, `animate(text)`, `dance(doc)`.
    */
   reconcile() {
     // One at a time, in order (a song decode is awaited inside).
@@ -232,6 +265,28 @@ export class ProjectSession {
     if (tags !== this.shown.tags) {
       this.shown.tags = tags;
       v.retag(now.tags.map((t) => [this.libraryId(t.clip), t.tags]).filter(([id]) => id != null));
+    }
+    // Put-on clips: the ones still as shown stay, the rest are rebuilt from the document.
+    const worn = now.worn || [];
+    let same = 0;
+    while (same < worn.length && same < this.shown.worn.length && this.shown.worn[same].key === JSON.stringify(worn[same])) same++;
+    const stale = this.shown.worn.splice(same).map((w) => w.id).filter((id) => id != null);
+    if (stale.length) v.removeClips(stale);
+    for (let i = same; i < worn.length; i++) {
+      const key = JSON.stringify(worn[i]);
+      try {
+        const info = this.project.wornInto(this.library, i, this.libraryId(worn[i].character));
+        this.shown.worn.push({ key, id: info.id });
+        if (v.addWorn) v.addWorn(info);
+      } catch (e) {
+        this.shown.worn.push({ key, id: null });
+        this.messages.error(`A clip put on the character could not be made again: ${e.message}`);
+      }
+    }
+    const character = JSON.stringify(now.character ?? null);
+    if (character !== this.shown.character) {
+      this.shown.character = character;
+      if (v.character) v.character(now.character ? this.libraryId(now.character) : null);
     }
     const texts = JSON.stringify(now.texts);
     if (texts !== this.shown.texts) {

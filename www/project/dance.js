@@ -23,6 +23,12 @@ export class ProjectDance {
     return r;
   }
 
+  /** Runs `f` (several edits: a share link applied bar by bar) as one project edit: one undo takes it all back. */
+  batch(f) {
+    this.project.beginGroup();
+    try { return f(); } finally { this.project.endGroup(); this.session.edited(); }
+  }
+
   // The built-in moves and the join table, a slice at a time (the page stays responsive).
   loadBuiltin(count) { return this.project.loadBuiltin(count); }
   prepareTable(columns) { return this.project.prepareTable(columns); }

@@ -8,6 +8,7 @@
 // animation (.vrma, for VRM avatars) or a BVH file, through the engine's exporters; the browser downloads the bytes. Errors go to the
 // message list with the engine's words; nothing in the library changes.
 export class ExportPanel {
+  /** `wear(clipId, characterId)` → ClipInfo may be set by the page (its project keeps the clip). */
   constructor({ button, format, character, putOn, library, player, messages, onAdded, onCharacter }) {
     this.library = library;
     this.player = player;
@@ -54,12 +55,25 @@ export class ExportPanel {
     }
   }
 
+  /** Shows `id` (a library clip of a character, "builtin", null: stick figures) as the chosen
+   * character, and draws on it (the page's project restoring its choice). */
+  showCharacter(id) {
+    this.refreshCharacters();
+    this.character.value = id == null ? "" : String(id);
+    try {
+      this.player.setCharacter(this.chosen());
+    } catch (e) {
+      this.messages.error(`Character: ${e.message}`);
+    }
+  }
+
   putOnCharacter() {
     const id = this.player.clip;
     const character = this.chosen();
     if (id == null || typeof character !== "number") { this.messages.warning("Put on: choose a character (an imported skinned glTF) and a clip."); return null; }
     try {
-      const info = this.library.putOnCharacter(id, character);
+      // `wear` (the page's project) keeps it; without one, the library alone holds it.
+      const info = this.wear ? this.wear(id, character) : this.library.putOnCharacter(id, character);
       this.messages.info(`${info.name}: ready (drawn on the character; Export gives it with the character's mesh)`);
       if (this.onAdded) this.onAdded(info);
       return info;

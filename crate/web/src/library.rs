@@ -103,6 +103,18 @@ impl Library {
         id
     }
 
+    /// Adds a clip played by a character (put on it): drawn with the mesh of library clip
+    /// `character` when that is still there (one mesh on the GPU for the character's clips),
+    /// else with `mesh`, a copy of its own.
+    #[cfg_attr(not(feature = "authoring"), allow(dead_code))]
+    pub(crate) fn push_on_character(&mut self, clip: Clip, character: Option<u32>, mesh: Option<&SkinnedMesh>) -> u32 {
+        let shared = character.and_then(|c| self.entries.iter().find(|e| e.id == c)).and_then(|e| e.mesh.clone());
+        let mesh = shared.or_else(|| mesh.map(|m| (self.next_id, Rc::new(m.clone()))));
+        let map = HumanoidMap::from_skeleton(&clip.skeleton);
+        let status = map.status(&clip.skeleton, Some(&clip));
+        self.push(clip, "character", map, status, mesh)
+    }
+
     fn bump_rev(&mut self) -> u64 {
         self.next_rev += 1;
         self.next_rev

@@ -298,12 +298,68 @@ impl Project {
         Ok(self.changed(()))
     }
 
+    /// Puts library clip `motionId` on the character shown as library clip `characterId`
+    /// (the project's clip `character`, `{ source, clip }`: an imported skinned humanoid), as
+    /// an edit of the project (undoable, kept, saved). `motion` is the motion's project clip
+    /// when it is one; undefined for a clip made in the page (the dance, a text animation, a
+    /// move, the built-in clip), which the project keeps as the BVH file the engine writes of
+    /// it. Adds the put-on clip to `library` and returns its `ClipInfo` with `worn` (its
+    /// number in the project's `doc().worn`). A character or motion that cannot be put on
+    /// throws (`character-*`, `motion-not-humanoid`), nothing changed.
+    #[wasm_bindgen(js_name = putOnInto, unchecked_return_type = "ClipInfo & { worn: number }")]
+    pub fn put_on_into(&mut self, library: &mut Library, motion_id: u32, motion: JsValue, character_id: u32, character: JsValue) -> Result<JsValue, OdoriError> {
+        let character: ClipRef = arg(character, "character")?;
+        let motion: Option<ClipRef> = if motion.is_undefined() || motion.is_null() { None } else { Some(arg(motion, "motion")?) };
+        let index = match motion {
+            Some(m) => self.inner.put_on(character, Some(m), None)?,
+            None => {
+                let e = library.entry(motion_id)?;
+                let file = odori_core::export::bvh::bvh(&e.clip)?;
+                let name = e.clip.name.clone();
+                self.inner.put_on(character, None, Some((&name, &file)))?
+            }
+        };
+        self.changed(());
+        self.worn_into(library, index as u32, Some(character_id))
+    }
+
+    /// Shows put-on clip `index` of the document (`doc().worn[index]`) in `library`, rebuilt
+    /// from its recipe (a restored project, or one brought back by undo/redo), drawn with the
+    /// mesh of library clip `characterId` when given. Returns its `ClipInfo` with `worn`.
+    #[wasm_bindgen(js_name = wornInto, unchecked_return_type = "ClipInfo & { worn: number }")]
+    pub fn worn_into(&mut self, library: &mut Library, index: u32, character_id: Option<u32>) -> Result<JsValue, OdoriError> {
+        let (clip, imported) = self.inner.worn_clip(index as usize)?;
+        let id = library.push_on_character(clip, character_id, imported.mesh.as_ref());
+        let info = to_js(&crate::library::info_of(library.entry(id)?));
+        js_sys::Reflect::set(&info, &JsValue::from_str("worn"), &JsValue::from(index)).map_err(|_| OdoriError::new("bad-argument", "clip info"))?;
+        Ok(info)
+    }
+
+    /// Takes put-on clip `index` out of the project (undoable).
+    #[wasm_bindgen(js_name = removeWorn)]
+    pub fn remove_worn(&mut self, index: u32) -> Result<(), OdoriError> {
+        self.inner.remove_worn(index as usize)?;
+        Ok(self.changed(()))
+    }
+
     /// The camera (`{ yawRad, pitchRad, distanceM, targetM }`, or undefined); not undoable.
     #[wasm_bindgen(js_name = setCamera)]
     pub fn set_camera(&mut self, camera: JsValue) -> Result<(), OdoriError> {
         let camera: Option<Camera> = if camera.is_undefined() || camera.is_null() { None } else { Some(arg(camera, "camera")?) };
         self.inner.set_camera(camera);
         Ok(self.changed(()))
+    }
+
+    /// Opens a group of edits one undo takes back (a share link applied bar by bar, then
+    /// Generate): every edit until `endGroup()` joins the first one's undo step.
+    #[wasm_bindgen(js_name = beginGroup)]
+    pub fn begin_group(&mut self) {
+        self.inner.begin_group();
+    }
+
+    #[wasm_bindgen(js_name = endGroup)]
+    pub fn end_group(&mut self) {
+        self.inner.end_group();
     }
 
     pub fn undo(&mut self) -> bool {

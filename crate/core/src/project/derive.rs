@@ -69,6 +69,12 @@ pub(crate) fn song_grid(song: &SongDoc, blobs: &BlobStore) -> Result<SongGrid, P
     Ok(grid)
 }
 
+/// What a parsed file is kept under: the same bytes read under another name or options are
+/// another parse.
+fn import_key(hash: &BlobHash, file_name: &str, options: &ImportOptions) -> String {
+    format!("{hash}|{file_name}|{}", serde_json::to_string(options).unwrap_or_default())
+}
+
 /// State derived from a project's document (see the module doc).
 #[derive(Default)]
 pub struct Derived {
@@ -135,7 +141,7 @@ impl Derived {
 
     /// Imports a file (or returns the copy imported before).
     pub(crate) fn import(&mut self, hash: &BlobHash, file_name: &str, bytes: &[u8], options: &ImportOptions) -> Result<Arc<Imported>, ImportError> {
-        let key = format!("{hash}|{file_name}|{}", serde_json::to_string(options).unwrap_or_default());
+        let key = import_key(hash, file_name, options);
         if let Some(i) = self.imports.get(&key) {
             return Ok(i.clone());
         }
@@ -199,6 +205,26 @@ impl Derived {
         self.rebuild_library(doc, blobs, &referenced, &earlier, from);
         self.lib_sources = sources;
         self.lib_tail = Some(tail);
+        self.forget_imports(doc);
+    }
+
+    /// Forgets the parsed files the document no longer names (a removed source, a source whose
+    /// options changed, a put-on motion taken away): a parse holds the whole clip, and a
+    /// session that imports and removes files would otherwise keep every one of them. The
+    /// blobs stay while the history refers to them, so an undo parses the file again.
+    fn forget_imports(&mut self, doc: &ProjectDoc) {
+        let mut keep: HashSet<String> = doc.sources.iter().map(|s| import_key(&s.blob, &s.file_name, &s.options)).collect();
+        for w in &doc.worn {
+            if let super::WornMotion::Motion { name, bvh } = &w.motion {
+                keep.insert(import_key(bvh, &super::worn_file_name(name), &ImportOptions::default()));
+            }
+        }
+        self.imports.retain(|k, _| keep.contains(k));
+    }
+
+    /// How many parsed files are kept (for tests of [`Derived::forget_imports`]).
+    pub fn parsed_files(&self) -> usize {
+        self.imports.len()
     }
 
     fn rebuild_library(&mut self, doc: &ProjectDoc, blobs: &BlobStore, referenced: &HashSet<String>, old_cuts: &BTreeMap<ClipRef, Vec<Option<f32>>>, from_source: usize) {

@@ -124,17 +124,134 @@ struct Manifest {
     blobs: BTreeMap<BlobHash, usize>,
 }
 
+/// The manifest as written (borrowing, so a write copies nothing it need not).
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct ManifestOut<'a> {
+    format: &'a str,
+    schema_version: u32,
+    generator: &'a str,
+    project: &'a ProjectDoc,
+    undo: &'a [Option<serde_json::Value>],
+    redo: &'a [Option<serde_json::Value>],
+    blobs: BTreeMap<BlobHash, usize>,
+}
+
+/// The history's changes ([`diff_chain`]) kept between writes: entry `i` of a stack is the
+/// change from entry `i + 1`, which never changes while both are on the stack, so each is
+/// computed once. The last entry's change is from the current document, which edits that are
+/// not undo steps (a name, the camera, an open search) change in place: it is recomputed on
+/// every write. Without this, every autosave serialised and compared the whole history
+/// (up to [`super::UNDO_LIMIT`] documents), which put a write over its 4 ms budget.
+#[derive(Debug, Default)]
+pub(crate) struct DiffCache {
+    undo: Vec<Option<serde_json::Value>>,
+    redo: Vec<Option<serde_json::Value>>,
+}
+
+/// Which stack of the history.
+#[derive(Clone, Copy)]
+pub(crate) enum Stack {
+    Undo,
+    Redo,
+}
+
+impl DiffCache {
+    fn stack(&mut self, s: Stack) -> &mut Vec<Option<serde_json::Value>> {
+        match s {
+            Stack::Undo => &mut self.undo,
+            Stack::Redo => &mut self.redo,
+        }
+    }
+
+    /// A state was pushed on `s`: the former top's change was from the current document and
+    /// is now from the pushed state.
+    pub(crate) fn pushed(&mut self, s: Stack) {
+        let v = self.stack(s);
+        if let Some(last) = v.last_mut() {
+            *last = None;
+        }
+        v.push(None);
+    }
+
+    pub(crate) fn popped(&mut self, s: Stack) {
+        self.stack(s).pop();
+    }
+
+    /// The oldest undo state was dropped (the undo limit).
+    pub(crate) fn dropped_oldest(&mut self) {
+        if !self.undo.is_empty() {
+            self.undo.remove(0);
+        }
+    }
+
+    pub(crate) fn cleared(&mut self, s: Stack) {
+        self.stack(s).clear();
+    }
+
+    /// Fills in what is not cached of `states`' changes (see [`diff_chain`]); the last from
+    /// `current`, always afresh.
+    fn fill(cache: &mut Vec<Option<serde_json::Value>>, current: &serde_json::Value, states: &[ProjectDoc]) {
+        if cache.len() != states.len() {
+            // Out of step (never expected): start over rather than write a wrong change.
+            *cache = vec![None; states.len()];
+        }
+        let n = states.len();
+        let mut next: Option<serde_json::Value> = None;
+        for i in (0..n).rev() {
+            if i + 1 == n {
+                let v = serde_json::to_value(&states[i]).unwrap_or_default();
+                cache[i] = Some(json_diff(current, &v));
+                next = Some(v);
+            } else if cache[i].is_some() {
+                next = None;
+            } else {
+                let after = match next.take() {
+                    Some(v) => v,
+                    None => serde_json::to_value(&states[i + 1]).unwrap_or_default(),
+                };
+                let v = serde_json::to_value(&states[i]).unwrap_or_default();
+                cache[i] = Some(json_diff(&after, &v));
+                next = Some(v);
+            }
+        }
+    }
+}
+
 /// The manifest of a project (what autosave writes on every edit; the blobs go separately,
 /// once each).
 pub fn manifest_json(project: &Project) -> Vec<u8> {
     let blobs = project.referenced_blobs().into_iter().filter_map(|h| project.blobs().get(&h).map(|b| (h, b.len()))).collect();
-    let m = Manifest {
-        format: FORMAT_NAME.into(),
+    let current = serde_json::to_value(project.doc()).unwrap_or_default();
+    let mut cache = project.diffs.lock().unwrap_or_else(|e| e.into_inner());
+    let cache = &mut *cache;
+    DiffCache::fill(&mut cache.undo, &current, project.undo_history());
+    DiffCache::fill(&mut cache.redo, &current, project.redo_history());
+    let m = ManifestOut {
+        format: FORMAT_NAME,
         schema_version: CURRENT_SCHEMA_VERSION,
-        generator: concat!("odori ", env!("CARGO_PKG_VERSION")).into(),
-        project: project.doc().clone(),
-        undo: diff_chain(project.doc(), project.undo_history()),
-        redo: diff_chain(project.doc(), project.redo_history()),
+        generator: concat!("odori ", env!("CARGO_PKG_VERSION")),
+        project: project.doc(),
+        undo: &cache.undo,
+        redo: &cache.redo,
+        blobs,
+    };
+    serde_json::to_vec(&m).unwrap_or_default()
+}
+
+/// [`manifest_json`] with every change computed afresh (what the cache must equal).
+#[doc(hidden)]
+pub fn manifest_json_uncached(project: &Project) -> Vec<u8> {
+    let blobs = project.referenced_blobs().into_iter().filter_map(|h| project.blobs().get(&h).map(|b| (h, b.len()))).collect();
+    let some = |v: Vec<serde_json::Value>| v.into_iter().map(Some).collect::<Vec<_>>();
+    let (undo, redo) = (some(diff_chain(project.doc(), project.undo_history())), some(diff_chain(project.doc(), project.redo_history())));
+    let m = ManifestOut {
+        format: FORMAT_NAME,
+        schema_version: CURRENT_SCHEMA_VERSION,
+        generator: concat!("odori ", env!("CARGO_PKG_VERSION")),
+        project: project.doc(),
+        undo: &undo,
+        redo: &redo,
         blobs,
     };
     serde_json::to_vec(&m).unwrap_or_default()
@@ -422,6 +539,11 @@ fn named_blobs(d: &ProjectDoc) -> Vec<(BlobHash, String)> {
             out.push((a.clone(), format!("song audio {}", song.file_name)));
         }
         out.push((song.envelope.clone(), format!("loudness envelope of {}", song.file_name)));
+    }
+    for w in &d.worn {
+        if let super::WornMotion::Motion { name, bvh } = &w.motion {
+            out.push((bvh.clone(), format!("put-on motion {name}")));
+        }
     }
     out
 }

@@ -159,6 +159,29 @@ pub struct Tagging {
     pub tags: Vec<String>,
 }
 
+/// The motion a put-on clip plays (see [`Worn`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "camelCase")]
+pub enum WornMotion {
+    /// A clip of one of the project's sources.
+    Clip { clip: ClipRef },
+    /// A motion made in the page (the dance, a text animation, a built-in move): kept as the
+    /// BVH file the engine wrote of it, because what made it may change later and the put-on
+    /// clip is the motion as it was when it was put on.
+    #[serde(rename_all = "camelCase")]
+    Motion { name: String, bvh: BlobHash },
+}
+
+/// A clip "put on" a character: `motion` retargeted to the rig of `character` (an imported
+/// skinned humanoid), drawn with its mesh. Only the recipe is kept; the clip is rebuilt from
+/// it ([`Project::worn_clip`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Worn {
+    pub character: ClipRef,
+    pub motion: WornMotion,
+}
+
 /// Where the viewer looks from.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -183,12 +206,23 @@ pub struct ProjectDoc {
     pub texts: Vec<String>,
     pub character: Option<ClipRef>,
     pub camera: Option<Camera>,
+    /// Clips put on a character, in the order made (absent in files written before it
+    /// existed, which read as none: no schema step needed).
+    #[serde(default)]
+    pub worn: Vec<Worn>,
 }
 
 impl ProjectDoc {
     /// Every blob the document refers to.
     pub fn blobs(&self) -> impl Iterator<Item = &BlobHash> {
-        self.sources.iter().map(|s| &s.blob).chain(self.song.iter().flat_map(|s| s.audio.iter().chain(std::iter::once(&s.envelope))))
+        self.sources
+            .iter()
+            .map(|s| &s.blob)
+            .chain(self.song.iter().flat_map(|s| s.audio.iter().chain(std::iter::once(&s.envelope))))
+            .chain(self.worn.iter().filter_map(|w| match &w.motion {
+                WornMotion::Motion { bvh, .. } => Some(bvh),
+                WornMotion::Clip { .. } => None,
+            }))
     }
 
     /// Every move key the document refers to for keeps: bars' moves and liked candidates.
@@ -226,6 +260,12 @@ pub enum ProjectError {
     Incomplete { count: usize, first: String },
     #[error("bad song envelope: {message}")]
     BadEnvelope { message: String },
+    #[error(transparent)]
+    Character(#[from] crate::character::CharacterError),
+    #[error("there is no put-on clip {index}: the project has {count}")]
+    NoSuchWorn { index: usize, count: usize },
+    #[error("put on: give a clip of the project or a motion to put on the character")]
+    NoMotion,
 }
 
 impl ProjectError {
@@ -240,6 +280,9 @@ impl ProjectError {
             ProjectError::NotDanceable { .. } => "not-humanoid",
             ProjectError::Incomplete { .. } => "missing-blob",
             ProjectError::BadEnvelope { .. } => "bad-argument",
+            ProjectError::Character(e) => e.kind(),
+            ProjectError::NoSuchWorn { .. } => "not-found",
+            ProjectError::NoMotion => "bad-argument",
         }
     }
 }
@@ -262,6 +305,12 @@ pub struct Project {
     /// Blobs the document refers to that were absent when it was opened.
     missing: Vec<MissingBlob>,
     derived: Derived,
+    /// The history's changes as the manifest writes them, kept between writes (see
+    /// [`file::DiffCache`]); kept in step with `history` by every method that moves it.
+    pub(crate) diffs: std::sync::Mutex<file::DiffCache>,
+    /// An open group of edits ([`Project::begin_group`]): `Some(true)` once its first edit
+    /// recorded the undo step the rest join.
+    group: Option<bool>,
 }
 
 /// Two projects are the same when what a person made (document, history, blobs) is the same;
@@ -311,6 +360,11 @@ pub fn decode_envelope(bytes: &[u8]) -> Result<RmsEnvelope, ProjectError> {
     Ok(RmsEnvelope { hop_secs, bands })
 }
 
+/// The file name a put-on motion's BVH is read under (it names the clip).
+pub(crate) fn worn_file_name(name: &str) -> String {
+    format!("{name}.bvh")
+}
+
 impl Project {
     /// An empty project.
     pub fn new() -> Self {
@@ -320,7 +374,8 @@ impl Project {
     /// A project from parts read back from a file or a store (history included). `missing`
     /// names what the document refers to that was not there.
     pub(crate) fn from_parts(doc: ProjectDoc, undo: Vec<ProjectDoc>, redo: Vec<ProjectDoc>, blobs: BlobStore, missing: Vec<MissingBlob>) -> Self {
-        Self { doc, history: History::from_parts(undo, redo), blobs, missing, derived: Derived::default() }
+        let diffs = std::sync::Mutex::new(file::DiffCache::default());
+        Self { doc, history: History::from_parts(undo, redo), blobs, missing, derived: Derived::default(), diffs, group: None }
     }
 
     pub fn doc(&self) -> &ProjectDoc {
@@ -360,8 +415,25 @@ impl Project {
         if doc == self.doc {
             return false;
         }
+        if self.group == Some(true) {
+            // A later edit of a group: part of the group's one undo step.
+            self.doc = doc;
+            let keep = self.referenced_blobs();
+            self.blobs.retain(&keep);
+            return true;
+        }
+        if self.group.is_some() {
+            self.group = Some(true);
+        }
         let prev = std::mem::replace(&mut self.doc, doc);
+        let dropped = self.history.undo.len() >= UNDO_LIMIT;
         self.history.record(prev, UNDO_LIMIT);
+        let cache = self.diffs.get_mut().unwrap_or_else(|e| e.into_inner());
+        cache.pushed(file::Stack::Undo);
+        if dropped {
+            cache.dropped_oldest();
+        }
+        cache.cleared(file::Stack::Redo);
         let keep = self.referenced_blobs();
         self.blobs.retain(&keep);
         true
@@ -400,14 +472,40 @@ impl Project {
         self.derived.imported_source(&src, &self.blobs)
     }
 
+    /// Opens a group of edits that one undo takes back (a share link applied bar by bar and
+    /// generated): every edit until [`Project::end_group`] joins the undo step of the group's
+    /// first edit. Undo, redo and the end close the group.
+    pub fn begin_group(&mut self) {
+        self.group = Some(false);
+    }
+
+    /// Closes the group [`Project::begin_group`] opened (nothing when none is open).
+    pub fn end_group(&mut self) {
+        self.group = None;
+    }
+
     /// Undoes the last edit; `false` when there is none.
     pub fn undo(&mut self) -> bool {
-        self.history.undo(&mut self.doc)
+        self.group = None;
+        let done = self.history.undo(&mut self.doc);
+        if done {
+            let cache = self.diffs.get_mut().unwrap_or_else(|e| e.into_inner());
+            cache.popped(file::Stack::Undo);
+            cache.pushed(file::Stack::Redo);
+        }
+        done
     }
 
     /// Redoes the last undone edit; `false` when there is none.
     pub fn redo(&mut self) -> bool {
-        self.history.redo(&mut self.doc)
+        self.group = None;
+        let done = self.history.redo(&mut self.doc);
+        if done {
+            let cache = self.diffs.get_mut().unwrap_or_else(|e| e.into_inner());
+            cache.popped(file::Stack::Redo);
+            cache.pushed(file::Stack::Undo);
+        }
+        done
     }
 
     pub fn can_undo(&self) -> bool {
@@ -471,6 +569,7 @@ impl Project {
         if doc.character.is_some_and(|c| c.source == id) {
             doc.character = None;
         }
+        doc.worn.retain(|w| w.character.source != id && !matches!(w.motion, WornMotion::Clip { clip } if clip.source == id));
         self.commit(doc);
         Ok(())
     }
@@ -583,6 +682,87 @@ impl Project {
         doc.character = clip;
         self.commit(doc);
         Ok(())
+    }
+
+    /// Puts a motion on a character (an imported skinned humanoid): `motion` is a clip of a
+    /// source, or `bvh` (the BVH file the engine wrote of a motion made in the page, with its
+    /// `name`) when `motion` is `None`. Refused, with nothing changed, when either clip is not
+    /// in the project or the character cannot play it. Returns the put-on clip's number (for
+    /// [`Project::worn_clip`]). Undoable.
+    pub fn put_on(&mut self, character: ClipRef, motion: Option<ClipRef>, bvh: Option<(&str, &[u8])>) -> Result<usize, ProjectError> {
+        self.check_clip(character)?;
+        let motion = match (motion, bvh) {
+            (Some(clip), _) => {
+                self.check_clip(clip)?;
+                WornMotion::Clip { clip }
+            }
+            (None, Some((name, bytes))) => {
+                // Read it now so a file that does not import is refused before it is kept.
+                self.derived.import(&BlobHash::of(bytes), &worn_file_name(name), bytes, &ImportOptions::default())?;
+                WornMotion::Motion { name: name.to_string(), bvh: BlobHash::of(bytes) }
+            }
+            (None, None) => return Err(ProjectError::NoMotion),
+        };
+        let worn = Worn { character, motion };
+        self.make_worn(&worn, bvh.map(|(_, b)| b))?;
+        if let (WornMotion::Motion { .. }, Some((_, bytes))) = (&worn.motion, bvh) {
+            self.blobs.put(bytes);
+        }
+        let mut doc = self.doc.clone();
+        doc.worn.push(worn);
+        let index = doc.worn.len() - 1;
+        self.commit(doc);
+        Ok(index)
+    }
+
+    /// Takes a put-on clip away. Undoable.
+    pub fn remove_worn(&mut self, index: usize) -> Result<(), ProjectError> {
+        if index >= self.doc.worn.len() {
+            return Err(ProjectError::NoSuchWorn { index, count: self.doc.worn.len() });
+        }
+        let mut doc = self.doc.clone();
+        doc.worn.remove(index);
+        self.commit(doc);
+        Ok(())
+    }
+
+    /// Put-on clip `index` rebuilt from its recipe: the motion retargeted to the character's
+    /// rig, with the character's file as imported (its mesh draws the clip).
+    pub fn worn_clip(&mut self, index: usize) -> Result<(Clip, std::sync::Arc<crate::import::Imported>), ProjectError> {
+        let worn = self.doc.worn.get(index).cloned().ok_or(ProjectError::NoSuchWorn { index, count: self.doc.worn.len() })?;
+        self.make_worn(&worn, None)
+    }
+
+    /// The source's file as imported, or why it cannot be had.
+    fn imported_or_missing(&mut self, source: SourceId) -> Result<std::sync::Arc<crate::import::Imported>, ProjectError> {
+        let src = self.doc.source(source).ok_or(ProjectError::NoSuchSource { source_id: source.0 })?.clone();
+        match self.derived.imported_source(&src, &self.blobs) {
+            Some(r) => Ok(r?),
+            None => Err(ProjectError::Incomplete { count: 1, first: format!("motion file {}", src.file_name) }),
+        }
+    }
+
+    fn make_worn(&mut self, worn: &Worn, bvh: Option<&[u8]>) -> Result<(Clip, std::sync::Arc<crate::import::Imported>), ProjectError> {
+        let ch = self.imported_or_missing(worn.character.source)?;
+        let file = self.doc.source(worn.character.source).map(|s| s.file_name.clone()).unwrap_or_default();
+        let character = crate::character::Character::from_imported(&file, &ch)?;
+        let (clip, map) = match &worn.motion {
+            WornMotion::Clip { clip } => {
+                let im = self.imported_or_missing(clip.source)?;
+                let c = im.clips.get(clip.clip as usize).cloned().ok_or_else(|| ProjectError::NoSuchClip { source_id: clip.source.0, file_name: file.clone(), clip: clip.clip, clips: im.clips.len() })?;
+                (c, im.humanoid.clone())
+            }
+            WornMotion::Motion { name, bvh: hash } => {
+                let bytes = match bvh {
+                    Some(b) => b.to_vec(),
+                    None => self.blobs.get(hash).map(|b| b.to_vec()).ok_or_else(|| ProjectError::Incomplete { count: 1, first: format!("put-on motion {name}") })?,
+                };
+                let im = self.derived.import(hash, &worn_file_name(name), &bytes, &ImportOptions::default())?;
+                let c = im.clips.first().cloned().ok_or_else(|| ProjectError::NoSuchClip { source_id: u32::MAX, file_name: name.clone(), clip: 0, clips: 0 })?;
+                (c, im.humanoid.clone())
+            }
+        };
+        Ok((character.retarget(&clip, &map)?, ch))
     }
 
     /// Where the viewer looks from. A view setting, not an edit: kept and saved, not undone.
