@@ -94,7 +94,7 @@ async function main() {
     library,
     messages,
     status: $("#status"),
-    fpsInput: $("#fps-override"),
+    optionsDialog: $("#import-options"),
     // The project parses the file (once) and shows its clips in the library.
     importer: (fileName, bytes, options) => session.importFile(fileName, bytes, options),
     onImported: (report) => imported(report),
