@@ -130,7 +130,10 @@ async function main() {
   window.odori = odori;
 
   await firstPose;
-  // Each step in its own task, so the page answers input between them.
+  // Each step in its own task, so the page answers input between them. First the 3D view's
+  // skinned-character pipeline, which the first pose did not need.
+  await nextTask();
+  viewer.warmUp();
   await nextTask();
   searchClient = new SearchClient(library);
   searchClient.add(demo.id);

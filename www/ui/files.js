@@ -58,7 +58,8 @@ export class FileLoader {
   openAll(files) {
     if (this.onFiles) files = this.onFiles(files);
     if (!files.length) return this.queue;
-    this.queue = this.queue.then(() => this.openBatch(files));
+    // A batch that fails as a whole is reported, and the next batch still runs.
+    this.queue = this.queue.then(() => this.openBatch(files)).catch((e) => this.messages.error(`Opening files failed: ${e && e.message ? e.message : e}`));
     return this.queue;
   }
 
