@@ -190,15 +190,21 @@ impl Viewer {
             mats: Vec::new(),
             follow_y: None,
         };
-        // The pipelines the first frame draws with, each made and then drawn with once, a task
-        // for each step: on WebGL2 the browser's GL (ANGLE) compiles a pipeline's GPU code only
+        // WebGL2: the pipelines the first frame draws with, each made and then drawn with once, a
+        // task for each step: on WebGL2 the browser's GL (ANGLE) compiles a pipeline's GPU code only
         // when it is first drawn with, so without these frames the first pose's task would pay
         // for all of it. The frames show the empty floor (the page's start-up cover hides it).
         // The figure's frame draws one capsule of zero radius: nothing is seen. Each frame's GPU
         // work is waited for (without blocking) before the next step.
         let nothing = [Vec3::ZERO];
         let invisible = Figure { joints: &nothing, bones: &[], color: [0.0; 4], radius: 0.0, head: None };
+        // WebGPU compiles pipelines in the GPU process without holding the page's thread: there
+        // the two are made at once and the first frame is not waited for.
         for kind in [PipelineKind::Lines, PipelineKind::Figure] {
+            if backend == "webgpu" {
+                viewer.renderer.prepare(kind);
+                continue;
+            }
             next_task().await;
             viewer.renderer.prepare(kind);
             next_task().await;
