@@ -95,7 +95,7 @@ async function main() {
     library,
     messages,
     status: $("#status"),
-    fpsInput: $("#fps-override"),
+    optionsDialog: $("#import-options"),
     // The project parses the file (once) and shows its clips in the library.
     importer: (fileName, bytes, options) => session.importFile(fileName, bytes, options),
     onImported: (report) => imported(report),
@@ -135,7 +135,10 @@ async function main() {
   window.odori = odori;
 
   await firstPose;
-  // Each step in its own task, so the page answers input between them.
+  // Each step in its own task, so the page answers input between them. First the 3D view's
+  // skinned-character pipeline, which the first pose did not need.
+  await nextTask();
+  viewer.warmUp();
   await nextTask();
   // The search index is kept in IndexedDB between visits (www/project/index-store.js).
   const indexStore = await IndexStore.open();

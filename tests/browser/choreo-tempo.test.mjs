@@ -4,7 +4,7 @@
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
-import { startServer, launch, openApp, artifacts, data } from "./harness.mjs";
+import { startServer, launch, openApp, artifacts, data, importFiles } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -18,8 +18,7 @@ test("dance: state an imported clip's tempo and re-cut it, keeping the pinned ba
     await openApp(page, server, "webgl2");
     await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 60000 });
     assert.equal(await page.isVisible("#dance-clip-row"), false, "no clip row before any clip is imported");
-    await page.fill("#fps-override", "60");
-    await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_02.bvh"));
+    await importFiles(page, join(data, "mocap/cmu-salsa/salsa_02.bvh"), { "salsa_02.bvh": { fps: 60 } });
     await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /dance segments/.test(li.textContent)), null, { timeout: 30000 });
     assert.ok(await page.isVisible("#dance-clip-row"));
     assert.match(await page.textContent("#dance-clip-info"), /found in the motion/);

@@ -4,7 +4,7 @@
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
-import { startServer, launch, openApp, canvasPixels, countAll, artifacts, data, waitUntil } from "./harness.mjs";
+import { startServer, launch, openApp, canvasPixels, countAll, artifacts, data, waitUntil, importFiles } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -32,8 +32,7 @@ test("dance: candidates, Set, Search twice, Generate, play", async () => {
     const nBars = Number(await page.evaluate(() => document.querySelector("#dance").dataset.bars));
     // An imported humanoid clip joins the segment library, cut at its own beats.
     const builtinSegments = await page.evaluate(() => window.odori.choreo.choreographer.segmentCount);
-    await page.fill("#fps-override", "60");
-    await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_02.bvh"));
+    await importFiles(page, join(data, "mocap/cmu-salsa/salsa_02.bvh"), { "salsa_02.bvh": { fps: 60 } });
     await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /dance segments/.test(li.textContent)), null, { timeout: 30000 });
     assert.ok(await page.evaluate(() => window.odori.choreo.choreographer.segmentCount) > builtinSegments);
     // The join costs for the grown library are built a slice at a time between frames.

@@ -4,7 +4,7 @@ import { spawn } from "node:child_process";
 import { existsSync, mkdirSync, readFileSync, statSync } from "node:fs";
 import { createServer } from "node:http";
 import { fileURLToPath } from "node:url";
-import { dirname, join } from "node:path";
+import { basename, dirname, join } from "node:path";
 import { chromium } from "playwright-core";
 
 export const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
@@ -52,6 +52,29 @@ export async function openApp(page, server, backend) {
   await page.waitForFunction(() => document.body.dataset.ready, null, { timeout: 60000 });
   const ready = await page.evaluate(() => document.body.dataset.ready);
   if (ready !== "1") throw new Error(`the app did not start: ${await page.textContent("#messages")}`);
+}
+
+/**
+ * Opens motion files through the page's picker (`files`: paths or playwright file payloads) and
+ * answers the import-options dialog the app shows when a BVH file is among them:
+ * `options[fileName] = { fps, units }` for the files that need other than their own ("units":
+ * metres per file unit as the dialog's values, e.g. "0.01"). Resolves once the dialog is
+ * answered, not when the import is done.
+ */
+export async function importFiles(page, files, options = {}) {
+  const list = Array.isArray(files) ? files : [files];
+  await page.setInputFiles("#file-input", list);
+  const names = list.map((f) => (typeof f === "string" ? basename(f) : f.name));
+  if (!names.some((n) => /\.bvh$/i.test(n))) return;
+  const dialog = page.locator("#import-options");
+  await dialog.waitFor({ state: "visible", timeout: 30000 });
+  for (const [name, o] of Object.entries(options)) {
+    const row = dialog.locator(`tr[data-file="${name}"]`);
+    if (o.fps != null) await row.locator(".import-fps").fill(String(o.fps));
+    if (o.units != null) await row.locator(".import-units").selectOption(String(o.units));
+  }
+  await page.click("#import-go");
+  await dialog.waitFor({ state: "hidden", timeout: 10000 });
 }
 
 /**

@@ -12,7 +12,7 @@
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
-import { startServer, launch, data, BACKENDS } from "./harness.mjs";
+import { startServer, launch, data, BACKENDS, importFiles } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -123,8 +123,7 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
     try {
       await openProjectApp(page, backend);
       // Motion: a BVH (at 60 fps, as the CMU salsa files are) and a GLB.
-      await page.fill("#fps-override", "60");
-      await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_10.bvh"));
+      await importFiles(page, join(data, "mocap/cmu-salsa/salsa_10.bvh"), { "salsa_10.bvh": { fps: 60 } });
       await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /salsa_10.*dance segments/.test(li.textContent)), null, { timeout: 60000 });
       await page.setInputFiles("#file-input", join(data, "gltf/RobotExpressive.glb"));
       await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /RobotExpressive.glb: \d+ clips? added/.test(li.textContent)), null, { timeout: 60000 });

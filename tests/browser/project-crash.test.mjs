@@ -13,7 +13,7 @@ import assert from "node:assert/strict";
 import { mkdtempSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
-import { startServer, startChromium, data, BACKENDS } from "./harness.mjs";
+import { startServer, startChromium, data, BACKENDS, importFiles } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -67,8 +67,7 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       await openApp(run.page, backend);
       let page = run.page;
       // Compose: a BVH, a grid nudge, a pinned bar, Generate — all autosaved.
-      await page.fill("#fps-override", "60");
-      await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_10.bvh"));
+      await importFiles(page, join(data, "mocap/cmu-salsa/salsa_10.bvh"), { "salsa_10.bvh": { fps: 60 } });
       await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /salsa_10.*dance segments/.test(li.textContent)), null, { timeout: 120000 });
       await page.click("#song-later");
       await onBar(page, 1, 0, "#dance-set");

@@ -3,7 +3,7 @@
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
-import { startServer, launch, openApp, canvasPixels, countAll, isOrange, isTeal, data, artifacts } from "./harness.mjs";
+import { startServer, launch, openApp, canvasPixels, countAll, isOrange, isTeal, data, artifacts, importFiles } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -13,8 +13,7 @@ test("search: query by dragging, results, overlay of two figures, plot", async (
   const { browser, page, logs } = await launch("webgl2");
   try {
     await openApp(page, server, "webgl2");
-    await page.fill("#fps-override", "60");
-    await page.setInputFiles("#file-input", [join(data, "mocap/cmu-salsa/salsa_01.bvh"), join(data, "mocap/cmu-salsa/salsa_02.bvh")]);
+    await importFiles(page, [join(data, "mocap/cmu-salsa/salsa_01.bvh"), join(data, "mocap/cmu-salsa/salsa_02.bvh")], { "salsa_01.bvh": { fps: 60 }, "salsa_02.bvh": { fps: 60 } });
     await page.waitForSelector("#library tbody tr:nth-child(3)", { timeout: 30000 });
     await page.click("#library tbody tr:nth-child(3) td:first-child"); // salsa_02
     // Drag on the timeline: from 30 % to 36 % of the clip (about 2.2 s of salsa_02).

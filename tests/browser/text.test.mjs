@@ -3,7 +3,7 @@
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
-import { startServer, launch, openApp, canvasPixels, artifacts, data } from "./harness.mjs";
+import { startServer, launch, openApp, canvasPixels, artifacts, data, importFiles } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -44,8 +44,7 @@ test("text: 太郎は走って，ボールを蹴る．そして喜ぶ． → run
     assert.deepEqual(joins, ["initial", "transition", "connection"]);
 
     // A clip tagged by the person is called by its tag: import salsa, tag it, use the word.
-    await page.fill("#fps-override", "60");
-    await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_02.bvh"));
+    await importFiles(page, join(data, "mocap/cmu-salsa/salsa_02.bvh"), { "salsa_02.bvh": { fps: 60 } });
     await page.waitForFunction(() => [...document.querySelectorAll("#library tbody tr")].some((tr) => tr.textContent.includes("salsa_02")));
     await page.click("#library tbody tr:last-child td:first-child");
     await page.fill("#text-tags", "salsa, サルサ");

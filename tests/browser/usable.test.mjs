@@ -2,7 +2,7 @@
 // song, dance and clip (Pause really pauses both; space leaves focused controls alone), undo
 // steps only for edits, messages shown where the action happened (errors stay until
 // dismissed, and are still logged), a library table that fits its panel with clickable
-// Overlay boxes and a remove button, import options for one import only, consistent fps and
+// Overlay boxes and a remove button, import options asked per file and kept per file, consistent fps and
 // joint counts, unpin, the small ones (Tap counter, tempo placeholder), the keyboard sheet and
 // first-run hint, the layout at phone and laptop sizes (touch targets, overflow, view size,
 // screenshots), an axe-core accessibility check, and the start-up figures.
@@ -11,7 +11,7 @@ import assert from "node:assert/strict";
 import { join } from "node:path";
 import { readFileSync, writeFileSync } from "node:fs";
 import { chromium } from "playwright-core";
-import { startServer, launch, openApp, waitUntil, artifacts, data, root, BACKENDS } from "./harness.mjs";
+import { startServer, launch, openApp, importFiles, waitUntil, artifacts, data, root, BACKENDS } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -19,6 +19,7 @@ after(() => server && server.stop());
 
 const SALSA_01 = join(data, "mocap/cmu-salsa/salsa_01.bvh");
 const SALSA_02 = join(data, "mocap/cmu-salsa/salsa_02.bvh");
+const SALSA_16 = join(data, "mocap/cmu-salsa/salsa_16.bvh");
 const ROBOT = join(data, "gltf/RobotExpressive.glb");
 const ARM_BVH = `HIERARCHY
 ROOT base
@@ -143,7 +144,7 @@ for (const backend of Object.keys(BACKENDS)) {
       });
 
       await t.test("a broken file shows an error at once that stays until dismissed", async () => {
-        await page.setInputFiles("#file-input", { name: "broken.bvh", mimeType: "text/plain", buffer: Buffer.from("HIERARCHY\nROOT hip\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition\n") });
+        await importFiles(page, { name: "broken.bvh", mimeType: "text/plain", buffer: Buffer.from("HIERARCHY\nROOT hip\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition\n") });
         const toast = page.locator(".toast.error", { hasText: "broken.bvh" });
         await toast.waitFor({ state: "visible", timeout: 10000 });
         const box = await toast.boundingBox();
@@ -156,26 +157,66 @@ for (const backend of Object.keys(BACKENDS)) {
         assert.equal(await toast.count(), 0);
       });
 
-      await t.test("the BVH fps override is for one import only; fps and joints read the same everywhere", async () => {
-        await page.fill("#fps-override", "60");
+      await t.test("import options are asked per file at import time, apply to that file only and stay with it in the project", async () => {
+        const rows = () => page.evaluate(() => Object.fromEntries([...document.querySelectorAll("#library tbody tr")].map((tr) => [tr.children[0].textContent, { fps: tr.children[2].textContent, frames: Number(tr.children[3].textContent), secs: Number(tr.children[4].textContent), id: Number(tr.dataset.id) }])));
+        const dialogRows = () => page.evaluate(() => Object.fromEntries([...document.querySelectorAll("#import-options tbody tr")].map((tr) => [tr.dataset.file, { fps: tr.querySelector(".import-fps").value, units: tr.querySelector(".import-units").value }])));
+        // Two BVH files at once: a row for each, each starting at its own header's rate.
+        await page.setInputFiles("#file-input", [SALSA_01, SALSA_02]);
+        await page.locator("#import-options").waitFor({ state: "visible", timeout: 30000 });
+        assert.deepEqual(await dialogRows(), { "salsa_01.bvh": { fps: "120", units: "" }, "salsa_02.bvh": { fps: "120", units: "" } });
+        // Different options for each: salsa_01 at 60 fps, salsa_02 at its own rate in stated centimetres.
+        await page.fill('#import-options tr[data-file="salsa_01.bvh"] .import-fps', "60");
+        await page.selectOption('#import-options tr[data-file="salsa_02.bvh"] .import-units', "0.01");
+        await page.click("#import-go");
+        await waitUntil(async () => { const r = await rows(); return r.salsa_01 && r.salsa_02; }, { what: "both files in the library" });
+        let r = await rows();
+        assert.equal(r.salsa_01.fps, "60", "salsa_01 not at the rate chosen for it");
+        assert.equal(r.salsa_02.fps, "120", "salsa_02 got salsa_01's rate");
+        // Each plays at its own rate: the frame shown for a time is time × the clip's fps.
+        for (const [name, want] of [["salsa_01", 60], ["salsa_02", 120]]) {
+          assert.ok(Math.abs(r[name].secs - (r[name].frames - 1) / want) < 0.02, `${name}: ${r[name].frames} frames in ${r[name].secs} s is not ${want} fps`);
+          const shown = await page.evaluate(({ id }) => { const p = window.odori.player; p.select(id); p.pause(); p.time = 2; p.drawNow(); return Number(document.querySelector("#scrub").value); }, r[name]);
+          assert.ok(Math.abs(shown - 2 * want) <= 1, `${name} at 2 s shows frame ${shown}, not ${2 * want}`);
+        }
+        // The next import starts from its own file again: nothing leaks from the last one.
+        await page.setInputFiles("#file-input", SALSA_16);
+        await page.locator("#import-options").waitFor({ state: "visible", timeout: 30000 });
+        assert.deepEqual(await dialogRows(), { "salsa_16.bvh": { fps: "120", units: "" } }, "the last import's options leaked into this one");
+        await page.click("#import-go");
+        await waitUntil(async () => (await rows()).salsa_16, { what: "salsa_16 in the library" });
+        r = await rows();
+        assert.equal(r.salsa_16.fps, "120", "a later file was played at an earlier file's rate");
+        for (const [name, v] of Object.entries(r)) assert.match(v.fps, /^\d+(\.\d?[1-9])?$/, `${name}: fps shown as ${v.fps}`);
+        // Kept per source in the project (a reload imports each file the same way).
+        const sources = await page.evaluate(() => Object.fromEntries(window.odori.project.project.doc().sources.map((s) => [s.file_name ?? s.fileName, s.options])));
+        assert.equal(sources["salsa_01.bvh"].fps_override ?? null, 60);
+        assert.equal(sources["salsa_01.bvh"].unit_scale ?? null, null);
+        assert.equal(sources["salsa_02.bvh"].fps_override ?? null, null);
+        assert.ok(Math.abs((sources["salsa_02.bvh"].unit_scale ?? 0) - 0.01) < 1e-6, `salsa_02 units: ${JSON.stringify(sources["salsa_02.bvh"])}`);
+        assert.equal(sources["salsa_16.bvh"].fps_override ?? null, null);
+        assert.equal(sources["salsa_16.bvh"].unit_scale ?? null, null);
+        // salsa_16 has done its part: removed, so the library has the rows the later checks expect.
+        await page.click('#library button.remove[aria-label="Remove salsa_16"]');
+        await waitUntil(async () => !(await rows()).salsa_16, { what: "salsa_16 removed" });
+        // Cancel imports nothing of the batch, and says so.
+        const before = await page.evaluate(() => window.odori.library.size);
         await page.setInputFiles("#file-input", SALSA_01);
-        await page.waitForFunction(() => [...document.querySelectorAll("#library tbody tr")].some((tr) => tr.children[0].textContent === "salsa_01"), null, { timeout: 30000 });
-        assert.equal(await page.inputValue("#fps-override"), "", "the override stayed for later files");
-        await page.setInputFiles("#file-input", SALSA_02);
-        await page.waitForFunction(() => [...document.querySelectorAll("#library tbody tr")].some((tr) => tr.children[0].textContent === "salsa_02"), null, { timeout: 30000 });
-        const fps = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll("#library tbody tr")].map((tr) => [tr.children[0].textContent, tr.children[2].textContent])));
-        assert.equal(fps.salsa_01, "60");
-        assert.equal(fps.salsa_02, "120", "a later file was played at the earlier file's override");
-        for (const [name, f] of Object.entries(fps)) assert.match(f, /^\d+(\.\d?[1-9])?$/, `${name}: fps shown as ${f}`);
+        await page.locator("#import-options").waitFor({ state: "visible", timeout: 30000 });
+        await page.click("#import-cancel");
+        await page.locator(".toast", { hasText: "Import cancelled" }).waitFor({ state: "visible", timeout: 10000 });
+        assert.equal(await page.evaluate(() => window.odori.library.size), before);
         // A clip that is not humanoid (a two-bone arm with an end site, at 30 fps): its message
         // counts the joints the table shows, and its frame rate reads 30.
-        await page.setInputFiles("#file-input", { name: "arm.bvh", mimeType: "text/plain", buffer: Buffer.from(ARM_BVH) });
+        await importFiles(page, { name: "arm.bvh", mimeType: "text/plain", buffer: Buffer.from(ARM_BVH) });
         await page.waitForFunction(() => [...document.querySelectorAll("#library tbody tr")].some((tr) => tr.children[1].textContent === "arm.bvh"), null, { timeout: 30000 });
         const arm = await page.evaluate(() => [...document.querySelectorAll("#library tbody tr")].filter((tr) => tr.children[1].textContent === "arm.bvh").map((tr) => ({ fps: tr.children[2].textContent, joints: tr.children[5].textContent, why: tr.children[6].title }))[0]);
         const m = arm.why.match(/among its (\d+) joints/);
         assert.ok(m, `humanoid message: ${arm.why}`);
         assert.equal(m[1], arm.joints, `joints ${arm.joints} vs humanoid message “${arm.why}”`);
         assert.equal(arm.fps, "30");
+        // Toasts of these imports would lie over the library's rows in the next check.
+        await page.evaluate(() => { for (const b of document.querySelectorAll('.toast button[aria-label="Dismiss"]')) b.click(); });
+        await waitUntil(() => page.evaluate(() => !document.querySelector(".toast")), { what: "the import toasts dismissed" });
       });
 
       await t.test("after opening a GLB the table fits its panel, Overlay is clickable, a clip can be removed", async () => {
@@ -192,8 +233,8 @@ for (const backend of Object.keys(BACKENDS)) {
         assert.ok(n > 3);
         const box = rows.nth(2).locator("input[type=checkbox]");
         await box.scrollIntoViewIfNeeded();
-        const hit = await box.evaluate((el) => { const r = el.getBoundingClientRect(); return document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2) === el; });
-        assert.ok(hit, "the Overlay box is covered or cut off");
+        const hit = await box.evaluate((el) => { const r = el.getBoundingClientRect(); const top = document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2); return top === el ? true : `${top ? top.outerHTML.slice(0, 160) : "nothing"} at ${JSON.stringify(r)}`; });
+        assert.equal(hit, true, `the Overlay box is covered or cut off: ${hit}`);
         await box.click();
         const id = Number(await rows.nth(2).getAttribute("data-id"));
         assert.ok((await page.evaluate(() => window.odori.player.overlays)).includes(id));
@@ -365,6 +406,9 @@ for (const backend of Object.keys(BACKENDS)) {
       assert.ok(shown, "no start-up indicator while the engine loads");
       assert.ok(await page.evaluate(() => getComputedStyle(document.querySelector("#startup")).display === "none"), "the start-up indicator stayed");
       assert.ok(Number.isFinite(f.pose) && f.pose > 0);
+      // The goals of issue 13, against what was measured above.
+      assert.ok(f.pose < 1000, `first drawn pose ${f.pose.toFixed(0)} ms after navigation (goal < 1000 ms)`);
+      assert.ok(f.longestBefore <= 200, `a main-thread task of ${f.longestBefore.toFixed(0)} ms before the first pose (goal ≤ 200 ms); long tasks [start, ms]: ${JSON.stringify(f.tasks)}`);
     } finally {
       await browser.close();
     }

@@ -6,7 +6,7 @@ import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
 import { writeFileSync } from "node:fs";
-import { startServer, launch, openApp, canvasPixels, canvasPixelsUntil, waitUntil, countNear, countAll, isOrange, isTeal, isBackground, data, artifacts } from "./harness.mjs";
+import { startServer, launch, openApp, canvasPixels, canvasPixelsUntil, waitUntil, countNear, countAll, isOrange, isTeal, isBackground, data, artifacts, importFiles } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -52,8 +52,7 @@ for (const backend of ["webgl2", "webgpu"]) {
       await canvasPixelsUntil(page, (img) => countAll(img, isOrange) > 300, "the built-in figure drawn", `${backend}-01-builtin.png`);
 
       // A real BVH through the file input, with the salsa frame-rate fix.
-      await page.fill("#fps-override", "60");
-      await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_01.bvh"));
+      await importFiles(page, join(data, "mocap/cmu-salsa/salsa_01.bvh"), { "salsa_01.bvh": { fps: 60 } });
       await page.waitForSelector("#library tbody tr:nth-child(2)", { timeout: 30000 });
       const row = await page.$$eval("#library tbody tr:nth-child(2) td", (tds) => tds.map((t) => t.textContent));
       // Duration spans the frames: (2243 − 1) / 60 = 37.37 s.
@@ -79,7 +78,7 @@ for (const backend of ["webgl2", "webgpu"]) {
       await waitUntil(() => page.evaluate((f0) => Number(document.querySelector("#scrub").value) !== f0, f0), { what: "playback moving the frame counter" });
 
       // Overlay a second clip: two colours in one scene.
-      await page.setInputFiles("#file-input", join(data, "mocap/cmu-salsa/salsa_16.bvh"));
+      await importFiles(page, join(data, "mocap/cmu-salsa/salsa_16.bvh"));
       await page.waitForSelector("#library tbody tr:nth-child(3)");
       await page.click("#library tbody tr:nth-child(2) td:first-child");
       await page.check("#library tbody tr:nth-child(3) input[type=checkbox]");
@@ -89,7 +88,7 @@ for (const backend of ["webgl2", "webgpu"]) {
       assert.ok(countAll(both, isTeal) > 200, "overlaid figure (teal) missing");
 
       // A broken file: message names it, the library keeps its three clips.
-      await page.setInputFiles("#file-input", { name: "broken.bvh", mimeType: "text/plain", buffer: Buffer.from("HIERARCHY\nROOT hip\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition\n") });
+      await importFiles(page, { name: "broken.bvh", mimeType: "text/plain", buffer: Buffer.from("HIERARCHY\nROOT hip\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition\n") });
       await page.waitForSelector("#messages li.error");
       const msg = await page.textContent("#messages li.error");
       assert.match(msg, /^broken\.bvh:\d+:\d+: /);

@@ -117,7 +117,11 @@ export class ProjectSession {
    * library. Returns the library's import report (throws the importer's error).
    */
   importFile(fileName, bytes, options) {
-    const report = this.project.importInto(this.library, fileName, bytes, options && options.fpsOverride ? { fpsOverride: options.fpsOverride } : undefined);
+    // The file's own options (frame rate, units) are kept with its source: a reload imports it the same way.
+    const o = {};
+    if (options && options.fpsOverride) o.fpsOverride = options.fpsOverride;
+    if (options && options.unitScale) o.unitScale = options.unitScale;
+    const report = this.project.importInto(this.library, fileName, bytes, o);
     this.mapClips(report.source, report);
     this.edited();
     return report;

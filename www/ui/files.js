@@ -1,15 +1,33 @@
 // Opening motion files by picker or drag and drop. Reading shows progress; a bad file gets
 // a message naming the file and the problem, and the library keeps what it had. Import
-// options (the BVH fps override) belong to one import: they are read when the files are
-// chosen, said in the message of each file they changed, and then cleared, so a later file
-// is never played at a rate meant for another.
+// options belong to one file: when BVH files are opened, a dialog shows a row per file with
+// its own frame rate (read from its header) and units, and what is chosen there is used for
+// that file only (and kept with it in the project, so a reload imports it the same way).
+// glTF and GLB files state their units (metres) and key times themselves: nothing to ask.
 const ACCEPT = /\.(bvh|glb|gltf)$/i;
+const BVH = /\.bvh$/i;
+
+/** Units a BVH file may be in: metres per file unit ("" = guessed from the skeleton's size). */
+const UNITS = [["", "guess from size"], ["0.01", "centimetres"], ["1", "metres"], ["0.001", "millimetres"], ["0.0254", "inches"]];
+
+/**
+ * The frame rate a BVH file's header states (1 / "Frame Time"), or null when the header cannot
+ * be read. Only a default for the dialog: the engine's parser reads the file itself.
+ */
+export function bvhHeaderFps(bytes) {
+  // The MOTION header follows the hierarchy, which is a few kilobytes even for big skeletons.
+  const head = new TextDecoder().decode(bytes.subarray(0, 1 << 18));
+  const m = head.match(/\bMOTION\s+Frames:\s*\d+\s+Frame\s+Time:\s*([0-9.eE+-]+)/);
+  const secs = m ? Number(m[1]) : NaN;
+  return secs > 0 && Number.isFinite(1 / secs) ? 1 / secs : null;
+}
 
 export class FileLoader {
-  constructor({ library, messages, status, fpsInput, onImported, onFiles, importer }) {
+  constructor({ library, messages, status, optionsDialog, onImported, onFiles, importer }) {
     // `importer(fileName, bytes, options)` → import report: who parses the file (the app's
     // project, which shows its clips in the library); the library's own import otherwise.
-    Object.assign(this, { library, messages, status, fpsInput, onImported, onFiles, importer });
+    // `optionsDialog`: the `<dialog>` asking each BVH file's options (index.html #import-options).
+    Object.assign(this, { library, messages, status, optionsDialog, onImported, onFiles, importer });
     this.queue = Promise.resolve();
   }
 
@@ -33,13 +51,91 @@ export class FileLoader {
     });
   }
 
+  /**
+   * Reads `files`, asks each BVH file's options (one dialog for the batch), then imports them
+   * in order. Resolves when done; a cancelled dialog imports none of the batch.
+   */
   openAll(files) {
     if (this.onFiles) files = this.onFiles(files);
-    const fps = Number(this.fpsInput.value);
-    const options = { fpsOverride: fps > 0 ? fps : undefined };
-    if (files.length) this.fpsInput.value = "";
-    for (const f of files) this.queue = this.queue.then(() => this.open(f, options));
+    if (!files.length) return this.queue;
+    // A batch that fails as a whole is reported, and the next batch still runs.
+    this.queue = this.queue.then(() => this.openBatch(files)).catch((e) => this.messages.error(`Opening files failed: ${e && e.message ? e.message : e}`));
     return this.queue;
+  }
+
+  async openBatch(files) {
+    const read = [];
+    for (const file of files) {
+      if (!ACCEPT.test(file.name)) {
+        this.messages.error(`${file.name}: not a motion file Odori reads (BVH, glTF or GLB)`);
+        continue;
+      }
+      try {
+        read.push({ file, bytes: await this.read(file) });
+      } catch (e) {
+        this.messages.error(`${file.name}: cannot be read (${e && e.message ? e.message : e})`);
+      }
+    }
+    this.status.textContent = "";
+    const options = await this.askOptions(read);
+    if (!options) {
+      this.messages.info(`Import cancelled: ${read.map((r) => r.file.name).join(", ")} not added`);
+      return;
+    }
+    for (let i = 0; i < read.length; i++) await this.open(read[i].file, read[i].bytes, options[i]);
+  }
+
+  /**
+   * The options of each read file: `{ fpsOverride?, unitScale?, headerFps? }`, from the dialog
+   * when a BVH file is among them (null when the person cancels it), else none.
+   */
+  askOptions(read) {
+    const dialog = this.optionsDialog;
+    const rows = read.map(({ file, bytes }) => (BVH.test(file.name) ? { name: file.name, headerFps: bvhHeaderFps(bytes) } : null));
+    if (!dialog || !rows.some(Boolean)) return Promise.resolve(read.map(() => ({})));
+    const body = dialog.querySelector("tbody");
+    body.replaceChildren();
+    const inputs = rows.map((row) => {
+      if (!row) return null;
+      const tr = document.createElement("tr");
+      tr.dataset.file = row.name;
+      const name = document.createElement("th");
+      name.scope = "row";
+      name.textContent = row.name;
+      const fpsCell = document.createElement("td");
+      const fps = Object.assign(document.createElement("input"), { type: "number", className: "import-fps", min: "0.1", max: "1000", step: "any", placeholder: "file's" });
+      fps.setAttribute("aria-label", `Frame rate of ${row.name}, frames per second`);
+      // The file's own rate as the default, to two decimals (1 / 0.008333 s reads 120).
+      if (row.headerFps) fps.value = String(Number(row.headerFps.toFixed(2)));
+      const said = document.createElement("small");
+      said.textContent = row.headerFps ? `file says ${Number(row.headerFps.toFixed(2))}` : "header unreadable";
+      fpsCell.append(fps, said);
+      const unitCell = document.createElement("td");
+      const units = Object.assign(document.createElement("select"), { className: "import-units" });
+      units.setAttribute("aria-label", `Units of ${row.name}`);
+      for (const [value, label] of UNITS) units.append(new Option(label, value));
+      unitCell.append(units);
+      tr.append(name, fpsCell, unitCell);
+      body.append(tr);
+      return { fps, units };
+    });
+    return new Promise((resolve) => {
+      dialog.addEventListener("close", () => {
+        if (dialog.returnValue !== "import") return resolve(null);
+        resolve(rows.map((row, i) => {
+          if (!row) return {};
+          const o = { headerFps: row.headerFps };
+          const fps = Number(inputs[i].fps.value);
+          // Left at the file's own (as shown, rounded): no override, the file's exact rate.
+          const shown = row.headerFps ? Number(row.headerFps.toFixed(2)) : null;
+          if (inputs[i].fps.value !== "" && fps > 0 && fps !== shown) o.fpsOverride = fps;
+          if (inputs[i].units.value) o.unitScale = Number(inputs[i].units.value);
+          return o;
+        }));
+      }, { once: true });
+      dialog.returnValue = "";
+      dialog.showModal();
+    });
   }
 
   async read(file) {
@@ -72,22 +168,21 @@ export class FileLoader {
     }
   }
 
-  async open(file, { fpsOverride } = {}) {
-    if (!ACCEPT.test(file.name)) {
-      this.messages.error(`${file.name}: not a motion file Odori reads (BVH, glTF or GLB)`);
-      return null;
-    }
+  /** Imports one read file with its options; the report, or null after an error message. */
+  async open(file, bytes, { fpsOverride, unitScale, headerFps } = {}) {
     try {
-      const bytes = await this.read(file);
       this.progress(`Parsing ${file.name}…`);
       await new Promise((r) => requestAnimationFrame(() => setTimeout(r, 0)));
-      const bvh = /\.bvh$/i.test(file.name);
-      const options = fpsOverride && bvh ? { fpsOverride } : {};
+      const options = {};
+      if (fpsOverride) options.fpsOverride = fpsOverride;
+      if (unitScale) options.unitScale = unitScale;
       const report = this.importer ? this.importer(file.name, bytes, options) : this.library.importFile(file.name, bytes, options);
       for (const w of report.warnings) this.messages.warning(`${file.name}: ${w}`);
       const n = report.clips.length;
-      const how = options.fpsOverride ? ` (played at ${options.fpsOverride} fps, as stated for this import)` : "";
-      this.messages.info(`${file.name}: ${n} clip${n === 1 ? "" : "s"} added${how}`);
+      const how = [];
+      if (fpsOverride) how.push(`played at ${fpsOverride} fps${headerFps ? ` instead of the file's ${Number(headerFps.toFixed(2))}` : ""}`);
+      if (unitScale) how.push(`in ${UNITS.find(([v]) => Number(v) === unitScale)?.[1] ?? `${unitScale} m units`}`);
+      this.messages.info(`${file.name}: ${n} clip${n === 1 ? "" : "s"} added${how.length ? ` (${how.join(", ")})` : ""}`);
       this.status.textContent = "";
       this.onImported(report, { fileName: file.name, bytes, options });
       return report;

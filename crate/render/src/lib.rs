@@ -7,6 +7,11 @@
 //! texture samples it (group 2) with the file's sampler; until its image arrives (the caller
 //! decodes it and fills [`Renderer::texture_target`]) and for untextured parts, a 1×1 white
 //! texture stands in, so the material's colour alone shows.
+//!
+//! Its pipelines can be made one at a time ([`Renderer::new_deferred`], then
+//! [`Renderer::prepare`]): on WebGL2 each one is a shader compile and link that holds the
+//! thread for tens of milliseconds, so a page starting up makes them in separate tasks, and a
+//! pipeline nothing has asked for yet is made when it is first drawn with.
 
 mod camera;
 pub use camera::OrbitCamera;
@@ -67,6 +72,21 @@ pub struct Figure<'a> {
     pub head: Option<usize>,
 }
 
+/// The renderer's pipelines, in the order a first frame needs them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PipelineKind {
+    /// The ground grid.
+    Lines,
+    /// Stick figures (capsules).
+    Figure,
+    /// GPU-skinned meshes (characters).
+    Mesh,
+}
+
+impl PipelineKind {
+    pub const ALL: [PipelineKind; 3] = [PipelineKind::Lines, PipelineKind::Figure, PipelineKind::Mesh];
+}
+
 /// A skinned mesh uploaded once.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MeshHandle(usize);
@@ -125,9 +145,13 @@ pub struct Renderer {
     texture_layout: wgpu::BindGroupLayout,
     /// The 1×1 white texture untextured parts (and textures still loading) are drawn with.
     white: wgpu::BindGroup,
-    line_pipeline: wgpu::RenderPipeline,
-    figure_pipeline: wgpu::RenderPipeline,
-    mesh_pipeline: wgpu::RenderPipeline,
+    basic_layout: wgpu::PipelineLayout,
+    mesh_layout: wgpu::PipelineLayout,
+    format: wgpu::TextureFormat,
+    /// Made on demand (`prepare`): `None` until then.
+    line_pipeline: Option<wgpu::RenderPipeline>,
+    figure_pipeline: Option<wgpu::RenderPipeline>,
+    mesh_pipeline: Option<wgpu::RenderPipeline>,
     grid: wgpu::Buffer,
     grid_count: u32,
     instances: wgpu::Buffer,
@@ -157,19 +181,19 @@ fn grid_lines() -> Vec<LineVertex> {
 }
 
 impl Renderer {
-    /// Builds the pipelines for a target of `format`.
+    /// Builds the renderer and all its pipelines for a target of `format`.
     pub fn new(device: wgpu::Device, queue: wgpu::Queue, format: wgpu::TextureFormat) -> Renderer {
-        let common = include_str!("shaders/common.wgsl");
-        let module = |name: &str, src: &str| {
-            device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(name),
-                source: wgpu::ShaderSource::Wgsl(format!("{common}\n{src}").into()),
-            })
-        };
-        let lines_sm = module("lines", include_str!("shaders/lines.wgsl"));
-        let figure_sm = module("figure", include_str!("shaders/figure.wgsl"));
-        let mesh_sm = module("mesh", include_str!("shaders/mesh.wgsl"));
+        let mut r = Renderer::new_deferred(device, queue, format);
+        for kind in PipelineKind::ALL {
+            r.prepare(kind);
+        }
+        r
+    }
 
+    /// Builds the renderer for a target of `format` without its pipelines: each is made by
+    /// [`Renderer::prepare`], or when first drawn with. The buffers and layouts made here are
+    /// cheap; the pipelines are not (a WGSL parse, and on WebGL2 a GLSL compile and link each).
+    pub fn new_deferred(device: wgpu::Device, queue: wgpu::Queue, format: wgpu::TextureFormat) -> Renderer {
         let uniform_entry = |visibility| wgpu::BindGroupLayoutEntry {
             binding: 0,
             visibility,
@@ -229,72 +253,6 @@ impl Renderer {
             bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout), Some(&texture_layout)],
             immediate_size: 0,
         });
-        let depth_state = Some(wgpu::DepthStencilState {
-            format: DEPTH,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        });
-        let pipeline = |label: &str,
-                        layout: &wgpu::PipelineLayout,
-                        sm: &wgpu::ShaderModule,
-                        buffers: &[Option<wgpu::VertexBufferLayout>],
-                        topology: wgpu::PrimitiveTopology,
-                        cull: Option<wgpu::Face>| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(layout),
-                vertex: wgpu::VertexState { module: sm, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers },
-                primitive: wgpu::PrimitiveState { topology, cull_mode: cull, ..Default::default() },
-                depth_stencil: depth_state.clone(),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: sm,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
-        let line_pipeline = pipeline(
-            "lines",
-            &basic_layout,
-            &lines_sm,
-            &[Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<LineVertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
-            })],
-            wgpu::PrimitiveTopology::LineList,
-            None,
-        );
-        let figure_pipeline = pipeline(
-            "figure",
-            &basic_layout,
-            &figure_sm,
-            &[Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<CapsuleInstance>() as u64,
-                step_mode: wgpu::VertexStepMode::Instance,
-                attributes: &wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4],
-            })],
-            wgpu::PrimitiveTopology::TriangleList,
-            None,
-        );
-        let mesh_pipeline = pipeline(
-            "mesh",
-            &mesh_layout,
-            &mesh_sm,
-            &[Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<MeshVertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x2],
-            })],
-            wgpu::PrimitiveTopology::TriangleList,
-            None,
-        );
         let grid_v = grid_lines();
         let grid = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("grid"),
@@ -332,9 +290,12 @@ impl Renderer {
             palette_layout,
             texture_layout,
             white,
-            line_pipeline,
-            figure_pipeline,
-            mesh_pipeline,
+            basic_layout,
+            mesh_layout,
+            format,
+            line_pipeline: None,
+            figure_pipeline: None,
+            mesh_pipeline: None,
             grid,
             grid_count: grid_v.len() as u32,
             instances,
@@ -345,6 +306,97 @@ impl Renderer {
             scratch: Vec::new(),
             clear: wgpu::Color { r: 0.055, g: 0.06, b: 0.075, a: 1.0 },
         }
+    }
+
+    /// Makes pipeline `kind` if it is not made yet.
+    pub fn prepare(&mut self, kind: PipelineKind) {
+        let made = match kind {
+            PipelineKind::Lines => self.line_pipeline.is_some(),
+            PipelineKind::Figure => self.figure_pipeline.is_some(),
+            PipelineKind::Mesh => self.mesh_pipeline.is_some(),
+        };
+        if made {
+            return;
+        }
+        let p = self.build_pipeline(kind);
+        match kind {
+            PipelineKind::Lines => self.line_pipeline = Some(p),
+            PipelineKind::Figure => self.figure_pipeline = Some(p),
+            PipelineKind::Mesh => self.mesh_pipeline = Some(p),
+        }
+    }
+
+    /// Whether pipeline `kind` is made.
+    pub fn is_prepared(&self, kind: PipelineKind) -> bool {
+        match kind {
+            PipelineKind::Lines => self.line_pipeline.is_some(),
+            PipelineKind::Figure => self.figure_pipeline.is_some(),
+            PipelineKind::Mesh => self.mesh_pipeline.is_some(),
+        }
+    }
+
+    fn build_pipeline(&self, kind: PipelineKind) -> wgpu::RenderPipeline {
+        let device = &self.device;
+        let common = include_str!("shaders/common.wgsl");
+        let (label, src, layout, buffer) = match kind {
+            PipelineKind::Lines => (
+                "lines",
+                include_str!("shaders/lines.wgsl"),
+                &self.basic_layout,
+                wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<LineVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
+                },
+            ),
+            PipelineKind::Figure => (
+                "figure",
+                include_str!("shaders/figure.wgsl"),
+                &self.basic_layout,
+                wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<CapsuleInstance>() as u64,
+                    step_mode: wgpu::VertexStepMode::Instance,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4],
+                },
+            ),
+            PipelineKind::Mesh => (
+                "mesh",
+                include_str!("shaders/mesh.wgsl"),
+                &self.mesh_layout,
+                wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<MeshVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x2],
+                },
+            ),
+        };
+        let topology = if kind == PipelineKind::Lines { wgpu::PrimitiveTopology::LineList } else { wgpu::PrimitiveTopology::TriangleList };
+        let sm = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(format!("{common}\n{src}").into()),
+        });
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState { module: &sm, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers: &[Some(buffer)] },
+            primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &sm,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState { format: self.format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
     }
 
     pub fn device(&self) -> &wgpu::Device {
@@ -523,6 +575,14 @@ impl Renderer {
             self.queue.write_buffer(&self.palettes[slot].tint, 0, bytemuck::cast_slice(&m.tint));
         }
 
+        // Pipelines not made yet are made now, for what this frame draws only.
+        self.prepare(PipelineKind::Lines);
+        if !drawable.is_empty() {
+            self.prepare(PipelineKind::Mesh);
+        }
+        if !self.scratch.is_empty() {
+            self.prepare(PipelineKind::Figure);
+        }
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         {
             let depth_view = &self.depth.as_ref().map(|d| &d.0).expect("depth texture was just made");
@@ -544,11 +604,13 @@ impl Renderer {
                 multiview_mask: None,
             });
             pass.set_bind_group(0, &self.camera_bg, &[]);
-            pass.set_pipeline(&self.line_pipeline);
-            pass.set_vertex_buffer(0, self.grid.slice(..));
-            pass.draw(0..self.grid_count, 0..1);
-            if !drawable.is_empty() {
-                pass.set_pipeline(&self.mesh_pipeline);
+            if let Some(lines) = &self.line_pipeline {
+                pass.set_pipeline(lines);
+                pass.set_vertex_buffer(0, self.grid.slice(..));
+                pass.draw(0..self.grid_count, 0..1);
+            }
+            if let (false, Some(mesh)) = (drawable.is_empty(), &self.mesh_pipeline) {
+                pass.set_pipeline(mesh);
                 for (slot, m) in drawable.iter().enumerate() {
                     let g = &self.meshes[m.mesh.0];
                     pass.set_bind_group(1, &self.palettes[slot].bind_group, &[]);
@@ -561,8 +623,8 @@ impl Renderer {
                     }
                 }
             }
-            if !self.scratch.is_empty() {
-                pass.set_pipeline(&self.figure_pipeline);
+            if let (false, Some(figure)) = (self.scratch.is_empty(), &self.figure_pipeline) {
+                pass.set_pipeline(figure);
                 pass.set_vertex_buffer(0, self.instances.slice(..));
                 pass.draw(0..6, 0..self.scratch.len() as u32);
             }

@@ -6,6 +6,11 @@
 //! character take), so the figure on screen is what an export gives. The retargeted clips are
 //! kept per library clip and made again when that clip changes (its revision) or the
 //! character does; a figure drawn with style "stick" is the stick figure as before.
+//!
+//! `Viewer.create` starts the renderer a step per task of the event loop (the canvas and
+//! adapter, the device, then each pipeline the first frame draws with, made and drawn with
+//! once), so no one task holds a page's main thread for the sum of them; the skinned-mesh
+//! pipeline is made by `warmUp` or when a character is first drawn.
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
@@ -18,7 +23,7 @@ use odori_core::import::{MeshTexture, SkinnedMesh};
 use odori_core::library::body::builtin_body;
 use odori_core::retarget::{is_canonical, to_canonical};
 use odori_core::Clip;
-use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, Renderer, FIGURE_COLORS};
+use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, PipelineKind, Renderer, FIGURE_COLORS};
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 use web_sys::HtmlCanvasElement;
@@ -113,6 +118,45 @@ pub struct Viewer {
     /// Library clips on `body`, by clip id.
     on_body: HashMap<u32, OnBody>,
     last_drawn: Vec<Drawn>,
+}
+
+/// Resolves in a later task of the event loop (a `setTimeout(0)`, in a page or a worker):
+/// awaiting it ends the current task, so the browser can paint and handle input between
+/// start-up steps. A microtask (an already resolved promise) would not.
+async fn next_task() {
+    let promise = js_sys::Promise::new(&mut |resolve, _reject| {
+        let global = js_sys::global();
+        let set_timeout = js_sys::Reflect::get(&global, &JsValue::from_str("setTimeout")).and_then(|f| f.dyn_into::<js_sys::Function>());
+        match set_timeout {
+            Ok(f) => {
+                let _ = f.call2(&global, &resolve, &JsValue::from(0));
+            }
+            // No timer in this global: go on at once rather than never.
+            Err(_) => {
+                let _ = resolve.call0(&JsValue::UNDEFINED);
+            }
+        }
+    });
+    let _ = wasm_bindgen_futures::JsFuture::from(promise).await;
+}
+
+/// Waits, a task at a time, until the GPU has done the work submitted so far (at most about
+/// half a second). A browser runs the GPU work in another process; a task that follows before
+/// it is done blocks on it at its first call that needs an answer, so a start-up step that
+/// only yields would still hand its GPU cost to the next step's task.
+async fn gpu_done(device: &wgpu::Device, queue: &wgpu::Queue) {
+    let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flag = done.clone();
+    queue.on_submitted_work_done(move || flag.store(true, std::sync::atomic::Ordering::Release));
+    for _ in 0..120 {
+        next_task().await;
+        // WebGL2: reads the submission's fence without blocking; WebGPU: nothing (the browser
+        // calls back from its event loop).
+        let _ = device.poll(wgpu::PollType::Poll);
+        if done.load(std::sync::atomic::Ordering::Acquire) {
+            break;
+        }
+    }
 }
 
 fn gpu_err(msg: impl Into<String>) -> OdoriError {
@@ -242,6 +286,7 @@ impl Viewer {
         let surface = instance
             .create_surface(wgpu::SurfaceTarget::Canvas(canvas))
             .map_err(|e| gpu_err(format!("cannot draw on the canvas: {e}")))?;
+        next_task().await;
         let adapter = instance
             .request_adapter(&wgpu::RequestAdapterOptions {
                 power_preference: wgpu::PowerPreference::HighPerformance,
@@ -264,6 +309,7 @@ impl Viewer {
             })
             .await
             .map_err(|e| gpu_err(format!("cannot open the graphics device: {e}")))?;
+        next_task().await;
         let caps = surface.get_capabilities(&adapter);
         let format = *caps.formats.first().ok_or_else(|| gpu_err("the canvas offers no texture format"))?;
         let view_format = format.add_srgb_suffix();
@@ -279,8 +325,8 @@ impl Viewer {
             ..surface.get_default_config(&adapter, width, height).ok_or_else(|| gpu_err("the canvas cannot be configured"))?
         };
         surface.configure(&device, &config);
-        let renderer = Renderer::new(device, queue, view_format);
-        Ok(Viewer {
+        let renderer = Renderer::new_deferred(device, queue, view_format);
+        let mut viewer = Viewer {
             surface,
             config,
             view_format,
@@ -297,7 +343,29 @@ impl Viewer {
             body: Body::Stick,
             on_body: HashMap::new(),
             last_drawn: Vec::new(),
-        })
+        };
+        // WebGL2: the pipelines the first frame draws with, each made and then drawn with once, a
+        // task for each step: on WebGL2 the browser's GL (ANGLE) compiles a pipeline's GPU code only
+        // when it is first drawn with, so without these frames the first pose's task would pay
+        // for all of it. The frames show the empty floor (the page's start-up cover hides it).
+        // The figure's frame draws one capsule of zero radius: nothing is seen. Each frame's GPU
+        // work is waited for (without blocking) before the next step.
+        let nothing = [Vec3::ZERO];
+        let invisible = Figure { joints: &nothing, bones: &[], color: [0.0; 4], radius: 0.0, head: None };
+        // WebGPU compiles pipelines in the GPU process without holding the page's thread: there
+        // the two are made at once and the first frame is not waited for.
+        for kind in [PipelineKind::Lines, PipelineKind::Figure] {
+            if backend == "webgpu" {
+                viewer.renderer.prepare(kind);
+                continue;
+            }
+            next_task().await;
+            viewer.renderer.prepare(kind);
+            next_task().await;
+            viewer.present(if kind == PipelineKind::Figure { std::slice::from_ref(&invisible) } else { &[] }, &[]);
+            gpu_done(viewer.renderer.device(), viewer.renderer.queue()).await;
+        }
+        Ok(viewer)
     }
 
     /// Gives the graphics device back now instead of when the garbage collector gets to it
@@ -306,6 +374,15 @@ impl Viewer {
     /// also loses the canvas's context (`WEBGL_lose_context`), which wgpu does not do.
     pub fn release(self) {
         self.renderer.device().destroy();
+    }
+
+    /// Makes what the first frame did not need (the skinned-mesh pipeline), so the first
+    /// character drawn does not pay for it. For when the page is idle after its first frame.
+    #[wasm_bindgen(js_name = warmUp)]
+    pub fn warm_up(&mut self) {
+        for kind in PipelineKind::ALL {
+            self.renderer.prepare(kind);
+        }
     }
 
     /// "webgpu" or "webgl2".
@@ -569,19 +646,26 @@ impl Viewer {
             }
         }
 
+        self.present(&figures, &meshes);
+        Ok(())
+    }
+}
+
+impl Viewer {
+    /// Renders `figures` and `meshes` to the canvas with the current camera.
+    fn present(&mut self, figures: &[Figure], meshes: &[MeshDraw]) {
         let frame = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 self.surface.configure(self.renderer.device(), &self.config);
-                return Ok(());
+                return;
             }
-            _ => return Ok(()),
+            _ => return,
         };
         self.take_decoded();
         let view = frame.texture.create_view(&wgpu::TextureViewDescriptor { format: Some(self.view_format), ..Default::default() });
-        self.renderer.render(&view, self.config.width, self.config.height, &self.camera, &figures, &meshes);
+        self.renderer.render(&view, self.config.width, self.config.height, &self.camera, figures, meshes);
         self.renderer.queue().present(frame);
-        Ok(())
     }
 }
 
