@@ -7,7 +7,7 @@
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
-import { startServer, launch, openApp, data } from "./harness.mjs";
+import { startServer, launch, openApp, data, importFiles } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -49,8 +49,7 @@ test("search index: stored in IndexedDB, reopened instead of rebuilt, same resul
     await openApp(page, server, "webgl2");
     await page.waitForFunction(() => document.body.dataset.project === "ready", null, { timeout: 120000 });
     const t0 = await page.evaluate(() => Date.now());
-    await page.fill("#fps-override", "60");
-    await page.setInputFiles("#file-input", [join(data, "mocap/cmu-salsa/salsa_01.bvh"), join(data, "mocap/cmu-salsa/salsa_02.bvh")]);
+    await importFiles(page, [join(data, "mocap/cmu-salsa/salsa_01.bvh"), join(data, "mocap/cmu-salsa/salsa_02.bvh")], { "salsa_01.bvh": { fps: 60 }, "salsa_02.bvh": { fps: 60 } });
     const built = await indexed(page, 3);
     assert.equal(built.built, 3, `a first visit indexes every clip: ${JSON.stringify(built)}`);
     assert.equal(built.restored, 0);
@@ -71,8 +70,7 @@ test("search index: stored in IndexedDB, reopened instead of rebuilt, same resul
 
     // The library changes: one clip more. Only it is indexed; the index is stored under a new key.
     const t1 = await page.evaluate(() => Date.now());
-    await page.fill("#fps-override", "60");
-    await page.setInputFiles("#file-input", [join(data, "mocap/cmu-salsa/salsa_03.bvh")]);
+    await importFiles(page, [join(data, "mocap/cmu-salsa/salsa_03.bvh")], { "salsa_03.bvh": { fps: 60 } });
     const grown = await indexed(page, 4);
     assert.equal(grown.built, 1, `only the new clip is indexed: ${JSON.stringify(grown)}`);
     const saved2 = await stored(page);

