@@ -35,6 +35,8 @@ error_kinds! {
     "search": "search by example failed (bad query or parameters)",
     "query-too-long": "search: the query's shortest admissible match (half its length) is longer than every clip",
     "cancelled": "search cancelled by its progress callback",
+    "index-version": "search: a stored index of another format version (it is built again)",
+    "index-corrupt": "search: stored index bytes that are damaged or truncated (it is built again)",
     "callback": "a progress callback threw: the work stopped (the message is the callback's)",
     "music": "song analysis failed (bad envelope, samples or correction)",
     "choreo": "choreography: no bars yet, clip already added, bad bar or segment",

@@ -24,7 +24,9 @@ use odori_core::library::body::builtin_body;
 use odori_core::retarget::{is_canonical, to_canonical};
 use odori_core::Clip;
 use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, PipelineKind, Renderer, FIGURE_COLORS};
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
+#[cfg(feature = "authoring")]
+use serde::Serialize;
 use wasm_bindgen::prelude::*;
 use web_sys::HtmlCanvasElement;
 
@@ -66,9 +68,11 @@ struct OnBody {
     clip: Option<Rc<Clip>>,
 }
 
-/// How one figure was last drawn (`lastDrawn`, for tests and labels).
-#[derive(Serialize, Clone)]
-#[serde(rename_all = "camelCase")]
+/// How one figure was last drawn (`lastDrawn`, for tests and labels; the player build leaves
+/// `lastDrawn` and `figureJoints` out, for size).
+#[derive(Clone)]
+#[cfg_attr(feature = "authoring", derive(Serialize), serde(rename_all = "camelCase"))]
+#[cfg_attr(not(feature = "authoring"), allow(dead_code))]
 struct Drawn {
     clip: u32,
     time_secs: f32,
@@ -76,6 +80,7 @@ struct Drawn {
     body: &'static str,
 }
 
+#[cfg(feature = "authoring")]
 #[derive(Serialize)]
 #[serde(rename_all = "camelCase")]
 struct FigureJoints {
@@ -461,6 +466,7 @@ impl Viewer {
     /// World joint positions of clip `clip` at `timeSecs` as the viewer draws it (style
     /// "auto"): on the chosen body when it plays that clip, else the clip's own skeleton.
     /// `{ names, positions (x, y, z per joint, metres), body }`; `body` as in `lastDrawn`.
+    #[cfg(feature = "authoring")]
     #[wasm_bindgen(js_name = figureJoints, unchecked_return_type = "FigureJoints")]
     pub fn figure_joints(&mut self, library: &Library, clip: u32, time_secs: f32) -> Result<JsValue, OdoriError> {
         let e = library.entry(clip)?;
@@ -486,6 +492,7 @@ impl Viewer {
 
     /// How each figure of the last `draw` was drawn: `[{ clip, timeSecs, body }]`, body
     /// "own" (the clip's mesh), "character", "builtin" or "stick".
+    #[cfg(feature = "authoring")]
     #[wasm_bindgen(js_name = lastDrawn, unchecked_return_type = "DrawnFigure[]")]
     pub fn last_drawn(&self) -> JsValue {
         crate::error::to_js(&self.last_drawn)
