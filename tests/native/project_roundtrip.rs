@@ -147,6 +147,11 @@ fn random_edit(p: &mut Project, rng: &mut Rng, log: &mut Vec<String>) {
             let c = salsa_clip(p);
             p.set_character(c)
         }
+        // Stick figures chosen over any body, now and then.
+        18 if rng.below(3) == 0 => {
+            p.set_stick_figures();
+            Ok(())
+        }
         17 => match (robot_clip(p), salsa_clip(p)) {
             // The character plays a clip of the project, or a move made in the page.
             (Some(robot), Some(salsa)) if rng.below(2) == 0 => p.put_on(robot, Some(salsa), None).map(|_| ()),
@@ -536,6 +541,34 @@ fn the_character_and_put_on_clips_are_kept() {
     q.remove_source(glb).expect("remove the robot");
     assert!(q.doc().worn.is_empty() && q.doc().character.is_none());
     assert!(q.undo() && q.doc().worn.len() == 1 && q.doc().character == Some(robot));
+}
+
+/// What the figures are drawn on: a new project (and a file written before the choice) has no
+/// choice, which the page shows as the built-in body; stick figures are a choice of their own,
+/// kept in the file, undone like any edit, ended by choosing a character. A file that never
+/// chose stick figures is written without the field (the bytes of older files stay).
+#[test]
+fn stick_figures_are_a_kept_choice_and_no_choice_is_the_builtin_body() {
+    let mut p = sample_project();
+    assert!(!p.doc().stick_figures && p.doc().character.is_none(), "a new project has no choice");
+    let manifest = |p: &Project| String::from_utf8(project::file::manifest_json(p)).unwrap();
+    assert!(!manifest(&p).contains("stickFigures"), "no choice: the field is not written");
+    p.set_stick_figures();
+    assert!(p.doc().stick_figures);
+    assert!(manifest(&p).contains("\"stickFigures\":true"));
+    let bytes = project::save(&p).expect("save");
+    let mut q = project::open(&bytes).expect("open").project;
+    assert!(q.doc().stick_figures && q.doc().character.is_none(), "kept in the file");
+    // A character chosen ends stick figures; undo brings them back.
+    let glb = q.add_source("RobotExpressive.glb", glb(), ImportOptions::default()).expect("glb").id;
+    let robot = ClipRef { source: glb, clip: 0 };
+    q.set_character(Some(robot)).expect("character");
+    assert!(!q.doc().stick_figures && q.doc().character == Some(robot));
+    assert!(q.undo() && q.doc().stick_figures && q.doc().character.is_none());
+    // The built-in body chosen again (no character, no stick figures) is the new project's state.
+    q.set_character(None).expect("built-in body");
+    assert!(!q.doc().stick_figures && q.doc().character.is_none());
+    assert!(q.undo() && q.doc().stick_figures, "one undo step each");
 }
 
 /// The project's cache of parsed files forgets a file once the document no longer names it

@@ -290,9 +290,18 @@ impl Project {
         self.changed(())
     }
 
-    /// The character (`{ source, clip }`, or undefined for the stick figure).
+    /// What the dance is shown on: a character (`{ source, clip }`), `"stick"` (stick
+    /// figures), or undefined/null (the built-in body, as in a new project). Kept in
+    /// `doc().character` and `doc().stickFigures`.
     #[wasm_bindgen(js_name = setCharacter)]
-    pub fn set_character(&mut self, clip: JsValue) -> Result<(), OdoriError> {
+    pub fn set_character(
+        &mut self,
+        #[wasm_bindgen(unchecked_param_type = "ClipRef | \"stick\" | null | undefined")] clip: JsValue,
+    ) -> Result<(), OdoriError> {
+        if clip.as_string().as_deref() == Some("stick") {
+            self.inner.set_stick_figures();
+            return Ok(self.changed(()));
+        }
         let clip: Option<ClipRef> = if clip.is_undefined() || clip.is_null() { None } else { Some(arg(clip, "clip")?) };
         self.inner.set_character(clip)?;
         Ok(self.changed(()))

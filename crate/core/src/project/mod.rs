@@ -204,7 +204,14 @@ pub struct ProjectDoc {
     pub dance: DanceDoc,
     pub tags: Vec<Tagging>,
     pub texts: Vec<String>,
+    /// The imported character the dance is shown on; `None` with `stick_figures` false is the
+    /// built-in body (a new project's, and what a project made before the choice existed
+    /// shows).
     pub character: Option<ClipRef>,
+    /// Stick figures chosen over any body (absent, read as false, in files written before it
+    /// existed and whenever it is false, so those files keep their bytes).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub stick_figures: bool,
     pub camera: Option<Camera>,
     /// Clips put on a character, in the order made (absent in files written before it
     /// existed, which read as none: no schema step needed).
@@ -673,15 +680,25 @@ impl Project {
         self.commit(doc);
     }
 
-    /// The character the dance is shown on (`None`: the stick figure). Undoable.
+    /// The character the dance is shown on (`None`: the built-in body). Undoable.
     pub fn set_character(&mut self, clip: Option<ClipRef>) -> Result<(), ProjectError> {
         if let Some(c) = clip {
             self.check_clip(c)?;
         }
         let mut doc = self.doc.clone();
         doc.character = clip;
+        doc.stick_figures = false;
         self.commit(doc);
         Ok(())
+    }
+
+    /// Stick figures instead of any body (the built-in one or a character). Undoable; a
+    /// character chosen after it ([`Project::set_character`]) ends it.
+    pub fn set_stick_figures(&mut self) {
+        let mut doc = self.doc.clone();
+        doc.character = None;
+        doc.stick_figures = true;
+        self.commit(doc);
     }
 
     /// Puts a motion on a character (an imported skinned humanoid): `motion` is a clip of a
