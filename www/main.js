@@ -111,6 +111,11 @@ async function main() {
   // The chosen character and the clips put on it are project edits (kept, undone, saved).
   exporter.wear = (id, character) => session.putOn(id, character);
   exporter.onCharacter = (id) => session.setCharacter(id);
+  // Every figure has a body from the first pose: the built-in one, unless the project chose
+  // stick figures (an imported character it chose follows once its file is shown, `reconcile`).
+  const firstBody = restored && restored.stickFigures ? null : "builtin";
+  viewer.setCharacter(library, firstBody);
+  exporter.character.value = firstBody ?? "";
 
   // The app opens on the engine's own demo clip: something moves with no file. Only what the
   // first pose needs runs before it; the rest waits for it (see `afterFirstPose`).

@@ -10,7 +10,7 @@ import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { join } from "node:path";
 import { readFileSync } from "node:fs";
-import { startServer, launch, openApp, canvasPixels, countNear, isOrange, isBackground, waitUntil, data, artifacts } from "./harness.mjs";
+import { startServer, launch, openApp, canvasPixels, countNear, countAll, isOrange, isWarmFigure, isBackground, waitUntil, data, artifacts } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -25,12 +25,75 @@ async function projected(page, joints) {
   }, joints);
 }
 
+/**
+ * Draws the player's figures (paused at `time`, when given) until the viewer has made every
+ * clip it leaves for between frames (`bodiesPending`: a long clip on the body, such as the
+ * dance or a text animation, is not retargeted inside a draw); returns how they were drawn.
+ */
+async function settledDraw(page, time) {
+  await waitUntil(() => page.evaluate((t) => {
+    const { player, viewer } = window.odori;
+    player.pause();
+    if (t != null) player.time = t;
+    player.drawNow();
+    return viewer.bodiesPending === 0;
+  }, time), { what: "the figures made on the chosen body" });
+  return page.evaluate(() => window.odori.viewer.lastDrawn());
+}
+
 function coverage(img, pts, pred, r = 3) {
   const inside = pts.filter(([x, y]) => x > r && y > r && x < img.width - r && y < img.height - r);
   return { inside: inside.length, hit: inside.filter(([x, y]) => countNear(img, x, y, r, pred) > 0).length };
 }
 
 for (const backend of ["webgl2", "webgpu"]) {
+  test(`a fresh page opens on the built-in body on ${backend}; stick figures are a choice it keeps`, async () => {
+    const { browser, page, logs } = await launch(backend);
+    try {
+      await openApp(page, server, backend);
+      await page.waitForFunction(() => document.body.dataset.project === "ready", null, { timeout: 90000 });
+      assert.equal(await page.evaluate(() => document.querySelector("#character").value), "builtin", "the Character menu shows the built-in body");
+      assert.equal(await page.evaluate(() => window.odori.viewer.character), "builtin");
+      // The demo clip, paused, on the body: the skin covers its joints, and it fills far more
+      // of the canvas than the same pose as a stick figure.
+      const drawn = await settledDraw(page, 0.5);
+      assert.deepEqual(drawn.map((d) => d.body), ["builtin"], "the first figure is drawn on the built-in body");
+      const fig = await page.evaluate(() => { const { viewer, library, player } = window.odori; return viewer.figureJoints(library, player.clip, 0.5); });
+      assert.equal(fig.body, "builtin");
+      const body = await canvasPixels(page, `${backend}-fresh-builtin-body.png`);
+      const cov = coverage(body, await projected(page, fig.positions), (c) => !isBackground(c));
+      assert.ok(cov.inside > 10 && cov.hit >= cov.inside * 0.8, `the body drawn at ${cov.hit} of ${cov.inside} projected joints`);
+      await page.check("#stick-figure");
+      assert.equal(await page.evaluate(() => window.odori.viewer.lastDrawn()[0].body), "stick", "stick figures are one click away");
+      const sticks = await canvasPixels(page, `${backend}-fresh-stick.png`);
+      // Figure pixels (warm: the clay body, the orange sticks; not the grey floor's lines).
+      const [bodyPx, stickPx] = [countAll(body, isWarmFigure), countAll(sticks, isWarmFigure)];
+      console.log(`${backend}: fresh page: the built-in body covers ${bodyPx} px, the same pose as sticks ${stickPx} px`);
+      assert.ok(bodyPx > 2 * stickPx, `the body (${bodyPx} px) is drawn, not a stick figure (${stickPx} px)`);
+      await page.uncheck("#stick-figure");
+      // Stick figures chosen in the menu are the project's choice: kept across a reload.
+      await page.selectOption("#character", "");
+      assert.equal(await page.evaluate(() => window.odori.viewer.character), null);
+      assert.equal(await page.evaluate(() => window.odori.project.project.doc().stickFigures), true, "the project keeps stick figures");
+      await page.evaluate(() => window.odori.project.store.flush()); // the autosave, written
+      await page.reload();
+      await page.waitForFunction(() => document.body.dataset.ready === "1" && document.body.dataset.project === "ready", null, { timeout: 90000 });
+      const after = await settledDraw(page, 0.5);
+      assert.deepEqual(after.map((d) => d.body), ["stick"], "after a reload: stick figures, as chosen");
+      assert.equal(await page.evaluate(() => document.querySelector("#character").value), "");
+      // And the built-in body chosen again is kept as the project's default (no stick figures).
+      await page.selectOption("#character", "builtin");
+      assert.equal(await page.evaluate(() => window.odori.project.project.doc().stickFigures ?? false), false);
+      await page.evaluate(() => window.odori.project.store.flush());
+      await page.reload();
+      await page.waitForFunction(() => document.body.dataset.ready === "1" && document.body.dataset.project === "ready", null, { timeout: 90000 });
+      assert.deepEqual((await settledDraw(page, 0.5)).map((d) => d.body), ["builtin"], "after a reload: the built-in body");
+      assert.ok(!logs.some((l) => l.startsWith("[pageerror]")), logs.join("\n"));
+    } finally {
+      await browser.close();
+    }
+  });
+
   test(`textured character on ${backend}: the Fox is drawn with its base-colour texture`, async () => {
     const { browser, page, logs } = await launch(backend);
     try {
@@ -86,6 +149,8 @@ for (const backend of ["webgl2", "webgpu"]) {
       await page.click("#dance-play");
       const danceId = await page.evaluate(() => window.odori.choreo.danceId);
       await waitUntil(() => page.evaluate(() => window.odori.songPlayer.playing && window.odori.songPlayer.position() > 1.0), { what: "the song playing past 1 s", timeoutMs: 60000 });
+      // The dance is put on Xbot between frames (not in one): until then it is drawn as before.
+      await waitUntil(() => page.evaluate(() => window.odori.viewer.bodiesPending === 0 && window.odori.viewer.lastDrawn()[0]?.body === "character"), { what: "the dance made on Xbot", timeoutMs: 60000 });
       // Read the last drawn figure and the song clock in one animation frame, after the
       // player's tick; polled until several frames agree (a loaded machine skips frames).
       const lags = [];
@@ -135,7 +200,7 @@ for (const backend of ["webgl2", "webgpu"]) {
       // The six candidates of a bar are drawn on the character.
       await page.click('#dance-bars [data-bar="3"]');
       await page.waitForFunction(() => document.querySelector("#dance").dataset.candidates === "6");
-      const cands = await page.evaluate(() => { const p = window.odori.player; p.pause(); p.time = 0.5; p.drawNow(); return window.odori.viewer.lastDrawn(); });
+      const cands = await settledDraw(page, 0.5);
       assert.equal(cands.length, 6);
       assert.ok(cands.every((d) => d.body === "character"), `candidates: ${JSON.stringify(cands)}`);
       // Each skinned candidate takes a wash of its chip's colour: the first (orange) is
@@ -154,7 +219,7 @@ for (const backend of ["webgl2", "webgpu"]) {
       // A text animation is drawn on it; so is everything on the built-in body.
       await page.fill("#text-input", "Taro runs, then kicks the ball.");
       await page.click("#text-go");
-      const text = await page.evaluate(() => { const p = window.odori.player; p.pause(); p.time = 1.0; p.drawNow(); return window.odori.viewer.lastDrawn(); });
+      const text = await settledDraw(page, 1.0);
       assert.equal(text[0].clip, await page.evaluate(() => window.odori.text.clipId));
       assert.equal(text[0].body, "character", `text animation: ${JSON.stringify(text)}`);
       await page.selectOption("#character", "builtin");

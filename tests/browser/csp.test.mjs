@@ -4,7 +4,7 @@
 // any other origin (fetch, WebSocket, image, beacon) is refused by the policy.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
-import { startServer, launch, openApp, canvasPixels, countAll, isOrange } from "./harness.mjs";
+import { startServer, launch, openApp, canvasPixels, countAll, isWarmFigure } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -22,7 +22,7 @@ test("csp: the app works with no connection outside its own files", async () => 
     assert.match(policy, /connect-src 'self'/);
     assert.match(policy, /default-src 'none'/);
     await page.waitForTimeout(300);
-    assert.ok(countAll(await canvasPixels(page, "csp.png"), isOrange) > 300, "the built-in figure is drawn");
+    assert.ok(countAll(await canvasPixels(page, "csp.png"), isWarmFigure) > 300, "the built-in figure is drawn");
     await page.waitForFunction(() => document.body.dataset.song === "demo", null, { timeout: 60000 });
     // The offline cache's service worker registers under the policy.
     await page.waitForFunction(async () => Boolean((await navigator.serviceWorker.ready).active), null, { timeout: 60000 });

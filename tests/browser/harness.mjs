@@ -125,6 +125,8 @@ export function countAll(img, pred) {
 /** Strongly orange (figure colour 0) / teal (figure colour 1), whatever the shading. */
 export const isOrange = ([r, g, b]) => r > 90 && r > g * 1.25 && g > b * 1.2 && r - b > 60;
 export const isTeal = ([r, g, b]) => b > 70 && g > 50 && g > r * 1.5 && b > r * 1.6;
+/** The first figure's pixels whatever it is drawn on: the built-in body's warm clay, or the first stick figure's orange (not the grey floor nor the background). */
+export const isWarmFigure = ([r, g, b]) => r > 80 && r - b > 30 && r >= g;
 export const isBackground = ([r, g, b]) => Math.max(r, g, b) < 90 && Math.abs(r - b) < 30;
 
 /**

@@ -9,7 +9,7 @@ import assert from "node:assert/strict";
 import { createHash } from "node:crypto";
 import { readFileSync } from "node:fs";
 import { join } from "node:path";
-import { launch, openApp, canvasPixelsUntil, countAll, isOrange, root, startStaticServer, waitUntil } from "./harness.mjs";
+import { launch, openApp, canvasPixelsUntil, countAll, isWarmFigure, root, startStaticServer, waitUntil } from "./harness.mjs";
 
 // The shell and cache name as the service worker states them, so the test follows the file.
 const swSource = readFileSync(join(root, "www", "sw.js"), "utf8");
@@ -40,8 +40,8 @@ async function assertAppWorks(page, logs, shot) {
   await page.waitForFunction(() => document.body.dataset.ready, null, { timeout: 60000 });
   assert.equal(await page.evaluate(() => document.body.dataset.ready), "1", await page.textContent("#messages"));
   assert.equal(await page.$$eval("#library tbody tr", (trs) => trs.length), 1);
-  const img = await canvasPixelsUntil(page, (i) => countAll(i, isOrange) > 300, "the built-in figure drawn", shot);
-  assert.ok(countAll(img, isOrange) > 300);
+  const img = await canvasPixelsUntil(page, (i) => countAll(i, isWarmFigure) > 300, "the built-in figure drawn", shot);
+  assert.ok(countAll(img, isWarmFigure) > 300);
   await page.waitForFunction(() => document.body.dataset.song === "demo", null, { timeout: 60000 });
   assert.deepEqual(logs.filter((l) => l.startsWith("[pageerror]")), []);
 }

@@ -38,6 +38,8 @@ test("search: query by dragging, results, overlay of two figures, plot", async (
     const k = rows.length > 1 ? 1 : 0;
     await page.click(`#search-results tbody tr:nth-child(${k + 1})`);
     await page.waitForFunction(() => document.querySelector("#search").dataset.plotted === "rightHand");
+    // The query and result figures' colours are checked as stick figures (chosen in the menu).
+    await page.selectOption("#character", "");
     await page.evaluate(() => { const p = window.odori.player; p.pause(); p.time = 0.8; p.drawNow(); });
     const img = await canvasPixels(page, "search-overlay.png");
     assert.ok(countAll(img, isOrange) > 150, "query figure (orange) missing");

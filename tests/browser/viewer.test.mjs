@@ -44,6 +44,9 @@ for (const backend of ["webgl2", "webgpu"]) {
       await openApp(page, server, backend);
       const startMs = Date.now() - t0;
       const timings = await page.evaluate(() => window.odoriTimings);
+      // This test checks stick figures' pixels (their colours at the clip's own joints): chosen
+      // in the Character menu (the app opens on the built-in body).
+      await page.selectOption("#character", "");
       assert.equal(await page.evaluate(() => document.body.dataset.backend), backend);
       assert.equal((await page.textContent("#backend")).trim(), backend === "webgpu" ? "WebGPU" : "WebGL2");
       // The built-in clip plays with no file.

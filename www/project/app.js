@@ -41,7 +41,7 @@ export class ProjectSession {
     /** Library clip id → the Project's ClipRef. */
     this.clipRefs = new Map();
     /** What the page shows of the document (see `reconcile`). */
-    this.shown = { sources: new Map(), song: null, corrections: "[]", tags: "[]", texts: "[]", character: "null", worn: [] };
+    this.shown = { sources: new Map(), song: null, corrections: "[]", tags: "[]", texts: "[]", character: bodyKey({}), worn: [] };
     /** Called after every edit (undo/redo buttons). */
     this.onEdited = null;
     /** The display hooks `reconcile` uses (set by the page, see main.js). */
@@ -109,7 +109,7 @@ export class ProjectSession {
     this.shown.corrections = JSON.stringify(doc.song ? doc.song.corrections : []);
     this.shown.tags = JSON.stringify(doc.tags);
     this.shown.texts = JSON.stringify(doc.texts);
-    this.shown.character = JSON.stringify(doc.character ?? null);
+    this.shown.character = bodyKey(doc);
   }
 
   /**
@@ -161,12 +161,17 @@ export class ProjectSession {
     this.mirror("the tags", (p) => p.setTags(ref, tags));
   }
 
-  /** The character chosen (a library clip of a project file; null: none; "builtin" is kept as none). */
+  /**
+   * The body chosen: a library clip of a project file (an imported character), "builtin", or
+   * null (stick figures). The built-in body is not a file of the project: it is kept as no
+   * character, which is also what a new project (and one made before the choice) shows;
+   * stick figures are kept as the project's `stickFigures`.
+   */
   setCharacter(clipId) {
-    // The built-in body is not a file of the project: kept as no character (stick figures).
-    if (clipId === "builtin") clipId = null;
-    const ref = clipId == null ? undefined : this.clipRefs.get(clipId);
-    if (clipId != null && !ref) return;
+    if (clipId === "builtin") { this.mirror("the character", (p) => p.setCharacter(undefined)); return; }
+    if (clipId == null) { this.mirror("the character", (p) => p.setCharacter("stick")); return; }
+    const ref = this.clipRefs.get(clipId);
+    if (!ref) return;
     this.mirror("the character", (p) => p.setCharacter(ref));
   }
 
@@ -287,10 +292,10 @@ export class ProjectSession {
         this.messages.error(`A clip put on the character could not be made again: ${e.message}`);
       }
     }
-    const character = JSON.stringify(now.character ?? null);
+    const character = bodyKey(now);
     if (character !== this.shown.character) {
       this.shown.character = character;
-      if (v.character) v.character(now.character ? this.libraryId(now.character) : null);
+      if (v.character) v.character(now.character ? (this.libraryId(now.character) ?? "builtin") : now.stickFigures ? null : "builtin");
     }
     const texts = JSON.stringify(now.texts);
     if (texts !== this.shown.texts) {
@@ -382,4 +387,9 @@ export class ProjectSession {
 /** What identifies the song shown (not its corrections). */
 function songKey(song) {
   return song ? JSON.stringify([song.fileName, song.audio, song.envelope, song.options]) : null;
+}
+
+/** What the document's body choice looks like to the page (a character, stick figures, or none: the built-in body). */
+function bodyKey(doc) {
+  return JSON.stringify([doc.character ?? null, !!doc.stickFigures]);
 }

@@ -1,7 +1,7 @@
 // Put the clip on screen on a character, and export it.
-// *Character*: the built-in body or any imported skinned humanoid (glTF): the viewer draws the
-// dance, the candidates and text animations on it (`onCharacter`; *Stick* draws stick figures
-// again); *Put on* plays the clip on screen (the dance, a text animation, a move, a BVH) on an
+// *Character*: the built-in body (the page opens on it), stick figures, or any imported skinned
+// humanoid (glTF): the viewer draws the dance, the candidates and text animations on it
+// (`onCharacter`; the *Stick* checkbox draws stick figures for a moment); *Put on* plays the clip on screen (the dance, a text animation, a move, a BVH) on an
 // imported one as a new library clip, drawn skinned.
 // Export the clip on screen (an imported clip, a text animation, the composed dance) as a GLB
 // (with the character's mesh, or the built-in body for the engine's own skeleton), a VRM
@@ -24,6 +24,8 @@ export class ExportPanel {
       putOn.addEventListener("click", () => this.putOnCharacter());
       character.addEventListener("change", () => this.characterChanged());
       this.refreshCharacters();
+      // Nothing chosen yet: the built-in body (the page's project may show another choice).
+      this.character.value = "builtin";
     }
   }
 
@@ -32,7 +34,7 @@ export class ExportPanel {
     const keep = this.character.value;
     const seen = new Set();
     const items = this.library.clips().filter((c) => c.hasMesh && c.humanoid.kind !== "notHumanoid" && c.format === "gltf" && !seen.has(c.source) && seen.add(c.source));
-    this.character.replaceChildren(new Option("Stick figures", ""), new Option("Built-in body", "builtin"));
+    this.character.replaceChildren(new Option("Built-in body", "builtin"), new Option("Stick figures", ""));
     for (const c of items) this.character.append(new Option(c.source.replace(/^.*[\\/]/, ""), String(c.id)));
     if ([...this.character.options].some((o) => o.value === keep)) this.character.value = keep;
   }
@@ -52,6 +54,7 @@ export class ExportPanel {
       this.messages.error(`Character: ${e.message}`);
       const had = this.player.viewer.character;
       this.character.value = had == null ? "" : String(had);
+      // The page shows why; the body drawn is the one it had.
     }
   }
 

@@ -17,6 +17,7 @@ export class Player {
     this.onTick = null;
     this.drawnOnce = false;
     this.stick = false;         // stick figures even when a character is chosen
+    this.preparing = null;      // the task that makes clips left by a draw (`preparePending`)
     this.withSong = false;      // does Play also play the song?
     this.listeners = [];        // called with the transport state after every change
     playButton.addEventListener("click", () => this.toggle());
@@ -200,10 +201,29 @@ export class Player {
     this.scrub.value = String(frame);
     this.label.textContent = `${frame} / ${c.frames - 1}`;
     this.viewer.draw(this.library, this.figures());
+    this.preparePending();
     if (!this.drawnOnce) {
       this.drawnOnce = true;
       if (this.onFirstFrame) this.onFirstFrame();
     }
+  }
+
+  /**
+   * A long clip on the chosen body (the dance onto a character) is not made inside a frame:
+   * the viewer draws it as it was until then and lists it (`bodiesPending`); it is made here,
+   * a clip per task between frames, then framed and drawn.
+   */
+  preparePending() {
+    if (this.preparing || !this.viewer.bodiesPending) return;
+    this.preparing = setTimeout(() => {
+      this.preparing = null;
+      if (this.viewer.prepareBodies(this.library)) {
+        this.reframe();
+        this.drawNow();
+      } else {
+        this.preparePending();
+      }
+    }, 0);
   }
 
   start() {

@@ -7,6 +7,12 @@
 //! kept per library clip and made again when that clip changes (its revision) or the
 //! character does; a figure drawn with style "stick" is the stick figure as before.
 //!
+//! A long clip (the whole dance: 11–61 ms onto Xbot) is not retargeted inside `draw` or
+//! `frameFigures`, which a page calls from its animation frames and input handlers: the
+//! figure keeps the clip's previous retargeting (or a stick figure, the first time) and the
+//! clip is listed in `bodiesPending`; the page calls `prepareBodies` in a task of its own,
+//! between frames, then draws again. Short clips (moves, candidates) are made at once.
+//!
 //! `Viewer.create` starts the renderer a step per task of the event loop (the canvas and
 //! adapter, the device, then each pipeline the first frame draws with, made and drawn with
 //! once), so no one task holds a page's main thread for the sum of them; the skinned-mesh
@@ -61,6 +67,12 @@ enum Body {
     /// An imported character (library clip `id`), with its shared mesh.
     Imported { id: u32, character: Box<Character>, mesh_key: u32, mesh: Rc<SkinnedMesh> },
 }
+
+/// Clips of more than this many frames × character joints are retargeted by `prepareBodies`,
+/// not in a draw (about 4 ms of the 61 ms the 68 s dance took onto Xbot's 65 joints, on a
+/// loaded machine: a move or a candidate is made at once, the dance is not).
+#[cfg(feature = "authoring")]
+const DEFER_FRAME_JOINTS: usize = 8_000;
 
 /// A library clip on the chosen body, at the clip's revision `rev`.
 struct OnBody {
@@ -122,6 +134,13 @@ pub struct Viewer {
     body: Body,
     /// Library clips on `body`, by clip id.
     on_body: HashMap<u32, OnBody>,
+    /// Clips a draw wanted on the body and left for `prepareBodies` (in the order asked).
+    #[cfg(feature = "authoring")]
+    pending: Vec<u32>,
+    /// Retarget long clips in `prepareBodies` (true), or in the draw that needs them (the
+    /// control of the frame-time benchmark, tests/browser/retarget-trace.mjs).
+    #[cfg(feature = "authoring")]
+    defer: bool,
     last_drawn: Vec<Drawn>,
 }
 
@@ -170,8 +189,10 @@ fn gpu_err(msg: impl Into<String>) -> OdoriError {
 
 impl Viewer {
     /// Clip `e` on the chosen body: `Some((clip to pose, mesh key, mesh, body name))`, or `None`
-    /// when it is drawn as it is (no body chosen, a mesh of its own, or not humanoid).
-    fn on_body(&mut self, e: &Entry) -> Option<(Rc<Clip>, u32, Rc<SkinnedMesh>, &'static str)> {
+    /// when it is drawn as it is (no body chosen, a mesh of its own, or not humanoid). With
+    /// `defer`, a long clip not yet made is left for `prepareBodies`: its previous making (an
+    /// earlier revision) is given meanwhile, or `None` when there is none.
+    fn on_body(&mut self, e: &Entry, #[cfg_attr(not(feature = "authoring"), allow(unused_variables))] defer: bool) -> Option<(Rc<Clip>, u32, Rc<SkinnedMesh>, &'static str)> {
         if e.mesh.is_some() {
             return None;
         }
@@ -182,6 +203,13 @@ impl Viewer {
         };
         if let Some(c) = self.on_body.get(&e.id).filter(|c| c.rev == e.rev) {
             return c.clip.clone().map(|c| (c, key, mesh, name));
+        }
+        #[cfg(feature = "authoring")]
+        if defer && self.defer && self.is_long(e) {
+            if !self.pending.contains(&e.id) {
+                self.pending.push(e.id);
+            }
+            return self.on_body.get(&e.id).and_then(|c| c.clip.clone()).map(|c| (c, key, mesh, name));
         }
         // Made once per clip revision (a whole dance takes a moment; each frame then only samples).
         let clip = match &self.body {
@@ -194,6 +222,19 @@ impl Viewer {
         };
         self.on_body.insert(e.id, OnBody { rev: e.rev, clip: clip.clone() });
         clip.map(|c| (c, key, mesh, name))
+    }
+
+    /// Whether making clip `e` on the body would hold a frame (see [`DEFER_FRAME_JOINTS`]).
+    #[cfg(feature = "authoring")]
+    fn is_long(&self, e: &Entry) -> bool {
+        let joints = match &self.body {
+            Body::Stick => return false,
+            // A canonical clip is the built-in body's own: nothing to make.
+            Body::Builtin { .. } if is_canonical(&e.clip.skeleton) => return false,
+            Body::Builtin { .. } => e.clip.skeleton.len(),
+            Body::Imported { character, .. } => character.skeleton.len(),
+        };
+        e.clip.frame_count() * joints > DEFER_FRAME_JOINTS
     }
 
     /// The uploaded mesh under `key`, uploading it the first time (`None`: drawn as sticks).
@@ -347,6 +388,10 @@ impl Viewer {
             decoding: Rc::new(Cell::new(0)),
             body: Body::Stick,
             on_body: HashMap::new(),
+            #[cfg(feature = "authoring")]
+            pending: Vec::new(),
+            #[cfg(feature = "authoring")]
+            defer: true,
             last_drawn: Vec::new(),
         };
         // WebGL2: the pipelines the first frame draws with, each made and then drawn with once, a
@@ -453,6 +498,40 @@ impl Viewer {
         Ok(())
     }
 
+    /// How many clips a draw left to `prepareBodies` (long clips on the chosen body, such as
+    /// the dance: until made, they are drawn as they were last made, or as stick figures).
+    #[cfg(feature = "authoring")]
+    #[wasm_bindgen(getter, js_name = bodiesPending)]
+    pub fn bodies_pending(&self) -> usize {
+        self.pending.len()
+    }
+
+    /// Makes the next clip a draw left (see `bodiesPending`) on the chosen body: one clip per
+    /// call, so a page calls it in a task of its own, between frames, and draws again. True
+    /// when a clip was made (the next draw shows it). Clips since removed or already made
+    /// are dropped from the list.
+    #[cfg(feature = "authoring")]
+    #[wasm_bindgen(js_name = prepareBodies)]
+    pub fn prepare_bodies(&mut self, library: &Library) -> bool {
+        while !self.pending.is_empty() {
+            let id = self.pending.remove(0);
+            let Ok(e) = library.entry(id) else { continue };
+            if self.on_body.get(&id).is_some_and(|c| c.rev == e.rev) {
+                continue;
+            }
+            return self.on_body(e, false).is_some();
+        }
+        false
+    }
+
+    /// Whether long clips are retargeted by `prepareBodies` between frames (true, the default)
+    /// or in the draw that first needs them (false: how it was, the benchmark's control).
+    #[cfg(feature = "authoring")]
+    #[wasm_bindgen(setter, js_name = deferRetarget)]
+    pub fn set_defer_retarget(&mut self, on: bool) {
+        self.defer = on;
+    }
+
     /// The body chosen with `setCharacter`: "builtin", the character's clip id, or `null`.
     #[wasm_bindgen(getter, unchecked_return_type = "number | \"builtin\" | null")]
     pub fn character(&self) -> JsValue {
@@ -473,7 +552,7 @@ impl Viewer {
         if !time_secs.is_finite() {
             return Err(OdoriError::new("bad-argument", format!("figureJoints: time {time_secs} s is not a finite number")));
         }
-        let on = self.on_body(e);
+        let on = self.on_body(e, false);
         let (c, body): (&Clip, &'static str) = match &on {
             Some((c, _, _, body)) => (c.as_ref(), *body),
             None => (&e.clip, if e.mesh.is_some() { "own" } else { "stick" }),
@@ -530,7 +609,7 @@ impl Viewer {
             let e = library.entry(s.clip)?;
             let off = Vec3::from(s.offset.unwrap_or([0.0; 3]));
             // Framed as drawn: on the chosen body (a character's size differs from the clip's).
-            let on = if s.style.as_deref() == Some("stick") { None } else { self.on_body(e) };
+            let on = if s.style.as_deref() == Some("stick") { None } else { self.on_body(e, true) };
             let clip: &Clip = on.as_ref().map(|o| &*o.0).unwrap_or(&e.clip);
             let frames = clip.frame_count();
             for (k, m) in moments.iter_mut().enumerate() {
@@ -599,7 +678,7 @@ impl Viewer {
             };
             let skinned = match own {
                 Some(o) => Some(o),
-                None if style != "stick" => match self.on_body(e) {
+                None if style != "stick" => match self.on_body(e, true) {
                     Some((clip, key, mesh, body)) => self.mesh_handle(key, &mesh).map(|h| (h, mesh, Some(clip), body)),
                     None => None,
                 },
