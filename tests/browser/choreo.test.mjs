@@ -28,6 +28,9 @@ test("dance: candidates, Set, Search twice, Generate, play", async () => {
   const { browser, page, logs } = await launch("webgl2");
   try {
     await openApp(page, server, "webgl2");
+    // The candidates' colours below are checked as stick figures (chosen in the Character
+    // menu; the app opens on the built-in body, where each candidate is a tinted body).
+    await page.selectOption("#character", "");
     await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 60000 });
     const nBars = Number(await page.evaluate(() => document.querySelector("#dance").dataset.bars));
     // An imported humanoid clip joins the segment library, cut at its own beats.
