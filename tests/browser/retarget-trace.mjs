@@ -48,6 +48,11 @@ try {
         requestAnimationFrame(tick);
         new PerformanceObserver((list) => { if (probe.on) for (const e of list.getEntries()) probe.long.push(e.duration); }).observe({ type: "longtask" });
       });
+      // The draws' own noise on this machine: 2 s of the dance playing on Xbot, no edit.
+      await page.evaluate(() => Object.assign(window.__probe, { draws: [], gaps: [], long: [], prepares: [], on: true }));
+      await page.waitForTimeout(2000);
+      const idle = await page.evaluate(() => { const p = window.__probe; p.on = false; const s = p.draws.slice().sort((a, b) => a - b); return { n: s.length, median: s[s.length >> 1] ?? 0, max: s.at(-1) ?? 0, gap: Math.max(0, ...p.gaps), long: p.long.length }; });
+      console.log(`${backend} no edit (2 s of play): ${idle.n} draws, median ${fmt(idle.median)} ms, longest ${fmt(idle.max)} ms; longest frame gap ${fmt(idle.gap)} ms; ${idle.long} long tasks`);
       for (const defer of [false, true]) {
         const rows = [];
         for (let g = 0; g < generates; g++) {

@@ -102,6 +102,31 @@ test("three.js GLTFLoader + AnimationMixer reproduce the product's joints within
   }
 });
 
+test("a BVH clip exported on the built-in body (as the app draws it) has the body, passes the validator and plays in three.js", async () => {
+  const lib = new Library();
+  const salsa = lib.importFile("salsa_01.bvh", read("mocap/cmu-salsa/salsa_01.bvh"), { fpsOverride: 60 }).clips[0];
+  // Without "builtin" it is the clip's own skeleton, with no mesh (the control).
+  const bare = await validator.validateBytes(lib.exportGlb(salsa.id), { maxIssues: 100 });
+  assert.ok(!bare.info.hasSkins, "auto: a BVH clip goes out on its own skeleton, no skin");
+  const glb = lib.exportGlb(salsa.id, { character: "builtin", startSecs: 0, endSecs: 10 });
+  const report = await validator.validateBytes(glb, { maxIssues: 100 });
+  const bad = report.issues.messages.filter((m) => m.severity <= 1).map((m) => `${m.code} ${m.pointer}: ${m.message}`);
+  console.log(`salsa_01 on the built-in body: ${glb.length} bytes, ${report.issues.numErrors} errors, ${report.issues.numWarnings} warnings`);
+  assert.equal(report.issues.numErrors + report.issues.numWarnings, 0, bad.join("; "));
+  assert.ok(report.info.animationCount === 1 && report.info.hasSkins, "one animation and a skin");
+  // Read back by the product: the built-in body's canonical rig, 10 s of the salsa's 60 fps.
+  const back = lib.importFile("salsa_on_body.glb", glb).clips[0];
+  assert.ok(back.hasMesh && back.humanoid.kind !== "notHumanoid", JSON.stringify(back));
+  assert.ok(Math.abs(back.durationSecs - 10) < 0.1, `${back.durationSecs} s`);
+  // And by three.js, which puts the joints where the product's re-import does.
+  const gltf = await new GLTFLoader().parseAsync(glb.buffer.slice(glb.byteOffset, glb.byteOffset + glb.byteLength), "");
+  const lookUp = (name) => gltf.scene.getObjectByName(THREE.PropertyBinding.sanitizeNodeName(name));
+  const { worst, compared } = worstAgainstThree(lib, back.id, gltf.scene, gltf.animations[0], 1, lookUp);
+  const height = heightOf(lib, back.id);
+  console.log(`salsa_01 on the built-in body: three.js vs product, worst joint ${(worst * 1000).toFixed(3)} mm over ${compared} samples (height ${height.toFixed(2)} m)`);
+  assert.ok(compared >= 10 * 20 && worst < 0.01 * height, `worst ${worst} m over ${compared}`);
+});
+
 test("BVH re-imports into the product and into three.js BVHLoader within 1 mm per metre", async () => {
   const lib = new Library();
   const salsa = lib.importFile("salsa_01.bvh", read("mocap/cmu-salsa/salsa_01.bvh"), { fpsOverride: 60 }).clips[0];

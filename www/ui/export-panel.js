@@ -92,10 +92,12 @@ export class ExportPanel {
     const info = this.library.clip(id);
     const kind = ["bvh", "vrma"].includes(this.format.value) ? this.format.value : "glb";
     try {
-      // A clip with no mesh of its own goes out on the character it is drawn on.
-      const onCharacter = typeof this.chosen() === "number" && !info.hasMesh && info.humanoid.kind !== "notHumanoid";
+      // A humanoid clip with no mesh of its own goes out on the chosen character, else on the
+      // built-in body (with stick figures on screen too: every GLB has a body).
+      const bodyless = !info.hasMesh && info.humanoid.kind !== "notHumanoid";
+      const chosen = this.chosen();
       const bytes = kind === "bvh" ? this.library.exportBvh(id) : kind === "vrma" ? this.library.exportVrma(id)
-        : this.library.exportGlb(id, onCharacter ? { character: this.chosen() } : undefined);
+        : this.library.exportGlb(id, bodyless ? { character: typeof chosen === "number" ? chosen : "builtin" } : undefined);
       const name = `${info.name.replace(/[^\p{L}\p{N}_.-]+/gu, "_") || "odori"}.${kind}`;
       const url = URL.createObjectURL(new Blob([bytes], { type: kind === "bvh" ? "text/plain" : "model/gltf-binary" }));
       const a = document.createElement("a");

@@ -74,7 +74,8 @@ impl Library {
 impl Library {
     /// The clip as a GLB file (glTF 2.0 binary): its skeleton as nodes, the character's mesh
     /// and skin, the motion as one animation. `options`: `{ character?: "auto" | "builtin" |
-    /// "none", startSecs?, endSecs? }`. Throws an `OdoriError` (`export-*` kinds) naming the problem.
+    /// "none", startSecs?, endSecs? }`; "builtin" carries a humanoid clip on a rig of its own
+    /// (with no mesh) onto the canonical skeleton first, as the viewer draws it. Throws an `OdoriError` (`export-*` kinds) naming the problem.
     #[wasm_bindgen(js_name = exportGlb)]
     pub fn export_glb(&self, id: u32, #[wasm_bindgen(unchecked_param_type = "ExportOptions | undefined")] options: JsValue) -> Result<Vec<u8>, OdoriError> {
         let o: JsExportOptions = from_js(options, "export options", KNOWN)?;
@@ -91,7 +92,17 @@ impl Library {
             Some(CharacterChoice::Named(s)) => s.as_str(),
             None => "auto",
         };
-        let clip = ranged(&e.clip, &o)?;
+        // The app draws a humanoid clip on a rig of its own (a BVH) on the built-in body by
+        // carrying it onto the canonical skeleton: "builtin" exports what it shows. (Authoring
+        // only: the player exports its own canonical dances.)
+        #[cfg(feature = "authoring")]
+        let carried = (named == "builtin" && e.mesh.is_none() && e.status.is_humanoid() && !is_canonical(&e.clip.skeleton))
+            .then(|| odori_core::retarget::to_canonical(&e.clip, &e.humanoid, e.clip.fps));
+        #[cfg(feature = "authoring")]
+        let source = carried.as_ref().unwrap_or(&e.clip);
+        #[cfg(not(feature = "authoring"))]
+        let source = &e.clip;
+        let clip = ranged(source, &o)?;
         let canonical = is_canonical(&clip.skeleton);
         let body: Option<SkinnedMesh>;
         let mesh: Option<&SkinnedMesh> = match named {
