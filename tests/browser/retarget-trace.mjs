@@ -69,8 +69,9 @@ try {
           }));
         }
         const worst = (k) => Math.max(...rows.map((r) => r[k]));
+        const median = (k) => rows.map((r) => r[k]).sort((a, b) => a - b)[rows.length >> 1];
         const mode = defer ? "between frames (prepareBodies)" : "control: in the draw       ";
-        console.log(`${backend} ${mode}: over ${rows.length} Generates with Xbot: longest draw ${fmt(worst("draw"))} ms [${rows.map((r) => fmt(r.draw)).join(", ")}], longest frame gap ${fmt(worst("gap"))} ms, longest prepareBodies ${fmt(worst("prepare"))} ms, long tasks ${JSON.stringify(rows.map((r) => r.long))}`);
+        console.log(`${backend} ${mode}: over ${rows.length} Generates with Xbot: longest draw ${fmt(worst("draw"))} ms (median over Generates ${fmt(median("draw"))}) [${rows.map((r) => fmt(r.draw)).join(", ")}], longest frame gap ${fmt(worst("gap"))} ms (median ${fmt(median("gap"))}), longest prepareBodies ${fmt(worst("prepare"))} ms, long tasks ${JSON.stringify(rows.map((r) => r.long))}`);
       }
     } finally {
       await browser.close();
