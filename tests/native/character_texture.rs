@@ -154,6 +154,7 @@ fn a_texture_transform_is_written_with_its_extension_and_read_back() {
     assert_eq!(ext["offset"], serde_json::json!([0.25, -0.5]));
     assert_eq!(ext["scale"], serde_json::json!([0.5, 2.0]));
     assert!((ext["rotation"].as_f64().unwrap() - 0.3).abs() < 1e-6);
+    assert_eq!(ext["texCoord"], 0, "the one UV set written");
     let back = reimport(&bytes, clip.fps);
     assert!(back.parts.iter().all(|p| p.uv_transform == Some(t)), "{:?}", back.parts[0].uv_transform);
 }

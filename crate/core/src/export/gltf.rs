@@ -11,6 +11,11 @@
 //! product's own skinning puts it at rest, so a character bound in another pose (or with
 //! several bind matrices per joint, as the importer's palette allows) comes out bound at rest
 //! with the same look; a rig bound at rest (the usual case) keeps its vertices exactly.
+//!
+//! A textured part keeps its look: its UV set is written as `TEXCOORD_0`, its base-colour
+//! image (PNG or JPEG, byte for byte) goes into the binary chunk through a buffer view with its
+//! MIME type, with the source's sampler, and its `KHR_texture_transform` is written back (and
+//! named in `extensionsUsed`).
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -276,7 +281,7 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
             let ib: Vec<u8> = part.indices.iter().flat_map(|x| x.to_le_bytes()).collect();
             let idx = bin.accessor(&ib, part.indices.len(), C::U32, Kind::Scalar, Some(ElementArrayBuffer), None);
             // The kept UV set is written as TEXCOORD_0 (whichever set the source's material
-            // named), so the material's texCoord is 0 and a transform needs no texCoord of its own.
+            // named), so the material's and the transform's texCoord are 0.
             let mut base_color_texture = None;
             let mut uv = None;
             if let Some((t, uvs, transform)) = &part.texture {
@@ -285,7 +290,9 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
                     offset: json::extensions::texture::TextureTransformOffset(x.offset),
                     rotation: json::extensions::texture::TextureTransformRotation(x.rotation_rad),
                     scale: json::extensions::texture::TextureTransformScale(x.scale),
-                    tex_coord: None,
+                    // gltf-json writes a `None` here as `null`, which the validator rejects;
+                    // 0 names the one set written.
+                    tex_coord: Some(0),
                     extras: Default::default(),
                 });
                 if texture_transform.is_some() && !root.extensions_used.iter().any(|e| e == "KHR_texture_transform") {
