@@ -7,7 +7,8 @@
 //! texture samples it (group 2) with the file's sampler; until its image arrives (the caller
 //! decodes it and fills [`Renderer::texture_target`]) and for untextured parts, a 1×1 white
 //! texture stands in, so the material's colour alone shows. A texture whose sampler
-//! minifies through mipmaps gets a full chain, made on the GPU (`mipmap.rs`); a part's
+//! minifies through mipmaps gets a full chain, made on the GPU (`mipmap.rs`; feature
+//! `mipmaps`, which the player build leaves out); a part's
 //! `KHR_texture_transform` is applied to its UVs as the mesh is uploaded (the transform is
 //! affine, so transforming the vertices' UVs gives the same sample at every pixel as
 //! transforming the interpolated UV in the shader, with nothing added per draw).
@@ -484,7 +485,7 @@ impl Renderer {
         let sampler = *self.meshes.get(mesh.0)?.samplers.get(texture)?;
         let max = self.device.limits().max_texture_dimension_2d;
         let (width, height) = (width.clamp(1, max), height.clamp(1, max));
-        let levels = if mipmap::wants_mipmaps(sampler.min_filter) { mipmap::full_chain(width, height) } else { 1 };
+        let levels = if cfg!(feature = "mipmaps") && mipmap::wants_mipmaps(sampler.min_filter) { mipmap::full_chain(width, height) } else { 1 };
         let tex = self.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("base colour"),
             size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
@@ -607,7 +608,7 @@ impl Renderer {
             self.prepare(PipelineKind::Figure);
         }
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
-        if !self.pending_mips.is_empty() {
+        if cfg!(feature = "mipmaps") && !self.pending_mips.is_empty() {
             let blit = self.mip_blit.get_or_insert_with(|| mipmap::MipBlit::new(&self.device, TEXTURE_FORMAT));
             for tex in self.pending_mips.drain(..) {
                 blit.encode(&self.device, &mut encoder, &tex);

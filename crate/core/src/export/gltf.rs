@@ -209,7 +209,8 @@ fn rest_parts(mesh: &SkinnedMesh, rest: &[Mat4], joints: usize) -> Result<Vec<Re
             color: part.color.map(|c| if c.is_finite() { c.clamp(0.0, 1.0) } else { 1.0 }),
             texture: None,
         };
-        if let Some(t) = part.texture {
+        // Without the feature (the player build) a character is written untextured.
+        if let (true, Some(t)) = (cfg!(feature = "export-textures"), part.texture) {
             if t >= mesh.textures.len() {
                 return Err(ExportError::BadMesh { part: pi, message: format!("texture {t} but the mesh has {}", mesh.textures.len()) });
             }
@@ -267,7 +268,7 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
     // Mesh, materials and skin.
     if let Some(mesh) = options.mesh.filter(|m| !m.parts.is_empty()) {
         let parts = rest_parts(mesh, &rest_m, n)?;
-        let texture_index = textures(&mut root, &mut bin, &mesh.textures, &parts);
+        let texture_index = if cfg!(feature = "export-textures") { textures(&mut root, &mut bin, &mesh.textures, &parts) } else { Vec::new() };
         let mut primitives = Vec::new();
         for (pi, part) in parts.iter().enumerate() {
             use json::accessor::ComponentType as C;
@@ -284,7 +285,7 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
             // named), so the material's and the transform's texCoord are 0.
             let mut base_color_texture = None;
             let mut uv = None;
-            if let Some((t, uvs, transform)) = &part.texture {
+            if let (true, Some((t, uvs, transform))) = (cfg!(feature = "export-textures"), &part.texture) {
                 uv = Some(bin.accessor(&f32_bytes(uvs.iter().flatten().copied()), nv, C::F32, Kind::Vec2, Some(ArrayBuffer), None));
                 let texture_transform = transform.map(|x| json::extensions::texture::TextureTransform {
                     offset: json::extensions::texture::TextureTransformOffset(x.offset),
