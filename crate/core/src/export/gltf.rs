@@ -47,6 +47,8 @@ pub(super) struct Bin {
 
 pub(super) enum Kind {
     Scalar,
+    // UVs, written only with the `export-textures` feature.
+    #[cfg_attr(not(feature = "export-textures"), allow(dead_code))]
     Vec2,
     Vec3,
     Vec4,
@@ -281,31 +283,7 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
             let wgt = bin.accessor(&f32_bytes(part.weights.iter().flatten().copied()), nv, C::F32, Kind::Vec4, Some(ArrayBuffer), None);
             let ib: Vec<u8> = part.indices.iter().flat_map(|x| x.to_le_bytes()).collect();
             let idx = bin.accessor(&ib, part.indices.len(), C::U32, Kind::Scalar, Some(ElementArrayBuffer), None);
-            // The kept UV set is written as TEXCOORD_0 (whichever set the source's material
-            // named), so the material's and the transform's texCoord are 0.
-            let mut base_color_texture = None;
-            let mut uv = None;
-            if let (true, Some((t, uvs, transform))) = (cfg!(feature = "export-textures"), &part.texture) {
-                uv = Some(bin.accessor(&f32_bytes(uvs.iter().flatten().copied()), nv, C::F32, Kind::Vec2, Some(ArrayBuffer), None));
-                let texture_transform = transform.map(|x| json::extensions::texture::TextureTransform {
-                    offset: json::extensions::texture::TextureTransformOffset(x.offset),
-                    rotation: json::extensions::texture::TextureTransformRotation(x.rotation_rad),
-                    scale: json::extensions::texture::TextureTransformScale(x.scale),
-                    // gltf-json writes a `None` here as `null`, which the validator rejects;
-                    // 0 names the one set written.
-                    tex_coord: Some(0),
-                    extras: Default::default(),
-                });
-                if texture_transform.is_some() && !root.extensions_used.iter().any(|e| e == "KHR_texture_transform") {
-                    root.extensions_used.push("KHR_texture_transform".into());
-                }
-                base_color_texture = Some(json::texture::Info {
-                    index: texture_index[*t],
-                    tex_coord: 0,
-                    extensions: texture_transform.map(|tt| json::extensions::texture::Info { texture_transform: Some(tt), others: Default::default() }),
-                    extras: Default::default(),
-                });
-            }
+            let (base_color_texture, uv) = part_texture(&mut root, &mut bin, part, &texture_index);
             root.materials.push(json::Material {
                 name: Some(format!("material {pi}")),
                 pbr_metallic_roughness: json::material::PbrMetallicRoughness {
@@ -427,6 +405,41 @@ fn textures(root: &mut json::Root, bin: &mut Bin, textures: &[MeshTexture], part
         index[i] = json::Index::new(root.textures.len() as u32 - 1);
     }
     index
+}
+
+/// A part's base-colour texture for its material, and its UVs' accessor. The kept UV set is
+/// written as TEXCOORD_0 (whichever set the source's material named), so the material's and the
+/// transform's texCoord are 0.
+#[cfg(feature = "export-textures")]
+fn part_texture(root: &mut json::Root, bin: &mut Bin, part: &RestPart, texture_index: &[json::Index<json::Texture>]) -> (Option<json::texture::Info>, Option<json::Index<json::Accessor>>) {
+    use json::accessor::ComponentType as C;
+    let Some((t, uvs, transform)) = &part.texture else { return (None, None) };
+    let uv = bin.accessor(&f32_bytes(uvs.iter().flatten().copied()), uvs.len(), C::F32, Kind::Vec2, Some(json::buffer::Target::ArrayBuffer), None);
+    let texture_transform = transform.map(|x| json::extensions::texture::TextureTransform {
+        offset: json::extensions::texture::TextureTransformOffset(x.offset),
+        rotation: json::extensions::texture::TextureTransformRotation(x.rotation_rad),
+        scale: json::extensions::texture::TextureTransformScale(x.scale),
+        // gltf-json writes a `None` here as `null`, which the validator rejects; 0 names the
+        // one set written.
+        tex_coord: Some(0),
+        extras: Default::default(),
+    });
+    if texture_transform.is_some() && !root.extensions_used.iter().any(|e| e == "KHR_texture_transform") {
+        root.extensions_used.push("KHR_texture_transform".into());
+    }
+    let info = json::texture::Info {
+        index: texture_index[*t],
+        tex_coord: 0,
+        extensions: texture_transform.map(|tt| json::extensions::texture::Info { texture_transform: Some(tt), others: Default::default() }),
+        extras: Default::default(),
+    };
+    (Some(info), Some(uv))
+}
+
+/// Without the feature (the player build) a character is written untextured.
+#[cfg(not(feature = "export-textures"))]
+fn part_texture(_: &mut json::Root, _: &mut Bin, _: &RestPart, _: &[json::Index<json::Texture>]) -> (Option<json::texture::Info>, Option<json::Index<json::Accessor>>) {
+    (None, None)
 }
 
 /// A fresh document and an empty binary chunk.

@@ -738,8 +738,12 @@ fn read_meshes(
             let mut part = MeshPart { positions, normals, joints, weights, indices, color: pbr.base_color_factor(), ..Default::default() };
             if let Some(info) = pbr.base_color_texture() {
                 // The transform's own texCoord, when it has one, overrides the texture's.
-                let transform = info.texture_transform();
-                let set = transform.as_ref().and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
+                // (Read only with the `export-textures` feature: the player build leaves it out.)
+                #[cfg(feature = "export-textures")]
+                let transform = info.texture_transform().map(|t| (UvTransform { offset: t.offset(), rotation_rad: t.rotation(), scale: t.scale() }, t.tex_coord()));
+                #[cfg(not(feature = "export-textures"))]
+                let transform: Option<(UvTransform, Option<u32>)> = None;
+                let set = transform.and_then(|t| t.1).unwrap_or(info.tex_coord());
                 let uvs: Vec<[f32; 2]> = r.read_tex_coords(set).map(|t| t.into_f32().collect()).unwrap_or_default();
                 let tex = info.texture();
                 let slot = *texture_of.entry(tex.index()).or_insert_with(|| {
@@ -755,7 +759,7 @@ fn read_meshes(
                 if uvs.len() == nv && slot.is_some() {
                     part.texture = slot;
                     part.uvs = uvs;
-                    part.uv_transform = transform.map(|t| UvTransform { offset: t.offset(), rotation_rad: t.rotation(), scale: t.scale() });
+                    part.uv_transform = transform.map(|t| t.0);
                     if let Some(t) = part.uv_transform.filter(|t| !(t.offset.iter().chain(&t.scale).all(|v| v.is_finite()) && t.rotation_rad.is_finite())) {
                         warnings.push(format!("mesh '{}': its texture transform {t:?} is not finite and is ignored", m.name().unwrap_or("?")));
                         part.uv_transform = None;
