@@ -12,6 +12,7 @@ import validator from "gltf-validator";
 import * as THREE from "three";
 import { GLTFLoader } from "three/examples/jsm/loaders/GLTFLoader.js";
 import { BVHLoader } from "three/examples/jsm/loaders/BVHLoader.js";
+import { texturedBox, QUADRANTS, CHECKER } from "./textured-glb.mjs";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
 const data = join(root, "..", "shared", "data");
@@ -72,8 +73,17 @@ function worstAgainstThree(lib, id, object3d, animation, scale, lookUp) {
   return { worst, compared };
 }
 
+/** Textured characters: the Fox (PNG, LINEAR_MIPMAP_LINEAR) and boxes made in the test (a KHR_texture_transform; a nearest-filtered clamped sampler; a checker). */
+function texturedCases() {
+  const lib = new Library();
+  const fox = lib.importFile("Fox.glb", read("gltf/Fox.glb")).clips[0];
+  const quad = lib.importFile("quadrants.glb", texturedBox({ image: QUADRANTS(), sampler: { magFilter: 9728, minFilter: 9728, wrapS: 33071, wrapT: 33648 }, transform: { offset: [0.5, 0], rotation: 0.25, scale: [0.5, 0.5] } })).clips[0];
+  const checker = lib.importFile("checker.glb", texturedBox({ image: CHECKER(64), sampler: {} })).clips[0];
+  return [["gltf/Fox.glb (textured)", lib, fox.id], ["box with a texture transform", lib, quad.id], ["box with a default sampler", lib, checker.id]];
+}
+
 test("every exported GLB passes the Khronos glTF validator with no errors or warnings", async () => {
-  for (const [label, lib, id] of cases()) {
+  for (const [label, lib, id] of [...cases(), ...texturedCases()]) {
     const glb = lib.exportGlb(id);
     assert.ok(glb instanceof Uint8Array && glb.length > 1000, `${label}: exportGlb returns the bytes`);
     const report = await validator.validateBytes(glb, { maxIssues: 100 });
@@ -83,6 +93,11 @@ test("every exported GLB passes the Khronos glTF validator with no errors or war
     assert.equal(issues.numErrors, 0, `${label}: ${bad.join("; ")}`);
     assert.equal(issues.numWarnings, 0, `${label}: ${bad.join("; ")}`);
     assert.ok(report.info.animationCount === 1 && report.info.hasSkins, `${label}: one animation and a skin`);
+    if (label.includes("textured") || label.includes("box")) {
+      assert.ok(report.info.hasTextures, `${label}: the export has its texture`);
+      assert.equal(report.info.resources.filter((r) => r.pointer.startsWith("/images/")).length, 1, `${label}: one image`);
+    }
+    if (label.includes("transform")) assert.deepEqual(report.info.extensionsUsed, ["KHR_texture_transform"], `${label}: the transform's extension is named`);
   }
 });
 

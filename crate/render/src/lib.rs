@@ -6,7 +6,12 @@
 //! uniform block (256 joints), WGSL compiled by naga for either. A part with a base-colour
 //! texture samples it (group 2) with the file's sampler; until its image arrives (the caller
 //! decodes it and fills [`Renderer::texture_target`]) and for untextured parts, a 1×1 white
-//! texture stands in, so the material's colour alone shows.
+//! texture stands in, so the material's colour alone shows. A texture whose sampler
+//! minifies through mipmaps gets a full chain, made on the GPU (`mipmap.rs`; feature
+//! `mipmaps`, which the player build leaves out); a part's
+//! `KHR_texture_transform` is applied to its UVs as the mesh is uploaded (the transform is
+//! affine, so transforming the vertices' UVs gives the same sample at every pixel as
+//! transforming the interpolated UV in the shader, with nothing added per draw).
 //!
 //! Its pipelines can be made one at a time ([`Renderer::new_deferred`], then
 //! [`Renderer::prepare`]): on WebGL2 each one is a shader compile and link that holds the
@@ -14,6 +19,7 @@
 //! pipeline nothing has asked for yet is made when it is first drawn with.
 
 mod camera;
+mod mipmap;
 pub use camera::OrbitCamera;
 
 use glam::{Mat4, Vec3};
@@ -157,6 +163,11 @@ pub struct Renderer {
     instances: wgpu::Buffer,
     instance_capacity: usize,
     meshes: Vec<GpuMesh>,
+    /// Textures given out by `texture_target` whose mip levels are still to be made (at the
+    /// next frame, after the caller has copied level 0 in).
+    pending_mips: Vec<wgpu::Texture>,
+    /// The pipeline that makes them, made the first time one is needed.
+    mip_blit: Option<mipmap::MipBlit>,
     palettes: Vec<PaletteSlot>,
     depth: Option<(wgpu::TextureView, u32, u32)>,
     scratch: Vec<CapsuleInstance>,
@@ -301,6 +312,8 @@ impl Renderer {
             instances,
             instance_capacity,
             meshes: Vec::new(),
+            pending_mips: Vec::new(),
+            mip_blit: None,
             palettes: Vec::new(),
             depth: None,
             scratch: Vec::new(),
@@ -426,7 +439,11 @@ impl Renderer {
                     joints: [j[0] as u32, j[1] as u32, j[2] as u32, j[3] as u32],
                     weights: part.weights[k],
                     color: part.color,
-                    uv: if textured.is_some() { part.uvs[k] } else { [0.0, 0.0] },
+                    uv: match (textured, part.uv_transform) {
+                        (None, _) => [0.0, 0.0],
+                        (Some(_), None) => part.uvs[k],
+                        (Some(_), Some(t)) => t.apply(part.uvs[k]),
+                    },
                 });
             }
             let start = indices.len() as u32;
@@ -461,14 +478,18 @@ impl Renderer {
     /// (bound with that texture's sampler from now on), for the caller to fill: with
     /// `queue().write_texture`, or on the web `copy_external_image_to_texture` from a decoded
     /// image (usable as a copy destination and a render attachment, as WebGPU asks of that
-    /// copy). `None` for a mesh or texture that does not exist.
+    /// copy). Fill level 0: when the sampler minifies through mipmaps the texture has a full
+    /// chain, and the other levels are made from level 0 before the next frame is drawn.
+    /// `None` for a mesh or texture that does not exist.
     pub fn texture_target(&mut self, mesh: MeshHandle, texture: usize, width: u32, height: u32) -> Option<wgpu::Texture> {
         let sampler = *self.meshes.get(mesh.0)?.samplers.get(texture)?;
         let max = self.device.limits().max_texture_dimension_2d;
+        let (width, height) = (width.clamp(1, max), height.clamp(1, max));
+        let levels = if cfg!(feature = "mipmaps") && mipmap::wants_mipmaps(sampler.min_filter) { mipmap::full_chain(width, height) } else { 1 };
         let tex = self.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("base colour"),
-            size: wgpu::Extent3d { width: width.clamp(1, max), height: height.clamp(1, max), depth_or_array_layers: 1 },
-            mip_level_count: 1,
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: levels,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: TEXTURE_FORMAT,
@@ -477,6 +498,9 @@ impl Renderer {
         });
         let bg = texture_bind_group(&self.device, &self.texture_layout, &tex, &sampler);
         self.meshes[mesh.0].textures[texture] = Some(bg);
+        if levels > 1 {
+            self.pending_mips.push(tex.clone());
+        }
         Some(tex)
     }
 
@@ -584,6 +608,12 @@ impl Renderer {
             self.prepare(PipelineKind::Figure);
         }
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        if cfg!(feature = "mipmaps") && !self.pending_mips.is_empty() {
+            let blit = self.mip_blit.get_or_insert_with(|| mipmap::MipBlit::new(&self.device, TEXTURE_FORMAT));
+            for tex in self.pending_mips.drain(..) {
+                blit.encode(&self.device, &mut encoder, &tex);
+            }
+        }
         {
             let depth_view = &self.depth.as_ref().map(|d| &d.0).expect("depth texture was just made");
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -636,7 +666,8 @@ impl Renderer {
 /// Base-colour textures are sRGB-encoded (glTF): sampled as linear colour.
 const TEXTURE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
-/// glTF sampler codes → wgpu. Mipmapped minifications sample the one level there is.
+/// glTF sampler codes → wgpu: the minification filter's own filter within a level and its
+/// filter between levels (a texture without levels ignores the latter).
 fn texture_bind_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, tex: &wgpu::Texture, s: &odori_core::import::Sampler) -> wgpu::BindGroup {
     let filter = |code: Option<u32>| match code {
         Some(9728) | Some(9984) | Some(9986) => wgpu::FilterMode::Nearest,
@@ -653,6 +684,11 @@ fn texture_bind_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, tex
         address_mode_v: wrap(s.wrap_t),
         mag_filter: filter(s.mag_filter),
         min_filter: filter(s.min_filter),
+        // NEAREST_MIPMAP_NEAREST and LINEAR_MIPMAP_NEAREST pick one level; the others blend two.
+        mipmap_filter: match s.min_filter {
+            Some(9984) | Some(9985) => wgpu::MipmapFilterMode::Nearest,
+            _ => wgpu::MipmapFilterMode::Linear,
+        },
         ..Default::default()
     });
     let view = tex.create_view(&Default::default());

@@ -11,6 +11,11 @@
 //! product's own skinning puts it at rest, so a character bound in another pose (or with
 //! several bind matrices per joint, as the importer's palette allows) comes out bound at rest
 //! with the same look; a rig bound at rest (the usual case) keeps its vertices exactly.
+//!
+//! A textured part keeps its look: its UV set is written as `TEXCOORD_0`, its base-colour
+//! image (PNG or JPEG, byte for byte) goes into the binary chunk through a buffer view with its
+//! MIME type, with the source's sampler, and its `KHR_texture_transform` is written back (and
+//! named in `extensionsUsed`).
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -21,7 +26,7 @@ use json::validation::{Checked::Valid, USize64};
 
 use super::{check_clips, ExportError};
 use crate::clip::Clip;
-use crate::import::SkinnedMesh;
+use crate::import::{MeshTexture, SkinnedMesh, UvTransform};
 use crate::motion;
 use crate::skeleton::Skeleton;
 
@@ -42,6 +47,9 @@ pub(super) struct Bin {
 
 pub(super) enum Kind {
     Scalar,
+    // UVs, written only with the `export-textures` feature.
+    #[cfg_attr(not(feature = "export-textures"), allow(dead_code))]
+    Vec2,
     Vec3,
     Vec4,
     Mat4,
@@ -79,6 +87,7 @@ impl Bin {
         let view = self.view(data, target);
         let type_ = match kind {
             Kind::Scalar => json::accessor::Type::Scalar,
+            Kind::Vec2 => json::accessor::Type::Vec2,
             Kind::Vec3 => json::accessor::Type::Vec3,
             Kind::Vec4 => json::accessor::Type::Vec4,
             Kind::Mat4 => json::accessor::Type::Mat4,
@@ -162,6 +171,8 @@ struct RestPart {
     weights: Vec<[f32; 4]>,
     indices: Vec<u32>,
     color: [f32; 4],
+    /// The base-colour texture (an index into the mesh's textures), its UVs and transform.
+    texture: Option<(usize, Vec<[f32; 2]>, Option<UvTransform>)>,
 }
 
 fn rest_parts(mesh: &SkinnedMesh, rest: &[Mat4], joints: usize) -> Result<Vec<RestPart>, ExportError> {
@@ -198,7 +209,23 @@ fn rest_parts(mesh: &SkinnedMesh, rest: &[Mat4], joints: usize) -> Result<Vec<Re
             weights: Vec::with_capacity(nv),
             indices: part.indices.clone(),
             color: part.color.map(|c| if c.is_finite() { c.clamp(0.0, 1.0) } else { 1.0 }),
+            texture: None,
         };
+        // Without the feature (the player build) a character is written untextured.
+        if let (true, Some(t)) = (cfg!(feature = "export-textures"), part.texture) {
+            if t >= mesh.textures.len() {
+                return Err(ExportError::BadMesh { part: pi, message: format!("texture {t} but the mesh has {}", mesh.textures.len()) });
+            }
+            if part.uvs.len() != nv {
+                return Err(ExportError::BadMesh { part: pi, message: format!("a texture but {} UVs for {nv} vertices", part.uvs.len()) });
+            }
+            if let Some(v) = part.uvs.iter().position(|uv| !uv.iter().all(|x| x.is_finite())) {
+                return Err(ExportError::BadMesh { part: pi, message: format!("UV {v} is not finite") });
+            }
+            // A transform that is not finite is left out, as the importer leaves it out.
+            let transform = part.uv_transform.filter(|x| x.offset.iter().chain(&x.scale).chain([&x.rotation_rad]).all(|v| v.is_finite()));
+            rp.texture = Some((t, part.uvs.clone(), transform));
+        }
         for v in 0..nv {
             // Where the product's skinning puts the vertex at rest: Σ w · rest(joint) · bind.
             let mut m = Mat4::ZERO;
@@ -243,6 +270,7 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
     // Mesh, materials and skin.
     if let Some(mesh) = options.mesh.filter(|m| !m.parts.is_empty()) {
         let parts = rest_parts(mesh, &rest_m, n)?;
+        let texture_index = if cfg!(feature = "export-textures") { textures(&mut root, &mut bin, &mesh.textures, &parts) } else { Vec::new() };
         let mut primitives = Vec::new();
         for (pi, part) in parts.iter().enumerate() {
             use json::accessor::ComponentType as C;
@@ -255,9 +283,11 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
             let wgt = bin.accessor(&f32_bytes(part.weights.iter().flatten().copied()), nv, C::F32, Kind::Vec4, Some(ArrayBuffer), None);
             let ib: Vec<u8> = part.indices.iter().flat_map(|x| x.to_le_bytes()).collect();
             let idx = bin.accessor(&ib, part.indices.len(), C::U32, Kind::Scalar, Some(ElementArrayBuffer), None);
+            let (base_color_texture, uv) = part_texture(&mut root, &mut bin, part, &texture_index);
             root.materials.push(json::Material {
                 name: Some(format!("material {pi}")),
                 pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+                    base_color_texture,
                     base_color_factor: json::material::PbrBaseColorFactor(part.color),
                     metallic_factor: json::material::StrengthFactor(0.0),
                     roughness_factor: json::material::StrengthFactor(0.8),
@@ -268,6 +298,9 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
             let mut attributes = BTreeMap::new();
             attributes.insert(Valid(json::mesh::Semantic::Positions), pos);
             attributes.insert(Valid(json::mesh::Semantic::Normals), nor);
+            if let Some(uv) = uv {
+                attributes.insert(Valid(json::mesh::Semantic::TexCoords(0)), uv);
+            }
             attributes.insert(Valid(json::mesh::Semantic::Joints(0)), jnt);
             attributes.insert(Valid(json::mesh::Semantic::Weights(0)), wgt);
             primitives.push(json::mesh::Primitive {
@@ -311,6 +344,102 @@ pub fn glb(skeleton: &Skeleton, clips: &[&Clip], options: &GlbOptions) -> Result
 
     animations(&mut root, &mut bin, clips, |_| true)?;
     finish(root, bin, scene_nodes)
+}
+
+/// The mesh's textures some part uses, each as an image in the binary chunk (a buffer view
+/// with its MIME type), its sampler and a texture; returns the glTF texture index of each of
+/// `textures` (unused ones are not written: the validator reports unused objects).
+fn textures(root: &mut json::Root, bin: &mut Bin, textures: &[MeshTexture], parts: &[RestPart]) -> Vec<json::Index<json::Texture>> {
+    use json::texture::{MagFilter, MinFilter, WrappingMode};
+    let mut index = vec![json::Index::new(0); textures.len()];
+    for (i, t) in textures.iter().enumerate() {
+        if !parts.iter().any(|p| matches!(&p.texture, Some((k, _, _)) if *k == i)) {
+            continue;
+        }
+        let view = bin.view(&t.image, None);
+        root.images.push(json::Image {
+            buffer_view: Some(view),
+            mime_type: Some(json::image::MimeType(t.mime_type.clone())),
+            name: None,
+            uri: None,
+            extensions: None,
+            extras: Default::default(),
+        });
+        // glTF's codes back to its enums; a code the importer never gives is left out (the
+        // client's default).
+        let mag = match t.sampler.mag_filter {
+            Some(9728) => Some(MagFilter::Nearest),
+            Some(9729) => Some(MagFilter::Linear),
+            _ => None,
+        };
+        let min = match t.sampler.min_filter {
+            Some(9728) => Some(MinFilter::Nearest),
+            Some(9729) => Some(MinFilter::Linear),
+            Some(9984) => Some(MinFilter::NearestMipmapNearest),
+            Some(9985) => Some(MinFilter::LinearMipmapNearest),
+            Some(9986) => Some(MinFilter::NearestMipmapLinear),
+            Some(9987) => Some(MinFilter::LinearMipmapLinear),
+            _ => None,
+        };
+        let wrap = |code: u32| match code {
+            33071 => WrappingMode::ClampToEdge,
+            33648 => WrappingMode::MirroredRepeat,
+            _ => WrappingMode::Repeat,
+        };
+        root.samplers.push(json::texture::Sampler {
+            mag_filter: mag.map(Valid),
+            min_filter: min.map(Valid),
+            name: None,
+            wrap_s: Valid(wrap(t.sampler.wrap_s)),
+            wrap_t: Valid(wrap(t.sampler.wrap_t)),
+            extensions: None,
+            extras: Default::default(),
+        });
+        root.textures.push(json::Texture {
+            name: None,
+            sampler: Some(json::Index::new(root.samplers.len() as u32 - 1)),
+            source: json::Index::new(root.images.len() as u32 - 1),
+            extensions: None,
+            extras: Default::default(),
+        });
+        index[i] = json::Index::new(root.textures.len() as u32 - 1);
+    }
+    index
+}
+
+/// A part's base-colour texture for its material, and its UVs' accessor. The kept UV set is
+/// written as TEXCOORD_0 (whichever set the source's material named), so the material's and the
+/// transform's texCoord are 0.
+#[cfg(feature = "export-textures")]
+fn part_texture(root: &mut json::Root, bin: &mut Bin, part: &RestPart, texture_index: &[json::Index<json::Texture>]) -> (Option<json::texture::Info>, Option<json::Index<json::Accessor>>) {
+    use json::accessor::ComponentType as C;
+    let Some((t, uvs, transform)) = &part.texture else { return (None, None) };
+    let uv = bin.accessor(&f32_bytes(uvs.iter().flatten().copied()), uvs.len(), C::F32, Kind::Vec2, Some(json::buffer::Target::ArrayBuffer), None);
+    let texture_transform = transform.map(|x| json::extensions::texture::TextureTransform {
+        offset: json::extensions::texture::TextureTransformOffset(x.offset),
+        rotation: json::extensions::texture::TextureTransformRotation(x.rotation_rad),
+        scale: json::extensions::texture::TextureTransformScale(x.scale),
+        // gltf-json writes a `None` here as `null`, which the validator rejects; 0 names the
+        // one set written.
+        tex_coord: Some(0),
+        extras: Default::default(),
+    });
+    if texture_transform.is_some() && !root.extensions_used.iter().any(|e| e == "KHR_texture_transform") {
+        root.extensions_used.push("KHR_texture_transform".into());
+    }
+    let info = json::texture::Info {
+        index: texture_index[*t],
+        tex_coord: 0,
+        extensions: texture_transform.map(|tt| json::extensions::texture::Info { texture_transform: Some(tt), others: Default::default() }),
+        extras: Default::default(),
+    };
+    (Some(info), Some(uv))
+}
+
+/// Without the feature (the player build) a character is written untextured.
+#[cfg(not(feature = "export-textures"))]
+fn part_texture(_: &mut json::Root, _: &mut Bin, _: &RestPart, _: &[json::Index<json::Texture>]) -> (Option<json::texture::Info>, Option<json::Index<json::Accessor>>) {
+    (None, None)
 }
 
 /// A fresh document and an empty binary chunk.

@@ -34,6 +34,36 @@ pub struct MeshPart {
     pub texture: Option<usize>,
     #[serde(default)]
     pub uvs: Vec<[f32; 2]>,
+    /// The material's `KHR_texture_transform` on its base-colour texture, applied to `uvs`
+    /// when sampling (the drawing side's, and written back on export). `None`: the UVs as they are.
+    #[serde(default)]
+    pub uv_transform: Option<UvTransform>,
+}
+
+/// A `KHR_texture_transform`: the UVs are scaled, then rotated, then offset
+/// (uv' = T · R · S · uv). The rotation is the one the implementations and the Khronos sample
+/// model agree on (glTF issue #1563: the extension's GLSL listing has the sign of the sine
+/// wrong for a V-down UV space): u' = cos·u + sin·v, v' = −sin·u + cos·v.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct UvTransform {
+    pub offset: [f32; 2],
+    pub rotation_rad: f32,
+    pub scale: [f32; 2],
+}
+
+impl Default for UvTransform {
+    fn default() -> Self {
+        UvTransform { offset: [0.0, 0.0], rotation_rad: 0.0, scale: [1.0, 1.0] }
+    }
+}
+
+impl UvTransform {
+    /// Where `uv` samples the texture.
+    pub fn apply(&self, uv: [f32; 2]) -> [f32; 2] {
+        let (s, c) = self.rotation_rad.sin_cos();
+        let (x, y) = (uv[0] * self.scale[0], uv[1] * self.scale[1]);
+        [c * x + s * y + self.offset[0], -s * x + c * y + self.offset[1]]
+    }
 }
 
 /// How a texture is sampled (glTF's sampler codes: 9728 nearest, 9729 linear, the mipmap
@@ -707,7 +737,14 @@ fn read_meshes(
             let pbr = prim.material().pbr_metallic_roughness();
             let mut part = MeshPart { positions, normals, joints, weights, indices, color: pbr.base_color_factor(), ..Default::default() };
             if let Some(info) = pbr.base_color_texture() {
-                let uvs: Vec<[f32; 2]> = r.read_tex_coords(info.tex_coord()).map(|t| t.into_f32().collect()).unwrap_or_default();
+                // The transform's own texCoord, when it has one, overrides the texture's.
+                // (Read only with the `export-textures` feature: the player build leaves it out.)
+                #[cfg(feature = "export-textures")]
+                let transform = info.texture_transform().map(|t| (UvTransform { offset: t.offset(), rotation_rad: t.rotation(), scale: t.scale() }, t.tex_coord()));
+                #[cfg(not(feature = "export-textures"))]
+                let transform: Option<(UvTransform, Option<u32>)> = None;
+                let set = transform.and_then(|t| t.1).unwrap_or(info.tex_coord());
+                let uvs: Vec<[f32; 2]> = r.read_tex_coords(set).map(|t| t.into_f32().collect()).unwrap_or_default();
                 let tex = info.texture();
                 let slot = *texture_of.entry(tex.index()).or_insert_with(|| {
                     let t = read_texture(&tex, data);
@@ -722,8 +759,13 @@ fn read_meshes(
                 if uvs.len() == nv && slot.is_some() {
                     part.texture = slot;
                     part.uvs = uvs;
+                    part.uv_transform = transform.map(|t| t.0);
+                    if let Some(t) = part.uv_transform.filter(|t| !(t.offset.iter().chain(&t.scale).all(|v| v.is_finite()) && t.rotation_rad.is_finite())) {
+                        warnings.push(format!("mesh '{}': its texture transform {t:?} is not finite and is ignored", m.name().unwrap_or("?")));
+                        part.uv_transform = None;
+                    }
                 } else if slot.is_some() {
-                    warnings.push(format!("mesh '{}' has a texture but no TEXCOORD_{} for its {nv} vertices; its base colour is used", m.name().unwrap_or("?"), info.tex_coord()));
+                    warnings.push(format!("mesh '{}' has a texture but no TEXCOORD_{set} for its {nv} vertices; its base colour is used", m.name().unwrap_or("?")));
                 }
             }
             mesh.parts.push(part);

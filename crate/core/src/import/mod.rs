@@ -23,7 +23,7 @@ use crate::clip::Clip;
 use crate::humanoid::{HumanoidMap, HumanoidStatus};
 use crate::skeleton::Skeleton;
 
-pub use self::gltf::{MeshPart, MeshTexture, Sampler, SkinnedMesh};
+pub use self::gltf::{MeshPart, MeshTexture, Sampler, SkinnedMesh, UvTransform};
 
 /// What the person (or the caller) can say about a file before it is read.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
