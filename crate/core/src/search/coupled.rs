@@ -10,10 +10,11 @@
 //! path has to serve every row, moving right by one or two columns per row — gives a bound
 //! that, on the real hour of motion, leaves a few percent of the cells to compute.
 //!
-//! `L(i, j)` is the distance from query frame i to the joint boxes of the [`FINE`]-frame chunk
-//! holding library frame j (`point_box`, a lower bound of the frame distance to every frame in
-//! the box), shrunk by a relative 1e-5 so f32 rounding in the box arithmetic never lifts it
-//! above the real distance. The backward DP uses exactly the forward step pattern: from
+//! `L(i, j)` is the distance between the joint boxes of the [`QFINE`]-frame query chunk
+//! holding query frame i and the [`FINE`]-frame library chunk holding library frame j
+//! (`box_box`, a lower bound of the frame distance between any two frames inside them),
+//! shrunk by a relative 1e-5 so f32 rounding in the box arithmetic never lifts it above the
+//! real distance. The backward DP uses exactly the forward step pattern: from
 //! (i, j) the path enters (i+1, j+1) with weight 2 and then stops there, or goes on to
 //! (i+1, j+2) or (i+2, j+1) with weight 1. Every real completion is one of those paths, and
 //! each of its terms `w·(d − τ)` is at least `w·(L − τ)`, so `B ≤` its `Σ w·(d − τ)`. For a
@@ -21,11 +22,13 @@
 //! a table built at τ stays a lower bound when the search's τ falls. The table's own f32
 //! rounding is covered by the slack the user subtracts ([`Coupled::at`]).
 
-use super::lanes::{point_box, push_box, BOX_FLOATS};
+use super::lanes::{box_box, push_box, BOX_FLOATS};
 use super::{Prepared, LANE_FLOATS};
 
 /// Library frames per box of the bound (smaller: tighter bound, more box distances).
 pub(crate) const FINE: usize = 8;
+/// Query frames per box of the bound.
+pub(crate) const QFINE: usize = 2;
 /// Columns a table covers (it is computed over `2·(I − 1)` more, where the paths of its
 /// columns may still run).
 pub(crate) const SPAN: usize = 2048;
@@ -40,6 +43,8 @@ pub(crate) struct Coupled {
     table: Vec<f32>,
     lrow: Vec<f32>,
     bx: Vec<f32>,
+    /// The query's boxes (filled on the first build: one `Coupled` serves one query).
+    qboxes: Vec<f32>,
     /// Rounding slack scale `2τ(I + maxSpan)` of the table's τ.
     scale: f32,
     /// Box distances computed (work counter).
@@ -61,16 +66,24 @@ impl Coupled {
         // L − τ, row-major.
         self.lrow.clear();
         self.lrow.resize(rows * w, 0.0);
+        // The query's boxes (`QFINE` frames each), made once per query.
+        if self.qboxes.is_empty() {
+            for ch in prep.query_lanes.chunks(QFINE * LANE_FLOATS) {
+                push_box(ch, &mut self.qboxes);
+            }
+        }
         for c in (b0..hi).step_by(FINE) {
             let c1 = (c + FINE).min(hi);
             self.bx.clear();
             push_box(&target[c * LANE_FLOATS..c1 * LANE_FLOATS], &mut self.bx);
             let bx = &self.bx[..BOX_FLOATS];
-            for i in 0..rows {
-                let e = point_box(prep.ql(i), bx, &prep.groups) * (1.0 - 1e-5) - tau;
-                self.lrow[i * w + (c - b0)..i * w + (c1 - b0)].fill(e);
+            for (q, qb) in self.qboxes.chunks_exact(BOX_FLOATS).enumerate() {
+                let e = box_box(qb, bx, &prep.groups) * (1.0 - 1e-5) - tau;
+                for i in q * QFINE..((q + 1) * QFINE).min(rows) {
+                    self.lrow[i * w + (c - b0)..i * w + (c1 - b0)].fill(e);
+                }
             }
-            self.boxes += rows as u64;
+            self.boxes += self.qboxes.len() as u64 / BOX_FLOATS as u64;
         }
         // The backward DP: B(I − 1, ·) = 0 (a path may end at any column); columns past `hi`
         // are out of reach of the valid columns' paths (or past the clip), so +∞ there.
