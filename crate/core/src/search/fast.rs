@@ -313,15 +313,16 @@ fn filter_pass(
     let mut upper_seen = 0usize;
     let mut done = 0usize;
     let mut filter = Filter::new(rows);
+    filter.busy = true;
     let mut coupled = Coupled::default();
     for &(ci, from, to) in segments {
         let target = index.clips[ci].lanes(prep.origin);
         let cols = target.len() / LANE_FLOATS;
         let cb = &bounds.clips[ci];
         filter.reset(from);
-        filter.busy = true;
         // The coupled bound's table, rebuilt every `SPAN` columns at the τ of the time, where
-        // paths get past their first row.
+        // paths get past their first row (`busy` carries over from the previous clip, so a
+        // library of many short clips does not pay a table per clip once τ is low).
         let mut table_to = from;
         for b0 in (from..to).step_by(BLOCK) {
             let p = SearchProgress { frames_done: done + b0 - from, frames_total: total, candidates: marks.len() };
