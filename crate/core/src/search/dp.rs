@@ -75,6 +75,8 @@ pub(crate) struct Prune<'a> {
     pub tau: f32,
     pub rest: &'a [f32],
     pub cols: f32,
+    /// The coupled bound of the rest of a path (`coupled.rs`), where it covers the column.
+    pub cell: Option<&'a super::coupled::Coupled>,
 }
 
 impl Prune<'_> {
@@ -83,7 +85,11 @@ impl Prune<'_> {
     #[inline]
     fn excess(&self, c: f32, s: usize, i: usize, j: usize) -> f32 {
         let w = (i + j + 2 - s) as f32;
-        let v = c - self.tau * w + self.rest[i] + self.cols;
+        let mut r = self.rest[i] + self.cols;
+        if let Some(cb) = self.cell.filter(|cb| cb.covers(j)) {
+            r = r.max(cb.at(i, j));
+        }
+        let v = c - self.tau * w + r;
         // Relative margin so rounding in the bound sums never drops a reportable path.
         v - (1e-4 * (c + self.tau * w) + 1e-6)
     }

@@ -37,6 +37,11 @@
 //! columns can reach. A frame distance is summed four joints at a time and abandoned once it
 //! exceeds the largest value any incoming path could survive with (the partial sum is itself a
 //! lower bound); an abandoned distance is recomputed in full if a compound step needs it.
+//! Both passes also use the *coupled* bound of `coupled.rs` where paths get past their first
+//! row: the same steps run backwards over box lower bounds of 8-frame library chunks, which
+//! bounds the rest of a path from each cell and not row by row, so one path has to serve every
+//! query frame (on a novel query this cut the cells needing a frame distance from about half
+//! to a few percent). Each bound is a lower bound, so the test keeps the larger of them.
 //! (The UCR Suite also reorders the query by variance; here the joints are summed in one fixed
 //! order, extremities first, because the sum must be bit-for-bit the plain DP's.)
 //!
@@ -54,10 +59,11 @@
 
 use std::ops::ControlFlow;
 
+use super::coupled::Coupled;
 use super::dp::{Engine, Prune};
 use super::filter::{Bound, Filter, Mark};
 use super::features::FeatureIndex;
-use super::lanes::{box_box, point_box, push_box, BOX_FLOATS};
+use super::lanes::{box_box, push_box, BOX_FLOATS};
 use super::results::{finish, order, select_matches, Candidate, SearchOutcome, SearchStats};
 use super::{Prepared, SearchError, SearchProgress, LANE_FLOATS};
 
@@ -281,33 +287,6 @@ fn block_bounds(cb: &ClipBounds, nq: usize, tau: f32, b0: usize, wend: usize, rq
     }
 }
 
-/// Row bounds that respect the slope limit (an envelope in the spirit of LB_Keogh's): a path
-/// at row i and a column of the block `b0 .. b0 + BLOCK` reaches row `i' = i + Δ` at a column
-/// no later than `b0 + BLOCK − 1 + 2Δ` (and never past `wend − 1`), so row i' adds at least the
-/// least bound of the target chunks up to that column. `rest[i] = Σ_{i' > i} (that − τ)`; `pm`
-/// is scratch (prefix minima over the window's chunks, per query frame).
-fn slope_rest(pb: &[f32], rows: usize, tau: f32, b0: usize, wend: usize, pm: &mut Vec<f32>, rest: &mut [f32]) {
-    let t0 = b0 / CHUNK;
-    let nt = (wend - 1) / CHUNK + 1 - t0;
-    pm.clear();
-    pm.extend_from_slice(&pb[t0 * rows..(t0 + 1) * rows]);
-    for k in 1..nt {
-        let t = t0 + k;
-        for i in 0..rows {
-            let m = pm[(k - 1) * rows + i].min(pb[t * rows + i]);
-            pm.push(m);
-        }
-    }
-    for (i, r) in rest.iter_mut().enumerate() {
-        let mut s = 0.0f32;
-        for ip in i + 1..rows {
-            let reach = (b0 + BLOCK - 1 + 2 * (ip - i)).min(wend - 1);
-            s += pm[(reach / CHUNK - t0) * rows + ip] - tau;
-        }
-        *r = s;
-    }
-}
-
 /// The marks of the one-value pass (`filter.rs`) over `segments` (whole clips), τ starting at
 /// `tau0` and lowered after each block to the far-set bound of the real paths found.
 type FilterResult = (Vec<(usize, Mark)>, f32, SearchStats);
@@ -334,25 +313,17 @@ fn filter_pass(
     let mut upper_seen = 0usize;
     let mut done = 0usize;
     let mut filter = Filter::new(rows);
-    let mut pb: Vec<f32> = Vec::new();
-    let mut pm: Vec<f32> = Vec::new();
-    let mut have: Vec<bool> = Vec::new();
+    filter.busy = true;
+    let mut coupled = Coupled::default();
     for &(ci, from, to) in segments {
         let target = index.clips[ci].lanes(prep.origin);
         let cols = target.len() / LANE_FLOATS;
         let cb = &bounds.clips[ci];
-        // Row bounds per query frame (not per query chunk): `pb[t · rows + i]` bounds d(i, ·)
-        // over target chunk t (the frame's distance to the chunk's boxes).
-        // Built lazily, chunk by chunk, for the blocks where paths live past the first row
-        // (where only a few columns start a path, the chunk bounds already settle it).
-        let boxes = index.clips[ci].chunk_boxes(prep.origin);
-        let nchunks = boxes.len() / BOX_FLOATS;
-        pb.clear();
-        pb.resize(nchunks * rows, 0.0);
-        have.clear();
-        have.resize(nchunks, false);
         filter.reset(from);
-        filter.busy = true;
+        // The coupled bound's table, rebuilt every `SPAN` columns at the τ of the time, where
+        // paths get past their first row (`busy` carries over from the previous clip, so a
+        // library of many short clips does not pay a table per clip once τ is low).
+        let mut table_to = from;
         for b0 in (from..to).step_by(BLOCK) {
             let p = SearchProgress { frames_done: done + b0 - from, frames_total: total, candidates: marks.len() };
             if progress(p).is_break() {
@@ -367,24 +338,17 @@ fn filter_pass(
                 upper.retain(|c| c.score <= tau);
             }
             block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
-            if filter.busy {
-                for t in b0 / CHUNK..=(wend - 1) / CHUNK {
-                    if !have[t] {
-                        have[t] = true;
-                        let bx = &boxes[t * BOX_FLOATS..(t + 1) * BOX_FLOATS];
-                        for (i, r) in pb[t * rows..(t + 1) * rows].iter_mut().enumerate() {
-                            *r = point_box(prep.ql(i), bx, &prep.groups);
-                        }
-                    }
-                }
-                slope_rest(&pb, rows, tau, b0, wend, &mut pm, &mut rest);
+            if b0 >= table_to && filter.busy {
+                coupled.build(prep, target, b0, to, tau);
+                table_to = coupled.valid_to;
             }
             filter.busy = false;
+            let cell = (b0 < table_to && coupled.covers(b0)).then_some(&coupled);
             // Stored values may have been summed with any τ since τ0: the margin scales with it.
             let margin = filter_margin(prep, tau0);
             for j in b0..b1 {
                 let last = (j + prep.max_span - 1).min(cols - 1);
-                let bound = Bound { margin, rest: &rest, fneg: &fneg, base: b0, last };
+                let bound = Bound { margin, rest: &rest, fneg: &fneg, base: b0, last, cell };
                 if let Some(m) = filter.column(prep, target, j, tau, &bound) {
                     let score = m.cost / (rows + m.end + 1 - m.start) as f32;
                     // A real path: its distance bounds its end's from above, wherever it lies.
@@ -409,7 +373,8 @@ fn filter_pass(
         }
         done += to - from;
     }
-    stats.distances_computed = filter.distances;
+    // A box distance costs about one frame distance: counted with them.
+    stats.distances_computed = filter.distances + coupled.boxes;
     Ok((marks, tau, stats))
 }
 
@@ -543,7 +508,7 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
             let fneg = vec![0f32; cols + 1 - from];
             filter.reset(from);
             for j in from..to {
-                let bound = Bound { margin: f32::INFINITY, rest: &rest, fneg: &fneg, base: from, last: (j + prep.max_span - 1).min(cols - 1) };
+                let bound = Bound { margin: f32::INFINITY, rest: &rest, fneg: &fneg, base: from, last: (j + prep.max_span - 1).min(cols - 1), cell: None };
                 if let Some(m) = filter.column(prep, target, j, lambda, &bound) {
                     let score = m.cost / (rows + m.end + 1 - m.start) as f32;
                     pool.push(Candidate { clip: ci, start: m.start, end: m.end, score, cost: m.cost });
@@ -589,12 +554,14 @@ fn scan(
     let mut eng = Engine::new(rows);
     let mut rest = vec![0f32; rows];
     let mut fneg: Vec<f32> = Vec::new();
+    let mut coupled = Coupled::default();
 
     for &(ci, from, to) in segments {
         let target = index.clips[ci].lanes(prep.origin);
         let cols = target.len() / LANE_FLOATS;
         let cb = &bounds.clips[ci];
         eng.reset(from);
+        let mut table_to = from;
         for b0 in (from..to).step_by(BLOCK) {
             let p = SearchProgress { frames_done: done + b0 - from, frames_total: total, candidates: pool.len() };
             if progress(p).is_break() {
@@ -609,12 +576,16 @@ fn scan(
                 // Row bounds: the nearest clip chunk, over the columns this block's paths can
                 // reach (an end is at most maxSpan − 1 columns after any column of its path).
                 block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
+                if b0 >= table_to {
+                    coupled.build(prep, target, b0, to, tau);
+                    table_to = coupled.valid_to;
+                }
             }
             for j in b0..b1 {
                 let found = if prune {
                     let hi = (j + prep.max_span - 1).min(cols - 1);
                     let cols_bound = if hi > j { fneg[hi + 1 - b0] - fneg[j + 1 - b0] } else { 0.0 };
-                    eng.column(prep, target, j, Some(&Prune { tau, rest: &rest, cols: cols_bound }))
+                    eng.column(prep, target, j, Some(&Prune { tau, rest: &rest, cols: cols_bound, cell: (table_to > from).then_some(&coupled) }))
                 } else {
                     eng.column(prep, target, j, None)
                 };
@@ -638,7 +609,7 @@ fn scan(
         done += to - from;
     }
     pool.retain(|c| c.score <= tau);
-    stats.distances_computed = eng.distances;
+    stats.distances_computed = eng.distances + coupled.boxes;
     Ok((pool, stats, tau))
 }
 

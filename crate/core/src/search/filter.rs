@@ -68,6 +68,8 @@ pub(crate) struct Bound<'a> {
     pub fneg: &'a [f32],
     pub base: usize,
     pub last: usize,
+    /// The coupled bound of the rest of a path (see `coupled.rs`), when one covers the column.
+    pub cell: Option<&'a super::coupled::Coupled>,
 }
 
 /// The one-value DP over one clip segment.
@@ -81,8 +83,9 @@ pub(crate) struct Filter {
     from: usize,
     /// Frame distances started.
     pub distances: u64,
-    /// Set when a cell past the first row is kept (the caller clears it): only then are the
-    /// costlier row bounds worth building.
+    /// Set when a cell past the first row is kept (the caller clears it): only then is the
+    /// coupled bound worth its box distances (where the row bounds already stop every path at
+    /// its first row, they settle the stretch alone).
     pub busy: bool,
 }
 
@@ -136,11 +139,21 @@ impl Filter {
             let cols = if last > j { bound.fneg[last + 1 - bound.base] - here } else { 0.0 };
             bound.margin - cols
         };
+        // margin − the bound of the rest of a path at row i: the larger of the row and column
+        // bounds and the coupled one.
+        let cell = bound.cell.filter(|c| c.covers(j));
+        let room = |i: usize| -> f32 {
+            let r = budget(i) - rest[i];
+            match cell {
+                Some(c) => r.min(bound.margin - c.at(i, j)),
+                None => r,
+            }
+        };
         let mut lo = usize::MAX;
         let mut hi = 0usize;
         // Row 0: a new start, value 2(d − τ).
         {
-            let limit = tau + (budget(0) - rest[0]) / 2.0;
+            let limit = tau + room(0) / 2.0;
             if limit >= 0.0 {
                 self.distances += 1;
                 let d = prep.d_abandon(0, t, limit);
@@ -167,7 +180,7 @@ impl Filter {
         let r_lo = r_lo.max(1);
         let r_hi = r_hi.min(rows);
         for i in r_lo..r_hi {
-            let b = budget(i) - rest[i];
+            let b = room(i);
             let va = c1.at(i - 1);
             let mut vh = c2.at(i - 1);
             let mut vv = if i >= 2 { c1.at(i - 2) } else { f32::INFINITY };

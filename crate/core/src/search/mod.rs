@@ -19,6 +19,7 @@
 //! `fast.rs`); [`search_plain`] computes every cell (the benchmark baseline). Both return the
 //! same results, and the tests check both against brute force (every start evaluated alone).
 
+mod coupled;
 mod dp;
 mod fast;
 mod filter;
