@@ -45,6 +45,10 @@ pub struct Figures {
     /// Targets where guided likes end closer than the mean of [`RANDOM_DRAWS`] random people
     /// (the random person's expected result, not one lucky or unlucky draw).
     pub wins_vs_mean: usize,
+    /// Over the [`RANDOM_DRAWS`] random people taken one at a time: the median of the targets
+    /// where guided likes end closer than that person, and the median of the ties.
+    pub wins_median: usize,
+    pub ties_median: usize,
     /// Mean over targets of eq. 9 (mean pairwise raw kWAS D of the 6 shown) per round, guided:
     /// §F's check that the shown set narrows.
     pub diversity: Vec<f32>,
@@ -53,24 +57,62 @@ pub struct Figures {
 /// Random people per target for [`Figures::wins_vs_mean`].
 pub const RANDOM_DRAWS: usize = 5;
 
+/// The target sets: A (the one the product's choices were tuned on, and the test's), then B
+/// and C, held out; each 64 segments spread over the library, at offsets 3, 8 and 5.
+pub const SETS: [(&str, usize); 3] = [("A (tuned on)", 3), ("B (held out)", 8), ("C (held out)", 5)];
+
 #[allow(dead_code)]
 fn main() {
-    let f = measure();
     let rho = Settings::default().rho;
-    println!("preference test (spec §J), {} targets, {} segments, {LIKES} likes per round, ρ {rho}:", f.targets, f.segments);
+    let (lib, positions) = library();
+    // `PREFERENCE_SETS=10`: every offset 0..10, ten disjoint sets (the whole library), for a
+    // steadier count than three sets give.
+    let sets: Vec<(String, usize)> = match std::env::var("PREFERENCE_SETS").ok().and_then(|v| v.parse::<usize>().ok()) {
+        Some(n) => (0..n.min(10)).map(|o| (format!("offset {o}"), o)).collect(),
+        None => SETS.iter().map(|&(n, o)| (n.to_string(), o)).collect(),
+    };
+    let mut total = [0usize; 4];
+    for (name, offset) in &sets {
+        let f = measure_on(&lib, &positions, *offset);
+        total[0] += f.targets;
+        total[1] += f.wins_vs_mean;
+        total[2] += f.wins_median;
+        total[3] += f.ties_median;
+        println!("preference test (spec §J), set {name}, {} targets, {} segments, {LIKES} likes per round, ρ {rho}:", f.targets, f.segments);
+        print_figures(&f);
+    }
+    println!(
+        "all sets: guided closer than the mean of {RANDOM_DRAWS} random people on {}/{} ({:.1} %); than one random person (median per set) on {} ({:.1} %), equal on {}",
+        total[1],
+        total[0],
+        100.0 * total[1] as f32 / total[0].max(1) as f32,
+        total[2],
+        100.0 * total[2] as f32 / total[0].max(1) as f32,
+        total[3]
+    );
+}
+
+fn print_figures(f: &Figures) {
     println!("  agreement of the search's Sim with the perceptual distance: Spearman {:.3} (mean over the targets)", f.agreement);
     println!("  round:                 {}", (1..=ROUNDS).map(|r| format!("{r:>7}")).collect::<String>());
     println!("  best shown, guided:    {}", f.guided_curve.iter().map(|v| format!("{v:>7.4}")).collect::<String>());
     println!("  best shown, random:    {}", f.random_curve.iter().map(|v| format!("{v:>7.4}")).collect::<String>());
     println!("  eq. 9 diversity, guided: {}", f.diversity.iter().map(|v| format!("{v:>7.4}")).collect::<String>());
     println!(
-        "  guided closer than the mean of {RANDOM_DRAWS} random people on {}/{} targets ({:.0} %)",
+        "  guided closer than the mean of {RANDOM_DRAWS} random people on {}/{} targets ({:.0} %, goal ≥ 75 %)",
         f.wins_vs_mean,
         f.targets,
         100.0 * f.wins_vs_mean as f32 / f.targets.max(1) as f32
     );
     println!(
-        "  round 5 vs round 1 (guided): mean fall {:.1} % (goal ≥ 20 %), fall of the mean {:.1} %; guided closer than random on {}/{} targets ({:.0} %, goal ≥ 75 %), equal on {}, farther on {}",
+        "  guided closer than one random person: median over {RANDOM_DRAWS} people {}/{} ({:.0} %), equal on {} (median)",
+        f.wins_median,
+        f.targets,
+        100.0 * f.wins_median as f32 / f.targets.max(1) as f32,
+        f.ties_median
+    );
+    println!(
+        "  round 5 vs round 1 (guided): mean fall {:.1} % (goal ≥ 20 %), fall of the mean {:.1} %; guided closer than the first random person on {}/{} targets ({:.0} %), equal on {}, farther on {}",
         100.0 * f.mean_fall,
         100.0 * (1.0 - f.guided_curve[ROUNDS - 1] / f.guided_curve[0].max(1e-9)),
         f.wins,
@@ -81,8 +123,16 @@ fn main() {
     );
 }
 
-/// Runs the preference test on the real library.
+/// Runs the preference test on the real library, set A.
+#[allow(dead_code)]
 pub fn measure() -> Figures {
+    let (lib, positions) = library();
+    measure_on(&lib, &positions, SETS[0].1)
+}
+
+/// The real library (built-in moves + the CMU salsa and Indian clips) and each segment's
+/// canonical positions.
+pub fn library() -> (SegmentLibrary, Vec<Vec<Vec3>>) {
     let mut lib = SegmentLibrary::builtin();
     for rel in all_bvh().into_iter().filter(|r| r.contains("cmu-salsa") || r.contains("cmu-indian")) {
         let opts = ImportOptions { fps_override: fps_override_for(&rel), ..Default::default() };
@@ -101,13 +151,19 @@ pub fn measure() -> Figures {
         p[a * CANON_COUNT..(b + 1) * CANON_COUNT].to_vec()
     };
     let positions: Vec<Vec<Vec3>> = (0..lib.len()).map(seg_pos).collect();
+    (lib, positions)
+}
+
+/// The preference test on 64 targets spread over the library, from segment `offset` on.
+pub fn measure_on(lib: &SegmentLibrary, positions: &[Vec<Vec3>], offset: usize) -> Figures {
     let dist = |a: usize, b: usize| perceptual_distance(&positions[a], &positions[b]).unwrap_or(f32::INFINITY);
     let settings = Settings::default();
-    let targets: Vec<usize> = (0..TARGETS).map(|i| (i * lib.len()) / TARGETS + 3).filter(|&t| t < lib.len()).collect();
+    let targets: Vec<usize> = (0..TARGETS).map(|i| (i * lib.len()) / TARGETS + offset).filter(|&t| t < lib.len()).collect();
     let mut guided_curve = vec![0.0f32; ROUNDS];
     let mut random_curve = vec![0.0f32; ROUNDS];
     let mut diversity = vec![0.0f32; ROUNDS];
     let (mut falls, mut wins, mut ties, mut losses, mut wins_vs_mean) = (Vec::new(), 0, 0, 0, 0);
+    let (mut wins_each, mut ties_each) = ([0usize; RANDOM_DRAWS], [0usize; RANDOM_DRAWS]);
     // The first random person of every target draws from `x` (as before the extra draws were
     // added, so the one-person count stays comparable); the others from `y`.
     let mut x = 0x5DEE_CE66_Du64;
@@ -116,12 +172,12 @@ pub fn measure() -> Figures {
         let intensity = lib.segments()[t].intensity01;
         let best_at_round = |guided: bool, x: &mut u64, diversity: &mut [f32]| -> Vec<f32> {
             let mut session = FeedbackSession::new();
-            let mut round: Vec<usize> = session.next_round(&lib, intensity, settings.rho, CANDIDATES_PER_ROUND).to_vec();
+            let mut round: Vec<usize> = session.next_round(lib, intensity, settings.rho, CANDIDATES_PER_ROUND).to_vec();
             let mut best = f32::INFINITY;
             let mut out = Vec::new();
             for r in 0..ROUNDS {
                 if guided {
-                    diversity[r] += mean_pairwise_dissimilarity(&lib, &round) / targets.len() as f32;
+                    diversity[r] += mean_pairwise_dissimilarity(lib, &round) / targets.len() as f32;
                 }
                 // The target is hidden: the person has it in mind, it is not in the library they
                 // see, so showing it counts for nothing (otherwise ρ's intensity match, with the
@@ -148,15 +204,23 @@ pub fn measure() -> Figures {
                     }
                     pick
                 };
-                round = session.search(&lib, &liked, intensity, settings.rho, CANDIDATES_PER_ROUND).to_vec();
+                round = session.search(lib, &liked, intensity, settings.rho, CANDIDATES_PER_ROUND).to_vec();
             }
             out
         };
         let g = best_at_round(true, &mut x, &mut diversity);
         let r = best_at_round(false, &mut x, &mut []);
-        let mut random_final = r[ROUNDS - 1];
+        let mut finals = vec![r[ROUNDS - 1]];
         for _ in 1..RANDOM_DRAWS {
-            random_final += best_at_round(false, &mut y, &mut [])[ROUNDS - 1];
+            finals.push(best_at_round(false, &mut y, &mut [])[ROUNDS - 1]);
+        }
+        let random_final: f32 = finals.iter().sum();
+        for (d, &fd) in finals.iter().enumerate() {
+            if g[ROUNDS - 1] < fd {
+                wins_each[d] += 1;
+            } else if g[ROUNDS - 1] == fd {
+                ties_each[d] += 1;
+            }
         }
         if g[ROUNDS - 1] < random_final / RANDOM_DRAWS as f32 {
             wins_vs_mean += 1;
@@ -184,7 +248,10 @@ pub fn measure() -> Figures {
         spearman(&sim, &near)
     }).sum::<f32>() / targets.len() as f32;
     let mean_fall = falls.iter().sum::<f32>() / falls.len().max(1) as f32;
-    Figures { targets: targets.len(), segments: lib.len(), agreement, guided_curve, random_curve, mean_fall, wins, ties, losses, wins_vs_mean, diversity }
+    wins_each.sort_unstable();
+    ties_each.sort_unstable();
+    let (wins_median, ties_median) = (wins_each[RANDOM_DRAWS / 2], ties_each[RANDOM_DRAWS / 2]);
+    Figures { targets: targets.len(), segments: lib.len(), agreement, guided_curve, random_curve, mean_fall, wins, ties, losses, wins_vs_mean, wins_median, ties_median, diversity }
 }
 
 /// Spearman's rank correlation (no tie correction: the values are continuous).
