@@ -1,18 +1,21 @@
-//! The preference test of spec §J for the relevance-feedback search (§F), measured: a
-//! simulated person hides a target segment and, each round, likes the 2 shown candidates
-//! closest to it by the perceptual distance (`quality::perceptual_distance`: mean joint
-//! distance after time-normalising both to 32 frames and normalising as §B, not the eigen
-//! similarity the search uses). The control likes 2 shown candidates at random. Library: the
-//! built-in moves plus the real salsa and Indian clips; 64 targets spread over the library,
-//! each hidden (showing it counts for nothing);
-//! the bar's intensity is the target's; ρ and τ as the app's defaults. Prints, per round, the
-//! mean distance of the best candidate shown so far and eq. 9's diversity of the shown (which
-//! should fall), and at round 5 the fall from round 1 and the share of targets where the
-//! guided person is closer than a random one — one random person (a single draw, noisy), and
-//! the mean of 5 random people (the control's expected result) — goals ≥ 20 % and ≥ 75 %;
-//! and how well the search's similarity agrees with the perceptual distance (Spearman's rank
-//! correlation over the library). Asserts nothing. `cargo test -p odori-tests --bench
-//! choreo_preference` for a quick build.
+//! The preference test of spec §J for the relevance-feedback search (§F), measured on the
+//! product's code path (`choreo::feedback`): a simulated person hides a target segment and,
+//! each round, likes the 2 shown candidates closest to it by the perceptual distance
+//! (`quality::perceptual_distance`: mean joint distance after time-normalising both to 32
+//! frames and normalising as §B, not the eigen similarity the search uses). The control likes
+//! 2 shown candidates at random. Library: the built-in moves plus the real salsa and Indian
+//! clips; each set is 64 targets spread over the library, each hidden (showing it counts for
+//! nothing); the bar's intensity is the target's; ρ and τ as the app's defaults. Sets: A (the
+//! product's choices were tuned on it), B and C held out; `PREFERENCE_SETS=10` runs all ten
+//! disjoint sets (offsets 0..10, the whole library) instead, for a steadier count. Prints per
+//! set, per round, the mean distance of the best candidate shown so far and eq. 9's diversity
+//! of the shown (which should fall), and at round 5 the fall from round 1 (goal ≥ 20 %) and
+//! the share of targets where the guided person is closer than random likes (goal ≥ 75 %):
+//! against the mean of 5 random people (the control's expected result), and against one
+//! random person at a time (the median over the 5, with ties — the same best for both —
+//! counted apart); then the totals over the sets. Also how well the search's similarity agrees
+//! with the perceptual distance (Spearman's rank correlation over the library). Asserts
+//! nothing. `cargo test -p odori-tests --bench choreo_preference` for a quick build.
 
 use glam::Vec3;
 use odori_core::choreo::quality::perceptual_distance;
