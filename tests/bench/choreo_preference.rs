@@ -13,7 +13,8 @@
 //! the share of targets where the guided person is closer than random likes (goal ≥ 75 %):
 //! against the mean of 5 random people (the control's expected result), and against one
 //! random person at a time (the median over the 5, with ties — the same best for both —
-//! counted apart); then the totals over the sets. Also how well the search's similarity agrees
+//! counted apart); then the totals over the sets. `PREFERENCE_DRAWS=n` (n > 5) also compares
+//! with the mean of n random people, a steadier estimate of their expected result. Also how well the search's similarity agrees
 //! with the perceptual distance (Spearman's rank correlation over the library). Asserts
 //! nothing. `cargo test -p odori-tests --bench choreo_preference` for a quick build.
 
@@ -52,6 +53,10 @@ pub struct Figures {
     /// where guided likes end closer than that person, and the median of the ties.
     pub wins_median: usize,
     pub ties_median: usize,
+    /// With `PREFERENCE_DRAWS=n` (n > 5): targets where guided likes end closer than the mean
+    /// of n random people (a steadier estimate of the random person's expected result); else 0.
+    pub wins_vs_many: usize,
+    pub many_draws: usize,
     /// Mean over targets of eq. 9 (mean pairwise raw kWAS D of the 6 shown) per round, guided:
     /// §F's check that the shown set narrows.
     pub diversity: Vec<f32>,
@@ -74,13 +79,14 @@ fn main() {
         Some(n) => (0..n.min(10)).map(|o| (format!("offset {o}"), o)).collect(),
         None => SETS.iter().map(|&(n, o)| (n.to_string(), o)).collect(),
     };
-    let mut total = [0usize; 4];
+    let mut total = [0usize; 5];
     for (name, offset) in &sets {
         let f = measure_on(&lib, &positions, *offset);
         total[0] += f.targets;
         total[1] += f.wins_vs_mean;
         total[2] += f.wins_median;
         total[3] += f.ties_median;
+        total[4] += f.wins_vs_many;
         println!("preference test (spec §J), set {name}, {} targets, {} segments, {LIKES} likes per round, ρ {rho}:", f.targets, f.segments);
         print_figures(&f);
     }
@@ -93,6 +99,14 @@ fn main() {
         100.0 * total[2] as f32 / total[0].max(1) as f32,
         total[3]
     );
+    if let Some(n) = many_draws() {
+        println!("all sets: guided closer than the mean of {n} random people on {}/{} ({:.1} %)", total[4], total[0], 100.0 * total[4] as f32 / total[0].max(1) as f32);
+    }
+}
+
+/// `PREFERENCE_DRAWS`, when above [`RANDOM_DRAWS`].
+fn many_draws() -> Option<usize> {
+    std::env::var("PREFERENCE_DRAWS").ok().and_then(|v| v.parse::<usize>().ok()).filter(|&n| n > RANDOM_DRAWS)
 }
 
 fn print_figures(f: &Figures) {
@@ -107,6 +121,9 @@ fn print_figures(f: &Figures) {
         f.targets,
         100.0 * f.wins_vs_mean as f32 / f.targets.max(1) as f32
     );
+    if f.many_draws > 0 {
+        println!("  guided closer than the mean of {} random people on {}/{} targets ({:.0} %)", f.many_draws, f.wins_vs_many, f.targets, 100.0 * f.wins_vs_many as f32 / f.targets.max(1) as f32);
+    }
     println!(
         "  guided closer than one random person: median over {RANDOM_DRAWS} people {}/{} ({:.0} %), equal on {} (median)",
         f.wins_median,
@@ -167,6 +184,8 @@ pub fn measure_on(lib: &SegmentLibrary, positions: &[Vec<Vec3>], offset: usize) 
     let mut diversity = vec![0.0f32; ROUNDS];
     let (mut falls, mut wins, mut ties, mut losses, mut wins_vs_mean) = (Vec::new(), 0, 0, 0, 0);
     let (mut wins_each, mut ties_each) = ([0usize; RANDOM_DRAWS], [0usize; RANDOM_DRAWS]);
+    let mut wins_vs_many = 0;
+    let mut z = 0x9E37_79B9_7F4A_7C15u64;
     // The first random person of every target draws from `x` (as before the extra draws were
     // added, so the one-person count stays comparable); the others from `y`.
     let mut x = 0x5DEE_CE66_Du64;
@@ -225,6 +244,15 @@ pub fn measure_on(lib: &SegmentLibrary, positions: &[Vec<Vec3>], offset: usize) 
                 ties_each[d] += 1;
             }
         }
+        if let Some(n) = many_draws() {
+            let mut sum = random_final;
+            for _ in RANDOM_DRAWS..n {
+                sum += best_at_round(false, &mut z, &mut [])[ROUNDS - 1];
+            }
+            if g[ROUNDS - 1] < sum / n as f32 {
+                wins_vs_many += 1;
+            }
+        }
         if g[ROUNDS - 1] < random_final / RANDOM_DRAWS as f32 {
             wins_vs_mean += 1;
         }
@@ -254,7 +282,7 @@ pub fn measure_on(lib: &SegmentLibrary, positions: &[Vec<Vec3>], offset: usize) 
     wins_each.sort_unstable();
     ties_each.sort_unstable();
     let (wins_median, ties_median) = (wins_each[RANDOM_DRAWS / 2], ties_each[RANDOM_DRAWS / 2]);
-    Figures { targets: targets.len(), segments: lib.len(), agreement, guided_curve, random_curve, mean_fall, wins, ties, losses, wins_vs_mean, wins_median, ties_median, diversity }
+    Figures { targets: targets.len(), segments: lib.len(), agreement, guided_curve, random_curve, mean_fall, wins, ties, losses, wins_vs_mean, wins_median, ties_median, wins_vs_many, many_draws: many_draws().unwrap_or(0), diversity }
 }
 
 /// Spearman's rank correlation (no tie correction: the values are continuous).
