@@ -467,6 +467,30 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_stretch_term_prefers_moves_near_the_bars_count_rate() {
+        // log2(120/60) = 1 octave; symmetric; nothing when off or unknown.
+        assert!((stretch_cost(0.5, 120.0, 60.0) - 0.5).abs() < 1e-6);
+        assert!((stretch_cost(0.5, 60.0, 120.0) - 0.5).abs() < 1e-6);
+        assert_eq!(stretch_cost(0.0, 120.0, 60.0), 0.0);
+        assert_eq!(stretch_cost(0.5, f32::NAN, 60.0), 0.0);
+        assert!((bar_count_rate_bpm(2.0) - 120.0).abs() < 1e-4);
+        // Two moves alike in every join and intensity, at 60 and 120 counts per minute, over
+        // bars of 2 s (120 per minute) then 4 s (60): with the term each bar takes the move
+        // at its rate; without it, the tie goes to the lower index.
+        let table = TransitionTable::from_costs(2, vec![1.0; 4]);
+        let layers = [Layer::Open { intensity: 0.5 }, Layer::Open { intensity: 0.5 }];
+        let (bar_bpm, segment_bpm) = ([bar_count_rate_bpm(2.0), bar_count_rate_bpm(4.0)], [60.0, 120.0]);
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm };
+        let on = FillWeights { stretch_weight: 0.5, repeat_penalty: 0.0, ..FillWeights::default() };
+        let (path, cost, _) = fill_with_tempi(&table, &layers, &[0.5, 0.5], &[], &tempi, &on).unwrap();
+        assert_eq!(path, vec![1, 0]);
+        assert!((cost - 1.0).abs() < 1e-5, "{cost}");
+        let off = FillWeights { stretch_weight: 0.0, ..on };
+        let (path, _, _) = fill_with_tempi(&table, &layers, &[0.5, 0.5], &[], &tempi, &off).unwrap();
+        assert_eq!(path, vec![0, 0]);
+    }
+
+    #[test]
     fn node_costs_charge_misses_and_prefer_fitting_own_moves() {
         let w = FillWeights { beat_weight: 0.5, own_moves_preference: 0.1, ..FillWeights::default() };
         // Built-in on the beat, built-in off it, imported on it, imported off it.
