@@ -9,7 +9,7 @@
 //! intensity|` per open bar, a beat term `beat_weight · (1 − beat fit)` per open bar (a segment
 //! whose counts fall on its kinetic beats turns on the song's beats once warped onto the bar,
 //! spec §E/§J), a tempo-stretch term `stretch_weight · |log₂(bar count rate / segment count
-//! tempo)|` per open bar (a move played far from its own tempo joins badly; [`Tempi`]), the person's-own-moves preference (`own_moves_preference` per open bar filled
+//! tempo)|` per open bar (off by default, see [`STRETCH_WEIGHT_DEFAULT`]; [`Tempi`]), the person's-own-moves preference (`own_moves_preference` per open bar filled
 //! by a built-in move when imported moves exist; [`node_costs`], [`fill_with_node_costs`]), and a repetition penalty `repeat_penalty` on an edge whose two
 //! segments share frames of the same clip (the same segment twice in a row included). Both
 //! keep the objective a sum over edges and nodes, so the dynamic programme below is exact: it
@@ -91,7 +91,7 @@ impl Default for FillWeights {
     }
 }
 
-/// Default [`FillWeights::stretch_weight`]: off. Measured in `benches/choreo_quality` (with
+/// Default [`FillWeights::stretch_weight`]: off. Measured with the `choreo_quality` bench (with
 /// the table's end-effector gap term, which is what keeps joins smooth): any weight from 0.05
 /// up tips whole dances between imported and built-in moves (moves of one kind join each
 /// other best, so the choice is nearly all-or-nothing), and on the real songs that cost beat
