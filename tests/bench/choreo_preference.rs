@@ -14,13 +14,15 @@
 //! against the mean of 5 random people (the control's expected result), and against one
 //! random person at a time (the median over the 5, with ties — the same best for both —
 //! counted apart); then the totals over the sets. `PREFERENCE_DRAWS=n` (n > 5) also compares
-//! with the mean of n random people, a steadier estimate of their expected result. Also how well the search's similarity agrees
+//! with the mean of n random people, a steadier estimate of their expected result.
+//! `PREFERENCE_LIKE=pairs` runs Φ's like term as the option [`LikeTerm::ChoicePairs`] instead of
+//! the spec's max (the default), `PREFERENCE_LIKE=both` runs the two side by side. Also how well the search's similarity agrees
 //! with the perceptual distance (Spearman's rank correlation over the library). Asserts
 //! nothing. `cargo test -p odori-tests --bench choreo_preference` for a quick build.
 
 use glam::Vec3;
 use odori_core::choreo::quality::perceptual_distance;
-use odori_core::choreo::{mean_pairwise_dissimilarity, FeedbackSession, SegmentLibrary, SegmentOptions, Settings, CANDIDATES_PER_ROUND};
+use odori_core::choreo::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, SegmentLibrary, SegmentOptions, Settings, CANDIDATES_PER_ROUND};
 use odori_core::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
 use odori_core::import::import_bytes;
 use odori_core::ImportOptions;
@@ -79,28 +81,51 @@ fn main() {
         Some(n) => (0..n.min(10)).map(|o| (format!("offset {o}"), o)).collect(),
         None => SETS.iter().map(|&(n, o)| (n.to_string(), o)).collect(),
     };
-    let mut total = [0usize; 5];
-    for (name, offset) in &sets {
-        let f = measure_on(&lib, &positions, *offset);
-        total[0] += f.targets;
-        total[1] += f.wins_vs_mean;
-        total[2] += f.wins_median;
-        total[3] += f.ties_median;
-        total[4] += f.wins_vs_many;
-        println!("preference test (spec §J), set {name}, {} targets, {} segments, {LIKES} likes per round, ρ {rho}:", f.targets, f.segments);
-        print_figures(&f);
+    for like_term in like_terms() {
+        println!("== Φ's like term: {} ==", like_term_name(like_term));
+        let mut total = [0usize; 5];
+        let mut fall_sum = 0.0f32;
+        for (name, offset) in &sets {
+            let f = measure_with(&lib, &positions, *offset, like_term);
+            fall_sum += f.mean_fall;
+            total[0] += f.targets;
+            total[1] += f.wins_vs_mean;
+            total[2] += f.wins_median;
+            total[3] += f.ties_median;
+            total[4] += f.wins_vs_many;
+            println!("preference test (spec §J), set {name}, {} targets, {} segments, {LIKES} likes per round, ρ {rho}:", f.targets, f.segments);
+            print_figures(&f);
+        }
+        println!(
+            "all sets: guided closer than the mean of {RANDOM_DRAWS} random people on {}/{} ({:.1} %); than one random person (median per set) on {} ({:.1} %), equal on {}",
+            total[1],
+            total[0],
+            100.0 * total[1] as f32 / total[0].max(1) as f32,
+            total[2],
+            100.0 * total[2] as f32 / total[0].max(1) as f32,
+            total[3]
+        );
+        if let Some(n) = many_draws() {
+            println!("all sets: guided closer than the mean of {n} random people on {}/{} ({:.1} %)", total[4], total[0], 100.0 * total[4] as f32 / total[0].max(1) as f32);
+        }
+        println!("all sets: mean fall of the guided best distance, round 1 → 5: {:.1} %", 100.0 * fall_sum / sets.len().max(1) as f32);
     }
-    println!(
-        "all sets: guided closer than the mean of {RANDOM_DRAWS} random people on {}/{} ({:.1} %); than one random person (median per set) on {} ({:.1} %), equal on {}",
-        total[1],
-        total[0],
-        100.0 * total[1] as f32 / total[0].max(1) as f32,
-        total[2],
-        100.0 * total[2] as f32 / total[0].max(1) as f32,
-        total[3]
-    );
-    if let Some(n) = many_draws() {
-        println!("all sets: guided closer than the mean of {n} random people on {}/{} ({:.1} %)", total[4], total[0], 100.0 * total[4] as f32 / total[0].max(1) as f32);
+}
+
+/// `PREFERENCE_LIKE`: `max` (the spec's rule, the default), `pairs` (the option), or `both`
+/// (side by side).
+fn like_terms() -> Vec<LikeTerm> {
+    match std::env::var("PREFERENCE_LIKE").as_deref() {
+        Ok("pairs") => vec![LikeTerm::ChoicePairs],
+        Ok("both") => vec![LikeTerm::MaxSimilarity, LikeTerm::ChoicePairs],
+        _ => vec![LikeTerm::MaxSimilarity],
+    }
+}
+
+fn like_term_name(t: LikeTerm) -> &'static str {
+    match t {
+        LikeTerm::MaxSimilarity => "max over L of Sim (spec §F, default)",
+        LikeTerm::ChoicePairs => "share of (liked, passed-over) pairs (option)",
     }
 }
 
@@ -174,8 +199,14 @@ pub fn library() -> (SegmentLibrary, Vec<Vec<Vec3>>) {
     (lib, positions)
 }
 
-/// The preference test on 64 targets spread over the library, from segment `offset` on.
+/// The preference test on 64 targets spread over the library, from segment `offset` on, with
+/// the product's default like term.
 pub fn measure_on(lib: &SegmentLibrary, positions: &[Vec<Vec3>], offset: usize) -> Figures {
+    measure_with(lib, positions, offset, LikeTerm::default())
+}
+
+/// [`measure_on`] with Φ's like term `like_term`.
+pub fn measure_with(lib: &SegmentLibrary, positions: &[Vec<Vec3>], offset: usize, like_term: LikeTerm) -> Figures {
     let dist = |a: usize, b: usize| perceptual_distance(&positions[a], &positions[b]).unwrap_or(f32::INFINITY);
     let settings = Settings::default();
     let targets: Vec<usize> = (0..TARGETS).map(|i| (i * lib.len()) / TARGETS + offset).filter(|&t| t < lib.len()).collect();
@@ -193,7 +224,7 @@ pub fn measure_on(lib: &SegmentLibrary, positions: &[Vec<Vec3>], offset: usize) 
     for &t in &targets {
         let intensity = lib.segments()[t].intensity01;
         let best_at_round = |guided: bool, x: &mut u64, diversity: &mut [f32]| -> Vec<f32> {
-            let mut session = FeedbackSession::new();
+            let mut session = FeedbackSession::with_like_term(like_term);
             let mut round: Vec<usize> = session.next_round(lib, intensity, settings.rho, CANDIDATES_PER_ROUND).to_vec();
             let mut best = f32::INFINITY;
             let mut out = Vec::new();

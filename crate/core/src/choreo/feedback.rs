@@ -12,20 +12,18 @@
 //!   preference bench's library a segment's 1st, 10th and 50th nearest neighbours score 0.965,
 //!   0.912 and 0.865 on average, its 600th 0.320), unlike rel's intensities, which spread over
 //!   0..1; the percentile keeps kWAS's order and puts the term on rel's scale.
-//! - **The like term is the share of the person's choices m agrees with**, in place of the max
-//!   over L of Sim(m, ·): a Search tells the search not only "these are good" but "these are
-//!   better than the ones shown beside them", so for every pair of a liked candidate l and a
-//!   shown one n the person passed over, m scores when Sim(m, l) > Sim(m, n) (raw kWAS: m is on
-//!   l's side of the pair), and the term is the share of pairs it scores on, again on [0, 1].
-//!   The max over L rewards the nearest neighbours of any like, including ones just as near to
-//!   what was passed over. Measured on the product's path (`choreo_preference` bench,
-//!   `PREFERENCE_SETS=10 PREFERENCE_DRAWS=20`: the library's ten disjoint sets of 64 hidden
-//!   targets): guided likes end closer than one random person (median of 5) on 410/640
-//!   targets against 372 with the max, with 120 ties against 141; closer than the mean of 5
-//!   random people on 468 against 463, of 20 on 505 against 492. In `choreo_preference_study`
-//!   (other random draws, 9 held-out sets) 436/576 against 412/576 for the mean of 5; the greedy
-//!   ceiling there (every candidate the nearest neighbour of a like) is 476/576. With every
-//!   shown candidate liked (nothing passed over) the term falls back to the max over L of the percentile Sim.
+//! - **The like term is the spec's max over L of Sim(m, ·)** by default
+//!   ([`LikeTerm::MaxSimilarity`]). A departure from the spec is kept as an option,
+//!   [`LikeTerm::ChoicePairs`]: the share of the person's choices m agrees with. A Search tells
+//!   the search not only "these are good" but "these are better than the ones shown beside
+//!   them", so for every pair of a liked candidate l and a shown one n the person passed over, m
+//!   scores when Sim(m, l) > Sim(m, n) (raw kWAS: m is on l's side of the pair), and the term is
+//!   the share of pairs it scores on, again on [0, 1]. With every shown candidate liked
+//!   (nothing passed over) it falls back to the max over L of the percentile Sim. The
+//!   `choreo_preference` bench measures both side by side (`PREFERENCE_LIKE=both`); on the
+//!   library of built-in moves plus the tempo-true re-cut salsa and Indian clips the two are
+//!   within a few targets of each other (figures in the bench's docs), so the spec's rule stays
+//!   the default.
 //! - **τ is multiplied by 19/20 per like** (at least once per Search): one like per round is
 //!   the spec's schedule; liking two narrows as far as two rounds of one like.
 //! - **In the min D term, S_n counts those shown and not liked** (plus this round's picks);
@@ -46,12 +44,26 @@ pub const CANDIDATES_PER_ROUND: usize = 6;
 /// τ's factor per like, and at least once per Search (eq. 4).
 pub const TAU_DECAY: f32 = 19.0 / 20.0;
 
+/// Φ's like term (module docs): the spec's rule or the product's option.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum LikeTerm {
+    /// §F: max{Sim(m, l) : l ∈ L}, Sim on the library's percentile scale.
+    #[default]
+    MaxSimilarity,
+    /// A departure from §F: the share of (liked l, passed-over n) pairs with Sim(m, l) > Sim(m, n).
+    ChoicePairs,
+}
+
 /// The search state of one bar.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 pub struct FeedbackSession {
     /// Current τ.
     pub tau: f32,
+    /// Which like term Φ uses (sessions saved before the option read as the spec's max).
+    #[serde(default)]
+    pub like_term: LikeTerm,
     /// Every segment shown so far (S_n), in the order shown.
     pub shown: Vec<usize>,
     /// Segments the person liked (L).
@@ -64,7 +76,7 @@ pub struct FeedbackSession {
 
 impl Default for FeedbackSession {
     fn default() -> Self {
-        Self { tau: 1.0, shown: Vec::new(), liked: Vec::new(), round: Vec::new(), rounds: 0 }
+        Self { tau: 1.0, like_term: LikeTerm::default(), shown: Vec::new(), liked: Vec::new(), round: Vec::new(), rounds: 0 }
     }
 }
 
@@ -77,6 +89,11 @@ impl FeedbackSession {
     /// A new session (τ = 1, nothing shown).
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// A new session whose Φ uses `like_term`.
+    pub fn with_like_term(like_term: LikeTerm) -> Self {
+        Self { like_term, ..Self::default() }
     }
 
     /// Chooses the next round of up to `count` unseen candidates by eq. 1 and records them as
@@ -93,7 +110,7 @@ impl FeedbackSession {
             }
         }
         // min D to the shown set for every segment, on the percentile scale, and the like
-        // term (the share of the person's choices each agrees with; module docs). A liked candidate stays out of U (never shown again)
+        // term (the max Sim to the liked set, or the option's share of choices; module docs). A liked candidate stays out of U (never shown again)
         // but does not push its neighbours away: with D = 1 − Sim, a neighbour's τ · D loses
         // more than its (1 − τ) · Sim gains while τ > ½, so counting liked ones in the min
         // would make every like repel the search from what was liked.
@@ -103,7 +120,10 @@ impl FeedbackSession {
                 update_min_d(lib, &mut min_d, s);
             }
         }
-        let like_term = self.agreement_with_choices(lib, &is_shown);
+        let like_term = match self.like_term {
+            LikeTerm::MaxSimilarity => self.max_similarity_to_liked(lib),
+            LikeTerm::ChoicePairs => self.agreement_with_choices(lib, &is_shown),
+        };
         let rel: Vec<f32> = lib.segments().iter().map(|s| relevance(bar_intensity, s.intensity01)).collect();
         self.round.clear();
         for _ in 0..count {
@@ -144,7 +164,20 @@ impl FeedbackSession {
 }
 
 impl FeedbackSession {
-    /// Φ's like term for every unseen segment c (0 for the others): the share of the person's
+    /// §F's like term for every segment: max over L of Sim(c, l) on the percentile scale; 0
+    /// with nothing liked.
+    fn max_similarity_to_liked(&self, lib: &SegmentLibrary) -> Vec<f32> {
+        let m = lib.len();
+        let mut out = vec![0.0f32; m];
+        for &l in self.liked.iter().filter(|&&l| l < m) {
+            for (slot, p) in out.iter_mut().zip(similarity_percentiles(lib, l)) {
+                *slot = slot.max(p);
+            }
+        }
+        out
+    }
+
+    /// [`LikeTerm::ChoicePairs`]'s like term for every unseen segment c (0 for the others): the share of the person's
     /// choices c agrees with — of every (liked l, shown and not liked n) pair, those with
     /// Sim(c, l) > Sim(c, n) on raw kWAS (module docs). With nothing liked, 0; with nothing
     /// passed over (every shown candidate liked), the spec's max over L of Sim(c, l) on the
@@ -158,12 +191,7 @@ impl FeedbackSession {
             return out;
         }
         if passed.is_empty() {
-            for &l in &liked {
-                for (slot, p) in out.iter_mut().zip(similarity_percentiles(lib, l)) {
-                    *slot = slot.max(p);
-                }
-            }
-            return out;
+            return self.max_similarity_to_liked(lib);
         }
         let pairs = (liked.len() * passed.len()) as f32;
         let mut to_passed = Vec::with_capacity(passed.len());
@@ -288,6 +316,27 @@ mod tests {
         assert_eq!(all_liked.agreement_with_choices(&lib, &vec![false; m]), similarity_percentiles(&lib, a));
         let none = FeedbackSession { shown: vec![a, b], ..FeedbackSession::new() };
         assert!(none.agreement_with_choices(&lib, &vec![false; m]).iter().all(|&v| v == 0.0));
+    }
+
+    #[test]
+    fn the_default_like_term_is_the_specs_max_over_the_liked() {
+        let lib = SegmentLibrary::builtin();
+        let m = lib.len();
+        let (a, b) = (2, m / 3);
+        let s = FeedbackSession { tau: 0.5, shown: vec![a, b, m - 1], liked: vec![a, b], ..FeedbackSession::new() };
+        assert_eq!(s.like_term, LikeTerm::MaxSimilarity);
+        let (pa, pb) = (similarity_percentiles(&lib, a), similarity_percentiles(&lib, b));
+        let want: Vec<f32> = pa.iter().zip(&pb).map(|(x, y)| x.max(*y)).collect();
+        assert_eq!(s.max_similarity_to_liked(&lib), want);
+        // The two rules rank candidates differently, so the option is a real choice.
+        let mut pairs = s.clone();
+        pairs.like_term = LikeTerm::ChoicePairs;
+        let (mut x, mut y) = (s.clone(), pairs);
+        assert_ne!(x.next_round(&lib, 0.5, 0.0, CANDIDATES_PER_ROUND), y.next_round(&lib, 0.5, 0.0, CANDIDATES_PER_ROUND));
+        // A session saved without the field reads as the spec's rule.
+        let json = r#"{"tau":0.9,"shown":[1],"liked":[],"round":[1],"rounds":1}"#;
+        let old: FeedbackSession = serde_json::from_str(json).unwrap();
+        assert_eq!(old.like_term, LikeTerm::MaxSimilarity);
     }
 
     #[test]

@@ -23,7 +23,7 @@ pub mod table;
 
 pub use document::{recut_clip, BarState, BarView, ChoreoError, Choreography, GenerateReport, RecutReport, Settings};
 pub use eigen::Signature;
-pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, CANDIDATES_PER_ROUND, TAU_DECAY};
+pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, CANDIDATES_PER_ROUND, TAU_DECAY};
 pub use fill::{
     bar_count_rate_bpm, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, node_costs, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
     FillWeights, Layer, Tempi, TransitionTable,
