@@ -16,8 +16,8 @@
 //! counted apart); then the totals over the sets. `PREFERENCE_DRAWS=n` (n > 5) also compares
 //! with the mean of n random people, a steadier estimate of their expected result.
 //! `PREFERENCE_LIKE=pairs` runs Φ's like term as the option [`LikeTerm::ChoicePairs`] instead of
-//! the spec's max (the default), `PREFERENCE_LIKE=both` runs the two side by side. Also how well the search's similarity agrees
-//! with the perceptual distance (Spearman's rank correlation over the library). Asserts
+//! the spec's max (the default), `PREFERENCE_LIKE=both` runs the two side by side. Also how
+//! well the search's similarity agrees with the perceptual distance (Spearman's rank correlation over the library). Asserts
 //! nothing. `cargo test -p odori-tests --bench choreo_preference` for a quick build.
 
 use glam::Vec3;
@@ -67,8 +67,7 @@ pub struct Figures {
 /// Random people per target for [`Figures::wins_vs_mean`].
 pub const RANDOM_DRAWS: usize = 5;
 
-/// The target sets: A (the one the product's choices were tuned on, and the test's), then B
-/// and C, held out; each 64 segments spread over the library, at offsets 3, 8 and 5.
+/// The target sets: A (the one the product's choices were tuned on), then B and C, held out; each 64 segments spread over the library, at offsets 3, 8 and 5.
 pub const SETS: [(&str, usize); 3] = [("A (tuned on)", 3), ("B (held out)", 8), ("C (held out)", 5)];
 
 #[allow(dead_code)]

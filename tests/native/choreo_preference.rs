@@ -8,7 +8,7 @@
 //! The asserts are regression guards that follow from what "likes steer the search" means,
 //! not figures read off set A:
 //! - The similarity §F uses agrees with the perceptual distance: mean Spearman ≥ 0.5 on every
-//!   set (the centred-position kWAS of session 4 scored 0.075; now about 0.7).
+//!   set (the centred-position kWAS of session 4 scored 0.075; now about 0.72).
 //! - On every set the guided best distance falls by ≥ 20 % from round 1 to round 5 (the
 //!   issue's goal) and eq. 9's diversity of the 6 shown falls over the first rounds (§F).
 //! - Likes beat chance: pooled over the three sets, guided likes end closer than the mean of 5
