@@ -15,6 +15,8 @@
 //! `ODORI_BEAT_WEIGHT=x` sets the filling's beat weight (default: the product's; 0: off, the
 //! filling before the beat term).
 //! `ODORI_OWN_MOVES=x` sets the preference for imported moves (0: none).
+//! `ODORI_STRETCH_WEIGHT=x` sets the tempo-stretch weight (0: off, the filling before it).
+//! `ODORI_JOINS=1` also prints each song's five worst joins and the segments either side.
 //! Prints figures; asserts nothing. `cargo bench -p odori-tests --bench choreo_quality`
 //! (release), or `cargo test -p odori-tests --bench choreo_quality` for a quicker build.
 
@@ -131,11 +133,46 @@ fn main() {
         if let Some(w) = std::env::var("ODORI_OWN_MOVES").ok().and_then(|v| v.parse().ok()) {
             doc.set_own_moves_preference(w).expect("own-moves preference");
         }
+        if let Some(w) = std::env::var("ODORI_STRETCH_WEIGHT").ok().and_then(|v| v.parse().ok()) {
+            doc.set_stretch_weight(w).expect("stretch weight");
+        }
         doc.generate(&lib).expect("generate");
         let chosen = doc.segments();
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
         let gen = quality(&lib, &bars, &beats, &chosen);
         // Random segments on the same bars (a fixed LCG: the same draws every run).
+        if std::env::var("ODORI_JOINS").is_ok() {
+            // The five worst joins, with the segments either side (a diagnostic).
+            let table = lib.transition_table(3.0);
+            let mut cs: Vec<f32> = (1..bars.len()).filter_map(|t| Some(table.cost(chosen[t - 1]?, chosen[t]?))).collect();
+            cs.sort_by(f32::total_cmp);
+            if !cs.is_empty() {
+                println!("    edge costs on the path: median {:.2}, max {:.2}", cs[cs.len() / 2], cs[cs.len() - 1]);
+            }
+            let clip = odori_core::choreo::render(&lib, &bars, &chosen, &RenderOptions::default());
+            let qm = QualityMotion::from_clip(&clip).expect("motion");
+            let nj = odori_core::humanoid::CANON_COUNT;
+            let mut js: Vec<(f32, usize)> = gen.bars.iter().filter_map(|b| b.join_jump.map(|j| (j, b.bar))).collect();
+            js.sort_by(|a, b| b.0.total_cmp(&a.0));
+            for (j, bar) in js.iter().take(5) {
+                let name = |i: usize| chosen[i].map_or("-".to_string(), |s| format!("{} ({:.0}/min)", lib.segments()[s].name, lib.segments()[s].tempo_bpm));
+                let f0 = (bars[*bar].start_secs * 30.0).round() as usize;
+                let p = |f: usize, j: usize| qm.positions[f * nj + j];
+                let (mut bj, mut bv, mut bf) = (0, 0.0f32, 0);
+                for f in f0.saturating_sub(3).max(1)..(f0 + 4).min(qm.positions.len() / nj - 1) {
+                    for j in 0..nj {
+                        let v = ((p(f + 1, j) - p(f, j)) - (p(f, j) - p(f - 1, j))).length() * 30.0;
+                        if v > bv {
+                            (bj, bv, bf) = (j, v, f);
+                        }
+                    }
+                }
+                let fa = f0.saturating_sub(4);
+                let fb = (f0 + 4).min(qm.positions.len() / nj - 1);
+                println!("      worst joint {bj} change {bv:.2} m/s at frame {} of the join; hips y {:.2} -> {:.2}; joint {bj} moved {:.2} m over the join (8 frames)", bf as i64 - f0 as i64, p(fa, 0).y, p(fb, 0).y, (p(fb, bj) - p(fa, bj)).length());
+                println!("    join {j:.2} (C {:.2}) at bar {bar} ({:.0}/min): {} -> {}", table.cost(chosen[bar - 1].unwrap_or(0), chosen[*bar].unwrap_or(0)), odori_core::choreo::bar_count_rate_bpm(bars[*bar].duration_secs()), name(bar - 1), name(*bar));
+            }
+        }
         let mut x = 0x9E37_79B9_7F4A_7C15u64;
         let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired).map(|s| s.index).collect();
         let mut rnd = Vec::new();

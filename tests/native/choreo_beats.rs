@@ -2,7 +2,8 @@
 //! ../shared/data/music and the drum take in ../shared/data/beats, with the core's own grid and
 //! the real salsa and Indian clips imported into the library: at default settings the dance's
 //! BAS-music beats random-segment dances on the same bars (mean of 5 draws) by ≥ 0.05 and the
-//! same dance scored on half-shifted beats by ≥ 0.10, its mean join jump stays ≤ 1.5, and
+//! same dance scored on half-shifted beats by ≥ 0.10, its largest join jump stays ≤ 1.5 (the
+//! mean before the table's end-effector gap term; the maximum was 1.55–3.63), and
 //! imported moves fill some bars. The full figures are printed by
 //! `tests/bench/choreo_quality.rs`.
 
@@ -79,7 +80,7 @@ fn generated_dances_follow_the_beat_on_every_real_song() {
             gen.beats.bas_music,
             gen.beats.bas_music_shifted
         );
-        assert!(gen.join_jump_mean <= 1.5, "{rel}: mean join jump {}", gen.join_jump_mean);
+        assert!(gen.join_jump_max <= 1.5, "{rel}: largest join jump {} (mean {})", gen.join_jump_max, gen.join_jump_mean);
     }
     assert!(imported_total > 0, "no bar of any song was filled from the imported clips at default settings");
 }

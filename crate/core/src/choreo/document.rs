@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
-use super::fill::{fill_with_node_costs, node_costs, FillError, FillWeights, Layer};
+use super::fill::{bar_count_rate_bpm, fill_with_tempi, node_costs, FillError, FillWeights, Layer, Tempi};
 use super::render::{render, RenderOptions};
 use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
 use crate::bars::Bar;
@@ -468,6 +468,16 @@ impl Choreography {
         Ok(())
     }
 
+    /// Weight of the filling's tempo-stretch term ([`FillWeights::stretch_weight`]), in 0..=100.
+    pub fn set_stretch_weight(&mut self, w: f32) -> Result<(), ChoreoError> {
+        if !(0.0..=100.0).contains(&w) {
+            return Err(ChoreoError::BadSetting { name: "stretchWeight".into(), range: "0..=100".into(), value: w });
+        }
+        self.record();
+        self.doc.settings.fill.stretch_weight = w;
+        Ok(())
+    }
+
     /// Repetition penalty of the filling, in 0..=100.
     pub fn set_repeat_penalty(&mut self, w: f32) -> Result<(), ChoreoError> {
         if !(0.0..=100.0).contains(&w) {
@@ -520,7 +530,10 @@ impl Choreography {
         let beat_fit: Vec<f32> = lib.segments().iter().map(|s| s.beat_fit).collect();
         let builtin: Vec<bool> = lib.segments().iter().map(|s| s.builtin.is_some()).collect();
         let node_cost = node_costs(&weights, &beat_fit, &builtin);
-        let (path, cost, _) = fill_with_node_costs(&table, &layers, &intensity, &node_cost, &weights)?;
+        let bar_bpm: Vec<f32> = self.doc.bars.iter().map(|b| bar_count_rate_bpm(b.duration_secs())).collect();
+        let segment_bpm: Vec<f32> = lib.segments().iter().map(|s| s.tempo_bpm).collect();
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm };
+        let (path, cost, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &weights)?;
         self.record();
         for (state, seg) in self.doc.states.iter_mut().zip(path) {
             if !matches!(state, BarState::Pinned { .. }) {

@@ -2,12 +2,14 @@
 //! bar, one node per segment in an open bar and the single pinned segment in a pinned bar.
 //!
 //! The edge cost from segment A to segment B is C = 1 / S with S = S_pose + S_move exactly as
-//! spec §G (see [`super::table`], which builds the M × M table of them).
+//! spec §G, plus the product's end-effector gap term (see [`super::table`], which builds the
+//! M × M table of them).
 //!
-//! The product adds four terms: a music term `music_weight · |bar intensity − segment
+//! The product adds five terms: a music term `music_weight · |bar intensity − segment
 //! intensity|` per open bar, a beat term `beat_weight · (1 − beat fit)` per open bar (a segment
 //! whose counts fall on its kinetic beats turns on the song's beats once warped onto the bar,
-//! spec §E/§J), the person's-own-moves preference (`own_moves_preference` per open bar filled
+//! spec §E/§J), a tempo-stretch term `stretch_weight · |log₂(bar count rate / segment count
+//! tempo)|` per open bar (off by default, see [`STRETCH_WEIGHT_DEFAULT`]; [`Tempi`]), the person's-own-moves preference (`own_moves_preference` per open bar filled
 //! by a built-in move when imported moves exist; [`node_costs`], [`fill_with_node_costs`]), and a repetition penalty `repeat_penalty` on an edge whose two
 //! segments share frames of the same clip (the same segment twice in a row included). Both
 //! keep the objective a sum over edges and nodes, so the dynamic programme below is exact: it
@@ -73,12 +75,44 @@ pub struct FillWeights {
     /// that keeps every real song's beat alignment ≥ random + 0.05: larger values fill more bars
     /// with the person's mocap, whose counts and joins are rougher than the built-in moves'.
     pub own_moves_preference: f32,
+    /// Weight of the tempo-stretch term per open bar: `stretch_weight · |log₂(bar count rate /
+    /// segment count tempo)|`, where the bar's count rate is its 4 counts over its length (what
+    /// the warp plays the segment at) and the segment's is its own (spec §E). A segment played
+    /// at twice or half its own tempo costs `stretch_weight`: a move sped up moves its limbs
+    /// faster by the same factor, and one slowed far below its tempo may turn on more kinetic
+    /// beats than the bar has counts. 0 (the default, see [`STRETCH_WEIGHT_DEFAULT`]) turns it
+    /// off.
+    pub stretch_weight: f32,
 }
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03 }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT }
     }
+}
+
+/// Default [`FillWeights::stretch_weight`]: off. Measured with the `choreo_quality` bench (with
+/// the table's end-effector gap term, which is what keeps joins smooth): any weight from 0.05
+/// up tips whole dances between imported and built-in moves (moves of one kind join each
+/// other best, so the choice is nearly all-or-nothing), and on the real songs that cost beat
+/// alignment (a one-bar song fell to random + 0.03), foot skate (Vibe Ace 25.5 → 40.3 cm/s) and
+/// the share of the person's moves (Vibe Ace 79 % → 0 %), while joins were already ≤ 1.1
+/// without it. A person may still turn it on.
+pub const STRETCH_WEIGHT_DEFAULT: f32 = 0.0;
+
+/// Count rate (counts per minute) a segment of 4 counts is played at over a bar of
+/// `duration_secs`.
+pub fn bar_count_rate_bpm(duration_secs: f32) -> f32 {
+    crate::choreo::segment::SEGMENT_COUNTS as f32 * 60.0 / duration_secs.max(1e-3)
+}
+
+/// The tempo-stretch cost of playing a segment of count tempo `segment_bpm` over a bar whose
+/// count rate is `bar_bpm` ([`FillWeights::stretch_weight`]); 0 when either is unknown.
+pub fn stretch_cost(weight: f32, bar_bpm: f32, segment_bpm: f32) -> f32 {
+    if weight == 0.0 || !(bar_bpm > 0.0 && segment_bpm > 0.0) || !bar_bpm.is_finite() || !segment_bpm.is_finite() {
+        return 0.0;
+    }
+    weight * (bar_bpm / segment_bpm).log2().abs()
 }
 
 
@@ -196,6 +230,36 @@ pub fn fill_with_node_costs(
     node_cost: &[f32],
     weights: &FillWeights,
 ) -> Result<(Vec<usize>, f32, FillStats), FillError> {
+    fill_with_tempi(table, layers, segment_intensity, node_cost, &Tempi::default(), weights)
+}
+
+/// The count rates the tempo-stretch term ([`FillWeights::stretch_weight`]) compares: per layer
+/// the rate its bar plays a segment at ([`bar_count_rate_bpm`]), per segment its own count
+/// tempo. Either empty: no stretch term.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Tempi<'a> {
+    pub bar_bpm: &'a [f32],
+    pub segment_bpm: &'a [f32],
+}
+
+impl Tempi<'_> {
+    fn cost(&self, weights: &FillWeights, layer: usize, segment: usize) -> f32 {
+        match (self.bar_bpm.get(layer), self.segment_bpm.get(segment)) {
+            (Some(&b), Some(&s)) => stretch_cost(weights.stretch_weight, b, s),
+            _ => 0.0,
+        }
+    }
+}
+
+/// [`fill_with_node_costs`] with the tempo-stretch term on `tempi`.
+pub fn fill_with_tempi(
+    table: &TransitionTable,
+    layers: &[Layer],
+    segment_intensity: &[f32],
+    node_cost: &[f32],
+    tempi: &Tempi,
+    weights: &FillWeights,
+) -> Result<(Vec<usize>, f32, FillStats), FillError> {
     let mut stats = FillStats::default();
     let m = table.len();
     if m == 0 {
@@ -224,9 +288,9 @@ pub fn fill_with_node_costs(
     let window = if weights.repeat_penalty > 0.0 { weights.repeat_window } else { 0 };
     // A segment kept only for the bars that hold it (an old cut of a re-cut clip) never fills
     // an open bar.
-    let music = |intensity: f32, b: usize| {
+    let music = |t: usize, intensity: f32, b: usize| {
         let unavailable = if table.is_available(b) { 0.0 } else { f32::INFINITY };
-        weights.music_weight * (intensity - segment_intensity[b]).abs() + extra(b) + unavailable
+        weights.music_weight * (intensity - segment_intensity[b]).abs() + extra(b) + tempi.cost(weights, t, b) + unavailable
     };
     // Node costs of the current layer: either one fixed node or all m.
     enum Nodes {
@@ -238,7 +302,7 @@ pub fn fill_with_node_costs(
     let mut cur = match layers[0] {
         Layer::Fixed { segment } => Nodes::One(segment, 0.0),
         Layer::Open { intensity } => {
-            Nodes::All((0..m).map(|b| music(intensity, b)).collect())
+            Nodes::All((0..m).map(|b| music(0, intensity, b)).collect())
         }
     };
     back.push(Vec::new());
@@ -262,7 +326,7 @@ pub fn fill_with_node_costs(
                 cur = Nodes::One(segment, best.0);
             }
             (Layer::Open { intensity }, Nodes::One(a, c)) => {
-                let mut next: Vec<f32> = (0..m).map(|b| c + table.cost(*a, b) + music(intensity, b)).collect();
+                let mut next: Vec<f32> = (0..m).map(|b| c + table.cost(*a, b) + music(t, intensity, b)).collect();
                 for (b, v) in next.iter_mut().enumerate() {
                     if repeats_on_path(&back, t, *a, b, window) {
                         *v += weights.repeat_penalty;
@@ -320,7 +384,7 @@ pub fn fill_with_node_costs(
                         best_a = at as u32;
                         stats.full_scans += 1;
                     }
-                    next[b] = best + music(intensity, b);
+                    next[b] = best + music(t, intensity, b);
                     arg[b] = best_a;
                 }
                 stats.open_columns += m;
@@ -361,7 +425,7 @@ pub fn fill_with_node_costs(
             node = if bt.len() == 1 { bt[0] as usize } else { bt.get(path[t]).copied().unwrap_or(0) as usize };
         }
     }
-    let cost = path_cost_with_node_costs(table, layers, segment_intensity, node_cost, weights, &path);
+    let cost = path_cost_with_tempi(table, layers, segment_intensity, node_cost, tempi, weights, &path);
     Ok((path, cost, stats))
 }
 
@@ -372,12 +436,18 @@ pub fn path_cost(table: &TransitionTable, layers: &[Layer], segment_intensity: &
 
 /// The objective [`fill_with_node_costs`] minimises, for any path.
 pub fn path_cost_with_node_costs(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], node_cost: &[f32], weights: &FillWeights, path: &[usize]) -> f32 {
+    path_cost_with_tempi(table, layers, segment_intensity, node_cost, &Tempi::default(), weights, path)
+}
+
+/// The objective [`fill_with_tempi`] minimises, for any path.
+pub fn path_cost_with_tempi(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], node_cost: &[f32], tempi: &Tempi, weights: &FillWeights, path: &[usize]) -> f32 {
     let mut c = 0.0;
     for (t, l) in layers.iter().enumerate() {
         let Some(&s) = path.get(t) else { return f32::INFINITY };
         if let Layer::Open { intensity } = l {
             c += weights.music_weight * (intensity - segment_intensity.get(s).copied().unwrap_or(f32::INFINITY)).abs();
             c += node_cost.get(s).copied().unwrap_or(0.0);
+            c += tempi.cost(weights, t, s);
             if !table.is_available(s) {
                 return f32::INFINITY;
             }
@@ -395,6 +465,30 @@ pub fn path_cost_with_node_costs(table: &TransitionTable, layers: &[Layer], segm
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_stretch_term_prefers_moves_near_the_bars_count_rate() {
+        // log2(120/60) = 1 octave; symmetric; nothing when off or unknown.
+        assert!((stretch_cost(0.5, 120.0, 60.0) - 0.5).abs() < 1e-6);
+        assert!((stretch_cost(0.5, 60.0, 120.0) - 0.5).abs() < 1e-6);
+        assert_eq!(stretch_cost(0.0, 120.0, 60.0), 0.0);
+        assert_eq!(stretch_cost(0.5, f32::NAN, 60.0), 0.0);
+        assert!((bar_count_rate_bpm(2.0) - 120.0).abs() < 1e-4);
+        // Two moves alike in every join and intensity, at 60 and 120 counts per minute, over
+        // bars of 2 s (120 per minute) then 4 s (60): with the term each bar takes the move
+        // at its rate; without it, the tie goes to the lower index.
+        let table = TransitionTable::from_costs(2, vec![1.0; 4]);
+        let layers = [Layer::Open { intensity: 0.5 }, Layer::Open { intensity: 0.5 }];
+        let (bar_bpm, segment_bpm) = ([bar_count_rate_bpm(2.0), bar_count_rate_bpm(4.0)], [60.0, 120.0]);
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm };
+        let on = FillWeights { stretch_weight: 0.5, repeat_penalty: 0.0, ..FillWeights::default() };
+        let (path, cost, _) = fill_with_tempi(&table, &layers, &[0.5, 0.5], &[], &tempi, &on).unwrap();
+        assert_eq!(path, vec![1, 0]);
+        assert!((cost - 1.0).abs() < 1e-5, "{cost}");
+        let off = FillWeights { stretch_weight: 0.0, ..on };
+        let (path, _, _) = fill_with_tempi(&table, &layers, &[0.5, 0.5], &[], &tempi, &off).unwrap();
+        assert_eq!(path, vec![0, 0]);
+    }
 
     #[test]
     fn node_costs_charge_misses_and_prefer_fitting_own_moves() {

@@ -23,8 +23,11 @@ pub mod table;
 
 pub use document::{recut_clip, BarState, BarView, ChoreoError, Choreography, GenerateReport, RecutReport, Settings};
 pub use eigen::Signature;
-pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, CANDIDATES_PER_ROUND, TAU_DECAY};
-pub use fill::{fill, fill_with_node_costs, fill_with_stats, node_costs, path_cost, path_cost_with_node_costs, FillError, FillStats, FillWeights, Layer, TransitionTable};
+pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, CANDIDATES_PER_ROUND, TAU_DECAY};
+pub use fill::{
+    bar_count_rate_bpm, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, node_costs, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
+    FillWeights, Layer, Tempi, TransitionTable,
+};
 pub use grid::{bars_from_tempo, GridError};
 pub use quality::{dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
 pub use render::{render, segment_clip, speed_jumps, RenderOptions};

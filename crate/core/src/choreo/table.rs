@@ -7,7 +7,10 @@
 //! body (spec §B), h normalisation to unit length and g[x] = max(x, 0). Where the spec leaves
 //! it open: S is floored at [`MIN_S`] (so C ≤ 50), and a link that does not move across the
 //! join (|v_l(j_B) − v_l(i_A)| < 1e-5) continues perfectly, g = 1 on both sides. The product
-//! adds `repeat_penalty` to an edge whose two segments share frames of the same clip.
+//! adds `repeat_penalty` to an edge whose two segments share frames of the same clip, and an
+//! end-effector gap term, [`END_GAP_WEIGHT`] × Σ over hands and feet of the distance between
+//! where each is at the end of A and at the start of B (normalised body), which S, a sum of
+//! per-link cosines, barely sees (see [`END_GAP_WEIGHT`]).
 //!
 //! Speed. The costs need one square root and one division per link and pair (the jump
 //! direction h(v_l(j_B) − v_l(i_A)) cannot be factored), so the work is M² · 20 of those;
@@ -22,10 +25,23 @@
 //! row by row (for the filling's fast path), with each column's [`TOP_K`] cheapest
 //! predecessors and a lower bound on the rest.
 
-use super::segment::{JoinEnds, SegmentLibrary, LINK_COUNT};
+use super::segment::{JoinEnds, SegmentLibrary, LINKS, LINK_COUNT};
 
 /// Floor on S, so C = 1/S stays finite.
 pub const MIN_S: f32 = 0.02;
+/// The product's end-effector gap term, added to C(a, b): this weight times the summed
+/// distance (body heights, in the normalised body of spec §B: hips origin, facing removed)
+/// between where each hand and foot is at the end of A and at the start of B. Why: S compares
+/// each link's direction by its cosine, which hardly moves for the 20–40° per link that add up
+/// along an arm to a hand half a metre away, and the renderer's join must then carry the hand
+/// that far in a few frames (the largest join jumps of §J measured on mocap joins were hands
+/// moving 0.3–0.7 m across the join at ordinary C). At 1 per body height, a hand 0.3 body
+/// heights off costs 0.3: the spread between a good and a middling C.
+pub const END_GAP_WEIGHT: f32 = 1.0;
+/// The end effectors of [`END_GAP_WEIGHT`]: hands and feet (canonical indices).
+const END_EFFECTORS: [usize; 4] = [8, 12, 15, 19];
+/// Floats per segment of the end-effector positions (xyz of each).
+const GAP_FLOATS: usize = 3 * END_EFFECTORS.len();
 /// Predecessors kept per column for the fast path of the filling.
 pub const TOP_K: usize = 96;
 /// |v_l(j_B) − v_l(i_A)|² below which a link counts as not moving across the join.
@@ -206,6 +222,10 @@ pub struct TableBuilder {
     a_side: Vec<f32>,
     /// Successor side, `[b][l][10]`: start link xyz, β·h(start) xyz, β·h(start velocity) xyz, 2β.
     b_side: Vec<f32>,
+    /// Predecessor end-effector positions at their end, `[GAP_FLOATS][m]`.
+    a_gap: Vec<f32>,
+    /// Successor end-effector positions at their start, `[b][GAP_FLOATS]`.
+    b_gap: Vec<f32>,
     overlaps: Vec<Vec<usize>>,
     costs: Vec<f32>,
     available: Vec<bool>,
@@ -251,10 +271,30 @@ impl TableBuilder {
                 b_side[o..o + 10].copy_from_slice(&[start.x, start.y, start.z, start_u.x, start_u.y, start_u.z, start_w.x, start_w.y, start_w.z, 2.0 * bl]);
             }
         }
+        // End-effector positions from the link vectors: each joint is its parent plus the link.
+        let mut a_gap = vec![0.0f32; GAP_FLOATS * m];
+        let mut b_gap = vec![0.0f32; m * GAP_FLOATS];
+        for (s, e) in ends.iter().enumerate() {
+            for (k, &joint) in END_EFFECTORS.iter().enumerate() {
+                let (mut at_end, mut at_start) = (glam::Vec3::ZERO, glam::Vec3::ZERO);
+                let mut j = joint;
+                while let Some(l) = LINKS.iter().position(|&(_, c)| c == j) {
+                    at_end += e.end[l];
+                    at_start += e.start[l];
+                    j = LINKS[l].0;
+                }
+                for (c, (x, y)) in [(at_end.x, at_start.x), (at_end.y, at_start.y), (at_end.z, at_start.z)].into_iter().enumerate() {
+                    a_gap[(3 * k + c) * m + s] = x;
+                    b_gap[s * GAP_FLOATS + 3 * k + c] = y;
+                }
+            }
+        }
         let available = lib.segments().iter().map(|s| !s.retired).collect();
         let mut b = TableBuilder::empty(m, vec![0.0f32; m * m], available, repeat_penalty, lib.revision());
         b.a_side = a_side;
         b.b_side = b_side;
+        b.a_gap = a_gap;
+        b.b_gap = b_gap;
         b.overlaps = lib.overlaps.clone();
         b
     }
@@ -264,6 +304,8 @@ impl TableBuilder {
             m,
             a_side: Vec::new(),
             b_side: Vec::new(),
+            a_gap: Vec::new(),
+            b_gap: Vec::new(),
             overlaps: Vec::new(),
             costs,
             available,
@@ -361,6 +403,12 @@ impl TableBuilder {
                 for (slot, s) in self.costs[b * m + a0..b * m + a0 + n].iter_mut().zip(acc.iter()) {
                     *slot = 1.0 / if *s > MIN_S { *s } else { MIN_S };
                 }
+                if let Some(bg) = self.b_gap.get(b * GAP_FLOATS..(b + 1) * GAP_FLOATS) {
+                    if self.a_gap.len() == GAP_FLOATS * m {
+                        let col = |k: usize| &self.a_gap[k * m + a0..k * m + a0 + n];
+                        end_gaps(&mut self.costs[b * m + a0..b * m + a0 + n], bg, col);
+                    }
+                }
             }
         }
     }
@@ -437,6 +485,20 @@ fn link_pairs(acc: &mut [f32], b: &[f32; 10], a: [&[f32]; A_FLOATS]) {
     }
 }
 
+/// Adds [`END_GAP_WEIGHT`] × the summed end-effector distance to each cost of a block of
+/// predecessors (`a(k)`: coordinate k of their end positions; `b`: the successor's start).
+fn end_gaps<'a>(costs: &mut [f32], b: &[f32], a: impl Fn(usize) -> &'a [f32]) {
+    let n = costs.len();
+    for e in 0..END_EFFECTORS.len() {
+        let (ax, ay, az) = (&a(3 * e)[..n], &a(3 * e + 1)[..n], &a(3 * e + 2)[..n]);
+        let (bx, by, bz) = (b[3 * e], b[3 * e + 1], b[3 * e + 2]);
+        for i in 0..n {
+            let (dx, dy, dz) = (bx - ax[i], by - ay[i], bz - az[i]);
+            costs[i] += END_GAP_WEIGHT * (dx * dx + dy * dy + dz * dz).sqrt();
+        }
+    }
+}
+
 /// Tile edge of the blocked transpose.
 const TILE: usize = 64;
 
@@ -459,7 +521,8 @@ mod tests {
     use super::*;
     use glam::Vec3;
 
-    /// Spec §G written out per pair with vector operations, independently of the flat loop.
+    /// Spec §G (and the product's end-effector gap) written out per pair with vector
+    /// operations, independently of the flat loop.
     fn reference_cost(e_a: &JoinEnds, e_b: &JoinEnds) -> f32 {
         let beta = link_weights();
         let h = |v: Vec3| v.normalize_or_zero();
@@ -477,7 +540,19 @@ mod tests {
                 s_move += beta[l] * g(h(d).dot(h(e_b.start_velocity[l])));
             }
         }
-        1.0 / (s_pose + s_move).max(MIN_S)
+        // The product's end-effector gap: each hand and foot placed by walking its chain of
+        // links out from the hips (joint paths written out here, not taken from the builder).
+        let chains: [&[usize]; 4] = [&[1, 2, 5, 6, 7, 8], &[1, 2, 9, 10, 11, 12], &[13, 14, 15], &[17, 18, 19]];
+        let link_to = |c: usize| LINKS.iter().position(|&(_, child)| child == c).unwrap();
+        let gap: f32 = chains
+            .iter()
+            .map(|chain| {
+                let end: Vec3 = chain.iter().map(|&c| e_a.end[link_to(c)]).sum();
+                let start: Vec3 = chain.iter().map(|&c| e_b.start[link_to(c)]).sum();
+                (start - end).length()
+            })
+            .sum();
+        1.0 / (s_pose + s_move).max(MIN_S) + END_GAP_WEIGHT * gap
     }
 
     #[test]

@@ -366,7 +366,7 @@ impl Derived {
             .dance
             .bars
             .iter()
-            .map(|b| b.search.as_ref().map(|s| FeedbackSession { tau: s.tau, shown: resolve(&s.shown), liked: resolve(&s.liked), round: resolve(&s.round), rounds: s.rounds }))
+            .map(|b| b.search.as_ref().map(|s| FeedbackSession { tau: s.tau, shown: resolve(&s.shown), liked: resolve(&s.liked), round: resolve(&s.round), rounds: s.rounds, ..FeedbackSession::new() }))
             .collect();
         Ok(Choreography::from_parts(grid.bars.clone(), states, sessions, doc.dance.settings)?)
     }
