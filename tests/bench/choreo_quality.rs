@@ -136,6 +136,9 @@ fn main() {
         if let Some(w) = std::env::var("ODORI_STRETCH_WEIGHT").ok().and_then(|v| v.parse().ok()) {
             doc.set_stretch_weight(w).expect("stretch weight");
         }
+        if let Some(w) = std::env::var("ODORI_SKATE_WEIGHT").ok().and_then(|v| v.parse().ok()) {
+            doc.set_skate_weight(w).expect("skate weight");
+        }
         doc.generate(&lib).expect("generate");
         let chosen = doc.segments();
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();

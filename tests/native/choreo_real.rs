@@ -156,3 +156,29 @@ fn real_library_and_real_song() {
     println!("Fig. 4 on the real + built-in library (6 real targets): rounds 1..3 mean pairwise D = {:.4}, {:.4}, {:.4}", div[0], div[1], div[2]);
     assert!(div[2] < div[0]);
 }
+
+/// Each segment's own foot skate (spec §J, kept for the filling's skate term) measures the
+/// frames it plays: the imported segments whose stored skate is in the lowest third skate less,
+/// when each is rendered alone at its own length and measured afresh, than those in the
+/// highest third; and every figure is finite and not negative.
+#[test]
+fn segment_skate_measures_its_own_frames() {
+    use odori_core::choreo::quality::foot_skate;
+    use odori_core::choreo::{segment_clip, QualityMotion};
+    let (lib, builtin) = real_library();
+    let mut pairs: Vec<(f32, f32)> = Vec::new();
+    for s in &lib.segments()[builtin..] {
+        assert!(s.skate_cm_per_s.is_finite() && s.skate_cm_per_s >= 0.0, "{}: skate {}", s.name, s.skate_cm_per_s);
+        assert!(s.clip_skate_cm_per_s.is_finite() && s.clip_skate_cm_per_s >= 0.0, "{}: clip skate {}", s.name, s.clip_skate_cm_per_s);
+        let clip = segment_clip(&lib, s.index, s.duration_secs(), 30.0).expect("segment clip");
+        let Ok(m) = QualityMotion::from_clip(&clip) else { continue };
+        pairs.push((s.skate_cm_per_s, foot_skate(&m).mean_cm_per_s));
+    }
+    assert!(pairs.len() >= 30, "only {} imported segments measured", pairs.len());
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let third = pairs.len() / 3;
+    let mean = |v: &[(f32, f32)]| v.iter().map(|p| p.1).sum::<f32>() / v.len() as f32;
+    let (low, high) = (mean(&pairs[..third]), mean(&pairs[pairs.len() - third..]));
+    println!("imported segments rendered alone: skate {low:.1} cm/s (stored lowest third) vs {high:.1} (highest third), {} segments", pairs.len());
+    assert!(high > low, "rendered skate {high:.1} (stored highest third) is not above {low:.1} (lowest third)");
+}

@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
-use super::fill::{bar_count_rate_bpm, fill_with_tempi, node_costs, FillError, FillWeights, Layer, Tempi};
+use super::fill::{bar_count_rate_bpm, fill_with_tempi, node_costs_with_skate, FillError, FillWeights, Layer, Tempi};
 use super::render::{render, RenderOptions};
 use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
 use crate::bars::Bar;
@@ -478,6 +478,16 @@ impl Choreography {
         Ok(())
     }
 
+    /// Weight of the filling's foot-skate term ([`FillWeights::skate_weight`]), in 0..=100.
+    pub fn set_skate_weight(&mut self, w: f32) -> Result<(), ChoreoError> {
+        if !(0.0..=100.0).contains(&w) {
+            return Err(ChoreoError::BadSetting { name: "skateWeight".into(), range: "0..=100".into(), value: w });
+        }
+        self.record();
+        self.doc.settings.fill.skate_weight = w;
+        Ok(())
+    }
+
     /// Repetition penalty of the filling, in 0..=100.
     pub fn set_repeat_penalty(&mut self, w: f32) -> Result<(), ChoreoError> {
         if !(0.0..=100.0).contains(&w) {
@@ -529,7 +539,9 @@ impl Choreography {
         let intensity: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
         let beat_fit: Vec<f32> = lib.segments().iter().map(|s| s.beat_fit).collect();
         let builtin: Vec<bool> = lib.segments().iter().map(|s| s.builtin.is_some()).collect();
-        let node_cost = node_costs(&weights, &beat_fit, &builtin);
+        // Skate beyond the source clip's own (the §J goal is "no worse than the source clips'").
+        let skate: Vec<f32> = lib.segments().iter().map(|s| (s.skate_cm_per_s - s.clip_skate_cm_per_s).max(0.0)).collect();
+        let node_cost = node_costs_with_skate(&weights, &beat_fit, &builtin, &skate);
         let bar_bpm: Vec<f32> = self.doc.bars.iter().map(|b| bar_count_rate_bpm(b.duration_secs())).collect();
         let segment_bpm: Vec<f32> = lib.segments().iter().map(|s| s.tempo_bpm).collect();
         let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm };

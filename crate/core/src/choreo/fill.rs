@@ -83,11 +83,19 @@ pub struct FillWeights {
     /// beats than the bar has counts. 0 (the default, see [`STRETCH_WEIGHT_DEFAULT`]) turns it
     /// off.
     pub stretch_weight: f32,
+    /// Weight of the foot-skate term per open bar: `skate_weight · excess`, the excess being how
+    /// far the segment's own §J foot skate ([`super::Segment::skate_cm_per_s`]) exceeds its
+    /// source clip's ([`super::Segment::clip_skate_cm_per_s`]), in metres per second: feet that
+    /// slide in a bar of the source slide in the dance, and §J asks a dance to skate no more than
+    /// its source clips. Charging the excess, not the skate itself, keeps the term from ruling
+    /// out the person's mocap, which skates more than the built-in moves throughout. See
+    /// [`SKATE_WEIGHT_DEFAULT`]; 0 turns it off.
+    pub skate_weight: f32,
 }
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT }
     }
 }
 
@@ -99,6 +107,16 @@ impl Default for FillWeights {
 /// the share of the person's moves (Vibe Ace 79 % → 0 %), while joins were already ≤ 1.1
 /// without it. A person may still turn it on.
 pub const STRETCH_WEIGHT_DEFAULT: f32 = 0.0;
+
+/// Default [`FillWeights::skate_weight`] (per m/s of skate above the source clip's): off.
+/// Measured with the `choreo_quality` bench (`ODORI_SKATE_WEIGHT=x`): the one-bar trumpet song's
+/// skate falls below its source clips' (41.3 → 34.1 cm/s) only from a weight of 0.5, and there
+/// its beat alignment falls (random + 0.197 → + 0.128); any weight from 0.05 up tips Vibe Ace
+/// (join jump max 1.04 → 1.60, imported 79 % → 73 %) and Let's Go Fishin' (imported 33 % →
+/// 0 %), the near all-or-nothing choice between kinds of move that the stretch term shows too.
+/// Charging the skate itself rather than its excess fills every song with built-in moves from
+/// 0.1 up. A person may still turn it on.
+pub const SKATE_WEIGHT_DEFAULT: f32 = 0.0;
 
 /// Count rate (counts per minute) a segment of 4 counts is played at over a bar of
 /// `duration_secs`.
@@ -206,17 +224,26 @@ pub const OWN_MOVE_MIN_FIT: f32 = 0.75;
 /// The per-open-bar cost of each segment beyond the music term: the beat term
 /// `beat_weight · (1 − beat_fit[s])` plus, when any segment is imported, `own_moves_preference`
 /// for every segment that is not an imported move fitting the beat (fit ≥ [`OWN_MOVE_MIN_FIT`]);
-/// see [`FillWeights`]. What [`fill_with_node_costs`] takes.
+/// see [`FillWeights`]. What [`fill_with_node_costs`] takes. No skate term: see
+/// [`node_costs_with_skate`].
 pub fn node_costs(weights: &FillWeights, beat_fit: &[f32], builtin: &[bool]) -> Vec<f32> {
+    node_costs_with_skate(weights, beat_fit, builtin, &[])
+}
+
+/// [`node_costs`] plus the foot-skate term `skate_weight · skate_cm_per_s[s] / 100` (the skate
+/// charged, in m/s: [`super::Choreography::generate`] passes each segment's excess over its source
+/// clip's; [`FillWeights::skate_weight`]); a segment missing from `skate_cm_per_s` pays none.
+pub fn node_costs_with_skate(weights: &FillWeights, beat_fit: &[f32], builtin: &[bool], skate_cm_per_s: &[f32]) -> Vec<f32> {
     let any_imported = builtin.iter().any(|b| !b);
-    (0..beat_fit.len().max(builtin.len()))
+    (0..beat_fit.len().max(builtin.len()).max(skate_cm_per_s.len()))
         .map(|s| {
+            let skate = skate_cm_per_s.get(s).filter(|v| v.is_finite()).map_or(0.0, |v| weights.skate_weight * v.max(0.0) / 100.0);
             let beat = beat_fit.get(s).map_or(0.0, |f| weights.beat_weight * (1.0 - f.clamp(0.0, 1.0)));
             // An imported move "fits" when it clearly turns on its counts (BAS on the counts at
             // least 0.5 above BAS on the half-counts); only those are preferred.
             let fits = beat_fit.get(s).is_some_and(|&f| f >= OWN_MOVE_MIN_FIT);
             let own = if any_imported && (builtin.get(s).copied().unwrap_or(false) || !fits) { weights.own_moves_preference } else { 0.0 };
-            beat + own
+            beat + own + skate
         })
         .collect()
 }
@@ -502,5 +529,25 @@ mod tests {
         // With no imported moves there is nothing to prefer.
         let only = node_costs(&w, &[1.0, 0.0], &[true, true]);
         assert!((only[0] - 0.0).abs() < 1e-6 && (only[1] - 0.5).abs() < 1e-6, "{only:?}");
+    }
+
+    #[test]
+    fn the_skate_term_prefers_planted_feet() {
+        let w = FillWeights { beat_weight: 0.0, own_moves_preference: 0.0, skate_weight: 2.0, ..FillWeights::default() };
+        // 10 and 40 cm/s of skate: 2.0 · 0.1 and 2.0 · 0.4; a missing or bad figure pays none.
+        let c = node_costs_with_skate(&w, &[0.5, 0.5, 0.5], &[true, true, true], &[10.0, 40.0]);
+        assert!((c[0] - 0.2).abs() < 1e-6 && (c[1] - 0.8).abs() < 1e-6 && c[2] == 0.0, "{c:?}");
+        assert_eq!(node_costs_with_skate(&w, &[0.5], &[true], &[f32::NAN]), vec![0.0]);
+        // Two moves alike in every join and intensity: the tie goes to the lower index without
+        // the term, to the one whose feet stay put with it.
+        let table = TransitionTable::from_costs(2, vec![1.0; 4]);
+        let layers = [Layer::Open { intensity: 0.5 }];
+        let skate = [35.0, 5.0];
+        let off = FillWeights { skate_weight: 0.0, ..w };
+        let (path, _, _) = fill_with_node_costs(&table, &layers, &[0.5, 0.5], &node_costs_with_skate(&off, &[], &[], &skate), &off).unwrap();
+        assert_eq!(path, vec![0]);
+        let (path, cost, _) = fill_with_node_costs(&table, &layers, &[0.5, 0.5], &node_costs_with_skate(&w, &[], &[], &skate), &w).unwrap();
+        assert_eq!(path, vec![1]);
+        assert!((cost - 0.1).abs() < 1e-5, "{cost}");
     }
 }

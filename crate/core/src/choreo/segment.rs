@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::eigen::Signature;
-use super::quality::{bas_music, kinetic_beats_secs, QualityMotion};
+use super::quality::{bas_music, foot_skate_samples, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
 use super::table::{TableBuilder, TransitionTable};
 use crate::retarget::to_canonical;
 use crate::clip::Clip;
@@ -187,6 +187,17 @@ pub struct Segment {
     /// beat term prefers high values.
     #[serde(default)]
     pub beat_fit: f32,
+    /// Its own foot skate (spec §J) in the clip it was cut from, centimetres per second: the
+    /// mean horizontal speed of ankles and toes on the floor over its frames, measured once
+    /// when the library is cut. The filling's skate term ([`super::FillWeights::skate_weight`])
+    /// prefers low values. 0 in documents saved before it was kept (and for a segment whose feet
+    /// never touch the floor).
+    #[serde(default)]
+    pub skate_cm_per_s: f32,
+    /// Foot skate of the whole clip it was cut from, centimetres per second (spec §J, the
+    /// source clip's figure): the skate term charges only a segment's skate above it.
+    #[serde(default)]
+    pub clip_skate_cm_per_s: f32,
     /// Kept only for the bars that already hold it (an older cut of a clip the person re-cut
     /// at a stated tempo): never offered as a candidate nor chosen to fill an open bar.
     #[serde(default)]
@@ -421,11 +432,15 @@ impl SegmentLibrary {
                 .map(|&c| intensity_weight(c) * (positions[b * CANON_COUNT + c.index()] - positions[a * CANON_COUNT + c.index()]).length() * LIBRARY_FPS)
                 .sum();
         }
-        // Kinetic beats (spec §J) of the whole clip, for each segment's beat fit.
-        let kinetic: Vec<f32> = match QualityMotion::from_positions(&positions, lc.clip.fps) {
-            Ok(m) => kinetic_beats_secs(&m).into_iter().map(|t| t * lc.clip.fps).collect(),
-            Err(_) => Vec::new(),
+        // Kinetic beats (spec §J) of the whole clip, for each segment's beat fit, and its foot
+        // skate samples (the floor is the whole clip's, as §J measures a source clip), for each
+        // segment's own skate.
+        let (kinetic, skate): (Vec<f32>, Vec<[Option<f32>; 4]>) = match QualityMotion::from_positions(&positions, lc.clip.fps) {
+            Ok(m) => (kinetic_beats_secs(&m).into_iter().map(|t| t * lc.clip.fps).collect(), foot_skate_samples(&m)),
+            Err(_) => (Vec::new(), Vec::new()),
         };
+        let clip_skate_cm_per_s = summarize_skate(&skate, 0..skate.len()).mean_cm_per_s;
+        let quality_frame = |f: usize| ((f as f32 / lc.clip.fps) * QUALITY_FPS).round() as usize;
         let first_new = self.segments.len();
         let beats = &lc.beat_frames;
         let mut k = 0;
@@ -448,11 +463,16 @@ impl SegmentLibrary {
                     count_frames = (0..=SEGMENT_COUNTS).map(|j| si as f32 + (ei - si) as f32 * j as f32 / SEGMENT_COUNTS as f32).collect();
                 }
                 let beat_fit = beat_fit(&count_frames, &kinetic);
+                // Samples of frames after the first: a sample is the speed from the frame before.
+                let skate_end = (quality_frame(ei) + 1).min(skate.len());
+                let skate_cm_per_s = summarize_skate(&skate, (quality_frame(si) + 1).min(skate_end)..skate_end).mean_cm_per_s;
                 self.segments.push(Segment {
                     index,
                     name,
                     count_frames,
                     beat_fit,
+                    skate_cm_per_s,
+                    clip_skate_cm_per_s,
                     clip: clip_index,
                     source: lc.clip.source.clone(),
                     start_frame: si as f32,
@@ -1151,6 +1171,8 @@ mod tests {
             end_frame: counts[4],
             count_frames: counts,
             beat_fit: 0.5,
+            skate_cm_per_s: 0.0,
+            clip_skate_cm_per_s: 0.0,
             tempo_bpm: 120.0,
             intensity: 1.0,
             intensity01: 0.5,
