@@ -139,6 +139,9 @@ fn main() {
         if let Some(w) = std::env::var("ODORI_SKATE_WEIGHT").ok().and_then(|v| v.parse().ok()) {
             doc.set_skate_weight(w).expect("skate weight");
         }
+        if let Some(w) = std::env::var("ODORI_BEAT_RATE_WEIGHT").ok().and_then(|v| v.parse().ok()) {
+            doc.set_beat_rate_weight(w).expect("beat-rate weight");
+        }
         doc.generate(&lib).expect("generate");
         let chosen = doc.segments();
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();

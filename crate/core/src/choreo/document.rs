@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
-use super::fill::{bar_count_rate_bpm, fill_with_tempi, node_costs_with_skate, FillError, FillWeights, Layer, Tempi};
+use super::fill::{bar_count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, FillError, FillWeights, Layer, Tempi};
 use super::render::{render, RenderOptions};
 use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
 use crate::bars::Bar;
@@ -488,6 +488,16 @@ impl Choreography {
         Ok(())
     }
 
+    /// Weight of the filling's beat-rate term ([`FillWeights::beat_rate_weight`]), in 0..=100.
+    pub fn set_beat_rate_weight(&mut self, w: f32) -> Result<(), ChoreoError> {
+        if !(0.0..=100.0).contains(&w) {
+            return Err(ChoreoError::BadSetting { name: "beatRateWeight".into(), range: "0..=100".into(), value: w });
+        }
+        self.record();
+        self.doc.settings.fill.beat_rate_weight = w;
+        Ok(())
+    }
+
     /// Repetition penalty of the filling, in 0..=100.
     pub fn set_repeat_penalty(&mut self, w: f32) -> Result<(), ChoreoError> {
         if !(0.0..=100.0).contains(&w) {
@@ -541,7 +551,12 @@ impl Choreography {
         let builtin: Vec<bool> = lib.segments().iter().map(|s| s.builtin.is_some()).collect();
         // Skate beyond the source clip's own (the §J goal is "no worse than the source clips'").
         let skate: Vec<f32> = lib.segments().iter().map(|s| (s.skate_cm_per_s - s.clip_skate_cm_per_s).max(0.0)).collect();
-        let node_cost = node_costs_with_skate(&weights, &beat_fit, &builtin, &skate);
+        let mut node_cost = node_costs_with_skate(&weights, &beat_fit, &builtin, &skate);
+        if weights.beat_rate_weight > 0.0 {
+            for (c, s) in node_cost.iter_mut().zip(lib.segments()) {
+                *c += weights.beat_rate_weight * beat_rate_cost(s.kinetic_per_count);
+            }
+        }
         let bar_bpm: Vec<f32> = self.doc.bars.iter().map(|b| bar_count_rate_bpm(b.duration_secs())).collect();
         let segment_bpm: Vec<f32> = lib.segments().iter().map(|s| s.tempo_bpm).collect();
         let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm };

@@ -91,11 +91,21 @@ pub struct FillWeights {
     /// out the person's mocap, which skates more than the built-in moves throughout. See
     /// [`SKATE_WEIGHT_DEFAULT`]; 0 turns it off.
     pub skate_weight: f32,
+    /// Weight of the beat-rate term per open bar: `beat_rate_weight · beat_rate_cost`, how far
+    /// (in octaves) the segment's kinetic beats per count are from 1 or ½ (§J asks a dance's
+    /// kinetic beat rate to be within 25 % of the song's beat rate or its half); see
+    /// [`beat_rate_cost`]. 0 (the default) turns it off. Measured with the `choreo_quality`
+    /// bench (`ODORI_BEAT_RATE_WEIGHT=x`): 0.05 brings Let's Go Fishin' into the goal (kinetic
+    /// over song beat rate 1.31 → 1.07, imported bars 33 % → 75 %) but tips the drum take to
+    /// imported moves (skate 11.8 → 22.8 cm/s, BAS − random +0.346 → +0.220); from 0.1 up the
+    /// dances turn to the person's mocap wholesale (skate 36–44 cm/s, joins up to 2.45), and
+    /// the one-bar trumpet song's rate (1.50) does not move at any weight. So it stays off.
+    pub beat_rate_weight: f32,
 }
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0 }
     }
 }
 
@@ -117,6 +127,17 @@ pub const STRETCH_WEIGHT_DEFAULT: f32 = 0.0;
 /// Charging the skate itself rather than its excess fills every song with built-in moves from
 /// 0.1 up. A person may still turn it on.
 pub const SKATE_WEIGHT_DEFAULT: f32 = 0.0;
+
+/// The beat-rate cost of a segment turning `kinetic_per_count` times a count: octaves from the
+/// nearer of 1 and ½ per count, `min(|log₂ r|, |log₂ 2r|)`, with r at least ¼ (a segment that
+/// never turns costs 1); 0 when r is unknown (not finite).
+pub fn beat_rate_cost(kinetic_per_count: f32) -> f32 {
+    if !kinetic_per_count.is_finite() {
+        return 0.0;
+    }
+    let r = kinetic_per_count.max(0.25);
+    r.log2().abs().min((2.0 * r).log2().abs())
+}
 
 /// Count rate (counts per minute) a segment of 4 counts is played at over a bar of
 /// `duration_secs`.
@@ -549,5 +570,17 @@ mod tests {
         let (path, cost, _) = fill_with_node_costs(&table, &layers, &[0.5, 0.5], &node_costs_with_skate(&w, &[], &[], &skate), &w).unwrap();
         assert_eq!(path, vec![1]);
         assert!((cost - 0.1).abs() < 1e-5, "{cost}");
+    }
+
+    #[test]
+    fn the_beat_rate_term_prefers_one_or_half_a_turn_per_count() {
+        assert_eq!(beat_rate_cost(1.0), 0.0);
+        assert_eq!(beat_rate_cost(0.5), 0.0);
+        // Twice a count is an octave from 1; three quarters is between ½ and 1.
+        assert!((beat_rate_cost(2.0) - 1.0).abs() < 1e-6);
+        assert!((beat_rate_cost(0.75) - (0.75f32 / 0.5).log2().min((1.0f32 / 0.75).log2())).abs() < 1e-6);
+        // Never turning is charged as a quarter turn per count: an octave below ½.
+        assert!((beat_rate_cost(0.0) - 1.0).abs() < 1e-6);
+        assert_eq!(beat_rate_cost(f32::NAN), 0.0);
     }
 }

@@ -25,7 +25,7 @@ pub use document::{recut_clip, BarState, BarView, ChoreoError, Choreography, Gen
 pub use eigen::Signature;
 pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, CANDIDATES_PER_ROUND, TAU_DECAY};
 pub use fill::{
-    bar_count_rate_bpm, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, node_costs, node_costs_with_skate, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
+    bar_count_rate_bpm, beat_rate_cost, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, node_costs, node_costs_with_skate, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
     FillWeights, Layer, Tempi, TransitionTable,
 };
 pub use grid::{bars_from_tempo, GridError};

@@ -198,6 +198,12 @@ pub struct Segment {
     /// source clip's figure): the skate term charges only a segment's skate above it.
     #[serde(default)]
     pub clip_skate_cm_per_s: f32,
+    /// Kinetic beats (spec §J) per count over its frames: 1 turns once a count, 0.5 every other
+    /// count. Warped onto a bar its counts fall on the song's beats, so this is the dance's
+    /// kinetic beat rate over the song's beat rate there (the beat-rate term,
+    /// [`super::FillWeights::beat_rate_weight`]). 0 in documents saved before it was kept.
+    #[serde(default)]
+    pub kinetic_per_count: f32,
     /// Kept only for the bars that already hold it (an older cut of a clip the person re-cut
     /// at a stated tempo): never offered as a candidate nor chosen to fill an open bar.
     #[serde(default)]
@@ -463,6 +469,8 @@ impl SegmentLibrary {
                     count_frames = (0..=SEGMENT_COUNTS).map(|j| si as f32 + (ei - si) as f32 * j as f32 / SEGMENT_COUNTS as f32).collect();
                 }
                 let beat_fit = beat_fit(&count_frames, &kinetic);
+                let (c0, c4) = (count_frames[0], count_frames[SEGMENT_COUNTS]);
+                let kinetic_per_count = kinetic.iter().filter(|&&f| f >= c0 && f < c4).count() as f32 / SEGMENT_COUNTS as f32;
                 // Samples of frames after the first: a sample is the speed from the frame before.
                 let skate_end = (quality_frame(ei) + 1).min(skate.len());
                 let skate_cm_per_s = summarize_skate(&skate, (quality_frame(si) + 1).min(skate_end)..skate_end).mean_cm_per_s;
@@ -473,6 +481,7 @@ impl SegmentLibrary {
                     beat_fit,
                     skate_cm_per_s,
                     clip_skate_cm_per_s,
+                    kinetic_per_count,
                     clip: clip_index,
                     source: lc.clip.source.clone(),
                     start_frame: si as f32,
@@ -1173,6 +1182,7 @@ mod tests {
             beat_fit: 0.5,
             skate_cm_per_s: 0.0,
             clip_skate_cm_per_s: 0.0,
+            kinetic_per_count: 0.0,
             tempo_bpm: 120.0,
             intensity: 1.0,
             intensity01: 0.5,
