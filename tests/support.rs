@@ -177,3 +177,26 @@ pub fn join_jump_ratio(joined: &odori_core::Clip, sources: [&odori_core::Clip; 2
     let p95 = inside.get(((inside.len() as f32 * 0.95) as usize).min(inside.len().saturating_sub(1))).copied().unwrap_or(0.0).max(1e-6);
     jumps(joined, from, to).into_iter().fold(0.0, f32::max) / p95
 }
+
+/// Spearman's rank correlation (no tie correction: the values are continuous). Used by the
+/// preference benches to say how well a similarity agrees with the perceptual distance.
+pub fn spearman(a: &[f32], b: &[f32]) -> f32 {
+    let rank = |x: &[f32]| {
+        let mut order: Vec<usize> = (0..x.len()).collect();
+        order.sort_by(|&i, &j| x[i].total_cmp(&x[j]));
+        let mut r = vec![0.0f64; x.len()];
+        for (k, &i) in order.iter().enumerate() {
+            r[i] = k as f64;
+        }
+        r
+    };
+    let (ra, rb) = (rank(a), rank(b));
+    let mid = (a.len() as f64 - 1.0) / 2.0;
+    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+    for (x, y) in ra.iter().zip(&rb) {
+        ab += (x - mid) * (y - mid);
+        aa += (x - mid) * (x - mid);
+        bb += (y - mid) * (y - mid);
+    }
+    (ab / (aa * bb).sqrt().max(1e-300)) as f32
+}

@@ -42,7 +42,7 @@ use odori_core::normalize::{body_height, normalize_in_place, Origin};
 use odori_core::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
 use odori_core::import::import_bytes;
 use odori_core::ImportOptions;
-use odori_tests::{all_bvh, fps_override_for, read};
+use odori_tests::{all_bvh, fps_override_for, read, spearman};
 
 const ROUNDS: usize = 5;
 const LIKES: usize = 2;
@@ -494,26 +494,4 @@ fn main() {
             }
         }
     }
-}
-
-/// Spearman's rank correlation (no tie correction: the values are continuous).
-fn spearman(a: &[f32], b: &[f32]) -> f32 {
-    let rank = |x: &[f32]| {
-        let mut order: Vec<usize> = (0..x.len()).collect();
-        order.sort_by(|&i, &j| x[i].total_cmp(&x[j]));
-        let mut r = vec![0.0f64; x.len()];
-        for (k, &i) in order.iter().enumerate() {
-            r[i] = k as f64;
-        }
-        r
-    };
-    let (ra, rb) = (rank(a), rank(b));
-    let mid = (a.len() as f64 - 1.0) / 2.0;
-    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
-    for (x, y) in ra.iter().zip(&rb) {
-        ab += (x - mid) * (y - mid);
-        aa += (x - mid) * (x - mid);
-        bb += (y - mid) * (y - mid);
-    }
-    (ab / (aa * bb).sqrt().max(1e-300)) as f32
 }
