@@ -5,13 +5,15 @@
 //! is character ≤ source + 1 cm/s) and vs the control with the feet not held by IK, the
 //! largest horizontal drift of the hips that holding the feet causes, the largest one-frame
 //! move of a foot joint against the source's (scaled; a held foot snapping back shows here),
-//! and the time to retarget per 1000 frames.
+//! and the time to retarget per 1000 frames. Under each case whose foot jump is above the
+//! source's + 5 cm (the bound `character_retarget` asserts), the frames where it is, per joint.
 //! `cargo bench -p odori-tests --bench retarget`.
 
 use std::time::Instant;
 
 use odori_core::character::{report, Character, RetargetOptions, Transfer};
-use odori_core::humanoid::HumanoidMap;
+use odori_core::humanoid::{Canon, HumanoidMap};
+use odori_core::retarget::{is_canonical, to_canonical};
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::Clip;
 use odori_tests::{fps_override_for, read};
@@ -82,6 +84,9 @@ fn main() {
             );
             jump_excess.push(r.foot_jump_excess_m());
             drifts.push(drift_m);
+            if r.foot_jump_excess_m() > 0.05 {
+                println!("{:<22}   one-frame moves above the source's largest + 5 cm (frame: character / source there, m): {}", "", jump_frames(clip, map, &ch, &out, 0.05).join("; "));
+            }
         }
         deltas.sort_by(f32::total_cmp);
         dir_p95.sort_by(f32::total_cmp);
@@ -99,4 +104,28 @@ fn main() {
             drifts.iter().copied().fold(0.0, f32::max)
         );
     }
+}
+
+/// Per foot joint, the frames where the character's one-frame move is more than `margin_m`
+/// above the largest the source's same joint makes (at the character's size, as
+/// `character::report` measures): the first three, with the character's and the source's move
+/// on that frame, and how many there are.
+fn jump_frames(clip: &Clip, map: &HumanoidMap, ch: &Character, out: &Clip, margin_m: f32) -> Vec<String> {
+    let src = if is_canonical(&clip.skeleton) { clip.clone() } else { to_canonical(clip, map, clip.fps) };
+    let scale = ch.scale_from_canonical();
+    let frames = src.frame_count().min(out.frame_count());
+    let (sp, cp): (Vec<_>, Vec<_>) = (0..frames).map(|f| (src.world_positions(f), out.world_positions(f))).unzip();
+    let mut parts = Vec::new();
+    for c in [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe] {
+        let Some(j) = ch.map.get(c) else { continue };
+        let src_move = |f: usize| (sp[f][c.index()] - sp[f - 1][c.index()]).length() * scale;
+        let src_max = (1..frames).map(src_move).fold(0.0, f32::max);
+        let over: Vec<usize> = (1..frames).filter(|&f| (cp[f][j] - cp[f - 1][j]).length() > src_max + margin_m).collect();
+        if over.is_empty() {
+            continue;
+        }
+        let first: Vec<String> = over.iter().take(3).map(|&f| format!("{f}: {:.3} / {:.3}", (cp[f][j] - cp[f - 1][j]).length(), src_move(f))).collect();
+        parts.push(format!("{c:?} ({} frames; source's largest {src_max:.3}) {}", over.len(), first.join(", ")));
+    }
+    parts
 }
