@@ -12,6 +12,62 @@ use odori_core::import::{import_bytes, ImportOptions, Imported};
 use odori_core::Clip;
 use odori_tests::{fps_override_for, read};
 
+/// A foot joint of the character may move in one frame at most this much further than the
+/// source's same joint ever does (at the character's size), m: a held foot dragged out of
+/// reach, or snapping back, is a jump a viewer sees. Fixed before the figures were looked at.
+const FOOT_JUMP_MARGIN_M: f32 = 0.05;
+
+/// Cases (character, clip, the excess over the source's jump in m, rounded up to the cm) known
+/// to break the foot-jump bound with the feet held as on main at 78b94ed: each may not get
+/// worse than its figure, a case that comes within the bound must leave the list, and any other
+/// case above the bound fails. RobotExpressive (hips 3.7× wider than the source's at its size):
+/// a foot held while the source's slides (the character's skate is well under the source's on
+/// these) is released and eased back onto its path in a few frames; on pivot turns the body
+/// swings round the held foot and drags the other out of reach. Open (issue #11).
+const KNOWN_FOOT_JUMPS: &[(&str, &str, f32)] = &[
+    ("gltf/RobotExpressive.glb", "Step-touch & clap (built-in)", 0.12),
+    ("gltf/RobotExpressive.glb", "box step + arm rolls (medium, right)", 0.10),
+    ("gltf/RobotExpressive.glb", "box step + waves (low, right)", 0.08),
+    ("gltf/RobotExpressive.glb", "chassé + arm swing (medium, right)", 0.08),
+    ("gltf/RobotExpressive.glb", "chassé + claps (high, right)", 0.09),
+    ("gltf/RobotExpressive.glb", "grapevine + arm rolls (high, right)", 0.07),
+    ("gltf/RobotExpressive.glb", "grapevine + waves (medium, right)", 0.06),
+    ("gltf/RobotExpressive.glb", "jump + arm wave (medium, right)", 0.10),
+    ("gltf/RobotExpressive.glb", "kick-ball-change + arm rolls (low, right)", 0.08),
+    ("gltf/RobotExpressive.glb", "kick-ball-change + arm swing (high, right)", 0.07),
+    ("gltf/RobotExpressive.glb", "mocap/cmu-indian/indian_04.bvh", 0.88),
+    ("gltf/RobotExpressive.glb", "mocap/cmu-martial/martial_04.bvh", 0.11),
+    ("gltf/RobotExpressive.glb", "pivot turn + arm swing (low, right)", 0.22),
+    ("gltf/RobotExpressive.glb", "pivot turn + arm wave (high, right)", 0.15),
+    ("gltf/RobotExpressive.glb", "pivot turn + claps (medium, right)", 0.18),
+    ("gltf/RobotExpressive.glb", "salsa_01 (20 s)", 0.70),
+    ("gltf/RobotExpressive.glb", "step-touch + overhead reaches (low, right)", 0.09),
+    ("gltf/RobotExpressive.glb", "step-touch + waves (high, right)", 0.14),
+];
+
+/// Checks one case's foot jump against the bound and the known list: `Err` says what is wrong.
+fn check_foot_jump(file: &str, clip: &str, excess_m: f32) -> Result<(), String> {
+    let known = KNOWN_FOOT_JUMPS.iter().find(|&&(f, c, _)| f == file && c == clip);
+    match known {
+        None if excess_m > FOOT_JUMP_MARGIN_M => Err(format!("{file} ← '{clip}': a foot joint jumps {excess_m:+.3} m more than the source's in one frame (bound {FOOT_JUMP_MARGIN_M} m)")),
+        Some(&(_, _, ceiling_m)) if excess_m > ceiling_m => Err(format!("{file} ← '{clip}': known foot jump got worse: {excess_m:+.3} m, listed {ceiling_m:+.2} m")),
+        Some(_) if excess_m <= FOOT_JUMP_MARGIN_M => Err(format!("{file} ← '{clip}': foot jump {excess_m:+.3} m is now within the bound: take it off KNOWN_FOOT_JUMPS")),
+        _ => Ok(()),
+    }
+}
+
+/// The largest horizontal distance, m, between the character's hips with the feet held and
+/// with them free (the transfer's scaled path): how far holding the feet moves the body.
+fn body_drift_m(ch: &Character, held: &Clip, free: &Clip) -> f32 {
+    let hips = ch.map.get(Canon::Hips).unwrap();
+    (0..held.frame_count().min(free.frame_count()))
+        .map(|f| {
+            let d = held.world_positions(f)[hips] - free.world_positions(f)[hips];
+            (d.x * d.x + d.z * d.z).sqrt()
+        })
+        .fold(0.0, f32::max)
+}
+
 fn character(file: &str) -> (Imported, Character) {
     let im = import_bytes(file, &read(file), &ImportOptions::default()).unwrap_or_else(|e| panic!("{e}"));
     let ch = Character::from_imported(file, &im).unwrap_or_else(|e| panic!("{e}"));
@@ -31,6 +87,7 @@ fn characters_follow_the_source_twist_included() {
     let demo = demo_clip();
     let demo_map = HumanoidMap::from_skeleton(&demo.skeleton);
     let (salsa, salsa_map) = salsa();
+    let mut jumps = Vec::new();
     for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
         let (_, ch) = character(file);
         for (clip, map) in [(&demo, &demo_map), (&salsa, &salsa_map)] {
@@ -60,11 +117,15 @@ fn characters_follow_the_source_twist_included() {
             assert!(free.direction_median_rad.to_degrees() < 1.0 && free.direction_p95_rad.to_degrees() < 2.0, "{file}: feet free {free:?}");
             assert!(r.direction_median_rad.to_degrees() < 2.0 && r.direction_p95_rad.to_degrees() < 12.0, "{file}: {r:?}");
             assert!(r.twist_p95_rad.to_degrees() < 2.0, "{file}: twist {r:?}");
+            if let Err(e) = check_foot_jump(file, &clip.name, r.foot_jump_excess_m()) {
+                jumps.push(format!("{e}: {r:?}"));
+            }
             // Foot skate is asserted on other clips (`held_feet_skate_no_more_than_the_source`).
             // The control loses roll: conjugation must be clearly better where the source rolls.
             assert!(control.twist_p95_rad > r.twist_p95_rad + 0.05, "{file}: control {control:?} vs {r:?}");
         }
     }
+    assert!(jumps.is_empty(), "one-frame foot moves against the source's + {FOOT_JUMP_MARGIN_M} m: {jumps:#?}");
 }
 
 #[test]
@@ -119,6 +180,8 @@ fn bad_characters_are_refused_naming_what_is_missing() {
 /// - RobotExpressive (hips 3.7× wider than the source's at its size): only the clips in
 ///   `KNOWN` above the acceptance; the test fails when another joins them, or when one of them
 ///   is fixed (then it leaves the list).
+/// - Every case: no foot joint moves in one frame more than the source's + 5 cm, but for the
+///   cases in `KNOWN_FOOT_JUMPS` (each held to its listed figure).
 #[test]
 fn held_feet_skate_no_more_than_the_source() {
     let mut sources: Vec<(Clip, HumanoidMap)> =
@@ -138,12 +201,26 @@ fn held_feet_skate_no_more_than_the_source() {
     const KNOWN: [&str; 1] = ["mocap/cmu-indian/indian_04.bvh"];
     for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
         let (_, ch) = character(file);
-        let (mut worse, mut worse_names, mut free_worse, mut xbot_worse, mut held_sum, mut free_sum) = (Vec::new(), Vec::new(), 0, 0, 0.0, 0.0);
+        let (mut worse, mut worse_names, mut jumps, mut free_worse, mut xbot_worse, mut held_sum, mut free_sum) = (Vec::new(), Vec::new(), Vec::new(), 0, 0, 0.0, 0.0);
         for (clip, map) in &sources {
-            let r = report(clip, map, &ch, &ch.retarget(clip, map).unwrap());
+            let held = ch.retarget(clip, map).unwrap();
+            let r = report(clip, map, &ch, &held);
             let free = ch.retarget_options(clip, map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
             let f = report(clip, map, &ch, &free);
-            println!("{file} ← '{}': skate held {:.2} cm/s, free {:.2}, source {:.2}", clip.name, r.skate_mean_cm_s, f.skate_mean_cm_s, r.source_skate_mean_cm_s);
+            println!(
+                "{file} ← '{}': skate held {:.2} cm/s, free {:.2}, source {:.2}; largest one-frame foot move {:.3} m (source {:.3}, excess {:+.3}); body drift {:.2} m",
+                clip.name,
+                r.skate_mean_cm_s,
+                f.skate_mean_cm_s,
+                r.source_skate_mean_cm_s,
+                r.foot_jump_m.iter().copied().fold(0.0, f32::max),
+                r.source_foot_jump_m.iter().copied().fold(0.0, f32::max),
+                r.foot_jump_excess_m(),
+                body_drift_m(&ch, &held, &free)
+            );
+            if let Err(e) = check_foot_jump(file, &clip.name, r.foot_jump_excess_m()) {
+                jumps.push(format!("{e}: {:?} m vs source {:?} m", r.foot_jump_m, r.source_foot_jump_m));
+            }
             if r.skate_mean_cm_s > r.source_skate_mean_cm_s + 1.0 {
                 worse.push(format!("{}: {:.2} vs source {:.2}", clip.name, r.skate_mean_cm_s, r.source_skate_mean_cm_s));
                 worse_names.push(clip.name.clone());
@@ -161,5 +238,6 @@ fn held_feet_skate_no_more_than_the_source() {
             assert_eq!(worse_names, KNOWN, "{file}: the clips above the source's skate + 1 cm/s changed: {worse:#?}");
         }
         assert!(worse.len() < free_worse && held_sum < free_sum, "{file}: held {} cases (skate sum {held_sum:.1}) vs free {free_worse} ({free_sum:.1}): {worse:#?}", worse.len());
+        assert!(jumps.is_empty(), "{file}: one-frame foot moves against the source's + {FOOT_JUMP_MARGIN_M} m: {jumps:#?}");
     }
 }

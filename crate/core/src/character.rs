@@ -137,6 +137,20 @@ pub struct RetargetReport {
     pub source_skate_p95_cm_s: f32,
     pub skate_mean_cm_s: f32,
     pub skate_p95_cm_s: f32,
+    /// The largest one-frame move of each foot joint (left ankle, left toe, right ankle,
+    /// right toe; 0 where the rig lacks it), m: the character's, and the source's at the
+    /// character's size (scaled by the ratio of leg lengths). A held foot dragged out of
+    /// reach, or snapping back onto its path, shows here as a jump the source never makes.
+    pub foot_jump_m: [f32; 4],
+    pub source_foot_jump_m: [f32; 4],
+}
+
+impl RetargetReport {
+    /// How much further any foot joint moves in one frame than the source's same joint ever
+    /// does (at the character's size), m: the largest of the four differences.
+    pub fn foot_jump_excess_m(&self) -> f32 {
+        (0..4).map(|k| self.foot_jump_m[k] - self.source_foot_jump_m[k]).fold(f32::NEG_INFINITY, f32::max)
+    }
 }
 
 /// Mean height of the two hip (thigh) joints above their ankles, metres (at least 1 mm).
@@ -820,7 +834,13 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
     // ratio of leg lengths), so the two figures compare.
     let (source_skate_mean_cm_s, source_skate_p95_cm_s) = skate(&src_tracks, src.fps);
     let (skate_mean_cm_s, skate_p95_cm_s) = skate(&out_tracks, out.fps);
+    let jump = |tracks: &[Vec<Vec3>]| -> [f32; 4] {
+        std::array::from_fn(|k| tracks[k].windows(2).map(|w| (w[1] - w[0]).length()).fold(0.0, f32::max))
+    };
+    let (foot_jump_m, source_foot_jump_m) = (jump(&out_tracks), jump(&src_tracks));
     RetargetReport {
+        foot_jump_m,
+        source_foot_jump_m,
         direction_median_rad,
         direction_p95_rad,
         twist_median_rad,
