@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
-use super::fill::{bar_count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, FillError, FillWeights, Layer, Tempi};
+use super::fill::{bar_count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, free_skate_pass, FillError, FillWeights, Layer, Tempi};
 use super::render::{render, RenderOptions};
 use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
 use crate::bars::Bar;
@@ -498,6 +498,17 @@ impl Choreography {
         Ok(())
     }
 
+    /// How much the objective may rise for a bar to take a segment whose feet slide less
+    /// ([`FillWeights::free_skate_slack`]), in 0..=10; 0 turns it off.
+    pub fn set_free_skate_slack(&mut self, slack: f32) -> Result<(), ChoreoError> {
+        if !(0.0..=10.0).contains(&slack) {
+            return Err(ChoreoError::BadSetting { name: "freeSkateSlack".into(), range: "0..=10".into(), value: slack });
+        }
+        self.record();
+        self.doc.settings.fill.free_skate_slack = slack;
+        Ok(())
+    }
+
     /// Repetition penalty of the filling, in 0..=100.
     pub fn set_repeat_penalty(&mut self, w: f32) -> Result<(), ChoreoError> {
         if !(0.0..=100.0).contains(&w) {
@@ -560,7 +571,9 @@ impl Choreography {
         let bar_bpm: Vec<f32> = self.doc.bars.iter().map(|b| bar_count_rate_bpm(b.duration_secs())).collect();
         let segment_bpm: Vec<f32> = lib.segments().iter().map(|s| s.tempo_bpm).collect();
         let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm };
-        let (path, cost, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &weights)?;
+        let (path, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &weights)?;
+        // Foot skate where it is free (FillWeights::free_skate_slack).
+        let (path, cost) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &skate, &path);
         self.record();
         for (state, seg) in self.doc.states.iter_mut().zip(path) {
             if !matches!(state, BarState::Pinned { .. }) {

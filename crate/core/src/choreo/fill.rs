@@ -101,13 +101,27 @@ pub struct FillWeights {
     /// dances turn to the person's mocap wholesale (skate 36–44 cm/s, joins up to 2.45), and
     /// the one-bar trumpet song's rate (1.50) does not move at any weight. So it stays off.
     pub beat_rate_weight: f32,
+    /// Foot skate where it is free: after the best path is found, each open bar whose segment's
+    /// feet slide more than its source clip's takes the segment with the least such excess
+    /// among those that raise the objective (every term above) by at most this much, its
+    /// neighbours unchanged ([`free_skate_pass`]). Where a cleaner segment fits a bar nearly as
+    /// well (a one-bar song, a near tie) the skate decides; where it would cost joins, the beat
+    /// or the person's moves, nothing changes. 0 turns it off. See [`FREE_SKATE_SLACK_DEFAULT`].
+    pub free_skate_slack: f32,
 }
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0 }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT }
     }
 }
+
+/// Default [`FillWeights::free_skate_slack`]: the same size as the default preference for the
+/// person's own moves (0.03), the amount the product already treats as a small difference
+/// between two moves that fit a bar. So a swap never trades an imported move that fits for a
+/// built-in one unless the built-in one is otherwise better.
+pub const FREE_SKATE_SLACK_DEFAULT: f32 = 0.03;
+
 
 /// Default [`FillWeights::stretch_weight`]: off. Measured with the `choreo_quality` bench (with
 /// the table's end-effector gap term, which is what keeps joins smooth): any weight from 0.05
@@ -477,6 +491,76 @@ pub fn fill_with_tempi(
     Ok((path, cost, stats))
 }
 
+/// Foot skate where it is free ([`FillWeights::free_skate_slack`]): bar by bar in order, an
+/// open bar whose segment's feet slide more than its source clip's (`skate_excess_cm_per_s[s]
+/// > 0`) takes instead the segment with the least such excess among those that keep the whole
+/// objective ([`path_cost_with_tempi`], the same terms the path was found with) within
+/// `free_skate_slack` of the path's, its neighbours unchanged (ties: the cheaper). A local
+/// swap, not a weight on the whole search: a skate weight tips whole dances between kinds of
+/// move, since moves of one kind join each other best; a swap only happens where a cleaner
+/// segment fits that bar nearly as well. Returns the path and its objective.
+#[allow(clippy::too_many_arguments)]
+pub fn free_skate_pass(
+    table: &TransitionTable,
+    layers: &[Layer],
+    segment_intensity: &[f32],
+    node_cost: &[f32],
+    tempi: &Tempi,
+    weights: &FillWeights,
+    skate_excess_cm_per_s: &[f32],
+    path: &[usize],
+) -> (Vec<usize>, f32) {
+    let mut path = path.to_vec();
+    let mut cost = path_cost_with_tempi(table, layers, segment_intensity, node_cost, tempi, weights, &path);
+    let slack = weights.free_skate_slack;
+    let excess = |s: usize| skate_excess_cm_per_s.get(s).copied().filter(|v| v.is_finite()).unwrap_or(0.0).max(0.0);
+    if !(slack > 0.0) || path.len() != layers.len() || !cost.is_finite() {
+        return (path, cost);
+    }
+    let m = table.len().min(segment_intensity.len());
+    for t in 0..layers.len() {
+        let Layer::Open { intensity } = layers[t] else { continue };
+        let a = path[t];
+        if excess(a) <= 0.0 {
+            continue;
+        }
+        // This bar's share of the objective with segment b in it (the window's repeats aside,
+        // which the full check below counts).
+        let (prev, next) = (t.checked_sub(1).map(|p| path[p]), path.get(t + 1).copied());
+        let local = |b: usize| {
+            let mut c = weights.music_weight * (intensity - segment_intensity[b]).abs() + node_cost.get(b).copied().unwrap_or(0.0) + tempi.cost(weights, t, b);
+            if let Some(p) = prev {
+                c += table.cost(p, b);
+            }
+            if let Some(n) = next {
+                c += table.cost(b, n);
+            }
+            c
+        };
+        let here = local(a);
+        let mut best: Option<(f32, f32, usize, f32)> = None; // (excess, rise, segment, new cost)
+        for b in 0..m {
+            if b == a || !table.is_available(b) || excess(b) >= excess(a) || local(b) - here > slack {
+                continue;
+            }
+            if best.is_some_and(|(e, r, _, _)| (excess(b), local(b) - here) >= (e, r)) {
+                continue;
+            }
+            path[t] = b;
+            let c = path_cost_with_tempi(table, layers, segment_intensity, node_cost, tempi, weights, &path);
+            path[t] = a;
+            if c - cost <= slack {
+                best = Some((excess(b), c - cost, b, c));
+            }
+        }
+        if let Some((_, _, b, c)) = best {
+            path[t] = b;
+            cost = c;
+        }
+    }
+    (path, cost)
+}
+
 /// The objective [`fill`] minimises, for any path (for checks and reports).
 pub fn path_cost(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], weights: &FillWeights, path: &[usize]) -> f32 {
     path_cost_with_node_costs(table, layers, segment_intensity, &[], weights, path)
@@ -536,6 +620,41 @@ mod tests {
         let off = FillWeights { stretch_weight: 0.0, ..on };
         let (path, _, _) = fill_with_tempi(&table, &layers, &[0.5, 0.5], &[], &tempi, &off).unwrap();
         assert_eq!(path, vec![0, 0]);
+    }
+
+    #[test]
+    fn the_free_skate_pass_swaps_only_where_a_cleaner_segment_fits_nearly_as_well() {
+        // Four segments, all joins alike (C = 1) except into and out of segment 3, whose joins
+        // cost 0.5 more. Segment 0 fits the bars' intensity best but slides 8 cm/s above its
+        // clip; 1 fits 0.02 worse with no excess; 2 fits 0.2 worse with none; 3 fits 0.01 worse
+        // with none but joins badly.
+        let m = 4;
+        let costs: Vec<f32> = (0..m * m).map(|i| if i / m == 3 || i % m == 3 { 1.5 } else { 1.0 }).collect();
+        let table = TransitionTable::from_costs(m, costs);
+        let intensity = [0.5, 0.52, 0.7, 0.51];
+        let excess = [8.0, 0.0, 0.0, 0.0];
+        let w = FillWeights { repeat_penalty: 0.0, ..FillWeights::default() };
+        let one = [Layer::Open { intensity: 0.5 }];
+        let tempi = Tempi::default();
+        // One bar (no joins): 0 is best; the pass moves it to the cheapest clean one, 3.
+        let (path, _, _) = fill_with_tempi(&table, &one, &intensity, &[], &tempi, &w).unwrap();
+        assert_eq!(path, vec![0]);
+        let (swapped, cost) = free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, &excess, &path);
+        assert_eq!(swapped, vec![3]);
+        assert!((cost - 0.01).abs() < 1e-5, "{cost}");
+        // Off: nothing changes. A slack below the rise: nothing changes.
+        let off = FillWeights { free_skate_slack: 0.0, ..w };
+        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &off, &excess, &path).0, vec![0]);
+        let tight = FillWeights { free_skate_slack: 0.005, ..w };
+        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &tight, &excess, &path).0, vec![0]);
+        // Between two pinned bars of segment 2, the swap keeps its neighbours and never takes
+        // segment 3, whose joins would cost 1.0 more.
+        let three = [Layer::Fixed { segment: 2 }, Layer::Open { intensity: 0.5 }, Layer::Fixed { segment: 2 }];
+        let (p3, c3) = free_skate_pass(&table, &three, &intensity, &[], &tempi, &w, &excess, &[2, 0, 2]);
+        assert_eq!(p3, vec![2, 1, 2]);
+        assert!((c3 - 2.02).abs() < 1e-5, "{c3}");
+        // With no excess anywhere the path is kept.
+        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, &[0.0; 4], &path).0, vec![0]);
     }
 
     #[test]

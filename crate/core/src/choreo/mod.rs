@@ -25,8 +25,8 @@ pub use document::{recut_clip, BarState, BarView, ChoreoError, Choreography, Gen
 pub use eigen::Signature;
 pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, CANDIDATES_PER_ROUND, TAU_DECAY};
 pub use fill::{
-    bar_count_rate_bpm, beat_rate_cost, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, node_costs, node_costs_with_skate, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
-    FillWeights, Layer, Tempi, TransitionTable,
+    bar_count_rate_bpm, beat_rate_cost, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, free_skate_pass, node_costs, node_costs_with_skate, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
+    FillWeights, Layer, Tempi, TransitionTable, FREE_SKATE_SLACK_DEFAULT,
 };
 pub use grid::{bars_from_tempo, GridError};
 pub use quality::{dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
