@@ -33,11 +33,24 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
-use super::fill::{bar_count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, free_skate_pass, FillError, FillWeights, Layer, Tempi};
+use super::fill::{bar_count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, free_skate_pass, in_beat_rate_band, FillError, FillWeights, Layer, Tempi, beat_rate_ladder};
 use super::render::{render, RenderOptions};
-use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
+use super::quality::{kinetic_beats_secs, QualityMotion};
+use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions, SEGMENT_COUNTS};
 use crate::bars::Bar;
 use crate::clip::Clip;
+
+/// Kinetic beats per count of the dance `path` fills `bars` with (spec §J: kinetic beats of
+/// the rendered dance within its bars, over 4 counts a bar): 1 turns on every count, 0.5 on
+/// every other. `None` when it cannot be measured (too short, no bars).
+pub fn dance_kinetic_per_count(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<f32> {
+    let (first, last) = (bars.first()?, bars.last()?);
+    let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
+    let clip = render(lib, bars, &choices, &RenderOptions::default());
+    let m = QualityMotion::from_clip(&clip).ok()?;
+    let kinetic = kinetic_beats_secs(&m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
+    Some(kinetic as f32 / (SEGMENT_COUNTS * bars.len()) as f32)
+}
 
 /// Most undo steps kept.
 pub const UNDO_LIMIT: usize = 500;
@@ -509,6 +522,13 @@ impl Choreography {
         Ok(())
     }
 
+    /// Whether the filling keeps the dance's kinetic beat rate near the song's
+    /// ([`FillWeights::follow_beat_rate`]).
+    pub fn set_follow_beat_rate(&mut self, on: bool) {
+        self.record();
+        self.doc.settings.fill.follow_beat_rate = on;
+    }
+
     /// Repetition penalty of the filling, in 0..=100.
     pub fn set_repeat_penalty(&mut self, w: f32) -> Result<(), ChoreoError> {
         if !(0.0..=100.0).contains(&w) {
@@ -562,16 +582,35 @@ impl Choreography {
         let builtin: Vec<bool> = lib.segments().iter().map(|s| s.builtin.is_some()).collect();
         // Skate beyond the source clip's own (the §J goal is "no worse than the source clips'").
         let skate: Vec<f32> = lib.segments().iter().map(|s| (s.skate_cm_per_s - s.clip_skate_cm_per_s).max(0.0)).collect();
-        let mut node_cost = node_costs_with_skate(&weights, &beat_fit, &builtin, &skate);
-        if weights.beat_rate_weight > 0.0 {
-            for (c, s) in node_cost.iter_mut().zip(lib.segments()) {
-                *c += weights.beat_rate_weight * beat_rate_cost(s.kinetic_per_count);
-            }
-        }
+        let node_cost = node_costs_with_skate(&weights, &beat_fit, &builtin, &skate);
         let bar_bpm: Vec<f32> = self.doc.bars.iter().map(|b| bar_count_rate_bpm(b.duration_secs())).collect();
         let segment_bpm: Vec<f32> = lib.segments().iter().map(|s| s.tempo_bpm).collect();
-        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm };
-        let (path, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &weights)?;
+        // Each segment's kinetic beats per count at each bar's count rate, and its beat-rate cost.
+        let follow = weights.follow_beat_rate && weights.beat_rate_weight == 0.0;
+        let kinetic: Vec<Vec<f32>> = if follow || weights.beat_rate_weight > 0.0 {
+            bar_bpm.iter().map(|&r| lib.segments().iter().map(|s| s.kinetic_per_count_at(r)).collect()).collect()
+        } else {
+            Vec::new()
+        };
+        let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &beat_rate };
+        let (mut path, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &weights)?;
+        // The dance's kinetic beat rate near the song's (FillWeights::follow_beat_rate),
+        // measured on the dance itself as §J measures it: the segments' own rates at the bars'
+        // count rates miss what the joins and neighbours add (0.2 a count on slow songs).
+        let bars = &self.doc.bars;
+        let measured = |p: &[usize]| dance_kinetic_per_count(lib, bars, p);
+        let mut weights = weights;
+        if follow && !kinetic.is_empty() && measured(&path).is_some_and(|r| !in_beat_rate_band(r)) {
+            for w in beat_rate_ladder() {
+                let stronger = FillWeights { beat_rate_weight: w, ..weights };
+                let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &stronger)?;
+                if measured(&p).is_some_and(in_beat_rate_band) {
+                    (path, weights) = (p, stronger);
+                    break;
+                }
+            }
+        }
         // Foot skate where it is free (FillWeights::free_skate_slack).
         let (path, cost) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &skate, &path);
         self.record();

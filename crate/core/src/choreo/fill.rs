@@ -92,7 +92,8 @@ pub struct FillWeights {
     /// [`SKATE_WEIGHT_DEFAULT`]; 0 turns it off.
     pub skate_weight: f32,
     /// Weight of the beat-rate term per open bar: `beat_rate_weight · beat_rate_cost`, how far
-    /// (in octaves) the segment's kinetic beats per count are from 1 or ½ (§J asks a dance's
+    /// (in octaves) the segment's kinetic beats per count, played at the bar's count rate
+    /// ([`super::Segment::kinetic_per_count_at`]), are from 1 or ½ (§J asks a dance's
     /// kinetic beat rate to be within 25 % of the song's beat rate or its half); see
     /// [`beat_rate_cost`]. 0 (the default) turns it off. Measured with the `choreo_quality`
     /// bench (`ODORI_BEAT_RATE_WEIGHT=x`): 0.05 brings Let's Go Fishin' into the goal (kinetic
@@ -108,11 +109,44 @@ pub struct FillWeights {
     /// well (a one-bar song, a near tie) the skate decides; where it would cost joins, the beat
     /// or the person's moves, nothing changes. 0 turns it off. See [`FREE_SKATE_SLACK_DEFAULT`].
     pub free_skate_slack: f32,
+    /// Keep the dance's kinetic beat rate near the song's (spec §J: within 25 % of the song's
+    /// beat rate or its half). When `beat_rate_weight` is 0 and the best path's dance, rendered
+    /// and measured as §J measures it ([`super::dance_kinetic_per_count`]), turns a number of
+    /// times a count outside [`BEAT_RATE_BAND`], the filling is run again with the beat-rate
+    /// term (each segment's kinetic beats per count at its bar's count rate,
+    /// [`super::Segment::kinetic_per_count_at`]) at each weight of [`beat_rate_ladder`],
+    /// weakest first, and the first dance inside the band is kept (none: the best path stays).
+    /// A song whose dance already turns on its beats is filled exactly as without it. Default
+    /// true.
+    #[serde(default = "yes")]
+    pub follow_beat_rate: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// The kinetic beats per count [`FillWeights::follow_beat_rate`] accepts: one turn a count or
+/// one every other count, each within 20 % (the §J goal is 25 %; the 5 % between is a margin
+/// for beats the grid's bars hold more or fewer of than 4).
+pub const BEAT_RATE_BAND: [(f32, f32); 2] = [(0.8, 1.2), (0.4, 0.6)];
+
+/// Beat-rate weights tried, weakest first, when the dance's beat rate is outside
+/// [`BEAT_RATE_BAND`] ([`FillWeights::follow_beat_rate`]): 0.01 to 0.45 in steps of √2 (the
+/// weakest that works is wanted: from about 0.1 a weight tips whole dances between kinds of
+/// move).
+pub fn beat_rate_ladder() -> impl Iterator<Item = f32> {
+    (0..12).map(|k| 0.01 * std::f32::consts::SQRT_2.powi(k))
+}
+
+/// Whether a predicted kinetic beats per count is inside [`BEAT_RATE_BAND`].
+pub fn in_beat_rate_band(kinetic_per_count: f32) -> bool {
+    BEAT_RATE_BAND.iter().any(|&(lo, hi)| (lo..=hi).contains(&kinetic_per_count))
 }
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT, follow_beat_rate: true }
     }
 }
 
@@ -302,14 +336,23 @@ pub fn fill_with_node_costs(
 pub struct Tempi<'a> {
     pub bar_bpm: &'a [f32],
     pub segment_bpm: &'a [f32],
+    /// Per layer, per segment: the beat-rate cost ([`beat_rate_cost`]) of the segment played at
+    /// that bar's count rate (from [`super::Segment::kinetic_per_count_at`]), charged
+    /// `beat_rate_weight` times. Empty: no beat-rate term here.
+    pub beat_rate: &'a [Vec<f32>],
 }
 
 impl Tempi<'_> {
     fn cost(&self, weights: &FillWeights, layer: usize, segment: usize) -> f32 {
-        match (self.bar_bpm.get(layer), self.segment_bpm.get(segment)) {
+        let stretch = match (self.bar_bpm.get(layer), self.segment_bpm.get(segment)) {
             (Some(&b), Some(&s)) => stretch_cost(weights.stretch_weight, b, s),
             _ => 0.0,
-        }
+        };
+        let rate = match self.beat_rate.get(layer).and_then(|v| v.get(segment)) {
+            Some(&c) if weights.beat_rate_weight > 0.0 && c.is_finite() => weights.beat_rate_weight * c,
+            _ => 0.0,
+        };
+        stretch + rate
     }
 }
 
@@ -612,7 +655,7 @@ mod tests {
         let table = TransitionTable::from_costs(2, vec![1.0; 4]);
         let layers = [Layer::Open { intensity: 0.5 }, Layer::Open { intensity: 0.5 }];
         let (bar_bpm, segment_bpm) = ([bar_count_rate_bpm(2.0), bar_count_rate_bpm(4.0)], [60.0, 120.0]);
-        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm };
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &[] };
         let on = FillWeights { stretch_weight: 0.5, repeat_penalty: 0.0, ..FillWeights::default() };
         let (path, cost, _) = fill_with_tempi(&table, &layers, &[0.5, 0.5], &[], &tempi, &on).unwrap();
         assert_eq!(path, vec![1, 0]);
