@@ -1,16 +1,20 @@
 //! Generated dances follow the beat (spec §E, §G, §J) on every real song in
 //! ../shared/data/music and the drum take in ../shared/data/beats, with the core's own grid and
 //! the real salsa and Indian clips imported into the library: at default settings the dance's
-//! BAS-music beats random-segment dances on the same bars (mean of 5 draws) by ≥ 0.05 and the
-//! same dance scored on half-shifted beats by ≥ 0.10, its largest join jump stays ≤ 1.5 (the
-//! mean before the table's end-effector gap term; the maximum was 1.55–3.63), and
-//! imported moves fill some bars. The full figures are printed by
-//! `tests/bench/choreo_quality.rs`.
+//! BAS-music beats random-segment dances on the same bars (mean of 5 draws, or of enough for
+//! 100 bars on a short song) by ≥ 0.05 and the same dance scored on half-shifted beats by
+//! ≥ 0.10, its largest join jump stays ≤ 1.5 (the mean before the table's end-effector gap
+//! term; the maximum was 1.55–3.63), its kinetic beats per second are within 25 % of the
+//! song's beat rate or its half (Let's Go Fishin' was at 1.31 before the filling followed the
+//! beat rate, the one-bar trumpet song at 1.50 before its bar held all its beats), its foot
+//! skate is no worse than its source clips' (the trumpet song was at 41.3 cm/s against 36.2
+//! before the free skate swap), and imported moves fill some bars. The full figures are
+//! printed by `tests/bench/choreo_quality.rs`.
 
 #[path = "music_audio.rs"]
 mod music_audio;
 
-use odori_core::choreo::quality::{dance_quality, DanceQuality};
+use odori_core::choreo::quality::{dance_quality, motion_quality, DanceQuality, QualityMotion};
 use odori_core::choreo::{Choreography, RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
 use odori_core::music::{analyze, AnalysisOptions};
@@ -32,6 +36,15 @@ fn library() -> SegmentLibrary {
 #[test]
 fn generated_dances_follow_the_beat_on_every_real_song() {
     let lib = library();
+    // The source clips' foot skate (spec §J), each kind's mean.
+    let (mut imp, mut bi) = (Vec::new(), Vec::new());
+    for c in lib.clips() {
+        let skate = motion_quality(&QualityMotion::from_clip(&c.clip).expect("clip measures")).foot_skate.mean_cm_per_s;
+        if c.builtin.is_some() { bi.push(skate) } else { imp.push(skate) }
+    }
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len().max(1) as f32;
+    let (skate_imported, skate_builtin) = (mean(&imp), mean(&bi));
+    println!("source clips' foot skate: imported {skate_imported:.1} cm/s, built-in {skate_builtin:.1} cm/s");
     let mut songs: Vec<&str> = music_audio::FULL_TRACKS.to_vec();
     songs.push(music_audio::TRUMPET);
     songs.push(music_audio::DRUMS);
@@ -50,7 +63,10 @@ fn generated_dances_follow_the_beat_on_every_real_song() {
         let gen = q(&chosen);
         let mut x = 0x2545_F491_4F6C_DD1Du64;
         let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired).map(|s| s.index).collect();
-        let random_bas: f32 = (0..5)
+        // The control's draws: 5, or enough for 100 random bars on a short song (one draw of a
+        // one-bar song is one segment: 5 of them are too few to estimate a random dance's score).
+        let draws = 5usize.max(100usize.div_ceil(bars.len()));
+        let random_bas: f32 = (0..draws)
             .map(|_| {
                 let ch: Vec<Option<usize>> = (0..bars.len())
                     .map(|_| {
@@ -61,7 +77,7 @@ fn generated_dances_follow_the_beat_on_every_real_song() {
                 q(&ch).beats.bas_music
             })
             .sum::<f32>()
-            / 5.0;
+            / draws as f32;
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
         imported_total += imported;
         println!(
@@ -81,6 +97,24 @@ fn generated_dances_follow_the_beat_on_every_real_song() {
             gen.beats.bas_music_shifted
         );
         assert!(gen.join_jump_max <= 1.5, "{rel}: largest join jump {} (mean {})", gen.join_jump_max, gen.join_jump_mean);
+        // Kinetic beats per second within 25 % of the song's beat rate or of its half.
+        let ratio = gen.beats.kinetic_beats_per_sec / gen.beats.music_beats_per_sec;
+        assert!(
+            (0.75..=1.25).contains(&ratio) || (0.375..=0.625).contains(&ratio),
+            "{rel}: {} kinetic beats per second against the song's {} beats per second (ratio {ratio})",
+            gen.beats.kinetic_beats_per_sec,
+            gen.beats.music_beats_per_sec
+        );
+        // Foot skate no worse than the source clips' it is made of: each kind's clips' mean
+        // (imported, built-in), weighted by the bars of that kind.
+        let skate_goal = (imported as f32 * skate_imported + (bars.len() - imported) as f32 * skate_builtin) / bars.len() as f32;
+        println!("  kinetic/song beat rate {ratio:.2}; foot skate {:.1} cm/s against its source clips' {skate_goal:.1}", gen.foot_skate.mean_cm_per_s);
+        assert!(
+            gen.foot_skate.mean_cm_per_s <= skate_goal,
+            "{rel}: foot skate {} cm/s, its source clips' {skate_goal} ({imported} of {} bars imported)",
+            gen.foot_skate.mean_cm_per_s,
+            bars.len()
+        );
     }
     assert!(imported_total > 0, "no bar of any song was filled from the imported clips at default settings");
 }

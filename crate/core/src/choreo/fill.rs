@@ -535,8 +535,8 @@ pub fn fill_with_tempi(
 }
 
 /// Foot skate where it is free ([`FillWeights::free_skate_slack`]): bar by bar in order, an
-/// open bar whose segment's feet slide more than its source clip's (`skate_excess_cm_per_s[s]
-/// > 0`) takes instead the segment with the least such excess among those that keep the whole
+/// open bar whose segment's feet slide more than its source clip's there
+/// (`skate_excess_cm_per_s(bar, segment) > 0`) takes instead the segment with the least such excess among those that keep the whole
 /// objective ([`path_cost_with_tempi`], the same terms the path was found with) within
 /// `free_skate_slack` of the path's, its neighbours unchanged (ties: the cheaper). A local
 /// swap, not a weight on the whole search: a skate weight tips whole dances between kinds of
@@ -550,19 +550,20 @@ pub fn free_skate_pass(
     node_cost: &[f32],
     tempi: &Tempi,
     weights: &FillWeights,
-    skate_excess_cm_per_s: &[f32],
+    skate_excess_cm_per_s: &dyn Fn(usize, usize) -> f32,
     path: &[usize],
 ) -> (Vec<usize>, f32) {
     let mut path = path.to_vec();
     let mut cost = path_cost_with_tempi(table, layers, segment_intensity, node_cost, tempi, weights, &path);
     let slack = weights.free_skate_slack;
-    let excess = |s: usize| skate_excess_cm_per_s.get(s).copied().filter(|v| v.is_finite()).unwrap_or(0.0).max(0.0);
+    let excess_at = |t: usize, s: usize| Some(skate_excess_cm_per_s(t, s)).filter(|v| v.is_finite()).unwrap_or(0.0).max(0.0);
     if !(slack > 0.0) || path.len() != layers.len() || !cost.is_finite() {
         return (path, cost);
     }
     let m = table.len().min(segment_intensity.len());
     for t in 0..layers.len() {
         let Layer::Open { intensity } = layers[t] else { continue };
+        let excess = |s: usize| excess_at(t, s);
         let a = path[t];
         if excess(a) <= 0.0 {
             continue;
@@ -675,7 +676,8 @@ mod tests {
         let costs: Vec<f32> = (0..m * m).map(|i| if i / m == 3 || i % m == 3 { 1.5 } else { 1.0 }).collect();
         let table = TransitionTable::from_costs(m, costs);
         let intensity = [0.5, 0.52, 0.7, 0.51];
-        let excess = [8.0, 0.0, 0.0, 0.0];
+        let ex = [8.0, 0.0, 0.0, 0.0];
+        let excess = |_: usize, s: usize| ex[s];
         let w = FillWeights { repeat_penalty: 0.0, ..FillWeights::default() };
         let one = [Layer::Open { intensity: 0.5 }];
         let tempi = Tempi::default();
@@ -697,7 +699,7 @@ mod tests {
         assert_eq!(p3, vec![2, 1, 2]);
         assert!((c3 - 2.02).abs() < 1e-5, "{c3}");
         // With no excess anywhere the path is kept.
-        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, &[0.0; 4], &path).0, vec![0]);
+        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, &|_, _| 0.0, &path).0, vec![0]);
     }
 
     #[test]

@@ -237,6 +237,19 @@ impl Segment {
         c[k] + (x - k as f32) * (c[k + 1] - c[k])
     }
 
+    /// The clip frame shown at `u` of the bar it fills, for `u` before the bar (−¼..0: the count
+    /// before its first, at the first count's pace), clamped to the clip's start. What the dance
+    /// plays as its lead-in before its first bar ([`super::render`]). `u` ≥ 0: [`Segment::frame_at`].
+    pub fn frame_before(&self, u: f32) -> f32 {
+        if u >= 0.0 {
+            return self.frame_at(u);
+        }
+        let u = u.max(-1.0 / SEGMENT_COUNTS as f32);
+        let c = &self.count_frames;
+        let count_frames = if c.len() == SEGMENT_COUNTS + 1 && c[1] > c[0] { c[1] - c[0] } else { (self.end_frame - self.start_frame) / SEGMENT_COUNTS as f32 };
+        (self.start_frame + u * SEGMENT_COUNTS as f32 * count_frames).max(0.0)
+    }
+
     /// Kinetic beats per count when played at `count_rate_bpm` counts per minute: interpolated
     /// in log rate between [`Segment::kinetic_per_count_by_rate`] (held at the ends), or its
     /// own-tempo [`Segment::kinetic_per_count`] when those were not measured.
