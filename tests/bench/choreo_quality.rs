@@ -17,6 +17,8 @@
 //! `ODORI_OWN_MOVES=x` sets the preference for imported moves (0: none).
 //! `ODORI_STRETCH_WEIGHT=x` sets the tempo-stretch weight (0: off, the filling before it).
 //! `ODORI_FREE_SKATE_SLACK=x` sets the free skate swap's slack (0: off, the filling before it).
+//! `ODORI_FOLLOW_SKATE=0` turns off keeping the dance's skate within its sources' (the filling
+//! before it).
 //! `ODORI_FOLLOW_BEAT_RATE=0` turns off following the song's beat rate (the filling before it).
 //! `ODORI_RATES=1` also prints the segments' kinetic beats per count at four count rates.
 //! The songs are followed by pieces from the demo-song generator that nothing was tuned on
@@ -196,6 +198,9 @@ fn main() {
         }
         if let Some(w) = std::env::var("ODORI_FREE_SKATE_SLACK").ok().and_then(|v| v.parse().ok()) {
             doc.set_free_skate_slack(w).expect("free skate slack");
+        }
+        if std::env::var("ODORI_FOLLOW_SKATE").is_ok_and(|v| v == "0") {
+            doc.set_follow_skate(false);
         }
         if std::env::var("ODORI_FOLLOW_BEAT_RATE").is_ok_and(|v| v == "0") {
             doc.set_follow_beat_rate(false);

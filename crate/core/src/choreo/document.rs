@@ -33,23 +33,51 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
-use super::fill::{bar_count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, free_skate_pass, in_beat_rate_band, FillError, FillWeights, Layer, Tempi, beat_rate_ladder};
+use super::fill::{bar_count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, free_skate_pass, in_beat_rate_band, FillError, FillWeights, Layer, Tempi, beat_rate_ladder, skate_ladder};
 use super::render::{render, RenderOptions};
-use super::quality::{kinetic_beats_secs, QualityMotion};
+use super::quality::{foot_skate_samples, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
 use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions, SEGMENT_COUNTS};
 use crate::bars::Bar;
 use crate::clip::Clip;
 
-/// Kinetic beats per count of the dance `path` fills `bars` with (spec §J: kinetic beats of
-/// the rendered dance within its bars, over 4 counts a bar): 1 turns on every count, 0.5 on
-/// every other. `None` when it cannot be measured (too short, no bars).
-pub fn dance_kinetic_per_count(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<f32> {
+/// What the filling checks of a dance it made (spec §J, on the rendered dance within its bars).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DanceFigures {
+    /// Kinetic beats over 4 counts a bar: 1 turns on every count, 0.5 on every other.
+    pub kinetic_per_count: f32,
+    /// Mean foot skate, centimetres per second.
+    pub foot_skate_cm_per_s: f32,
+}
+
+/// [`DanceFigures`] of the dance `path` fills `bars` with; `None` when it cannot be measured
+/// (too short, no bars).
+pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<DanceFigures> {
     let (first, last) = (bars.first()?, bars.last()?);
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
     let clip = render(lib, bars, &choices, &RenderOptions::default());
     let m = QualityMotion::from_clip(&clip).ok()?;
     let kinetic = kinetic_beats_secs(&m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
-    Some(kinetic as f32 / (SEGMENT_COUNTS * bars.len()) as f32)
+    let frames = m.frames();
+    let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
+    let skate = summarize_skate(&foot_skate_samples(&m), frame_of(first.start_secs)..frame_of(last.end_secs));
+    Some(DanceFigures { kinetic_per_count: kinetic as f32 / (SEGMENT_COUNTS * bars.len()) as f32, foot_skate_cm_per_s: skate.mean_cm_per_s })
+}
+
+/// The foot skate a dance on `path` should not exceed (spec §J: no worse than its source
+/// clips'): per bar, the mean skate of the source clips of its segment's kind (imported or
+/// built-in), averaged over the bars.
+fn skate_goal_cm_per_s(lib: &SegmentLibrary, path: &[usize]) -> f32 {
+    let mut seen = BTreeSet::new();
+    let (mut sum, mut n) = ([0.0f32; 2], [0usize; 2]);
+    for s in lib.segments() {
+        if seen.insert(s.clip) {
+            let k = usize::from(s.builtin.is_some());
+            sum[k] += s.clip_skate_cm_per_s;
+            n[k] += 1;
+        }
+    }
+    let mean = |k: usize| sum[k] / n[k].max(1) as f32;
+    path.iter().map(|&s| mean(usize::from(lib.segments()[s].builtin.is_some()))).sum::<f32>() / path.len().max(1) as f32
 }
 
 /// Most undo steps kept.
@@ -522,6 +550,13 @@ impl Choreography {
         Ok(())
     }
 
+    /// Whether the filling keeps the dance's foot skate no worse than its source clips'
+    /// ([`FillWeights::follow_skate`]).
+    pub fn set_follow_skate(&mut self, on: bool) {
+        self.record();
+        self.doc.settings.fill.follow_skate = on;
+    }
+
     /// Whether the filling keeps the dance's kinetic beat rate near the song's
     /// ([`FillWeights::follow_beat_rate`]).
     pub fn set_follow_beat_rate(&mut self, on: bool) {
@@ -593,13 +628,13 @@ impl Choreography {
             Vec::new()
         };
         let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
-        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &beat_rate };
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &beat_rate, extra: &[] };
         let (mut path, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &weights)?;
         // The dance's kinetic beat rate near the song's (FillWeights::follow_beat_rate),
         // measured on the dance itself as §J measures it: the segments' own rates at the bars'
         // count rates miss what the joins and neighbours add (0.2 a count on slow songs).
         let bars = &self.doc.bars;
-        let measured = |p: &[usize]| dance_kinetic_per_count(lib, bars, p);
+        let measured = |p: &[usize]| dance_figures(lib, bars, p).map(|f| f.kinetic_per_count);
         let mut weights = weights;
         if follow && !kinetic.is_empty() && measured(&path).is_some_and(|r| !in_beat_rate_band(r)) {
             for w in beat_rate_ladder() {
@@ -620,7 +655,26 @@ impl Choreography {
             let speed_up = if seg.tempo_bpm > 0.0 && bar_bpm[t] > 0.0 { bar_bpm[t] / seg.tempo_bpm } else { 1.0 };
             seg.skate_cm_per_s * speed_up - seg.clip_skate_cm_per_s
         };
-        let (path, cost) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &path);
+        let (mut path, mut cost) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &path);
+        // Foot skate no worse than the source clips' (FillWeights::follow_skate).
+        if weights.follow_skate {
+            let figures = dance_figures(lib, bars, &path);
+            if let Some(before) = figures.filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(lib, &path)) {
+                let on_beat = in_beat_rate_band(before.kinetic_per_count);
+                let over: Vec<Vec<f32>> = (0..layers.len()).map(|t| (0..lib.len()).map(|s| excess(t, s).max(0.0) / 100.0).collect()).collect();
+                for w in skate_ladder() {
+                    let extra: Vec<Vec<f32>> = over.iter().map(|v| v.iter().map(|x| w * x).collect()).collect();
+                    let with_skate = Tempi { extra: &extra, ..tempi };
+                    let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &with_skate, &weights)?;
+                    let (p, c) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &p);
+                    let Some(f) = dance_figures(lib, bars, &p) else { continue };
+                    if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &p) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)) {
+                        (path, cost) = (p, c);
+                        break;
+                    }
+                }
+            }
+        }
         self.record();
         for (state, seg) in self.doc.states.iter_mut().zip(path) {
             if !matches!(state, BarState::Pinned { .. }) {

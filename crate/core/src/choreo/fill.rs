@@ -111,7 +111,7 @@ pub struct FillWeights {
     pub free_skate_slack: f32,
     /// Keep the dance's kinetic beat rate near the song's (spec §J: within 25 % of the song's
     /// beat rate or its half). When `beat_rate_weight` is 0 and the best path's dance, rendered
-    /// and measured as §J measures it ([`super::dance_kinetic_per_count`]), turns a number of
+    /// and measured as §J measures it ([`super::dance_figures`]), turns a number of
     /// times a count outside [`BEAT_RATE_BAND`], the filling is run again with the beat-rate
     /// term (each segment's kinetic beats per count at its bar's count rate,
     /// [`super::Segment::kinetic_per_count_at`]) at each weight of [`beat_rate_ladder`],
@@ -120,6 +120,21 @@ pub struct FillWeights {
     /// true.
     #[serde(default = "yes")]
     pub follow_beat_rate: bool,
+    /// Keep the dance's foot skate no worse than its source clips' (spec §J): when the dance,
+    /// rendered and measured ([`super::dance_figures`]), slides its feet more than the mean
+    /// skate of its kinds of source clip (imported, built-in; weighted by the bars of each),
+    /// the filling is run again with a skate term on each segment's skate above its clip's as
+    /// the bar plays it (sped up or slowed) at each weight of [`skate_ladder`], weakest first,
+    /// and the first dance within the goal (and not pushed off the beat rate) is kept. A dance
+    /// already within it is filled as without it. Default true.
+    #[serde(default = "yes")]
+    pub follow_skate: bool,
+}
+
+/// Skate weights (per m/s of skate above the source clip's) tried, weakest first, by
+/// [`FillWeights::follow_skate`]: 0.1 to 12.8, doubling.
+pub fn skate_ladder() -> impl Iterator<Item = f32> {
+    (0..8).map(|k| 0.1 * 2f32.powi(k))
 }
 
 fn yes() -> bool {
@@ -146,7 +161,7 @@ pub fn in_beat_rate_band(kinetic_per_count: f32) -> bool {
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT, follow_beat_rate: true }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT, follow_beat_rate: true, follow_skate: true }
     }
 }
 
@@ -340,6 +355,8 @@ pub struct Tempi<'a> {
     /// that bar's count rate (from [`super::Segment::kinetic_per_count_at`]), charged
     /// `beat_rate_weight` times. Empty: no beat-rate term here.
     pub beat_rate: &'a [Vec<f32>],
+    /// Per layer, per segment: a cost added as it is (already weighted). Empty: none.
+    pub extra: &'a [Vec<f32>],
 }
 
 impl Tempi<'_> {
@@ -352,7 +369,8 @@ impl Tempi<'_> {
             Some(&c) if weights.beat_rate_weight > 0.0 && c.is_finite() => weights.beat_rate_weight * c,
             _ => 0.0,
         };
-        stretch + rate
+        let extra = self.extra.get(layer).and_then(|v| v.get(segment)).copied().filter(|c| c.is_finite()).unwrap_or(0.0);
+        stretch + rate + extra
     }
 }
 
@@ -557,7 +575,7 @@ pub fn free_skate_pass(
     let mut cost = path_cost_with_tempi(table, layers, segment_intensity, node_cost, tempi, weights, &path);
     let slack = weights.free_skate_slack;
     let excess_at = |t: usize, s: usize| Some(skate_excess_cm_per_s(t, s)).filter(|v| v.is_finite()).unwrap_or(0.0).max(0.0);
-    if !(slack > 0.0) || path.len() != layers.len() || !cost.is_finite() {
+    if slack.is_nan() || slack <= 0.0 || path.len() != layers.len() || !cost.is_finite() {
         return (path, cost);
     }
     let m = table.len().min(segment_intensity.len());
@@ -656,7 +674,7 @@ mod tests {
         let table = TransitionTable::from_costs(2, vec![1.0; 4]);
         let layers = [Layer::Open { intensity: 0.5 }, Layer::Open { intensity: 0.5 }];
         let (bar_bpm, segment_bpm) = ([bar_count_rate_bpm(2.0), bar_count_rate_bpm(4.0)], [60.0, 120.0]);
-        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &[] };
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &[], extra: &[] };
         let on = FillWeights { stretch_weight: 0.5, repeat_penalty: 0.0, ..FillWeights::default() };
         let (path, cost, _) = fill_with_tempi(&table, &layers, &[0.5, 0.5], &[], &tempi, &on).unwrap();
         assert_eq!(path, vec![1, 0]);
