@@ -208,7 +208,9 @@ fn main() {
         if let Some(w) = std::env::var("ODORI_BEAT_RATE_WEIGHT").ok().and_then(|v| v.parse().ok()) {
             doc.set_beat_rate_weight(w).expect("beat-rate weight");
         }
+        let tg = Instant::now();
         doc.generate(&lib).expect("generate");
+        let generate_ms = tg.elapsed().as_secs_f64() * 1e3;
         let chosen = doc.segments();
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
         let gen = quality(&lib, &bars, &beats, &chosen);
@@ -282,14 +284,15 @@ fn main() {
             100.0 * imported as f32 / bars.len().max(1) as f32
         );
         println!(
-            "{:<44}   grid {:.0} BPM in {}; margins: gen − random {:+.3} (goal ≥ +0.05), gen − shifted {:+.3} (goal ≥ +0.10); kinetic/song beat rate {:.2} (goal 0.75..1.25 or 0.375..0.625); skate goal ≤ {:.1} (its kinds' source clips)",
+            "{:<44}   grid {:.0} BPM in {}; margins: gen − random {:+.3} (goal ≥ +0.05), gen − shifted {:+.3} (goal ≥ +0.10); kinetic/song beat rate {:.2} (goal 0.75..1.25 or 0.375..0.625); skate goal ≤ {:.1} (its kinds' source clips); generate {:.0} ms",
             "",
             grid.bpm,
             grid.beats_per_bar,
             gen.beats.bas_music - rm(&|q| q.beats.bas_music),
             gen.beats.bas_music - gen.beats.bas_music_shifted,
             gen.beats.kinetic_beats_per_sec / gen.beats.music_beats_per_sec.max(1e-6),
-            (imported as f32 * mean(&skate_imp) + (bars.len() - imported) as f32 * mean(&skate_bi)) / bars.len().max(1) as f32
+            (imported as f32 * mean(&skate_imp) + (bars.len() - imported) as f32 * mean(&skate_bi)) / bars.len().max(1) as f32,
+            generate_ms
         );
     }
 

@@ -634,15 +634,22 @@ impl Choreography {
         // measured on the dance itself as §J measures it: the segments' own rates at the bars'
         // count rates miss what the joins and neighbours add (0.2 a count on slow songs).
         let bars = &self.doc.bars;
-        let measured = |p: &[usize]| dance_figures(lib, bars, p).map(|f| f.kinetic_per_count);
+        // The figures of the path last measured (a render and a measure each: kept, not redone).
+        let mut figures: Option<(Vec<usize>, Option<DanceFigures>)> = None;
         let mut weights = weights;
-        if follow && !kinetic.is_empty() && measured(&path).is_some_and(|r| !in_beat_rate_band(r)) {
-            for w in beat_rate_ladder() {
-                let stronger = FillWeights { beat_rate_weight: w, ..weights };
-                let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &stronger)?;
-                if measured(&p).is_some_and(in_beat_rate_band) {
-                    (path, weights) = (p, stronger);
-                    break;
+        if follow && !kinetic.is_empty() {
+            let first = dance_figures(lib, bars, &path);
+            figures = Some((path.clone(), first));
+            if first.is_some_and(|f| !in_beat_rate_band(f.kinetic_per_count)) {
+                for w in beat_rate_ladder() {
+                    let stronger = FillWeights { beat_rate_weight: w, ..weights };
+                    let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &stronger)?;
+                    let f = dance_figures(lib, bars, &p);
+                    if f.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count)) {
+                        figures = Some((p.clone(), f));
+                        (path, weights) = (p, stronger);
+                        break;
+                    }
                 }
             }
         }
@@ -658,8 +665,11 @@ impl Choreography {
         let (mut path, mut cost) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &path);
         // Foot skate no worse than the source clips' (FillWeights::follow_skate).
         if weights.follow_skate {
-            let figures = dance_figures(lib, bars, &path);
-            if let Some(before) = figures.filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(lib, &path)) {
+            let current = match figures {
+                Some((p, f)) if p == path => f,
+                _ => dance_figures(lib, bars, &path),
+            };
+            if let Some(before) = current.filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(lib, &path)) {
                 let on_beat = in_beat_rate_band(before.kinetic_per_count);
                 let over: Vec<Vec<f32>> = (0..layers.len()).map(|t| (0..lib.len()).map(|s| excess(t, s).max(0.0) / 100.0).collect()).collect();
                 for w in skate_ladder() {
