@@ -1296,6 +1296,51 @@ mod tests {
     }
 
     #[test]
+    fn the_lead_in_is_the_count_before_at_the_first_counts_pace() {
+        let s = seg_with_counts(vec![10.0, 20.0, 40.0, 48.0, 60.0]);
+        // A quarter of the bar before: one count (10 frames, the first count's length) earlier.
+        assert!((s.frame_before(-0.25) - 0.0).abs() < 1e-4);
+        assert!((s.frame_before(-0.125) - 5.0).abs() < 1e-4);
+        // No further back than a count, nor before the clip's start; in the bar, as frame_at.
+        assert!((s.frame_before(-3.0) - 0.0).abs() < 1e-4);
+        assert!((seg_with_counts(vec![3.0, 13.0, 23.0, 33.0, 43.0]).frame_before(-0.25) - 0.0).abs() < 1e-4);
+        assert!((s.frame_before(0.375) - s.frame_at(0.375)).abs() < 1e-4);
+    }
+
+    #[test]
+    fn kinetic_beats_per_count_follow_the_count_rate() {
+        // Interpolated in log rate between the measured rates, held at the ends, and the
+        // own-tempo figure when none were measured.
+        let mut s = seg_with_counts(vec![0.0, 15.0, 30.0, 45.0, 60.0]);
+        s.kinetic_per_count = 0.75;
+        assert_eq!(s.kinetic_per_count_at(100.0), 0.75);
+        s.kinetic_per_count_by_rate = vec![2.0, 1.5, 1.25, 1.0, 0.75, 0.5];
+        assert_eq!(s.kinetic_per_count_at(40.0), 2.0);
+        assert_eq!(s.kinetic_per_count_at(200.0), 0.5);
+        assert!((s.kinetic_per_count_at(90.0) - 1.25).abs() < 1e-5);
+        let mid = (90.0f32 * 110.0).sqrt();
+        assert!((s.kinetic_per_count_at(mid) - 1.125).abs() < 1e-4);
+        // A body bobbing so it turns once a count (every 30 frames at 30 fps, 60 counts per
+        // minute; the turns 0.3 frame after the counts, off the resampling grid: an exactly
+        // symmetric turn is a two-frame tie, no strict minimum): about one kinetic beat a count
+        // at every rate, the first count included (the half count around it gives it a turn).
+        let rest = crate::builtin::canonical_skeleton().rest_positions();
+        let frames = 240;
+        let pos: Vec<Vec3> = (0..frames)
+            .flat_map(|f| {
+                let y = 0.08 * ((f as f32 - 0.3) / 30.0 * std::f32::consts::PI).cos();
+                rest.iter().map(move |p| *p + Vec3::Y * y)
+            })
+            .collect();
+        let counts = [60.0f32, 90.0, 120.0, 150.0, 180.0];
+        let v = kinetic_per_count_by_rate(&pos, &counts);
+        assert_eq!(v.len(), KINETIC_RATES_BPM.len());
+        for (r, k) in KINETIC_RATES_BPM.iter().zip(&v) {
+            assert!((0.75..=1.25).contains(k), "{k} kinetic beats a count at {r} counts per minute ({v:?})");
+        }
+    }
+
+    #[test]
     fn each_count_lands_on_its_quarter_of_the_bar() {
         // Uneven counts: the second count comes early, the third late.
         let s = seg_with_counts(vec![10.0, 20.0, 40.0, 48.0, 60.0]);
