@@ -147,6 +147,17 @@ fn main() {
     }
 
     if std::env::var("ODORI_RATES").is_ok() {
+        // What measuring every segment's kinetic beats per count at the six rates costs, of the
+        // library's cut above.
+        let t = Instant::now();
+        let mut n = 0;
+        for (ci, c) in lib.clips().iter().enumerate() {
+            let pos = odori_core::humanoid::canonical_positions(&c.clip, &odori_core::humanoid::HumanoidMap::from_skeleton(&c.clip.skeleton));
+            for s in lib.segments().iter().filter(|s| s.clip == ci) {
+                n += odori_core::choreo::kinetic_per_count_by_rate(&pos, &s.count_frames).len();
+            }
+        }
+        println!("kinetic beats per count at {} rates of {} segments: {:.2} s", odori_core::choreo::KINETIC_RATES_BPM.len(), n / 6, t.elapsed().as_secs_f64());
         // Kinetic beats per count of each segment alone, played at four count rates: §J's
         // speed is smoothed over a fixed time, so a slowed move turns more often a count.
         for (label, bi) in [("built-in", true), ("imported", false)] {
