@@ -95,12 +95,13 @@ pub struct FillWeights {
     /// (in octaves) the segment's kinetic beats per count, played at the bar's count rate
     /// ([`super::Segment::kinetic_per_count_at`]), are from 1 or ½ (§J asks a dance's
     /// kinetic beat rate to be within 25 % of the song's beat rate or its half); see
-    /// [`beat_rate_cost`]. 0 (the default) turns it off. Measured with the `choreo_quality`
-    /// bench (`ODORI_BEAT_RATE_WEIGHT=x`): 0.05 brings Let's Go Fishin' into the goal (kinetic
-    /// over song beat rate 1.31 → 1.07, imported bars 33 % → 75 %) but tips the drum take to
-    /// imported moves (skate 11.8 → 22.8 cm/s, BAS − random +0.346 → +0.220); from 0.1 up the
-    /// dances turn to the person's mocap wholesale (skate 36–44 cm/s, joins up to 2.45), and
-    /// the one-bar trumpet song's rate (1.50) does not move at any weight. So it stays off.
+    /// [`beat_rate_cost`]. 0 (the default) leaves it to [`FillWeights::follow_beat_rate`],
+    /// which applies the weakest weight that works, and only to a dance off the song's beat
+    /// rate: a fixed weight acts on every song, and measured with the `choreo_quality` bench
+    /// (`ODORI_BEAT_RATE_WEIGHT=x`, with `ODORI_FOLLOW_BEAT_RATE=0`) 0.07 turns Vibe Ace and the
+    /// drum take wholly to one kind of move (Vibe Ace imported 79 % → 0 %, skate 25.5 → 38.8
+    /// cm/s). (The one-bar trumpet song's 1.50 that no weight moved came from its grid: its bar
+    /// held 2 of its 4 beats.) A value above 0 is used as it is, on every song.
     pub beat_rate_weight: f32,
     /// Foot skate where it is free: after the best path is found, each open bar whose segment's
     /// feet slide more than its source clip's takes the segment with the least such excess
@@ -188,7 +189,9 @@ pub const STRETCH_WEIGHT_DEFAULT: f32 = 0.0;
 /// (join jump max 1.04 → 1.60, imported 79 % → 73 %) and Let's Go Fishin' (imported 33 % →
 /// 0 %), the near all-or-nothing choice between kinds of move that the stretch term shows too.
 /// Charging the skate itself rather than its excess fills every song with built-in moves from
-/// 0.1 up. A person may still turn it on.
+/// 0.1 up. A person may still turn it on. The product instead swaps where it is free
+/// ([`FillWeights::free_skate_slack`]) and steers only a dance that slides more than its sources
+/// ([`FillWeights::follow_skate`]).
 pub const SKATE_WEIGHT_DEFAULT: f32 = 0.0;
 
 /// The beat-rate cost of a segment turning `kinetic_per_count` times a count: octaves from the
