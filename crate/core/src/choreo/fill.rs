@@ -98,8 +98,8 @@ pub struct FillWeights {
     /// [`beat_rate_cost`]. 0 (the default) leaves it to [`FillWeights::follow_beat_rate`],
     /// which applies the weakest weight that works, and only to a dance off the song's beat
     /// rate: a fixed weight acts on every song, and measured with the `choreo_quality` bench
-    /// (`ODORI_BEAT_RATE_WEIGHT=x`, with `ODORI_FOLLOW_BEAT_RATE=0`) 0.07 turns Vibe Ace and the
-    /// drum take wholly to one kind of move (Vibe Ace imported 79 % → 0 %, skate 25.5 → 38.8
+    /// (`ODORI_BEAT_RATE_WEIGHT=x`, with `ODORI_FOLLOW_BEAT_RATE=0`) 0.07 turns Vibe Ace, which
+    /// was on its beat rate, wholly to built-in moves (imported 79 % → 0 %, skate 25.5 → 38.8
     /// cm/s). (The one-bar trumpet song's 1.50 that no weight moved came from its grid: its bar
     /// held 2 of its 4 beats.) A value above 0 is used as it is, on every song.
     pub beat_rate_weight: f32,
