@@ -4,7 +4,7 @@
 //! clips, cut at their detected tempo). For each song it prints, against controls measured in
 //! the same run:
 //! - BAS-music and BAS-motion of the generated dance (default settings), of dances of random
-//!   segments on the same bars (mean of 5 draws), and of the generated dance scored against
+//!   segments on the same bars (mean of 5 draws, more on a short song: at least 100 bars), and of the generated dance scored against
 //!   the half-beat-shifted beats;
 //! - kinetic beats per second against the song's beat rate;
 //! - foot skate (mean, p95 cm/s) and PFC against the source clips';
@@ -16,6 +16,13 @@
 //! filling before the beat term).
 //! `ODORI_OWN_MOVES=x` sets the preference for imported moves (0: none).
 //! `ODORI_STRETCH_WEIGHT=x` sets the tempo-stretch weight (0: off, the filling before it).
+//! `ODORI_FREE_SKATE_SLACK=x` sets the free skate swap's slack (0: off, the filling before it).
+//! `ODORI_FOLLOW_SKATE=0` turns off keeping the dance's skate within its sources' (the filling
+//! before it).
+//! `ODORI_FOLLOW_BEAT_RATE=0` turns off following the song's beat rate (the filling before it).
+//! `ODORI_RATES=1` also prints the segments' kinetic beats per count at four count rates.
+//! The songs are followed by pieces from the demo-song generator that nothing was tuned on
+//! (other tempi, a waltz, a tempo ramp, a short piece).
 //! `ODORI_JOINS=1` also prints each song's five worst joins and the segments either side.
 //! Prints figures; asserts nothing. `cargo bench -p odori-tests --bench choreo_quality`
 //! (release), or `cargo test -p odori-tests --bench choreo_quality` for a quicker build.
@@ -29,12 +36,16 @@ use odori_core::bars::Bar;
 use odori_core::choreo::quality::{dance_quality, motion_quality, DanceQuality, QualityMotion};
 use odori_core::choreo::{Choreography, RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
-use odori_core::music::{analyze, AnalysisOptions};
+use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
+use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
 use odori_core::ImportOptions;
 use odori_tests::{all_bvh, fps_override_for, read};
 
-/// Random dances per song.
-const RANDOM_DRAWS: usize = 5;
+/// Random dances per song: 5, or enough for 100 random bars on a short song (one draw of a
+/// one-bar song is one segment: 5 are too few to estimate a random dance's score).
+fn random_draws(bars: usize) -> usize {
+    5usize.max(100usize.div_ceil(bars.max(1)))
+}
 
 /// The library as the app has it after the person opens the dance clips: built-in moves plus
 /// every salsa and Indian BVH, cut at the detected tempo (the app's default).
@@ -51,6 +62,28 @@ fn library() -> SegmentLibrary {
         }
     }
     lib
+}
+
+/// Test pieces from the demo-song generator that no setting was tuned on: other tempi, a
+/// waltz, a tempo ramp and a short piece (three bars of the chorus, which the analysis takes as
+/// a loop).
+fn demo_pieces() -> Vec<(String, RmsEnvelope)> {
+    let make = |beats_per_bar: u32, bpm: f32, end_bpm: f32| {
+        demo_song_with(22050.0, &DemoSongOptions { beats_per_bar, bpm, end_bpm }).expect("demo song")
+    };
+    let env = |samples: &[f32]| envelope(&[samples], 22050.0).expect("envelope");
+    let mut out = Vec::new();
+    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 140.0, 140.0), (3, 150.0, 150.0), (4, 90.0, 130.0)] {
+        let song = make(bpb, bpm, end);
+        let label = if bpm == end { format!("demo in {bpb}, {bpm:.0} BPM") } else { format!("demo in {bpb}, ramp {bpm:.0}→{end:.0} BPM") };
+        out.push((label, env(&song.samples)));
+    }
+    // Short: 3 bars of the first chorus at 140 BPM.
+    let song = make(4, 140.0, 140.0);
+    let chorus = song.sections.iter().find(|s| s.name == "chorus").expect("a chorus");
+    let (a, b) = ((chorus.start_secs * 22050.0) as usize, ((chorus.start_secs + 3.0 * 4.0 * 60.0 / 140.0) * 22050.0) as usize);
+    out.push(("demo in 4, 140 BPM, 3 bars".to_string(), env(&song.samples[a..b.min(song.samples.len())])));
+    out
 }
 
 fn quality(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], choices: &[Option<usize>]) -> DanceQuality {
@@ -113,17 +146,52 @@ fn main() {
         println!("{label} segments alone on a 120 BPM bar: inner counts BAS-music {:.3}, half-shifted {:.3} ({n} segments)", on / n as f32, off / n as f32);
     }
 
-    let mut songs: Vec<&str> = music_audio::FULL_TRACKS.to_vec();
-    songs.push(music_audio::TRUMPET);
-    songs.push(music_audio::DRUMS);
+    if std::env::var("ODORI_RATES").is_ok() {
+        // What measuring every segment's kinetic beats per count at the six rates costs, of the
+        // library's cut above.
+        let t = Instant::now();
+        let mut n = 0;
+        for (ci, c) in lib.clips().iter().enumerate() {
+            let pos = odori_core::humanoid::canonical_positions(&c.clip, &odori_core::humanoid::HumanoidMap::from_skeleton(&c.clip.skeleton));
+            for s in lib.segments().iter().filter(|s| s.clip == ci) {
+                n += odori_core::choreo::kinetic_per_count_by_rate(&pos, &s.count_frames).len();
+            }
+        }
+        println!("kinetic beats per count at {} rates of {} segments: {:.2} s", odori_core::choreo::KINETIC_RATES_BPM.len(), n / 6, t.elapsed().as_secs_f64());
+        // Kinetic beats per count of each segment alone, played at four count rates: §J's
+        // speed is smoothed over a fixed time, so a slowed move turns more often a count.
+        for (label, bi) in [("built-in", true), ("imported", false)] {
+            for bar_secs in [1.6f32, 2.0, 2.7, 3.5] {
+                let (mut k, mut n, mut inner) = (0usize, 0usize, 0usize);
+                for s in lib.segments().iter().filter(|s| s.builtin.is_some() == bi && !s.retired) {
+                    let Some(clip) = odori_core::choreo::segment_clip(&lib, s.index, bar_secs, 30.0) else { continue };
+                    let Ok(m) = QualityMotion::from_clip(&clip) else { continue };
+                    let kb = odori_core::choreo::quality::kinetic_beats_secs(&m);
+                    k += kb.len();
+                    inner += kb.iter().filter(|&&t| t > 0.125 * bar_secs && t < 0.875 * bar_secs).count();
+                    n += 1;
+                }
+                println!("  {label} segments on a bar of {bar_secs:.1} s ({:.0} counts/min): kinetic beats per count {:.2}, inner (1/8..7/8 of the bar) per inner count {:.2}", 240.0 / bar_secs, k as f32 / (4 * n) as f32, inner as f32 / (3 * n) as f32);
+            }
+        }
+    }
+    let mut songs: Vec<(String, RmsEnvelope)> = music_audio::FULL_TRACKS
+        .iter()
+        .chain([&music_audio::TRUMPET, &music_audio::DRUMS])
+        .map(|rel| {
+            let env = music_audio::decode_data(rel).envelope().unwrap_or_else(|e| panic!("{rel}: {e}"));
+            (rel.to_string(), env)
+        })
+        .collect();
+    // Pieces no setting was tuned on, from the demo-song generator (synthesised here).
+    songs.extend(demo_pieces());
     println!(
         "\n{:<44} {:>5} {:>5} | {:>11} {:>11} {:>11} | {:>9} {:>9} | {:>5} {:>5} | {:>9} {:>5} | {:>9} {:>9} | {:>8}",
         "song", "bars", "b/s", "BASm gen", "BASm rand", "BASm shift", "BASk gen", "BASk rnd", "kb/s", "rnd", "skate", "PFC", "jump mean", "jump max", "imported"
     );
-    for rel in songs {
-        let audio = music_audio::decode_data(rel);
-        let env = audio.envelope().unwrap_or_else(|e| panic!("{rel}: {e}"));
-        let grid = analyze(&env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    for (rel, env) in &songs {
+        let rel = rel.as_str();
+        let grid = analyze(env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{rel}: {e}"));
         let bars = grid.bars.clone();
         let beats = grid.beat_times_secs.clone();
         let mut doc = Choreography::new(bars.clone()).expect("bars");
@@ -139,10 +207,21 @@ fn main() {
         if let Some(w) = std::env::var("ODORI_SKATE_WEIGHT").ok().and_then(|v| v.parse().ok()) {
             doc.set_skate_weight(w).expect("skate weight");
         }
+        if let Some(w) = std::env::var("ODORI_FREE_SKATE_SLACK").ok().and_then(|v| v.parse().ok()) {
+            doc.set_free_skate_slack(w).expect("free skate slack");
+        }
+        if std::env::var("ODORI_FOLLOW_SKATE").is_ok_and(|v| v == "0") {
+            doc.set_follow_skate(false);
+        }
+        if std::env::var("ODORI_FOLLOW_BEAT_RATE").is_ok_and(|v| v == "0") {
+            doc.set_follow_beat_rate(false);
+        }
         if let Some(w) = std::env::var("ODORI_BEAT_RATE_WEIGHT").ok().and_then(|v| v.parse().ok()) {
             doc.set_beat_rate_weight(w).expect("beat-rate weight");
         }
+        let tg = Instant::now();
         doc.generate(&lib).expect("generate");
+        let generate_ms = tg.elapsed().as_secs_f64() * 1e3;
         let chosen = doc.segments();
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
         let gen = quality(&lib, &bars, &beats, &chosen);
@@ -182,7 +261,7 @@ fn main() {
         let mut x = 0x9E37_79B9_7F4A_7C15u64;
         let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired).map(|s| s.index).collect();
         let mut rnd = Vec::new();
-        for _ in 0..RANDOM_DRAWS {
+        for _ in 0..random_draws(bars.len()) {
             let ch: Vec<Option<usize>> = (0..bars.len())
                 .map(|_| {
                     x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -216,11 +295,15 @@ fn main() {
             100.0 * imported as f32 / bars.len().max(1) as f32
         );
         println!(
-            "{:<44}   margins: gen − random {:+.3} (goal ≥ +0.05), gen − shifted {:+.3} (goal ≥ +0.10); kinetic/song beat rate {:.2} (goal 0.75..1.25 or 0.375..0.625)",
+            "{:<44}   grid {:.0} BPM in {}; margins: gen − random {:+.3} (goal ≥ +0.05), gen − shifted {:+.3} (goal ≥ +0.10); kinetic/song beat rate {:.2} (goal 0.75..1.25 or 0.375..0.625); skate goal ≤ {:.1} (its kinds' source clips); generate {:.0} ms",
             "",
+            grid.bpm,
+            grid.beats_per_bar,
             gen.beats.bas_music - rm(&|q| q.beats.bas_music),
             gen.beats.bas_music - gen.beats.bas_music_shifted,
-            gen.beats.kinetic_beats_per_sec / gen.beats.music_beats_per_sec.max(1e-6)
+            gen.beats.kinetic_beats_per_sec / gen.beats.music_beats_per_sec.max(1e-6),
+            (imported as f32 * mean(&skate_imp) + (bars.len() - imported) as f32 * mean(&skate_bi)) / bars.len().max(1) as f32,
+            generate_ms
         );
     }
 

@@ -33,11 +33,52 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
-use super::fill::{bar_count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, FillError, FillWeights, Layer, Tempi};
+use super::fill::{bar_count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, free_skate_pass, in_beat_rate_band, FillError, FillWeights, Layer, Tempi, beat_rate_ladder, skate_ladder};
 use super::render::{render, RenderOptions};
-use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
+use super::quality::{foot_skate_samples, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
+use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions, SEGMENT_COUNTS};
 use crate::bars::Bar;
 use crate::clip::Clip;
+
+/// What the filling checks of a dance it made (spec §J, on the rendered dance within its bars).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DanceFigures {
+    /// Kinetic beats over 4 counts a bar: 1 turns on every count, 0.5 on every other.
+    pub kinetic_per_count: f32,
+    /// Mean foot skate, centimetres per second.
+    pub foot_skate_cm_per_s: f32,
+}
+
+/// [`DanceFigures`] of the dance `path` fills `bars` with; `None` when it cannot be measured
+/// (too short, no bars).
+pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<DanceFigures> {
+    let (first, last) = (bars.first()?, bars.last()?);
+    let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
+    let clip = render(lib, bars, &choices, &RenderOptions::default());
+    let m = QualityMotion::from_clip(&clip).ok()?;
+    let kinetic = kinetic_beats_secs(&m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
+    let frames = m.frames();
+    let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
+    let skate = summarize_skate(&foot_skate_samples(&m), frame_of(first.start_secs)..frame_of(last.end_secs));
+    Some(DanceFigures { kinetic_per_count: kinetic as f32 / (SEGMENT_COUNTS * bars.len()) as f32, foot_skate_cm_per_s: skate.mean_cm_per_s })
+}
+
+/// The foot skate a dance on `path` should not exceed (spec §J: no worse than its source
+/// clips'): per bar, the mean skate of the source clips of its segment's kind (imported or
+/// built-in), averaged over the bars.
+fn skate_goal_cm_per_s(lib: &SegmentLibrary, path: &[usize]) -> f32 {
+    let mut seen = BTreeSet::new();
+    let (mut sum, mut n) = ([0.0f32; 2], [0usize; 2]);
+    for s in lib.segments() {
+        if seen.insert(s.clip) {
+            let k = usize::from(s.builtin.is_some());
+            sum[k] += s.clip_skate_cm_per_s;
+            n[k] += 1;
+        }
+    }
+    let mean = |k: usize| sum[k] / n[k].max(1) as f32;
+    path.iter().map(|&s| mean(usize::from(lib.segments()[s].builtin.is_some()))).sum::<f32>() / path.len().max(1) as f32
+}
 
 /// Most undo steps kept.
 pub const UNDO_LIMIT: usize = 500;
@@ -498,6 +539,31 @@ impl Choreography {
         Ok(())
     }
 
+    /// How much the objective may rise for a bar to take a segment whose feet slide less
+    /// ([`FillWeights::free_skate_slack`]), in 0..=10; 0 turns it off.
+    pub fn set_free_skate_slack(&mut self, slack: f32) -> Result<(), ChoreoError> {
+        if !(0.0..=10.0).contains(&slack) {
+            return Err(ChoreoError::BadSetting { name: "freeSkateSlack".into(), range: "0..=10".into(), value: slack });
+        }
+        self.record();
+        self.doc.settings.fill.free_skate_slack = slack;
+        Ok(())
+    }
+
+    /// Whether the filling keeps the dance's foot skate no worse than its source clips'
+    /// ([`FillWeights::follow_skate`]).
+    pub fn set_follow_skate(&mut self, on: bool) {
+        self.record();
+        self.doc.settings.fill.follow_skate = on;
+    }
+
+    /// Whether the filling keeps the dance's kinetic beat rate near the song's
+    /// ([`FillWeights::follow_beat_rate`]).
+    pub fn set_follow_beat_rate(&mut self, on: bool) {
+        self.record();
+        self.doc.settings.fill.follow_beat_rate = on;
+    }
+
     /// Repetition penalty of the filling, in 0..=100.
     pub fn set_repeat_penalty(&mut self, w: f32) -> Result<(), ChoreoError> {
         if !(0.0..=100.0).contains(&w) {
@@ -551,16 +617,74 @@ impl Choreography {
         let builtin: Vec<bool> = lib.segments().iter().map(|s| s.builtin.is_some()).collect();
         // Skate beyond the source clip's own (the §J goal is "no worse than the source clips'").
         let skate: Vec<f32> = lib.segments().iter().map(|s| (s.skate_cm_per_s - s.clip_skate_cm_per_s).max(0.0)).collect();
-        let mut node_cost = node_costs_with_skate(&weights, &beat_fit, &builtin, &skate);
-        if weights.beat_rate_weight > 0.0 {
-            for (c, s) in node_cost.iter_mut().zip(lib.segments()) {
-                *c += weights.beat_rate_weight * beat_rate_cost(s.kinetic_per_count);
-            }
-        }
+        let node_cost = node_costs_with_skate(&weights, &beat_fit, &builtin, &skate);
         let bar_bpm: Vec<f32> = self.doc.bars.iter().map(|b| bar_count_rate_bpm(b.duration_secs())).collect();
         let segment_bpm: Vec<f32> = lib.segments().iter().map(|s| s.tempo_bpm).collect();
-        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm };
-        let (path, cost, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &weights)?;
+        // Each segment's kinetic beats per count at each bar's count rate, and its beat-rate cost.
+        let follow = weights.follow_beat_rate && weights.beat_rate_weight == 0.0;
+        let kinetic: Vec<Vec<f32>> = if follow || weights.beat_rate_weight > 0.0 {
+            bar_bpm.iter().map(|&r| lib.segments().iter().map(|s| s.kinetic_per_count_at(r)).collect()).collect()
+        } else {
+            Vec::new()
+        };
+        let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &beat_rate, extra: &[] };
+        let (mut path, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &weights)?;
+        // The dance's kinetic beat rate near the song's (FillWeights::follow_beat_rate),
+        // measured on the dance itself as §J measures it: the segments' own rates at the bars'
+        // count rates miss what the joins and neighbours add (0.2 a count on slow songs).
+        let bars = &self.doc.bars;
+        // The figures of the path last measured (a render and a measure each: kept, not redone).
+        let mut figures: Option<(Vec<usize>, Option<DanceFigures>)> = None;
+        let mut weights = weights;
+        if follow && !kinetic.is_empty() {
+            let first = dance_figures(lib, bars, &path);
+            figures = Some((path.clone(), first));
+            if first.is_some_and(|f| !in_beat_rate_band(f.kinetic_per_count)) {
+                for w in beat_rate_ladder() {
+                    let stronger = FillWeights { beat_rate_weight: w, ..weights };
+                    let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &stronger)?;
+                    let f = dance_figures(lib, bars, &p);
+                    if f.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count)) {
+                        figures = Some((p.clone(), f));
+                        (path, weights) = (p, stronger);
+                        break;
+                    }
+                }
+            }
+        }
+        // Foot skate where it is free (FillWeights::free_skate_slack).
+        // The excess as the bar plays the segment: its feet slide faster by the factor it is
+        // sped up by (a salsa bar at 80 counts per minute on a bar at 140 slides 1.75 times as
+        // fast), against its clip's at the clip's own tempo.
+        let excess = |t: usize, s: usize| {
+            let seg = &lib.segments()[s];
+            let speed_up = if seg.tempo_bpm > 0.0 && bar_bpm[t] > 0.0 { bar_bpm[t] / seg.tempo_bpm } else { 1.0 };
+            seg.skate_cm_per_s * speed_up - seg.clip_skate_cm_per_s
+        };
+        let (mut path, mut cost) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &path);
+        // Foot skate no worse than the source clips' (FillWeights::follow_skate).
+        if weights.follow_skate {
+            let current = match figures {
+                Some((p, f)) if p == path => f,
+                _ => dance_figures(lib, bars, &path),
+            };
+            if let Some(before) = current.filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(lib, &path)) {
+                let on_beat = in_beat_rate_band(before.kinetic_per_count);
+                let over: Vec<Vec<f32>> = (0..layers.len()).map(|t| (0..lib.len()).map(|s| excess(t, s).max(0.0) / 100.0).collect()).collect();
+                for w in skate_ladder() {
+                    let extra: Vec<Vec<f32>> = over.iter().map(|v| v.iter().map(|x| w * x).collect()).collect();
+                    let with_skate = Tempi { extra: &extra, ..tempi };
+                    let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &with_skate, &weights)?;
+                    let (p, c) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &p);
+                    let Some(f) = dance_figures(lib, bars, &p) else { continue };
+                    if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &p) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)) {
+                        (path, cost) = (p, c);
+                        break;
+                    }
+                }
+            }
+        }
         self.record();
         for (state, seg) in self.doc.states.iter_mut().zip(path) {
             if !matches!(state, BarState::Pinned { .. }) {

@@ -92,22 +92,86 @@ pub struct FillWeights {
     /// [`SKATE_WEIGHT_DEFAULT`]; 0 turns it off.
     pub skate_weight: f32,
     /// Weight of the beat-rate term per open bar: `beat_rate_weight · beat_rate_cost`, how far
-    /// (in octaves) the segment's kinetic beats per count are from 1 or ½ (§J asks a dance's
+    /// (in octaves) the segment's kinetic beats per count, played at the bar's count rate
+    /// ([`super::Segment::kinetic_per_count_at`]), are from 1 or ½ (§J asks a dance's
     /// kinetic beat rate to be within 25 % of the song's beat rate or its half); see
-    /// [`beat_rate_cost`]. 0 (the default) turns it off. Measured with the `choreo_quality`
-    /// bench (`ODORI_BEAT_RATE_WEIGHT=x`): 0.05 brings Let's Go Fishin' into the goal (kinetic
-    /// over song beat rate 1.31 → 1.07, imported bars 33 % → 75 %) but tips the drum take to
-    /// imported moves (skate 11.8 → 22.8 cm/s, BAS − random +0.346 → +0.220); from 0.1 up the
-    /// dances turn to the person's mocap wholesale (skate 36–44 cm/s, joins up to 2.45), and
-    /// the one-bar trumpet song's rate (1.50) does not move at any weight. So it stays off.
+    /// [`beat_rate_cost`]. 0 (the default) leaves it to [`FillWeights::follow_beat_rate`],
+    /// which applies the weakest weight that works, and only to a dance off the song's beat
+    /// rate: a fixed weight acts on every song, and measured with the `choreo_quality` bench
+    /// (`ODORI_BEAT_RATE_WEIGHT=x`, with `ODORI_FOLLOW_BEAT_RATE=0`) 0.07 turns Vibe Ace, which
+    /// was on its beat rate, wholly to built-in moves (imported 79 % → 0 %, skate 25.5 → 38.8
+    /// cm/s). (The one-bar trumpet song's 1.50 that no weight moved came from its grid: its bar
+    /// held 2 of its 4 beats.) A value above 0 is used as it is, on every song.
     pub beat_rate_weight: f32,
+    /// Foot skate where it is free: after the best path is found, each open bar whose segment's
+    /// feet slide more than its source clip's takes the segment with the least such excess
+    /// among those that raise the objective (every term above) by at most this much, its
+    /// neighbours unchanged ([`free_skate_pass`]). Where a cleaner segment fits a bar nearly as
+    /// well (a one-bar song, a near tie) the skate decides; where it would cost joins, the beat
+    /// or the person's moves, nothing changes. 0 turns it off. See [`FREE_SKATE_SLACK_DEFAULT`].
+    pub free_skate_slack: f32,
+    /// Keep the dance's kinetic beat rate near the song's (spec §J: within 25 % of the song's
+    /// beat rate or its half). When `beat_rate_weight` is 0 and the best path's dance, rendered
+    /// and measured as §J measures it ([`super::dance_figures`]), turns a number of
+    /// times a count outside [`BEAT_RATE_BAND`], the filling is run again with the beat-rate
+    /// term (each segment's kinetic beats per count at its bar's count rate,
+    /// [`super::Segment::kinetic_per_count_at`]) at each weight of [`beat_rate_ladder`],
+    /// weakest first, and the first dance inside the band is kept (none: the best path stays).
+    /// A song whose dance already turns on its beats is filled exactly as without it. Default
+    /// true.
+    #[serde(default = "yes")]
+    pub follow_beat_rate: bool,
+    /// Keep the dance's foot skate no worse than its source clips' (spec §J): when the dance,
+    /// rendered and measured ([`super::dance_figures`]), slides its feet more than the mean
+    /// skate of its kinds of source clip (imported, built-in; weighted by the bars of each),
+    /// the filling is run again with a skate term on each segment's skate above its clip's as
+    /// the bar plays it (sped up or slowed) at each weight of [`skate_ladder`], weakest first,
+    /// and the first dance within the goal (and not pushed off the beat rate) is kept. A dance
+    /// already within it is filled as without it. Default true.
+    #[serde(default = "yes")]
+    pub follow_skate: bool,
+}
+
+/// Skate weights (per m/s of skate above the source clip's) tried, weakest first, by
+/// [`FillWeights::follow_skate`]: 0.1 to 12.8, doubling.
+pub fn skate_ladder() -> impl Iterator<Item = f32> {
+    (0..8).map(|k| 0.1 * 2f32.powi(k))
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// The kinetic beats per count [`FillWeights::follow_beat_rate`] accepts: one turn a count or
+/// one every other count, each within 20 % (the §J goal is 25 %; the 5 % between is a margin
+/// for beats the grid's bars hold more or fewer of than 4).
+pub const BEAT_RATE_BAND: [(f32, f32); 2] = [(0.8, 1.2), (0.4, 0.6)];
+
+/// Beat-rate weights tried, weakest first, when the dance's beat rate is outside
+/// [`BEAT_RATE_BAND`] ([`FillWeights::follow_beat_rate`]): 0.01 to 0.45 in steps of √2 (the
+/// weakest that works is wanted: from about 0.1 a weight tips whole dances between kinds of
+/// move).
+pub fn beat_rate_ladder() -> impl Iterator<Item = f32> {
+    (0..12).map(|k| 0.01 * std::f32::consts::SQRT_2.powi(k))
+}
+
+/// Whether a predicted kinetic beats per count is inside [`BEAT_RATE_BAND`].
+pub fn in_beat_rate_band(kinetic_per_count: f32) -> bool {
+    BEAT_RATE_BAND.iter().any(|&(lo, hi)| (lo..=hi).contains(&kinetic_per_count))
 }
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0 }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT, follow_beat_rate: true, follow_skate: true }
     }
 }
+
+/// Default [`FillWeights::free_skate_slack`]: the same size as the default preference for the
+/// person's own moves (0.03), the amount the product already treats as a small difference
+/// between two moves that fit a bar. So a swap never trades an imported move that fits for a
+/// built-in one unless the built-in one is otherwise better.
+pub const FREE_SKATE_SLACK_DEFAULT: f32 = 0.03;
+
 
 /// Default [`FillWeights::stretch_weight`]: off. Measured with the `choreo_quality` bench (with
 /// the table's end-effector gap term, which is what keeps joins smooth): any weight from 0.05
@@ -125,7 +189,9 @@ pub const STRETCH_WEIGHT_DEFAULT: f32 = 0.0;
 /// (join jump max 1.04 → 1.60, imported 79 % → 73 %) and Let's Go Fishin' (imported 33 % →
 /// 0 %), the near all-or-nothing choice between kinds of move that the stretch term shows too.
 /// Charging the skate itself rather than its excess fills every song with built-in moves from
-/// 0.1 up. A person may still turn it on.
+/// 0.1 up. A person may still turn it on. The product instead swaps where it is free
+/// ([`FillWeights::free_skate_slack`]) and steers only a dance that slides more than its sources
+/// ([`FillWeights::follow_skate`]).
 pub const SKATE_WEIGHT_DEFAULT: f32 = 0.0;
 
 /// The beat-rate cost of a segment turning `kinetic_per_count` times a count: octaves from the
@@ -288,14 +354,26 @@ pub fn fill_with_node_costs(
 pub struct Tempi<'a> {
     pub bar_bpm: &'a [f32],
     pub segment_bpm: &'a [f32],
+    /// Per layer, per segment: the beat-rate cost ([`beat_rate_cost`]) of the segment played at
+    /// that bar's count rate (from [`super::Segment::kinetic_per_count_at`]), charged
+    /// `beat_rate_weight` times. Empty: no beat-rate term here.
+    pub beat_rate: &'a [Vec<f32>],
+    /// Per layer, per segment: a cost added as it is (already weighted). Empty: none.
+    pub extra: &'a [Vec<f32>],
 }
 
 impl Tempi<'_> {
     fn cost(&self, weights: &FillWeights, layer: usize, segment: usize) -> f32 {
-        match (self.bar_bpm.get(layer), self.segment_bpm.get(segment)) {
+        let stretch = match (self.bar_bpm.get(layer), self.segment_bpm.get(segment)) {
             (Some(&b), Some(&s)) => stretch_cost(weights.stretch_weight, b, s),
             _ => 0.0,
-        }
+        };
+        let rate = match self.beat_rate.get(layer).and_then(|v| v.get(segment)) {
+            Some(&c) if weights.beat_rate_weight > 0.0 && c.is_finite() => weights.beat_rate_weight * c,
+            _ => 0.0,
+        };
+        let extra = self.extra.get(layer).and_then(|v| v.get(segment)).copied().filter(|c| c.is_finite()).unwrap_or(0.0);
+        stretch + rate + extra
     }
 }
 
@@ -477,6 +555,77 @@ pub fn fill_with_tempi(
     Ok((path, cost, stats))
 }
 
+/// Foot skate where it is free ([`FillWeights::free_skate_slack`]): bar by bar in order, an
+/// open bar whose segment's feet slide more than its source clip's there
+/// (`skate_excess_cm_per_s(bar, segment) > 0`) takes instead the segment with the least such excess among those that keep the whole
+/// objective ([`path_cost_with_tempi`], the same terms the path was found with) within
+/// `free_skate_slack` of the path's, its neighbours unchanged (ties: the cheaper). A local
+/// swap, not a weight on the whole search: a skate weight tips whole dances between kinds of
+/// move, since moves of one kind join each other best; a swap only happens where a cleaner
+/// segment fits that bar nearly as well. Returns the path and its objective.
+#[allow(clippy::too_many_arguments)]
+pub fn free_skate_pass(
+    table: &TransitionTable,
+    layers: &[Layer],
+    segment_intensity: &[f32],
+    node_cost: &[f32],
+    tempi: &Tempi,
+    weights: &FillWeights,
+    skate_excess_cm_per_s: &dyn Fn(usize, usize) -> f32,
+    path: &[usize],
+) -> (Vec<usize>, f32) {
+    let mut path = path.to_vec();
+    let mut cost = path_cost_with_tempi(table, layers, segment_intensity, node_cost, tempi, weights, &path);
+    let slack = weights.free_skate_slack;
+    let excess_at = |t: usize, s: usize| Some(skate_excess_cm_per_s(t, s)).filter(|v| v.is_finite()).unwrap_or(0.0).max(0.0);
+    if slack.is_nan() || slack <= 0.0 || path.len() != layers.len() || !cost.is_finite() {
+        return (path, cost);
+    }
+    let m = table.len().min(segment_intensity.len());
+    for t in 0..layers.len() {
+        let Layer::Open { intensity } = layers[t] else { continue };
+        let excess = |s: usize| excess_at(t, s);
+        let a = path[t];
+        if excess(a) <= 0.0 {
+            continue;
+        }
+        // This bar's share of the objective with segment b in it (the window's repeats aside,
+        // which the full check below counts).
+        let (prev, next) = (t.checked_sub(1).map(|p| path[p]), path.get(t + 1).copied());
+        let local = |b: usize| {
+            let mut c = weights.music_weight * (intensity - segment_intensity[b]).abs() + node_cost.get(b).copied().unwrap_or(0.0) + tempi.cost(weights, t, b);
+            if let Some(p) = prev {
+                c += table.cost(p, b);
+            }
+            if let Some(n) = next {
+                c += table.cost(b, n);
+            }
+            c
+        };
+        let here = local(a);
+        let mut best: Option<(f32, f32, usize, f32)> = None; // (excess, rise, segment, new cost)
+        for b in 0..m {
+            if b == a || !table.is_available(b) || excess(b) >= excess(a) || local(b) - here > slack {
+                continue;
+            }
+            if best.is_some_and(|(e, r, _, _)| (excess(b), local(b) - here) >= (e, r)) {
+                continue;
+            }
+            path[t] = b;
+            let c = path_cost_with_tempi(table, layers, segment_intensity, node_cost, tempi, weights, &path);
+            path[t] = a;
+            if c - cost <= slack {
+                best = Some((excess(b), c - cost, b, c));
+            }
+        }
+        if let Some((_, _, b, c)) = best {
+            path[t] = b;
+            cost = c;
+        }
+    }
+    (path, cost)
+}
+
 /// The objective [`fill`] minimises, for any path (for checks and reports).
 pub fn path_cost(table: &TransitionTable, layers: &[Layer], segment_intensity: &[f32], weights: &FillWeights, path: &[usize]) -> f32 {
     path_cost_with_node_costs(table, layers, segment_intensity, &[], weights, path)
@@ -528,7 +677,7 @@ mod tests {
         let table = TransitionTable::from_costs(2, vec![1.0; 4]);
         let layers = [Layer::Open { intensity: 0.5 }, Layer::Open { intensity: 0.5 }];
         let (bar_bpm, segment_bpm) = ([bar_count_rate_bpm(2.0), bar_count_rate_bpm(4.0)], [60.0, 120.0]);
-        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm };
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &[], extra: &[] };
         let on = FillWeights { stretch_weight: 0.5, repeat_penalty: 0.0, ..FillWeights::default() };
         let (path, cost, _) = fill_with_tempi(&table, &layers, &[0.5, 0.5], &[], &tempi, &on).unwrap();
         assert_eq!(path, vec![1, 0]);
@@ -536,6 +685,42 @@ mod tests {
         let off = FillWeights { stretch_weight: 0.0, ..on };
         let (path, _, _) = fill_with_tempi(&table, &layers, &[0.5, 0.5], &[], &tempi, &off).unwrap();
         assert_eq!(path, vec![0, 0]);
+    }
+
+    #[test]
+    fn the_free_skate_pass_swaps_only_where_a_cleaner_segment_fits_nearly_as_well() {
+        // Four segments, all joins alike (C = 1) except into and out of segment 3, whose joins
+        // cost 0.5 more. Segment 0 fits the bars' intensity best but slides 8 cm/s above its
+        // clip; 1 fits 0.02 worse with no excess; 2 fits 0.2 worse with none; 3 fits 0.01 worse
+        // with none but joins badly.
+        let m = 4;
+        let costs: Vec<f32> = (0..m * m).map(|i| if i / m == 3 || i % m == 3 { 1.5 } else { 1.0 }).collect();
+        let table = TransitionTable::from_costs(m, costs);
+        let intensity = [0.5, 0.52, 0.7, 0.51];
+        let ex = [8.0, 0.0, 0.0, 0.0];
+        let excess = |_: usize, s: usize| ex[s];
+        let w = FillWeights { repeat_penalty: 0.0, ..FillWeights::default() };
+        let one = [Layer::Open { intensity: 0.5 }];
+        let tempi = Tempi::default();
+        // One bar (no joins): 0 is best; the pass moves it to the cheapest clean one, 3.
+        let (path, _, _) = fill_with_tempi(&table, &one, &intensity, &[], &tempi, &w).unwrap();
+        assert_eq!(path, vec![0]);
+        let (swapped, cost) = free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, &excess, &path);
+        assert_eq!(swapped, vec![3]);
+        assert!((cost - 0.01).abs() < 1e-5, "{cost}");
+        // Off: nothing changes. A slack below the rise: nothing changes.
+        let off = FillWeights { free_skate_slack: 0.0, ..w };
+        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &off, &excess, &path).0, vec![0]);
+        let tight = FillWeights { free_skate_slack: 0.005, ..w };
+        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &tight, &excess, &path).0, vec![0]);
+        // Between two pinned bars of segment 2, the swap keeps its neighbours and never takes
+        // segment 3, whose joins would cost 1.0 more.
+        let three = [Layer::Fixed { segment: 2 }, Layer::Open { intensity: 0.5 }, Layer::Fixed { segment: 2 }];
+        let (p3, c3) = free_skate_pass(&table, &three, &intensity, &[], &tempi, &w, &excess, &[2, 0, 2]);
+        assert_eq!(p3, vec![2, 1, 2]);
+        assert!((c3 - 2.02).abs() < 1e-5, "{c3}");
+        // With no excess anywhere the path is kept.
+        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, &|_, _| 0.0, &path).0, vec![0]);
     }
 
     #[test]

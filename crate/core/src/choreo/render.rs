@@ -1,4 +1,5 @@
-//! The dance as one canonical clip, in sync with the song: each bar's segment is warped in
+//! The dance as one canonical clip, in sync with the song (the count before the first bar
+//! plays the first segment's lead-in, held still before that): each bar's segment is warped in
 //! time onto the bar, piecewise-linearly between its counts so count k plays at k/4 of the bar
 //! (the bar's beats, spec §E), placed so it starts where (and facing the way) the previous one
 //! ended, and consecutive segments are joined by rewriting the last 5 frames of the earlier and
@@ -40,12 +41,13 @@ fn yaw_of(q: Quat) -> f32 {
     f.x.atan2(f.z)
 }
 
-/// Samples segment `seg` at `u` in 0..=1 of its length: local rotations and root translation.
+/// Samples segment `seg` at `u` in 0..=1 of its length (or up to a count before it, −¼..0,
+/// [`super::Segment::frame_before`]): local rotations and root translation.
 fn sample_segment(lib: &SegmentLibrary, seg: usize, u: f32, rot: &mut Vec<Quat>, trans: &mut Vec<Vec3>) -> Option<(Vec3, Quat)> {
     let s = lib.segment(seg)?;
     let lc = lib.clips().get(s.clip)?;
     // Piecewise-linear between the segment's counts, so each count lands on the bar's beat.
-    let frame = s.frame_at(u);
+    let frame = s.frame_before(u);
     lc.clip.sample_into(frame / LIBRARY_FPS, rot, trans);
     let root_t = trans.first().copied().unwrap_or(Vec3::ZERO);
     let root_q = rot.first().copied().unwrap_or(Quat::IDENTITY);
@@ -80,6 +82,8 @@ pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], opt
     let mut bar_i = 0usize;
     // Current bar's transform: source start (ground) and yaw offset.
     let mut xf: Option<(usize, Vec3, f32)> = None; // (bar index, source start ground pos, yaw delta)
+    // The lead-in's placement: the first segment's start (ground position) and yaw offset.
+    let mut lead_in_placement: Option<(Vec3, f32)> = None;
     for f in 0..frames {
         let t = f as f32 / fps;
         while bar_i + 1 < bars.len() && t >= bars[bar_i + 1].start_secs {
@@ -91,7 +95,14 @@ pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], opt
                 let d = b.duration_secs().max(1e-6);
                 (((t - b.start_secs) / d).clamp(0.0, 1.0), choices.get(bar_i).copied().flatten())
             }
-            Some(_) => (0.0, choices.first().copied().flatten()),
+            // Before the first bar: the count that leads into its segment (its clip's own frames
+            // before it, at the bar's pace), held still before that. A dancer who starts from
+            // rest on the one cannot turn on it (§J's kinetic beat is a slowing then a speeding
+            // up); with the lead-in the first count is a turn like every other.
+            Some(b) => {
+                let d = b.duration_secs().max(1e-6);
+                (((t - b.start_secs) / d).max(-1.0 / super::segment::SEGMENT_COUNTS as f32), choices.first().copied().flatten())
+            }
             None => (0.0, None),
         };
         let in_bar = bar.is_some_and(|b| t >= b.start_secs);
@@ -127,13 +138,23 @@ pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], opt
                 roots.push(Vec3::new(place_pos.x + g.x, rt.y, place_pos.z + g.z));
             }
             (Some((rt, _)), None) => {
-                // Before the first bar: hold the first segment's first pose.
-                let q = Quat::from_rotation_y(-yaw_of(rot.first().copied().unwrap_or(Quat::IDENTITY)));
+                // Before the first bar: its lead-in, placed as the first bar will place its
+                // segment (its first pose at the origin, facing +Z), so it runs on without a seam.
+                let (start, yaw) = lead_in_placement.get_or_insert_with(|| {
+                    let mut r = Vec::new();
+                    let mut tr = Vec::new();
+                    match seg.and_then(|s| sample_segment(lib, s, 0.0, &mut r, &mut tr)) {
+                        Some((t0, q0)) => (Vec3::new(t0.x, 0.0, t0.z), -yaw_of(q0)),
+                        None => (Vec3::ZERO, 0.0),
+                    }
+                });
+                let q = Quat::from_rotation_y(*yaw);
                 if let Some(r0) = rot.first_mut() {
                     *r0 = (q * *r0).normalize();
                 }
+                let g = q * Vec3::new(rt.x - start.x, 0.0, rt.z - start.z);
                 rotations.extend_from_slice(&rot);
-                roots.push(Vec3::new(0.0, rt.y, 0.0));
+                roots.push(Vec3::new(g.x, rt.y, g.z));
             }
             _ => {
                 let q = Quat::from_rotation_y(place_yaw);

@@ -204,6 +204,15 @@ pub struct Segment {
     /// [`super::FillWeights::beat_rate_weight`]). 0 in documents saved before it was kept.
     #[serde(default)]
     pub kinetic_per_count: f32,
+    /// Its kinetic beats per count when played at each count rate of [`KINETIC_RATES_BPM`]
+    /// (warped onto a bar as the dance plays it, with half a count of its own clip on either
+    /// side): §J's kinetic beats are minima of a speed smoothed over a fixed 0.067 s, so a
+    /// move slowed below its own tempo shows turns inside its counts that its own tempo
+    /// smoothed away (the built-in moves turn 0.97 times a count at 120 counts per minute and
+    /// 1.23 times at 89). What the filling's beat-rate term reads
+    /// ([`Segment::kinetic_per_count_at`]). Empty in documents saved before it was kept.
+    #[serde(default)]
+    pub kinetic_per_count_by_rate: Vec<f32>,
     /// Kept only for the bars that already hold it (an older cut of a clip the person re-cut
     /// at a stated tempo): never offered as a candidate nor chosen to fill an open bar.
     #[serde(default)]
@@ -226,6 +235,40 @@ impl Segment {
         let x = u * SEGMENT_COUNTS as f32;
         let k = (x.floor() as usize).min(SEGMENT_COUNTS - 1);
         c[k] + (x - k as f32) * (c[k + 1] - c[k])
+    }
+
+    /// The clip frame shown at `u` of the bar it fills, for `u` before the bar (−¼..0: the count
+    /// before its first, at the first count's pace), clamped to the clip's start. What the dance
+    /// plays as its lead-in before its first bar ([`super::render`]). `u` ≥ 0: [`Segment::frame_at`].
+    pub fn frame_before(&self, u: f32) -> f32 {
+        if u >= 0.0 {
+            return self.frame_at(u);
+        }
+        let u = u.max(-1.0 / SEGMENT_COUNTS as f32);
+        let c = &self.count_frames;
+        let count_frames = if c.len() == SEGMENT_COUNTS + 1 && c[1] > c[0] { c[1] - c[0] } else { (self.end_frame - self.start_frame) / SEGMENT_COUNTS as f32 };
+        (self.start_frame + u * SEGMENT_COUNTS as f32 * count_frames).max(0.0)
+    }
+
+    /// Kinetic beats per count when played at `count_rate_bpm` counts per minute: interpolated
+    /// in log rate between [`Segment::kinetic_per_count_by_rate`] (held at the ends), or its
+    /// own-tempo [`Segment::kinetic_per_count`] when those were not measured.
+    pub fn kinetic_per_count_at(&self, count_rate_bpm: f32) -> f32 {
+        let v = &self.kinetic_per_count_by_rate;
+        if v.len() != KINETIC_RATES_BPM.len() || !count_rate_bpm.is_finite() || count_rate_bpm <= 0.0 {
+            return self.kinetic_per_count;
+        }
+        let r = &KINETIC_RATES_BPM;
+        if count_rate_bpm <= r[0] {
+            return v[0];
+        }
+        for i in 1..r.len() {
+            if count_rate_bpm <= r[i] {
+                let a = (count_rate_bpm / r[i - 1]).log2() / (r[i] / r[i - 1]).log2();
+                return v[i - 1] + a * (v[i] - v[i - 1]);
+            }
+        }
+        v[v.len() - 1]
     }
 
     /// Where in 0..=1 of the bar clip frame `frame` plays (the inverse of [`Segment::frame_at`]).
@@ -471,6 +514,7 @@ impl SegmentLibrary {
                 let beat_fit = beat_fit(&count_frames, &kinetic);
                 let (c0, c4) = (count_frames[0], count_frames[SEGMENT_COUNTS]);
                 let kinetic_per_count = kinetic.iter().filter(|&&f| f >= c0 && f < c4).count() as f32 / SEGMENT_COUNTS as f32;
+                let kinetic_per_count_by_rate = kinetic_per_count_by_rate(&positions, &count_frames);
                 // Samples of frames after the first: a sample is the speed from the frame before.
                 let skate_end = (quality_frame(ei) + 1).min(skate.len());
                 let skate_cm_per_s = summarize_skate(&skate, (quality_frame(si) + 1).min(skate_end)..skate_end).mean_cm_per_s;
@@ -482,6 +526,7 @@ impl SegmentLibrary {
                     skate_cm_per_s,
                     clip_skate_cm_per_s,
                     kinetic_per_count,
+                    kinetic_per_count_by_rate,
                     clip: clip_index,
                     source: lc.clip.source.clone(),
                     start_frame: si as f32,
@@ -1050,6 +1095,64 @@ pub fn beat_fit(count_frames: &[f32], kinetic_frames: &[f32]) -> f32 {
     ((on - off + 1.0) * 0.5).clamp(0.0, 1.0)
 }
 
+/// Count rates, counts per minute, at which each segment's kinetic beats per count are measured
+/// when the library is cut ([`Segment::kinetic_per_count_by_rate`]): the range the grid's bars
+/// play segments at, log-spaced.
+pub const KINETIC_RATES_BPM: [f32; 6] = [60.0, 75.0, 90.0, 110.0, 135.0, 165.0];
+
+/// Kinetic beats per count (spec §J) of the segment with counts `count_frames` (frames of
+/// `positions`, canonical world positions at [`LIBRARY_FPS`], frame-major) played at each rate
+/// of [`KINETIC_RATES_BPM`]: resampled at [`QUALITY_FPS`] with its counts on the bar's beats
+/// (piecewise-linear, as the renderer warps it) and half a count of the clip either side (so
+/// its first count can be a turn, as in a dance), kinetic beats counted over its 4 counts.
+pub fn kinetic_per_count_by_rate(positions: &[Vec3], count_frames: &[f32]) -> Vec<f32> {
+    let frames = positions.len() / CANON_COUNT;
+    if count_frames.len() != SEGMENT_COUNTS + 1 || frames < 2 {
+        return Vec::new();
+    }
+    let c = count_frames;
+    // Source frame at u counts from the segment's first count (u may run half a count out).
+    let frame_at = |u: f32| -> f32 {
+        let f = if u < 0.0 {
+            c[0] + u * (c[1] - c[0])
+        } else if u >= SEGMENT_COUNTS as f32 {
+            c[SEGMENT_COUNTS] + (u - SEGMENT_COUNTS as f32) * (c[SEGMENT_COUNTS] - c[SEGMENT_COUNTS - 1])
+        } else {
+            let k = (u.floor() as usize).min(SEGMENT_COUNTS - 1);
+            c[k] + (u - k as f32) * (c[k + 1] - c[k])
+        };
+        // Past the clip's ends, the clip mirrored in time (a one-bar built-in move has nothing
+        // around it; the dance puts another move there whose speed is as likely to rise away
+        // from the join as this one's).
+        let last = (frames - 1) as f32;
+        let f = if f < 0.0 { -f } else if f > last { 2.0 * last - f } else { f };
+        f.clamp(0.0, last)
+    };
+    KINETIC_RATES_BPM
+        .iter()
+        .map(|&rate| {
+            let count_secs = 60.0 / rate;
+            let margin = 0.5 * count_secs;
+            let n = ((SEGMENT_COUNTS as f32 * count_secs + 2.0 * margin) * QUALITY_FPS).round() as usize + 1;
+            let mut out = Vec::with_capacity(n * CANON_COUNT);
+            for i in 0..n {
+                let t = i as f32 / QUALITY_FPS - margin;
+                let f = frame_at(t / count_secs);
+                let f0 = f.floor() as usize;
+                let f1 = (f0 + 1).min(frames - 1);
+                let a = f - f0 as f32;
+                for j in 0..CANON_COUNT {
+                    out.push(positions[f0 * CANON_COUNT + j].lerp(positions[f1 * CANON_COUNT + j], a));
+                }
+            }
+            let Ok(m) = QualityMotion::from_positions(&out, QUALITY_FPS) else { return 0.0 };
+            let span = SEGMENT_COUNTS as f32 * count_secs;
+            let beats = kinetic_beats_secs(&m).into_iter().filter(|&t| t >= margin - 1e-4 && t < margin + span - 1e-4).count();
+            beats as f32 / SEGMENT_COUNTS as f32
+        })
+        .collect()
+}
+
 /// Keeps the items whose `mask` entry is true.
 fn retain_by_mask<T>(v: &mut Vec<T>, mask: &[bool]) {
     let mut i = 0;
@@ -1183,11 +1286,57 @@ mod tests {
             skate_cm_per_s: 0.0,
             clip_skate_cm_per_s: 0.0,
             kinetic_per_count: 0.0,
+            kinetic_per_count_by_rate: Vec::new(),
             tempo_bpm: 120.0,
             intensity: 1.0,
             intensity01: 0.5,
             builtin: None,
             retired: false,
+        }
+    }
+
+    #[test]
+    fn the_lead_in_is_the_count_before_at_the_first_counts_pace() {
+        let s = seg_with_counts(vec![10.0, 20.0, 40.0, 48.0, 60.0]);
+        // A quarter of the bar before: one count (10 frames, the first count's length) earlier.
+        assert!((s.frame_before(-0.25) - 0.0).abs() < 1e-4);
+        assert!((s.frame_before(-0.125) - 5.0).abs() < 1e-4);
+        // No further back than a count, nor before the clip's start; in the bar, as frame_at.
+        assert!((s.frame_before(-3.0) - 0.0).abs() < 1e-4);
+        assert!((seg_with_counts(vec![3.0, 13.0, 23.0, 33.0, 43.0]).frame_before(-0.25) - 0.0).abs() < 1e-4);
+        assert!((s.frame_before(0.375) - s.frame_at(0.375)).abs() < 1e-4);
+    }
+
+    #[test]
+    fn kinetic_beats_per_count_follow_the_count_rate() {
+        // Interpolated in log rate between the measured rates, held at the ends, and the
+        // own-tempo figure when none were measured.
+        let mut s = seg_with_counts(vec![0.0, 15.0, 30.0, 45.0, 60.0]);
+        s.kinetic_per_count = 0.75;
+        assert_eq!(s.kinetic_per_count_at(100.0), 0.75);
+        s.kinetic_per_count_by_rate = vec![2.0, 1.5, 1.25, 1.0, 0.75, 0.5];
+        assert_eq!(s.kinetic_per_count_at(40.0), 2.0);
+        assert_eq!(s.kinetic_per_count_at(200.0), 0.5);
+        assert!((s.kinetic_per_count_at(90.0) - 1.25).abs() < 1e-5);
+        let mid = (90.0f32 * 110.0).sqrt();
+        assert!((s.kinetic_per_count_at(mid) - 1.125).abs() < 1e-4);
+        // A body bobbing so it turns once a count (every 30 frames at 30 fps, 60 counts per
+        // minute; the turns 0.3 frame after the counts, off the resampling grid: an exactly
+        // symmetric turn is a two-frame tie, no strict minimum): about one kinetic beat a count
+        // at every rate, the first count included (the half count around it gives it a turn).
+        let rest = crate::builtin::canonical_skeleton().rest_positions();
+        let frames = 240;
+        let pos: Vec<Vec3> = (0..frames)
+            .flat_map(|f| {
+                let y = 0.08 * ((f as f32 - 0.3) / 30.0 * std::f32::consts::PI).cos();
+                rest.iter().map(move |p| *p + Vec3::Y * y)
+            })
+            .collect();
+        let counts = [60.0f32, 90.0, 120.0, 150.0, 180.0];
+        let v = kinetic_per_count_by_rate(&pos, &counts);
+        assert_eq!(v.len(), KINETIC_RATES_BPM.len());
+        for (r, k) in KINETIC_RATES_BPM.iter().zip(&v) {
+            assert!((0.75..=1.25).contains(k), "{k} kinetic beats a count at {r} counts per minute ({v:?})");
         }
     }
 

@@ -74,7 +74,8 @@ pub struct SongGrid {
     /// Every downbeat: `beat_times_secs[first_downbeat_index + k · beats_per_bar]`.
     pub downbeat_times_secs: Vec<f32>,
     /// One bar per downbeat. A bar ends at the next downbeat; the last one ends `beats_per_bar`
-    /// beats later, clipped to the song's end (dropped when less than half of it remains).
+    /// beats later at the period of the song's last beats, clipped to the song's end (dropped
+    /// when less than half of it remains), and `beat_times_secs` holds every beat of it.
     pub bars: Vec<Bar>,
     /// True for a metronomic grid made from a typed or tapped BPM; false for tracked beats.
     pub regular: bool,
@@ -188,8 +189,20 @@ pub(crate) fn bpm_of_beats(beat_times_secs: &[f32]) -> Option<f32> {
 }
 
 impl SongGrid {
+    /// The beat period at the end of `beats`, seconds: the mean of the last `bpb` intervals (the
+    /// last bar's tempo, which a tempo-following tracker may have moved from the song's mean);
+    /// `60 / bpm` with fewer than two beats.
+    fn closing_period_secs(beats: &[f32], bpb: usize, bpm: f32) -> f32 {
+        let n = beats.len();
+        if n < 2 {
+            return 60.0 / bpm;
+        }
+        let k = bpb.min(n - 1);
+        (beats[n - 1] - beats[n - 1 - k]) / k as f32
+    }
+
     /// Assembles a grid from beats and a bar phase, deriving downbeats and bars. `bpm` is the
-    /// tempo used to extend the last bar.
+    /// tempo used to extend the last bar when fewer than two beats are known.
     pub(crate) fn assemble(
         duration_secs: f32,
         bpm: f32,
@@ -201,15 +214,35 @@ impl SongGrid {
     ) -> Self {
         let bpb = beats_per_bar.max(1) as usize;
         let first = first_downbeat_index % bpb;
+        let mut beat_times_secs = beat_times_secs;
         let downbeats: Vec<f32> = beat_times_secs.iter().skip(first).step_by(bpb).copied().collect();
-        let bar_secs = bpb as f32 * 60.0 / bpm;
         let mut bars = Vec::with_capacity(downbeats.len());
         for (k, &start_secs) in downbeats.iter().enumerate() {
             let next = beat_times_secs.get(first + (k + 1) * bpb).copied();
             let end_secs = match next {
                 Some(end) => end,
-                None if duration_secs - start_secs >= 0.5 * bar_secs => (start_secs + bar_secs).min(duration_secs),
-                None => continue,
+                // The last downbeat: the beats stop inside its bar (the song ends, or a held
+                // note or a fade gives the tracker nothing to follow).
+                None => {
+                    let period_secs = Self::closing_period_secs(&beat_times_secs, bpb, bpm);
+                    let bar_secs = bpb as f32 * period_secs;
+                    if duration_secs - start_secs < 0.5 * bar_secs {
+                        continue;
+                    }
+                    let end_secs = (start_secs + bar_secs).min(duration_secs);
+                    // The bar keeps all its beats, at the period the last ones had: the dance
+                    // puts a count on each of them, and the §J measures score every beat of
+                    // every bar (without them a one-bar song counted 2 beats in a bar of 4).
+                    let downbeat_index = first + k * bpb;
+                    for i in (beat_times_secs.len() - downbeat_index)..bpb {
+                        let t = start_secs + i as f32 * period_secs;
+                        if t >= end_secs - 1e-4 || t >= duration_secs {
+                            break;
+                        }
+                        beat_times_secs.push(t);
+                    }
+                    end_secs
+                }
             };
             bars.push(Bar { index: bars.len(), start_secs, end_secs, intensity: loudness.mean_over(start_secs, end_secs) });
         }
@@ -430,8 +463,37 @@ mod tests {
         assert_eq!(far.with_bpm(120.0).unwrap().beat_times_secs.len(), 60);
         let tracked = SongGrid { regular: false, ..g.clone() };
         let n = tracked.nudged(-0.5).unwrap();
-        assert_eq!(n.beat_times_secs.len(), g.beat_times_secs.len() - 1);
+        // The first beat falls off the start; the rest move; the room the nudge leaves at the
+        // end goes to the last bar's beats (a bar keeps all its beats).
+        let moved: Vec<f32> = g.beat_times_secs[1..].iter().map(|t| t - 0.5).collect();
+        assert!(n.beat_times_secs.len() >= moved.len());
+        assert!(moved.iter().zip(&n.beat_times_secs).all(|(a, b)| (a - b).abs() < 1e-4));
+        let last_bar = n.bars.last().unwrap();
+        assert!(n.beat_times_secs[moved.len()..].iter().all(|&t| t >= last_bar.start_secs && t < last_bar.end_secs));
         assert!((n.first_downbeat_secs - tracked.downbeat_times_secs[1] + 0.5).abs() < 1e-5);
+    }
+
+    #[test]
+    fn the_last_bar_keeps_its_beats_when_the_tracker_stops_inside_it() {
+        // Tracked beats every 0.6 s that stop at 3.0 s, in a song of 5 s: the bar from the
+        // downbeat at 2.4 s runs four beats of 0.6 s to 4.8 s and holds beats at 3.6 and 4.2 s
+        // that the tracker did not give (a held note at the end of a solo).
+        let beats: Vec<f32> = (0..6).map(|i| 0.6 * i as f32).collect();
+        let g = SongGrid::assemble(5.0, 90.0, 4, beats.clone(), 0, false, flat(5.0));
+        assert_eq!(g.bars.len(), 2);
+        let last = g.bars[1];
+        assert!((last.start_secs - 2.4).abs() < 1e-5 && (last.end_secs - 4.8).abs() < 1e-4, "{last:?}");
+        assert_eq!(g.beat_times_secs.len(), 8, "{:?}", g.beat_times_secs);
+        assert!((g.beat_times_secs[6] - 3.6).abs() < 1e-4 && (g.beat_times_secs[7] - 4.2).abs() < 1e-4);
+        // At the period of the last beats (0.6 s), not the song's mean tempo (90 BPM: 0.67 s).
+        // Rebuilding the grid (any correction) adds nothing more.
+        let again = g.with_beats_per_bar(4).unwrap();
+        assert_eq!(again.beat_times_secs, g.beat_times_secs);
+        assert_eq!(again.bars, g.bars);
+        // Clipped to the song: a 4.5 s song keeps the bar to its end and no beat past it.
+        let short = SongGrid::assemble(4.5, 90.0, 4, beats, 0, false, flat(4.5));
+        assert!((short.bars[1].end_secs - 4.5).abs() < 1e-5);
+        assert!(short.beat_times_secs.iter().all(|&t| t < 4.5) && short.beat_times_secs.len() == 8);
     }
 
     #[test]
