@@ -61,6 +61,9 @@ struct PlayerRelease {
     /// node_modules: the download is the point of the player build.
     #[serde(default)]
     minify_js: bool,
+    /// rustc flags for this build only, after `[toolchain] rustflags` (e.g. `-Z` size flags).
+    #[serde(default)]
+    rustflags: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -79,6 +82,9 @@ struct ProfileSettings {
     cargo_profile: String,
     wasm_opt: Vec<String>,
     keep_debug_names: bool,
+    /// rustc flags of this build added to `[toolchain] rustflags`.
+    #[serde(default)]
+    rustflags: Vec<String>,
 }
 
 fn root() -> PathBuf {
@@ -149,9 +155,15 @@ fn build_wasm(root: &Path, settings: &Settings, profile: &ProfileSettings, featu
         fail("no Rust toolchain with a wasm32 std: run ./dev setup (installs rustc-web, cargo-web, rust-web-src, lld-19)");
     }
     cargo.current_dir(root).args(["build", "--target", target, "-p", &settings.package.krate, "--profile", &profile.cargo_profile]).args(feature_args);
-    if !settings.toolchain.rustflags.is_empty() {
+    let rustflags: Vec<&str> = settings.toolchain.rustflags.iter().chain(&profile.rustflags).map(String::as_str).collect();
+    if !rustflags.is_empty() {
         let var = format!("CARGO_TARGET_{}_RUSTFLAGS", target.to_uppercase().replace(['-', '.'], "_"));
-        cargo.env(var, settings.toolchain.rustflags.join(" "));
+        cargo.env(var, rustflags.join(" "));
+    }
+    // `-Z` flags (the player's size flags) need a nightly rustc; the build-std path above runs
+    // with RUSTC_BOOTSTRAP already, a plain toolchain is given it for these builds only.
+    if rustflags.iter().any(|f| f.starts_with("-Z")) {
+        cargo.env("RUSTC_BOOTSTRAP", "1");
     }
     run(&mut cargo);
     let dir_name = if profile.cargo_profile == "dev" { "debug" } else { &profile.cargo_profile };
@@ -208,7 +220,12 @@ fn build_player_package(root: &Path, settings: &Settings, profile: &ProfileSetti
     }
     // In release, the player may use its own cargo profile and wasm-opt flags.
     let own = match (&player.release, dev) {
-        (Some(r), false) => Some(ProfileSettings { cargo_profile: r.cargo_profile.clone(), wasm_opt: r.wasm_opt.clone(), keep_debug_names: profile.keep_debug_names }),
+        (Some(r), false) => Some(ProfileSettings {
+            cargo_profile: r.cargo_profile.clone(),
+            wasm_opt: r.wasm_opt.clone(),
+            keep_debug_names: profile.keep_debug_names,
+            rustflags: r.rustflags.clone(),
+        }),
         _ => None,
     };
     build_wasm(root, settings, own.as_ref().unwrap_or(profile), &args, &player_dir, &player.out_name);
