@@ -1277,6 +1277,34 @@ mod tests {
     }
 
     #[test]
+    fn signatures_tell_a_move_from_itself_played_backwards() {
+        // Played backwards, a move passes through the same poses: position-only features
+        // (their second moments) cannot tell the two apart; the velocities can.
+        let lib = SegmentLibrary::builtin();
+        let lc = &lib.clips()[3];
+        let positions = canonical_world_positions(&lc.clip);
+        let mut normed = positions.clone();
+        normalize_in_place(&mut normed, Origin::Hips, body_height(&positions));
+        let frames = normed.len() / CANON_COUNT;
+        let reversed: Vec<Vec3> = (0..frames).rev().flat_map(|f| normed[f * CANON_COUNT..(f + 1) * CANON_COUNT].to_vec()).collect();
+        // The same span both ways (every other frame: the reverse samples the frames between).
+        let (si, ei) = (0, frames - 1);
+        let (a, b) = (signature_of(&normed, si, ei), signature_of(&reversed, si, ei));
+        assert!((a.similarity(&a) - 1.0).abs() < 1e-4);
+        let positions_only = |n: &[Vec3], from: usize, to: usize| {
+            let feats: Vec<f32> = (from..to).step_by(2).flat_map(|f| n[f * CANON_COUNT..(f + 1) * CANON_COUNT].iter().zip(&SIGNATURE_REFERENCE).flat_map(|(p, r)| [p.x - r[0], p.y - r[1], p.z - r[2]]).chain([SIGNATURE_OFFSET]).collect::<Vec<f32>>()).collect();
+            Signature::of_uncentred(&feats, CANON_COUNT * 3 + 1, SIGNATURE_AXES)
+        };
+        let same = positions_only(&normed, si, ei).similarity(&positions_only(&reversed, si, ei));
+        let with_velocity = a.similarity(&b);
+        println!("a move against itself backwards: Sim {with_velocity} with velocities, {same} on positions only");
+        assert!(same > 0.99, "position-only signatures of a move and its reverse: Sim {same}");
+        // Raw kWAS bunches near 1 (the search ranks it among each segment's neighbours), so
+        // the check is on D = 1 − Sim: the velocities make it a hundred times larger.
+        assert!(with_velocity < 0.995 && 1.0 - with_velocity > 100.0 * (1.0 - same), "with velocities, a move and its reverse still look alike: Sim {with_velocity} (positions only {same})");
+    }
+
+    #[test]
     fn signature_reference_is_the_builtin_moves_mean_pose() {
         let lib = SegmentLibrary::builtin();
         let mut sum = [[0.0f64; 3]; CANON_COUNT];
