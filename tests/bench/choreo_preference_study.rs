@@ -36,7 +36,8 @@
 
 use glam::Vec3;
 use odori_core::choreo::quality::perceptual_distance;
-use odori_core::choreo::segment::{SIGNATURE_AXES, SIGNATURE_JOINTS, SIGNATURE_OFFSET};
+use odori_core::choreo::segment::{SIGNATURE_AXES, SIGNATURE_OFFSET};
+use odori_core::humanoid::Canon;
 use odori_core::choreo::{feedback::relevance, SegmentLibrary, SegmentOptions, Settings, Signature};
 use odori_core::normalize::{body_height, normalize_in_place, Origin};
 use odori_core::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
@@ -309,7 +310,8 @@ fn main() {
             mean_pose[f % CANON_COUNT] += *p / (32 * m) as f32;
         }
     }
-    let sig_joints: Vec<usize> = SIGNATURE_JOINTS.iter().map(|c| c.index()).collect();
+    // The ten joints the product's signatures used until session 7.
+    let sig_joints: Vec<usize> = [Canon::Chest, Canon::Head, Canon::LeftForearm, Canon::RightForearm, Canon::LeftHand, Canon::RightHand, Canon::LeftLowerLeg, Canon::RightLowerLeg, Canon::LeftFoot, Canon::RightFoot].iter().map(|c| c.index()).collect();
     let all_joints: Vec<usize> = (0..CANON_COUNT).collect();
     let sig_of = |n: &[Vec3], joints: &[usize], vel: f32| -> Signature {
         let dims = joints.len() * if vel > 0.0 { 6 } else { 3 } + 1;

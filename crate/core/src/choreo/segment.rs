@@ -34,58 +34,75 @@ pub const LIBRARY_FPS: f32 = 30.0;
 pub const SEGMENT_COUNTS: usize = 4;
 /// Eigen axes kept per signature.
 pub const SIGNATURE_AXES: usize = 5;
-/// Joints whose normalised positions make the signature's per-frame feature vector.
-pub const SIGNATURE_JOINTS: [Canon; 10] = [
-    Canon::Chest,
-    Canon::Head,
-    Canon::LeftForearm,
-    Canon::RightForearm,
-    Canon::LeftHand,
-    Canon::RightHand,
-    Canon::LeftLowerLeg,
-    Canon::RightLowerLeg,
-    Canon::LeftFoot,
-    Canon::RightFoot,
-];
 /// The pose the signature's features are measured from: the mean §B-normalised position (body
-/// heights; x, y, z) of each of [`SIGNATURE_JOINTS`] over the built-in moves (a unit test
-/// recomputes it). A fixed pose, not the current library's mean, so a segment's signature never
-/// changes when clips are added.
-pub const SIGNATURE_REFERENCE: [[f32; 3]; 10] = [
-    [-0.004, 0.212, 0.0],
-    [-0.036, 0.450, 0.0],
-    [-0.019, 0.233, 0.193],
-    [-0.019, 0.233, -0.193],
-    [-0.136, 0.259, 0.177],
-    [-0.136, 0.259, -0.177],
-    [-0.110, -0.266, 0.108],
-    [-0.110, -0.266, -0.108],
-    [-0.002, -0.523, 0.093],
+/// heights; x, y, z) of every canonical joint (in [`Canon::ALL`]'s order) over the built-in
+/// moves (a unit test recomputes it). A fixed pose, not the current library's mean, so a
+/// segment's signature never changes when clips are added.
+pub const SIGNATURE_REFERENCE: [[f32; 3]; CANON_COUNT] = [
+    [0.000, 0.035, 0.0],    // hips
+    [0.000, 0.106, 0.0],    // spine
+    [-0.004, 0.212, 0.0],   // chest
+    [-0.015, 0.367, 0.0],   // neck
+    [-0.036, 0.450, 0.0],   // head
+    [-0.013, 0.331, 0.021], // left shoulder
+    [-0.013, 0.334, 0.127], // left upper arm
+    [-0.018, 0.233, 0.193], // left forearm
+    [-0.135, 0.258, 0.178], // left hand
+    [-0.013, 0.331, -0.021], // right side, the same order
+    [-0.013, 0.334, -0.127],
+    [-0.018, 0.233, -0.193],
+    [-0.135, 0.258, -0.178],
+    [0.000, 0.000, 0.064],   // left upper leg
+    [-0.111, -0.266, 0.108], // left lower leg
+    [-0.002, -0.523, 0.093], // left foot
+    [-0.077, -0.587, 0.103], // left toe
+    [0.000, 0.000, -0.064],
+    [-0.111, -0.266, -0.108],
     [-0.002, -0.523, -0.093],
+    [-0.077, -0.587, -0.103],
 ];
-/// The constant last feature of every frame, body heights: about the root-mean-square distance
-/// of a frame's [`SIGNATURE_JOINTS`] from [`SIGNATURE_REFERENCE`] over the library (0.47 on
-/// the built-in moves and the real salsa and Indian clips), so the first principal axis of the
+/// The velocity part of the signature's features: each joint's displacement over this span
+/// (seconds; a central difference over ±2 frames at [`LIBRARY_FPS`], doubled), body heights.
+/// Chosen with the constant below by the `choreo_preference_features` bench on its tuning
+/// sets (spans of 0.07–0.4 s tried; module docs of `choreo::feedback` give the figures).
+pub const SIGNATURE_VELOCITY_SECS: f32 = 4.0 / LIBRARY_FPS;
+/// The constant last feature of every frame, body heights, so the first principal axis of the
 /// uncentred matrix carries the segment's mean pose with its sign (eigenvectors have none;
-/// against the constant, +pose and −pose point differently) and the rest how it moves.
-pub const SIGNATURE_OFFSET: f32 = 0.5;
+/// against the constant, +pose and −pose point differently) and the rest how it moves. Its
+/// size sets how much that first axis weighs against the others in kWAS; 0.25–1.25 tried
+/// (`choreo_preference_features`).
+pub const SIGNATURE_OFFSET: f32 = 1.0;
 
 /// The eigen signature (spec §F) of frames `si..ei` of a clip's §B-normalised canonical
 /// positions. Features per frame (every other frame: 15 per second is plenty for the principal
-/// axes): each of [`SIGNATURE_JOINTS`] minus its [`SIGNATURE_REFERENCE`] position, then
+/// axes): every canonical joint's position minus its [`SIGNATURE_REFERENCE`], then its
+/// displacement over [`SIGNATURE_VELOCITY_SECS`] (within the segment), then
 /// [`SIGNATURE_OFFSET`]; axes of the uncentred matrix ([`Signature::of_uncentred`]).
 ///
-/// Why not the covariance of the positions (the features before): centred on the segment's
-/// mean, it saw only the directions in which joints move, not where they are, and agreed with
-/// what a person sees (the §J perceptual distance) at a Spearman rank correlation of 0.05–0.09
-/// over the library; these features agree at about 0.7 (`choreo_preference` bench).
+/// Why these features: §J's perceptual distance (what the relevance feedback should agree
+/// with) is the mean distance of *every* joint's position, frame by frame. The centred
+/// covariance of positions (session 4) saw only the directions joints move in and agreed with
+/// it at a Spearman rank correlation of 0.05–0.09; ten joints' positions from a reference
+/// pose (sessions 5–6) at 0.72; all joints with their velocities at 0.79. The velocities let
+/// the signature tell motions that pass through the same poses at different speeds or in a
+/// different order apart, which a second-moment matrix of positions alone cannot.
 pub fn signature_of(normed: &[Vec3], si: usize, ei: usize) -> Signature {
-    let dims = SIGNATURE_JOINTS.len() * 3 + 1;
+    const J: usize = CANON_COUNT;
+    let dims = J * 6 + 1;
+    let last = ei.max(si);
     let mut feats = Vec::with_capacity((ei.saturating_sub(si) / 2 + 1) * dims);
     for f in (si..ei).step_by(2) {
-        for (c, r) in SIGNATURE_JOINTS.iter().zip(&SIGNATURE_REFERENCE) {
-            let p = normed[f * CANON_COUNT + c.index()];
+        let frame = &normed[f * J..(f + 1) * J];
+        for (p, r) in frame.iter().zip(&SIGNATURE_REFERENCE) {
             feats.extend_from_slice(&[p.x - r[0], p.y - r[1], p.z - r[2]]);
+        }
+        // Central difference over ±2 frames, one-sided at the segment's ends, scaled to the
+        // displacement over SIGNATURE_VELOCITY_SECS.
+        let (f0, f1) = (f.saturating_sub(2).max(si), (f + 2).min(last));
+        let scale = if f1 > f0 { SIGNATURE_VELOCITY_SECS * LIBRARY_FPS / (f1 - f0) as f32 } else { 0.0 };
+        for j in 0..J {
+            let d = (normed[f1 * J + j] - normed[f0 * J + j]) * scale;
+            feats.extend_from_slice(&[d.x, d.y, d.z]);
         }
         feats.push(SIGNATURE_OFFSET);
     }
@@ -1409,17 +1426,44 @@ mod tests {
     }
 
     #[test]
+    fn signatures_tell_a_move_from_itself_played_backwards() {
+        // Played backwards, a move passes through the same poses: position-only features
+        // (their second moments) cannot tell the two apart; the velocities can.
+        let lib = SegmentLibrary::builtin();
+        let lc = &lib.clips()[3];
+        let positions = canonical_world_positions(&lc.clip);
+        let mut normed = positions.clone();
+        normalize_in_place(&mut normed, Origin::Hips, body_height(&positions));
+        let frames = normed.len() / CANON_COUNT;
+        let reversed: Vec<Vec3> = (0..frames).rev().flat_map(|f| normed[f * CANON_COUNT..(f + 1) * CANON_COUNT].to_vec()).collect();
+        // The same span both ways (every other frame: the reverse samples the frames between).
+        let (si, ei) = (0, frames - 1);
+        let (a, b) = (signature_of(&normed, si, ei), signature_of(&reversed, si, ei));
+        assert!((a.similarity(&a) - 1.0).abs() < 1e-4);
+        let positions_only = |n: &[Vec3], from: usize, to: usize| {
+            let feats: Vec<f32> = (from..to).step_by(2).flat_map(|f| n[f * CANON_COUNT..(f + 1) * CANON_COUNT].iter().zip(&SIGNATURE_REFERENCE).flat_map(|(p, r)| [p.x - r[0], p.y - r[1], p.z - r[2]]).chain([SIGNATURE_OFFSET]).collect::<Vec<f32>>()).collect();
+            Signature::of_uncentred(&feats, CANON_COUNT * 3 + 1, SIGNATURE_AXES)
+        };
+        let same = positions_only(&normed, si, ei).similarity(&positions_only(&reversed, si, ei));
+        let with_velocity = a.similarity(&b);
+        println!("a move against itself backwards: Sim {with_velocity} with velocities, {same} on positions only");
+        assert!(same > 0.99, "position-only signatures of a move and its reverse: Sim {same}");
+        // Raw kWAS bunches near 1 (the search ranks it among each segment's neighbours), so
+        // the check is on D = 1 − Sim: the velocities make it a hundred times larger.
+        assert!(with_velocity < 0.995 && 1.0 - with_velocity > 100.0 * (1.0 - same), "with velocities, a move and its reverse still look alike: Sim {with_velocity} (positions only {same})");
+    }
+
+    #[test]
     fn signature_reference_is_the_builtin_moves_mean_pose() {
         let lib = SegmentLibrary::builtin();
-        let mut sum = [[0.0f64; 3]; 10];
+        let mut sum = [[0.0f64; 3]; CANON_COUNT];
         let mut frames = 0usize;
         for lc in lib.clips() {
             let positions = canonical_world_positions(&lc.clip);
             let mut normed = positions.clone();
             normalize_in_place(&mut normed, Origin::Hips, body_height(&positions));
             for frame in normed.chunks_exact(CANON_COUNT) {
-                for (acc, c) in sum.iter_mut().zip(SIGNATURE_JOINTS) {
-                    let p = frame[c.index()];
+                for (acc, p) in sum.iter_mut().zip(frame) {
                     acc[0] += p.x as f64;
                     acc[1] += p.y as f64;
                     acc[2] += p.z as f64;
@@ -1427,11 +1471,17 @@ mod tests {
                 frames += 1;
             }
         }
+        // Printed whole (the table to paste if the built-in moves change), then checked.
+        let mut wrong = Vec::new();
         for (j, (acc, r)) in sum.iter().zip(&SIGNATURE_REFERENCE).enumerate() {
+            let mean = acc.map(|a| a / frames as f64);
+            println!("    [{:.3}, {:.3}, {:.3}], // {:?}", mean[0], mean[1], mean[2], Canon::ALL[j]);
             for a in 0..3 {
-                let mean = acc[a] / frames as f64;
-                assert!((mean - r[a] as f64).abs() < 0.01, "joint {j} axis {a}: mean {mean:.4}, constant {}", r[a]);
+                if (mean[a] - r[a] as f64).abs() >= 0.01 {
+                    wrong.push(format!("{:?} axis {a}: mean {:.4}, constant {}", Canon::ALL[j], mean[a], r[a]));
+                }
             }
         }
+        assert!(wrong.is_empty(), "SIGNATURE_REFERENCE is not the built-in moves' mean pose: {wrong:?}");
     }
 }
