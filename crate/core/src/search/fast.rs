@@ -73,8 +73,6 @@ const CHUNK: usize = super::features::BOX_CHUNK_FRAMES;
 const QCHUNK: usize = 8;
 /// Columns per block: the row bounds and τ are refreshed per block.
 const BLOCK: usize = 64;
-/// Columns between the starts of the probe's first diagonal paths in a place.
-const DIAGONAL_STEP: usize = 8;
 /// Most results for which the search first probes the most promising places for a bound.
 const PROBE_MAX_RESULTS: usize = 32;
 
@@ -94,7 +92,7 @@ fn seed(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
     if prep.max_results > PROBE_MAX_RESULTS {
         return (f32::INFINITY, 0);
     }
-    let (set, probed) = probe(index, prep, bounds);
+    let (set, probed) = probe(index, prep, bounds, 2);
     (if set.len() == prep.max_results { set[prep.max_results - 1] } else { f32::INFINITY }, probed)
 }
 
@@ -126,7 +124,11 @@ pub(crate) fn probe_part(index: &FeatureIndex, prep: &Prepared) -> (Vec<f32>, u6
     if prep.max_results > PROBE_MAX_RESULTS {
         return (Vec::new(), 0);
     }
-    probe(index, prep, &Bounds::new(index, prep))
+    // One round: the parts' lists are joined before any τ is used, and the joined bound is
+    // tighter than a part's own second-round bound would be (on the hour of real motion split
+    // in two, the second round took about half of a part's probe time and moved the joined
+    // bound by under 1 %; the search's first pass lowers τ from real paths anyway).
+    probe(index, prep, &Bounds::new(index, prep), 1)
 }
 
 /// Round 2 (see [`super::search_bounded`]): [`run`] with the probe replaced by `bound`.
@@ -386,7 +388,7 @@ fn filter_pass(
             }
             block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
             if b0 >= table_to && filter.busy {
-                coupled.build(prep, target, b0, to, tau);
+                coupled.build(prep, index.clips[ci].fine_boxes(prep.origin), b0, to, tau);
                 table_to = coupled.valid_to;
             }
             filter.busy = false;
@@ -513,19 +515,19 @@ impl Bounds {
 /// whose row bounds are lowest (each with `maxSpan` columns of run-up), and the far set of
 /// their distances picked best first (real paths, so each bounds its end's least distance from
 /// above; its k-th member, if it has k, bounds the k-th result's, see the module docs).
-/// Returns that far set's distances, best first (at most k), and the work done.
+/// Returns that far set's distances, best first (at most k), and the work done, after
+/// `rounds` (1 or 2) rounds.
 ///
-/// The paths come first from plain diagonals (a few starts per place), then from the one-value
-/// DP of `filter.rs`, which at a fixed λ finds into every end the path of least `Σ w·(d − λ)`
-/// (and carries its cost and start) — about the cost of one frame distance per cell, where the
-/// front DP costs several. Twice, as in Dinkelbach's method for least ratios, each time at the
-/// far-set bound λ of the paths found so far: a path of least `Σ w·(d − λ)` with λ at or above
-/// the least distance has a distance no higher than λ, so each round tightens the bound. Only
-/// paths with `Σ w·(d − λ) ≤ 0` can do that, so the DP drops the others with the bounds of the
-/// search itself (row bounds and the coupled table, built at λ over the probed stretch) —
-/// pruning can only lose paths, never make one up, so whatever is found stays real. (Without k
-/// far diagonals, the first round runs at λ = 0 with nothing pruned, the cheapest paths.)
-fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (Vec<f32>, u64) {
+/// The paths come from the one-value DP of `filter.rs`, which at a fixed λ finds into every end
+/// the path of least `Σ w·(d − λ)` (and carries its cost and start) — about the cost of one
+/// frame distance per cell, where the front DP costs several. Twice, as in Dinkelbach's method
+/// for least ratios: at λ = 0 (the cheapest paths, nothing pruned: every value is ≥ 0), then at
+/// the far-set bound of those; a path of least `Σ w·(d − λ)` with λ at or above the least
+/// distance has a distance no higher than λ, so the second round tightens the bound. Only paths
+/// with `Σ w·(d − λ) ≤ 0` can do that, so the second round drops the others with the bounds of
+/// the search itself (row bounds and the coupled table, built at λ over the probed stretch) —
+/// pruning there can only lose paths, never make one up, so whatever is found stays real.
+fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds, rounds: usize) -> (Vec<f32>, u64) {
     let k = prep.max_results;
     let nq = bounds.nq;
     let mut rq = vec![0f32; nq];
@@ -558,57 +560,33 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (Vec<f32>, u
         segments.push((ci, b0.saturating_sub(prep.max_span), (b0 + BLOCK + prep.max_span).min(cols)));
     }
     let rows = prep.query_frames;
-    // First bound: plain diagonal paths (span I, every step diagonal) from a few starts in each
-    // place — real admissible paths, about one frame distance per query frame each. Their cost is
-    // summed in path order as the DPs sum it, so it has the bits a DP would give that path.
-    let mut pool: Vec<Candidate> = Vec::new();
-    let mut diagonals = 0u64;
-    for &(ci, b0) in &picked {
-        let target = index.clips[ci].lanes(prep.origin);
-        let cols = target.len() / LANE_FLOATS;
-        for s in (b0..b0 + BLOCK).step_by(DIAGONAL_STEP).filter(|&s| s + rows <= cols) {
-            let mut cost = 0.0f32;
-            for i in 0..rows {
-                cost += 2.0 * prep.d(i, &target[(s + i) * LANE_FLOATS..(s + i + 1) * LANE_FLOATS]);
-            }
-            diagonals += rows as u64;
-            pool.push(Candidate { clip: ci, start: s, end: s + rows - 1, score: cost / (2 * rows) as f32, cost });
-        }
-    }
-    let mut set = far_set(&mut pool, k, prep.max_span);
     let mut filter = Filter::new(rows);
     let mut rest = vec![0f32; rows];
     let mut fneg: Vec<f32> = Vec::new();
     let mut coupled = Coupled::default();
-    let mut last_lambda = f32::INFINITY;
-    for round in 0..2 {
-        // λ: the k-th member of the far set so far (the diagonals' first), pruned; without k
-        // members, 0 and nothing pruned in the first round, the worst member in the second.
-        let (lambda, prune) = match set.last() {
-            Some(&l) if set.len() == k || round > 0 => (l, true),
-            _ if round > 0 => break,
-            _ => (0.0, false),
-        };
-        if prune && lambda >= last_lambda {
-            // No lower than the last round's: the same paths again.
+    let mut pool: Vec<Candidate> = Vec::new();
+    let mut set: Vec<f32> = Vec::new();
+    for round in 0..rounds {
+        // λ: 0, then the worst member of the first round's far set (its k-th when it has k).
+        let lambda = if round == 0 { 0.0 } else { set.last().copied().unwrap_or(f32::INFINITY) };
+        if !lambda.is_finite() {
             break;
         }
-        last_lambda = if prune { lambda } else { f32::INFINITY };
         for &(ci, from, to) in &segments {
             let target = index.clips[ci].lanes(prep.origin);
-            let margin = if prune {
-                // The stretch's paths stay inside `from..to`.
-                block_bounds(&bounds.clips[ci], nq, lambda, from, to, &mut rq, &mut rest, &mut fneg);
-                coupled.build(prep, target, from, to, lambda);
-                filter_margin(prep, lambda)
-            } else {
+            let margin = if round == 0 {
                 // Nothing pruned: an infinite margin, zero bounds.
                 rest.fill(0.0);
                 fneg.clear();
                 fneg.resize(to + 1 - from, 0.0);
                 f32::INFINITY
+            } else {
+                // The stretch's paths stay inside `from..to`.
+                block_bounds(&bounds.clips[ci], nq, lambda, from, to, &mut rq, &mut rest, &mut fneg);
+                coupled.build(prep, index.clips[ci].fine_boxes(prep.origin), from, to, lambda);
+                filter_margin(prep, lambda)
             };
-            let cell = prune.then_some(&coupled);
+            let cell = (round > 0).then_some(&coupled);
             filter.reset(from);
             for j in from..to {
                 let bound = Bound { margin, rest: &rest, fneg: &fneg, base: from, last: (j + prep.max_span - 1).min(to - 1), cell };
@@ -620,7 +598,7 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (Vec<f32>, u
         }
         set = far_set(&mut pool, k, prep.max_span);
     }
-    (set, filter.distances + coupled.boxes + diagonals)
+    (set, filter.distances + coupled.boxes)
 }
 
 /// (ends with their least distance ≤ the final τ, work, final τ).
@@ -677,7 +655,7 @@ fn scan(
                 // reach (an end is at most maxSpan − 1 columns after any column of its path).
                 block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
                 if b0 >= table_to {
-                    coupled.build(prep, target, b0, to, tau);
+                    coupled.build(prep, index.clips[ci].fine_boxes(prep.origin), b0, to, tau);
                     table_to = coupled.valid_to;
                 }
             }
