@@ -184,12 +184,30 @@ fn main() {
         // The web app's path: round 1 (probe) in both parts, the joined bound, round 2 in both
         // (one after the other here; each part's CPU time is what its worker takes).
         let (mut split_busiest, mut split_sum, mut probe_max, mut one_clips) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        // Control: each part searched alone with its own probe and bound (the app before the two
+        // rounds), merged the same way.
+        let mut alone_busiest = Vec::new();
         let mut split_same = true;
         let mut bound = f32::NAN;
         for _ in 0..3 {
             let c = thread_cpu_secs();
             let whole = search(&clips_hour, query, params, &mut no_progress()).expect("fast search over the clips");
             one_clips.push(thread_cpu_secs() - c);
+            let mut alone = Vec::new();
+            let mut alone_merged = Vec::new();
+            for p in &parts {
+                let c = thread_cpu_secs();
+                let r = search(&p.0, query, params, &mut no_progress()).expect("part searched alone");
+                alone.push(thread_cpu_secs() - c);
+                alone_merged.extend(r.matches.into_iter().map(|mut m| {
+                    m.clip_index = p.1[m.clip_index];
+                    m
+                }));
+            }
+            alone_merged.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.clip_index.cmp(&b.clip_index)).then(a.end_frame.cmp(&b.end_frame)));
+            alone_merged.truncate(params.max_results);
+            split_same &= same(&whole, &SearchOutcome { matches: alone_merged, ..SearchOutcome::default() });
+            alone_busiest.push(alone.iter().copied().fold(0.0, f64::max));
             let mut probe_cpu = Vec::new();
             let mut lists = Vec::new();
             for p in &parts {
@@ -219,9 +237,10 @@ fn main() {
             probe_max.push(probe_cpu.iter().copied().fold(0.0, f64::max));
         }
         println!(
-            "{name}, the hour as {} clips in 2 parts (the app's 2 workers): one thread over the clips CPU {:.1} ms; split: busiest part's CPU {:.1} ms (its probe {:.1} ms), both parts {:.1} ms, medians of 3; joined bound {bound:.4}; merged = one thread's: {split_same}",
+            "{name}, the hour as {} clips in 2 parts (the app's 2 workers): one thread over the clips CPU {:.1} ms; each part alone (own probe, the control) busiest part's CPU {:.1} ms; two rounds: busiest part's CPU {:.1} ms (its probe {:.1} ms), both parts {:.1} ms, medians of 3; joined bound {bound:.4}; merged = one thread's: {split_same}",
             clips_hour.clips.len(),
             median(&mut one_clips) * 1e3,
+            median(&mut alone_busiest) * 1e3,
             median(&mut split_busiest) * 1e3,
             median(&mut probe_max) * 1e3,
             median(&mut split_sum) * 1e3,
