@@ -38,13 +38,19 @@ async function handle(m) {
       index.remove(m.id);
     } else if (m.type === "queryFeatures") {
       self.postMessage({ type: "features", token: m.token, features: index.queryFeatures(m.query) });
+    } else if (m.type === "probe") {
+      // Round 1 of a search over several workers (see search/client.js).
+      const probe = index.probeFeatures(m.features, m.params);
+      self.postMessage({ type: "probe", token: m.token, distances: probe.distances, distancesComputed: probe.distancesComputed });
     } else if (m.type === "search") {
       let last = 0;
-      const outcome = index.searchFeatures(m.features, m.params, (done, total) => {
+      const progress = (done, total) => {
         const now = performance.now();
         if (now - last > 40) { last = now; self.postMessage({ type: "progress", token: m.token, done, total }); }
         return true;
-      });
+      };
+      // Round 2 from the bound joined from every worker's probe, or alone with its own probe.
+      const outcome = m.bound === undefined ? index.searchFeatures(m.features, m.params, progress) : index.searchFeaturesBounded(m.features, m.params, m.bound, progress);
       self.postMessage({ type: "result", token: m.token, outcome });
     } else if (m.type === "curve") {
       self.postMessage({ type: "curve", token: m.token, curve: index.jointCurve(m.id, m.joint, m.shoulders) });

@@ -5,7 +5,8 @@
 // frames. Three ways over the same clips:
 // - the product's path: the app's SearchClient (www/search/client.js) with one Web Worker per
 //   core (navigator.hardwareConcurrency, at most 4), each holding part of the clips, the query
-//   sent to all and their answers merged exactly (mergeOutcomes);
+//   sent to all and their answers merged exactly (mergeOutcomes); with two or more workers in
+//   two rounds: each worker's probe, then each worker's search from the joined bound;
 // - one SearchIndex on the page's thread (one core);
 // - the plain DP (`searchPlainFeatures`, every cell) on the page's thread, with the ratio.
 // It checks that the workers' merged results equal the one-thread results. Beside each wall
@@ -87,7 +88,7 @@ try {
   }
   const out = await page.evaluate(async (withPlain) => {
     const { SearchIndex } = await import("./pkg/odori.js");
-    const { SearchClient, mergeOutcomes } = await import("./search/client.js");
+    const { SearchClient } = await import("./search/client.js");
     const { library } = window.odori;
     const allClips = library.clips().filter((c) => c.format === "bvh");
     // indian_13 is the novel query's source: left out of the hour.
@@ -129,12 +130,8 @@ try {
     const mid = Math.floor(library.searchFeatures(held.id).length / perFrame / 2);
     const features = { in: index.queryFeatures(q), novel: side.queryFeatures({ clipId: held.id, startFrame: mid, endFrame: mid + 120 }) };
     // The product's path for given query features: SearchClient.search after its queryFeatures
-    // round trip (the same requests and the same exact merge).
-    const viaWorkers = async (feats, params) => {
-      const busy = client.workers.map((w, k) => k).filter((k) => client.workers[k].frames > 0);
-      const outcomes = await Promise.all(busy.map((k) => client.request(k, { type: "search", features: feats, params })));
-      return mergeOutcomes(outcomes, hour.map((h) => h.id), params.maxResults);
-    };
+    // round trip (the same two rounds and the same exact merge).
+    const viaWorkers = (feats, params) => client.searchFeatures(feats, params);
     const key = (r) => JSON.stringify(r.matches.map((m) => [m.clipId, m.startFrame, m.endFrame, m.distance]));
     // One search per call from Node (which reads the threads' CPU time between calls).
     window.__searchBench = { key, last: {}, async run(way, which, k) {

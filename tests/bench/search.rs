@@ -14,7 +14,7 @@ use std::time::Instant;
 use common::Rng;
 use odori_core::normalize::Origin;
 use odori_core::search::{
-    no_progress, search, search_plain, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS,
+    joined_bound, no_progress, search, search_bounded, search_plain, search_probe, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS,
 };
 
 const LIBRARY_FRAMES: usize = 216_000;
@@ -59,6 +59,32 @@ fn main() {
             data.extend_from_slice(&f[..f.len().min(room)]);
             if data.len() == LIBRARY_FRAMES * FRAME_FLOATS {
                 break 'fill;
+            }
+        }
+    }
+    // The same hour as the web app holds it (tests/bench/search-browser.mjs): each copy of a
+    // clip its own library clip, the clips dealt to two parts — the app's two workers on this
+    // 2-core machine — each to the part holding the fewest frames, as www/search/client.js does.
+    let mut parts: Vec<(FeatureIndex, Vec<usize>, usize)> = (0..2).map(|_| (FeatureIndex::new(), Vec::new(), 0)).collect();
+    let mut clips_hour = FeatureIndex::new();
+    {
+        let mut at = 0usize;
+        'clips: loop {
+            for (k, c) in real.clips.iter().enumerate() {
+                if k == held {
+                    continue;
+                }
+                let n = c.frame_count().min(LIBRARY_FRAMES - at);
+                let f = ClipFeatures::new(format!("{} copy", c.name), 60.0, MotionFeatures { origin: Origin::Hips, data: data[at * FRAME_FLOATS..(at + n) * FRAME_FLOATS].to_vec() });
+                let part = parts.iter_mut().min_by_key(|p| p.2).expect("two parts");
+                part.0.add_features(f.clone());
+                part.1.push(clips_hour.clips.len());
+                part.2 += n;
+                clips_hour.add_features(f);
+                at += n;
+                if at == LIBRARY_FRAMES {
+                    break 'clips;
+                }
             }
         }
     }
@@ -155,6 +181,71 @@ fn main() {
             fast.matches.first().map(|m| (m.start_frame, m.end_frame, m.distance)),
         );
         assert!(ok, "{name}: fast, threaded and plain differ");
+        // The web app's path: round 1 (probe) in both parts, the joined bound, round 2 in both
+        // (one after the other here; each part's CPU time is what its worker takes).
+        let (mut split_busiest, mut split_sum, mut probe_max, mut one_clips) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        // Control: each part searched alone with its own probe and bound (the app before the two
+        // rounds), merged the same way.
+        let mut alone_busiest = Vec::new();
+        let mut split_same = true;
+        let mut bound = f32::NAN;
+        for _ in 0..3 {
+            let c = thread_cpu_secs();
+            let whole = search(&clips_hour, query, params, &mut no_progress()).expect("fast search over the clips");
+            one_clips.push(thread_cpu_secs() - c);
+            let mut alone = Vec::new();
+            let mut alone_merged = Vec::new();
+            for p in &parts {
+                let c = thread_cpu_secs();
+                let r = search(&p.0, query, params, &mut no_progress()).expect("part searched alone");
+                alone.push(thread_cpu_secs() - c);
+                alone_merged.extend(r.matches.into_iter().map(|mut m| {
+                    m.clip_index = p.1[m.clip_index];
+                    m
+                }));
+            }
+            alone_merged.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.clip_index.cmp(&b.clip_index)).then(a.end_frame.cmp(&b.end_frame)));
+            alone_merged.truncate(params.max_results);
+            split_same &= same(&whole, &SearchOutcome { matches: alone_merged, ..SearchOutcome::default() });
+            alone_busiest.push(alone.iter().copied().fold(0.0, f64::max));
+            let mut probe_cpu = Vec::new();
+            let mut lists = Vec::new();
+            for p in &parts {
+                let c = thread_cpu_secs();
+                lists.push(search_probe(&p.0, query, params).expect("probe").distances);
+                probe_cpu.push(thread_cpu_secs() - c);
+            }
+            let refs: Vec<&[f32]> = lists.iter().map(|l| l.as_slice()).collect();
+            bound = joined_bound(&refs, params.max_results);
+            let mut part_cpu = Vec::new();
+            let mut merged = Vec::new();
+            for p in &parts {
+                let c = thread_cpu_secs();
+                let r = search_bounded(&p.0, query, params, bound, &mut no_progress()).expect("bounded search");
+                part_cpu.push(thread_cpu_secs() - c);
+                merged.extend(r.matches.into_iter().map(|mut m| {
+                    m.clip_index = p.1[m.clip_index];
+                    m
+                }));
+            }
+            merged.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.clip_index.cmp(&b.clip_index)).then(a.end_frame.cmp(&b.end_frame)));
+            merged.truncate(params.max_results);
+            split_same &= same(&whole, &SearchOutcome { matches: merged, ..SearchOutcome::default() });
+            let per: Vec<f64> = (0..parts.len()).map(|k| probe_cpu[k] + part_cpu[k]).collect();
+            split_busiest.push(per.iter().copied().fold(0.0, f64::max));
+            split_sum.push(per.iter().sum::<f64>());
+            probe_max.push(probe_cpu.iter().copied().fold(0.0, f64::max));
+        }
+        println!(
+            "{name}, the hour as {} clips in 2 parts (the app's 2 workers): one thread over the clips CPU {:.1} ms; each part alone (own probe, the control) busiest part's CPU {:.1} ms; two rounds: busiest part's CPU {:.1} ms (its probe {:.1} ms), both parts {:.1} ms, medians of 3; joined bound {bound:.4}; merged = one thread's: {split_same}",
+            clips_hour.clips.len(),
+            median(&mut one_clips) * 1e3,
+            median(&mut alone_busiest) * 1e3,
+            median(&mut split_busiest) * 1e3,
+            median(&mut probe_max) * 1e3,
+            median(&mut split_sum) * 1e3,
+        );
+        assert!(split_same, "{name}: the split search differs from one thread's");
         timings.push(format!(
             "{{\"name\":\"{name}\",\"query\":\"{tag}\",\"k\":{},\"plainMs\":{:.3},\"plainCpuMs\":{:.3},\"fastMs\":{:.3},\"fastCpuMs\":{:.3},\"threads\":{threads},\"threadsMs\":{:.3}}}",
             params.max_results,

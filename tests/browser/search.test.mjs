@@ -67,9 +67,13 @@ test("search: query by dragging, results, overlay of two figures, plot", async (
       const params = { maxResults: 12 };
       const key = (o) => o.matches.map((m) => `${m.clipId}:${m.startFrame}-${m.endFrame}:${m.distance.toFixed(5)}`).join(" ");
       const merged = await searchClient.search(query, params);
-      return { workers: searchClient.workers.filter((w) => w.frames > 0).length, merged: key(merged), one: key(one.search(query, params)), plain: key(one.searchPlain(query, params)) };
+      return { workers: searchClient.workers.filter((w) => w.frames > 0).length, bound: merged.stats.bound, merged: key(merged), one: key(one.search(query, params)), plain: key(one.searchPlain(query, params)) };
     }, { clipId: await page.evaluate(() => window.odori.search.range.clipId), startFrame: Math.round(q.startSecs * 60), endFrame: Math.round(q.endSecs * 60) + 1 });
     assert.ok(cmp.workers >= 1, JSON.stringify(cmp));
+    // With two or more workers the search runs in two rounds: round 2 starts from the bound
+    // joined from every worker's probe (a number; Infinity only when the probes found fewer than
+    // maxResults far ends together).
+    if (cmp.workers > 1) assert.equal(typeof cmp.bound, "number", JSON.stringify(cmp));
     assert.equal(cmp.merged, cmp.one, "merged workers vs one index");
     assert.equal(cmp.one, cmp.plain, "fast vs plain");
     // Fewer than asked under a tight threshold: the summary says how many exist and why.

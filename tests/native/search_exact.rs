@@ -9,7 +9,8 @@ use common::{reference_search, Rng};
 use odori_core::humanoid::CANON_COUNT;
 use odori_core::normalize::Origin;
 use odori_core::search::{
-    no_progress, search, search_plain, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS,
+    joined_bound, no_progress, search, search_bounded, search_plain, search_probe, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures,
+    SearchError, SearchOutcome, SearchParams, FRAME_FLOATS,
 };
 
 /// Smooth random motion: each coordinate a sum of three sinusoids plus a slow random walk.
@@ -82,6 +83,49 @@ fn assert_same(what: &str, fast: &SearchOutcome, reference: &[common::RefMatch],
     }
 }
 
+/// The web app's split search (www/search/client.js) done with the core's API: whole clips
+/// dealt to `parts` indexes (each to the one holding the fewest frames, as the client places
+/// them), round 1 probes every part, the probes are joined into one bound, round 2 searches
+/// every part from it, and the answers are merged as `mergeOutcomes` does — best first by
+/// distance, then clip in library order, then end — keeping the first `maxResults`. Returns
+/// the merged answer (clip indexes of the whole library) and the bound round 2 started from.
+fn split_search(index: &FeatureIndex, parts: usize, query: &ClipFeatures, params: &SearchParams) -> (SearchOutcome, f32) {
+    let mut owned: Vec<(FeatureIndex, Vec<usize>, usize)> = (0..parts).map(|_| (FeatureIndex::new(), Vec::new(), 0)).collect();
+    for (ci, c) in index.clips.iter().enumerate() {
+        let part = owned.iter_mut().min_by_key(|p| p.2).expect("parts > 0");
+        part.0.add_features(c.clone());
+        part.1.push(ci);
+        part.2 += c.frame_count();
+    }
+    owned.retain(|p| !p.1.is_empty());
+    // A part whose clips are all shorter than the shortest match has nothing to offer.
+    fn usable<T>(r: &Result<T, SearchError>) -> bool {
+        !matches!(r, Err(SearchError::QueryTooLong { .. }))
+    }
+    let probes: Vec<Vec<f32>> = owned
+        .iter()
+        .map(|p| search_probe(&p.0, query, params))
+        .filter(|r| usable(r))
+        .map(|r| r.expect("probe").distances)
+        .collect();
+    let lists: Vec<&[f32]> = probes.iter().map(|p| p.as_slice()).collect();
+    let bound = joined_bound(&lists, params.max_results);
+    let mut matches = Vec::new();
+    for p in &owned {
+        let r = search_bounded(&p.0, query, params, bound, &mut no_progress());
+        if !usable(&r) {
+            continue;
+        }
+        for mut m in r.expect("bounded search").matches {
+            m.clip_index = p.1[m.clip_index];
+            matches.push(m);
+        }
+    }
+    matches.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.clip_index.cmp(&b.clip_index)).then(a.end_frame.cmp(&b.end_frame)));
+    matches.truncate(params.max_results);
+    (SearchOutcome { matches, ..SearchOutcome::default() }, bound)
+}
+
 fn random_params(rng: &mut Rng, round: usize) -> SearchParams {
     let preset = BodyPreset::ALL[round % BodyPreset::ALL.len()];
     let mut p = SearchParams::preset(preset);
@@ -118,6 +162,7 @@ fn fast_equals_reference_on_random_motion() {
     }
     let mut pruned = 0u64;
     let mut cells = 0u64;
+    let mut bounded = 0usize;
     for round in 0..120 {
         let rows = 12 + rng.usize(30);
         let src = rng.usize(clips.len());
@@ -146,13 +191,23 @@ fn fast_equals_reference_on_random_motion() {
         assert_same(&format!("fast, {what}"), &fast, &reference, (&query, &index, &params));
         assert_same(&format!("fast on {threads} threads, {what}"), &threaded, &reference, (&query, &index, &params));
         assert_same(&format!("plain, {what}"), &plain, &reference, (&query, &index, &params));
+        // The web app's workers: whole clips in 2–3 parts, round 2 from the joined probes' bound.
+        let (split, bound) = split_search(&index, 2 + round % 2, &query, &params);
+        assert_same(&format!("split in {} parts from bound {bound}, {what}", 2 + round % 2), &split, &reference, (&query, &index, &params));
+        if let Some(kth) = reference.get(params.max_results - 1) {
+            assert!(bound >= kth.3, "{what}: the joined bound {bound} is below the k-th result's distance {}", kth.3);
+        }
+        bounded += bound.is_finite() as usize;
         if round % 4 != 3 {
             assert!(!reference.is_empty(), "{what}: a query cut from the library should match");
         }
         pruned += fast.stats.distances_computed;
         cells += plain.stats.distances_computed;
     }
-    println!("random exactness: 120 rounds; the fast search computed {:.1} % of the plain DP's frame distances", 100.0 * pruned as f64 / cells as f64);
+    println!("random exactness: 120 rounds; the fast search computed {:.1} % of the plain DP's frame distances; the split search's round 2 started from a finite joined bound in {bounded} rounds", 100.0 * pruned as f64 / cells as f64);
+    // The joined bound is what makes round 2 prune: it must be finite wherever the probes can
+    // find k far ends (every round asks for at most 40 of six clips of 250–700 frames).
+    assert!(bounded >= 60, "the joined bound was finite in only {bounded} of 120 rounds");
 }
 
 /// A query that holds one pose finds its own exact copy at distance 0 (the old rule lost it:
@@ -300,6 +355,9 @@ fn falling_bound_over_long_clips_keeps_exactness() {
         // Split into parts that share τ: a part's bound lowers the others'.
         let threaded = search_threads(&index, &query, &params, 2 + round % 2, &mut no_progress()).unwrap();
         assert_same(&format!("long clips on threads, round {round} ({rows} frames, k {})", params.max_results), &threaded, &reference, (&query, &index, &params));
+        // Two clips, two parts: each worker holds one, and prunes with the other's probe too.
+        let (split, _) = split_search(&index, 2, &query, &params);
+        assert_same(&format!("long clips split in 2 parts, round {round} ({rows} frames, k {})", params.max_results), &split, &reference, (&query, &index, &params));
         assert!(!fast.matches.is_empty(), "round {round}: the phrase is in the library");
     }
 }

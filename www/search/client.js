@@ -4,6 +4,15 @@
 // within one clip, so each worker's best-first list is the whole library's list restricted to
 // its clips, and the merged list is the best `maxResults` of their union in the same order
 // (distance, then clip in library order, then end frame).
+// With more than one worker a search runs in two rounds, so that every worker prunes with the
+// whole library's bound and not only its own part's (a worker whose own best matches are poor
+// would otherwise do most of the work): round 1, each worker's cheap probe returns distances of
+// real admissible paths whose ends are pairwise far apart (`probeFeatures`); their union's
+// k-th smallest is a proven upper bound of the whole library's k-th result, because ends in
+// different workers lie in different clips and so are far apart too (see `joined_bound` in
+// crate/core/src/search/mod.rs); round 2, each worker searches its clips from that bound
+// (`searchFeaturesBounded`). Each worker still returns every match of its clips within its
+// final bound, so the merge below stays exact.
 // Cancel terminates the workers (a running DP cannot be interrupted from outside) and starts
 // fresh ones with the same clips.
 //
@@ -283,20 +292,41 @@ export class SearchClient {
     const owner = this.features.get(query.clipId);
     if (!owner) { const e = new Error(`clip ${query.clipId} is not in the search index`); e.kind = "not-found"; throw e; }
     const features = await this.request(owner.worker, { type: "queryFeatures", query });
+    return this.searchFeatures(features, params, onProgress);
+  }
+
+  /** `search` for normalised query features (`SearchIndex.queryFeatures`), in two rounds when
+   * more than one worker holds clips (see the top of this file). */
+  async searchFeatures(features, params, onProgress) {
+    await this.loading;
     const busy = this.workers.map((w, k) => k).filter((k) => [...this.features.values()].some((f) => f.worker === k));
+    const k = params?.maxResults ?? 10;
+    // A worker whose clips are all shorter than the shortest admissible match has nothing to
+    // offer; any other failure (cancel, bad parameters) is the search's.
+    const answers = (settled) => {
+      const out = [];
+      for (const s of settled) {
+        if (s.status === "fulfilled") out.push(s.value);
+        else if (s.reason.kind !== "query-too-long") throw s.reason;
+      }
+      if (out.length === 0) throw settled[0].reason;
+      return out;
+    };
+    let bound;
+    let probed = 0;
+    if (busy.length > 1) {
+      const probes = answers(await Promise.allSettled(busy.map((w) => this.request(w, { type: "probe", features, params }))));
+      bound = joinedBound(probes.map((p) => p.distances), k);
+      probed = probes.reduce((a, p) => a + p.distancesComputed, 0);
+    }
     const done = new Map();
     const total = new Map();
     const report = () => { if (onProgress) onProgress([...done.values()].reduce((a, b) => a + b, 0), [...total.values()].reduce((a, b) => a + b, 0)); };
-    const settled = await Promise.allSettled(busy.map((k) => this.request(k, { type: "search", features, params }, (d, t) => { done.set(k, d); total.set(k, t); report(); })));
-    const outcomes = [];
-    for (const s of settled) {
-      if (s.status === "fulfilled") outcomes.push(s.value);
-      // A worker whose clips are all shorter than the shortest admissible match has nothing
-      // to offer; any other failure (cancel, bad parameters) is the search's.
-      else if (s.reason.kind !== "query-too-long") throw s.reason;
-    }
-    if (outcomes.length === 0) throw settled[0].reason;
-    return mergeOutcomes(outcomes, [...this.features.keys()], params?.maxResults ?? 10);
+    const outcomes = answers(await Promise.allSettled(busy.map((w) => this.request(w, { type: "search", features, params, bound }, (d, t) => { done.set(w, d); total.set(w, t); report(); }))));
+    const merged = mergeOutcomes(outcomes, [...this.features.keys()], k);
+    merged.stats.distancesComputed += probed;
+    merged.stats.bound = bound ?? null;
+    return merged;
   }
 
   async curve(id, joint, shoulders = false) {
@@ -311,6 +341,17 @@ export class SearchClient {
     this.pending.clear();
     this.spawn();
   }
+}
+
+/** The bound round 2 starts from: the k-th smallest of every worker's probe distances
+ * (`SearchIndex.probeFeatures`), or Infinity when they hold fewer than k together. Ends in
+ * one worker's list are pairwise far apart, and ends in different workers lie in different
+ * clips, so the k smallest are k far ends of real paths: the library has at least k results
+ * within this distance (the proof is at `joined_bound` in crate/core/src/search/mod.rs, which
+ * computes the same). */
+export function joinedBound(lists, k) {
+  const all = lists.flatMap((l) => Array.from(l)).filter((d) => !Number.isNaN(d)).sort((a, b) => a - b);
+  return all.length >= k ? all[k - 1] : Infinity;
 }
 
 /** Merges per-worker outcomes exactly (see the top of this file). `order` lists clip ids in

@@ -110,6 +110,8 @@ impl JsParams {
 enum Method {
     Fast,
     Plain,
+    /// Round 2 of a split search, from this bound.
+    Bounded(f32),
 }
 
 #[derive(Serialize)]
@@ -340,6 +342,37 @@ impl SearchIndex {
         self.run(&query, params, progress, Method::Fast)
     }
 
+    /// Round 1 of a search split over several indexes that each hold whole clips (the app's
+    /// workers): for query features from `queryFeatures` and the same params as `search`, the
+    /// `{ distances, distancesComputed }`: the distances of real admissible paths this index's
+    /// probe found, pairwise far apart, best first, at most `maxResults` (none for more than
+    /// 32), and the work done. The k-th smallest over every index's lists (k = `maxResults`;
+    /// +Infinity when they hold fewer) bounds the whole library's k-th result; pass it to
+    /// `searchFeaturesBounded` in every index.
+    #[wasm_bindgen(js_name = probeFeatures, unchecked_return_type = "{ distances: number[]; distancesComputed: number }")]
+    pub fn probe_features(&self, features: Float32Array, #[wasm_bindgen(unchecked_param_type = "SearchParamsJs | undefined")] params: JsValue) -> Result<JsValue, OdoriError> {
+        let query = feature_query(features)?;
+        let sp = JsParams::decode(params)?;
+        let probe = search::search_probe(&self.index, &query, &sp).map_err(search_err)?;
+        Ok(to_js(&probe))
+    }
+
+    /// Round 2 of a split search: `searchFeatures` with its bound taken from every index's
+    /// `probeFeatures` (the k-th smallest of their union) instead of this index's own probe.
+    /// Merging every index's matches best first (distance, then clip in library order, then end
+    /// frame) and keeping `maxResults` gives exactly `search` over the whole library.
+    #[wasm_bindgen(js_name = searchFeaturesBounded)]
+    pub fn search_features_bounded(
+        &self,
+        features: Float32Array,
+        #[wasm_bindgen(unchecked_param_type = "SearchParamsJs | undefined")] params: JsValue,
+        bound: f64,
+        progress: Option<js_sys::Function>,
+    ) -> Result<JsValue, OdoriError> {
+        let query = feature_query(features)?;
+        self.run(&query, params, progress, Method::Bounded(bound as f32))
+    }
+
     /// `searchPlain` with the query given as normalised features from `queryFeatures` (the
     /// benchmark's baseline for a query from outside the index).
     #[wasm_bindgen(js_name = searchPlainFeatures)]
@@ -385,6 +418,7 @@ impl SearchIndex {
         let out = match method {
             Method::Fast => search::search(&self.index, query, &sp, &mut cb),
             Method::Plain => search::search_plain(&self.index, query, &sp, &mut cb),
+            Method::Bounded(bound) => search::search_bounded(&self.index, query, &sp, bound, &mut cb),
         };
         if let Some(message) = thrown {
             return Err(OdoriError::new("callback", format!("the progress callback threw ({message}); the search was stopped")));

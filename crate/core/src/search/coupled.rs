@@ -11,8 +11,8 @@
 //! that, on the real hour of motion, leaves a few percent of the cells to compute.
 //!
 //! `L(i, j)` is the distance between the joint boxes of the [`QFINE`]-frame query chunk
-//! holding query frame i and the [`FINE`]-frame library chunk holding library frame j
-//! (`box_box`, a lower bound of the frame distance between any two frames inside them),
+//! holding query frame i and the aligned [`FINE`]-frame library chunk holding library frame j
+//! (the clip's boxes are made once, when the index is built: `ClipFeatures::fine_boxes`) (`box_box`, a lower bound of the frame distance between any two frames inside them),
 //! shrunk by a relative 1e-5 so f32 rounding in the box arithmetic never lifts it above the
 //! real distance. The backward DP uses exactly the forward step pattern: from
 //! (i, j) the path enters (i+1, j+1) with weight 2 and then stops there, or goes on to
@@ -42,7 +42,6 @@ pub(crate) struct Coupled {
     w: usize,
     table: Vec<f32>,
     lrow: Vec<f32>,
-    bx: Vec<f32>,
     /// The query's boxes (filled on the first build: one `Coupled` serves one query).
     qboxes: Vec<f32>,
     /// Rounding slack scale `2τ(I + maxSpan)` of the table's τ.
@@ -52,10 +51,13 @@ pub(crate) struct Coupled {
 }
 
 impl Coupled {
-    /// Builds the table at τ for columns `b0 ..` of a clip (`target`, lane layout) for paths
-    /// that end before column `to` (the end of the stretch the caller searches: no later end
-    /// is ever reported from it, so leaving those completions out keeps the bound valid).
-    pub(crate) fn build(&mut self, prep: &Prepared, target: &[f32], b0: usize, to: usize, tau: f32) {
+    /// Builds the table at τ for columns `b0 ..` of a clip (`boxes`: its [`FINE`]-frame boxes,
+    /// `ClipFeatures::fine_boxes`) for paths that end before column `to` (the end of the
+    /// stretch the caller searches: no later end is ever reported from it, so leaving those
+    /// completions out keeps the bound valid). A column's box is that of the aligned
+    /// [`FINE`]-frame chunk holding it, whatever `b0` is: a box holding more frames than the
+    /// columns a table needs only lowers `L`, so the bound stays a lower bound.
+    pub(crate) fn build(&mut self, prep: &Prepared, boxes: &[f32], b0: usize, to: usize, tau: f32) {
         let rows = prep.query_frames;
         let hi = to.min(b0 + SPAN + 2 * (rows - 1));
         let w = hi - b0;
@@ -72,15 +74,13 @@ impl Coupled {
                 push_box(ch, &mut self.qboxes);
             }
         }
-        for c in (b0..hi).step_by(FINE) {
-            let c1 = (c + FINE).min(hi);
-            self.bx.clear();
-            push_box(&target[c * LANE_FLOATS..c1 * LANE_FLOATS], &mut self.bx);
-            let bx = &self.bx[..BOX_FLOATS];
+        for t in (b0 / FINE)..hi.div_ceil(FINE) {
+            let (c0, c1) = ((t * FINE).max(b0), ((t + 1) * FINE).min(hi));
+            let bx = &boxes[t * BOX_FLOATS..(t + 1) * BOX_FLOATS];
             for (q, qb) in self.qboxes.chunks_exact(BOX_FLOATS).enumerate() {
                 let e = box_box(qb, bx, &prep.groups) * (1.0 - 1e-5) - tau;
                 for i in q * QFINE..((q + 1) * QFINE).min(rows) {
-                    self.lrow[i * w + (c - b0)..i * w + (c1 - b0)].fill(e);
+                    self.lrow[i * w + (c0 - b0)..i * w + (c1 - b0)].fill(e);
                 }
             }
             self.boxes += self.qboxes.len() as u64 / BOX_FLOATS as u64;
@@ -191,7 +191,7 @@ mod tests {
             }
         }
         let mut c = Coupled::default();
-        c.build(&prep, &t, 0, cols, tau);
+        c.build(&prep, &crate::search::lanes::chunk_boxes(&t, FINE), 0, cols, tau);
         let mut finite = 0;
         for i in 0..rows {
             for j in 0..cols {

@@ -82,15 +82,66 @@ pub(crate) fn run(
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<SearchOutcome, SearchError> {
     let bounds = Bounds::new(index, prep);
-    let (seed, probed) = if prep.max_results > PROBE_MAX_RESULTS { (f32::INFINITY, 0) } else { probe(index, prep, &bounds) };
+    let (seed, probed) = seed(index, prep, &bounds);
+    run_seeded(index, prep, &bounds, seed, probed, progress)
+}
+
+/// The probe's bound for [`run`]: the k-th member of its far set, or +∞ (no probe for many
+/// results, or fewer than k far ends found).
+fn seed(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
+    if prep.max_results > PROBE_MAX_RESULTS {
+        return (f32::INFINITY, 0);
+    }
+    let (set, probed) = probe(index, prep, bounds, 2);
+    (if set.len() == prep.max_results { set[prep.max_results - 1] } else { f32::INFINITY }, probed)
+}
+
+/// The exact search over the whole library with τ starting at the lower of the threshold and
+/// `seed` (a proven upper bound of the k-th result's distance, or +∞).
+fn run_seeded(
+    index: &FeatureIndex,
+    prep: &Prepared,
+    bounds: &Bounds,
+    seed: f32,
+    probed: u64,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<SearchOutcome, SearchError> {
     let all: Vec<(usize, usize, usize)> =
         index.clips.iter().enumerate().map(|(ci, c)| (ci, 0, c.frame_count())).filter(|s| s.2 >= prep.min_span).collect();
     let shared = SharedTau::new(prep.threshold.min(seed));
-    let (mut pool, mut stats) = run_part(index, prep, &bounds, &all, seed, &shared, progress)?;
+    let (mut pool, mut stats) = run_part(index, prep, bounds, &all, seed, &shared, progress)?;
     stats.distances_computed += probed;
     let within = pool.len() as u64;
     let selected = select_matches(index, prep, &mut pool);
     Ok(finish(index, prep, selected, stats, within))
+}
+
+/// Round 1 of a search over a library split into parts that hold different clips (the web
+/// app's workers, see [`super::search_probe`]): this part's probe far set, best first, and the
+/// work done (none for more than [`PROBE_MAX_RESULTS`] results: the search then starts
+/// unbounded, as [`run`] does).
+pub(crate) fn probe_part(index: &FeatureIndex, prep: &Prepared) -> (Vec<f32>, u64) {
+    if prep.max_results > PROBE_MAX_RESULTS {
+        return (Vec::new(), 0);
+    }
+    // One round: the parts' lists are joined before any τ is used (the union's k-th smallest
+    // is never above one part's own k-th), and the search's first pass lowers τ from real
+    // paths anyway. On the hour of real motion split in two (tests/bench/search.rs) the second
+    // round took about half of a part's probe time; without it the joined bound rose by 0 %
+    // (source in the library) and 3.5 % (novel query) for top 10, and the busiest part's CPU
+    // time fell from 60.0 to 47.9 ms and from 74.8 to 73.3 ms.
+    probe(index, prep, &Bounds::new(index, prep), 1)
+}
+
+/// Round 2 (see [`super::search_bounded`]): [`run`] with the probe replaced by `bound`.
+pub(crate) fn run_bounded(
+    index: &FeatureIndex,
+    prep: &Prepared,
+    bound: f32,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<SearchOutcome, SearchError> {
+    let bounds = Bounds::new(index, prep);
+    run_seeded(index, prep, &bounds, bound, 0, progress)
 }
 
 /// [`run`] on `threads` threads: the library's ends are cut into `threads` runs of about equal
@@ -110,7 +161,7 @@ pub(crate) fn run_threads(
 ) -> Result<SearchOutcome, SearchError> {
     use std::sync::atomic::{AtomicBool, Ordering};
     let bounds = Bounds::new(index, prep);
-    let (seed, probed) = if prep.max_results > PROBE_MAX_RESULTS { (f32::INFINITY, 0) } else { probe(index, prep, &bounds) };
+    let (seed, probed) = seed(index, prep, &bounds);
     let parts = split(index, prep, threads.max(1));
     let shared = SharedTau::new(prep.threshold.min(seed));
     let cancel = AtomicBool::new(false);
@@ -339,7 +390,7 @@ fn filter_pass(
             }
             block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
             if b0 >= table_to && filter.busy {
-                coupled.build(prep, target, b0, to, tau);
+                coupled.build(prep, index.clips[ci].fine_boxes(prep.origin), b0, to, tau);
                 table_to = coupled.valid_to;
             }
             filter.busy = false;
@@ -381,18 +432,27 @@ fn filter_pass(
 /// The k-th distance of a far set (see the module docs) picked best first from `pool`, if it
 /// has k members: an upper bound of the k-th result's distance.
 fn far_bound(pool: &mut [Candidate], k: usize, max_span: usize) -> Option<f32> {
+    let set = far_set(pool, k, max_span);
+    (set.len() == k).then(|| set[k - 1])
+}
+
+/// The distances of a far set picked best first from `pool` (at most k of them, best first):
+/// each end is taken unless it is near one taken before.
+fn far_set(pool: &mut [Candidate], k: usize, max_span: usize) -> Vec<f32> {
     pool.sort_by(order);
     let gap = 2 * max_span - 1;
     let mut picked: Vec<(usize, usize)> = Vec::new();
+    let mut set = Vec::new();
     for c in pool.iter() {
+        if set.len() == k {
+            break;
+        }
         if picked.iter().all(|&(clip, end)| clip != c.clip || end.abs_diff(c.end) >= gap) {
             picked.push((c.clip, c.end));
-            if picked.len() == k {
-                return Some(c.score);
-            }
+            set.push(c.score);
         }
     }
-    None
+    set
 }
 
 /// Lower-bound tables of one clip: `dist[t * nq + q]` is the box-to-box bound between target
@@ -454,16 +514,22 @@ impl Bounds {
 }
 
 /// A first τ when there is no threshold or it is loose: real paths found on the few places
-/// whose row bounds are lowest (each with `maxSpan` columns of run-up), and the far-set bound
-/// of their distances (real paths, so each bounds its end's least distance from above).
+/// whose row bounds are lowest (each with `maxSpan` columns of run-up), and the far set of
+/// their distances picked best first (real paths, so each bounds its end's least distance from
+/// above; its k-th member, if it has k, bounds the k-th result's, see the module docs).
+/// Returns that far set's distances, best first (at most k), and the work done, after
+/// `rounds` (1 or 2) rounds.
 ///
-/// The paths come from the one-value DP of `filter.rs` with nothing pruned, which at a fixed λ
-/// finds into every end the path of least `Σ w·(d − λ)` (and carries its cost and start) —
-/// about the cost of one frame distance per cell, where the front DP costs several. Twice, as
-/// in Dinkelbach's method for least ratios: at λ = 0 (the cheapest paths), then at the far-set
-/// bound of those; a path of least `Σ w·(d − λ)` with λ at or above the least distance has a
-/// distance no higher than λ, so the second round tightens the bound.
-fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
+/// The paths come from the one-value DP of `filter.rs`, which at a fixed λ finds into every end
+/// the path of least `Σ w·(d − λ)` (and carries its cost and start) — about the cost of one
+/// frame distance per cell, where the front DP costs several. Twice, as in Dinkelbach's method
+/// for least ratios: at λ = 0 (the cheapest paths, nothing pruned: every value is ≥ 0), then at
+/// the far-set bound of those; a path of least `Σ w·(d − λ)` with λ at or above the least
+/// distance has a distance no higher than λ, so the second round tightens the bound. Only paths
+/// with `Σ w·(d − λ) ≤ 0` can do that, so the second round drops the others with the bounds of
+/// the search itself (row bounds and the coupled table, built at λ over the probed stretch) —
+/// pruning there can only lose paths, never make one up, so whatever is found stays real.
+fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds, rounds: usize) -> (Vec<f32>, u64) {
     let k = prep.max_results;
     let nq = bounds.nq;
     let mut rq = vec![0f32; nq];
@@ -497,30 +563,44 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
     }
     let rows = prep.query_frames;
     let mut filter = Filter::new(rows);
-    let rest = vec![0f32; rows];
+    let mut rest = vec![0f32; rows];
+    let mut fneg: Vec<f32> = Vec::new();
+    let mut coupled = Coupled::default();
     let mut pool: Vec<Candidate> = Vec::new();
-    let mut lambda = 0.0f32;
-    for _round in 0..2 {
+    let mut set: Vec<f32> = Vec::new();
+    for round in 0..rounds {
+        // λ: 0, then the worst member of the first round's far set (its k-th when it has k).
+        let lambda = if round == 0 { 0.0 } else { set.last().copied().unwrap_or(f32::INFINITY) };
+        if !lambda.is_finite() {
+            break;
+        }
         for &(ci, from, to) in &segments {
             let target = index.clips[ci].lanes(prep.origin);
-            let cols = target.len() / LANE_FLOATS;
-            // Nothing pruned: an infinite margin, zero bounds.
-            let fneg = vec![0f32; cols + 1 - from];
+            let margin = if round == 0 {
+                // Nothing pruned: an infinite margin, zero bounds.
+                rest.fill(0.0);
+                fneg.clear();
+                fneg.resize(to + 1 - from, 0.0);
+                f32::INFINITY
+            } else {
+                // The stretch's paths stay inside `from..to`.
+                block_bounds(&bounds.clips[ci], nq, lambda, from, to, &mut rq, &mut rest, &mut fneg);
+                coupled.build(prep, index.clips[ci].fine_boxes(prep.origin), from, to, lambda);
+                filter_margin(prep, lambda)
+            };
+            let cell = (round > 0).then_some(&coupled);
             filter.reset(from);
             for j in from..to {
-                let bound = Bound { margin: f32::INFINITY, rest: &rest, fneg: &fneg, base: from, last: (j + prep.max_span - 1).min(cols - 1), cell: None };
+                let bound = Bound { margin, rest: &rest, fneg: &fneg, base: from, last: (j + prep.max_span - 1).min(to - 1), cell };
                 if let Some(m) = filter.column(prep, target, j, lambda, &bound) {
                     let score = m.cost / (rows + m.end + 1 - m.start) as f32;
                     pool.push(Candidate { clip: ci, start: m.start, end: m.end, score, cost: m.cost });
                 }
             }
         }
-        match far_bound(&mut pool, k, prep.max_span) {
-            Some(b) => lambda = b,
-            None => return (f32::INFINITY, filter.distances),
-        }
+        set = far_set(&mut pool, k, prep.max_span);
     }
-    (lambda, filter.distances)
+    (set, filter.distances + coupled.boxes)
 }
 
 /// (ends with their least distance ≤ the final τ, work, final τ).
@@ -577,7 +657,7 @@ fn scan(
                 // reach (an end is at most maxSpan − 1 columns after any column of its path).
                 block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
                 if b0 >= table_to {
-                    coupled.build(prep, target, b0, to, tau);
+                    coupled.build(prep, index.clips[ci].fine_boxes(prep.origin), b0, to, tau);
                     table_to = coupled.valid_to;
                 }
             }

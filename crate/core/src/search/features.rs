@@ -104,6 +104,9 @@ pub struct ClipFeatures {
     /// Per origin (hips, shoulders): bounding boxes of every joint over each run of
     /// [`BOX_CHUNK_FRAMES`] frames, in the lane layout.
     boxes: [OnceLock<Vec<f32>>; 2],
+    /// Per origin: bounding boxes of every joint over each run of the coupled bound's
+    /// `coupled::FINE` frames, in the lane layout (built with the index, not stored).
+    fine: [OnceLock<Vec<f32>>; 2],
     /// Per origin: the frames in the distance's lane layout (see `search::lanes`), built on
     /// first use.
     lanes: [OnceLock<Vec<f32>>; 2],
@@ -122,6 +125,7 @@ impl ClipFeatures {
             hips,
             shoulders: OnceLock::new(),
             boxes: [OnceLock::new(), OnceLock::new()],
+            fine: [OnceLock::new(), OnceLock::new()],
             lanes: [OnceLock::new(), OnceLock::new()],
         }
     }
@@ -151,7 +155,7 @@ impl ClipFeatures {
     pub fn heap_bytes(&self) -> usize {
         let floats = self.hips.data.len()
             + self.shoulders.get().map_or(0, |m| m.data.len())
-            + self.boxes.iter().chain(&self.lanes).map(|l| l.get().map_or(0, Vec::len)).sum::<usize>();
+            + self.boxes.iter().chain(&self.fine).chain(&self.lanes).map(|l| l.get().map_or(0, Vec::len)).sum::<usize>();
         floats * std::mem::size_of::<f32>() + self.name.len()
     }
 
@@ -190,6 +194,17 @@ impl ClipFeatures {
             Origin::Shoulders => &self.boxes[1],
         };
         slot.get_or_init(|| super::lanes::chunk_boxes(self.lanes(origin), BOX_CHUNK_FRAMES))
+    }
+
+    /// Joint bounding boxes per `coupled::FINE` (8) frames for an origin, in the lane layout,
+    /// for the coupled bound's tables (built on first use; the index builds the hip-origin
+    /// ones when a clip is added, so a search does not box the library again every time).
+    pub(crate) fn fine_boxes(&self, origin: Origin) -> &[f32] {
+        let slot = match origin {
+            Origin::Hips => &self.fine[0],
+            Origin::Shoulders => &self.fine[1],
+        };
+        slot.get_or_init(|| super::lanes::chunk_boxes(self.lanes(origin), super::coupled::FINE))
     }
 
     /// Frames `start_frame..end_frame` as a new motion (a query cut from a library clip keeps
@@ -311,6 +326,7 @@ impl FeatureIndex {
     /// its hip-origin bounding boxes.
     pub fn add_features(&mut self, features: ClipFeatures) -> usize {
         features.chunk_boxes(Origin::Hips);
+        features.fine_boxes(Origin::Hips);
         self.clips.push(features);
         self.clips.len() - 1
     }

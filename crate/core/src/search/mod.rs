@@ -246,6 +246,78 @@ pub fn search_threads(
     fast::run_threads(index, &prep, threads, progress)
 }
 
+/// Round 1 of an exact search over a library split into parts that each hold whole clips (the
+/// web app's Web Workers, which share no memory): the distances of real admissible paths this
+/// part's probe found, as a far set picked best first (at most `maxResults` of them, best
+/// first; none when more than 32 results are asked for, where the search starts unbounded).
+/// Give every part's list to [`joined_bound`], and its answer to [`search_bounded`] in every
+/// part: each part then prunes with the whole library's bound instead of its own (an idle part
+/// whose own best matches are poor would otherwise do most of the work of the search).
+pub fn search_probe(index: &FeatureIndex, query: &ClipFeatures, params: &SearchParams) -> Result<SearchProbe, SearchError> {
+    let prep = Prepared::new(index, query, params)?;
+    let (distances, work) = fast::probe_part(index, &prep);
+    Ok(SearchProbe { distances, distances_computed: work })
+}
+
+/// What [`search_probe`] found in one part.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct SearchProbe {
+    /// Distances of real admissible paths whose ends are pairwise far (in different clips, or
+    /// at least `2·maxSpan − 1` frames apart: no span of an admissible match touches two of
+    /// them), best first, at most `maxResults`.
+    pub distances: Vec<f32>,
+    /// Work counter: frame and box distances the probe computed.
+    pub distances_computed: u64,
+}
+
+/// The bound round 2 starts from: the `max_results`-th smallest distance over every part's
+/// [`SearchProbe::distances`], or +∞ when they hold fewer together.
+///
+/// Why it bounds the whole library's k-th result's distance from above (k = `max_results`):
+/// ends in one part's list are pairwise far by construction, and ends in different parts lie
+/// in different clips (a part holds whole clips), so they are far too; the k smallest of the
+/// union are then k pairwise far ends of real paths, each with distance ≤ the bound. Results
+/// are taken best first and a taken result knocks out only ends whose span overlaps its own,
+/// so no result knocks out two far ends; each of the k is either taken or knocked out by a
+/// better taken result, so at least k results have distance ≤ the bound.
+pub fn joined_bound(parts: &[&[f32]], max_results: usize) -> f32 {
+    let mut all: Vec<f32> = parts.iter().flat_map(|p| p.iter().copied()).filter(|d| !d.is_nan()).collect();
+    all.sort_by(f32::total_cmp);
+    match max_results.checked_sub(1).and_then(|k| all.get(k)) {
+        Some(&d) => d,
+        None => f32::INFINITY,
+    }
+}
+
+/// Round 2 of a split search (see [`search_probe`]): [`search`] over this part's clips with τ
+/// starting at the lower of the threshold and `bound` (from [`joined_bound`]; +∞ is allowed)
+/// instead of this part's own probe.
+///
+/// Merging the parts' answers best first — by distance, then clip in library order, then end —
+/// and keeping the first `maxResults` gives exactly [`search`] over the whole library: `bound`
+/// is at least the library's k-th result's distance, and so is every lower τ the part proves
+/// on the way (a far set inside a part is a far set of the library); the part returns every
+/// result of its clips within its final τ with the whole library's distance and start, and a
+/// result's fate in the selection depends only on better ends of its own clip, which are all
+/// within that τ too. So every one of the library's k results is in its part's answer, in the
+/// same order. A part's `shortfall` counts are its clips' exact counts only when its τ never
+/// fell below the threshold — always the case when the merged answer is short, since a finite
+/// bound below the threshold proves k results exist.
+pub fn search_bounded(
+    index: &FeatureIndex,
+    query: &ClipFeatures,
+    params: &SearchParams,
+    bound: f32,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<SearchOutcome, SearchError> {
+    if bound.is_nan() || bound < 0.0 {
+        return Err(SearchError::BadParam { name: "bound", value: bound, why: "must be a distance ≥ 0 (or +∞)" });
+    }
+    let prep = Prepared::new(index, query, params)?;
+    fast::run_bounded(index, &prep, bound, progress)
+}
+
 /// The plain subsequence DP (every cell of every clip computed): the reference the fast search
 /// must agree with, and the benchmark baseline. Same arguments and results as [`search`].
 pub fn search_plain(
