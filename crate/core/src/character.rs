@@ -26,8 +26,13 @@
 //!   source's, turning on one foot, must move round it — so the character's path can drift
 //!   from the source's scaled one; the pelvis drops where a held foot would be out of reach
 //!   (a foot not held then keeps its free path by IK, so the drop does not drag a step down
-//!   onto the floor), and a released foot eases back onto its free path. The benchmark prints the skate against the source's and against
-//!   the free-feet control (`tests/bench/retarget.rs`).
+//!   onto the floor), and a released foot eases back onto its free path (a foot landing again
+//!   within that ease has the step in height to the new hold spread over the eased frames).
+//!   The benchmark prints the skate against the source's and against the free-feet control
+//!   (`tests/bench/retarget.rs`).
+//! - A motion-capture take's calibration frame (frame 0 in its skeleton's rest pose, as in
+//!   the CMU files) is not played: the character starts in the take's first real pose. The
+//!   report measures the source without it too.
 
 use std::sync::Arc;
 
@@ -329,7 +334,10 @@ impl Character {
         if let HumanoidStatus::NotHumanoid { reason } = status {
             return Err(CharacterError::SourceNotHumanoid { clip: clip.name.clone(), reason });
         }
-        let src = if is_canonical(&clip.skeleton) { clip.clone() } else { to_canonical(clip, clip_map, clip.fps) };
+        let mut src = if is_canonical(&clip.skeleton) { clip.clone() } else { to_canonical(clip, clip_map, clip.fps) };
+        if starts_on_calibration_frame(clip, clip_map) {
+            hold_first_pose(&mut src);
+        }
         // The canonical rest is the T-pose with identity rest rotations: a source bone's world
         // rotation is already its rotation away from the reference.
         let canon = &src.skeleton;
@@ -565,6 +573,45 @@ impl Character {
     }
 }
 
+/// A take's first frame within this angle of its skeleton's rest pose on every humanoid bone
+/// is the capture's calibration frame, not motion (see [`starts_on_calibration_frame`]).
+/// Capture noise on a calibration pose is a few degrees (the CMU takes: under 8°); a danced
+/// pose is far from any rest pose (every built-in move's first frame: over 60°).
+const CALIBRATION_FRAME_DEG: f32 = 15.0;
+
+/// Whether `clip` opens on its skeleton's rest pose, every humanoid bone within
+/// [`CALIBRATION_FRAME_DEG`] of it: the calibration frame a motion-capture take carries
+/// before the take (the CMU BVH files: a T-pose facing the capture volume's axis, the dancer's
+/// real first pose — turned a quarter or half turn from it — on frame 1). It is not motion: a
+/// character played from it would swing its whole body round in one frame, and a rig with
+/// wider hips than the source's (RobotExpressive) swings its feet a metre where the source's
+/// move half that. A clip easing out of its rest pose loses nothing by starting on its
+/// second frame's pose.
+fn starts_on_calibration_frame(clip: &Clip, map: &HumanoidMap) -> bool {
+    if clip.frame_count() < 2 {
+        return false;
+    }
+    let first = clip.frame_rotations(0);
+    let mut bones = Canon::ALL.into_iter().filter_map(|c| map.get(c)).peekable();
+    bones.peek().is_some() && bones.all(|j| first[j].angle_between(clip.skeleton.joints[j].rest_rotation) < CALIBRATION_FRAME_DEG.to_radians())
+}
+
+/// Frame 0 of `clip` set to frame 1's pose (rotations and translations): the character stands
+/// in the take's first real pose from the start, and the frame count (the song clock's
+/// frames) is kept.
+fn hold_first_pose(clip: &mut Clip) {
+    let n = clip.skeleton.len();
+    if clip.frame_count() < 2 {
+        return;
+    }
+    clip.rotations.copy_within(n..2 * n, 0);
+    for t in clip.translations.iter_mut() {
+        if t.values.len() > 1 {
+            t.values[0] = t.values[1];
+        }
+    }
+}
+
 /// Choices of [`Character::retarget_options`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RetargetOptions {
@@ -717,6 +764,7 @@ fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3
                     continue;
                 };
                 let lead = if c == Contact::Toe { toe_from_ankle(k, f) } else { Vec3::ZERO };
+                let lands = point[k].is_none();
                 let p = match point[k] {
                     Some((c0, p)) if c0 == c => p,
                     // Lands, or changes point: where the ankle was on the previous frame (its
@@ -726,6 +774,22 @@ fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3
                 point[k] = Some((c, p));
                 let ankle = p - lead;
                 let target = Vec3::new(ankle.x, t.src_ankle[f].y + t.y_offset, ankle.z);
+                // Landing again within a release ease: the ease kept the height it was held at
+                // while the source's foot went up or down (faster than the ease), and the new
+                // hold sits at the source's height. Spread that step in height over the eased
+                // frames, so the foot does not snap to it in one.
+                if lands {
+                    if let Some((_, end)) = last[k].filter(|&(_, end)| end + 1 < f && f - end <= w + 1) {
+                        if let Some(prev) = targets[k][f - 1] {
+                            let step = target.y - prev.y;
+                            for g in end + 1..f {
+                                if let Some(eased) = targets[k][g].as_mut() {
+                                    eased.y += step * (g - end) as f32 / (f - end) as f32;
+                                }
+                            }
+                        }
+                    }
+                }
                 targets[k][f] = Some(target);
                 last[k] = Some((target, f));
                 sum += ankle - flat(t.free_ankle[f]);
@@ -766,9 +830,16 @@ fn pelvis_drop(legs: &[Leg], hips: &[Vec<Vec3>], targets: &[Vec<Option<Vec3>>], 
     (0..frames).map(|f| held[window(f)].iter().sum::<f32>() / window(f).len() as f32).collect()
 }
 
-/// Compares a retargeted clip with its canonical source (same frame count and rate).
+/// Compares a retargeted clip with its canonical source (same frame count and rate), both
+/// without a take's calibration frame ([`starts_on_calibration_frame`]).
 pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, out: &Clip) -> RetargetReport {
-    let src = if is_canonical(&source.skeleton) { source.clone() } else { to_canonical(source, source_map, source.fps) };
+    let mut src = if is_canonical(&source.skeleton) { source.clone() } else { to_canonical(source, source_map, source.fps) };
+    // A take's calibration frame is not motion, for the source as for the character: its
+    // swing onto the first real pose would count as the source's largest foot move and as
+    // skate, and loosen both bounds.
+    if starts_on_calibration_frame(source, source_map) {
+        hold_first_pose(&mut src);
+    }
     let frames = src.frame_count().min(out.frame_count());
     let canon = canonical_skeleton();
     let canon_rest = canon.rest_positions();
@@ -873,6 +944,38 @@ mod tests {
                 assert!((*x - *y).length() < 1e-4, "frame {f}: {x} vs {y}");
             }
         }
+    }
+
+    #[test]
+    fn a_calibration_first_frame_is_not_played() {
+        // The demo with a capture's calibration frame put before it: the rest pose (every
+        // rotation the rest's), facing the other way from the dance's first pose.
+        let demo = demo_clip();
+        let n = demo.skeleton.len();
+        let map = HumanoidMap::from_skeleton(&demo.skeleton);
+        let mut take = demo.clone();
+        take.rotations.splice(0..0, demo.skeleton.joints.iter().map(|j| j.rest_rotation));
+        for t in take.translations.iter_mut() {
+            let first = t.values[0];
+            t.values.insert(0, first + Vec3::X * 0.3);
+        }
+        take.validate().unwrap();
+        assert!(starts_on_calibration_frame(&take, &map));
+        assert!(!starts_on_calibration_frame(&demo, &map), "a danced first pose is motion");
+        let sk = demo.skeleton.clone();
+        let ch = Character::build("body", sk.clone(), builtin_body(&sk), map.clone());
+        for hold_feet in [false, true] {
+            let out = ch.retarget_options(&take, &map, &RetargetOptions { hold_feet, ..Default::default() }).unwrap();
+            assert_eq!(out.frame_count(), take.frame_count());
+            assert_eq!(&out.rotations[..n], &out.rotations[n..2 * n], "frame 0 stands in frame 1's pose");
+            let (a, b) = (out.world_positions(0), out.world_positions(1));
+            for (x, y) in a.iter().zip(&b) {
+                assert!((*x - *y).length() < 1e-4, "hold_feet {hold_feet}: {x} vs {y}");
+            }
+        }
+        // The dance itself is played from its first frame.
+        let out = ch.retarget_options(&demo, &map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
+        assert!((out.world_positions(0)[0] - demo.world_positions(0)[0]).length() < 1e-4);
     }
 
     fn tracks(src_ankle: Vec<Vec3>, src_toe: Vec<Vec3>, free_ankle: Vec<Vec3>, free_toe: Vec<Vec3>) -> FootTracks {
