@@ -26,8 +26,10 @@
 //!   source's, turning on one foot, must move round it — so the character's path can drift
 //!   from the source's scaled one; the pelvis drops where a held foot would be out of reach
 //!   (a foot not held then keeps its free path by IK, so the drop does not drag a step down
-//!   onto the floor), and a released foot eases back onto its free path (a foot landing again
-//!   within that ease has the step in height to the new hold spread over the eased frames).
+//!   onto the floor), and a released foot eases back onto its free path. A landing foot comes
+//!   down to the hold's height (the source's) over the frames before it, on its free path or
+//!   over the release ease it lands within, not in one frame: a rig that lifts its foot
+//!   higher than the source (RobotExpressive's longer feet) would otherwise snap down.
 //!   The benchmark prints the skate against the source's and against the free-feet control
 //!   (`tests/bench/retarget.rs`).
 //! - A motion-capture take's calibration frame (frame 0 in its skeleton's rest pose, as in
@@ -787,6 +789,22 @@ fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3
                                     eased.y += step * (g - end) as f32 / (f - end) as f32;
                                 }
                             }
+                        }
+                    } else if f > 0 && targets[k][f - 1].is_none() {
+                        // Landing from the free path: a rig that lifts its foot higher than
+                        // the source (a longer foot, straightened legs) comes down to the
+                        // source's height over the frames before, on its (shifted) free path,
+                        // not in one.
+                        // Only frames left free (not a release ease's, which keep theirs).
+                        let mut start = f;
+                        while start > f.saturating_sub(w + 1) && targets[k][start - 1].is_none() {
+                            start -= 1;
+                        }
+                        let step = target.y - t.free_ankle[f - 1].y;
+                        for g in start..f {
+                            let at = body.as_ref().map_or(shift[g], |b| b[g]);
+                            let s = (g + 1 - start) as f32 / (f - start + 1) as f32;
+                            targets[k][g] = Some(t.free_ankle[g] + at + Vec3::Y * (step * s));
                         }
                     }
                 }
