@@ -848,16 +848,22 @@ fn pelvis_drop(legs: &[Leg], hips: &[Vec<Vec3>], targets: &[Vec<Option<Vec3>>], 
     (0..frames).map(|f| held[window(f)].iter().sum::<f32>() / window(f).len() as f32).collect()
 }
 
-/// Compares a retargeted clip with its canonical source (same frame count and rate), both
-/// without a take's calibration frame ([`starts_on_calibration_frame`]).
-pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, out: &Clip) -> RetargetReport {
+/// The source as [`report`] measures it: on the canonical skeleton, without a take's
+/// calibration frame (frame 0 given frame 1's pose). The calibration frame is not motion, for
+/// the source as for the character: its swing onto the first real pose would count as the
+/// source's largest foot move and as skate, and loosen both bounds.
+pub fn measured_source(source: &Clip, source_map: &HumanoidMap) -> Clip {
     let mut src = if is_canonical(&source.skeleton) { source.clone() } else { to_canonical(source, source_map, source.fps) };
-    // A take's calibration frame is not motion, for the source as for the character: its
-    // swing onto the first real pose would count as the source's largest foot move and as
-    // skate, and loosen both bounds.
     if starts_on_calibration_frame(source, source_map) {
         hold_first_pose(&mut src);
     }
+    src
+}
+
+/// Compares a retargeted clip with its canonical source (same frame count and rate), both
+/// without a take's calibration frame ([`starts_on_calibration_frame`]).
+pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, out: &Clip) -> RetargetReport {
+    let src = measured_source(source, source_map);
     let frames = src.frame_count().min(out.frame_count());
     let canon = canonical_skeleton();
     let canon_rest = canon.rest_positions();
@@ -998,6 +1004,31 @@ mod tests {
 
     fn tracks(src_ankle: Vec<Vec3>, src_toe: Vec<Vec3>, free_ankle: Vec<Vec3>, free_toe: Vec<Vec3>) -> FootTracks {
         FootTracks { src_ankle, src_toe, free_ankle, free_toe, y_offset: 0.02 }
+    }
+
+    #[test]
+    fn a_foot_lifted_higher_than_the_sources_lands_over_several_frames() {
+        // The source's left ankle comes down at frame 20 and stays planted; the character's
+        // free left ankle (a rig lifting its foot higher) is 35 cm above where the hold puts it.
+        // The right foot stays in the air.
+        let fps = 30.0;
+        let src_l: Vec<Vec3> = (0..40).map(|f| Vec3::new(0.2, if f < 20 { 0.3 } else { 0.08 }, 0.0)).collect();
+        let src_r: Vec<Vec3> = (0..40).map(|_| Vec3::new(-0.2, 0.3, 0.0)).collect();
+        let free_l: Vec<Vec3> = (0..40).map(|_| Vec3::new(0.5, 0.45, 0.0)).collect();
+        let free_r: Vec<Vec3> = (0..40).map(|_| Vec3::new(-0.5, 0.45, 0.0)).collect();
+        let feet = [tracks(src_l, Vec::new(), free_l.clone(), Vec::new()), tracks(src_r, Vec::new(), free_r, Vec::new())];
+        let (targets, shift) = hold_plan(&feet, fps);
+        // Held from frame 20 at the source's height on the character's ground.
+        assert!((targets[0][20].expect("held").y - 0.10).abs() < 1e-5, "{:?}", targets[0][20]);
+        // Where the foot goes: its target, or its free path moved by the body.
+        let at = |f: usize| targets[0][f].unwrap_or(free_l[f] + shift[f]);
+        let steps: Vec<f32> = (1..40).map(|f| (at(f) - at(f - 1)).length()).collect();
+        let worst = steps.iter().copied().fold(0.0, f32::max);
+        assert!(worst < 0.1, "one-frame moves {steps:?}");
+        // Coming down takes the frames just before the landing, on the free path; well before,
+        // the foot is left free.
+        assert!(targets[0][19].is_some_and(|t| t.y < 0.45 && t.y > 0.10));
+        assert!(targets[0][..10].iter().all(Option::is_none));
     }
 
     #[test]
