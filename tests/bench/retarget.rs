@@ -11,9 +11,8 @@
 
 use std::time::Instant;
 
-use odori_core::character::{report, Character, RetargetOptions, Transfer};
+use odori_core::character::{measured_source, report, Character, RetargetOptions, Transfer};
 use odori_core::humanoid::{Canon, HumanoidMap};
-use odori_core::retarget::{is_canonical, to_canonical};
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::Clip;
 use odori_tests::{fps_override_for, read};
@@ -111,7 +110,7 @@ fn main() {
 /// `character::report` measures): the first three, with the character's and the source's move
 /// on that frame, and how many there are.
 fn jump_frames(clip: &Clip, map: &HumanoidMap, ch: &Character, out: &Clip, margin_m: f32) -> Vec<String> {
-    let src = if is_canonical(&clip.skeleton) { clip.clone() } else { to_canonical(clip, map, clip.fps) };
+    let src = measured_source(clip, map);
     let scale = ch.scale_from_canonical();
     let frames = src.frame_count().min(out.frame_count());
     let (sp, cp): (Vec<_>, Vec<_>) = (0..frames).map(|f| (src.world_positions(f), out.world_positions(f))).unzip();

@@ -18,31 +18,22 @@ use odori_tests::{fps_override_for, read};
 const FOOT_JUMP_MARGIN_M: f32 = 0.05;
 
 /// Cases (character, clip, the excess over the source's jump in m, rounded up to the cm) known
-/// to break the foot-jump bound with the feet held as on main at 78b94ed: each may not get
-/// worse than its figure, a case that comes within the bound must leave the list, and any other
-/// case above the bound fails. RobotExpressive (hips 3.7× wider than the source's at its size):
-/// a foot held while the source's slides (the character's skate is well under the source's on
-/// these) is released and eased back onto its path in a few frames; on pivot turns the body
-/// swings round the held foot and drags the other out of reach. Open (issue #11).
+/// to break the foot-jump bound: each may not get worse than its figure, a case that comes
+/// within the bound must leave the list, and any other case above the bound fails. Main at
+/// 78b94ed had 18 here, all RobotExpressive (hips 3.7× wider than the source's at its size).
+/// s7-11b took 13 off: a take's calibration frame is neither played nor measured (the CMU
+/// salsa and Indian jumps were the swing from it onto the first real pose), and a foot that
+/// lands comes down to the source's height over the frames before instead of in one (the
+/// built-in moves' jumps: the robot lifts its longer foot higher than the source). Left: on
+/// pivot turns the body swings round the held foot and drags the other out of reach; salsa's
+/// and Indian's are the robot's free feet themselves (the transfer alone moves them that far).
+/// Open (issue #11).
 const KNOWN_FOOT_JUMPS: &[(&str, &str, f32)] = &[
-    ("gltf/RobotExpressive.glb", "Step-touch & clap (built-in)", 0.12),
-    ("gltf/RobotExpressive.glb", "box step + arm rolls (medium, right)", 0.10),
-    ("gltf/RobotExpressive.glb", "box step + waves (low, right)", 0.08),
-    ("gltf/RobotExpressive.glb", "chassé + arm swing (medium, right)", 0.08),
-    ("gltf/RobotExpressive.glb", "chassé + claps (high, right)", 0.09),
-    ("gltf/RobotExpressive.glb", "grapevine + arm rolls (high, right)", 0.07),
-    ("gltf/RobotExpressive.glb", "grapevine + waves (medium, right)", 0.06),
-    ("gltf/RobotExpressive.glb", "jump + arm wave (medium, right)", 0.10),
-    ("gltf/RobotExpressive.glb", "kick-ball-change + arm rolls (low, right)", 0.08),
-    ("gltf/RobotExpressive.glb", "kick-ball-change + arm swing (high, right)", 0.07),
-    ("gltf/RobotExpressive.glb", "mocap/cmu-indian/indian_04.bvh", 0.88),
-    ("gltf/RobotExpressive.glb", "mocap/cmu-martial/martial_04.bvh", 0.11),
+    ("gltf/RobotExpressive.glb", "mocap/cmu-indian/indian_04.bvh", 0.10),
     ("gltf/RobotExpressive.glb", "pivot turn + arm swing (low, right)", 0.22),
     ("gltf/RobotExpressive.glb", "pivot turn + arm wave (high, right)", 0.15),
     ("gltf/RobotExpressive.glb", "pivot turn + claps (medium, right)", 0.18),
-    ("gltf/RobotExpressive.glb", "salsa_01 (20 s)", 0.70),
-    ("gltf/RobotExpressive.glb", "step-touch + overhead reaches (low, right)", 0.09),
-    ("gltf/RobotExpressive.glb", "step-touch + waves (high, right)", 0.14),
+    ("gltf/RobotExpressive.glb", "salsa_01 (20 s)", 0.10),
 ];
 
 /// Checks one case's foot jump against the bound and the known list: `Err` says what is wrong.
@@ -197,8 +188,9 @@ fn held_feet_skate_no_more_than_the_source() {
         let frames = c.frame_count().min((20.0 * c.fps) as usize);
         sources.push((c.slice(0, frames, rel), im.humanoid));
     }
-    // Indian dance (foot stamps and turns on a wide base): 88 cm/s against the source's 69.
-    const KNOWN: [&str; 1] = ["mocap/cmu-indian/indian_04.bvh"];
+    // None since the takes' calibration frame is no longer played (indian_04 was 88 cm/s
+    // against the source's 69 with it; 41 against 56 without).
+    const KNOWN: [&str; 0] = [];
     for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
         let (_, ch) = character(file);
         let (mut worse, mut worse_names, mut jumps, mut free_worse, mut xbot_worse, mut held_sum, mut free_sum) = (Vec::new(), Vec::new(), Vec::new(), 0, 0, 0.0, 0.0);

@@ -26,8 +26,15 @@
 //!   source's, turning on one foot, must move round it — so the character's path can drift
 //!   from the source's scaled one; the pelvis drops where a held foot would be out of reach
 //!   (a foot not held then keeps its free path by IK, so the drop does not drag a step down
-//!   onto the floor), and a released foot eases back onto its free path. The benchmark prints the skate against the source's and against
-//!   the free-feet control (`tests/bench/retarget.rs`).
+//!   onto the floor), and a released foot eases back onto its free path. A landing foot comes
+//!   down to the hold's height (the source's) over the frames before it, on its free path or
+//!   over the release ease it lands within, not in one frame: a rig that lifts its foot
+//!   higher than the source (RobotExpressive's longer feet) would otherwise snap down.
+//!   The benchmark prints the skate against the source's and against the free-feet control
+//!   (`tests/bench/retarget.rs`).
+//! - A motion-capture take's calibration frame (frame 0 in its skeleton's rest pose, as in
+//!   the CMU files) is not played: the character starts in the take's first real pose. The
+//!   report measures the source without it too.
 
 use std::sync::Arc;
 
@@ -329,7 +336,10 @@ impl Character {
         if let HumanoidStatus::NotHumanoid { reason } = status {
             return Err(CharacterError::SourceNotHumanoid { clip: clip.name.clone(), reason });
         }
-        let src = if is_canonical(&clip.skeleton) { clip.clone() } else { to_canonical(clip, clip_map, clip.fps) };
+        let mut src = if is_canonical(&clip.skeleton) { clip.clone() } else { to_canonical(clip, clip_map, clip.fps) };
+        if starts_on_calibration_frame(clip, clip_map) {
+            hold_first_pose(&mut src);
+        }
         // The canonical rest is the T-pose with identity rest rotations: a source bone's world
         // rotation is already its rotation away from the reference.
         let canon = &src.skeleton;
@@ -565,6 +575,45 @@ impl Character {
     }
 }
 
+/// A take's first frame within this angle of its skeleton's rest pose on every humanoid bone
+/// is the capture's calibration frame, not motion (see [`starts_on_calibration_frame`]).
+/// Capture noise on a calibration pose is a few degrees (the CMU takes: under 8°); a danced
+/// pose is far from any rest pose (every built-in move's first frame: over 60°).
+const CALIBRATION_FRAME_DEG: f32 = 15.0;
+
+/// Whether `clip` opens on its skeleton's rest pose, every humanoid bone within
+/// [`CALIBRATION_FRAME_DEG`] of it: the calibration frame a motion-capture take carries
+/// before the take (the CMU BVH files: a T-pose facing the capture volume's axis, the dancer's
+/// real first pose — turned a quarter or half turn from it — on frame 1). It is not motion: a
+/// character played from it would swing its whole body round in one frame, and a rig with
+/// wider hips than the source's (RobotExpressive) swings its feet a metre where the source's
+/// move half that. A clip easing out of its rest pose loses nothing by starting on its
+/// second frame's pose.
+fn starts_on_calibration_frame(clip: &Clip, map: &HumanoidMap) -> bool {
+    if clip.frame_count() < 2 {
+        return false;
+    }
+    let first = clip.frame_rotations(0);
+    let mut bones = Canon::ALL.into_iter().filter_map(|c| map.get(c)).peekable();
+    bones.peek().is_some() && bones.all(|j| first[j].angle_between(clip.skeleton.joints[j].rest_rotation) < CALIBRATION_FRAME_DEG.to_radians())
+}
+
+/// Frame 0 of `clip` set to frame 1's pose (rotations and translations): the character stands
+/// in the take's first real pose from the start, and the frame count (the song clock's
+/// frames) is kept.
+fn hold_first_pose(clip: &mut Clip) {
+    let n = clip.skeleton.len();
+    if clip.frame_count() < 2 {
+        return;
+    }
+    clip.rotations.copy_within(n..2 * n, 0);
+    for t in clip.translations.iter_mut() {
+        if t.values.len() > 1 {
+            t.values[0] = t.values[1];
+        }
+    }
+}
+
 /// Choices of [`Character::retarget_options`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RetargetOptions {
@@ -717,6 +766,7 @@ fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3
                     continue;
                 };
                 let lead = if c == Contact::Toe { toe_from_ankle(k, f) } else { Vec3::ZERO };
+                let lands = point[k].is_none();
                 let p = match point[k] {
                     Some((c0, p)) if c0 == c => p,
                     // Lands, or changes point: where the ankle was on the previous frame (its
@@ -726,6 +776,38 @@ fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3
                 point[k] = Some((c, p));
                 let ankle = p - lead;
                 let target = Vec3::new(ankle.x, t.src_ankle[f].y + t.y_offset, ankle.z);
+                // Landing again within a release ease: the ease kept the height it was held at
+                // while the source's foot went up or down (faster than the ease), and the new
+                // hold sits at the source's height. Spread that step in height over the eased
+                // frames, so the foot does not snap to it in one.
+                if lands {
+                    if let Some((_, end)) = last[k].filter(|&(_, end)| end + 1 < f && f - end <= w + 1) {
+                        if let Some(prev) = targets[k][f - 1] {
+                            let step = target.y - prev.y;
+                            for g in end + 1..f {
+                                if let Some(eased) = targets[k][g].as_mut() {
+                                    eased.y += step * (g - end) as f32 / (f - end) as f32;
+                                }
+                            }
+                        }
+                    } else if f > 0 && targets[k][f - 1].is_none() {
+                        // Landing from the free path: a rig that lifts its foot higher than
+                        // the source (a longer foot, straightened legs) comes down to the
+                        // source's height over the frames before, on its (shifted) free path,
+                        // not in one.
+                        // Only frames left free (not a release ease's, which keep theirs).
+                        let mut start = f;
+                        while start > f.saturating_sub(w + 1) && targets[k][start - 1].is_none() {
+                            start -= 1;
+                        }
+                        let step = target.y - t.free_ankle[f - 1].y;
+                        for g in start..f {
+                            let at = body.as_ref().map_or(shift[g], |b| b[g]);
+                            let s = (g + 1 - start) as f32 / (f - start + 1) as f32;
+                            targets[k][g] = Some(t.free_ankle[g] + at + Vec3::Y * (step * s));
+                        }
+                    }
+                }
                 targets[k][f] = Some(target);
                 last[k] = Some((target, f));
                 sum += ankle - flat(t.free_ankle[f]);
@@ -766,9 +848,22 @@ fn pelvis_drop(legs: &[Leg], hips: &[Vec<Vec3>], targets: &[Vec<Option<Vec3>>], 
     (0..frames).map(|f| held[window(f)].iter().sum::<f32>() / window(f).len() as f32).collect()
 }
 
-/// Compares a retargeted clip with its canonical source (same frame count and rate).
+/// The source as [`report`] measures it: on the canonical skeleton, without a take's
+/// calibration frame (frame 0 given frame 1's pose). The calibration frame is not motion, for
+/// the source as for the character: its swing onto the first real pose would count as the
+/// source's largest foot move and as skate, and loosen both bounds.
+pub fn measured_source(source: &Clip, source_map: &HumanoidMap) -> Clip {
+    let mut src = if is_canonical(&source.skeleton) { source.clone() } else { to_canonical(source, source_map, source.fps) };
+    if starts_on_calibration_frame(source, source_map) {
+        hold_first_pose(&mut src);
+    }
+    src
+}
+
+/// Compares a retargeted clip with its canonical source (same frame count and rate), both
+/// without a take's calibration frame ([`starts_on_calibration_frame`]).
 pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, out: &Clip) -> RetargetReport {
-    let src = if is_canonical(&source.skeleton) { source.clone() } else { to_canonical(source, source_map, source.fps) };
+    let src = measured_source(source, source_map);
     let frames = src.frame_count().min(out.frame_count());
     let canon = canonical_skeleton();
     let canon_rest = canon.rest_positions();
@@ -875,8 +970,65 @@ mod tests {
         }
     }
 
+    #[test]
+    fn a_calibration_first_frame_is_not_played() {
+        // The demo with a capture's calibration frame put before it: the rest pose (every
+        // rotation the rest's), facing the other way from the dance's first pose.
+        let demo = demo_clip();
+        let n = demo.skeleton.len();
+        let map = HumanoidMap::from_skeleton(&demo.skeleton);
+        let mut take = demo.clone();
+        take.rotations.splice(0..0, demo.skeleton.joints.iter().map(|j| j.rest_rotation));
+        for t in take.translations.iter_mut() {
+            let first = t.values[0];
+            t.values.insert(0, first + Vec3::X * 0.3);
+        }
+        take.validate().unwrap();
+        assert!(starts_on_calibration_frame(&take, &map));
+        assert!(!starts_on_calibration_frame(&demo, &map), "a danced first pose is motion");
+        let sk = demo.skeleton.clone();
+        let ch = Character::build("body", sk.clone(), builtin_body(&sk), map.clone());
+        for hold_feet in [false, true] {
+            let out = ch.retarget_options(&take, &map, &RetargetOptions { hold_feet, ..Default::default() }).unwrap();
+            assert_eq!(out.frame_count(), take.frame_count());
+            assert_eq!(&out.rotations[..n], &out.rotations[n..2 * n], "frame 0 stands in frame 1's pose");
+            let (a, b) = (out.world_positions(0), out.world_positions(1));
+            for (x, y) in a.iter().zip(&b) {
+                assert!((*x - *y).length() < 1e-4, "hold_feet {hold_feet}: {x} vs {y}");
+            }
+        }
+        // The dance itself is played from its first frame.
+        let out = ch.retarget_options(&demo, &map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
+        assert!((out.world_positions(0)[0] - demo.world_positions(0)[0]).length() < 1e-4);
+    }
+
     fn tracks(src_ankle: Vec<Vec3>, src_toe: Vec<Vec3>, free_ankle: Vec<Vec3>, free_toe: Vec<Vec3>) -> FootTracks {
         FootTracks { src_ankle, src_toe, free_ankle, free_toe, y_offset: 0.02 }
+    }
+
+    #[test]
+    fn a_foot_lifted_higher_than_the_sources_lands_over_several_frames() {
+        // The source's left ankle comes down at frame 20 and stays planted; the character's
+        // free left ankle (a rig lifting its foot higher) is 35 cm above where the hold puts it.
+        // The right foot stays in the air.
+        let fps = 30.0;
+        let src_l: Vec<Vec3> = (0..40).map(|f| Vec3::new(0.2, if f < 20 { 0.3 } else { 0.08 }, 0.0)).collect();
+        let src_r: Vec<Vec3> = (0..40).map(|_| Vec3::new(-0.2, 0.3, 0.0)).collect();
+        let free_l: Vec<Vec3> = (0..40).map(|_| Vec3::new(0.5, 0.45, 0.0)).collect();
+        let free_r: Vec<Vec3> = (0..40).map(|_| Vec3::new(-0.5, 0.45, 0.0)).collect();
+        let feet = [tracks(src_l, Vec::new(), free_l.clone(), Vec::new()), tracks(src_r, Vec::new(), free_r, Vec::new())];
+        let (targets, shift) = hold_plan(&feet, fps);
+        // Held from frame 20 at the source's height on the character's ground.
+        assert!((targets[0][20].expect("held").y - 0.10).abs() < 1e-5, "{:?}", targets[0][20]);
+        // Where the foot goes: its target, or its free path moved by the body.
+        let at = |f: usize| targets[0][f].unwrap_or(free_l[f] + shift[f]);
+        let steps: Vec<f32> = (1..40).map(|f| (at(f) - at(f - 1)).length()).collect();
+        let worst = steps.iter().copied().fold(0.0, f32::max);
+        assert!(worst < 0.1, "one-frame moves {steps:?}");
+        // Coming down takes the frames just before the landing, on the free path; well before,
+        // the foot is left free.
+        assert!(targets[0][19].is_some_and(|t| t.y < 0.45 && t.y > 0.10));
+        assert!(targets[0][..10].iter().all(Option::is_none));
     }
 
     #[test]
