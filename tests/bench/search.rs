@@ -14,7 +14,7 @@ use std::time::Instant;
 use common::Rng;
 use odori_core::normalize::Origin;
 use odori_core::search::{
-    joined_bound, no_progress, search, search_bounded, search_plain, search_probe, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS,
+    joined_bound, no_progress, search, search_bounded_cached, search_plain, search_probe_cached, search_threads, SearchCache, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS,
 };
 
 const LIBRARY_FRAMES: usize = 216_000;
@@ -189,6 +189,7 @@ fn main() {
         let mut alone_busiest = Vec::new();
         let mut split_same = true;
         let mut bound = f32::NAN;
+        let mut cache_bytes = 0usize;
         for _ in 0..3 {
             let c = thread_cpu_secs();
             let whole = search(&clips_hour, query, params, &mut no_progress()).expect("fast search over the clips");
@@ -210,18 +211,21 @@ fn main() {
             alone_busiest.push(alone.iter().copied().fold(0.0, f64::max));
             let mut probe_cpu = Vec::new();
             let mut lists = Vec::new();
-            for p in &parts {
+            // Each part's worker keeps what its probe builds for its bounded search (a fresh
+            // cache per repetition: nothing carries over from the last one).
+            let mut caches: Vec<SearchCache> = parts.iter().map(|_| SearchCache::default()).collect();
+            for (p, cache) in parts.iter().zip(&mut caches) {
                 let c = thread_cpu_secs();
-                lists.push(search_probe(&p.0, query, params).expect("probe").distances);
+                lists.push(search_probe_cached(&p.0, query, params, cache).expect("probe").distances);
                 probe_cpu.push(thread_cpu_secs() - c);
             }
             let refs: Vec<&[f32]> = lists.iter().map(|l| l.as_slice()).collect();
             bound = joined_bound(&refs, params.max_results);
             let mut part_cpu = Vec::new();
             let mut merged = Vec::new();
-            for p in &parts {
+            for (p, cache) in parts.iter().zip(&mut caches) {
                 let c = thread_cpu_secs();
-                let r = search_bounded(&p.0, query, params, bound, &mut no_progress()).expect("bounded search");
+                let r = search_bounded_cached(&p.0, query, params, bound, cache, &mut no_progress()).expect("bounded search");
                 part_cpu.push(thread_cpu_secs() - c);
                 merged.extend(r.matches.into_iter().map(|mut m| {
                     m.clip_index = p.1[m.clip_index];
@@ -235,15 +239,17 @@ fn main() {
             split_busiest.push(per.iter().copied().fold(0.0, f64::max));
             split_sum.push(per.iter().sum::<f64>());
             probe_max.push(probe_cpu.iter().copied().fold(0.0, f64::max));
+            cache_bytes = caches.iter().map(SearchCache::heap_bytes).max().unwrap_or(0);
         }
         println!(
-            "{name}, the hour as {} clips in 2 parts (the app's 2 workers): one thread over the clips CPU {:.1} ms; each part alone (own probe, the control) busiest part's CPU {:.1} ms; two rounds: busiest part's CPU {:.1} ms (its probe {:.1} ms), both parts {:.1} ms, medians of 3; joined bound {bound:.4}; merged = one thread's: {split_same}",
+            "{name}, the hour as {} clips in 2 parts (the app's 2 workers): one thread over the clips CPU {:.1} ms; each part alone (own probe, the control) busiest part's CPU {:.1} ms; two rounds: busiest part's CPU {:.1} ms (its probe {:.1} ms), both parts {:.1} ms, medians of 3; kept from probe to search {:.2} MB (largest part); joined bound {bound:.4}; merged = one thread's: {split_same}",
             clips_hour.clips.len(),
             median(&mut one_clips) * 1e3,
             median(&mut alone_busiest) * 1e3,
             median(&mut split_busiest) * 1e3,
             median(&mut probe_max) * 1e3,
             median(&mut split_sum) * 1e3,
+            cache_bytes as f64 / 1e6,
         );
         assert!(split_same, "{name}: the split search differs from one thread's");
         timings.push(format!(

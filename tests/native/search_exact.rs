@@ -9,7 +9,7 @@ use common::{reference_search, Rng};
 use odori_core::humanoid::CANON_COUNT;
 use odori_core::normalize::Origin;
 use odori_core::search::{
-    joined_bound, no_progress, search, search_bounded, search_plain, search_probe, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures,
+    joined_bound, no_progress, search, search_bounded_cached, search_plain, search_probe_cached, search_threads, SearchCache, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures,
     SearchError, SearchOutcome, SearchParams, FRAME_FLOATS,
 };
 
@@ -89,6 +89,11 @@ fn assert_same(what: &str, fast: &SearchOutcome, reference: &[common::RefMatch],
 /// every part from it, and the answers are merged as `mergeOutcomes` does — best first by
 /// distance, then clip in library order, then end — keeping the first `maxResults`. Returns
 /// the merged answer (clip indexes of the whole library) and the bound round 2 started from.
+///
+/// Each part keeps what its probe builds for its round 2 (`SearchCache`, as the app's workers
+/// do), and every cache first serves a decoy query (the query's features halved and shifted,
+/// same length and parameters): the real probe must replace what the decoy left, so a cache
+/// that kept another query's tables would show up as a result differing from the reference.
 fn split_search(index: &FeatureIndex, parts: usize, query: &ClipFeatures, params: &SearchParams) -> (SearchOutcome, f32) {
     let mut owned: Vec<(FeatureIndex, Vec<usize>, usize)> = (0..parts).map(|_| (FeatureIndex::new(), Vec::new(), 0)).collect();
     for (ci, c) in index.clips.iter().enumerate() {
@@ -102,17 +107,23 @@ fn split_search(index: &FeatureIndex, parts: usize, query: &ClipFeatures, params
     fn usable<T>(r: &Result<T, SearchError>) -> bool {
         !matches!(r, Err(SearchError::QueryTooLong { .. }))
     }
+    let decoy = features("decoy", query.features(Origin::Hips).data.iter().map(|v| v * 0.5 + 0.1).collect());
+    let mut caches: Vec<SearchCache> = owned.iter().map(|_| SearchCache::default()).collect();
+    for (p, cache) in owned.iter().zip(&mut caches) {
+        let _ = search_probe_cached(&p.0, &decoy, params, cache);
+    }
     let probes: Vec<Vec<f32>> = owned
         .iter()
-        .map(|p| search_probe(&p.0, query, params))
+        .zip(&mut caches)
+        .map(|(p, cache)| search_probe_cached(&p.0, query, params, cache))
         .filter(|r| usable(r))
         .map(|r| r.expect("probe").distances)
         .collect();
     let lists: Vec<&[f32]> = probes.iter().map(|p| p.as_slice()).collect();
     let bound = joined_bound(&lists, params.max_results);
     let mut matches = Vec::new();
-    for p in &owned {
-        let r = search_bounded(&p.0, query, params, bound, &mut no_progress());
+    for (p, cache) in owned.iter().zip(&mut caches) {
+        let r = search_bounded_cached(&p.0, query, params, bound, cache, &mut no_progress());
         if !usable(&r) {
             continue;
         }

@@ -3,6 +3,7 @@
 //! Worker (www/search-worker.js): the main thread sends each clip's canonical positions
 //! (`Library.searchFeatures`) and the worker searches off the UI thread with progress.
 
+use std::cell::RefCell;
 use std::ops::ControlFlow;
 
 use js_sys::Float32Array;
@@ -129,6 +130,9 @@ pub struct SearchIndex {
     ids: Vec<u32>,
     /// Content key per clip (see `Library.searchKey`), parallel to `ids`.
     keys: Vec<u128>,
+    /// What `probeFeatures` built from its query, for the `searchFeaturesBounded` that follows
+    /// with the same query (the app's two rounds): cleared whenever clips change.
+    cache: RefCell<search::SearchCache>,
 }
 
 impl Default for SearchIndex {
@@ -141,7 +145,7 @@ impl Default for SearchIndex {
 impl SearchIndex {
     #[wasm_bindgen(constructor)]
     pub fn new() -> SearchIndex {
-        SearchIndex { index: FeatureIndex::new(), ids: Vec::new(), keys: Vec::new() }
+        SearchIndex { index: FeatureIndex::new(), ids: Vec::new(), keys: Vec::new(), cache: RefCell::default() }
     }
 
     /// The index in its stored binary form (versioned, checksummed; see `fromBytes`): every
@@ -158,7 +162,7 @@ impl SearchIndex {
     #[wasm_bindgen(js_name = fromBytes)]
     pub fn from_bytes(bytes: &[u8]) -> Result<SearchIndex, OdoriError> {
         let s = search::decode_index(bytes).map_err(stored_err)?;
-        Ok(SearchIndex { ids: s.clips.iter().map(|c| c.id).collect(), keys: s.clips.iter().map(|c| c.key).collect(), index: s.index })
+        Ok(SearchIndex { ids: s.clips.iter().map(|c| c.id).collect(), keys: s.clips.iter().map(|c| c.key).collect(), index: s.index, cache: RefCell::default() })
     }
 
     /// Adds the clips of a stored index (`toBytes`) whose content key is in `keys`, under the
@@ -168,6 +172,7 @@ impl SearchIndex {
     /// `fromBytes`.
     #[wasm_bindgen(js_name = addBytes)]
     pub fn add_bytes(&mut self, bytes: &[u8], keys: Vec<String>, ids: Vec<u32>) -> Result<Vec<u32>, OdoriError> {
+        self.cache.get_mut().clear();
         if keys.len() != ids.len() {
             return Err(OdoriError::new("bad-argument", format!("{} keys and {} ids: give one id per key", keys.len(), ids.len())));
         }
@@ -234,6 +239,7 @@ impl SearchIndex {
     /// the positions themselves.
     #[wasm_bindgen(js_name = addFeatures)]
     pub fn add_features(&mut self, clip_id: u32, name: String, positions: Float32Array, key: Option<String>) -> Result<usize, OdoriError> {
+        self.cache.get_mut().clear();
         let key = key.as_deref().map(parse_key).transpose()?;
         let flat = positions.to_vec();
         if flat.is_empty() || flat.len() % (CANON_COUNT * 3) != 0 {
@@ -251,6 +257,7 @@ impl SearchIndex {
     /// Adds a clip straight from a library in the same thread.
     #[wasm_bindgen(js_name = addFromLibrary)]
     pub fn add_from_library(&mut self, library: &Library, clip_id: u32) -> Result<usize, OdoriError> {
+        self.cache.get_mut().clear();
         let f = library.search_features(clip_id)?;
         let name = library.entry(clip_id)?.clip.name.clone();
         let key = library.search_key(clip_id)?;
@@ -259,6 +266,7 @@ impl SearchIndex {
 
     /// Drops a clip; false when it was not indexed.
     pub fn remove(&mut self, clip_id: u32) -> bool {
+        self.cache.get_mut().clear();
         match self.ids.iter().position(|&i| i == clip_id) {
             Some(k) => {
                 self.ids.remove(k);
@@ -353,7 +361,7 @@ impl SearchIndex {
     pub fn probe_features(&self, features: Float32Array, #[wasm_bindgen(unchecked_param_type = "SearchParamsJs | undefined")] params: JsValue) -> Result<JsValue, OdoriError> {
         let query = feature_query(features)?;
         let sp = JsParams::decode(params)?;
-        let probe = search::search_probe(&self.index, &query, &sp).map_err(search_err)?;
+        let probe = self.with_cache(|cache| search::search_probe_cached(&self.index, &query, &sp, cache)).map_err(search_err)?;
         Ok(to_js(&probe))
     }
 
@@ -392,6 +400,15 @@ impl SearchIndex {
         self.index.query_range(k, q.start_frame, q.end_frame).map_err(search_err)
     }
 
+    /// `f` with the kept cache, or with a fresh one if it is in use (a progress callback that
+    /// calls back into this index: the app's worker never does, but a panic must not reach JS).
+    fn with_cache<T>(&self, f: impl FnOnce(&mut search::SearchCache) -> T) -> T {
+        match self.cache.try_borrow_mut() {
+            Ok(mut kept) => f(&mut kept),
+            Err(_) => f(&mut search::SearchCache::default()),
+        }
+    }
+
     fn run(&self, query: &ClipFeatures, params: JsValue, progress: Option<js_sys::Function>, method: Method) -> Result<JsValue, OdoriError> {
         let sp = JsParams::decode(params)?;
         // A callback that throws stops the search, and the caller gets an error saying so (with
@@ -418,7 +435,7 @@ impl SearchIndex {
         let out = match method {
             Method::Fast => search::search(&self.index, query, &sp, &mut cb),
             Method::Plain => search::search_plain(&self.index, query, &sp, &mut cb),
-            Method::Bounded(bound) => search::search_bounded(&self.index, query, &sp, bound, &mut cb),
+            Method::Bounded(bound) => self.with_cache(|cache| search::search_bounded_cached(&self.index, query, &sp, bound, cache, &mut cb)),
         };
         if let Some(message) = thrown {
             return Err(OdoriError::new("callback", format!("the progress callback threw ({message}); the search was stopped")));

@@ -42,12 +42,85 @@ pub(crate) struct Coupled {
     w: usize,
     table: Vec<f32>,
     lrow: Vec<f32>,
-    /// The query's boxes (filled on the first build: one `Coupled` serves one query).
-    qboxes: Vec<f32>,
     /// Rounding slack scale `2τ(I + maxSpan)` of the table's τ.
     scale: f32,
+}
+
+/// Most box distances a [`FineDists`] keeps (16 MB of f32): an hour of motion at 60 fps and a
+/// 120-frame query needs 27,000 chunks × 60 query boxes = 1.6 M; past the cap the distances of
+/// further clips are computed per table, as before the cache.
+const KEEP_MAX_FLOATS: usize = 4 << 20;
+
+/// The box distances `L` of the coupled tables (before τ is subtracted, already shrunk), per
+/// clip, [`FINE`]-frame chunk and query box, computed on first use and kept for the query.
+///
+/// Why one set serves every table of a query: a table at τ reads `L − τ`, and `L` depends on
+/// the query, the weights, the origin and the clip, never on τ or on the stretch — so tables
+/// built at a later, lower τ (the next `SPAN` of a clip, the exact pass over the marked ends
+/// after the one-value pass, the bounded search after the probe on the same worker) and
+/// overlapping tables (each reaches `2·(I − 1)` columns past its valid ones) reuse the same
+/// numbers, bit for bit. The table's DP itself is redone at each τ: a table built at the
+/// lower τ is the tighter one, and it costs a few additions per cell where a box distance
+/// costs about a frame distance.
+#[derive(Default)]
+pub(crate) struct FineDists {
+    /// The query's boxes ([`QFINE`] frames each).
+    qboxes: Vec<f32>,
+    /// Per clip: `chunks × query boxes` distances (empty until first used, or when past the cap).
+    clips: Vec<Vec<f32>>,
+    /// Per clip: which chunks' distances are in `clips`.
+    done: Vec<Vec<bool>>,
+    kept: usize,
+    scratch: Vec<f32>,
     /// Box distances computed (work counter).
     pub boxes: u64,
+}
+
+impl FineDists {
+    /// Distances for `clips` clips of the query of `prep`.
+    pub(crate) fn new(prep: &Prepared, clips: usize) -> FineDists {
+        let mut qboxes = Vec::new();
+        for ch in prep.query_lanes.chunks(QFINE * LANE_FLOATS) {
+            push_box(ch, &mut qboxes);
+        }
+        FineDists { qboxes, clips: vec![Vec::new(); clips], done: vec![Vec::new(); clips], ..FineDists::default() }
+    }
+
+    /// Heap bytes held.
+    pub(crate) fn heap_bytes(&self) -> usize {
+        4 * (self.qboxes.capacity() + self.kept + self.scratch.capacity()) + self.done.iter().map(Vec::capacity).sum::<usize>()
+    }
+
+    /// `L` between every query box and chunk `t` of clip `ci` (`boxes`: the clip's
+    /// [`FINE`]-frame boxes).
+    fn chunk(&mut self, prep: &Prepared, ci: usize, boxes: &[f32], t: usize) -> &[f32] {
+        let nqf = self.qboxes.len() / BOX_FLOATS;
+        let chunks = boxes.len() / BOX_FLOATS;
+        if self.clips[ci].is_empty() && self.kept + chunks * nqf <= KEEP_MAX_FLOATS {
+            self.clips[ci] = vec![0.0; chunks * nqf];
+            self.done[ci] = vec![false; chunks];
+            self.kept += chunks * nqf;
+        }
+        let keep = !self.clips[ci].is_empty();
+        if keep && self.done[ci][t] {
+            return &self.clips[ci][t * nqf..(t + 1) * nqf];
+        }
+        let bx = &boxes[t * BOX_FLOATS..(t + 1) * BOX_FLOATS];
+        let out = if keep { &mut self.clips[ci][t * nqf..(t + 1) * nqf] } else {
+            self.scratch.resize(nqf, 0.0);
+            &mut self.scratch[..]
+        };
+        for (o, qb) in out.iter_mut().zip(self.qboxes.chunks_exact(BOX_FLOATS)) {
+            *o = box_box(qb, bx, &prep.groups) * (1.0 - 1e-5);
+        }
+        self.boxes += nqf as u64;
+        if keep {
+            self.done[ci][t] = true;
+            &self.clips[ci][t * nqf..(t + 1) * nqf]
+        } else {
+            &self.scratch[..nqf]
+        }
+    }
 }
 
 impl Coupled {
@@ -57,7 +130,8 @@ impl Coupled {
     /// completions out keeps the bound valid). A column's box is that of the aligned
     /// [`FINE`]-frame chunk holding it, whatever `b0` is: a box holding more frames than the
     /// columns a table needs only lowers `L`, so the bound stays a lower bound.
-    pub(crate) fn build(&mut self, prep: &Prepared, boxes: &[f32], b0: usize, to: usize, tau: f32) {
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn build(&mut self, prep: &Prepared, dists: &mut FineDists, ci: usize, boxes: &[f32], b0: usize, to: usize, tau: f32) {
         let rows = prep.query_frames;
         let hi = to.min(b0 + SPAN + 2 * (rows - 1));
         let w = hi - b0;
@@ -68,22 +142,14 @@ impl Coupled {
         // L − τ, row-major.
         self.lrow.clear();
         self.lrow.resize(rows * w, 0.0);
-        // The query's boxes (`QFINE` frames each), made once per query.
-        if self.qboxes.is_empty() {
-            for ch in prep.query_lanes.chunks(QFINE * LANE_FLOATS) {
-                push_box(ch, &mut self.qboxes);
-            }
-        }
         for t in (b0 / FINE)..hi.div_ceil(FINE) {
             let (c0, c1) = ((t * FINE).max(b0), ((t + 1) * FINE).min(hi));
-            let bx = &boxes[t * BOX_FLOATS..(t + 1) * BOX_FLOATS];
-            for (q, qb) in self.qboxes.chunks_exact(BOX_FLOATS).enumerate() {
-                let e = box_box(qb, bx, &prep.groups) * (1.0 - 1e-5) - tau;
+            for (q, l) in dists.chunk(prep, ci, boxes, t).iter().enumerate() {
+                let e = l - tau;
                 for i in q * QFINE..((q + 1) * QFINE).min(rows) {
                     self.lrow[i * w + (c0 - b0)..i * w + (c1 - b0)].fill(e);
                 }
             }
-            self.boxes += self.qboxes.len() as u64 / BOX_FLOATS as u64;
         }
         // The backward DP: B(I − 1, ·) = 0 (a path may end at any column); columns past `hi`
         // are out of reach of the valid columns' paths (or past the clip), so +∞ there.
@@ -191,7 +257,8 @@ mod tests {
             }
         }
         let mut c = Coupled::default();
-        c.build(&prep, &crate::search::lanes::chunk_boxes(&t, FINE), 0, cols, tau);
+        let mut dists = FineDists::new(&prep, 1);
+        c.build(&prep, &mut dists, 0, &crate::search::lanes::chunk_boxes(&t, FINE), 0, cols, tau);
         let mut finite = 0;
         for i in 0..rows {
             for j in 0..cols {

@@ -59,7 +59,7 @@
 
 use std::ops::ControlFlow;
 
-use super::coupled::Coupled;
+use super::coupled::{Coupled, FineDists};
 use super::dp::{Engine, Prune};
 use super::filter::{Bound, Filter, Mark};
 use super::features::FeatureIndex;
@@ -81,18 +81,38 @@ pub(crate) fn run(
     prep: &Prepared,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<SearchOutcome, SearchError> {
-    let bounds = Bounds::new(index, prep);
-    let (seed, probed) = seed(index, prep, &bounds);
-    run_seeded(index, prep, &bounds, seed, probed, progress)
+    let mut built = Prebuilt::new(index, prep);
+    let (seed, probed) = seed(index, prep, &mut built);
+    run_seeded(index, prep, &mut built, seed, probed, progress)
+}
+
+/// What a search builds from the query and the library before it prunes: the row and column
+/// bounds' tables and the coupled tables' box distances (filled as tables are built). Valid
+/// for one query, weights and origin on one index; [`super::SearchCache`] keeps it from a
+/// part's probe for the bounded search that follows on the same worker.
+pub(crate) struct Prebuilt {
+    bounds: Bounds,
+    fine: FineDists,
+}
+
+impl Prebuilt {
+    pub(crate) fn new(index: &FeatureIndex, prep: &Prepared) -> Prebuilt {
+        Prebuilt { bounds: Bounds::new(index, prep), fine: FineDists::new(prep, index.clips.len()) }
+    }
+
+    /// Heap bytes held.
+    pub(crate) fn heap_bytes(&self) -> usize {
+        4 * self.bounds.clips.iter().map(|c| c.dist.capacity() + c.lbc.capacity()).sum::<usize>() + self.fine.heap_bytes()
+    }
 }
 
 /// The probe's bound for [`run`]: the k-th member of its far set, or +∞ (no probe for many
 /// results, or fewer than k far ends found).
-fn seed(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
+fn seed(index: &FeatureIndex, prep: &Prepared, built: &mut Prebuilt) -> (f32, u64) {
     if prep.max_results > PROBE_MAX_RESULTS {
         return (f32::INFINITY, 0);
     }
-    let (set, probed) = probe(index, prep, bounds, 2);
+    let (set, probed) = probe(index, prep, &built.bounds, &mut built.fine, 2);
     (if set.len() == prep.max_results { set[prep.max_results - 1] } else { f32::INFINITY }, probed)
 }
 
@@ -101,7 +121,7 @@ fn seed(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds) -> (f32, u64) {
 fn run_seeded(
     index: &FeatureIndex,
     prep: &Prepared,
-    bounds: &Bounds,
+    built: &mut Prebuilt,
     seed: f32,
     probed: u64,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
@@ -109,7 +129,7 @@ fn run_seeded(
     let all: Vec<(usize, usize, usize)> =
         index.clips.iter().enumerate().map(|(ci, c)| (ci, 0, c.frame_count())).filter(|s| s.2 >= prep.min_span).collect();
     let shared = SharedTau::new(prep.threshold.min(seed));
-    let (mut pool, mut stats) = run_part(index, prep, bounds, &all, seed, &shared, progress)?;
+    let (mut pool, mut stats) = run_part(index, prep, &built.bounds, &mut built.fine, &all, seed, &shared, progress)?;
     stats.distances_computed += probed;
     let within = pool.len() as u64;
     let selected = select_matches(index, prep, &mut pool);
@@ -120,7 +140,7 @@ fn run_seeded(
 /// app's workers, see [`super::search_probe`]): this part's probe far set, best first, and the
 /// work done (none for more than [`PROBE_MAX_RESULTS`] results: the search then starts
 /// unbounded, as [`run`] does).
-pub(crate) fn probe_part(index: &FeatureIndex, prep: &Prepared) -> (Vec<f32>, u64) {
+pub(crate) fn probe_part(index: &FeatureIndex, prep: &Prepared, built: &mut Prebuilt) -> (Vec<f32>, u64) {
     if prep.max_results > PROBE_MAX_RESULTS {
         return (Vec::new(), 0);
     }
@@ -130,18 +150,18 @@ pub(crate) fn probe_part(index: &FeatureIndex, prep: &Prepared) -> (Vec<f32>, u6
     // round took about half of a part's probe time; without it the joined bound rose by 0 %
     // (source in the library) and 3.5 % (novel query) for top 10, and the busiest part's CPU
     // time fell from 60.0 to 47.9 ms and from 74.8 to 73.3 ms.
-    probe(index, prep, &Bounds::new(index, prep), 1)
+    probe(index, prep, &built.bounds, &mut built.fine, 1)
 }
 
 /// Round 2 (see [`super::search_bounded`]): [`run`] with the probe replaced by `bound`.
 pub(crate) fn run_bounded(
     index: &FeatureIndex,
     prep: &Prepared,
+    built: &mut Prebuilt,
     bound: f32,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<SearchOutcome, SearchError> {
-    let bounds = Bounds::new(index, prep);
-    run_seeded(index, prep, &bounds, bound, 0, progress)
+    run_seeded(index, prep, built, bound, 0, progress)
 }
 
 /// [`run`] on `threads` threads: the library's ends are cut into `threads` runs of about equal
@@ -160,8 +180,9 @@ pub(crate) fn run_threads(
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<SearchOutcome, SearchError> {
     use std::sync::atomic::{AtomicBool, Ordering};
-    let bounds = Bounds::new(index, prep);
-    let (seed, probed) = seed(index, prep, &bounds);
+    let mut built = Prebuilt::new(index, prep);
+    let (seed, probed) = seed(index, prep, &mut built);
+    let (bounds, fine) = (&built.bounds, &mut built.fine);
     let parts = split(index, prep, threads.max(1));
     let shared = SharedTau::new(prep.threshold.min(seed));
     let cancel = AtomicBool::new(false);
@@ -174,10 +195,11 @@ pub(crate) fn run_threads(
         let handles: Vec<_> = rest
             .iter()
             .map(|segments| {
-                let (bounds, shared, cancel) = (&bounds, &shared, &cancel);
+                let (shared, cancel) = (&shared, &cancel);
                 scope.spawn(move || {
                     let mut stop = |_: SearchProgress| if cancel.load(Ordering::Relaxed) { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
-                    run_part(index, prep, bounds, segments, seed, shared, &mut stop)
+                    // Each thread keeps its own box distances (filled where its tables are).
+                    run_part(index, prep, bounds, &mut FineDists::new(prep, index.clips.len()), segments, seed, shared, &mut stop)
                 })
             })
             .collect();
@@ -191,7 +213,7 @@ pub(crate) fn run_threads(
             }
             r
         };
-        let mut out = vec![run_part(index, prep, &bounds, first, seed, &shared, &mut mine)];
+        let mut out = vec![run_part(index, prep, bounds, fine, first, seed, &shared, &mut mine)];
         out.extend(handles.into_iter().map(|h| h.join().expect("search thread panicked")));
         out
     });
@@ -270,10 +292,12 @@ impl SharedTau {
 /// The exact search over `segments` (see [`split`]), τ starting at the lower of the threshold
 /// and `seed` and shared through `shared`: the ends of the segments whose least distance is
 /// within the final τ, with the work done.
+#[allow(clippy::too_many_arguments)]
 fn run_part(
     index: &FeatureIndex,
     prep: &Prepared,
     bounds: &Bounds,
+    fine: &mut FineDists,
     all: &[(usize, usize, usize)],
     seed: f32,
     shared: &SharedTau,
@@ -283,7 +307,7 @@ fn run_part(
     if tau0.is_finite() {
         // Two passes: the one-value filter finds the ends that can be within τ (and lowers τ),
         // then the exact front DP runs on those ends' windows only.
-        let (marks, tau, filtered) = filter_pass(index, prep, bounds, all, tau0, shared, progress)?;
+        let (marks, tau, filtered) = filter_pass(index, prep, bounds, fine, all, tau0, shared, progress)?;
         // Sums were formed with τ values up to τ0: their rounding scales with it.
         let margin = filter_margin(prep, tau0);
         let wmin = (prep.query_frames + prep.min_span) as f32;
@@ -302,11 +326,11 @@ fn run_part(
         }
         let total = index.total_frames();
         let mut pass2 = |p: SearchProgress| progress(SearchProgress { frames_done: total, frames_total: total, candidates: p.candidates });
-        let (pool, exact, _) = scan(index, prep, bounds, &segments, tau, false, true, shared, &mut pass2)?;
+        let (pool, exact, _) = scan(index, prep, bounds, fine, &segments, tau, false, true, shared, &mut pass2)?;
         let stats = SearchStats { distances_computed: filtered.distances_computed + exact.distances_computed, ..filtered };
         Ok((pool, stats))
     } else {
-        let (pool, stats, _) = scan(index, prep, bounds, all, seed, true, true, shared, progress)?;
+        let (pool, stats, _) = scan(index, prep, bounds, fine, all, seed, true, true, shared, progress)?;
         Ok((pool, stats))
     }
 }
@@ -342,10 +366,12 @@ fn block_bounds(cb: &ClipBounds, nq: usize, tau: f32, b0: usize, wend: usize, rq
 /// `tau0` and lowered after each block to the far-set bound of the real paths found.
 type FilterResult = (Vec<(usize, Mark)>, f32, SearchStats);
 
+#[allow(clippy::too_many_arguments)]
 fn filter_pass(
     index: &FeatureIndex,
     prep: &Prepared,
     bounds: &Bounds,
+    fine: &mut FineDists,
     segments: &[(usize, usize, usize)],
     tau0: f32,
     shared: &SharedTau,
@@ -366,6 +392,7 @@ fn filter_pass(
     let mut filter = Filter::new(rows);
     filter.busy = true;
     let mut coupled = Coupled::default();
+    let boxes0 = fine.boxes;
     for &(ci, from, to) in segments {
         let target = index.clips[ci].lanes(prep.origin);
         let cols = target.len() / LANE_FLOATS;
@@ -390,7 +417,7 @@ fn filter_pass(
             }
             block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
             if b0 >= table_to && filter.busy {
-                coupled.build(prep, index.clips[ci].fine_boxes(prep.origin), b0, to, tau);
+                coupled.build(prep, fine, ci, index.clips[ci].fine_boxes(prep.origin), b0, to, tau);
                 table_to = coupled.valid_to;
             }
             filter.busy = false;
@@ -425,7 +452,7 @@ fn filter_pass(
         done += to - from;
     }
     // A box distance costs about one frame distance: counted with them.
-    stats.distances_computed = filter.distances + coupled.boxes;
+    stats.distances_computed = filter.distances + (fine.boxes - boxes0);
     Ok((marks, tau, stats))
 }
 
@@ -529,7 +556,8 @@ impl Bounds {
 /// with `Σ w·(d − λ) ≤ 0` can do that, so the second round drops the others with the bounds of
 /// the search itself (row bounds and the coupled table, built at λ over the probed stretch) —
 /// pruning there can only lose paths, never make one up, so whatever is found stays real.
-fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds, rounds: usize) -> (Vec<f32>, u64) {
+fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds, fine: &mut FineDists, rounds: usize) -> (Vec<f32>, u64) {
+    let boxes0 = fine.boxes;
     let k = prep.max_results;
     let nq = bounds.nq;
     let mut rq = vec![0f32; nq];
@@ -585,7 +613,7 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds, rounds: usize) 
             } else {
                 // The stretch's paths stay inside `from..to`.
                 block_bounds(&bounds.clips[ci], nq, lambda, from, to, &mut rq, &mut rest, &mut fneg);
-                coupled.build(prep, index.clips[ci].fine_boxes(prep.origin), from, to, lambda);
+                coupled.build(prep, fine, ci, index.clips[ci].fine_boxes(prep.origin), from, to, lambda);
                 filter_margin(prep, lambda)
             };
             let cell = (round > 0).then_some(&coupled);
@@ -600,7 +628,7 @@ fn probe(index: &FeatureIndex, prep: &Prepared, bounds: &Bounds, rounds: usize) 
         }
         set = far_set(&mut pool, k, prep.max_span);
     }
-    (set, filter.distances + coupled.boxes)
+    (set, filter.distances + (fine.boxes - boxes0))
 }
 
 /// (ends with their least distance ≤ the final τ, work, final τ).
@@ -615,6 +643,7 @@ fn scan(
     index: &FeatureIndex,
     prep: &Prepared,
     bounds: &Bounds,
+    fine: &mut FineDists,
     segments: &[(usize, usize, usize)],
     seed: f32,
     lower: bool,
@@ -635,6 +664,7 @@ fn scan(
     let mut rest = vec![0f32; rows];
     let mut fneg: Vec<f32> = Vec::new();
     let mut coupled = Coupled::default();
+    let boxes0 = fine.boxes;
 
     for &(ci, from, to) in segments {
         let target = index.clips[ci].lanes(prep.origin);
@@ -657,7 +687,7 @@ fn scan(
                 // reach (an end is at most maxSpan − 1 columns after any column of its path).
                 block_bounds(cb, nq, tau, b0, wend, &mut rq, &mut rest, &mut fneg);
                 if b0 >= table_to {
-                    coupled.build(prep, index.clips[ci].fine_boxes(prep.origin), b0, to, tau);
+                    coupled.build(prep, fine, ci, index.clips[ci].fine_boxes(prep.origin), b0, to, tau);
                     table_to = coupled.valid_to;
                 }
             }
@@ -689,7 +719,7 @@ fn scan(
         done += to - from;
     }
     pool.retain(|c| c.score <= tau);
-    stats.distances_computed = eng.distances + coupled.boxes;
+    stats.distances_computed = eng.distances + (fine.boxes - boxes0);
     Ok((pool, stats, tau))
 }
 

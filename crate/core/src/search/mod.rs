@@ -254,9 +254,74 @@ pub fn search_threads(
 /// part: each part then prunes with the whole library's bound instead of its own (an idle part
 /// whose own best matches are poor would otherwise do most of the work of the search).
 pub fn search_probe(index: &FeatureIndex, query: &ClipFeatures, params: &SearchParams) -> Result<SearchProbe, SearchError> {
+    search_probe_cached(index, query, params, &mut SearchCache::default())
+}
+
+/// [`search_probe`] keeping what it builds from the query in `cache`, for the
+/// [`search_bounded_cached`] that follows with the same query on the same index (the web app's
+/// worker): the bound tables and the coupled bound's box distances are then not built again.
+/// Same results as [`search_probe`].
+pub fn search_probe_cached(index: &FeatureIndex, query: &ClipFeatures, params: &SearchParams, cache: &mut SearchCache) -> Result<SearchProbe, SearchError> {
     let prep = Prepared::new(index, query, params)?;
-    let (distances, work) = fast::probe_part(index, &prep);
+    let (distances, work) = fast::probe_part(index, &prep, cache.get(index, &prep));
     Ok(SearchProbe { distances, distances_computed: work })
+}
+
+/// What the fast search builds from one query before it prunes — the row and column bounds'
+/// tables (box distances between the query's 8-frame chunks and every clip's 16-frame chunks)
+/// and the coupled bound's box distances (2-frame query chunks against 8-frame clip chunks,
+/// filled where tables are built) — kept between calls by [`search_probe_cached`] and
+/// [`search_bounded_cached`].
+///
+/// Keyed by the query's features (bit for bit), the weights and the origin (all these numbers
+/// depend on, and nothing else: not the threshold, `maxResults` or any τ), and the index's clip
+/// and frame counts; another query replaces what is kept. It belongs to one index: call
+/// [`SearchCache::clear`] when clips are added or removed. Memory: the bound tables (about 0.9
+/// MB per hour of motion, 60 fps, 120-frame query) and at most 16 MB of box distances (an hour
+/// needs about 6.5 MB; past the cap they are computed per table).
+#[derive(Default)]
+pub struct SearchCache {
+    key: Option<CacheKey>,
+    built: Option<fast::Prebuilt>,
+}
+
+#[derive(PartialEq)]
+struct CacheKey {
+    query_bits: Vec<u32>,
+    group_bits: Vec<(usize, [u32; lanes::LANES])>,
+    origin: Origin,
+    clips: usize,
+    frames: usize,
+}
+
+impl SearchCache {
+    /// Drops what is kept.
+    pub fn clear(&mut self) {
+        *self = SearchCache::default();
+    }
+
+    /// Heap bytes held (0 when empty).
+    pub fn heap_bytes(&self) -> usize {
+        self.built.as_ref().map_or(0, fast::Prebuilt::heap_bytes) + self.key.as_ref().map_or(0, |k| 4 * k.query_bits.capacity())
+    }
+
+    /// The prebuilt tables for this query, built now unless kept from the last call with it.
+    fn get(&mut self, index: &FeatureIndex, prep: &Prepared) -> &mut fast::Prebuilt {
+        let key = CacheKey {
+            query_bits: prep.query_lanes.iter().map(|v| v.to_bits()).collect(),
+            group_bits: prep.groups.iter().map(|(g, w)| (*g, w.map(f32::to_bits))).collect(),
+            origin: prep.origin,
+            clips: index.clips.len(),
+            frames: index.total_frames(),
+        };
+        if self.key.as_ref() != Some(&key) || self.built.is_none() {
+            // Dropped before the new one is built: at most one query's tables are held.
+            self.built = None;
+            self.built = Some(fast::Prebuilt::new(index, prep));
+            self.key = Some(key);
+        }
+        self.built.as_mut().expect("built above")
+    }
 }
 
 /// What [`search_probe`] found in one part.
@@ -314,8 +379,24 @@ pub fn search_bounded(
     if bound.is_nan() || bound < 0.0 {
         return Err(SearchError::BadParam { name: "bound", value: bound, why: "must be a distance ≥ 0 (or +∞)" });
     }
+    search_bounded_cached(index, query, params, bound, &mut SearchCache::default(), progress)
+}
+
+/// [`search_bounded`] reusing (or keeping) in `cache` what [`search_probe_cached`] built for
+/// the same query on this index. Same results as [`search_bounded`].
+pub fn search_bounded_cached(
+    index: &FeatureIndex,
+    query: &ClipFeatures,
+    params: &SearchParams,
+    bound: f32,
+    cache: &mut SearchCache,
+    progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
+) -> Result<SearchOutcome, SearchError> {
+    if bound.is_nan() || bound < 0.0 {
+        return Err(SearchError::BadParam { name: "bound", value: bound, why: "must be a distance ≥ 0 (or +∞)" });
+    }
     let prep = Prepared::new(index, query, params)?;
-    fast::run_bounded(index, &prep, bound, progress)
+    fast::run_bounded(index, &prep, cache.get(index, &prep), bound, progress)
 }
 
 /// The plain subsequence DP (every cell of every clip computed): the reference the fast search
