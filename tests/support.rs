@@ -200,3 +200,23 @@ pub fn spearman(a: &[f32], b: &[f32]) -> f32 {
     }
     (ab / (aa * bb).sqrt().max(1e-300)) as f32
 }
+
+/// The simulated person of the preference test (spec §J): of one round's shown candidates
+/// (`scored`: each one's perceptual distance to the hidden target and its index, in the order
+/// shown, the target left out), the `likes` it likes — the closest (`guided`), or that many
+/// distinct ones at random (a 64-bit LCG on `seed`, so a run's draws are reproducible).
+pub fn simulated_likes(mut scored: Vec<(f32, usize)>, guided: bool, likes: usize, seed: &mut u64) -> Vec<usize> {
+    if guided {
+        scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+        return scored.iter().take(likes).map(|s| s.1).collect();
+    }
+    let mut pick = Vec::new();
+    while pick.len() < likes.min(scored.len()) {
+        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let c = scored[(*seed >> 33) as usize % scored.len()].1;
+        if !pick.contains(&c) {
+            pick.push(c);
+        }
+    }
+    pick
+}

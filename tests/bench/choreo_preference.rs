@@ -26,7 +26,7 @@ use odori_core::choreo::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm,
 use odori_core::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
 use odori_core::import::import_bytes;
 use odori_core::ImportOptions;
-use odori_tests::{all_bvh, fps_override_for, read, spearman};
+use odori_tests::{all_bvh, fps_override_for, read, simulated_likes, spearman};
 
 const TARGETS: usize = 64;
 const ROUNDS: usize = 5;
@@ -235,27 +235,13 @@ pub fn measure_with(lib: &SegmentLibrary, positions: &[Vec<Vec3>], offset: usize
                 // see, so showing it counts for nothing (otherwise ρ's intensity match, with the
                 // bar at the target's own intensity, finds it in the first round and every run
                 // ties at distance 0).
-                let mut scored: Vec<(f32, usize)> = round.iter().filter(|&&c| c != t).map(|&c| (dist(c, t), c)).collect();
+                let scored: Vec<(f32, usize)> = round.iter().filter(|&&c| c != t).map(|&c| (dist(c, t), c)).collect();
                 best = scored.iter().map(|s| s.0).fold(best, f32::min);
                 out.push(best);
                 if r + 1 == ROUNDS {
                     break;
                 }
-                let liked: Vec<usize> = if guided {
-                    scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    scored.iter().take(LIKES).map(|s| s.1).collect()
-                } else {
-                    let mut pick = Vec::new();
-                    let visible: Vec<usize> = round.iter().copied().filter(|&c| c != t).collect();
-                    while pick.len() < LIKES.min(visible.len()) {
-                        *x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                        let c = visible[(*x >> 33) as usize % visible.len()];
-                        if !pick.contains(&c) {
-                            pick.push(c);
-                        }
-                    }
-                    pick
-                };
+                let liked = simulated_likes(scored, guided, LIKES, x);
                 round = session.search(lib, &liked, intensity, settings.rho, CANDIDATES_PER_ROUND).to_vec();
             }
             out

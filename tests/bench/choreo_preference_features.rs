@@ -37,10 +37,11 @@
 mod preference;
 
 use glam::Vec3;
+use odori_core::choreo::quality::perceptual_frames;
 use odori_core::choreo::{feedback::relevance, SegmentLibrary, Settings, Signature};
 use odori_core::humanoid::{Canon, CANON_COUNT};
 use odori_core::normalize::{body_height, normalize_in_place, Origin};
-use odori_tests::spearman;
+use odori_tests::{simulated_likes, spearman};
 
 const ROUNDS: usize = 5;
 const LIKES: usize = 2;
@@ -77,25 +78,7 @@ fn main() {
             n
         })
         .collect();
-    let prep32: Vec<Vec<Vec3>> = positions
-        .iter()
-        .map(|p| {
-            let frames = p.len() / CANON_COUNT;
-            let mut out = Vec::with_capacity(32 * CANON_COUNT);
-            for k in 0..32 {
-                let x = k as f32 * (frames - 1) as f32 / 31.0;
-                let f0 = x.floor() as usize;
-                let f1 = (f0 + 1).min(frames - 1);
-                let w = x - f0 as f32;
-                for j in 0..CANON_COUNT {
-                    out.push(p[f0 * CANON_COUNT + j].lerp(p[f1 * CANON_COUNT + j], w));
-                }
-            }
-            let h = body_height(&out);
-            normalize_in_place(&mut out, Origin::Hips, h);
-            out
-        })
-        .collect();
+    let prep32: Vec<Vec<Vec3>> = positions.iter().map(|p| perceptual_frames(p).expect("a segment's canonical positions")).collect();
     let mut pd = vec![0.0f32; m * m];
     for a in 0..m {
         for b in a + 1..m {
@@ -404,27 +387,13 @@ fn run(sim: &[f32], rank: &[f32], m: usize, rel: &[f32], retired: &[bool], rho: 
     let mut out = Vec::new();
     for r in 0..ROUNDS {
         let round = pick_round(sim, rank, m, rel, &mut is_shown, &mut shown, &liked, rho, tau, pairs);
-        let mut scored: Vec<(f32, usize)> = round.iter().filter(|&&c| c != target).map(|&c| (dist(c), c)).collect();
+        let scored: Vec<(f32, usize)> = round.iter().filter(|&&c| c != target).map(|&c| (dist(c), c)).collect();
         best = scored.iter().map(|s| s.0).fold(best, f32::min);
         out.push(best);
         if r + 1 == ROUNDS {
             break;
         }
-        let picks: Vec<usize> = if guided {
-            scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-            scored.iter().take(LIKES).map(|s| s.1).collect()
-        } else {
-            let vis: Vec<usize> = round.iter().copied().filter(|&c| c != target).collect();
-            let mut p = Vec::new();
-            while p.len() < LIKES.min(vis.len()) {
-                *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                let c = vis[(*seed >> 33) as usize % vis.len()];
-                if !p.contains(&c) {
-                    p.push(c);
-                }
-            }
-            p
-        };
+        let picks = simulated_likes(scored, guided, LIKES, seed);
         let new = picks.iter().filter(|p| !liked.contains(*p)).count();
         liked.extend(picks);
         tau *= (19.0f32 / 20.0).powi(new.max(1) as i32);

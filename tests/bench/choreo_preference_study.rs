@@ -43,7 +43,7 @@ use odori_core::normalize::{body_height, normalize_in_place, Origin};
 use odori_core::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
 use odori_core::import::import_bytes;
 use odori_core::ImportOptions;
-use odori_tests::{all_bvh, fps_override_for, read, spearman};
+use odori_tests::{all_bvh, fps_override_for, read, simulated_likes, spearman};
 
 const ROUNDS: usize = 5;
 const LIKES: usize = 2;
@@ -200,27 +200,13 @@ fn run(v: V, sim_raw: &[f32], sim_rank: &[f32], m: usize, rel_of: &dyn Fn(usize)
             round.push(p);
             upd(&mut min_d, p);
         }
-        let mut scored: Vec<(f32, usize)> = round.iter().filter(|&&c| c != target).map(|&c| (dist(c), c)).collect();
+        let scored: Vec<(f32, usize)> = round.iter().filter(|&&c| c != target).map(|&c| (dist(c), c)).collect();
         best = scored.iter().map(|s| s.0).fold(best, f32::min);
         out.push(best);
         if r + 1 == ROUNDS {
             break;
         }
-        let picks: Vec<usize> = if guided {
-            scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-            scored.iter().take(LIKES).map(|s| s.1).collect()
-        } else {
-            let vis: Vec<usize> = round.iter().copied().filter(|&c| c != target).collect();
-            let mut p = Vec::new();
-            while p.len() < LIKES.min(vis.len()) {
-                *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                let c = vis[(*seed >> 33) as usize % vis.len()];
-                if !p.contains(&c) {
-                    p.push(c);
-                }
-            }
-            p
-        };
+        let picks = simulated_likes(scored, guided, LIKES, seed);
         for &p in &picks {
             liked.push((p, r));
         }

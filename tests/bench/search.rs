@@ -188,6 +188,23 @@ fn main() {
         // rounds), merged the same way.
         let mut alone_busiest = Vec::new();
         let mut split_same = true;
+        // The parts' answers merged as the app's client does: library clip numbers, best first
+        // (distance, then clip, then end), the first k.
+        let merge = |answers: Vec<SearchOutcome>| {
+            let mut matches: Vec<_> = answers
+                .into_iter()
+                .zip(&parts)
+                .flat_map(|(r, p)| {
+                    r.matches.into_iter().map(|mut m| {
+                        m.clip_index = p.1[m.clip_index];
+                        m
+                    })
+                })
+                .collect();
+            matches.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.clip_index.cmp(&b.clip_index)).then(a.end_frame.cmp(&b.end_frame)));
+            matches.truncate(params.max_results);
+            SearchOutcome { matches, ..SearchOutcome::default() }
+        };
         let mut bound = f32::NAN;
         let mut cache_bytes = 0usize;
         for _ in 0..3 {
@@ -195,19 +212,13 @@ fn main() {
             let whole = search(&clips_hour, query, params, &mut no_progress()).expect("fast search over the clips");
             one_clips.push(thread_cpu_secs() - c);
             let mut alone = Vec::new();
-            let mut alone_merged = Vec::new();
+            let mut alone_answers = Vec::new();
             for p in &parts {
                 let c = thread_cpu_secs();
-                let r = search(&p.0, query, params, &mut no_progress()).expect("part searched alone");
+                alone_answers.push(search(&p.0, query, params, &mut no_progress()).expect("part searched alone"));
                 alone.push(thread_cpu_secs() - c);
-                alone_merged.extend(r.matches.into_iter().map(|mut m| {
-                    m.clip_index = p.1[m.clip_index];
-                    m
-                }));
             }
-            alone_merged.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.clip_index.cmp(&b.clip_index)).then(a.end_frame.cmp(&b.end_frame)));
-            alone_merged.truncate(params.max_results);
-            split_same &= same(&whole, &SearchOutcome { matches: alone_merged, ..SearchOutcome::default() });
+            split_same &= same(&whole, &merge(alone_answers));
             alone_busiest.push(alone.iter().copied().fold(0.0, f64::max));
             let mut probe_cpu = Vec::new();
             let mut lists = Vec::new();
@@ -222,19 +233,13 @@ fn main() {
             let refs: Vec<&[f32]> = lists.iter().map(|l| l.as_slice()).collect();
             bound = joined_bound(&refs, params.max_results);
             let mut part_cpu = Vec::new();
-            let mut merged = Vec::new();
+            let mut answers = Vec::new();
             for (p, cache) in parts.iter().zip(&mut caches) {
                 let c = thread_cpu_secs();
-                let r = search_bounded_cached(&p.0, query, params, bound, cache, &mut no_progress()).expect("bounded search");
+                answers.push(search_bounded_cached(&p.0, query, params, bound, cache, &mut no_progress()).expect("bounded search"));
                 part_cpu.push(thread_cpu_secs() - c);
-                merged.extend(r.matches.into_iter().map(|mut m| {
-                    m.clip_index = p.1[m.clip_index];
-                    m
-                }));
             }
-            merged.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.clip_index.cmp(&b.clip_index)).then(a.end_frame.cmp(&b.end_frame)));
-            merged.truncate(params.max_results);
-            split_same &= same(&whole, &SearchOutcome { matches: merged, ..SearchOutcome::default() });
+            split_same &= same(&whole, &merge(answers));
             let per: Vec<f64> = (0..parts.len()).map(|k| probe_cpu[k] + part_cpu[k]).collect();
             split_busiest.push(per.iter().copied().fold(0.0, f64::max));
             split_sum.push(per.iter().sum::<f64>());

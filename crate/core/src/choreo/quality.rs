@@ -497,27 +497,32 @@ pub fn dance_quality_of(m: &QualityMotion, bars: &[Bar], music_beats_secs: &[f32
 /// to [`PERCEPTUAL_FRAMES`] frames, normalised as §B (hips origin, facing, body height), then
 /// the mean joint-position distance. In body heights; 0 for identical motions.
 pub fn perceptual_distance(a: &[Vec3], b: &[Vec3]) -> Result<f32, QualityError> {
-    let prep = |p: &[Vec3]| -> Result<Vec<Vec3>, QualityError> {
-        if p.is_empty() || p.len() % CANON_COUNT != 0 {
-            return Err(QualityError::RaggedPositions { values: p.len(), joints: CANON_COUNT });
-        }
-        let frames = p.len() / CANON_COUNT;
-        let mut out = Vec::with_capacity(PERCEPTUAL_FRAMES * CANON_COUNT);
-        for k in 0..PERCEPTUAL_FRAMES {
-            let x = k as f32 * (frames - 1) as f32 / (PERCEPTUAL_FRAMES - 1) as f32;
-            let f0 = x.floor() as usize;
-            let f1 = (f0 + 1).min(frames - 1);
-            let w = x - f0 as f32;
-            for j in 0..CANON_COUNT {
-                out.push(p[f0 * CANON_COUNT + j].lerp(p[f1 * CANON_COUNT + j], w));
-            }
-        }
-        let h = body_height(&out);
-        normalize_in_place(&mut out, Origin::Hips, h);
-        Ok(out)
-    };
-    let (pa, pb) = (prep(a)?, prep(b)?);
+    let (pa, pb) = (perceptual_frames(a)?, perceptual_frames(b)?);
     Ok(pa.iter().zip(&pb).map(|(x, y)| (*x - *y).length()).sum::<f32>() / pa.len() as f32)
+}
+
+/// One motion as [`perceptual_distance`] compares it: canonical positions (frame-major, any
+/// length) time-normalised to [`PERCEPTUAL_FRAMES`] frames and normalised as §B. The distance
+/// of two such is the mean of their joint-position distances; benches that compare many pairs
+/// prepare each motion once with this.
+pub fn perceptual_frames(p: &[Vec3]) -> Result<Vec<Vec3>, QualityError> {
+    if p.is_empty() || p.len() % CANON_COUNT != 0 {
+        return Err(QualityError::RaggedPositions { values: p.len(), joints: CANON_COUNT });
+    }
+    let frames = p.len() / CANON_COUNT;
+    let mut out = Vec::with_capacity(PERCEPTUAL_FRAMES * CANON_COUNT);
+    for k in 0..PERCEPTUAL_FRAMES {
+        let x = k as f32 * (frames - 1) as f32 / (PERCEPTUAL_FRAMES - 1) as f32;
+        let f0 = x.floor() as usize;
+        let f1 = (f0 + 1).min(frames - 1);
+        let w = x - f0 as f32;
+        for j in 0..CANON_COUNT {
+            out.push(p[f0 * CANON_COUNT + j].lerp(p[f1 * CANON_COUNT + j], w));
+        }
+    }
+    let h = body_height(&out);
+    normalize_in_place(&mut out, Origin::Hips, h);
+    Ok(out)
 }
 
 #[cfg(test)]

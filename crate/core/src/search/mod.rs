@@ -376,9 +376,6 @@ pub fn search_bounded(
     bound: f32,
     progress: &mut dyn FnMut(SearchProgress) -> ControlFlow<()>,
 ) -> Result<SearchOutcome, SearchError> {
-    if bound.is_nan() || bound < 0.0 {
-        return Err(SearchError::BadParam { name: "bound", value: bound, why: "must be a distance ≥ 0 (or +∞)" });
-    }
     search_bounded_cached(index, query, params, bound, &mut SearchCache::default(), progress)
 }
 
