@@ -195,10 +195,13 @@ impl AdapterInfo {
             wgpu::DeviceType::VirtualGpu => "virtual-gpu",
             wgpu::DeviceType::Other => "other",
         };
-        let name = info.name.to_lowercase();
+        let name = info.name.to_ascii_lowercase();
         // wgpu infers `Cpu` from these names on GL; a WebGPU adapter that is software but not
-        // flagged as the fallback adapter would still name its rasteriser.
-        let software = device_type == "cpu" || ["swiftshader", "llvmpipe", "softpipe", "software"].iter().any(|s| name.contains(s));
+        // flagged as the fallback adapter (Mesa's lavapipe under Vulkan) still names its
+        // rasteriser. A plain byte search: `str::contains` brings the two-way string searcher
+        // into the player build (about 1 kB gzip).
+        let has = |word: &str| name.as_bytes().windows(word.len()).any(|w| w == word.as_bytes());
+        let software = device_type == "cpu" || ["swiftshader", "llvmpipe", "softpipe", "software"].into_iter().any(has);
         AdapterInfo { backend, name: info.name.clone(), device_type, software }
     }
 }
