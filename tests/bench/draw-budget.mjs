@@ -11,7 +11,9 @@
 // the GPU process, the renderer and the rest), the frames the viewer put on screen per second,
 // and capped / lifted. The search's cost beside the drawing is in search-browser.mjs's
 // "playing" lines (cap lifted and capped). Prints figures; not a test. Run after `./dev build`:
-// node tests/bench/draw-budget.mjs  (ODORI_BENCH_BACKENDS=webgl2 for one back end).
+// node tests/bench/draw-budget.mjs  (ODORI_BENCH_BACKENDS=webgl2 for one back end;
+// ODORI_BENCH_VIEWPORT=640x400 for another window size: software drawing's cost per frame
+// grows with the canvas's pixels).
 import { readFileSync, readdirSync } from "node:fs";
 import { startServer, launch, openApp } from "../browser/harness.mjs";
 
@@ -86,7 +88,10 @@ try {
   for (const backend of backends) {
     const { browser, page } = await launch(backend);
     try {
+      const [w, h] = (process.env.ODORI_BENCH_VIEWPORT || "1280x800").split("x").map(Number);
+      await page.setViewportSize({ width: w, height: h });
       await openApp(page, server, backend);
+      const canvas = await page.evaluate(() => { const c = document.querySelector("#view"); return `${c.width}×${c.height}`; });
       const info = await page.evaluate(() => window.odori.viewer.adapterInfo);
       // The start-up work after the first pose (the built-in moves, the demo song) is done.
       await page.waitForFunction(() => !document.querySelector("#status").textContent.trim(), null, { timeout: 120000 }).catch(() => {});
@@ -100,10 +105,11 @@ try {
       };
       const [a, b, c] = [row("lifted"), row("capped"), row("paused")];
       const line = (label, x) => `  ${label.padEnd(36)} ${x.total.toFixed(2).padStart(5)} s CPU per ${SECS} s (GPU process ${x.gpu.toFixed(2)}, renderer ${x.renderer.toFixed(2)}, other ${x.other.toFixed(2)}; runs ${x.each}), ${x.fps.toFixed(1)} frames drawn/s`;
-      console.log(`${backend}: adapter ${JSON.stringify(info)}; Chromium's CPU, mean of ${ROUNDS} runs of ${SECS} s each:`);
+      console.log(`${backend}: adapter ${JSON.stringify(info)}; window ${w}×${h}, canvas ${canvas} px; Chromium's CPU, mean of ${ROUNDS} runs of ${SECS} s each:`);
       console.log(line("demo playing, cap lifted (before)", a));
       console.log(line("demo playing, capped (now)", b));
       console.log(line("paused", c));
+      console.log(`  CPU per frame drawn: cap lifted ${((a.total - c.total) / (a.fps * SECS) * 1000).toFixed(1)} ms, capped ${((b.total - c.total) / (b.fps * SECS) * 1000).toFixed(1)} ms (beyond the paused page's)`);
       console.log(`  capped / lifted: ${(b.total / a.total).toFixed(2)}x CPU (GPU process ${(b.gpu / a.gpu).toFixed(2)}x), ${(b.fps / a.fps).toFixed(2)}x frames; CPU saved ${(a.total - b.total).toFixed(2)} s per ${SECS} s (${((a.total - b.total) / SECS).toFixed(2)} cores)`);
     } finally {
       await browser.close();
