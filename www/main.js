@@ -64,6 +64,7 @@ async function main() {
   let searchClient = null, searchPanel = null, textPanel = null, choreo = null;
   const waitingForDance = [], waitingForSearch = [];
   const player = new Player({ viewer, library, canvas, scrub: $("#scrub"), label: $("#frame-label"), playButton: $("#play"), loop: $("#loop") });
+  bindDrawCap(player, viewer.adapterInfo, badge);
   const panel = new LibraryPanel($("#library tbody"), library, {
     onSelect: (id) => { player.select(id); if (searchPanel) searchPanel.clipChanged(); },
     onOverlay: (ids) => player.setOverlays(ids),
@@ -383,6 +384,37 @@ function fitCanvas(canvas) {
   if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
 }
 
+/** Animation draws per second on a software adapter (see `bindDrawCap`). */
+const SOFTWARE_MAX_FPS = 30;
+
+/**
+ * With no GPU the browser draws in software: at the display's rate that took about 1.8 cores
+ * on this project's test machine and halved the search's speed beside it. There the figure is
+ * drawn at most SOFTWARE_MAX_FPS times a second (motion pictures' and most mocap's rate: the
+ * motion still reads as continuous), said quietly beside the back end's badge; the person can
+ * lift the cap (the box, kept in this browser).
+ */
+function bindDrawCap(player, adapter, badge) {
+  badge.title = `Graphics back end (${adapter.name || "adapter name not given"}${adapter.software ? ", drawn in software" : ""})`;
+  document.body.dataset.software = adapter.software ? "1" : "0";
+  const box = document.querySelector("#draw-cap-box");
+  const input = document.querySelector("#draw-cap");
+  const text = document.querySelector("#draw-rate");
+  player.onDrawRate = ({ maxFps }) => {
+    text.textContent = maxFps ? `drawn in software, ${maxFps} fps` : "drawn in software, not capped";
+  };
+  if (!adapter.software) return;
+  let lifted = false;
+  try { lifted = localStorage.getItem("odori.drawCap") === "off"; } catch { /* storage off: capped */ }
+  box.hidden = false;
+  input.checked = !lifted;
+  player.setMaxFps(lifted ? null : SOFTWARE_MAX_FPS);
+  input.addEventListener("change", () => {
+    player.setMaxFps(input.checked ? SOFTWARE_MAX_FPS : null);
+    try { localStorage.setItem("odori.drawCap", input.checked ? "on" : "off"); } catch { /* storage off */ }
+  });
+}
+
 // Offline use: a service worker keeps the app (and the engine) cached.
 if ("serviceWorker" in navigator && location.protocol !== "file:") {
   navigator.serviceWorker.register("./sw.js").catch((e) => console.warn("offline cache unavailable:", e.message));
@@ -393,3 +425,4 @@ main().catch((e) => {
   const s = document.querySelector("#status");
   if (s) s.textContent = `Odori failed to start: ${e.message || e}`;
 });
+

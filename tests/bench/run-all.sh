@@ -9,6 +9,8 @@ bash tests/wasm_bench/run.sh
 # The search in wasm in headless Chromium (needs pkg/, which ./dev bench builds).
 cargo build -q -p xtask
 node tests/bench/search-browser.mjs
+# Drawing the playing demo in software (no GPU): Chromium's CPU, cap lifted vs capped.
+node tests/bench/draw-budget.mjs
 # Ten hours of motion indexed, stored in IndexedDB and reopened (issue 16; about 3 GB of memory).
 node tests/bench/search-index-10h.mjs
 # Embedding (issue 12): player and full bundle sizes and time to the first pose, beside

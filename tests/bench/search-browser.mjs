@@ -15,7 +15,8 @@
 // mostly measure the load, while the busiest worker's CPU time is what the product's path takes
 // on an idle machine of this kind (the workers run at once, one per core). Prints figures; not
 // a test. Run after `./dev build`: node tests/bench/search-browser.mjs  (ODORI_BENCH_NO_PLAIN=1
-// skips the plain DP, which takes tens of seconds per query).
+// skips the plain DP, which takes tens of seconds per query; ODORI_BENCH_BACKEND=webgpu runs the
+// page on WebGPU instead of WebGL2).
 import { readFileSync, readdirSync } from "node:fs";
 import { join } from "node:path";
 import { startServer, launch, data } from "../browser/harness.mjs";
@@ -73,9 +74,10 @@ function cpuDelta(a, b, which) {
 }
 
 const server = await startServer();
-const { browser, page } = await launch("webgl2");
+const BACKEND = process.env.ODORI_BENCH_BACKEND || "webgl2";
+const { browser, page } = await launch(BACKEND);
 try {
-  await page.goto(server.url + "?backend=webgl2");
+  await page.goto(server.url + `?backend=${BACKEND}`);
   await page.waitForFunction(() => document.body.dataset.ready === "1");
   for (const f of ALL) {
     const b64 = readFileSync(join(data, "mocap", `${f}.bvh`)).toString("base64");
@@ -151,9 +153,14 @@ try {
   // draws it in software (SwiftShader) on the same two cores, about 1.8 cores' worth at 60 fps,
   // so the search is timed twice: with the app's figure paused (the search alone) and playing
   // (what a person on a GPU-less machine gets while the dance plays). The plain DP runs once,
-  // paused.
-  const measure = async (playing) => {
-    await page.evaluate((on) => (on ? window.odori.player.play() : window.odori.player.pause()), playing);
+  // paused. Playing is timed twice: with the app's software cap (30 draws a second, what the
+  // app does there) and with the cap lifted (the display's rate, as before the cap).
+  const measure = async (playing, capped = true) => {
+    await page.evaluate(([on, capped]) => {
+      const box = document.querySelector("#draw-cap");
+      if (!box.closest("label").hidden && box.checked !== capped) box.click();
+      on ? window.odori.player.play() : window.odori.player.pause();
+    }, [playing, capped]);
     const res = {};
     for (const which of ["in", "novel"]) {
       for (const k of [1, 10]) {
@@ -187,16 +194,19 @@ try {
     }
     return res;
   };
-  out.res = { paused: await measure(false), playing: await measure(true) };
+  out.res = { paused: await measure(false), "playing, cap lifted": await measure(true, false), "playing, capped": await measure(true, true) };
   console.log(`one hour of real motion: ${out.frames} frames in ${out.clips} clips (every real clip but indian_13, repeated); one-thread index built in ${out.tIndex.toFixed(0)} ms, ${out.workers} search workers (the app's SearchClient, one per core) loaded in ${out.tWorkers.toFixed(0)} ms`);
   for (const [mode, res] of Object.entries(out.res)) {
-    console.log(mode === "paused" ? "the app's figure paused (the search alone):" : "the app's figure playing (drawn in software beside the search on this GPU-less machine):");
+    const drawn = await page.evaluate(() => window.odori.viewer.adapterInfo.software ? "drawn in software" : "drawn by the GPU");
+    console.log(mode === "paused" ? `the app's figure paused (the search alone, ${BACKEND}):` : `the app's figure ${mode} (${drawn} beside the search, ${BACKEND}):`);
     for (const [k, v] of Object.entries(res)) {
       let line = `wasm in Chromium, ${k}: ${out.workers} workers (the product's path) ${v.workersMs.toFixed(1)} ms wall, busiest worker's CPU ${v.workersCpu.toFixed(0)} ms (all workers ${v.workersCpuSum.toFixed(0)} ms); one thread ${v.oneMs.toFixed(1)} ms wall, CPU ${v.oneCpu.toFixed(0)} ms (medians of 3; CPU from /proc, 10 ms ticks); ${v.matches} matches, best ${v.best?.toFixed(4)}; workers' merged results = one thread's: ${v.same}`;
       if (v.plainMs !== undefined) line += `; plain DP ${v.plainMs.toFixed(0)} ms wall, CPU ${v.plainCpu.toFixed(0)} ms (same results: ${v.plainSame}), plain / workers = ${(v.plainMs / v.workersMs).toFixed(1)}x wall, plain CPU / busiest worker's CPU = ${(v.plainCpu / v.workersCpu).toFixed(1)}x, plain / one thread = ${(v.plainCpu / v.oneCpu).toFixed(1)}x CPU`;
       console.log(line);
     }
   }
+  const lifted = out.res["playing, cap lifted"], capped = out.res["playing, capped"];
+  console.log(`playing, capped / cap lifted (workers' wall): ${Object.keys(capped).map((k) => `${k} ${(capped[k].workersMs / lifted[k].workersMs).toFixed(2)}x`).join(", ")}`);
 } finally {
   await browser.close();
   server.stop();

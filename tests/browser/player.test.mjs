@@ -122,13 +122,15 @@ for (const backend of ["webgl2", "webgpu"]) {
           const f = p.lastFrame;
           samples.push({ song: f.songTimeSecs, clip: f.clipTimeSecs, audio: audio.currentTime, nowMs: performance.now() });
           if (samples.length < 90) requestAnimationFrame(step);
-          else resolve({ samples, clipDur });
+          else resolve({ samples, clipDur, drawFps: Math.min(p.maxFps, p.clip.fps) });
         };
         requestAnimationFrame(step);
       }));
-      // One frame: this run's display frame interval (software rendering here is slower than 60 Hz).
+      // One frame: this run's display frame interval (software rendering here is slower than 60 Hz),
+      // or the player's drawing interval when longer (at most the clip's frame rate, and 30 a
+      // second on this machine's software adapter: www/player/odori-player.js).
       const deltas = sync.samples.slice(1).map((s, i) => (s.nowMs - sync.samples[i].nowMs) / 1000).sort((x, y) => x - y);
-      const frame = Math.max(1 / 60, deltas[deltas.length >> 1]);
+      const frame = Math.max(1 / 60, deltas[deltas.length >> 1], 1 / sync.drawFps);
       // The audio clock runs on while the frame is drawn, so the figure trails it by the draw
       // time; a stall of the shared test machine (the test run has another test file and the
       // fuzz run beside this one) can hold the page between the player's callback and this

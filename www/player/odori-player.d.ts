@@ -1,5 +1,5 @@
 // Types of `odori/player`: the <odori-player> custom element.
-import type { Library, ImportReport, OdoriErrorKind } from "./odori_player.js";
+import type { Library, ImportReport, OdoriErrorKind, AdapterInfo } from "./odori_player.js";
 
 /** Detail of the `error` event. `kind` is an OdoriErrorKind, or "load" for a network/media failure. */
 export interface OdoriPlayerErrorDetail {
@@ -46,7 +46,8 @@ export interface OdoriPlayerEventMap {
  * song; none: the engine's built-in routine), `music` (audio URL or `#id` of an `<audio>`: its
  * clock drives the figure), `animation-name`, `character` ("auto" | "stick" | "builtin" | URL of
  * a skinned humanoid GLB), `autoplay`, `loop`, `camera-controls`, `poster`, `loading`
- * ("lazy" | "eager"), `backend` ("auto" | "webgpu" | "webgl2").
+ * ("lazy" | "eager"), `backend` ("auto" | "webgpu" | "webgl2"), `max-fps` (draws per second while
+ * playing: a positive number, or "none"; default 30 on a software adapter, else uncapped).
  */
 export declare class OdoriPlayer extends HTMLElement {
   /** Where the player build's .wasm is, when a bundler moved it (default: beside odori_player.js). */
@@ -61,6 +62,8 @@ export declare class OdoriPlayer extends HTMLElement {
   static seekStepSecs: number;
   /** Graphics back end for players without a `backend` attribute. */
   static backend: "auto" | "webgpu" | "webgl2";
+  /** Draws per second while playing on a software adapter (no GPU), for players without `max-fps` (30). */
+  static softwareMaxFps: number;
   static readonly observedAttributes: string[];
 
   src: string | null;
@@ -76,6 +79,12 @@ export declare class OdoriPlayer extends HTMLElement {
   readonly state: "idle" | "loading" | "ready" | "error";
   /** The back end while a GPU context is held, else null (off-screen players hold none). */
   readonly gpuContext: "webgpu" | "webgl2" | null;
+  /** What the browser reports of the graphics adapter while a GPU context is held, else null. */
+  readonly adapterInfo: AdapterInfo | null;
+  /** Draws per second while playing (the `max-fps` attribute, else 30 on a software adapter); Infinity: no cap. Setting it sets the attribute. */
+  maxFps: number;
+  /** Frames put on screen so far (a draw that would repeat the last image is not one). */
+  readonly framesDrawn: number;
   readonly audioElement: HTMLMediaElement | null;
   readonly clip: OdoriPlayerClip | null;
   /** With a `.odori` src: the project playing, else null. */

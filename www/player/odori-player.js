@@ -4,8 +4,8 @@
 // engine (odori_player.js: Library + Viewer, no authoring). Attribute names follow
 // <model-viewer> where they mean the same: src, poster, loading, autoplay, camera-controls,
 // animation-name; plus music (an audio URL, or "#id" of an <audio> on the page: its clock
-// drives the figure), loop, character ("auto" | "stick") and backend ("auto" | "webgpu" |
-// "webgl2"). Methods play(), pause(); properties currentTime, duration, paused; events load,
+// drives the figure), loop, character ("auto" | "stick"), backend ("auto" | "webgpu" |
+// "webgl2") and max-fps (draws per second while playing: a number, or "none"). Methods play(), pause(); properties currentTime, duration, paused; events load,
 // progress, error, ended.
 //
 // `src` is a motion file (GLB/glTF with animation, BVH) or a `.odori` project. A project's
@@ -24,6 +24,10 @@
 //   audio.currentTime and draws that instant of the dance, so figure and song cannot drift.
 // - Where neither WebGPU nor WebGL2 exists the poster stays, with a message.
 // - Autoplay with sound is often blocked: the player then starts muted and shows "Unmute".
+// - Drawing costs only what can be seen: a paused player draws nothing, a playing one at most
+//   at its clip's own frame rate, and on a software adapter (no GPU: the browser draws with the
+//   CPU, whatever else the page runs) at most `OdoriPlayer.softwareMaxFps` (30) a second unless
+//   `max-fps` says otherwise.
 
 let enginePromise = null;
 let fullEnginePromise = null;
@@ -235,6 +239,8 @@ export class OdoriPlayer extends HTMLElement {
   static seekStepSecs = 5;
   /** Graphics back end for players without a `backend` attribute: "auto" | "webgpu" | "webgl2". */
   static backend = "auto";
+  /** Draws per second while playing on a software adapter, for players without `max-fps`. */
+  static softwareMaxFps = 30;
 
   static get observedAttributes() {
     return ["src", "music", "animation-name", "poster", "loop", "character", "camera-controls"];
@@ -244,6 +250,7 @@ export class OdoriPlayer extends HTMLElement {
   #library = null;
   #clip = null; // ClipInfo of the clip playing
   #viewer = null;
+  #software = false; // the viewer's adapter draws with the CPU
   #canvas = null;
   #audio = null; // HTMLAudioElement when `music` is set
   #ownAudio = false;
@@ -267,8 +274,11 @@ export class OdoriPlayer extends HTMLElement {
   #project = null; // { name, songName, musicUrl } when src is a .odori project
   #pendingDemo = false; // a project on the demo song whose song is not synthesised yet
   #songUrl = null; // object URL of the project's song, revoked when replaced
+  #dueMs = 0; // the animation loop's next draw is due (rAF clock)
   /** The last drawn frame: { songTimeSecs, clipTimeSecs } (for tests and sync checks). */
   lastFrame = null;
+  /** Frames put on screen (a draw that would repeat the last image is not one). */
+  framesDrawn = 0;
   /** Milliseconds from attach to the first drawn pose (and to the engine/source being ready). */
   timings = {};
 
@@ -362,6 +372,20 @@ export class OdoriPlayer extends HTMLElement {
   get state() { return this.#state; }
   /** The graphics back end while a GPU context is held ("webgpu" | "webgl2"), else null. */
   get gpuContext() { return this.#viewer ? this.#viewer.backend : null; }
+  /** What the browser reports of the adapter `{ backend, name, deviceType, software }`, while a GPU context is held. */
+  get adapterInfo() { return this.#viewer ? this.#viewer.adapterInfo : null; }
+  /**
+   * Draws per second while playing: the `max-fps` attribute (a positive number; "none": no
+   * cap), else `OdoriPlayer.softwareMaxFps` on a software adapter; Infinity when uncapped.
+   */
+  get maxFps() {
+    const attr = (this.getAttribute("max-fps") || "").trim().toLowerCase();
+    if (attr === "none") return Infinity;
+    const n = Number(attr);
+    if (attr && n > 0) return n;
+    return this.#software ? OdoriPlayer.softwareMaxFps : Infinity;
+  }
+  set maxFps(v) { this.setAttribute("max-fps", v > 0 && Number.isFinite(Number(v)) ? String(v) : "none"); }
   /** The audio element whose clock drives the figure, or null. */
   get audioElement() { return this.#audio; }
   /** The clip being played (ClipInfo), or null. */
@@ -676,6 +700,7 @@ export class OdoriPlayer extends HTMLElement {
         return;
       }
       this.#viewer = viewer;
+      this.#software = viewer.adapterInfo.software;
       this.#bindCamera(canvas);
       this.#frame();
       this.#drawNow();
@@ -822,7 +847,7 @@ export class OdoriPlayer extends HTMLElement {
     seek.setAttribute("aria-valuetext", `${fmt(song)} of ${fmt(this.duration)}`);
     if (!this.#viewer) return;
     try {
-      this.#viewer.draw(this.#library, this.#figures(clipTime));
+      if (this.#viewer.draw(this.#library, this.#figures(clipTime))) this.framesDrawn++;
       this.lastFrame = { songTimeSecs: song, clipTimeSecs: clipTime };
     } catch (e) {
       this.pause();
@@ -832,10 +857,17 @@ export class OdoriPlayer extends HTMLElement {
 
   #tick() {
     if (this.#raf || !this.#playing) return;
-    const frame = () => {
+    const frame = (nowMs) => {
       this.#raf = 0;
       if (!this.#playing) return;
-      this.#drawNow();
+      // At most the clip's own frame rate (the viewer only interpolates between its frames)
+      // and the cap. The due time advances by whole intervals, so a late frame does not push
+      // the later ones back; 2 ms of slack takes up the timestamps' jitter.
+      const intervalMs = 1000 / Math.min(this.maxFps, this.#clip?.fps || Infinity);
+      if (!(nowMs < this.#dueMs - 2)) {
+        this.#dueMs = nowMs - this.#dueMs > intervalMs ? nowMs + intervalMs : this.#dueMs + intervalMs;
+        this.#drawNow();
+      }
       if (this.#playing) this.#raf = requestAnimationFrame(frame);
     };
     this.#raf = requestAnimationFrame(frame);

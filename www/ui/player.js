@@ -3,6 +3,13 @@
 // This is the app's one transport: `playing` (and `withSong`) are the single source of truth
 // for the figure, the dance and the song. While the song sounds its audio clock drives the
 // figure; Pause (button or space) stops both, Play resumes both; the buttons only show state.
+//
+// The drawing budget: the animation loop draws only what a person can see change. A paused
+// figure is not drawn again (the camera, when it moves, is drawn at the next animation frame);
+// a playing one at most at the fastest shown clip's own frame rate (the viewer interpolates
+// between a clip's frames: drawing faster shows only poses the viewer made up) and at most
+// `maxFps` (set by the page on a software adapter, where each frame costs the CPU whole
+// milliseconds: see www/main.js). Scrubs, steps and edits still draw at once.
 export class Player {
   constructor({ viewer, library, canvas, scrub, label, playButton, loop }) {
     Object.assign(this, { viewer, library, canvas, scrub, label, playButton, loop });
@@ -20,6 +27,11 @@ export class Player {
     this.preparing = null;      // the task that makes clips left by a draw (`preparePending`)
     this.withSong = false;      // does Play also play the song?
     this.listeners = [];        // called with the transport state after every change
+    this.maxFps = null;         // cap on animation draws per second (null: none)
+    this.poseFps = Infinity;    // fastest frame rate among the clips shown (Infinity: unknown)
+    this.dueMs = 0;             // the animation loop's next draw is due (rAF clock)
+    this.cameraMoved = false;   // paused, the camera moved: draw at the next allowed frame
+    this.onDrawRate = null;     // told `{ maxFps }` when the cap changes (the page's status)
     playButton.addEventListener("click", () => this.toggle());
     scrub.addEventListener("input", () => {
       this.pause();
@@ -73,6 +85,9 @@ export class Player {
   setCompare(spec) {
     this.compare = spec;
     this.time = 0;
+    // Candidates are played sped up or slowed to the music: their frames come faster than
+    // their clips' rates, so only the cap (if any) limits them.
+    this.poseFps = Infinity;
     this.scrub.max = String(Math.max(0, this.info().frames - 1));
     this.viewer.frameFigures(this.library, this.figures());
     // Candidates loop on their own clock, or on the song's when it already sounds.
@@ -86,9 +101,41 @@ export class Player {
     this.clip = id;
     this.time = 0;
     const c = this.info();
+    this.updatePoseFps();
     this.scrub.max = String(Math.max(0, c.frames - 1));
     this.viewer.frameFigures(this.library, this.figures());
     this.drawNow();
+  }
+
+  /** The fastest frame rate among the clips shown (the selected clip and its overlays). */
+  updatePoseFps() {
+    const ids = [this.clip, ...this.overlays].filter((id) => id != null);
+    let fps = 0;
+    for (const id of new Set(ids)) {
+      try { fps = Math.max(fps, this.library.clip(id).fps); } catch { /* removed: not shown */ }
+    }
+    this.poseFps = fps > 0 ? fps : Infinity;
+  }
+
+  /** Caps animation draws at `fps` per second (null: no cap, as fast as the display). */
+  setMaxFps(fps) {
+    this.maxFps = fps > 0 && Number.isFinite(fps) ? fps : null;
+    this.dueMs = 0;
+    if (this.onDrawRate) this.onDrawRate({ maxFps: this.maxFps });
+  }
+
+  /**
+   * Whether the animation loop may draw at `nowMs` (a rAF timestamp) at most `fps` times a
+   * second. The due time advances by whole intervals, so a frame that comes a little late
+   * does not push every later one back (a 60 Hz display then draws exactly every other frame
+   * at 30); 2 ms of slack takes up the jitter of the timestamps.
+   */
+  frameDue(nowMs, fps) {
+    if (!(fps < Infinity)) return true;
+    const intervalMs = 1000 / fps;
+    if (nowMs < this.dueMs - 2) return false;
+    this.dueMs = nowMs - this.dueMs > intervalMs ? nowMs + intervalMs : this.dueMs + intervalMs;
+    return true;
   }
 
   /** Frames the figures again (the view changed shape). */
@@ -110,6 +157,7 @@ export class Player {
   setOverlays(ids) {
     this.overlays = ids;
     if (this.clip == null) return;
+    if (!this.compare) this.updatePoseFps();
     this.viewer.frameFigures(this.library, this.figures());
     this.drawNow();
   }
@@ -184,17 +232,18 @@ export class Player {
       const r = this.canvas.getBoundingClientRect();
       this.viewer.orbit((ev.clientX - drag.x) / r.width, (ev.clientY - drag.y) / r.height);
       drag = { x: ev.clientX, y: ev.clientY };
-      if (!this.playing) this.drawNow();
+      this.cameraMoved = true;
     });
     this.canvas.addEventListener("pointerup", () => { drag = null; });
     this.canvas.addEventListener("wheel", (ev) => {
       ev.preventDefault();
       this.viewer.zoom(Math.sign(ev.deltaY));
-      if (!this.playing) this.drawNow();
+      this.cameraMoved = true;
     }, { passive: false });
   }
 
   drawNow() {
+    this.cameraMoved = false;
     if (this.clip == null) return;
     const c = this.info();
     const frame = Math.min(c.frames - 1, Math.floor(this.time * c.fps + 1e-4));
@@ -229,27 +278,32 @@ export class Player {
   start() {
     const tick = (now) => {
       if (this.onTick) this.onTick();
+      const cap = this.maxFps ?? Infinity;
       if (this.songClock && this.songClock.playing && this.clip != null) {
         // A song is playing: its audio clock drives the figure (the clip loops under it).
         const c = this.info();
         const end = (c.frames - 1) / c.fps;
         const t = this.songClock.position() - (this.compare && this.compare.songStart != null ? this.compare.songStart : 0);
         this.time = end > 0 ? ((t % end) + end) % end : 0;
-        this.drawNow();
+        if (this.frameDue(now, Math.min(cap, this.poseFps))) this.drawNow();
       } else if (this.playing && this.clip != null) {
         const dt = this.last == null ? 0 : (now - this.last) / 1000;
         this.last = now;
         const c = this.info();
         const end = (c.frames - 1) / c.fps;
         this.time += Math.min(dt, 0.1);
+        let ended = false;
         if (this.time > end) {
           if (this.loop.checked) this.time = end > 0 ? this.time % end : 0;
-          else { this.time = end; this.pause(); }
+          else { this.time = end; this.pause(); ended = true; }
         }
-        this.drawNow();
+        // The last frame of a clip that stops is always drawn.
+        if (ended || this.frameDue(now, Math.min(cap, this.poseFps))) this.drawNow();
       } else {
         this.last = null;
+        if (this.cameraMoved && this.frameDue(now, cap)) this.drawNow();
       }
+      if (this.playing) this.cameraMoved = false;
       requestAnimationFrame(tick);
     };
     requestAnimationFrame(tick);

@@ -17,6 +17,14 @@
 //! adapter, the device, then each pipeline the first frame draws with, made and drawn with
 //! once), so no one task holds a page's main thread for the sum of them; the skinned-mesh
 //! pipeline is made by `warmUp` or when a character is first drawn.
+//!
+//! A `draw` that would put the same image on screen again is skipped (it returns false): the
+//! figures' sampled poses (clip, revision and the clamped position `timeSecs × fps` the clip is
+//! sampled at — poses are interpolated between frames, so any change of time is a new pose),
+//! the camera, the canvas size and the body are compared with the last drawn. On a machine
+//! with no GPU the browser draws in software and every frame costs whole milliseconds of CPU:
+//! `adapterInfo` says so (wgpu's device type `Cpu`: on Chromium, WebGL2's ANGLE renderer names
+//! SwiftShader, and WebGPU's adapter is the fallback adapter), so a page can draw less often.
 
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
@@ -30,9 +38,7 @@ use odori_core::library::body::builtin_body;
 use odori_core::retarget::{is_canonical, to_canonical};
 use odori_core::Clip;
 use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, PipelineKind, Renderer, FIGURE_COLORS};
-use serde::Deserialize;
-#[cfg(feature = "authoring")]
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 use web_sys::HtmlCanvasElement;
 
@@ -142,6 +148,72 @@ pub struct Viewer {
     #[cfg(feature = "authoring")]
     defer: bool,
     last_drawn: Vec<Drawn>,
+    /// What the last presented frame showed (`None`: nothing yet, or the surface was lost).
+    shown: Option<Shown>,
+    /// Bumped when the body's clips change outside a draw (`setCharacter`, `prepareBodies`),
+    /// so the next draw is not taken for a repeat.
+    body_generation: u32,
+    adapter: AdapterInfo,
+    /// Frames presented since the viewer was made (for tests of the drawing budget).
+    #[cfg(feature = "authoring")]
+    frames_drawn: u32,
+}
+
+#[wasm_bindgen(typescript_custom_section)]
+const TS_ADAPTER_INFO: &'static str = r#"
+/** What the browser reports of a viewer's graphics adapter (`Viewer.adapterInfo`). */
+export interface AdapterInfo {
+  backend: "webgpu" | "webgl2";
+  /** WebGL2: the renderer's name (e.g. "ANGLE (Google, Vulkan 1.3.0 (SwiftShader Device (Subzero) …)"); WebGPU: the adapter's description, often empty. */
+  name: string;
+  deviceType: "cpu" | "integrated-gpu" | "discrete-gpu" | "virtual-gpu" | "other";
+  /** The CPU draws (no GPU): each frame costs the page milliseconds of CPU, so draw less often. */
+  software: boolean;
+}
+"#;
+
+/// What the adapter reports (`adapterInfo`), from wgpu's `AdapterInfo`.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct AdapterInfo {
+    backend: &'static str,
+    /// The adapter's name as the browser gives it (WebGL2: the unmasked renderer; WebGPU: the
+    /// adapter's description, which Chromium leaves empty).
+    name: String,
+    /// wgpu's device type: "cpu", "integrated-gpu", "discrete-gpu", "virtual-gpu" or "other".
+    device_type: &'static str,
+    /// Drawn by the CPU: device type "cpu" or a software rasteriser's name.
+    software: bool,
+}
+
+impl AdapterInfo {
+    fn of(info: &wgpu::AdapterInfo, backend: &'static str) -> AdapterInfo {
+        let device_type = match info.device_type {
+            wgpu::DeviceType::Cpu => "cpu",
+            wgpu::DeviceType::IntegratedGpu => "integrated-gpu",
+            wgpu::DeviceType::DiscreteGpu => "discrete-gpu",
+            wgpu::DeviceType::VirtualGpu => "virtual-gpu",
+            wgpu::DeviceType::Other => "other",
+        };
+        let name = info.name.to_ascii_lowercase();
+        // wgpu infers `Cpu` from these names on GL; a WebGPU adapter that is software but not
+        // flagged as the fallback adapter (Mesa's lavapipe under Vulkan) still names its
+        // rasteriser. A plain byte search: `str::contains` brings the two-way string searcher
+        // into the player build (about 1 kB gzip).
+        let has = |word: &str| name.as_bytes().windows(word.len()).any(|w| w == word.as_bytes());
+        let software = device_type == "cpu" || ["swiftshader", "llvmpipe", "softpipe", "software"].into_iter().any(has);
+        AdapterInfo { backend, name: info.name.clone(), device_type, software }
+    }
+}
+
+/// The key of a drawn image: two draws with equal `Shown` put the same pixels on screen.
+#[derive(PartialEq)]
+struct Shown {
+    camera: OrbitCamera,
+    size: (u32, u32),
+    body_generation: u32,
+    /// Per figure: clip, revision (two words), sampled position, style, colour, offset (bits).
+    figures: Vec<u32>,
 }
 
 /// Resolves in a later task of the event loop (a `setTimeout(0)`, in a page or a worker):
@@ -342,10 +414,12 @@ impl Viewer {
             })
             .await
             .map_err(|e| gpu_err(format!("no graphics adapter: {e}")))?;
-        let backend = match adapter.get_info().backend {
+        let info = adapter.get_info();
+        let backend = match info.backend {
             wgpu::Backend::BrowserWebGpu => "webgpu",
             _ => "webgl2",
         };
+        let adapter_info = AdapterInfo::of(&info, backend);
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("odori"),
@@ -393,6 +467,11 @@ impl Viewer {
             #[cfg(feature = "authoring")]
             defer: true,
             last_drawn: Vec::new(),
+            shown: None,
+            body_generation: 0,
+            adapter: adapter_info,
+            #[cfg(feature = "authoring")]
+            frames_drawn: 0,
         };
         // WebGL2: the pipelines the first frame draws with, each made and then drawn with once, a
         // task for each step: on WebGL2 the browser's GL (ANGLE) compiles a pipeline's GPU code only
@@ -439,6 +518,23 @@ impl Viewer {
     #[wasm_bindgen(getter)]
     pub fn backend(&self) -> String {
         self.backend.to_string()
+    }
+
+    /// What the browser reports of the graphics adapter: `{ backend, name, deviceType, software }`.
+    /// `software` is true when the CPU draws (no GPU: SwiftShader, llvmpipe), where each frame
+    /// costs milliseconds of CPU and a page should draw less often (the app and `<odori-player>`
+    /// cap animation at 30 frames per second there).
+    #[wasm_bindgen(getter, js_name = adapterInfo, unchecked_return_type = "AdapterInfo")]
+    pub fn adapter_info(&self) -> JsValue {
+        crate::error::to_js(&self.adapter)
+    }
+
+    /// Frames put on screen since the viewer was made (a `draw` that would repeat the last
+    /// image is not one).
+    #[cfg(feature = "authoring")]
+    #[wasm_bindgen(getter, js_name = framesDrawn)]
+    pub fn frames_drawn(&self) -> u32 {
+        self.frames_drawn
     }
 
     /// Call when the canvas's pixel size changes.
@@ -495,6 +591,7 @@ impl Viewer {
         };
         self.body = body;
         self.on_body.clear();
+        self.body_generation = self.body_generation.wrapping_add(1);
         Ok(())
     }
 
@@ -519,6 +616,7 @@ impl Viewer {
             if self.on_body.get(&id).is_some_and(|c| c.rev == e.rev) {
                 continue;
             }
+            self.body_generation = self.body_generation.wrapping_add(1);
             return self.on_body(e, false).is_some();
         }
         false
@@ -644,13 +742,18 @@ impl Viewer {
         Ok(())
     }
 
-    /// Draws one frame: each figure is a clip at a time.
+    /// Draws one frame: each figure is a clip at a time. Returns false, drawing nothing, when
+    /// the frame would repeat the last one drawn (same poses, camera, size and body).
     pub fn draw(
         &mut self,
         library: &Library,
         #[wasm_bindgen(unchecked_param_type = "FigureSpec[]")] figures: JsValue,
-    ) -> Result<(), OdoriError> {
+    ) -> Result<bool, OdoriError> {
         let specs = parse_figures(figures)?;
+        let key = self.shown_key(library, &specs)?;
+        if self.shown.as_ref() == Some(&key) && self.decoded.borrow().is_empty() {
+            return Ok(false);
+        }
         // Poses first (positions for sticks, palettes for meshes).
         let mut sticks: Vec<(Vec<Vec3>, &Entry, [f32; 4])> = Vec::new();
         let mut palettes: Vec<(MeshHandle, Vec<Mat4>, [f32; 4])> = Vec::new();
@@ -732,26 +835,55 @@ impl Viewer {
             }
         }
 
-        self.present(&figures, &meshes);
-        Ok(())
+        // Keyed with the camera as drawn (a followed figure moved its target).
+        self.shown = self.present(&figures, &meshes).then_some(Shown { camera: self.camera, ..key });
+        #[cfg(feature = "authoring")]
+        {
+            self.frames_drawn += u32::from(self.shown.is_some());
+        }
+        Ok(self.shown.is_some())
     }
 }
 
 impl Viewer {
-    /// Renders `figures` and `meshes` to the canvas with the current camera.
-    fn present(&mut self, figures: &[Figure], meshes: &[MeshDraw]) {
+    /// What a draw of `specs` would show, to compare with the last drawn (see `Shown`).
+    fn shown_key(&self, library: &Library, specs: &[FigureSpec]) -> JsResult<Shown> {
+        let mut figures = Vec::with_capacity(specs.len() * 12);
+        for s in specs {
+            let e = library.entry(s.clip)?;
+            // Where `Clip::sample_into` samples: times past either end show the end frame.
+            let at = (s.time_secs * e.clip.fps).clamp(0.0, e.clip.frame_count().saturating_sub(1) as f32);
+            let style = match s.style.as_deref() {
+                None => 0,
+                Some("auto") => 1,
+                Some("stick") => 2,
+                Some("mesh") => 3,
+                // An unknown style fails in the draw itself, with its name.
+                Some(_) => 4,
+            };
+            figures.extend([s.clip, e.rev as u32, (e.rev >> 32) as u32, at.to_bits(), style]);
+            figures.extend(s.color.map_or([u32::MAX; 3], |c| c.map(f32::to_bits)));
+            figures.extend(s.offset.unwrap_or([0.0; 3]).map(f32::to_bits));
+        }
+        Ok(Shown { camera: self.camera, size: (self.config.width, self.config.height), body_generation: self.body_generation, figures })
+    }
+
+    /// Renders `figures` and `meshes` to the canvas with the current camera; false when the
+    /// canvas had no texture to draw on (it is configured again for the next draw).
+    fn present(&mut self, figures: &[Figure], meshes: &[MeshDraw]) -> bool {
         let frame = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 self.surface.configure(self.renderer.device(), &self.config);
-                return;
+                return false;
             }
-            _ => return,
+            _ => return false,
         };
         self.take_decoded();
         let view = frame.texture.create_view(&wgpu::TextureViewDescriptor { format: Some(self.view_format), ..Default::default() });
         self.renderer.render(&view, self.config.width, self.config.height, &self.camera, figures, meshes);
         self.renderer.queue().present(frame);
+        true
     }
 }
 
