@@ -7,6 +7,10 @@
 //! move of a foot joint against the source's (scaled; a held foot snapping back shows here),
 //! and the time to retarget per 1000 frames. Under each case whose foot jump is above the
 //! source's + 5 cm (the bound `character_retarget` asserts), the frames where it is, per joint.
+//! Last, the pivot turns on RobotExpressive (every built-in "pivot turn" move the benchmark or
+//! `character_retarget` plays), frame by frame where a foot joint breaks that bound: each
+//! ankle's move, the pelvis's yaw rate and the stance width, the source's (scaled) against
+//! the robot's.
 //! `cargo bench -p odori-tests --bench retarget`.
 
 use std::time::Instant;
@@ -102,6 +106,71 @@ fn main() {
             jump_excess.iter().filter(|&&e| e > 0.05).count(),
             drifts.iter().copied().fold(0.0, f32::max)
         );
+    }
+    pivot_turns();
+}
+
+/// The pivot turns on RobotExpressive, frame by frame on the frames where a foot joint moves
+/// more than the source's largest + 5 cm: each ankle's move (robot / source scaled, m), the
+/// pelvis's yaw rate (the hip line's turn per frame, rad; the transfer gives the robot the
+/// source's), the stance width (horizontal ankle-to-ankle distance, m, source scaled / robot)
+/// the hips' horizontal distance from each ankle (robot), and each source ankle's height above
+/// its floor (scaled, m: a foot is held only within 5 cm of it). Every built-in pivot turn that
+/// the benchmark (every 20th move) or `character_retarget` (every 20th from the 10th) plays.
+fn pivot_turns() {
+    let file = "gltf/RobotExpressive.glb";
+    let im = import_bytes(file, &read(file), &ImportOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let ch = Character::from_imported(file, &im).unwrap_or_else(|e| panic!("{e}"));
+    let scale = ch.scale_from_canonical();
+    let joint = |c: Canon| ch.map.get(c).unwrap_or_else(|| panic!("{file}: no {c:?}"));
+    for (_, clip) in odori_core::library::builtin_clips().into_iter().enumerate().filter(|(i, c)| i % 10 == 0 && c.name.starts_with("pivot turn")) {
+        let map = HumanoidMap::from_skeleton(&clip.skeleton);
+        let out = ch.retarget(&clip, &map).unwrap();
+        let src = measured_source(&clip, &map);
+        let frames = src.frame_count().min(out.frame_count());
+        let (sp, cp): (Vec<_>, Vec<_>) = (0..frames).map(|f| (src.world_positions(f), out.world_positions(f))).unzip();
+        let flat = |v: glam::Vec3| glam::Vec3::new(v.x, 0.0, v.z);
+        let feet = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
+        let src_move = |f: usize, c: Canon| (sp[f][c.index()] - sp[f - 1][c.index()]).length() * scale;
+        let out_move = |f: usize, c: Canon| (cp[f][joint(c)] - cp[f - 1][joint(c)]).length();
+        let src_max: Vec<f32> = feet.iter().map(|&c| (1..frames).map(|f| src_move(f, c)).fold(0.0, f32::max)).collect();
+        let yaw = |a: glam::Vec3, b: glam::Vec3| (b.z - a.z).atan2(b.x - a.x);
+        let wrap = |d: f32| (d + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU) - std::f32::consts::PI;
+        let r = report(&clip, &map, &ch, &out);
+        // Each source ankle's floor (spec §J: the 1st percentile of its heights), scaled.
+        let floor = |c: Canon| odori_core::motion::floor_height(&(0..frames).map(|f| sp[f][c.index()].y * scale).collect::<Vec<_>>()).unwrap_or(0.0);
+        let (floor_l, floor_r) = (floor(Canon::LeftFoot), floor(Canon::RightFoot));
+        println!("RobotExpressive ← '{}' ({frames} frames at {} fps): excess {:+.3} m; source's largest move per frame (scaled) L ankle {:.3}, L toe {:.3}, R ankle {:.3}, R toe {:.3}", clip.name, clip.fps, r.foot_jump_excess_m(), src_max[0], src_max[1], src_max[2], src_max[3]);
+        println!("  {:>5} | {:>13} {:>13} | {:>13} {:>13} | {:>7} | {:>13} | {:>11} | {:>11}", "frame", "L ankle r/s", "R ankle r/s", "L toe r/s", "R toe r/s", "yaw/f", "stance s/r", "hips-L/-R r", "src lift L/R");
+        for f in 1..frames {
+            if !feet.iter().enumerate().any(|(k, &c)| out_move(f, c) > src_max[k] + 0.05) {
+                continue;
+            }
+            let (sl, sr) = (sp[f][Canon::LeftUpperLeg.index()], sp[f][Canon::RightUpperLeg.index()]);
+            let (pl, pr) = (sp[f - 1][Canon::LeftUpperLeg.index()], sp[f - 1][Canon::RightUpperLeg.index()]);
+            let yaw_rate = wrap(yaw(sl, sr) - yaw(pl, pr));
+            let stance_src = flat(sp[f][Canon::LeftFoot.index()] - sp[f][Canon::RightFoot.index()]).length() * scale;
+            let stance_out = flat(cp[f][joint(Canon::LeftFoot)] - cp[f][joint(Canon::RightFoot)]).length();
+            let hips = cp[f][joint(Canon::Hips)];
+            println!(
+                "  {f:>5} | {:>6.3}/{:<6.3} {:>6.3}/{:<6.3} | {:>6.3}/{:<6.3} {:>6.3}/{:<6.3} | {:>+7.3} | {:>6.3}/{:<6.3} | {:>5.3}/{:<5.3} | {:>5.3}/{:<5.3}",
+                out_move(f, Canon::LeftFoot),
+                src_move(f, Canon::LeftFoot),
+                out_move(f, Canon::RightFoot),
+                src_move(f, Canon::RightFoot),
+                out_move(f, Canon::LeftToe),
+                src_move(f, Canon::LeftToe),
+                out_move(f, Canon::RightToe),
+                src_move(f, Canon::RightToe),
+                yaw_rate,
+                stance_src,
+                stance_out,
+                flat(hips - cp[f][joint(Canon::LeftFoot)]).length(),
+                flat(hips - cp[f][joint(Canon::RightFoot)]).length(),
+                sp[f][Canon::LeftFoot.index()].y * scale - floor_l,
+                sp[f][Canon::RightFoot.index()].y * scale - floor_r,
+            );
+        }
     }
 }
 
