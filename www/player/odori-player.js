@@ -24,10 +24,10 @@
 //   audio.currentTime and draws that instant of the dance, so figure and song cannot drift.
 // - Where neither WebGPU nor WebGL2 exists the poster stays, with a message.
 // - Autoplay with sound is often blocked: the player then starts muted and shows "Unmute".
-// - Drawing costs only what can be seen: a paused player draws nothing, a playing one at most
-//   at its clip's own frame rate, and on a software adapter (no GPU: the browser draws with the
-//   CPU, whatever else the page runs) at most `OdoriPlayer.softwareMaxFps` (30) a second unless
-//   `max-fps` says otherwise.
+// - Drawing costs only what can be seen: a paused player draws nothing, a playing one every
+//   display frame, but on a software adapter (no GPU: the browser draws with the
+//   CPU, whatever else the page runs) at most `OdoriPlayer.softwareMaxFps` (30) a second and
+//   no faster than its clip's frames, unless `max-fps` says otherwise.
 
 let enginePromise = null;
 let fullEnginePromise = null;
@@ -860,10 +860,10 @@ export class OdoriPlayer extends HTMLElement {
     const frame = (nowMs) => {
       this.#raf = 0;
       if (!this.#playing) return;
-      // At most the clip's own frame rate (the viewer only interpolates between its frames)
-      // and the cap. The due time advances by whole intervals, so a late frame does not push
+      // Uncapped, every display frame (the viewer interpolates between the clip's frames);
+      // capped, at most the cap and the clip's own frame rate. The due time advances by whole intervals, so a late frame does not push
       // the later ones back; 2 ms of slack takes up the timestamps' jitter.
-      const intervalMs = 1000 / Math.min(this.maxFps, this.#clip?.fps || Infinity);
+      const intervalMs = this.maxFps < Infinity ? 1000 / Math.min(this.maxFps, this.#clip?.fps || Infinity) : 0;
       if (!(nowMs < this.#dueMs - 2)) {
         this.#dueMs = nowMs - this.#dueMs > intervalMs ? nowMs + intervalMs : this.#dueMs + intervalMs;
         this.#drawNow();

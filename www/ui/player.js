@@ -6,10 +6,10 @@
 //
 // The drawing budget: the animation loop draws only what a person can see change. A paused
 // figure is not drawn again (the camera, when it moves, is drawn at the next animation frame);
-// a playing one at most at the fastest shown clip's own frame rate (the viewer interpolates
-// between a clip's frames: drawing faster shows only poses the viewer made up) and at most
-// `maxFps` (set by the page on a software adapter, where each frame costs the CPU whole
-// milliseconds: see www/main.js). Scrubs, steps and edits still draw at once.
+// a playing one at every display frame (the viewer interpolates between a clip's frames), except
+// under `maxFps` (set by the page on a software adapter, where each frame costs the CPU whole
+// milliseconds: see www/main.js), where it draws at most `maxFps` times a second and no faster
+// than the fastest shown clip's own frame rate. Scrubs, steps and edits still draw at once.
 export class Player {
   constructor({ viewer, library, canvas, scrub, label, playButton, loop }) {
     Object.assign(this, { viewer, library, canvas, scrub, label, playButton, loop });
@@ -115,6 +115,15 @@ export class Player {
       try { fps = Math.max(fps, this.library.clip(id).fps); } catch { /* removed: not shown */ }
     }
     this.poseFps = fps > 0 ? fps : Infinity;
+  }
+
+  /**
+   * The animation loop's draws per second under `cap`: with a cap (a software adapter), also no
+   * faster than the fastest shown clip's frames; uncapped, every display frame (a GPU draws the
+   * poses interpolated between a clip's frames at no cost a person feels, and they look smoother).
+   */
+  drawRate(cap) {
+    return cap < Infinity ? Math.min(cap, this.poseFps) : Infinity;
   }
 
   /** Caps animation draws at `fps` per second (null: no cap, as fast as the display). */
@@ -285,7 +294,7 @@ export class Player {
         const end = (c.frames - 1) / c.fps;
         const t = this.songClock.position() - (this.compare && this.compare.songStart != null ? this.compare.songStart : 0);
         this.time = end > 0 ? ((t % end) + end) % end : 0;
-        if (this.frameDue(now, Math.min(cap, this.poseFps))) this.drawNow();
+        if (this.frameDue(now, this.drawRate(cap))) this.drawNow();
       } else if (this.playing && this.clip != null) {
         const dt = this.last == null ? 0 : (now - this.last) / 1000;
         this.last = now;
@@ -298,7 +307,7 @@ export class Player {
           else { this.time = end; this.pause(); ended = true; }
         }
         // The last frame of a clip that stops is always drawn.
-        if (ended || this.frameDue(now, Math.min(cap, this.poseFps))) this.drawNow();
+        if (ended || this.frameDue(now, this.drawRate(cap))) this.drawNow();
       } else {
         this.last = null;
         if (this.cameraMoved && this.frameDue(now, cap)) this.drawNow();
