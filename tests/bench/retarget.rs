@@ -7,6 +7,9 @@
 //! move of a foot joint against the source's (scaled; a held foot snapping back shows here),
 //! and the time to retarget per 1000 frames. Under each case whose foot jump is above the
 //! source's + 5 cm (the bound `character_retarget` asserts), the frames where it is, per joint.
+//! Under each case above the skate bound (and each case whose clip name contains
+//! `RETARGET_DETAIL`), what each foot joint's skate is made of: its floor, its frames in the
+//! 5 cm band and their speeds, and its height on the source's drag frames, against the source's.
 //! Last, the pivot turns on RobotExpressive (every built-in "pivot turn" move the benchmark or
 //! `character_retarget` plays), frame by frame where a foot joint breaks that bound: each
 //! ankle's move, the pelvis's yaw rate and the stance width, the source's (scaled) against
@@ -14,6 +17,8 @@
 //! `cargo bench -p odori-tests --bench retarget`.
 
 use std::time::Instant;
+
+use glam::Vec3;
 
 use odori_core::character::{measured_source, report, Character, RetargetOptions, Transfer};
 use odori_core::humanoid::{Canon, HumanoidMap};
@@ -33,6 +38,9 @@ fn main() {
         let map = HumanoidMap::from_skeleton(&m.skeleton);
         sources.push((m, map));
     }
+    // `RETARGET_DETAIL=name` prints the per-joint skate of the cases whose clip name contains
+    // it (cases above the source's skate + 1 cm/s are always printed).
+    let detail = std::env::var("RETARGET_DETAIL").ok();
     println!("retarget: {} sources (2 CMU salsa, {move_count} built-in moves)", sources.len());
     println!("{:<22} {:<34} {:>7} {:>7} | {:>7} {:>7} | {:>8} {:>8} | {:>7} {:>7} {:>7} {:>7} {:>7} | {:>6} {:>6} {:>7} | {:>8}", "character", "source", "dir.med", "dir.p95", "tw.med", "tw.p95", "ctl.med", "ctl.p95", "skate", "src", "Δ cm/s", "free", "drift m", "jump m", "src m", "excess", "ms/1k f");
     for file in ["gltf/Xbot.glb", "gltf/RobotExpressive.glb"] {
@@ -89,6 +97,11 @@ fn main() {
             drifts.push(drift_m);
             if r.foot_jump_excess_m() > 0.05 {
                 println!("{:<22}   one-frame moves above the source's largest + 5 cm (frame: character / source there, m): {}", "", jump_frames(clip, map, &ch, &out, 0.05).join("; "));
+            }
+            if delta > 1.0 || detail.as_deref().is_some_and(|d| clip.name.contains(d)) {
+                for line in skate_joints(clip, map, &ch, &out) {
+                    println!("{:<22}   {line}", "");
+                }
             }
         }
         deltas.sort_by(f32::total_cmp);
@@ -172,6 +185,49 @@ fn pivot_turns() {
             );
         }
     }
+}
+
+/// Per foot joint, what the skate (spec §J: horizontal speed on the frames within 5 cm of the
+/// joint's floor, the 1st percentile of its heights) is made of, for the character and the
+/// source (at the character's size): the floor, how many frames are in the band, their summed
+/// and mean speed; and on the source's drag frames (in its band and faster than 30 cm/s) each
+/// one's height above its own floor (mean, lowest) and world height (mean): a character joint that sinks below where
+/// the source's is lowers its floor, and its slow frames drop out of the band.
+fn skate_joints(clip: &Clip, map: &HumanoidMap, ch: &Character, out: &Clip) -> Vec<String> {
+    let src = measured_source(clip, map);
+    let scale = ch.scale_from_canonical();
+    let frames = src.frame_count().min(out.frame_count());
+    let (sp, cp): (Vec<_>, Vec<_>) = (0..frames).map(|f| (src.world_positions(f), out.world_positions(f))).unzip();
+    let fps = src.fps;
+    let mut lines = Vec::new();
+    for c in [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe] {
+        let Some(j) = ch.map.get(c) else { continue };
+        let s: Vec<_> = sp.iter().map(|p| p[c.index()] * scale).collect();
+        let o: Vec<_> = cp.iter().map(|p| p[j]).collect();
+        let floor = |t: &[Vec3]| odori_core::motion::floor_height(&t.iter().map(|p| p.y).collect::<Vec<_>>()).unwrap_or(0.0);
+        let (fs, fo) = (floor(&s), floor(&o));
+        let speed = |t: &[Vec3], f: usize| (t[f] - t[f - 1]).with_y(0.0).length() * fps * 100.0;
+        let band = |t: &[Vec3], fl: f32| -> (usize, f32) {
+            let v: Vec<f32> = (1..frames).filter(|&f| t[f].y - fl < 0.05).map(|f| speed(t, f)).collect();
+            (v.len(), v.iter().sum())
+        };
+        let ((ns, ss), (no, so)) = (band(&s, fs), band(&o, fo));
+        let drag: Vec<usize> = (1..frames).filter(|&f| s[f].y - fs < 0.05 && speed(&s, f) > 30.0).collect();
+        let heights = |t: &[Vec3], fl: f32| -> (f32, f32) {
+            let h: Vec<f32> = drag.iter().map(|&f| t[f].y - fl).collect();
+            (h.iter().sum::<f32>() / h.len().max(1) as f32, h.iter().copied().fold(f32::INFINITY, f32::min))
+        };
+        let ((hs, ls), (ho, lo)) = (heights(&s, fs), heights(&o, fo));
+        lines.push(format!(
+            "{c:?}: floor {fo:+.3} m (source {fs:+.3}); in band {no} frames, sum {so:.0}, mean {:.1} cm/s (source {ns}, {ss:.0}, {:.1}); on the source's {} drag frames, height above its floor: mean {ho:+.3} lowest {lo:+.3} m (source {hs:+.3} / {ls:+.3}); world y mean {:+.3} (source {:+.3})",
+            so / no.max(1) as f32,
+            ss / ns.max(1) as f32,
+            drag.len(),
+            drag.iter().map(|&f| o[f].y).sum::<f32>() / drag.len().max(1) as f32,
+            drag.iter().map(|&f| s[f].y).sum::<f32>() / drag.len().max(1) as f32,
+        ));
+    }
+    lines
 }
 
 /// Per foot joint, the frames where the character's one-frame move is more than `margin_m`

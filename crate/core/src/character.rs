@@ -30,6 +30,10 @@
 //!   down to the hold's height (the source's) over the frames before it, on its free path or
 //!   over the release ease it lands within, not in one frame: a rig that lifts its foot
 //!   higher than the source (RobotExpressive's longer feet) would otherwise snap down.
+//!   Where the source's toe is on the floor, the character's is kept off it: a rig whose foot
+//!   is longer or whose ankle is lower than the source's (RobotExpressive's) would point its
+//!   toe through the floor, so its foot is pitched up about the ankle, smoothly over several
+//!   frames (`toe_clearance`).
 //!   The benchmark prints the skate against the source's and against the free-feet control
 //!   (`tests/bench/retarget.rs`).
 //! - A motion-capture take's calibration frame (frame 0 in its skeleton's rest pose, as in
@@ -445,7 +449,22 @@ impl Character {
                 y_offset: char_rest_pos[leg.foot].y - canon_rest[leg.canon_foot.index()].y * scale,
             })
             .collect();
+        // The same for the toe: the source's toe height onto the character's ground.
+        let toe_y_offset: Vec<f32> =
+            legs.iter().map(|leg| leg.toe.map_or(0.0, |toe| char_rest_pos[toe].y - canon_rest[leg.canon_toe.index()].y * scale)).collect();
         let mut free_hip: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
+        // Each foot's ankle hinge (the horizontal axis across the foot at rest, in the foot
+        // joint's own frame; a toe-up turn about it is positive), and its world direction on
+        // each frame of pass 0: the axis `toe_clearance` pitches the foot about.
+        let hinge_local: Vec<Option<Vec3>> = legs
+            .iter()
+            .map(|leg| {
+                let toe = leg.toe?;
+                let across = (char_rest_pos[toe] - char_rest_pos[leg.foot]).cross(Vec3::Y).try_normalize()?;
+                Some(char_rest_rot[leg.foot].inverse() * across)
+            })
+            .collect();
+        let mut free_hinge: Vec<Vec<Vec3>> = vec![Vec::with_capacity(frames); legs.len()];
         let mut plant_target: Vec<Vec<Option<Vec3>>> = vec![vec![None; frames]; legs.len()];
         let mut drop_m = vec![0.0f32; frames];
         let mut shift_m = vec![Vec3::ZERO; frames];
@@ -473,6 +492,13 @@ impl Character {
         let mut p = vec![Vec3::ZERO; n];
         let mut local = vec![Quat::IDENTITY; n];
         let mut ik_shin = [Quat::IDENTITY; 2];
+        // Per leg and frame, the turn that pitches the foot up to keep its toe off the floor
+        // (`toe_clearance`), and which leg a foot joint is.
+        let mut toe_pitch: Vec<Vec<Option<Quat>>> = vec![vec![None; frames]; legs.len()];
+        let mut foot_leg = vec![usize::MAX; n];
+        for (k, leg) in legs.iter().enumerate() {
+            foot_leg[leg.foot] = k;
+        }
         for pass in if hold { 0..2 } else { 1..2 } {
             if pass == 1 && hold {
                 (plant_target, shift_m) = hold_plan(&feet, src.fps);
@@ -482,6 +508,7 @@ impl Character {
                     }
                 }
                 drop_m = pelvis_drop(&legs, &free_hip, &plant_target, src.fps);
+                toe_pitch = toe_clearance(&feet, &free_hinge, &toe_y_offset, &shift_m, &plant_target, src.fps);
                 // A foot not held, where the pelvis drops for the other, keeps its (shifted)
                 // free path by IK: lowering the body must not lower the step with it — a
                 // swing foot dragged down to the floor slides on it (the skate the source does
@@ -515,6 +542,9 @@ impl Character {
                         Some(c) => (pg.inverse() * canon_world(c, &src_rot)).normalize(),
                         None => j.rest_rotation,
                     };
+                    if let Some(turn) = foot_leg.get(i).and_then(|&k| toe_pitch.get(k)).and_then(|t| t[f]) {
+                        local[i] = (pg.inverse() * turn * pg * local[i]).normalize();
+                    }
                     g[i] = pg * local[i];
                     let t = if i == hips {
                         pg.inverse() * (target - pp)
@@ -558,6 +588,9 @@ impl Character {
                             t.src_toe.push(src_pos[leg.canon_toe.index()] * scale);
                         }
                         free_hip[k].push(p[leg.hip]);
+                        if let Some(h) = hinge_local[k] {
+                            free_hinge[k].push(g[leg.foot] * h);
+                        }
                     }
                 } else {
                     rotations.extend_from_slice(&local);
@@ -825,6 +858,99 @@ fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3
     (targets, body.unwrap_or_else(|| vec![Vec3::ZERO; frames]))
 }
 
+/// The most [`toe_clearance`] pitches a foot up: a quarter turn (a foot pointed straight down
+/// brought level), however far below the source's its toe would be.
+const TOE_PITCH_MAX_RAD: f32 = std::f32::consts::FRAC_PI_2;
+
+/// Keeps the character's toe off the floor where the source's is: wherever the source's toe
+/// is on its floor (within spec §J's contact band, [`PLANT_HEIGHT_M`]) and the character's toe
+/// would go lower than it (at the character's size, on the character's ground:
+/// `toe_y_offset`), the foot is pitched up about its ankle hinge (`hinge`: the horizontal
+/// axis across the foot at rest, as the transfer turns the foot on each frame) just enough to
+/// lift the toe to the source's height. Returns the world turn per leg and frame (`None`: the
+/// foot as the transfer turns it), applied on top of the foot's world rotation.
+/// - Why: a rig whose foot is longer than the source's and whose ankle is lower
+///   (RobotExpressive's) points its toe deeper when the source points its foot. In
+///   "step-touch + claps" the robot's toe went 5–6 cm under its ground while the source
+///   dragged the ball of its foot along the floor, while its heel rose on a held ankle, and
+///   on a one-frame hold on the ball. A toe under the floor is wrong to see, and it lowers
+///   the toe's measured floor (spec §J's 1st percentile), so its slow flat-foot frames fall
+///   out of the 5 cm contact band and its skate reads as the drags alone.
+/// - Why the foot and not the ankle: the ankle stays where the transfer or the hold puts it,
+///   so a held ankle stays held and the legs keep the source's directions (raising the ankle
+///   by the leg's IK instead bent the robot's knees: its direction p95 rose 0.5°).
+/// - Only raised, never lowered: a toe higher than the source's is the rig's shape (a shorter
+///   foot) and is left, and a foot is turned no further than level with its ankle (nor more
+///   than [`TOE_PITCH_MAX_RAD`]).
+/// - Every such frame counts, held or not (a heel rising on a held ankle, a foot held on its
+///   ball, a release ease), but one where the transfer sweeps the toe faster than the source's
+///   by more than a planted foot moves ([`PLANT_SPEED_CM_S`]): its path there is the rig's own
+///   (a body with wider hips turning round a held foot, as in pivot turns), not the source's
+///   contact, and putting it on the floor would draw a slide the source does not make. A foot
+///   in the air keeps the transfer's pose (a pointed foot lifted in a kick is not turned).
+/// - The pitch is smoothed as the pelvis drop is (a running maximum, then a running mean over
+///   ±[`RELEASE_S`]), so the foot turns into and out of it over several frames, never in one.
+fn toe_clearance(feet: &[FootTracks], hinge: &[Vec<Vec3>], toe_y_offset: &[f32], shift: &[Vec3], targets: &[Vec<Option<Vec3>>], fps: f32) -> Vec<Vec<Option<Quat>>> {
+    let mut turns = Vec::with_capacity(feet.len());
+    for (k, t) in feet.iter().enumerate() {
+        let frames = targets[k].len().min(t.src_ankle.len()).min(t.free_ankle.len());
+        let mut leg_turns = vec![None; targets[k].len()];
+        if frames == 0 || t.src_toe.len() < frames || t.free_toe.len() < frames || hinge[k].len() < frames {
+            turns.push(leg_turns);
+            continue;
+        }
+        // The source's toe is on its floor within spec §J's contact band.
+        let heights: Vec<f32> = t.src_toe[..frames].iter().map(|p| p.y).collect();
+        let Some(floor) = motion::floor_height(&heights) else {
+            turns.push(leg_turns);
+            continue;
+        };
+        // Horizontal speed of a track over frames f−1..f+1, cm/s (`shift`: the body's move).
+        let speed_cm_s = |track: &[Vec3], f: usize, moved: bool| {
+            let (a, b) = (f.saturating_sub(1), (f + 1).min(frames - 1));
+            let d = track[b] - track[a] + if moved { shift[b] - shift[a] } else { Vec3::ZERO };
+            Vec3::new(d.x, 0.0, d.z).length() * fps * 100.0 / (b - a).max(1) as f32
+        };
+        let mut pitch = vec![0.0f32; frames];
+        for f in 0..frames {
+            if t.src_toe[f].y - floor >= PLANT_HEIGHT_M || speed_cm_s(&t.free_toe, f, true) > speed_cm_s(&t.src_toe, f, false) + PLANT_SPEED_CM_S {
+                continue;
+            }
+            // The foot, ankle to toe, as the transfer turns it (the IK leaves the foot its
+            // world rotation). Turned by θ about the hinge h, its toe's height from the ankle
+            // is p + a·cos θ + b·sin θ = p + m·cos(θ − top).
+            let (v, h) = (t.free_toe[f] - t.free_ankle[f], hinge[k][f]);
+            let along = h * h.dot(v);
+            let u = v - along;
+            let (p, a, b) = (along.y, u.y, h.cross(u).y);
+            let m = (a * a + b * b).sqrt();
+            if m < 1e-6 {
+                continue;
+            }
+            // The toe-up turn that takes the toe highest, in [0, 2π): a foot pointed past
+            // straight down (b < 0) first goes a little lower, then up.
+            let top = b.atan2(a).rem_euclid(std::f32::consts::TAU);
+            let level = (top - (-p / m).clamp(-1.0, 1.0).acos()).clamp(0.0, top).min(TOE_PITCH_MAX_RAD);
+            let at = targets[k][f].unwrap_or(t.free_ankle[f] + shift[f]);
+            let want = (t.src_toe[f].y + toe_y_offset[k] - at.y).min(0.0);
+            if want > p + a {
+                pitch[f] = (top - ((want - p) / m).clamp(-1.0, 1.0).acos()).clamp(0.0, level);
+            }
+        }
+        let w = ((RELEASE_S * fps).round() as usize).max(1);
+        let window = |f: usize| f.saturating_sub(w)..(f + w + 1).min(frames);
+        let most: Vec<f32> = (0..frames).map(|f| pitch[window(f)].iter().copied().fold(0.0, f32::max)).collect();
+        for f in 0..frames {
+            let turn = most[window(f)].iter().sum::<f32>() / window(f).len() as f32;
+            if turn > 1e-5 {
+                leg_turns[f] = Some(Quat::from_axis_angle(hinge[k][f], turn));
+            }
+        }
+        turns.push(leg_turns);
+    }
+    turns
+}
+
 /// How far the pelvis drops on each frame so every held foot is within reach of its hip
 /// (legs nearly straight at most), smoothed so the body does not bob: a running maximum then
 /// a running mean over ±[`RELEASE_S`].
@@ -1088,6 +1214,54 @@ mod tests {
         // The ankle does move: round the ball.
         let (a, b) = (targets[0][12].unwrap(), targets[0][49].unwrap());
         assert!((Vec3::new(a.x - b.x, 0.0, a.z - b.z)).length() > 0.05, "{a} {b}");
+    }
+
+    #[test]
+    fn a_dragged_toe_on_a_longer_foot_stays_on_the_floor() {
+        // The source raises its left heel over frames 8..20 (ankle 8 → 12 cm up, toe on its
+        // floor at height 0), drags the ball of its foot along the floor at 150 cm/s for
+        // frames 20..60, then lowers the heel again over 60..72. The character stands with its
+        // ankle 10 cm up (the hold's `y_offset` of 2 cm) on a foot 30 cm long, its toe on the
+        // ground; turned as the source's, its longer foot points its toe 5 cm under the ground
+        // on the drag.
+        let fps = 60.0;
+        let frames = 80;
+        let drag = 20..60;
+        let x = |f: usize| 0.025 * f.clamp(drag.start, drag.end) as f32;
+        // How far the heel is up, 0..1.
+        let heel = |f: usize| ((f as f32 - 8.0) / 12.0).min((72.0 - f as f32) / 12.0).clamp(0.0, 1.0);
+        let src_ankle: Vec<Vec3> = (0..frames).map(|f| Vec3::new(x(f), 0.08 + 0.04 * heel(f), 0.0)).collect();
+        let src_toe: Vec<Vec3> = (0..frames).map(|f| Vec3::new(x(f) + 0.12, 0.0, 0.0)).collect();
+        let free_ankle: Vec<Vec3> = (0..frames).map(|f| Vec3::new(x(f), 0.10 + 0.04 * heel(f), 0.0)).collect();
+        let drop = |f: usize| 0.10 + 0.09 * heel(f);
+        let free_toe: Vec<Vec3> = (0..frames).map(|f| free_ankle[f] + Vec3::new((0.09 - drop(f) * drop(f)).sqrt(), -drop(f), 0.0)).collect();
+        let still = |y: f32| (0..frames).map(|_| Vec3::new(0.0, y, -0.3)).collect::<Vec<_>>();
+        let feet = [
+            tracks(src_ankle, src_toe.clone(), free_ankle.clone(), free_toe.clone()),
+            tracks(still(0.08), still(0.0), still(0.0), still(-0.01)),
+        ];
+        // The hinge across each foot (the foot pitches about it, so it stays put).
+        let hinge = vec![vec![Vec3::Z; frames], vec![Vec3::Z; frames]];
+        // The source's toe height onto the character's: the same ground.
+        let toe_y_offset = [0.0, 0.0];
+        let (targets, shift) = hold_plan(&feet, fps);
+        let turns = toe_clearance(&feet, &hinge, &toe_y_offset, &shift, &targets, fps);
+        let toe_at = |f: usize| {
+            let ankle = targets[0][f].unwrap_or(free_ankle[f] + shift[f]);
+            ankle + turns[0][f].unwrap_or(Quat::IDENTITY) * (free_toe[f] - free_ankle[f])
+        };
+        // Without the pitch the toe is 5 cm under; with it, within 1 cm of the ground on every
+        // frame the source's toe drags (the turn comes in over the frames before).
+        assert!(free_toe[40].y < -0.045);
+        for f in drag.clone() {
+            let y = toe_at(f).y;
+            assert!(y.abs() < 0.01, "frame {f}: toe at {y:+.3} m");
+        }
+        // The foot turns into it and out of it over several frames, never in one.
+        let steps: Vec<f32> = (1..frames).map(|f| (toe_at(f) - toe_at(f - 1)).length()).collect();
+        assert!(steps.iter().all(|&d| d < 0.05), "{steps:?}");
+        // The other foot, standing flat, is not turned.
+        assert!(turns[1].iter().all(Option::is_none));
     }
 
     #[test]
