@@ -205,8 +205,12 @@ export class Player {
 
   /** Pauses the figure and the song together. */
   pause() {
+    const wasPlaying = this.playing;
     this.playing = false;
     if (this.songClock && this.songClock.playing) this.songClock.stop();
+    // Under the drawing cap the last instant the loop reached may not have been drawn: a
+    // paused figure (and the frame counter) show exactly where it stopped.
+    if (wasPlaying) this.drawNow();
     this.render();
   }
 
