@@ -284,12 +284,12 @@ impl Choreographer {
     /// basMusicShifted, basMotion, basMotionShifted, kineticBeatsPerSec, musicBeatsPerSec },
     /// footSkate: { meanCmPerS, p95CmPerS, contacts }, pfc, joinJumpMean, joinJumpMax, bars:
     /// [{ bar, beats, footSkate, joinJump }] }`. `beatTimesSecs`: the song's beats (the grid's
-    /// `beatTimesSecs`); omitted: each bar's four quarters.
+    /// `beatTimesSecs`); omitted: each bar's beats spread evenly over it.
     pub fn quality(&self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
         let d = self.doc.as_ref().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
         let bars = d.bars();
         let beats = beat_times_secs.unwrap_or_else(|| {
-            bars.iter().flat_map(|b| (0..4).map(move |k| b.start_secs + b.duration_secs() * k as f32 / 4.0)).collect()
+            bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect()
         });
         // As the person sees it (the joined 60 fps dance); the measures resample to 30 fps.
         let clip = d.render(&self.lib, &RenderOptions::default());

@@ -83,10 +83,26 @@ pub enum MoveKey {
     /// One of the built-in moves.
     #[serde(rename_all = "camelCase")]
     Builtin { r#move: MoveInfo },
-    /// Four counts of an imported clip, cut at `cut_tempo_bpm` (the tempo the person stated;
-    /// `None`: the tempo detected from the motion), starting on count `first_count` (0-based).
+    /// `counts` counts of an imported clip (4, or 3 for a bar in 3), cut at `cut_tempo_bpm` (the
+    /// tempo the person stated; `None`: the tempo detected from the motion), starting on count
+    /// `first_count` (0-based). `counts` is left out of the file (and the key's id) when 4, so
+    /// projects saved before 3-count segments open, and save, unchanged.
     #[serde(rename_all = "camelCase")]
-    Cut { clip: ClipRef, cut_tempo_bpm: Option<f32>, first_count: u32 },
+    Cut {
+        clip: ClipRef,
+        cut_tempo_bpm: Option<f32>,
+        first_count: u32,
+        #[serde(default = "four_counts", skip_serializing_if = "is_four_counts")]
+        counts: u32,
+    },
+}
+
+fn four_counts() -> u32 {
+    4
+}
+
+fn is_four_counts(n: &u32) -> bool {
+    *n == 4
 }
 
 impl MoveKey {
