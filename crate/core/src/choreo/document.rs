@@ -35,7 +35,7 @@ use thiserror::Error;
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
 use super::fill::{bar_count_rate_bpm, count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, free_skate_pass, in_beat_rate_band, FillError, FillWeights, Layer, Tempi, beat_rate_ladder, skate_ladder};
 use super::render::{render, RenderOptions};
-use super::quality::{foot_skate_samples, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
+use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
 use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
 use crate::bars::Bar;
 use crate::clip::Clip;
@@ -48,7 +48,22 @@ pub struct DanceFigures {
     pub kinetic_per_count: f32,
     /// Mean foot skate, centimetres per second.
     pub foot_skate_cm_per_s: f32,
+    /// The largest join jump (spec §J, [`super::quality::join_jumps`]), 0 with one bar.
+    pub join_jump_max: f32,
+    /// The bar after that join (its first bar is 1), if any.
+    pub worst_join_bar: Option<usize>,
 }
+
+/// The largest join jump a generated dance should have (spec §J; the goal): joins no
+/// more abrupt than 1.5 times the sharpest moments (95th percentile) of the moves themselves.
+/// What [`FillWeights::follow_joins`] keeps to.
+pub const JOIN_JUMP_GOAL: f32 = 1.5;
+/// Refills [`FillWeights::follow_joins`] tries at most, each steering away from one more join.
+pub const JOIN_REPAIRS: usize = 16;
+/// Cost added to a segment in the bar after a join it made too abrupt, so the refill takes
+/// another there: far above any term of the objective (a ban that stays finite, so a bar
+/// whose every segment is banned still gets one).
+const JOIN_BAN: f32 = 100.0;
 
 /// [`DanceFigures`] of the dance `path` fills `bars` with; `None` when it cannot be measured
 /// (too short, no bars).
@@ -62,7 +77,16 @@ pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Opti
     let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
     let skate = summarize_skate(&foot_skate_samples(&m), frame_of(first.start_secs)..frame_of(last.end_secs));
     let counts: usize = bars.iter().map(Bar::beat_count).sum();
-    Some(DanceFigures { kinetic_per_count: kinetic as f32 / counts.max(1) as f32, foot_skate_cm_per_s: skate.mean_cm_per_s })
+    // Join jumps as dance_quality measures them (joins at the bars' starts after the first).
+    let joins: Vec<(usize, usize)> = bars.iter().enumerate().skip(1).map(|(i, b)| (i, frame_of(b.start_secs))).filter(|&(_, f)| f + 1 < frames).collect();
+    let jumps = join_jumps(&m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
+    let worst = jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (joins[k].0, j));
+    Some(DanceFigures {
+        kinetic_per_count: kinetic as f32 / counts.max(1) as f32,
+        foot_skate_cm_per_s: skate.mean_cm_per_s,
+        join_jump_max: worst.map_or(0.0, |w| w.1),
+        worst_join_bar: worst.map(|w| w.0),
+    })
 }
 
 /// The counts each bar takes (spec §E, [`super::segment`]'s module docs): its beats, when the
@@ -587,6 +611,13 @@ impl Choreography {
         self.doc.settings.fill.follow_skate = on;
     }
 
+    /// Whether the filling keeps every join of the dance within [`JOIN_JUMP_GOAL`]
+    /// ([`FillWeights::follow_joins`]).
+    pub fn set_follow_joins(&mut self, on: bool) {
+        self.record();
+        self.doc.settings.fill.follow_joins = on;
+    }
+
     /// Whether the filling keeps the dance's kinetic beat rate near the song's
     /// ([`FillWeights::follow_beat_rate`]).
     pub fn set_follow_beat_rate(&mut self, on: bool) {
@@ -699,10 +730,11 @@ impl Choreography {
         let (mut path, mut cost) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &path);
         // Foot skate no worse than the source clips' (FillWeights::follow_skate).
         if weights.follow_skate {
-            let current = match figures {
-                Some((p, f)) if p == path => f,
+            let current = match &figures {
+                Some((p, f)) if *p == path => *f,
                 _ => dance_figures(lib, bars, &path),
             };
+            figures = Some((path.clone(), current));
             if let Some(before) = current.filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(lib, &path)) {
                 let on_beat = in_beat_rate_band(before.kinetic_per_count);
                 let over: Vec<Vec<f32>> = (0..layers.len()).map(|t| (0..lib.len()).map(|s| excess(t, s).max(0.0) / 100.0).collect()).collect();
@@ -713,10 +745,74 @@ impl Choreography {
                     let (p, c) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &p);
                     let Some(f) = dance_figures(lib, bars, &p) else { continue };
                     if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &p) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)) {
+                        figures = Some((p.clone(), Some(f)));
                         (path, cost) = (p, c);
                         break;
                     }
                 }
+            }
+        }
+        // Joins no more abrupt than JOIN_JUMP_GOAL (FillWeights::follow_joins), measured on the
+        // dance: the table's cost (§G, link directions and end gaps) misses some abrupt joins,
+        // e.g. between two crouched moves of the Indian clips in 3/4, where fewer moves fit a bar.
+        if weights.follow_joins && layers.len() > 1 {
+            let current = match figures {
+                Some((p, f)) if p == path => f,
+                _ => dance_figures(lib, bars, &path),
+            };
+            // Each refill bars, from every bar, the move after the worst join of the last refill
+            // (the same move makes the same abrupt join wherever the filling puts it after a
+            // like move: barred from one bar only, on the 108 BPM piece in 3 it moved to the
+            // next), so the bars add up over the tries. A refill whose feet slide past the goal
+            // the dance met makes the next one charge skate too, at the next weight of
+            // skate_ladder (the moves with the smoothest joins are not always the cleanest).
+            // The best dance that keeps what the first one met is kept.
+            let (mut trial_path, mut trial) = (path.clone(), current);
+            let mut best = current;
+            let skate_met = current.is_some_and(|f| f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &path));
+            let on_beat = current.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
+            let mut ban: Vec<Vec<f32>> = Vec::new();
+            let mut skate_weights = skate_ladder();
+            let mut skate_weight = 0.0f32;
+            for _ in 0..JOIN_REPAIRS {
+                let Some(f) = trial else { break };
+                let joins_ok = f.join_jump_max <= JOIN_JUMP_GOAL;
+                let skate_ok = !skate_met || f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &trial_path);
+                if joins_ok && skate_ok {
+                    break;
+                }
+                if ban.is_empty() {
+                    ban = vec![vec![0.0; lib.len()]; layers.len()];
+                }
+                if !joins_ok {
+                    // The bar after the join takes another move (the one before it, when that
+                    // one is pinned; both pinned: nothing to change).
+                    let Some(bar) = f.worst_join_bar else { break };
+                    let Some(t) = [bar, bar - 1].into_iter().find(|&t| matches!(layers[t], Layer::Open { .. })) else { break };
+                    let s = trial_path[t];
+                    for v in ban.iter_mut() {
+                        v[s] += JOIN_BAN;
+                    }
+                }
+                if !skate_ok {
+                    let Some(w) = skate_weights.next() else { break };
+                    skate_weight = w;
+                }
+                let extra: Vec<Vec<f32>> = ban.iter().enumerate().map(|(t, v)| v.iter().enumerate().map(|(s, b)| b + skate_weight * excess(t, s).max(0.0) / 100.0).collect()).collect();
+                let with = Tempi { extra: &extra, ..tempi };
+                let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &with, &weights)?;
+                let (p, c) = free_skate_pass(&table, &layers, &intensity, &node_cost, &with, &weights, &excess, &p);
+                let after = dance_figures(lib, bars, &p);
+                if let (Some(a), Some(b)) = (after, best) {
+                    // Kept only when its worst join is better and nothing the dance met is lost:
+                    // the beat rate's band, and the skate goal.
+                    let keeps_rate = !on_beat || in_beat_rate_band(a.kinetic_per_count);
+                    let keeps_skate = !skate_met || a.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &p);
+                    if a.join_jump_max < b.join_jump_max && keeps_rate && keeps_skate {
+                        (path, cost, best) = (p.clone(), c, after);
+                    }
+                }
+                (trial_path, trial) = (p, after);
             }
         }
         self.record();

@@ -135,6 +135,15 @@ pub struct FillWeights {
     /// already within it is filled as without it. Default true.
     #[serde(default = "yes")]
     pub follow_skate: bool,
+    /// Keep every join of the dance within [`super::document::JOIN_JUMP_GOAL`] (spec §J's join
+    /// jump): when the dance, rendered and measured ([`super::dance_figures`]), has a join above
+    /// it, the move after its worst join is barred from that bar and the filling runs again, up
+    /// to [`super::document::JOIN_REPAIRS`] times; a refill is kept only when that join improves
+    /// and the beat-rate band and skate goal the dance met still hold. A dance whose joins are
+    /// within the goal is filled as without it (every 4/4 song of `choreo_quality`). Default
+    /// true.
+    #[serde(default = "yes")]
+    pub follow_joins: bool,
 }
 
 /// Skate weights (per m/s of skate above the source clip's) tried, weakest first, by
@@ -167,7 +176,7 @@ pub fn in_beat_rate_band(kinetic_per_count: f32) -> bool {
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT, follow_beat_rate: true, follow_skate: true }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT, follow_beat_rate: true, follow_skate: true, follow_joins: true }
     }
 }
 

@@ -731,17 +731,19 @@ impl SegmentLibrary {
         guard.as_ref().filter(|t| t.repeat_penalty() == repeat_penalty).cloned()
     }
 
-    /// Rescales every segment's intensity to the library's range.
+    /// Rescales every segment's intensity to the range of the library's segments of its count
+    /// (a bar in 3 chooses among 3-count moves only, so they are scaled among themselves; and
+    /// the 4-count moves keep the scale they had before 3-count ones were cut).
     fn rescale(&mut self) {
-        let mut v: Vec<f32> = self.segments.iter().map(|s| s.intensity).collect();
-        if v.is_empty() {
-            return;
-        }
-        v.sort_by(f32::total_cmp);
-        let lo = v[v.len() * 5 / 100];
-        let hi = v[(v.len() * 95 / 100).min(v.len() - 1)];
-        for s in self.segments.iter_mut() {
-            s.intensity01 = if hi > lo + 1e-6 { ((s.intensity - lo) / (hi - lo)).clamp(0.0, 1.0) } else { 0.5 };
+        let metres: std::collections::BTreeSet<usize> = self.segments.iter().map(Segment::counts).collect();
+        for n in metres {
+            let mut v: Vec<f32> = self.segments.iter().filter(|s| s.counts() == n).map(|s| s.intensity).collect();
+            v.sort_by(f32::total_cmp);
+            let lo = v[v.len() * 5 / 100];
+            let hi = v[(v.len() * 95 / 100).min(v.len() - 1)];
+            for s in self.segments.iter_mut().filter(|s| s.counts() == n) {
+                s.intensity01 = if hi > lo + 1e-6 { ((s.intensity - lo) / (hi - lo)).clamp(0.0, 1.0) } else { 0.5 };
+            }
         }
     }
 
