@@ -73,7 +73,7 @@ fn library() -> SegmentLibrary {
 }
 
 /// Test pieces from the demo-song generator that no setting was tuned on: other tempi, two
-/// pieces in 3/4 (150 and 108 BPM), a tempo ramp and a short piece (three bars of the chorus, which the analysis takes as
+/// pieces in 3/4 (150, 108, 126, 138, 84 BPM and a 96 → 120 BPM ramp), a tempo ramp and a short piece (three bars of the chorus, which the analysis takes as
 /// a loop).
 fn demo_pieces() -> Vec<(String, RmsEnvelope)> {
     let make = |beats_per_bar: u32, bpm: f32, end_bpm: f32| {
@@ -81,7 +81,7 @@ fn demo_pieces() -> Vec<(String, RmsEnvelope)> {
     };
     let env = |samples: &[f32]| envelope(&[samples], 22050.0).expect("envelope");
     let mut out = Vec::new();
-    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 140.0, 140.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (4, 90.0, 130.0)] {
+    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 140.0, 140.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (3, 126.0, 126.0), (3, 96.0, 120.0), (3, 138.0, 138.0), (3, 84.0, 84.0), (4, 90.0, 130.0)] {
         let song = make(bpb, bpm, end);
         let label = if bpm == end { format!("demo in {bpb}, {bpm:.0} BPM") } else { format!("demo in {bpb}, ramp {bpm:.0}→{end:.0} BPM") };
         out.push((label, env(&song.samples)));

@@ -12,7 +12,11 @@
 //! pieces from the demo-song generator that nothing was tuned on (100 and 140 BPM, a tempo
 //! ramp, three bars), and on two pieces in 3/4: the 150 BPM waltz (printed only while the
 //! library had 4-count moves alone: −0.020 against the half-shifted beats, beat rate 1.30) and
-//! a 108 BPM piece in 3 held out (its check, the same goals, was fixed before it was first run).
+//! a 108 BPM piece in 3 (meant as held out, but its first run failed the join goal, 5.66, and
+//! `FillWeights::follow_joins` was made on it), two more in 3 held out for that change (126 BPM,
+//! which failed it at 2.92, and a 96 → 120 BPM ramp, which passed), after which 3-count
+//! segments were cut on every count; and two held out for that (138 and 84 BPM; their check, the
+//! same goals, fixed before their first run).
 //! Bars in 3 are danced by the imported clips' 3-count segments (`choreo::segment`'s module
 //! docs). The random control draws, for each bar, among the segments that bar can take (its
 //! count). The full figures are printed by `tests/bench/choreo_quality.rs`.
@@ -61,7 +65,7 @@ fn generated_dances_follow_the_beat_on_every_real_song() {
         .collect();
     let demo = |bpb: u32, bpm: f32, end_bpm: f32| demo_song_with(22050.0, &DemoSongOptions { beats_per_bar: bpb, bpm, end_bpm }).unwrap();
     let env = |x: &[f32]| envelope(&[x], 22050.0).unwrap();
-    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 140.0, 140.0), (4, 90.0, 130.0), (3, 150.0, 150.0), (3, 108.0, 108.0)] {
+    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 140.0, 140.0), (4, 90.0, 130.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (3, 126.0, 126.0), (3, 96.0, 120.0), (3, 138.0, 138.0), (3, 84.0, 84.0)] {
         songs.push((format!("demo in {bpb}, {bpm}→{end} BPM"), env(&demo(bpb, bpm, end).samples), true));
     }
     let fast = demo(4, 140.0, 140.0);

@@ -15,8 +15,13 @@
 //!
 //! Bars in 3 (extends §E, which says "segments of 4 counts (one bar)"): a segment is one bar
 //! *of its own metre*. Each imported clip is cut at the same counts twice: into windows of 4
-//! counts plus the next bar's first, and into windows of 3 counts plus the next one
-//! ([`SEGMENT_METRES`]; both every `hop_counts` counts). A bar of n beats
+//! counts plus the next bar's first every `hop_counts` counts, and into windows of 3 counts plus
+//! the next one on every count ([`SEGMENT_METRES`]). Why every count: most dance mocap repeats
+//! a step in 4 (or 8) counts, and a 3-count window ends on another count of that cycle than it
+//! starts on; windows every 2 counts all start on counts 1 and 3 of the cycle and so all end on
+//! 2 and 4, and no end met a start on the same foot (pieces in 3 joined at up to 9.7 times the
+//! moves' own sharpest moments, §J's join jump; windows on every count give each end a start on
+//! its own count of the cycle). A bar of n beats
 //! ([`crate::bars::Bar::beats`]) is filled only by segments of n counts ([`Segment::counts`]),
 //! and the count warp puts count k at k/n of the bar, so each count lands on one of its beats;
 //! only when the library holds no segment of n counts does a bar take any segment, its counts
@@ -547,7 +552,8 @@ impl SegmentLibrary {
         // metre at the same counts.
         let metres: &[usize] = if lc.builtin.is_some() { &[SEGMENT_COUNTS] } else { &SEGMENT_METRES };
         for &n in metres {
-        let hop = hop.clamp(1, n);
+        // 3-count windows on every count (module docs).
+        let hop = if n == SEGMENT_COUNTS { hop.clamp(1, n) } else { 1 };
         let mut k = 0;
         while k + n < beats.len() {
             let (s, e) = (beats[k], beats[k + n]);
@@ -1382,10 +1388,11 @@ pub(crate) mod tests {
         assert!(builtin.iter().all(|s| s.counts() == 4 && s.count_frames.len() == 5));
         let beats = &lib.clips()[3].beat_frames;
         assert_eq!(beats.len(), 9, "{beats:?}");
-        // Windows every 2 counts: 4 counts from counts 0, 2, 4; 3 counts from 0, 2, 4.
+        // 4 counts every 2 counts (hop_counts): from counts 0, 2, 4; 3 counts on every count:
+        // from 0 to 5.
         let of = |n: usize| imported.iter().filter(|s| s.counts() == n).map(|s| s.start_frame).collect::<Vec<f32>>();
-        assert_eq!(of(4).len(), 3);
-        assert_eq!(of(3).len(), 3);
+        assert_eq!(of(4), [0, 2, 4].map(|k| beats[k].round()));
+        assert_eq!(of(3), [0, 1, 2, 3, 4, 5].map(|k| beats[k].round()));
         for s in imported.iter().filter(|s| s.counts() == 3) {
             assert_eq!(s.count_frames.len(), 4);
             assert!(s.name.ends_with("(in 3)"), "{}", s.name);
