@@ -16,12 +16,15 @@
 //! Bars in 3 (extends §E, which says "segments of 4 counts (one bar)"): a segment is one bar
 //! *of its own metre*. Each imported clip is cut at the same counts twice: into windows of 4
 //! counts plus the next bar's first every `hop_counts` counts, and into windows of 3 counts plus
-//! the next one on every count ([`SEGMENT_METRES`]). Why every count: most dance mocap repeats
-//! a step in 4 (or 8) counts, and a 3-count window ends on another count of that cycle than it
-//! starts on; windows every 2 counts all start on counts 1 and 3 of the cycle and so all end on
-//! 2 and 4, and no end met a start on the same foot (pieces in 3 joined at up to 9.7 times the
-//! moves' own sharpest moments, §J's join jump; windows on every count give each end a start on
-//! its own count of the cycle). A bar of n beats
+//! the next one on every count ([`SEGMENT_METRES`]). Why every count: in 3 only the imported
+//! clips' windows can fill a bar, and they join each other roughly (the path the table (§G)
+//! finds first has joins at 5.7–14 times the moves' own sharpest moments on pieces in 3, §J's
+//! join jump, either way; [`super::FillWeights::follow_joins`] repairs them). With windows
+//! every 2 counts (185 of them from the real clips) the repair left a 126 BPM piece at 2.92; on
+//! every count (362) it brings six pieces in 3 under the goal of 1.5 (`choreo_beats`). Most dance
+//! mocap repeats its step in 4 or 8 counts, so a 3-count window ends on another count of that
+//! cycle than it starts on, and windows on every count give each end more starts on the same
+//! count (the likely reason, not measured). A bar of n beats
 //! ([`crate::bars::Bar::beats`]) is filled only by segments of n counts ([`Segment::counts`]),
 //! and the count warp puts count k at k/n of the bar, so each count lands on one of its beats;
 //! only when the library holds no segment of n counts does a bar take any segment, its counts
@@ -30,7 +33,8 @@
 //! 3-count windows: each is one 4-count bar at 120 counts per minute composed to leave and
 //! return to one neutral stance on its counts 1 and 5 (which is why built-in moves join each
 //! other so well); its first 3 counts stop mid-phrase, away from that stance, and cut off the
-//! fourth count's motion, so in 3 they would join badly and not be the move the person picked.
+//! fourth count's motion, so in 3 they would end away from the stance the other moves start
+//! from (not measured) and not be the move the person picked.
 //! They also stay one segment each, so the built-in library (and its load time) is unchanged.
 
 use std::sync::{Arc, Mutex};
