@@ -198,7 +198,8 @@ impl Choreographer {
     /// For a segment cut from an imported clip, the count (0-based, among the clip's counts) it
     /// starts on; undefined for a built-in move or an unknown segment. With the clip and its cut
     /// tempo it makes the segment's stable key (`MoveKey`), how the page mirrors its dance into
-    /// a `Project` (the same rule as the project's own library).
+    /// a `Project` (the same rule as the project's own library); a 3-count segment's key also
+    /// has `counts: 3` (its `countFrames` hold counts + 1 frames).
     #[wasm_bindgen(js_name = firstCount)]
     pub fn first_count(&self, segment: usize) -> Option<u32> {
         let seg = self.lib.segment(segment)?;

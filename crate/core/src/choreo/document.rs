@@ -910,6 +910,21 @@ mod tests {
     }
 
     #[test]
+    fn the_join_repair_leaves_a_dance_with_smooth_joins_as_it_was() {
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(17.0, 120.0, 4, 0.0, |a, _| (a / 17.0).clamp(0.0, 1.0)).unwrap();
+        let mut on = Choreography::new(bars.clone()).unwrap();
+        on.generate(&lib).unwrap();
+        let f = dance_figures(&lib, &bars, &on.segments().into_iter().flatten().collect::<Vec<_>>()).unwrap();
+        assert!(f.join_jump_max <= JOIN_JUMP_GOAL, "{f:?}");
+        assert!(f.worst_join_bar.is_some_and(|b| (1..bars.len()).contains(&b)), "{f:?}");
+        let mut off = Choreography::new(bars).unwrap();
+        off.set_follow_joins(false);
+        off.generate(&lib).unwrap();
+        assert_eq!(on.segments(), off.segments());
+    }
+
+    #[test]
     fn bars_in_three_with_no_three_count_move_take_any_move() {
         // The built-in moves are all 4 counts: a waltz still gets a dance (counts spread evenly).
         let lib = SegmentLibrary::builtin();
