@@ -907,3 +907,22 @@ impl Project {
         Ok(clip)
     }
 }
+
+#[cfg(test)]
+mod move_key_tests {
+    use super::*;
+
+    #[test]
+    fn a_cut_keys_counts_are_left_out_when_four_and_kept_when_three() {
+        let clip = ClipRef { source: SourceId(2), clip: 0 };
+        let four = MoveKey::Cut { clip, cut_tempo_bpm: None, first_count: 6, counts: 4 };
+        let three = MoveKey::Cut { clip, cut_tempo_bpm: None, first_count: 6, counts: 3 };
+        // A 4-count key is written (and identified) as before 3-count segments existed.
+        let saved_before = r#"{"kind":"cut","clip":{"source":2,"clip":0},"cutTempoBpm":null,"firstCount":6}"#;
+        assert_eq!(four.id(), saved_before);
+        assert_eq!(serde_json::from_str::<MoveKey>(saved_before).unwrap(), four);
+        // The 3-count window from the same count is another move.
+        assert_ne!(three.id(), four.id());
+        assert_eq!(serde_json::from_str::<MoveKey>(&three.id()).unwrap(), three);
+    }
+}
