@@ -520,6 +520,13 @@ pub fn fill_with_tempi(
                     }
                 }
                 for b in 0..m {
+                    // A segment this bar cannot take (another metre's, or retired) stays at ∞:
+                    // no need to prove its best predecessor (exact: it is on no finite path).
+                    let node = music(t, intensity, b);
+                    if node == f32::INFINITY {
+                        next[b] = f32::INFINITY;
+                        continue;
+                    }
                     let (mut best, mut best_a) = (next[b], arg[b]);
                     // Then the column's cheapest edges. Any other predecessor costs at least
                     // prev_rest + rest_min[b], so the best found is exact when no worse.
@@ -539,7 +546,7 @@ pub fn fill_with_tempi(
                         best_a = at as u32;
                         stats.full_scans += 1;
                     }
-                    next[b] = best + music(t, intensity, b);
+                    next[b] = best + node;
                     arg[b] = best_a;
                 }
                 stats.open_columns += m;
