@@ -23,6 +23,8 @@
 //! `ODORI_FOLLOW_SKATE=0` turns off keeping the dance's skate within its sources' (the filling
 //! before it).
 //! `ODORI_FOLLOW_BEAT_RATE=0` turns off following the song's beat rate (the filling before it).
+//! `ODORI_FOLLOW_JOINS=0` turns off keeping every join within the join-jump goal (the filling
+//! before it).
 //! `ODORI_RATES=1` also prints the segments' kinetic beats per count at four count rates.
 //! The songs are followed by pieces from the demo-song generator that nothing was tuned on
 //! (other tempi, a waltz, a tempo ramp, a short piece).
@@ -70,8 +72,8 @@ fn library() -> SegmentLibrary {
     lib
 }
 
-/// Test pieces from the demo-song generator that no setting was tuned on: other tempi, a
-/// waltz, a tempo ramp and a short piece (three bars of the chorus, which the analysis takes as
+/// Test pieces from the demo-song generator that no setting was tuned on: other tempi, two
+/// pieces in 3/4 (150, 108, 126, 138, 84 BPM and a 96 → 120 BPM ramp), a tempo ramp and a short piece (three bars of the chorus, which the analysis takes as
 /// a loop).
 fn demo_pieces() -> Vec<(String, RmsEnvelope)> {
     let make = |beats_per_bar: u32, bpm: f32, end_bpm: f32| {
@@ -79,7 +81,7 @@ fn demo_pieces() -> Vec<(String, RmsEnvelope)> {
     };
     let env = |samples: &[f32]| envelope(&[samples], 22050.0).expect("envelope");
     let mut out = Vec::new();
-    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 140.0, 140.0), (3, 150.0, 150.0), (4, 90.0, 130.0)] {
+    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 140.0, 140.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (3, 126.0, 126.0), (3, 96.0, 120.0), (3, 138.0, 138.0), (3, 84.0, 84.0), (4, 90.0, 130.0)] {
         let song = make(bpb, bpm, end);
         let label = if bpm == end { format!("demo in {bpb}, {bpm:.0} BPM") } else { format!("demo in {bpb}, ramp {bpm:.0}→{end:.0} BPM") };
         out.push((label, env(&song.samples)));
@@ -101,7 +103,8 @@ fn main() {
     let t = Instant::now();
     let lib = library();
     let builtin = lib.segments().iter().filter(|s| s.builtin.is_some()).count();
-    println!("library: {} segments ({builtin} built-in, {} imported) in {:.1} s", lib.len(), lib.len() - builtin, t.elapsed().as_secs_f64());
+    let in_three = lib.segments().iter().filter(|s| s.counts() == 3).count();
+    println!("library: {} segments ({builtin} built-in, {} imported, {in_three} of them in 3) in {:.2} s", lib.len(), lib.len() - builtin, t.elapsed().as_secs_f64());
 
     for (label, bi) in [("built-in", true), ("imported", false)] {
         let v: Vec<&odori_core::choreo::Segment> = lib.segments().iter().filter(|s| s.builtin.is_some() == bi).collect();
@@ -219,6 +222,9 @@ fn main() {
         if std::env::var("ODORI_FOLLOW_SKATE").is_ok_and(|v| v == "0") {
             doc.set_follow_skate(false);
         }
+        if std::env::var("ODORI_FOLLOW_JOINS").is_ok_and(|v| v == "0") {
+            doc.set_follow_joins(false);
+        }
         if std::env::var("ODORI_FOLLOW_BEAT_RATE").is_ok_and(|v| v == "0") {
             doc.set_follow_beat_rate(false);
         }
@@ -287,13 +293,17 @@ fn main() {
             }
         }
         let mut x = 0x9E37_79B9_7F4A_7C15u64;
-        let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired).map(|s| s.index).collect();
+        // Per bar, the live segments it can take (its count; any when the library has none).
+        let live: Vec<Vec<usize>> = odori_core::choreo::bar_counts(&lib, &bars)
+            .iter()
+            .map(|&n| lib.segments().iter().filter(|s| !s.retired && (n == 0 || s.counts() == n)).map(|s| s.index).collect())
+            .collect();
         let mut rnd = Vec::new();
         for _ in 0..random_draws(bars.len()) {
             let ch: Vec<Option<usize>> = (0..bars.len())
-                .map(|_| {
+                .map(|b| {
                     x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                    Some(live[(x >> 33) as usize % live.len()])
+                    Some(live[b][(x >> 33) as usize % live[b].len()])
                 })
                 .collect();
             rnd.push(quality(&lib, &bars, &beats, &ch));

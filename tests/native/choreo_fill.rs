@@ -270,7 +270,7 @@ fn bad_input_gives_clear_errors() {
     let not_shown = (0..lib.len()).find(|s| !round.contains(s)).unwrap();
     assert!(matches!(doc.search(&lib, 1, &[not_shown]), Err(ChoreoError::NotACandidate { .. })));
     assert!(matches!(doc.set_rho(1.5), Err(ChoreoError::BadSetting { .. })));
-    let e = Choreography::new(vec![Bar { index: 0, start_secs: 2.0, end_secs: 1.0, intensity: 0.5 }]).unwrap_err();
+    let e = Choreography::new(vec![Bar { index: 0, start_secs: 2.0, end_secs: 1.0, intensity: 0.5, beats: 4 }]).unwrap_err();
     assert!(matches!(e, ChoreoError::BadBar { .. }));
 }
 

@@ -76,14 +76,16 @@ fn stating_a_tempo_recuts_the_clip_and_keeps_the_dance() {
 
     let report = recut_clip(&mut lib, Some(&mut doc), clip, &SegmentOptions { tempo_bpm: Some(90.0), ..Default::default() }).unwrap();
 
-    // The new cut: 4 counts at 90 per minute are 80 frames.
+    // The new cut: 4 counts at 90 per minute are 80 frames (and the 3-count segments for bars
+    // in 3, 60).
     assert!(!report.clip.tempo_detected);
     assert_eq!(report.clip.tempo_bpm, 90.0);
     let new_cut = of_clip(&lib, clip);
     assert_eq!(new_cut.len(), report.clip.segments);
     for &s in &new_cut {
         let seg = &lib.segments()[s];
-        assert!(((seg.end_frame - seg.start_frame) - 4.0 * 60.0 / 90.0 * LIBRARY_FPS).abs() <= 1.0, "{}: {} frames", seg.name, seg.end_frame - seg.start_frame);
+        let counts = seg.counts() as f32;
+        assert!(((seg.end_frame - seg.start_frame) - counts * 60.0 / 90.0 * LIBRARY_FPS).abs() <= 1.0, "{}: {} frames", seg.name, seg.end_frame - seg.start_frame);
     }
     assert_eq!(lib.len(), len_before - report.removed + report.clip.segments);
     // Kept: the segments of bar 2, of the filled bars and (in the redo history) of bar 11; all

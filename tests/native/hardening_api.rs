@@ -6,7 +6,7 @@ use odori_core::bars::Bar;
 use odori_core::choreo::{ChoreoError, Choreography};
 
 fn bars(intensity_of_bar_2: f32) -> Vec<Bar> {
-    (0..4).map(|i| Bar { index: i, start_secs: i as f32 * 2.0, end_secs: i as f32 * 2.0 + 2.0, intensity: if i == 2 { intensity_of_bar_2 } else { 0.5 } }).collect()
+    (0..4).map(|i| Bar { index: i, start_secs: i as f32 * 2.0, end_secs: i as f32 * 2.0 + 2.0, intensity: if i == 2 { intensity_of_bar_2 } else { 0.5 }, beats: 4 }).collect()
 }
 
 #[test]

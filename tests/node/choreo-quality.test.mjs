@@ -43,3 +43,30 @@ test("quality of a generated dance: beat alignment above its half-shifted contro
   ch.setOwnMovesPreference(0);
   assert.throws(() => ch.setBeatWeight(-1), (e) => e.name === "OdoriError" && /beatWeight/.test(e.message));
 });
+
+test("a bar in 3 is danced with 3-count moves, a bar set back to 4 with 4-count ones", () => {
+  const lib = new Library();
+  const salsa = lib.importFile("salsa_01.bvh", new Uint8Array(readFileSync(join(data, "mocap/cmu-salsa/salsa_01.bvh"))), { fpsOverride: 60 }).clips[0];
+  const demo = DemoSong.render(44100);
+  const song = Song.fromSamples([demo.samples], demo.sampleRateHz);
+  // The person sets the metre to 3: every bar has 3 beats.
+  const inThree = song.correct({ beatsPerBar: 3 });
+  assert.ok(inThree.bars.length > 4 && inThree.bars.every((b) => b.beats === 3), JSON.stringify(inThree.bars[0]));
+  const ch = new Choreographer();
+  ch.setBars(inThree.bars);
+  ch.addClip(lib, salsa.id);
+  while (ch.prepareTable(256) < 1) { /* slices of the join table */ }
+  const counts = (i) => ch.segment(i).countFrames.length - 1;
+  assert.ok(ch.candidates(0).every((s) => counts(s) === 3), "a bar in 3 shows only 3-count moves");
+  ch.generate();
+  const moves = ch.view().map((v) => v.state.segment);
+  assert.ok(moves.every((s) => counts(s) === 3), `moves in 3: ${moves.map(counts)}`);
+  // Each bar's beats, spread over it, are what quality() uses without beats: 3 a bar.
+  const own = ch.quality();
+  assert.ok(Math.abs(own.beats.musicBeatsPerSec - 3 / (inThree.bars[0].endSecs - inThree.bars[0].startSecs)) < 0.1, JSON.stringify(own.beats));
+  // Back to 4: the next Generate fills the bars with 4-count moves.
+  const inFour = song.correct({ beatsPerBar: 4 });
+  ch.setBars(inFour.bars);
+  ch.generate();
+  assert.ok(ch.view().every((v) => counts(v.state.segment) === 4));
+});

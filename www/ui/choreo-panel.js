@@ -110,7 +110,7 @@ export class ChoreoPanel {
     }
   }
 
-  /** Cuts an imported humanoid clip into 4-count segments at its own beats; says why not. */
+  /** Cuts an imported humanoid clip into 4- and 3-count segments at its own beats; says why not. */
   addClip(info) {
     if (info.humanoid.kind === "notHumanoid") return;
     try {

@@ -14,10 +14,24 @@ pub struct Bar {
     /// Music intensity of the bar, the mean RMS over it scaled to the song's range: 0..=1
     /// (spec §D).
     pub intensity: f32,
+    /// Beats in the bar, its metre's count (3 in a waltz, 4 in 4/4): a bar of n beats is filled
+    /// by a segment of n counts, count k on its k-th beat (spec §E; [`crate::choreo::segment`]).
+    /// 4 in documents saved before bars kept it.
+    #[serde(default = "four")]
+    pub beats: u32,
+}
+
+fn four() -> u32 {
+    4
 }
 
 impl Bar {
     pub fn duration_secs(&self) -> f32 {
         self.end_secs - self.start_secs
+    }
+
+    /// Its beats as a count of at least 1 (a bar deserialised with 0 beats has 4).
+    pub fn beat_count(&self) -> usize {
+        if self.beats == 0 { 4 } else { self.beats as usize }
     }
 }

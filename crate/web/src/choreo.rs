@@ -198,7 +198,8 @@ impl Choreographer {
     /// For a segment cut from an imported clip, the count (0-based, among the clip's counts) it
     /// starts on; undefined for a built-in move or an unknown segment. With the clip and its cut
     /// tempo it makes the segment's stable key (`MoveKey`), how the page mirrors its dance into
-    /// a `Project` (the same rule as the project's own library).
+    /// a `Project` (the same rule as the project's own library); a 3-count segment's key also
+    /// has `counts: 3` (its `countFrames` hold counts + 1 frames).
     #[wasm_bindgen(js_name = firstCount)]
     pub fn first_count(&self, segment: usize) -> Option<u32> {
         let seg = self.lib.segment(segment)?;
@@ -284,12 +285,12 @@ impl Choreographer {
     /// basMusicShifted, basMotion, basMotionShifted, kineticBeatsPerSec, musicBeatsPerSec },
     /// footSkate: { meanCmPerS, p95CmPerS, contacts }, pfc, joinJumpMean, joinJumpMax, bars:
     /// [{ bar, beats, footSkate, joinJump }] }`. `beatTimesSecs`: the song's beats (the grid's
-    /// `beatTimesSecs`); omitted: each bar's four quarters.
+    /// `beatTimesSecs`); omitted: each bar's beats spread evenly over it.
     pub fn quality(&self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
         let d = self.doc.as_ref().ok_or_else(|| OdoriError::new("choreo", "no song bars yet"))?;
         let bars = d.bars();
         let beats = beat_times_secs.unwrap_or_else(|| {
-            bars.iter().flat_map(|b| (0..4).map(move |k| b.start_secs + b.duration_secs() * k as f32 / 4.0)).collect()
+            bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect()
         });
         // As the person sees it (the joined 60 fps dance); the measures resample to 30 fps.
         let clip = d.render(&self.lib, &RenderOptions::default());

@@ -135,7 +135,7 @@ impl DemoSong {
 
 #[wasm_bindgen(typescript_custom_section)]
 const TS_MUSIC: &'static str = r#"
-export interface Bar { index: number; startSecs: number; endSecs: number; /** 0..1 */ intensity: number; }
+export interface Bar { index: number; startSecs: number; endSecs: number; /** 0..1 */ intensity: number; /** beats in the bar (3 in 3/4) */ beats: number; }
 export interface SongGrid {
   durationSecs: number; bpm: number; beatsPerBar: number;
   beatTimesSecs: number[]; firstDownbeatIndex: number; firstDownbeatSecs: number;

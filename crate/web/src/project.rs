@@ -545,7 +545,7 @@ impl Project {
     pub fn quality(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
         let ch = self.inner.choreography()?;
         let bars = ch.bars();
-        let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..4).map(move |k| b.start_secs + b.duration_secs() * k as f32 / 4.0)).collect());
+        let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect());
         let clip = ch.render(self.inner.segment_library(), &RenderOptions::default());
         let q = odori_core::choreo::dance_quality(&clip, bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
         Ok(to_js(&q))

@@ -33,21 +33,37 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
-use super::fill::{bar_count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, free_skate_pass, in_beat_rate_band, FillError, FillWeights, Layer, Tempi, beat_rate_ladder, skate_ladder};
+use super::fill::{bar_count_rate_bpm, count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, free_skate_pass, in_beat_rate_band, FillError, FillWeights, Layer, Tempi, beat_rate_ladder, skate_ladder};
 use super::render::{render, RenderOptions};
-use super::quality::{foot_skate_samples, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
-use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions, SEGMENT_COUNTS};
+use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
+use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
 use crate::bars::Bar;
 use crate::clip::Clip;
 
 /// What the filling checks of a dance it made (spec §J, on the rendered dance within its bars).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DanceFigures {
-    /// Kinetic beats over 4 counts a bar: 1 turns on every count, 0.5 on every other.
+    /// Kinetic beats over the bars' beats (4 a bar in 4/4, 3 in 3/4): 1 turns on every count,
+    /// 0.5 on every other.
     pub kinetic_per_count: f32,
     /// Mean foot skate, centimetres per second.
     pub foot_skate_cm_per_s: f32,
+    /// The largest join jump (spec §J, [`super::quality::join_jumps`]), 0 with one bar.
+    pub join_jump_max: f32,
+    /// The bar after that join (its first bar is 1), if any.
+    pub worst_join_bar: Option<usize>,
 }
+
+/// The largest join jump a generated dance should have (spec §J; the issue's goal): joins no
+/// more abrupt than 1.5 times the sharpest moments (95th percentile) of the moves themselves.
+/// What [`FillWeights::follow_joins`] keeps to.
+pub const JOIN_JUMP_GOAL: f32 = 1.5;
+/// Refills [`FillWeights::follow_joins`] tries at most, each steering away from one more join.
+pub const JOIN_REPAIRS: usize = 16;
+/// Cost added to a segment in the bar after a join it made too abrupt, so the refill takes
+/// another there: far above any term of the objective (a ban that stays finite, so a bar
+/// whose every segment is banned still gets one).
+const JOIN_BAN: f32 = 100.0;
 
 /// [`DanceFigures`] of the dance `path` fills `bars` with; `None` when it cannot be measured
 /// (too short, no bars).
@@ -60,7 +76,27 @@ pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Opti
     let frames = m.frames();
     let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
     let skate = summarize_skate(&foot_skate_samples(&m), frame_of(first.start_secs)..frame_of(last.end_secs));
-    Some(DanceFigures { kinetic_per_count: kinetic as f32 / (SEGMENT_COUNTS * bars.len()) as f32, foot_skate_cm_per_s: skate.mean_cm_per_s })
+    let counts: usize = bars.iter().map(Bar::beat_count).sum();
+    // Join jumps as dance_quality measures them (joins at the bars' starts after the first).
+    let joins: Vec<(usize, usize)> = bars.iter().enumerate().skip(1).map(|(i, b)| (i, frame_of(b.start_secs))).filter(|&(_, f)| f + 1 < frames).collect();
+    let jumps = join_jumps(&m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
+    let worst = jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (joins[k].0, j));
+    Some(DanceFigures {
+        kinetic_per_count: kinetic as f32 / counts.max(1) as f32,
+        foot_skate_cm_per_s: skate.mean_cm_per_s,
+        join_jump_max: worst.map_or(0.0, |w| w.1),
+        worst_join_bar: worst.map(|w| w.0),
+    })
+}
+
+/// The counts each bar takes (spec §E, [`super::segment`]'s module docs): its beats, when the
+/// library holds a live segment of that many counts; 0 (any segment) when it holds none.
+pub fn bar_counts(lib: &SegmentLibrary, bars: &[Bar]) -> Vec<usize> {
+    let mut has = BTreeSet::new();
+    for s in lib.segments().iter().filter(|s| !s.retired) {
+        has.insert(s.counts());
+    }
+    bars.iter().map(|b| if has.contains(&b.beat_count()) { b.beat_count() } else { 0 }).collect()
 }
 
 /// The foot skate a dance on `path` should not exceed (spec §J: no worse than its source
@@ -286,6 +322,16 @@ impl Choreography {
         }
         self.record();
         let n = bars.len();
+        // A bar whose metre changed forgets its search: what it showed and liked were moves of
+        // the old count (undo brings it back). Its move stays until the next Generate (a pinned
+        // one stays: what the person chose is never dropped; it plays its counts evenly).
+        for (i, b) in bars.iter().enumerate() {
+            if self.doc.bars.get(i).is_some_and(|old| old.beat_count() != b.beat_count()) {
+                if let Some(s) = self.doc.sessions.get_mut(i) {
+                    *s = None;
+                }
+            }
+        }
         self.doc.bars = bars;
         self.doc.states.resize(n, BarState::Empty);
         self.doc.sessions.resize(n, None);
@@ -368,6 +414,11 @@ impl Choreography {
             .collect()
     }
 
+    /// The counts bar `bar`'s candidates must have ([`bar_counts`]; `None`: any).
+    fn counts_of_bar(&self, lib: &SegmentLibrary, bar: usize) -> Option<usize> {
+        self.doc.bars.get(bar).and_then(|b| bar_counts(lib, std::slice::from_ref(b)).first().copied()).filter(|&n| n != 0)
+    }
+
     fn check_bar(&self, bar: usize) -> Result<(), ChoreoError> {
         if bar < self.doc.bars.len() {
             Ok(())
@@ -401,6 +452,7 @@ impl Choreography {
         }
         let (intensity, rho, count) = (self.doc.bars[bar].intensity, self.doc.settings.rho, self.doc.settings.candidates_per_round);
         let mut s = FeedbackSession::new();
+        s.counts = self.counts_of_bar(lib, bar);
         let round = s.next_round(lib, intensity, rho, count).to_vec();
         self.doc.sessions[bar] = Some(s);
         Ok(round)
@@ -418,9 +470,11 @@ impl Choreography {
         }
         self.record();
         let (intensity, rho, count) = (self.doc.bars[bar].intensity, self.doc.settings.rho, self.doc.settings.candidates_per_round);
+        let counts = self.counts_of_bar(lib, bar);
         let Some(session) = self.doc.sessions[bar].as_mut() else {
             return Err(ChoreoError::NoSearch { bar });
         };
+        session.counts = counts;
         Ok(session.search(lib, liked, intensity, rho, count).to_vec())
     }
 
@@ -557,6 +611,13 @@ impl Choreography {
         self.doc.settings.fill.follow_skate = on;
     }
 
+    /// Whether the filling keeps every join of the dance within [`JOIN_JUMP_GOAL`]
+    /// ([`FillWeights::follow_joins`]).
+    pub fn set_follow_joins(&mut self, on: bool) {
+        self.record();
+        self.doc.settings.fill.follow_joins = on;
+    }
+
     /// Whether the filling keeps the dance's kinetic beat rate near the song's
     /// ([`FillWeights::follow_beat_rate`]).
     pub fn set_follow_beat_rate(&mut self, on: bool) {
@@ -618,7 +679,11 @@ impl Choreography {
         // Skate beyond the source clip's own (the §J goal is "no worse than the source clips'").
         let skate: Vec<f32> = lib.segments().iter().map(|s| (s.skate_cm_per_s - s.clip_skate_cm_per_s).max(0.0)).collect();
         let node_cost = node_costs_with_skate(&weights, &beat_fit, &builtin, &skate);
-        let bar_bpm: Vec<f32> = self.doc.bars.iter().map(|b| bar_count_rate_bpm(b.duration_secs())).collect();
+        // The bar's metre: a bar of n beats takes segments of n counts (0: any), played at n
+        // counts over the bar.
+        let bar_counts = bar_counts(lib, &self.doc.bars);
+        let segment_counts: Vec<usize> = lib.segments().iter().map(|s| s.counts()).collect();
+        let bar_bpm: Vec<f32> = self.doc.bars.iter().zip(&bar_counts).map(|(b, &n)| if n == 0 { bar_count_rate_bpm(b.duration_secs()) } else { count_rate_bpm(n, b.duration_secs()) }).collect();
         let segment_bpm: Vec<f32> = lib.segments().iter().map(|s| s.tempo_bpm).collect();
         // Each segment's kinetic beats per count at each bar's count rate, and its beat-rate cost.
         let follow = weights.follow_beat_rate && weights.beat_rate_weight == 0.0;
@@ -628,7 +693,7 @@ impl Choreography {
             Vec::new()
         };
         let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
-        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &beat_rate, extra: &[] };
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &beat_rate, extra: &[], bar_counts: &bar_counts, segment_counts: &segment_counts };
         let (mut path, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &weights)?;
         // The dance's kinetic beat rate near the song's (FillWeights::follow_beat_rate),
         // measured on the dance itself as §J measures it: the segments' own rates at the bars'
@@ -665,10 +730,11 @@ impl Choreography {
         let (mut path, mut cost) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &path);
         // Foot skate no worse than the source clips' (FillWeights::follow_skate).
         if weights.follow_skate {
-            let current = match figures {
-                Some((p, f)) if p == path => f,
+            let current = match &figures {
+                Some((p, f)) if *p == path => *f,
                 _ => dance_figures(lib, bars, &path),
             };
+            figures = Some((path.clone(), current));
             if let Some(before) = current.filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(lib, &path)) {
                 let on_beat = in_beat_rate_band(before.kinetic_per_count);
                 let over: Vec<Vec<f32>> = (0..layers.len()).map(|t| (0..lib.len()).map(|s| excess(t, s).max(0.0) / 100.0).collect()).collect();
@@ -679,10 +745,74 @@ impl Choreography {
                     let (p, c) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &p);
                     let Some(f) = dance_figures(lib, bars, &p) else { continue };
                     if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &p) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)) {
+                        figures = Some((p.clone(), Some(f)));
                         (path, cost) = (p, c);
                         break;
                     }
                 }
+            }
+        }
+        // Joins no more abrupt than JOIN_JUMP_GOAL (FillWeights::follow_joins), measured on the
+        // dance: the table's cost (§G, link directions and end gaps) misses some abrupt joins,
+        // e.g. between two crouched moves of the Indian clips in 3/4, where fewer moves fit a bar.
+        if weights.follow_joins && layers.len() > 1 {
+            let current = match figures {
+                Some((p, f)) if p == path => f,
+                _ => dance_figures(lib, bars, &path),
+            };
+            // Each refill bars, from every bar, the move after the worst join of the last refill
+            // (the same move makes the same abrupt join wherever the filling puts it after a
+            // like move: barred from one bar only, on the 108 BPM piece in 3 it moved to the
+            // next), so the bars add up over the tries. A refill whose feet slide past the goal
+            // the dance met makes the next one charge skate too, at the next weight of
+            // skate_ladder (the moves with the smoothest joins are not always the cleanest).
+            // The best dance that keeps what the first one met is kept.
+            let (mut trial_path, mut trial) = (path.clone(), current);
+            let mut best = current;
+            let skate_met = current.is_some_and(|f| f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &path));
+            let on_beat = current.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
+            let mut ban: Vec<Vec<f32>> = Vec::new();
+            let mut skate_weights = skate_ladder();
+            let mut skate_weight = 0.0f32;
+            for _ in 0..JOIN_REPAIRS {
+                let Some(f) = trial else { break };
+                let joins_ok = f.join_jump_max <= JOIN_JUMP_GOAL;
+                let skate_ok = !skate_met || f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &trial_path);
+                if joins_ok && skate_ok {
+                    break;
+                }
+                if ban.is_empty() {
+                    ban = vec![vec![0.0; lib.len()]; layers.len()];
+                }
+                if !joins_ok {
+                    // The bar after the join takes another move (the one before it, when that
+                    // one is pinned; both pinned: nothing to change).
+                    let Some(bar) = f.worst_join_bar else { break };
+                    let Some(t) = [bar, bar - 1].into_iter().find(|&t| matches!(layers[t], Layer::Open { .. })) else { break };
+                    let s = trial_path[t];
+                    for v in ban.iter_mut() {
+                        v[s] += JOIN_BAN;
+                    }
+                }
+                if !skate_ok {
+                    let Some(w) = skate_weights.next() else { break };
+                    skate_weight = w;
+                }
+                let extra: Vec<Vec<f32>> = ban.iter().enumerate().map(|(t, v)| v.iter().enumerate().map(|(s, b)| b + skate_weight * excess(t, s).max(0.0) / 100.0).collect()).collect();
+                let with = Tempi { extra: &extra, ..tempi };
+                let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &with, &weights)?;
+                let (p, c) = free_skate_pass(&table, &layers, &intensity, &node_cost, &with, &weights, &excess, &p);
+                let after = dance_figures(lib, bars, &p);
+                if let (Some(a), Some(b)) = (after, best) {
+                    // Kept only when its worst join is better and nothing the dance met is lost:
+                    // the beat rate's band, and the skate goal.
+                    let keeps_rate = !on_beat || in_beat_rate_band(a.kinetic_per_count);
+                    let keeps_skate = !skate_met || a.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &p);
+                    if a.join_jump_max < b.join_jump_max && keeps_rate && keeps_skate {
+                        (path, cost, best) = (p.clone(), c, after);
+                    }
+                }
+                (trial_path, trial) = (p, after);
             }
         }
         self.record();
@@ -723,6 +853,93 @@ impl Choreography {
 mod tests {
     use super::*;
     use crate::choreo::grid::bars_from_tempo;
+    use crate::choreo::segment::LIBRARY_FPS;
+    use crate::humanoid::CANON_COUNT;
+
+    #[test]
+    fn a_bar_in_three_takes_a_three_count_segment_whose_counts_land_on_its_beats() {
+        let lib = crate::choreo::segment::tests::small_library_with_an_imported_clip();
+        // Four bars in 3 at 120 BPM: 1.5 s each, a beat every 0.5 s (30 frames at 60 fps).
+        let bars = bars_from_tempo(6.0, 120.0, 3, 0.0, |_, _| 0.5).unwrap();
+        assert!(bars.iter().all(|b| b.beats == 3));
+        let mut doc = Choreography::new(bars.clone()).unwrap();
+        doc.generate(&lib).unwrap();
+        let chosen: Vec<usize> = doc.segments().into_iter().map(|s| s.unwrap()).collect();
+        assert!(chosen.iter().all(|&s| lib.segments()[s].counts() == 3), "{chosen:?}");
+        // The search of a bar in 3 shows only 3-count moves.
+        let round = doc.candidates(&lib, 1).unwrap();
+        assert!(!round.is_empty() && round.iter().all(|&s| lib.segments()[s].counts() == 3), "{round:?}");
+        // Count k of each bar's segment plays on the bar's k-th beat: the rendered pose there is
+        // the clip's at that count (joints below the root; the root is placed and turned).
+        let fps = 60.0;
+        let clip = doc.render(&lib, &RenderOptions { fps, join_frames: 5 });
+        let (mut rot, mut trans) = (Vec::new(), Vec::new());
+        for (b, &s) in bars.iter().zip(&chosen) {
+            let seg = &lib.segments()[s];
+            let source = &lib.clips()[seg.clip].clip;
+            for k in 1..3 {
+                let f = ((b.start_secs + b.duration_secs() * k as f32 / 3.0) * fps).round() as usize;
+                source.sample_into(seg.count_frames[k] / LIBRARY_FPS, &mut rot, &mut trans);
+                for j in 1..CANON_COUNT {
+                    let (a, e) = (clip.rotations[f * CANON_COUNT + j], rot[j]);
+                    assert!(a.dot(e).abs() > 0.9999, "bar {} beat {k} joint {j}: {a:?} vs {e:?}", b.index);
+                }
+            }
+        }
+        // The person corrects the metre to 4: the same song in bars of 4 beats (2 s). The bars
+        // forget their 3-count searches, and Generate fills them with 4-count moves.
+        let in_four = bars_from_tempo(6.0, 120.0, 4, 0.0, |_, _| 0.5).unwrap();
+        doc.set_bars(in_four).unwrap();
+        assert!(doc.view()[1].candidates.is_empty());
+        doc.generate(&lib).unwrap();
+        assert!(doc.segments().iter().all(|s| lib.segments()[s.unwrap()].counts() == 4), "{:?}", doc.segments());
+        let round = doc.candidates(&lib, 0).unwrap();
+        assert!(round.iter().all(|&s| lib.segments()[s].counts() == 4), "{round:?}");
+        // And back to 3 (undo brings back the bars in 3 and their search).
+        doc.undo();
+        doc.undo();
+        assert!(doc.bars().iter().all(|b| b.beats == 3));
+        assert_eq!(doc.view()[1].candidates, round_in_three(&lib));
+    }
+
+    /// The first round of a fresh search on bar 1 of four bars in 3 (as the test above opened).
+    fn round_in_three(lib: &SegmentLibrary) -> Vec<usize> {
+        let bars = bars_from_tempo(6.0, 120.0, 3, 0.0, |_, _| 0.5).unwrap();
+        let mut doc = Choreography::new(bars).unwrap();
+        doc.candidates(lib, 1).unwrap()
+    }
+
+    #[test]
+    fn the_join_repair_leaves_a_dance_with_smooth_joins_as_it_was() {
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(17.0, 120.0, 4, 0.0, |a, _| (a / 17.0).clamp(0.0, 1.0)).unwrap();
+        let mut on = Choreography::new(bars.clone()).unwrap();
+        on.generate(&lib).unwrap();
+        let f = dance_figures(&lib, &bars, &on.segments().into_iter().flatten().collect::<Vec<_>>()).unwrap();
+        assert!(f.join_jump_max <= JOIN_JUMP_GOAL, "{f:?}");
+        assert!(f.worst_join_bar.is_some_and(|b| (1..bars.len()).contains(&b)), "{f:?}");
+        let mut off = Choreography::new(bars).unwrap();
+        off.set_follow_joins(false);
+        off.generate(&lib).unwrap();
+        assert_eq!(on.segments(), off.segments());
+    }
+
+    #[test]
+    fn bars_in_three_with_no_three_count_move_take_any_move() {
+        // The built-in moves are all 4 counts: a waltz still gets a dance (counts spread evenly).
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(6.0, 120.0, 3, 0.0, |_, _| 0.5).unwrap();
+        assert_eq!(bar_counts(&lib, &bars), vec![0; bars.len()]);
+        let mut doc = Choreography::new(bars).unwrap();
+        doc.generate(&lib).unwrap();
+        assert!(doc.segments().iter().all(Option::is_some));
+    }
+
+    #[test]
+    fn bars_saved_before_they_kept_their_beats_have_four() {
+        let b: Bar = serde_json::from_str(r#"{"index":0,"startSecs":0.0,"endSecs":2.0,"intensity":0.5}"#).unwrap();
+        assert_eq!((b.beats, b.beat_count()), (4, 4));
+    }
 
     #[test]
     fn round_trips_through_json_in_camel_case() {

@@ -90,11 +90,16 @@ pub struct FeedbackSession {
     pub round: Vec<usize>,
     /// Rounds shown so far (1 after the first).
     pub rounds: usize,
+    /// Only segments of this many counts are offered (the bar's beats: a bar in 3 is shown
+    /// 3-count moves, [`super::segment`]'s module docs); `None`: any. The document sets it from
+    /// the bar before every round.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub counts: Option<usize>,
 }
 
 impl Default for FeedbackSession {
     fn default() -> Self {
-        Self { tau: 1.0, like_term: LikeTerm::default(), shown: Vec::new(), liked: Vec::new(), round: Vec::new(), rounds: 0 }
+        Self { tau: 1.0, like_term: LikeTerm::default(), shown: Vec::new(), liked: Vec::new(), round: Vec::new(), rounds: 0, counts: None }
     }
 }
 
@@ -120,8 +125,9 @@ impl FeedbackSession {
         let m = lib.len();
         let rho = if rho.is_finite() { rho.clamp(0.0, 1.0) } else { 0.5 };
         let tau = self.tau;
-        // Segments kept only for the bars that hold them (an earlier cut) are never offered.
-        let mut is_shown: Vec<bool> = lib.segments().iter().map(|s| s.retired).collect();
+        // Segments kept only for the bars that hold them (an earlier cut) are never offered, nor
+        // segments of another metre than the bar's.
+        let mut is_shown: Vec<bool> = lib.segments().iter().map(|s| s.retired || self.counts.is_some_and(|n| s.counts() != n)).collect();
         for &s in &self.shown {
             if s < m {
                 is_shown[s] = true;

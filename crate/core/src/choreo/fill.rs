@@ -22,6 +22,11 @@
 //! cost is the full objective, window included. With `repeat_window` ≤ 1 the result is exactly
 //! optimal.
 //!
+//! The bar's metre ([`Tempi::bar_counts`]): an open bar of n beats takes only segments of n
+//! counts (a segment of another count costs ∞ there), so a waltz bar is danced by 3-count moves
+//! whose counts land on its 3 beats ([`super::segment`]'s module docs). The document leaves a
+//! bar unrestricted (0) when the library holds no live segment of its count.
+//!
 //! Speed: the M × M edge costs depend only on the library and are computed once per library
 //! ([`super::table`]; cached by [`super::SegmentLibrary::transition_table`]). In each open
 //! layer a column
@@ -130,6 +135,15 @@ pub struct FillWeights {
     /// already within it is filled as without it. Default true.
     #[serde(default = "yes")]
     pub follow_skate: bool,
+    /// Keep every join of the dance within [`super::document::JOIN_JUMP_GOAL`] (spec §J's join
+    /// jump): when the dance, rendered and measured ([`super::dance_figures`]), has a join above
+    /// it, the move after its worst join is barred from that bar and the filling runs again, up
+    /// to [`super::document::JOIN_REPAIRS`] times; a refill is kept only when that join improves
+    /// and the beat-rate band and skate goal the dance met still hold. A dance whose joins are
+    /// within the goal is filled as without it (every 4/4 song of `choreo_quality`). Default
+    /// true.
+    #[serde(default = "yes")]
+    pub follow_joins: bool,
 }
 
 /// Skate weights (per m/s of skate above the source clip's) tried, weakest first, by
@@ -162,7 +176,7 @@ pub fn in_beat_rate_band(kinetic_per_count: f32) -> bool {
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT, follow_beat_rate: true, follow_skate: true }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT, follow_beat_rate: true, follow_skate: true, follow_joins: true }
     }
 }
 
@@ -208,7 +222,13 @@ pub fn beat_rate_cost(kinetic_per_count: f32) -> f32 {
 /// Count rate (counts per minute) a segment of 4 counts is played at over a bar of
 /// `duration_secs`.
 pub fn bar_count_rate_bpm(duration_secs: f32) -> f32 {
-    crate::choreo::segment::SEGMENT_COUNTS as f32 * 60.0 / duration_secs.max(1e-3)
+    count_rate_bpm(crate::choreo::segment::SEGMENT_COUNTS, duration_secs)
+}
+
+/// Count rate (counts per minute) a segment of `counts` counts is played at over a bar of
+/// `duration_secs` (a 3-count segment on a bar in 3).
+pub fn count_rate_bpm(counts: usize, duration_secs: f32) -> f32 {
+    counts.max(1) as f32 * 60.0 / duration_secs.max(1e-3)
 }
 
 /// The tempo-stretch cost of playing a segment of count tempo `segment_bpm` over a bar whose
@@ -360,6 +380,11 @@ pub struct Tempi<'a> {
     pub beat_rate: &'a [Vec<f32>],
     /// Per layer, per segment: a cost added as it is (already weighted). Empty: none.
     pub extra: &'a [Vec<f32>],
+    /// Per layer, the counts its bar takes (its beats; 0: any): a segment whose
+    /// [`Tempi::segment_counts`] differ costs ∞ there. Empty: no metre rule.
+    pub bar_counts: &'a [usize],
+    /// Per segment, its counts ([`super::Segment::counts`]).
+    pub segment_counts: &'a [usize],
 }
 
 impl Tempi<'_> {
@@ -373,7 +398,11 @@ impl Tempi<'_> {
             _ => 0.0,
         };
         let extra = self.extra.get(layer).and_then(|v| v.get(segment)).copied().filter(|c| c.is_finite()).unwrap_or(0.0);
-        stretch + rate + extra
+        let metre = match (self.bar_counts.get(layer), self.segment_counts.get(segment)) {
+            (Some(&b), Some(&n)) if b != 0 && b != n => f32::INFINITY,
+            _ => 0.0,
+        };
+        stretch + rate + extra + metre
     }
 }
 
@@ -491,6 +520,13 @@ pub fn fill_with_tempi(
                     }
                 }
                 for b in 0..m {
+                    // A segment this bar cannot take (another metre's, or retired) stays at ∞:
+                    // no need to prove its best predecessor (exact: it is on no finite path).
+                    let node = music(t, intensity, b);
+                    if node == f32::INFINITY {
+                        next[b] = f32::INFINITY;
+                        continue;
+                    }
                     let (mut best, mut best_a) = (next[b], arg[b]);
                     // Then the column's cheapest edges. Any other predecessor costs at least
                     // prev_rest + rest_min[b], so the best found is exact when no worse.
@@ -510,7 +546,7 @@ pub fn fill_with_tempi(
                         best_a = at as u32;
                         stats.full_scans += 1;
                     }
-                    next[b] = best + music(t, intensity, b);
+                    next[b] = best + node;
                     arg[b] = best_a;
                 }
                 stats.open_columns += m;
@@ -664,6 +700,28 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_bar_takes_only_segments_of_its_own_count() {
+        // Segments 0 and 2 have 4 counts, 1 has 3; segment 0 joins everything cheapest, so
+        // without the metre rule it fills every bar. Bars in 3, 4, any (0), 3.
+        let table = TransitionTable::from_costs(3, vec![0.1, 0.5, 0.5, 0.1, 0.5, 0.5, 0.1, 0.5, 0.5]);
+        let layers = [Layer::Open { intensity: 0.5 }; 4];
+        let weights = FillWeights { repeat_penalty: 0.0, ..FillWeights::default() };
+        let free = fill_with_tempi(&table, &layers, &[0.5; 3], &[], &Tempi::default(), &weights).unwrap().0;
+        assert_eq!(free, vec![0, 0, 0, 0]);
+        let (bar_counts, segment_counts) = ([3, 4, 0, 3], [4, 3, 4]);
+        let tempi = Tempi { bar_counts: &bar_counts, segment_counts: &segment_counts, ..Default::default() };
+        let (path, cost, _) = fill_with_tempi(&table, &layers, &[0.5; 3], &[], &tempi, &weights).unwrap();
+        assert_eq!(path, vec![1, 0, 0, 1]);
+        assert!(cost.is_finite());
+        // A pinned bar of another count is kept (the person's choice) and costs nothing extra.
+        let pinned = [Layer::Fixed { segment: 0 }, Layer::Open { intensity: 0.5 }, Layer::Open { intensity: 0.5 }, Layer::Open { intensity: 0.5 }];
+        let (path, cost, _) = fill_with_tempi(&table, &pinned, &[0.5; 3], &[], &tempi, &weights).unwrap();
+        assert_eq!(path, vec![0, 0, 0, 1]);
+        assert!(cost.is_finite());
+        assert!((count_rate_bpm(3, 1.5) - 120.0).abs() < 1e-4);
+    }
+
+    #[test]
     fn the_stretch_term_prefers_moves_near_the_bars_count_rate() {
         // log2(120/60) = 1 octave; symmetric; nothing when off or unknown.
         assert!((stretch_cost(0.5, 120.0, 60.0) - 0.5).abs() < 1e-6);
@@ -677,7 +735,7 @@ mod tests {
         let table = TransitionTable::from_costs(2, vec![1.0; 4]);
         let layers = [Layer::Open { intensity: 0.5 }, Layer::Open { intensity: 0.5 }];
         let (bar_bpm, segment_bpm) = ([bar_count_rate_bpm(2.0), bar_count_rate_bpm(4.0)], [60.0, 120.0]);
-        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &[], extra: &[] };
+        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, ..Default::default() };
         let on = FillWeights { stretch_weight: 0.5, repeat_penalty: 0.0, ..FillWeights::default() };
         let (path, cost, _) = fill_with_tempi(&table, &layers, &[0.5, 0.5], &[], &tempi, &on).unwrap();
         assert_eq!(path, vec![1, 0]);

@@ -42,7 +42,7 @@ pub fn bars_from_tempo(
         .map(|i| {
             let start_secs = first + i as f32 * bar_secs;
             let end_secs = start_secs + bar_secs;
-            Bar { index: i, start_secs, end_secs, intensity: intensity(start_secs, end_secs).clamp(0.0, 1.0) }
+            Bar { index: i, start_secs, end_secs, intensity: intensity(start_secs, end_secs).clamp(0.0, 1.0), beats: beats_per_bar as u32 }
         })
         .collect())
 }

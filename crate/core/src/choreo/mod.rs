@@ -1,4 +1,4 @@
-//! Choreography authoring (spec §E–G, paper 000): a song's bars, a library of 4-count
+//! Choreography authoring (spec §E–G, paper 000): a song's bars, a library of 4-count (and 3-count)
 //! segments cut from any humanoid clip at the motion's own beats, relevance-feedback candidate
 //! search per bar, automatic filling of the open bars by a shortest path, cubic joins, the quality measures of §J, and the
 //! editable document with undo/redo that the web layer drives. Everything here is
@@ -21,15 +21,15 @@ pub mod render;
 pub mod segment;
 pub mod table;
 
-pub use document::{dance_figures, recut_clip, DanceFigures, BarState, BarView, ChoreoError, Choreography, GenerateReport, RecutReport, Settings};
+pub use document::{bar_counts, dance_figures, recut_clip, DanceFigures, BarState, BarView, ChoreoError, Choreography, GenerateReport, RecutReport, Settings};
 pub use eigen::Signature;
 pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, CANDIDATES_PER_ROUND, TAU_DECAY};
 pub use fill::{
-    bar_count_rate_bpm, beat_rate_cost, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, free_skate_pass, node_costs, node_costs_with_skate, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
+    bar_count_rate_bpm, beat_rate_cost, count_rate_bpm, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, free_skate_pass, node_costs, node_costs_with_skate, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
     FillWeights, Layer, Tempi, TransitionTable, FREE_SKATE_SLACK_DEFAULT, BEAT_RATE_BAND, beat_rate_ladder, in_beat_rate_band, skate_ladder,
 };
 pub use grid::{bars_from_tempo, GridError};
 pub use quality::{dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
 pub use render::{render, segment_clip, speed_jumps, RenderOptions};
 pub use table::{TableBuilder, TableProgress};
-pub use segment::{kinetic_per_count_by_rate, KINETIC_RATES_BPM, BuiltinLoader, ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};
+pub use segment::{kinetic_per_count_by_rate, KINETIC_RATES_BPM, SEGMENT_COUNTS, SEGMENT_METRES, BuiltinLoader, ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};

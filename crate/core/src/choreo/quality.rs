@@ -576,7 +576,7 @@ mod tests {
         assert!(matches!(QualityMotion::from_positions(&rest_frame(Vec3::ZERO), f32::NAN), Err(QualityError::BadFps { .. })));
         let m = bobbing(90, 15.0, 0.0);
         assert_eq!(dance_quality_of(&m, &[], &[0.5]), Err(QualityError::NoBars));
-        let bar = Bar { index: 0, start_secs: 0.0, end_secs: 2.0, intensity: 0.5 };
+        let bar = Bar { index: 0, start_secs: 0.0, end_secs: 2.0, intensity: 0.5, beats: 4 };
         assert_eq!(dance_quality_of(&m, &[bar], &[1.0, 0.5]), Err(QualityError::BadBeat { index: 1, value: 0.5 }));
     }
 
@@ -676,7 +676,7 @@ mod tests {
     #[test]
     fn dance_quality_reads_each_bar() {
         let m = bobbing(241, 15.0, 0.3);
-        let bars: Vec<Bar> = (0..4).map(|i| Bar { index: i, start_secs: 2.0 * i as f32, end_secs: 2.0 * (i + 1) as f32, intensity: 0.5 }).collect();
+        let bars: Vec<Bar> = (0..4).map(|i| Bar { index: i, start_secs: 2.0 * i as f32, end_secs: 2.0 * (i + 1) as f32, intensity: 0.5, beats: 4 }).collect();
         let music: Vec<f32> = (0..16).map(|i| i as f32 * 0.5).collect();
         let q = dance_quality_of(&m, &bars, &music).unwrap();
         assert_eq!(q.bars.len(), 4);

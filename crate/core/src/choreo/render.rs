@@ -1,7 +1,7 @@
 //! The dance as one canonical clip, in sync with the song (the count before the first bar
 //! plays the first segment's lead-in, held still before that): each bar's segment is warped in
-//! time onto the bar, piecewise-linearly between its counts so count k plays at k/4 of the bar
-//! (the bar's beats, spec §E), placed so it starts where (and facing the way) the previous one
+//! time onto the bar, piecewise-linearly between its counts so count k of its n plays at k/n of
+//! the bar (the bar's beats when n is the bar's metre, spec §E; [`super::segment`]), placed so it starts where (and facing the way) the previous one
 //! ended, and consecutive segments are joined by rewriting the last 5 frames of the earlier and
 //! the first 5 of the later one with a cubic Hermite curve between the untouched poses on
 //! either side (positions and velocities matched), so no time is added and every bar stays on
@@ -57,7 +57,8 @@ fn sample_segment(lib: &SegmentLibrary, seg: usize, u: f32, rot: &mut Vec<Quat>,
 /// One segment played over `duration_secs` at `fps`, starting at the origin facing +Z: what a
 /// candidate view plays in sync with its bar.
 pub fn segment_clip(lib: &SegmentLibrary, seg: usize, duration_secs: f32, fps: f32) -> Option<Clip> {
-    let bar = Bar { index: 0, start_secs: 0.0, end_secs: duration_secs.max(1e-3), intensity: 0.5 };
+    let beats = lib.segment(seg).map_or(4, |s| s.counts() as u32);
+    let bar = Bar { index: 0, start_secs: 0.0, end_secs: duration_secs.max(1e-3), intensity: 0.5, beats };
     let mut clip = render(lib, &[bar], &[Some(seg)], &RenderOptions { fps, join_frames: 0 });
     clip.name = lib.segment(seg)?.name.clone();
     Some(clip)
@@ -101,7 +102,9 @@ pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], opt
             // up); with the lead-in the first count is a turn like every other.
             Some(b) => {
                 let d = b.duration_secs().max(1e-6);
-                (((t - b.start_secs) / d).max(-1.0 / super::segment::SEGMENT_COUNTS as f32), choices.first().copied().flatten())
+                let first = choices.first().copied().flatten();
+                let counts = first.and_then(|s| lib.segment(s)).map_or(super::segment::SEGMENT_COUNTS, |s| s.counts());
+                (((t - b.start_secs) / d).max(-1.0 / counts as f32), first)
             }
             None => (0.0, None),
         };

@@ -1,5 +1,5 @@
-//! The segment library (spec §E): clips cut into 4-count segments at the motion's own beats,
-//! each with its source, frame range, tempo, motion intensity W (eq. 2), eigen signature
+//! The segment library (spec §E): clips cut into 4-count segments (and, from imported clips,
+//! 3-count ones too) at the motion's own beats, each with its source, frame range, tempo, motion intensity W (eq. 2), eigen signature
 //! (§F) and the start/end link vectors and velocities the filling's transition cost (§G)
 //! reads.
 //!
@@ -12,6 +12,30 @@
 //! of 60..=150 per minute (fast footwork such as salsa's steps is counted in twos); the phase
 //! is where the whole-body speed is lowest on that grid, and each count snaps to the nearest
 //! local minimum of the speed (its kinetic beat). A person may instead state the clip's tempo.
+//!
+//! Bars in 3 (extends §E, which says "segments of 4 counts (one bar)"): a segment is one bar
+//! *of its own metre*. Each imported clip is cut at the same counts twice: into windows of 4
+//! counts plus the next bar's first every `hop_counts` counts, and into windows of 3 counts plus
+//! the next one on every count ([`SEGMENT_METRES`]). Why every count: in 3 only the imported
+//! clips' windows can fill a bar, and they join each other roughly (the path the table (§G)
+//! finds first has joins at 5.7–14 times the moves' own sharpest moments on pieces in 3, §J's
+//! join jump, either way; [`super::FillWeights::follow_joins`] repairs them). With windows
+//! every 2 counts (185 of them from the real clips) the repair left a 126 BPM piece at 2.92; on
+//! every count (362) it brings six pieces in 3 under the goal of 1.5 (`choreo_beats`). Most dance
+//! mocap repeats its step in 4 or 8 counts, so a 3-count window ends on another count of that
+//! cycle than it starts on, and windows on every count give each end more starts on the same
+//! count (the likely reason, not measured). A bar of n beats
+//! ([`crate::bars::Bar::beats`]) is filled only by segments of n counts ([`Segment::counts`]),
+//! and the count warp puts count k at k/n of the bar, so each count lands on one of its beats;
+//! only when the library holds no segment of n counts does a bar take any segment, its counts
+//! spread evenly over the bar (what every bar in 3 did before). The objective's terms (§G) and
+//! the feedback signatures (§F) are per segment and apply unchanged. The built-in moves give no
+//! 3-count windows: each is one 4-count bar at 120 counts per minute composed to leave and
+//! return to one neutral stance on its counts 1 and 5 (which is why built-in moves join each
+//! other so well); its first 3 counts stop mid-phrase, away from that stance, and cut off the
+//! fourth count's motion, so in 3 they would end away from the stance the other moves start
+//! from (not measured) and not be the move the person picked.
+//! They also stay one segment each, so the built-in library (and its load time) is unchanged.
 
 use std::sync::{Arc, Mutex};
 
@@ -30,8 +54,11 @@ use crate::normalize::{body_height, normalize_in_place, Origin};
 
 /// Frame rate every library clip is stored and analysed at.
 pub const LIBRARY_FPS: f32 = 30.0;
-/// Counts per segment (one bar).
+/// Counts per segment (one bar of 4/4): every built-in move, and the default.
 pub const SEGMENT_COUNTS: usize = 4;
+/// The counts of the segments cut from each imported clip: one bar of 4/4 and one of 3/4
+/// (module docs: a bar of n beats takes segments of n counts).
+pub const SEGMENT_METRES: [usize; 2] = [4, 3];
 /// Eigen axes kept per signature.
 pub const SIGNATURE_AXES: usize = 5;
 /// The pose the signature's features are measured from: the mean §B-normalised position (body
@@ -193,8 +220,9 @@ pub struct Segment {
     pub intensity01: f32,
     /// The built-in move, for built-in segments.
     pub builtin: Option<MoveInfo>,
-    /// The frames of its 5 counts (the 4 it spans and the next bar's first), each where the
-    /// motion has it (its kinetic beat): `count_frames[0] == start_frame`, `[4] == end_frame`.
+    /// The frames of its n + 1 counts (the n it spans, n = [`Segment::counts`], and the next
+    /// bar's first), each where the motion has it (its kinetic beat): `count_frames[0] ==
+    /// start_frame`, `[n] == end_frame`.
     /// Filling a bar warps time piecewise-linearly between them so every count lands on the
     /// song's beat (spec §E). Empty in documents saved before counts were kept: linear then.
     #[serde(default)]
@@ -241,30 +269,44 @@ impl Segment {
         (self.end_frame - self.start_frame) / LIBRARY_FPS
     }
 
+    /// Its counts: the beats of the bar it fills (4, or 3 for a bar in 3; module docs). 4 in
+    /// documents saved before counts were kept.
+    pub fn counts(&self) -> usize {
+        if self.count_frames.len() >= 2 { self.count_frames.len() - 1 } else { SEGMENT_COUNTS }
+    }
+
+    /// Whether its count frames are usable for the warp (as many as its counts + 1, increasing).
+    fn counts_known(&self) -> bool {
+        let c = &self.count_frames;
+        c.len() >= 2 && c.windows(2).all(|w| w[1] > w[0])
+    }
+
     /// The clip frame shown at `u` (0..=1) of the bar it fills: piecewise-linear between its
-    /// counts, count k at u = k/4 (linear from start to end when the counts are unknown).
+    /// counts, count k of n at u = k/n (linear from start to end when the counts are unknown).
     pub fn frame_at(&self, u: f32) -> f32 {
         let u = u.clamp(0.0, 1.0);
         let c = &self.count_frames;
-        if c.len() != SEGMENT_COUNTS + 1 || c.windows(2).any(|w| !(w[1] > w[0])) {
+        if !self.counts_known() {
             return self.start_frame + u * (self.end_frame - self.start_frame);
         }
-        let x = u * SEGMENT_COUNTS as f32;
-        let k = (x.floor() as usize).min(SEGMENT_COUNTS - 1);
+        let n = self.counts();
+        let x = u * n as f32;
+        let k = (x.floor() as usize).min(n - 1);
         c[k] + (x - k as f32) * (c[k + 1] - c[k])
     }
 
-    /// The clip frame shown at `u` of the bar it fills, for `u` before the bar (−¼..0: the count
-    /// before its first, at the first count's pace), clamped to the clip's start. What the dance
-    /// plays as its lead-in before its first bar ([`super::render`]). `u` ≥ 0: [`Segment::frame_at`].
+    /// The clip frame shown at `u` of the bar it fills, for `u` before the bar (−1/n..0: the
+    /// count before its first, at the first count's pace), clamped to the clip's start. What the
+    /// dance plays as its lead-in before its first bar ([`super::render`]). `u` ≥ 0: [`Segment::frame_at`].
     pub fn frame_before(&self, u: f32) -> f32 {
         if u >= 0.0 {
             return self.frame_at(u);
         }
-        let u = u.max(-1.0 / SEGMENT_COUNTS as f32);
+        let n = self.counts() as f32;
+        let u = u.max(-1.0 / n);
         let c = &self.count_frames;
-        let count_frames = if c.len() == SEGMENT_COUNTS + 1 && c[1] > c[0] { c[1] - c[0] } else { (self.end_frame - self.start_frame) / SEGMENT_COUNTS as f32 };
-        (self.start_frame + u * SEGMENT_COUNTS as f32 * count_frames).max(0.0)
+        let count_frames = if c.len() >= 2 && c[1] > c[0] { c[1] - c[0] } else { (self.end_frame - self.start_frame) / n };
+        (self.start_frame + u * n * count_frames).max(0.0)
     }
 
     /// Kinetic beats per count when played at `count_rate_bpm` counts per minute: interpolated
@@ -291,11 +333,12 @@ impl Segment {
     /// Where in 0..=1 of the bar clip frame `frame` plays (the inverse of [`Segment::frame_at`]).
     pub fn bar_position(&self, frame: f32) -> f32 {
         let c = &self.count_frames;
-        if c.len() != SEGMENT_COUNTS + 1 || c.windows(2).any(|w| !(w[1] > w[0])) {
+        if !self.counts_known() {
             return ((frame - self.start_frame) / (self.end_frame - self.start_frame).max(1e-6)).clamp(0.0, 1.0);
         }
-        let k = (0..SEGMENT_COUNTS).rfind(|&k| frame >= c[k]).unwrap_or(0);
-        ((k as f32 + ((frame - c[k]) / (c[k + 1] - c[k])).clamp(0.0, 1.0)) / SEGMENT_COUNTS as f32).clamp(0.0, 1.0)
+        let n = self.counts();
+        let k = (0..n).rfind(|&k| frame >= c[k]).unwrap_or(0);
+        ((k as f32 + ((frame - c[k]) / (c[k + 1] - c[k])).clamp(0.0, 1.0)) / n as f32).clamp(0.0, 1.0)
     }
 }
 
@@ -509,9 +552,15 @@ impl SegmentLibrary {
         let quality_frame = |f: usize| ((f as f32 / lc.clip.fps) * QUALITY_FPS).round() as usize;
         let first_new = self.segments.len();
         let beats = &lc.beat_frames;
+        // Built-in moves: their one 4-count bar only (module docs); imported clips: bars of each
+        // metre at the same counts.
+        let metres: &[usize] = if lc.builtin.is_some() { &[SEGMENT_COUNTS] } else { &SEGMENT_METRES };
+        for &n in metres {
+        // 3-count windows on every count (module docs).
+        let hop = if n == SEGMENT_COUNTS { hop.clamp(1, n) } else { 1 };
         let mut k = 0;
-        while k + SEGMENT_COUNTS < beats.len() {
-            let (s, e) = (beats[k], beats[k + SEGMENT_COUNTS]);
+        while k + n < beats.len() {
+            let (s, e) = (beats[k], beats[k + n]);
             let (si, ei) = (s.round().max(0.0) as usize, (e.round() as usize).min(frames.saturating_sub(1)));
             if ei > si + 2 {
                 let index = self.segments.len();
@@ -520,17 +569,18 @@ impl SegmentLibrary {
                 self.ends.push(join_ends(&normed, si, ei));
                 let name = match &lc.builtin {
                     Some(info) => info.name(),
-                    None => format!("{} · counts {}–{}", lc.clip.name, k + 1, k + SEGMENT_COUNTS),
+                    None if n == SEGMENT_COUNTS => format!("{} · counts {}–{}", lc.clip.name, k + 1, k + n),
+                    None => format!("{} · counts {}–{} (in {n})", lc.clip.name, k + 1, k + n),
                 };
-                let mut count_frames: Vec<f32> = beats[k..=k + SEGMENT_COUNTS].to_vec();
+                let mut count_frames: Vec<f32> = beats[k..=k + n].to_vec();
                 count_frames[0] = si as f32;
-                count_frames[SEGMENT_COUNTS] = ei as f32;
+                count_frames[n] = ei as f32;
                 if count_frames.windows(2).any(|w| !(w[1] > w[0])) {
-                    count_frames = (0..=SEGMENT_COUNTS).map(|j| si as f32 + (ei - si) as f32 * j as f32 / SEGMENT_COUNTS as f32).collect();
+                    count_frames = (0..=n).map(|j| si as f32 + (ei - si) as f32 * j as f32 / n as f32).collect();
                 }
                 let beat_fit = beat_fit(&count_frames, &kinetic);
-                let (c0, c4) = (count_frames[0], count_frames[SEGMENT_COUNTS]);
-                let kinetic_per_count = kinetic.iter().filter(|&&f| f >= c0 && f < c4).count() as f32 / SEGMENT_COUNTS as f32;
+                let (c0, c4) = (count_frames[0], count_frames[n]);
+                let kinetic_per_count = kinetic.iter().filter(|&&f| f >= c0 && f < c4).count() as f32 / n as f32;
                 let kinetic_per_count_by_rate = kinetic_per_count_by_rate(&positions, &count_frames);
                 // Samples of frames after the first: a sample is the speed from the frame before.
                 let skate_end = (quality_frame(ei) + 1).min(skate.len());
@@ -548,7 +598,7 @@ impl SegmentLibrary {
                     source: lc.clip.source.clone(),
                     start_frame: si as f32,
                     end_frame: ei as f32,
-                    tempo_bpm: SEGMENT_COUNTS as f32 * 60.0 / ((ei - si) as f32 / LIBRARY_FPS),
+                    tempo_bpm: n as f32 * 60.0 / ((ei - si) as f32 / LIBRARY_FPS),
                     intensity,
                     intensity01: 0.0,
                     builtin: lc.builtin,
@@ -557,6 +607,7 @@ impl SegmentLibrary {
                 self.overlaps.push(Vec::new());
             }
             k += hop;
+        }
         }
         self.set_overlaps(clip_index);
         self.segments.len() - first_new
@@ -690,17 +741,19 @@ impl SegmentLibrary {
         guard.as_ref().filter(|t| t.repeat_penalty() == repeat_penalty).cloned()
     }
 
-    /// Rescales every segment's intensity to the library's range.
+    /// Rescales every segment's intensity to the range of the library's segments of its count
+    /// (a bar in 3 chooses among 3-count moves only, so they are scaled among themselves; and
+    /// the 4-count moves keep the scale they had before 3-count ones were cut).
     fn rescale(&mut self) {
-        let mut v: Vec<f32> = self.segments.iter().map(|s| s.intensity).collect();
-        if v.is_empty() {
-            return;
-        }
-        v.sort_by(f32::total_cmp);
-        let lo = v[v.len() * 5 / 100];
-        let hi = v[(v.len() * 95 / 100).min(v.len() - 1)];
-        for s in self.segments.iter_mut() {
-            s.intensity01 = if hi > lo + 1e-6 { ((s.intensity - lo) / (hi - lo)).clamp(0.0, 1.0) } else { 0.5 };
+        let metres: std::collections::BTreeSet<usize> = self.segments.iter().map(Segment::counts).collect();
+        for n in metres {
+            let mut v: Vec<f32> = self.segments.iter().filter(|s| s.counts() == n).map(|s| s.intensity).collect();
+            v.sort_by(f32::total_cmp);
+            let lo = v[v.len() * 5 / 100];
+            let hi = v[(v.len() * 95 / 100).min(v.len() - 1)];
+            for s in self.segments.iter_mut().filter(|s| s.counts() == n) {
+                s.intensity01 = if hi > lo + 1e-6 { ((s.intensity - lo) / (hi - lo)).clamp(0.0, 1.0) } else { 0.5 };
+            }
         }
     }
 
@@ -1085,28 +1138,30 @@ fn counts_of(canon: &Clip, speed: &[f32]) -> (Vec<f32>, f32) {
     (beats_at_period(speed, period), period)
 }
 
-/// Nominal bar length the beat fit is judged on, seconds (4 counts at 120 per minute).
-const FIT_BAR_SECS: f32 = 2.0;
+/// Nominal count length the beat fit is judged on, seconds (120 per minute).
+const FIT_COUNT_SECS: f32 = 0.5;
 
-/// Beat fit of a segment with counts `count_frames` in a clip whose kinetic beats are
-/// `kinetic_frames` (both clip frames): its kinetic beats warped onto a bar of
-/// [`FIT_BAR_SECS`] as the renderer warps them, then (BAS-music on the 3 inner counts − BAS on
-/// the 4 half-counts + 1) / 2. 1: turns on every count and never between; 0.5: no preference.
+/// Beat fit of a segment with counts `count_frames` (n + 1 of them) in a clip whose kinetic
+/// beats are `kinetic_frames` (both clip frames): its kinetic beats warped onto a bar of n
+/// counts of [`FIT_COUNT_SECS`] as the renderer warps them, then (BAS-music on the n − 1 inner
+/// counts − BAS on the n half-counts + 1) / 2. 1: turns on every count and never between; 0.5:
+/// no preference.
 pub fn beat_fit(count_frames: &[f32], kinetic_frames: &[f32]) -> f32 {
-    if count_frames.len() != SEGMENT_COUNTS + 1 {
+    if count_frames.len() < 3 {
         return 0.5;
     }
-    let (c0, c4) = (count_frames[0], count_frames[SEGMENT_COUNTS]);
+    let n = count_frames.len() - 1;
+    let (c0, c4) = (count_frames[0], count_frames[n]);
     let warp = |f: f32| -> f32 {
-        let k = (0..SEGMENT_COUNTS).rfind(|&k| f >= count_frames[k]).unwrap_or(0);
+        let k = (0..n).rfind(|&k| f >= count_frames[k]).unwrap_or(0);
         let span = (count_frames[k + 1] - count_frames[k]).max(1e-6);
-        (k as f32 + (f - count_frames[k]) / span) / SEGMENT_COUNTS as f32 * FIT_BAR_SECS
+        (k as f32 + (f - count_frames[k]) / span) * FIT_COUNT_SECS
     };
     let mut kin: Vec<f32> = kinetic_frames.iter().copied().filter(|&f| f >= c0 && f <= c4).map(warp).collect();
     kin.sort_by(f32::total_cmp);
-    let step = FIT_BAR_SECS / SEGMENT_COUNTS as f32;
-    let counts: Vec<f32> = (1..SEGMENT_COUNTS).map(|k| k as f32 * step).collect();
-    let halves: Vec<f32> = (0..SEGMENT_COUNTS).map(|k| (k as f32 + 0.5) * step).collect();
+    let step = FIT_COUNT_SECS;
+    let counts: Vec<f32> = (1..n).map(|k| k as f32 * step).collect();
+    let halves: Vec<f32> = (0..n).map(|k| (k as f32 + 0.5) * step).collect();
     let on = bas_music(&counts, &kin).unwrap_or(0.0);
     let off = bas_music(&halves, &kin).unwrap_or(0.0);
     ((on - off + 1.0) * 0.5).clamp(0.0, 1.0)
@@ -1121,21 +1176,23 @@ pub const KINETIC_RATES_BPM: [f32; 6] = [60.0, 75.0, 90.0, 110.0, 135.0, 165.0];
 /// `positions`, canonical world positions at [`LIBRARY_FPS`], frame-major) played at each rate
 /// of [`KINETIC_RATES_BPM`]: resampled at [`QUALITY_FPS`] with its counts on the bar's beats
 /// (piecewise-linear, as the renderer warps it) and half a count of the clip either side (so
-/// its first count can be a turn, as in a dance), kinetic beats counted over its 4 counts.
+/// its first count can be a turn, as in a dance), kinetic beats counted over its n counts
+/// (`count_frames` holds n + 1).
 pub fn kinetic_per_count_by_rate(positions: &[Vec3], count_frames: &[f32]) -> Vec<f32> {
     let frames = positions.len() / CANON_COUNT;
-    if count_frames.len() != SEGMENT_COUNTS + 1 || frames < 2 {
+    if count_frames.len() < 2 || frames < 2 {
         return Vec::new();
     }
+    let counts = count_frames.len() - 1;
     let c = count_frames;
     // Source frame at u counts from the segment's first count (u may run half a count out).
     let frame_at = |u: f32| -> f32 {
         let f = if u < 0.0 {
             c[0] + u * (c[1] - c[0])
-        } else if u >= SEGMENT_COUNTS as f32 {
-            c[SEGMENT_COUNTS] + (u - SEGMENT_COUNTS as f32) * (c[SEGMENT_COUNTS] - c[SEGMENT_COUNTS - 1])
+        } else if u >= counts as f32 {
+            c[counts] + (u - counts as f32) * (c[counts] - c[counts - 1])
         } else {
-            let k = (u.floor() as usize).min(SEGMENT_COUNTS - 1);
+            let k = (u.floor() as usize).min(counts - 1);
             c[k] + (u - k as f32) * (c[k + 1] - c[k])
         };
         // Past the clip's ends, the clip mirrored in time (a one-bar built-in move has nothing
@@ -1150,7 +1207,7 @@ pub fn kinetic_per_count_by_rate(positions: &[Vec3], count_frames: &[f32]) -> Ve
         .map(|&rate| {
             let count_secs = 60.0 / rate;
             let margin = 0.5 * count_secs;
-            let n = ((SEGMENT_COUNTS as f32 * count_secs + 2.0 * margin) * QUALITY_FPS).round() as usize + 1;
+            let n = ((counts as f32 * count_secs + 2.0 * margin) * QUALITY_FPS).round() as usize + 1;
             let mut out = Vec::with_capacity(n * CANON_COUNT);
             for i in 0..n {
                 let t = i as f32 / QUALITY_FPS - margin;
@@ -1163,9 +1220,9 @@ pub fn kinetic_per_count_by_rate(positions: &[Vec3], count_frames: &[f32]) -> Ve
                 }
             }
             let Ok(m) = QualityMotion::from_positions(&out, QUALITY_FPS) else { return 0.0 };
-            let span = SEGMENT_COUNTS as f32 * count_secs;
+            let span = counts as f32 * count_secs;
             let beats = kinetic_beats_secs(&m).into_iter().filter(|&t| t >= margin - 1e-4 && t < margin + span - 1e-4).count();
-            beats as f32 / SEGMENT_COUNTS as f32
+            beats as f32 / counts as f32
         })
         .collect()
 }
@@ -1235,7 +1292,7 @@ fn grid(frames: usize, period: f32, phase: f32) -> Vec<f32> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -1312,6 +1369,54 @@ mod tests {
         }
     }
 
+    /// Three built-in moves and one imported clip (a built-in move's frames under another name,
+    /// cut at a stated 240 counts per minute: 9 counts in its 2 s).
+    pub(crate) fn small_library_with_an_imported_clip() -> SegmentLibrary {
+        let mut lib = SegmentLibrary::new();
+        let mut loader = BuiltinLoader::new();
+        lib.load_builtin(&mut loader, 3);
+        let mut clip = lib.clips()[1].clip.clone();
+        clip.name = "imported".into();
+        clip.source = "imported.bvh".into();
+        let map = HumanoidMap::from_skeleton(&clip.skeleton);
+        let options = SegmentOptions { tempo_bpm: Some(240.0), first_beat_secs: Some(0.0), hop_counts: 2 };
+        lib.add_clip(&clip, &map, &HumanoidStatus::Complete, &options).unwrap();
+        lib
+    }
+
+    #[test]
+    fn imported_clips_are_cut_in_three_and_four_built_in_moves_in_four() {
+        let lib = small_library_with_an_imported_clip();
+        let (builtin, imported): (Vec<&Segment>, Vec<&Segment>) = lib.segments().iter().partition(|s| s.builtin.is_some());
+        assert_eq!(builtin.len(), 3);
+        assert!(builtin.iter().all(|s| s.counts() == 4 && s.count_frames.len() == 5));
+        let beats = &lib.clips()[3].beat_frames;
+        assert_eq!(beats.len(), 9, "{beats:?}");
+        // 4 counts every 2 counts (hop_counts): from counts 0, 2, 4; 3 counts on every count:
+        // from 0 to 5.
+        let of = |n: usize| imported.iter().filter(|s| s.counts() == n).map(|s| s.start_frame).collect::<Vec<f32>>();
+        assert_eq!(of(4), [0, 2, 4].map(|k| beats[k].round()));
+        assert_eq!(of(3), [0, 1, 2, 3, 4, 5].map(|k| beats[k].round()));
+        for s in imported.iter().filter(|s| s.counts() == 3) {
+            assert_eq!(s.count_frames.len(), 4);
+            assert!(s.name.ends_with("(in 3)"), "{}", s.name);
+            // One count per beat of a bar in 3: count k at k/3 of the bar, and back.
+            for (k, c) in s.count_frames.iter().enumerate() {
+                assert!((s.frame_at(k as f32 / 3.0) - c).abs() < 1e-4, "{}: count {k}", s.name);
+                assert!((s.bar_position(*c) - k as f32 / 3.0).abs() < 1e-4, "{}: count {k}", s.name);
+            }
+            // Its tempo is its 3 counts over its length, as a 4-count one's is its 4.
+            assert!((s.tempo_bpm - 3.0 * 60.0 / s.duration_secs()).abs() < 1e-3);
+            assert!(s.kinetic_per_count_by_rate.len() == KINETIC_RATES_BPM.len());
+            // The lead-in is one of its counts long: a third of the bar.
+            assert!((s.frame_before(-1.0 / 3.0) - (s.count_frames[0] - (s.count_frames[1] - s.count_frames[0])).max(0.0)).abs() < 1e-4);
+        }
+        // A 3-count segment shares frames with the 4-count one from the same count.
+        let a = imported.iter().find(|s| s.counts() == 3).unwrap();
+        let b = imported.iter().find(|s| s.counts() == 4 && s.start_frame == a.start_frame).unwrap();
+        assert!(lib.overlaps[a.index].contains(&b.index));
+    }
+
     #[test]
     fn the_lead_in_is_the_count_before_at_the_first_counts_pace() {
         let s = seg_with_counts(vec![10.0, 20.0, 40.0, 48.0, 60.0]);
@@ -1371,6 +1476,14 @@ mod tests {
         let mut old = s.clone();
         old.count_frames.clear();
         assert!((old.frame_at(0.25) - 22.5).abs() < 1e-4);
+    }
+
+    #[test]
+    fn beat_fit_in_three_prefers_turns_on_its_three_counts() {
+        let counts = [0.0f32, 14.0, 31.0, 45.0];
+        let between: Vec<f32> = counts.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+        assert!(beat_fit(&counts, &counts) > 0.95);
+        assert!(beat_fit(&counts, &between) < 0.05);
     }
 
     #[test]

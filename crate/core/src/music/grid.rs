@@ -244,7 +244,7 @@ impl SongGrid {
                     end_secs
                 }
             };
-            bars.push(Bar { index: bars.len(), start_secs, end_secs, intensity: loudness.mean_over(start_secs, end_secs) });
+            bars.push(Bar { index: bars.len(), start_secs, end_secs, intensity: loudness.mean_over(start_secs, end_secs), beats: bpb as u32 });
         }
         // Intensity: mean loudness scaled to the song's range (spec §D): the quietest bar is 0,
         // the loudest 1; all bars equal -> 0.5.

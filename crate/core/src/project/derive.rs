@@ -239,7 +239,7 @@ impl Derived {
             .map(|s| match s.builtin {
                 Some(m) => MoveKey::Builtin { r#move: m },
                 // Unreachable: the built-in library holds only built-in moves.
-                None => MoveKey::Cut { clip: ClipRef { source: SourceId(u32::MAX), clip: s.index as u32 }, cut_tempo_bpm: None, first_count: 0 },
+                None => MoveKey::Cut { clip: ClipRef { source: SourceId(u32::MAX), clip: s.index as u32 }, cut_tempo_bpm: None, first_count: 0, counts: 4 },
             })
             .collect();
         self.cut_sources(&doc.sources, blobs, referenced, old_cuts, lib, keys, Vec::new());
@@ -276,7 +276,7 @@ impl Derived {
                                         remapped[*new] = Some(k.clone());
                                     }
                                 }
-                                keys = remapped.into_iter().map(|k| k.unwrap_or(MoveKey::Cut { clip: cref, cut_tempo_bpm: tempo, first_count: 0 })).collect();
+                                keys = remapped.into_iter().map(|k| k.unwrap_or(MoveKey::Cut { clip: cref, cut_tempo_bpm: tempo, first_count: 0, counts: 4 })).collect();
                                 r.summary
                             })
                         }
@@ -288,7 +288,7 @@ impl Derived {
                             for seg in &lib.segments()[lib.len() - summary.segments..] {
                                 let beats = &lib.clips()[seg.clip].beat_frames;
                                 let first_count = beats.iter().position(|b| b.round().max(0.0) == seg.start_frame).unwrap_or(usize::MAX) as u32;
-                                keys.push(MoveKey::Cut { clip: cref, cut_tempo_bpm: tempo, first_count });
+                                keys.push(MoveKey::Cut { clip: cref, cut_tempo_bpm: tempo, first_count, counts: seg.counts() as u32 });
                             }
                             if is_current {
                                 info.cut = Some(summary);

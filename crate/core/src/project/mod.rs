@@ -83,10 +83,26 @@ pub enum MoveKey {
     /// One of the built-in moves.
     #[serde(rename_all = "camelCase")]
     Builtin { r#move: MoveInfo },
-    /// Four counts of an imported clip, cut at `cut_tempo_bpm` (the tempo the person stated;
-    /// `None`: the tempo detected from the motion), starting on count `first_count` (0-based).
+    /// `counts` counts of an imported clip (4, or 3 for a bar in 3), cut at `cut_tempo_bpm` (the
+    /// tempo the person stated; `None`: the tempo detected from the motion), starting on count
+    /// `first_count` (0-based). `counts` is left out of the file (and the key's id) when 4, so
+    /// projects saved before 3-count segments open, and save, unchanged.
     #[serde(rename_all = "camelCase")]
-    Cut { clip: ClipRef, cut_tempo_bpm: Option<f32>, first_count: u32 },
+    Cut {
+        clip: ClipRef,
+        cut_tempo_bpm: Option<f32>,
+        first_count: u32,
+        #[serde(default = "four_counts", skip_serializing_if = "is_four_counts")]
+        counts: u32,
+    },
+}
+
+fn four_counts() -> u32 {
+    4
+}
+
+fn is_four_counts(n: &u32) -> bool {
+    *n == 4
 }
 
 impl MoveKey {
@@ -889,5 +905,24 @@ impl Project {
         clip.name = "Dance".into();
         clip.source = "choreography".into();
         Ok(clip)
+    }
+}
+
+#[cfg(test)]
+mod move_key_tests {
+    use super::*;
+
+    #[test]
+    fn a_cut_keys_counts_are_left_out_when_four_and_kept_when_three() {
+        let clip = ClipRef { source: SourceId(2), clip: 0 };
+        let four = MoveKey::Cut { clip, cut_tempo_bpm: None, first_count: 6, counts: 4 };
+        let three = MoveKey::Cut { clip, cut_tempo_bpm: None, first_count: 6, counts: 3 };
+        // A 4-count key is written (and identified) as before 3-count segments existed.
+        let saved_before = r#"{"kind":"cut","clip":{"source":2,"clip":0},"cutTempoBpm":null,"firstCount":6}"#;
+        assert_eq!(four.id(), saved_before);
+        assert_eq!(serde_json::from_str::<MoveKey>(saved_before).unwrap(), four);
+        // The 3-count window from the same count is another move.
+        assert_ne!(three.id(), four.id());
+        assert_eq!(serde_json::from_str::<MoveKey>(&three.id()).unwrap(), three);
     }
 }
