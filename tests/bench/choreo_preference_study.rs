@@ -35,11 +35,10 @@
 //! Asserts nothing.
 
 use glam::Vec3;
-use odori_core::choreo::quality::perceptual_distance;
+use odori_core::choreo::quality::{perceptual_distance, perceptual_frames};
 use odori_core::choreo::segment::{SIGNATURE_AXES, SIGNATURE_OFFSET};
 use odori_core::humanoid::Canon;
 use odori_core::choreo::{feedback::relevance, SegmentLibrary, SegmentOptions, Settings, Signature};
-use odori_core::normalize::{body_height, normalize_in_place, Origin};
 use odori_core::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
 use odori_core::import::import_bytes;
 use odori_core::ImportOptions;
@@ -273,22 +272,7 @@ fn main() {
     // Feature variants for the eigen signatures, computed here from each segment's positions
     // time-normalised to 32 frames and normalised as §B (as the perceptual distance prepares
     // them), against the library's mean pose.
-    let prep = |p: &[Vec3]| -> Vec<Vec3> {
-        let frames = p.len() / CANON_COUNT;
-        let mut out = Vec::with_capacity(32 * CANON_COUNT);
-        for k in 0..32 {
-            let x = k as f32 * (frames - 1) as f32 / 31.0;
-            let f0 = x.floor() as usize;
-            let f1 = (f0 + 1).min(frames - 1);
-            let w = x - f0 as f32;
-            for j in 0..CANON_COUNT {
-                out.push(p[f0 * CANON_COUNT + j].lerp(p[f1 * CANON_COUNT + j], w));
-            }
-        }
-        let h = body_height(&out);
-        normalize_in_place(&mut out, Origin::Hips, h);
-        out
-    };
+    let prep = |p: &[Vec3]| perceptual_frames(p).unwrap_or_else(|e| panic!("{e}"));
     let normed: Vec<Vec<Vec3>> = positions.iter().map(|p| prep(p)).collect();
     let mut mean_pose = vec![Vec3::ZERO; CANON_COUNT];
     for n in &normed {

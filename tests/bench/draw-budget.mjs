@@ -14,30 +14,14 @@
 // node tests/bench/draw-budget.mjs  (ODORI_BENCH_BACKENDS=webgl2 for one back end;
 // ODORI_BENCH_VIEWPORT=640x400 for another window size: software drawing's cost per frame
 // grows with the canvas's pixels).
-import { readFileSync, readdirSync } from "node:fs";
+import { readFileSync } from "node:fs";
 import { startServer, launch, openApp } from "../browser/harness.mjs";
+import { descendants } from "./proc.mjs";
 
 const SECS = 5;
 const ROUNDS = 2;
 const TICK_MS = 1000 / 100; // /proc's clock ticks (USER_HZ 100 on Linux)
 
-/** Every process under this one (Chromium and its helpers), by pid. */
-function descendants() {
-  const kids = new Map();
-  for (const d of readdirSync("/proc")) {
-    if (!/^\d+$/.test(d)) continue;
-    try {
-      const st = readFileSync(`/proc/${d}/stat`, "utf8");
-      const ppid = Number(st.slice(st.lastIndexOf(")") + 2).split(" ")[1]);
-      if (!kids.has(ppid)) kids.set(ppid, []);
-      kids.get(ppid).push(Number(d));
-    } catch { /* gone */ }
-  }
-  const out = [];
-  const walk = (p) => { for (const c of kids.get(p) || []) { out.push(c); walk(c); } };
-  walk(process.pid);
-  return out;
-}
 
 /** CPU ms so far of Chromium's processes, by kind: { gpu, renderer, other }. */
 function chromiumCpu() {

@@ -20,6 +20,7 @@
 import { readFileSync, readdirSync } from "node:fs";
 import { join } from "node:path";
 import { startServer, launch, data } from "../browser/harness.mjs";
+import { descendants } from "./proc.mjs";
 
 const ALL = readdirSync(join(data, "mocap"), { withFileTypes: true })
   .filter((d) => d.isDirectory())
@@ -28,22 +29,6 @@ const ALL = readdirSync(join(data, "mocap"), { withFileTypes: true })
 // CPU time per thread of this run's Chromium renderers (descendants of this process), from
 // /proc: the machine is shared, so wall times say more about its load than about the search;
 // a worker thread's CPU time is what it would take on an idle machine of this kind.
-function descendants() {
-  const kids = new Map();
-  for (const d of readdirSync("/proc")) {
-    if (!/^\d+$/.test(d)) continue;
-    try {
-      const st = readFileSync(`/proc/${d}/stat`, "utf8");
-      const ppid = Number(st.slice(st.lastIndexOf(")") + 2).split(" ")[1]);
-      if (!kids.has(ppid)) kids.set(ppid, []);
-      kids.get(ppid).push(Number(d));
-    } catch { /* gone */ }
-  }
-  const out = [];
-  const walk = (p) => { for (const c of kids.get(p) || []) { out.push(c); walk(c); } };
-  walk(process.pid);
-  return out;
-}
 /** Map "pid/tid" → { name, ms } for every thread of this run's renderer processes. */
 function threadCpu() {
   const m = new Map();
