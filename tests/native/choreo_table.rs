@@ -15,8 +15,14 @@ use odori_tests::{all_bvh, fps_override_for, read};
 #[path = "music_audio.rs"]
 mod music_audio;
 
-/// The built-in moves and every real mocap clip, cut at the default options (4- and 3-count).
+/// The built-in moves and every real mocap clip, cut at the default options (4- and 3-count);
+/// made once for the tests of this file.
 fn real_library() -> SegmentLibrary {
+    static LIB: std::sync::OnceLock<SegmentLibrary> = std::sync::OnceLock::new();
+    LIB.get_or_init(make_real_library).clone()
+}
+
+fn make_real_library() -> SegmentLibrary {
     let mut lib = SegmentLibrary::builtin();
     for rel in all_bvh() {
         let opts = ImportOptions { fps_override: fps_override_for(&rel), ..Default::default() };
@@ -136,4 +142,71 @@ fn tables_by_metre_give_main_s_costs_and_dances() {
         assert_eq!((ra.filled, ra.pinned, ra.cost.to_bits()), (rb.filled, rb.pinned, rb.cost.to_bits()), "{name}: the reports differ");
         assert!(b.states().iter().any(|s| matches!(s, BarState::Generated { .. })), "{name}: nothing generated");
     }
+}
+
+#[test]
+fn the_cache_builds_the_blocks_new_bars_bring_in_and_refuses_other_tables() {
+    let mut lib = real_library();
+    let penalty = FillWeights::default().repeat_penalty;
+    let m = lib.len();
+    let (m3, m4) = (lib.segments().iter().filter(|s| s.counts() == 3).count(), lib.segments().iter().filter(|s| s.counts() == 4).count());
+    let four = continue_bars(&[], 40.0, 120.0, 4);
+    let mut doc = Choreography::new(four).expect("bars");
+    let scope4 = doc.table_scope(&lib);
+    assert_eq!(scope4, TableScope::for_metres(&[4]));
+
+    // A 4/4 song: the 4-count block alone, in slices whose progress only grows.
+    let mut b = lib.table_builder_for(penalty, &scope4);
+    let mut fractions = Vec::new();
+    while !b.step(64).is_done() {
+        fractions.push(b.progress().fraction());
+    }
+    assert!(fractions.len() > 5 && fractions.windows(2).all(|w| w[0] < w[1]), "{fractions:?}");
+    let t4 = b.finish().expect("table");
+    assert_eq!(t4.stored_pairs(), m4 * m4);
+    assert!(lib.install_table_for(t4.clone(), &scope4));
+    assert!(lib.cached_table_for(penalty, &scope4).is_some());
+
+    // New bars with a metre change: only the blocks missing are built (less work than all of
+    // them), and the table holds the 4-count block too.
+    let change = continue_bars(&continue_bars(&[], 20.0, 120.0, 4), 20.0, 120.0, 3);
+    doc.set_bars(change).expect("bars");
+    let scope = doc.table_scope(&lib);
+    assert_eq!(scope, TableScope::for_metres(&[3, 4]).with_join(4, 3));
+    assert!(lib.cached_table_for(penalty, &scope).is_none(), "the 4-count table does not cover a 3/4 bar");
+    // A table lacking the new blocks is refused for these bars.
+    assert!(!lib.install_table_for(t4.clone(), &scope));
+    let b = lib.table_builder_for(penalty, &scope);
+    let all_new = odori_core::choreo::TableBuilder::for_scope(&lib, penalty, &scope, None);
+    assert!(b.progress().total < all_new.progress().total, "the 4-count block is not built again");
+    let mut b = b;
+    while !b.step(256).is_done() {}
+    let t = b.finish().expect("table");
+    assert_eq!(t.stored_pairs(), m4 * m4 + m3 * m3 + m4 * m3);
+    assert!(lib.install_table_for(t, &scope));
+    let cached = lib.cached_table_for(penalty, &scope).expect("cached");
+    // Its costs are the all-pairs table's on the blocks (bit for bit).
+    let full = TransitionTable::from_library(&lib, penalty);
+    for a in (0..m).step_by(11) {
+        for b in (0..m).step_by(13) {
+            assert_eq!(cached.cost(a, b).to_bits(), full.cost(a, b).to_bits());
+        }
+    }
+    // Generate reads the cached table as it is (nothing more to build).
+    doc.generate(&lib).expect("generate");
+    assert!(std::sync::Arc::ptr_eq(&cached, &lib.cached_table(penalty).expect("still cached")));
+
+    // A library change drops the table, and a table built before it is refused.
+    let stale = lib.table_builder_for(penalty, &scope);
+    let rel = all_bvh().into_iter().next().expect("a mocap clip");
+    let imp = import_bytes(&rel, &read(&rel), &ImportOptions { fps_override: fps_override_for(&rel), ..Default::default() }).expect("import");
+    lib.add_clip(&imp.clips[0], &imp.humanoid, &imp.status, &SegmentOptions::default()).expect("add");
+    assert!(lib.cached_table(penalty).is_none(), "a library change drops the table");
+    let mut stale = stale;
+    while !stale.step(usize::MAX).is_done() {}
+    assert!(!lib.install_table_for(stale.finish().expect("table"), &scope), "a table of another revision is refused");
+    // And one of another library with the same segments count is refused too.
+    let other = real_library();
+    let t_other = TransitionTable::for_scope(&other, penalty, &scope);
+    assert!(!lib.install_table(t_other));
 }

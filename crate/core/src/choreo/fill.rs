@@ -27,9 +27,10 @@
 //! whose counts land on its 3 beats ([`super::segment`]'s module docs). The document leaves a
 //! bar unrestricted (0) when the library holds no live segment of its count.
 //!
-//! Speed: the M × M edge costs depend only on the library and are computed once per library
-//! ([`super::table`]; cached by [`super::SegmentLibrary::transition_table`]). In each open
-//! layer a column
+//! Speed: the edge costs depend only on the library and are computed once per library, for
+//! the pairs of metres the song's bars join ([`super::table`]; cached by
+//! [`super::SegmentLibrary::transition_table_for`]); an open layer after an open layer reads the
+//! block from the previous bar's metre to its own. In a within-metre block a column
 //! first tries only its [`TOP_K`] cheapest edges and the previous layer's [`LOW_L`] cheapest
 //! nodes, and accepts their best when it is provably optimal: any other predecessor costs at
 //! least (the cheapest node outside that set) + (the cheapest edge outside that list).

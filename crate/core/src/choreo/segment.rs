@@ -754,6 +754,14 @@ impl SegmentLibrary {
         table.scope().covers(scope) && self.install_table(table)
     }
 
+    /// Drops the cached table (its memory is freed once no one holds it); the next one needed
+    /// is built again.
+    pub fn drop_table(&self) {
+        if let Ok(mut t) = self.table.lock() {
+            *t = None;
+        }
+    }
+
     /// The cached table, when there is one for this repetition penalty.
     pub fn cached_table(&self, repeat_penalty: f32) -> Option<Arc<TransitionTable>> {
         let guard = self.table.lock().ok()?;

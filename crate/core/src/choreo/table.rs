@@ -21,9 +21,25 @@
 //! built by a [`TableBuilder`] in slices of columns, so a host can spread it over frames and
 //! show progress; the same builder run to the end is [`TransitionTable::from_library`].
 //!
-//! Layout. Costs are stored column by column (all predecessors of one segment contiguous) and
-//! row by row (for the filling's fast path), with each column's [`TOP_K`] cheapest
-//! predecessors and a lower bound on the rest.
+//! Which pairs. A bar of n beats takes only n-count segments ([`super::fill::Tempi::bar_counts`]),
+//! so a dance only ever joins a segment of bar t − 1's metre to one of bar t's. A table is
+//! built for a [`TableScope`]: blocks of pairs by (predecessor counts, successor counts), the
+//! (n, n) block for each metre two bars in a row have, and a cross block (p, n) only where a
+//! bar of p is followed by one of n (a corrected bar, a metre change). A 4/4 song builds the
+//! 4-count block alone; a bar whose metre no segment has (it takes any) needs every pair, one
+//! block of all segments (main's all-pairs table, [`TransitionTable::from_library`], kept for
+//! it and for comparisons). Cross blocks rather than costs computed per join in the filling:
+//! a cross join needs every pair of the two metres all the same (the filling relaxes every
+//! predecessor of every successor), a Generate runs the filling several times (its ladders
+//! and join repairs) and a person Generates again and again, so the block is built once, in
+//! the same slices with the same progress as the others, and cached with them. Costs are
+//! the same formula and the same floating-point operations in any block, so a block holds
+//! bit for bit what the all-pairs table holds; a pair outside the built blocks (a pinned
+//! segment of another metre) is computed when asked ([`TransitionTable::cost`]), the same value.
+//!
+//! Layout. Each block's costs are stored column by column (all predecessors of one segment
+//! contiguous); a within-metre block also row by row (for the filling's fast path), with each
+//! column's [`TOP_K`] cheapest predecessors and a lower bound on the rest.
 
 use std::collections::BTreeSet;
 use std::sync::Arc;
