@@ -170,7 +170,7 @@ pub(crate) struct Block {
     /// Its predecessors' and successors' library indices, ascending.
     pub(crate) from: Vec<u32>,
     pub(crate) to: Vec<u32>,
-    pub(crate) costs: Vec<f32>,
+    pub(crate) costs: Arc<[f32]>,
     /// `rows[la * to.len() + lb]` = the same costs row by row (within-group blocks only).
     pub(crate) rows: Vec<f32>,
     /// Per column, the [`TOP_K`] cheapest predecessors (local indices) in increasing cost
@@ -311,6 +311,8 @@ pub struct TransitionTable {
     local: Vec<u32>,
     /// `blocks[g * groups + h]`: the costs from group g to group h, when built.
     blocks: Vec<Option<Arc<Block>>>,
+    /// The costs of the one block of an all-pairs table (shared with it), `flat[b * m + a]`.
+    flat: Option<Arc<[f32]>>,
     ends: Option<Arc<Ends>>,
     /// Segments that may fill an open bar (`false`: kept only for the bars that already hold
     /// them, see [`SegmentLibrary::recut_clip`]).
@@ -390,9 +392,15 @@ impl TransitionTable {
 
     /// C(a, b); infinite when out of range. A pair outside the built blocks is computed here
     /// (the same value a block would hold).
+    #[inline]
     pub fn cost(&self, a: usize, b: usize) -> f32 {
         if a >= self.m || b >= self.m {
             return f32::INFINITY;
+        }
+        // One block of all segments (all pairs): indexed as it is, through a slice held here
+        // (the loops that call this for every pair then run as fast as over a plain array).
+        if let Some(flat) = &self.flat {
+            return flat[b * self.m + a];
         }
         let (g, h) = (self.group[a] as usize, self.group[b] as usize);
         if let Some(block) = self.block(g, h) {
@@ -448,6 +456,7 @@ fn unreachable_empty(m: usize) -> TransitionTable {
         group: Vec::new(),
         local: Vec::new(),
         blocks: Vec::new(),
+        flat: None,
         ends: None,
         available: Vec::new(),
         repeat_penalty: 0.0,
@@ -564,7 +573,7 @@ impl Job {
 
     fn into_block(self) -> Block {
         let Job { from, to, costs, rows, top, top_cost, rest_min, .. } = self;
-        Block { from, to, costs, rows, top, top_cost, rest_min }
+        Block { from, to, costs: costs.into(), rows, top, top_cost, rest_min }
     }
 }
 
@@ -719,7 +728,11 @@ impl TableBuilder {
             }
         }
         let Layout { metres, group, local, .. } = layout;
-        Some(TransitionTable { m, scope, metres, group, local, blocks, ends, available, repeat_penalty, revision })
+        let flat = match blocks.as_slice() {
+            [Some(b)] if metres.is_empty() && b.costs.len() == m * m => Some(b.costs.clone()),
+            _ => None,
+        };
+        Some(TransitionTable { m, scope, metres, group, local, blocks, flat, ends, available, repeat_penalty, revision })
     }
 }
 
