@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use odori_core::choreo::{fill_with_stats, FeedbackSession, FillWeights, Layer, RenderOptions, SegmentLibrary, SegmentOptions, TransitionTable};
+use odori_core::choreo::{fill_with_stats, FeedbackSession, FillWeights, Layer, RenderOptions, SegmentLibrary, SegmentOptions, TableScope, TransitionTable};
 use odori_core::import::import_bytes;
 use odori_core::ImportOptions;
 use odori_tests::{all_bvh, fps_override_for, read};
@@ -118,6 +118,33 @@ fn main() {
     println!("  phases: pair costs {pairs_ms:.0} ms ({:.2} ns per link and pair), top-{} lists {top_ms:.0} ms, row-major copy {rows_ms:.0} ms",
         pairs_ms * 1e6 / (m * m * 20) as f64, odori_core::choreo::fill::TOP_K);
 
+    // The table by metre (what a song's bars need, TableScope) against the all-pairs table
+    // above, in the same run: each metre set built from nothing, best of 3.
+    let penalty = FillWeights::default().repeat_penalty;
+    let time_scope = |scope: &TableScope| {
+        let mut best = f64::MAX;
+        let mut stored = 0;
+        for _ in 0..3 {
+            let t = Instant::now();
+            let tb = TransitionTable::for_scope(&lib, penalty, scope);
+            best = best.min(ms(t));
+            stored = tb.stored_pairs();
+        }
+        (best, stored)
+    };
+    let (all_ms, all_stored) = time_scope(&TableScope::all_pairs());
+    let (n3, n4) = (lib.segments().iter().filter(|s| s.counts() == 3).count(), lib.segments().iter().filter(|s| s.counts() == 4).count());
+    println!("transition table by metre ({n4} segments in 4 counts, {n3} in 3); all pairs (main's table): {all_ms:.0} ms, {all_stored} costs (best of 3)");
+    for (what, scope) in [
+        ("a 4/4 song", TableScope::for_metres(&[4])),
+        ("a 3/4 song", TableScope::for_metres(&[3])),
+        ("a 4/4 song with one bar corrected to 3", TableScope::for_metres(&[4]).with_join(4, 3).with_join(3, 4)),
+        ("a song in 4/4 and 3/4 with a change each way", TableScope::for_metres(&[3, 4]).with_join(4, 3).with_join(3, 4)),
+    ] {
+        let (t, stored) = time_scope(&scope);
+        println!("  {what} ({scope}): {t:.0} ms, {stored} costs; all pairs / this: {:.2}x time, {:.2}x memory", all_ms / t, all_stored as f64 / stored.max(1) as f64);
+    }
+
     // The same ≥ 2,000-segment library the wasm bench times (tests/wasm_bench), for a direct
     // comparison.
     let medley = odori_tests::builtin_medley_library();
@@ -187,13 +214,55 @@ fn main() {
     s.search(&lib, &r[..2], 0.6, 0.3, 6);
     println!("feedback: first round of 6 from {m} segments {first:.1} ms; a Search round {:.1} ms", ms(t));
 
-    // 6. Render 90 bars.
+    // 6. Generate over 90 bars: with main's all-pairs table cached, and with the table by
+    // metre (built by the first Generate on a copy of the library without a table, then
+    // cached), in 4/4 and 3/4; the dances must be the same.
+    for (beats, bpm) in [(4usize, 120.0f32), (3, 90.0)] {
+        let bars = odori_core::choreo::bars_from_tempo(181.0, bpm, beats, 0.0, |_, _| 0.5).unwrap();
+        // A copy shares the cached all-pairs table (built in 3.).
+        let with_all = lib.clone();
+        assert!(with_all.cached_table(penalty).is_some_and(|t| t.scope().is_all_pairs()));
+        let mut doc = odori_core::choreo::Choreography::new(bars.clone()).unwrap();
+        let mut all_gen = f64::MAX;
+        for _ in 0..2 {
+            let mut d = doc.clone();
+            let t = Instant::now();
+            d.generate(&with_all).unwrap();
+            all_gen = all_gen.min(ms(t));
+        }
+        let scoped = lib.clone();
+        scoped.drop_table();
+        let mut first = doc.clone();
+        let t = Instant::now();
+        first.generate(&scoped).unwrap();
+        let first_ms = ms(t);
+        let built = scoped.cached_table(penalty).expect("cached");
+        let mut cached_gen = f64::MAX;
+        for _ in 0..2 {
+            let mut d = doc.clone();
+            let t = Instant::now();
+            d.generate(&scoped).unwrap();
+            cached_gen = cached_gen.min(ms(t));
+            assert_eq!(d.states(), first.states());
+        }
+        doc.generate(&with_all).unwrap();
+        assert_eq!(doc.states(), first.states(), "the table by metre changed the dance");
+        println!(
+            "Choreography::generate over {} bars in {beats}/4: all-pairs table cached {all_gen:.0} ms; table by metre ({}) cached {cached_gen:.0} ms ({:.2}x faster), \
+             first Generate building it {first_ms:.0} ms (against all-pairs build + Generate {:.0} ms: {:.2}x); same dance",
+            doc.bars().len(),
+            built.scope(),
+            all_gen / cached_gen,
+            all_ms + all_gen,
+            (all_ms + all_gen) / first_ms
+        );
+    }
+
+    // 7. Render 90 bars.
     let bars = odori_core::choreo::bars_from_tempo(181.0, 120.0, 4, 0.0, |_, _| 0.5).unwrap();
     let mut doc = odori_core::choreo::Choreography::new(bars).unwrap();
-    let t = Instant::now();
     doc.generate(&lib).unwrap();
-    let gen = ms(t);
     let t = Instant::now();
     let clip = doc.render(&lib, &RenderOptions::default());
-    println!("Choreography::generate over {} bars {gen:.1} ms (table cached); render at 60 fps ({} frames) {:.1} ms", doc.bars().len(), clip.frame_count(), ms(t));
+    println!("render of {} bars at 60 fps ({} frames) {:.1} ms", doc.bars().len(), clip.frame_count(), ms(t));
 }

@@ -23,9 +23,10 @@ export class ChoreoPanel {
   }
 
   /**
-   * Builds the filling's join costs (every pair of segments, spec §G) a slice at a time
-   * between frames, so the page stays responsive; shows progress. Resolves when ready. Runs
-   * again whenever the library changes; Generate waits for it.
+   * Builds the filling's join costs (spec §G, for the pairs of segments the song's bars can
+   * join: the blocks of their metres) a slice at a time between frames, so the page stays
+   * responsive; shows progress. Resolves when ready. Runs again whenever the library or the
+   * bars change; Generate waits for it.
    */
   prepareJoins() {
     if (this.preparing) return this.preparing;
@@ -195,6 +196,8 @@ export class ChoreoPanel {
       this.choreographer.setBars(bars);
       if (this.bar != null && this.bar >= bars.length) this.bar = null;
       this.refresh();
+      // New bars may bring in a metre (or a change of metre) whose joins are not built yet.
+      this.prepareJoins();
     } catch (e) { this.messages.error(`Dance: ${e.message}`); }
   }
 

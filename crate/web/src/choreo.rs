@@ -4,7 +4,7 @@
 //! frame time is song time.
 
 use odori_core::bars::Bar;
-use odori_core::choreo::{recut_clip, segment_clip, BuiltinLoader, Choreography, ClipSummary, FillWeights, RenderOptions, SegmentLibrary, SegmentOptions, TableBuilder};
+use odori_core::choreo::{recut_clip, segment_clip, BuiltinLoader, Choreography, ClipSummary, FillWeights, RenderOptions, SegmentLibrary, SegmentOptions, TableBuilder, TableScope};
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
@@ -62,6 +62,11 @@ impl Choreographer {
         self.doc.as_ref().map_or(FillWeights::default().repeat_penalty, |d| d.settings().fill.repeat_penalty)
     }
 
+    /// The pairs of segments the song's bars join (none before there are bars).
+    fn table_scope(&self) -> TableScope {
+        self.doc.as_ref().map_or_else(TableScope::none, |d| d.table_scope(&self.lib))
+    }
+
     fn doc(&mut self) -> Result<&mut Choreography, OdoriError> {
         self.doc.as_mut().ok_or_else(|| OdoriError::new("choreo", "no song bars yet: open a song (or use the demo song) first"))
     }
@@ -95,21 +100,23 @@ impl Choreographer {
         p
     }
 
-    /// Builds the filling's transition table (spec §G costs between every pair of segments)
-    /// in slices of up to `columns` segments, so the page stays responsive: call it between
-    /// frames until it returns 1. Returns the fraction done. `generate` builds whatever is
-    /// left in one go, so calling this is optional; it is needed again after the library
-    /// changes.
+    /// Builds the filling's transition table (spec §G costs between the pairs of segments the
+    /// song's bars can join: the blocks of their metres, and across a metre change; see
+    /// `TableScope`) in slices of up to `columns` segments, so the page stays responsive: call
+    /// it between frames until it returns 1. Returns the fraction done. `generate` builds
+    /// whatever is left in one go, so calling this is optional; it is needed again after the
+    /// library changes, and after new bars bring in a metre (or a metre change) not yet built.
     #[wasm_bindgen(js_name = prepareTable)]
     pub fn prepare_table(&mut self, columns: u32) -> f32 {
         let penalty = self.repeat_penalty();
-        if self.lib.cached_table(penalty).is_some() {
+        let scope = self.table_scope();
+        if self.lib.cached_table_for(penalty, &scope).is_some() {
             self.builder = None;
             return 1.0;
         }
-        let stale = self.builder.as_ref().is_none_or(|b| b.revision() != self.lib.revision() || b.repeat_penalty() != penalty);
+        let stale = self.builder.as_ref().is_none_or(|b| b.revision() != self.lib.revision() || b.repeat_penalty() != penalty || !b.scope().covers(&scope));
         if stale {
-            self.builder = Some(self.lib.table_builder(penalty));
+            self.builder = Some(self.lib.table_builder_for(penalty, &scope));
         }
         let Some(builder) = self.builder.as_mut() else { return 0.0 };
         let progress = builder.step(columns.max(1) as usize);
@@ -117,15 +124,20 @@ impl Choreographer {
             return progress.fraction().min(0.999);
         }
         if let Some(table) = self.builder.take().and_then(TableBuilder::finish) {
-            self.lib.install_table(table);
+            // Refused (false) when the library or the bars changed meanwhile: the next call
+            // starts again.
+            if !self.lib.install_table_for(table, &scope) {
+                return 0.0;
+            }
         }
         1.0
     }
 
-    /// Whether the transition table is ready (Generate then takes milliseconds).
+    /// Whether the transition table holds what the song's bars need (Generate then takes
+    /// milliseconds).
     #[wasm_bindgen(getter, js_name = tableReady)]
     pub fn table_ready(&self) -> bool {
-        self.lib.cached_table(self.repeat_penalty()).is_some()
+        self.lib.cached_table_for(self.repeat_penalty(), &self.table_scope()).is_some()
     }
 
     /// Number of segments in the library.

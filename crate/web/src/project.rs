@@ -433,19 +433,22 @@ impl Project {
     }
 
     /// Builds the filling's transition table over the project's segment library in slices
-    /// of up to `columns` segments; returns the fraction done (1: ready). Needed again after
-    /// the library changes; `generate` builds what is left in one go otherwise.
+    /// of up to `columns` segments: the pairs the song's bars can join (the blocks of their
+    /// metres, and across a metre change); returns the fraction done (1: ready). Needed again
+    /// after the library changes or new bars bring in a metre not yet built; `generate` builds
+    /// what is left in one go otherwise.
     #[wasm_bindgen(js_name = prepareTable)]
     pub fn prepare_table(&mut self, columns: u32) -> f32 {
         let penalty = self.inner.fill_weights().repeat_penalty;
+        let scope = self.inner.table_scope();
         let lib = self.inner.segment_library();
-        if lib.cached_table(penalty).is_some() {
+        if lib.cached_table_for(penalty, &scope).is_some() {
             self.builder = None;
             return 1.0;
         }
-        let stale = self.builder.as_ref().is_none_or(|b| b.revision() != lib.revision() || b.repeat_penalty() != penalty);
+        let stale = self.builder.as_ref().is_none_or(|b| b.revision() != lib.revision() || b.repeat_penalty() != penalty || !b.scope().covers(&scope));
         if stale {
-            self.builder = Some(lib.table_builder(penalty));
+            self.builder = Some(lib.table_builder_for(penalty, &scope));
         }
         let Some(builder) = self.builder.as_mut() else { return 0.0 };
         let progress = builder.step(columns.max(1) as usize);
@@ -453,19 +456,21 @@ impl Project {
             return progress.fraction().min(0.999);
         }
         if let Some(table) = self.builder.take().and_then(TableBuilder::finish) {
-            // Refused (false) when the library changed meanwhile: the next call starts again.
-            if !self.inner.segment_library().install_table(table) {
+            // Refused (false) when the library or the bars changed meanwhile: the next call starts again.
+            if !self.inner.segment_library().install_table_for(table, &scope) {
                 return 0.0;
             }
         }
         1.0
     }
 
-    /// Whether the transition table is ready (Generate then takes milliseconds).
+    /// Whether the transition table holds what the song's bars need (Generate then takes
+    /// milliseconds).
     #[wasm_bindgen(getter, js_name = tableReady)]
     pub fn table_ready(&mut self) -> bool {
         let penalty = self.inner.fill_weights().repeat_penalty;
-        self.inner.segment_library().cached_table(penalty).is_some()
+        let scope = self.inner.table_scope();
+        self.inner.segment_library().cached_table_for(penalty, &scope).is_some()
     }
 
     /// Number of segments in the project's dance library.

@@ -37,6 +37,7 @@ use super::fill::{bar_count_rate_bpm, count_rate_bpm, beat_rate_cost, fill_with_
 use super::render::{render, RenderOptions};
 use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
 use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
+use super::table::TableScope;
 use crate::bars::Bar;
 use crate::clip::Clip;
 
@@ -645,6 +646,14 @@ impl Choreography {
         Ok(())
     }
 
+    /// The pairs of segments the filling of this song's bars reads ([`TableScope::for_bar_counts`]
+    /// of [`bar_counts`]): a song in 4/4 needs the 4-count block alone; a bar in 3 brings in
+    /// the (3, 3) block where two such bars follow each other, and the cross blocks where the
+    /// metre changes between two bars.
+    pub fn table_scope(&self, lib: &SegmentLibrary) -> TableScope {
+        TableScope::for_bar_counts(&bar_counts(lib, &self.doc.bars))
+    }
+
     /// Generate: fills every bar that is not pinned with the minimum-cost path of spec §G.
     /// Pinned bars never change. With every bar pinned nothing changes (and nothing is
     /// recorded for undo).
@@ -672,7 +681,8 @@ impl Choreography {
             })
             .collect();
         let weights = self.doc.settings.fill;
-        let table = lib.transition_table(weights.repeat_penalty);
+        // The joins this song's bars make (its metres, and any change between two bars).
+        let table = lib.transition_table_for(weights.repeat_penalty, &self.table_scope(lib));
         let intensity: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
         let beat_fit: Vec<f32> = lib.segments().iter().map(|s| s.beat_fit).collect();
         let builtin: Vec<bool> = lib.segments().iter().map(|s| s.builtin.is_some()).collect();

@@ -27,9 +27,10 @@
 //! whose counts land on its 3 beats ([`super::segment`]'s module docs). The document leaves a
 //! bar unrestricted (0) when the library holds no live segment of its count.
 //!
-//! Speed: the M × M edge costs depend only on the library and are computed once per library
-//! ([`super::table`]; cached by [`super::SegmentLibrary::transition_table`]). In each open
-//! layer a column
+//! Speed: the edge costs depend only on the library and are computed once per library, for
+//! the pairs of metres the song's bars join ([`super::table`]; cached by
+//! [`super::SegmentLibrary::transition_table_for`]); an open layer after an open layer reads the
+//! block from the previous bar's metre to its own. In a within-metre block a column
 //! first tries only its [`TOP_K`] cheapest edges and the previous layer's [`LOW_L`] cheapest
 //! nodes, and accepts their best when it is provably optimal: any other predecessor costs at
 //! least (the cheapest node outside that set) + (the cheapest edge outside that list).
@@ -39,6 +40,7 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use super::table::Block;
 pub use super::table::{link_weights, TransitionTable, MIN_S, TOP_K};
 
 /// Cheapest nodes of the previous layer tried by every column on the fast path.
@@ -277,6 +279,143 @@ fn column_min(prev: &[f32], col: &[f32]) -> (f32, usize) {
     (min, at)
 }
 
+/// One open layer after an open layer: for every segment `b` this bar can take (`node[b]`
+/// finite), the cheapest predecessor `a` (by `prev[a] + C(a, b)`, ties to the lowest index)
+/// into `arg[b]` and that cost plus `node[b]` into `next[b]` (∞ elsewhere). The reachable
+/// predecessors all lie in one group of the table (one metre: the previous bar's) and the
+/// successors in one per metre, so each group of successors reads one block: its own group's
+/// (the fast path of the module docs) or a cross block (every pair, exact); a pair outside
+/// the table's blocks is computed (the same value, slowly).
+fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f32], arg: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats) {
+    let m = table.len();
+    let groups = table.metres().len().max(1);
+    let mut from = vec![false; groups];
+    let mut to = vec![false; groups];
+    for a in 0..m {
+        if prev[a] != f32::INFINITY {
+            from[table.group_of(a)] = true;
+        }
+        if node[a] != f32::INFINITY {
+            to[table.group_of(a)] = true;
+        }
+    }
+    let from: Vec<usize> = (0..groups).filter(|&g| from[g]).collect();
+    for h in (0..groups).filter(|&h| to[h]) {
+        match from.as_slice() {
+            // Nothing reachable: every node stays at ∞.
+            [] => {}
+            [g] if table.block(*g, h).is_some() => {
+                if let Some(block) = table.block(*g, h) {
+                    if *g == h {
+                        relax_within(block, prev, node, next, arg, low, stats);
+                    } else {
+                        relax_across(block, prev, node, next, arg, stats);
+                    }
+                }
+            }
+            _ => {
+                for b in (0..m).filter(|&b| table.group_of(b) == h && node[b] != f32::INFINITY) {
+                    let mut best = (f32::INFINITY, 0usize);
+                    for (a, &p) in prev.iter().enumerate() {
+                        if p == f32::INFINITY {
+                            continue;
+                        }
+                        let v = p + table.cost(a, b);
+                        if v < best.0 {
+                            best = (v, a);
+                        }
+                    }
+                    next[b] = best.0 + node[b];
+                    arg[b] = best.1 as u32;
+                    stats.full_scans += 1;
+                }
+                stats.open_columns += (0..m).filter(|&b| table.group_of(b) == h).count();
+            }
+        }
+    }
+}
+
+/// [`relax_open`] over a within-group block: the fast path of the module docs, on the
+/// block's own (local) indices.
+fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats) {
+    let m = block.to.len();
+    let prev: Vec<f32> = block.from.iter().map(|&a| prev_all[a as usize]).collect();
+    // The previous layer's LOW_L cheapest nodes, and the cheapest cost outside them.
+    low.clear();
+    low.extend(0..m as u32);
+    let l = LOW_L.min(m);
+    let prev_rest = if l < m {
+        low.select_nth_unstable_by(l, |x, y| prev[*x as usize].total_cmp(&prev[*y as usize]).then(x.cmp(y)));
+        let r = low[l..].iter().map(|&a| prev[a as usize]).fold(f32::INFINITY, f32::min);
+        low.truncate(l);
+        r
+    } else {
+        f32::INFINITY
+    };
+    let k = TOP_K.min(m);
+    // The cheapest nodes' rows, streamed (vectorised).
+    let mut next = vec![f32::INFINITY; m];
+    let mut arg = vec![0u32; m];
+    low.sort_unstable();
+    for &a in low.iter() {
+        let pa = prev[a as usize];
+        let row = &block.rows[a as usize * m..(a as usize + 1) * m];
+        for ((n, g), &c) in next.iter_mut().zip(arg.iter_mut()).zip(row) {
+            let v = pa + c;
+            let better = v < *n;
+            *n = if better { v } else { *n };
+            *g = if better { a } else { *g };
+        }
+    }
+    for b in 0..m {
+        // A segment this bar cannot take (retired, or held out by another term) stays at ∞:
+        // no need to prove its best predecessor (exact: it is on no finite path).
+        let global = block.to[b] as usize;
+        let node = node_all[global];
+        if node == f32::INFINITY {
+            continue;
+        }
+        let (mut best, mut best_a) = (next[b], arg[b]);
+        // Then the column's cheapest edges. Any other predecessor costs at least
+        // prev_rest + rest_min[b], so the best found is exact when no worse.
+        let (ti, tc) = (&block.top[b * k..(b + 1) * k], &block.top_cost[b * k..(b + 1) * k]);
+        for (&a, &c) in ti.iter().zip(tc) {
+            let v = prev[a as usize] + c;
+            if v < best || (v == best && a < best_a) {
+                best = v;
+                best_a = a;
+            }
+        }
+        if best > prev_rest + block.rest_min[b] {
+            // Not provable from the list: the whole column, contiguous (vectorised
+            // minimum, then the first predecessor reaching it).
+            let (min, at) = column_min(&prev, block.column(b));
+            best = min;
+            best_a = at as u32;
+            stats.full_scans += 1;
+        }
+        next_all[global] = best + node;
+        arg_all[global] = block.from.get(best_a as usize).copied().unwrap_or(0);
+    }
+    stats.open_columns += m;
+}
+
+/// [`relax_open`] over a cross block (a metre change between the bars): every pair.
+fn relax_across(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], stats: &mut FillStats) {
+    let prev: Vec<f32> = block.from.iter().map(|&a| prev_all[a as usize]).collect();
+    for (lb, &b) in block.to.iter().enumerate() {
+        let node = node_all[b as usize];
+        if node == f32::INFINITY {
+            continue;
+        }
+        let (min, at) = column_min(&prev, block.column(lb));
+        next_all[b as usize] = min + node;
+        arg_all[b as usize] = block.from.get(at).copied().unwrap_or(0);
+        stats.full_scans += 1;
+    }
+    stats.open_columns += block.to.len();
+}
+
 /// Whether segment `b` in layer `t`, reached from node `pred` of layer `t - 1`, repeats a
 /// segment of that node's best path 2..=`window` layers back.
 fn repeats_on_path(back: &[Vec<u32>], t: usize, pred: usize, b: usize, window: usize) -> bool {
@@ -469,10 +608,14 @@ pub fn fill_with_tempi(
                 cur = Nodes::One(segment, v);
             }
             (Layer::Fixed { segment }, Nodes::All(prev)) => {
-                let col = table.column(segment);
+                // Every predecessor, in index order (one that cannot be reached adds ∞ and never
+                // wins).
                 let mut best = (f32::INFINITY, 0usize);
-                for (a, (p, c)) in prev.iter().zip(col).enumerate() {
-                    let v = p + c;
+                for (a, p) in prev.iter().enumerate() {
+                    if *p == f32::INFINITY {
+                        continue;
+                    }
+                    let v = p + table.cost(a, segment);
                     if v < best.0 {
                         best = (v, a);
                     }
@@ -481,7 +624,13 @@ pub fn fill_with_tempi(
                 cur = Nodes::One(segment, best.0);
             }
             (Layer::Open { intensity }, Nodes::One(a, c)) => {
-                let mut next: Vec<f32> = (0..m).map(|b| c + table.cost(*a, b) + music(t, intensity, b)).collect();
+                let mut next: Vec<f32> = (0..m)
+                    .map(|b| {
+                        let node = music(t, intensity, b);
+                        // A segment this bar cannot take stays at ∞ (its join is not looked up).
+                        if node == f32::INFINITY { f32::INFINITY } else { c + table.cost(*a, b) + node }
+                    })
+                    .collect();
                 for (b, v) in next.iter_mut().enumerate() {
                     if repeats_on_path(&back, t, *a, b, window) {
                         *v += weights.repeat_penalty;
@@ -492,64 +641,10 @@ pub fn fill_with_tempi(
                 cur = Nodes::All(next);
             }
             (Layer::Open { intensity }, Nodes::All(prev)) => {
-                // The previous layer's LOW_L cheapest nodes, and the cheapest cost outside them.
-                low.clear();
-                low.extend(0..m as u32);
-                let l = LOW_L.min(m);
-                let prev_rest = if l < m {
-                    low.select_nth_unstable_by(l, |x, y| prev[*x as usize].total_cmp(&prev[*y as usize]).then(x.cmp(y)));
-                    let r = low[l..].iter().map(|&a| prev[a as usize]).fold(f32::INFINITY, f32::min);
-                    low.truncate(l);
-                    r
-                } else {
-                    f32::INFINITY
-                };
-                let k = TOP_K.min(m);
-                // The cheapest nodes' rows, streamed (vectorised).
+                let node: Vec<f32> = (0..m).map(|b| music(t, intensity, b)).collect();
                 let mut next = vec![f32::INFINITY; m];
                 let mut arg = vec![0u32; m];
-                low.sort_unstable();
-                for &a in low.iter() {
-                    let pa = prev[a as usize];
-                    let row = &table.rows[a as usize * m..(a as usize + 1) * m];
-                    for ((n, g), &c) in next.iter_mut().zip(arg.iter_mut()).zip(row) {
-                        let v = pa + c;
-                        let better = v < *n;
-                        *n = if better { v } else { *n };
-                        *g = if better { a } else { *g };
-                    }
-                }
-                for b in 0..m {
-                    // A segment this bar cannot take (another metre's, or retired) stays at ∞:
-                    // no need to prove its best predecessor (exact: it is on no finite path).
-                    let node = music(t, intensity, b);
-                    if node == f32::INFINITY {
-                        next[b] = f32::INFINITY;
-                        continue;
-                    }
-                    let (mut best, mut best_a) = (next[b], arg[b]);
-                    // Then the column's cheapest edges. Any other predecessor costs at least
-                    // prev_rest + rest_min[b], so the best found is exact when no worse.
-                    let (ti, tc) = (&table.top[b * k..(b + 1) * k], &table.top_cost[b * k..(b + 1) * k]);
-                    for (&a, &c) in ti.iter().zip(tc) {
-                        let v = prev[a as usize] + c;
-                        if v < best || (v == best && a < best_a) {
-                            best = v;
-                            best_a = a;
-                        }
-                    }
-                    if best > prev_rest + table.rest_min[b] {
-                        // Not provable from the list: the whole column, contiguous (vectorised
-                        // minimum, then the first predecessor reaching it).
-                        let (min, at) = column_min(prev, table.column(b));
-                        best = min;
-                        best_a = at as u32;
-                        stats.full_scans += 1;
-                    }
-                    next[b] = best + node;
-                    arg[b] = best_a;
-                }
-                stats.open_columns += m;
+                relax_open(table, prev, &node, &mut next, &mut arg, &mut low, &mut stats);
                 for (b, v) in next.iter_mut().enumerate() {
                     if repeats_on_path(&back, t, arg[b] as usize, b, window) {
                         *v += weights.repeat_penalty;
@@ -630,6 +725,10 @@ pub fn free_skate_pass(
         let (prev, next) = (t.checked_sub(1).map(|p| path[p]), path.get(t + 1).copied());
         let local = |b: usize| {
             let mut c = weights.music_weight * (intensity - segment_intensity[b]).abs() + node_cost.get(b).copied().unwrap_or(0.0) + tempi.cost(weights, t, b);
+            if c == f32::INFINITY {
+                // A segment this bar cannot take: its joins are not looked up (∞ either way).
+                return c;
+            }
             if let Some(p) = prev {
                 c += table.cost(p, b);
             }

@@ -31,5 +31,5 @@ pub use fill::{
 pub use grid::{bars_from_tempo, GridError};
 pub use quality::{dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
 pub use render::{render, segment_clip, speed_jumps, RenderOptions};
-pub use table::{TableBuilder, TableProgress};
+pub use table::{TableBuilder, TableProgress, TableScope};
 pub use segment::{kinetic_per_count_by_rate, KINETIC_RATES_BPM, SEGMENT_COUNTS, SEGMENT_METRES, BuiltinLoader, ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};

@@ -45,7 +45,7 @@ use thiserror::Error;
 
 use super::eigen::Signature;
 use super::quality::{bas_music, foot_skate_samples, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
-use super::table::{TableBuilder, TransitionTable};
+use super::table::{TableBuilder, TableScope, TransitionTable};
 use crate::retarget::to_canonical;
 use crate::clip::Clip;
 use crate::humanoid::{canonical_positions, Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
@@ -715,16 +715,29 @@ impl SegmentLibrary {
         self.revision
     }
 
-    /// A builder of this library's transition table, to run in slices (see
+    /// A builder of this library's all-pairs transition table, to run in slices (see
     /// [`TableBuilder`]); hand its result to [`SegmentLibrary::install_table`].
     pub fn table_builder(&self, repeat_penalty: f32) -> TableBuilder {
         TableBuilder::new(self, repeat_penalty)
     }
 
-    /// Caches a table built by [`SegmentLibrary::table_builder`]; refused (`false`) when the
-    /// library changed since.
+    /// A builder of the blocks of `scope` ([`TableScope`]: what a song's bars need,
+    /// [`super::Choreography::table_scope`]) that the cached table (same penalty) lacks; its
+    /// table holds the cached blocks too. Hand its result to
+    /// [`SegmentLibrary::install_table_for`].
+    pub fn table_builder_for(&self, repeat_penalty: f32, scope: &TableScope) -> TableBuilder {
+        let cached = self.cached_table(repeat_penalty);
+        TableBuilder::for_scope(self, repeat_penalty, scope, cached.as_deref())
+    }
+
+    /// Caches a table built by [`SegmentLibrary::table_builder`] or
+    /// [`SegmentLibrary::table_builder_for`]; refused (`false`) when the library changed since
+    /// (another revision, or segments grouped by other metres).
     pub fn install_table(&self, table: TransitionTable) -> bool {
         if table.revision() != self.revision || table.len() != self.len() {
+            return false;
+        }
+        if !table.scope().is_all_pairs() && table.metres() != super::table::library_metres(self).as_slice() {
             return false;
         }
         let mut guard = match self.table.lock() {
@@ -735,10 +748,30 @@ impl SegmentLibrary {
         true
     }
 
+    /// [`SegmentLibrary::install_table`], refused too when the table lacks a block of `scope`
+    /// (built for another set of metres than the song now needs).
+    pub fn install_table_for(&self, table: TransitionTable, scope: &TableScope) -> bool {
+        table.scope().covers(scope) && self.install_table(table)
+    }
+
+    /// Drops the cached table (its memory is freed once no one holds it); the next one needed
+    /// is built again.
+    pub fn drop_table(&self) {
+        if let Ok(mut t) = self.table.lock() {
+            *t = None;
+        }
+    }
+
     /// The cached table, when there is one for this repetition penalty.
     pub fn cached_table(&self, repeat_penalty: f32) -> Option<Arc<TransitionTable>> {
         let guard = self.table.lock().ok()?;
         guard.as_ref().filter(|t| t.repeat_penalty() == repeat_penalty).cloned()
+    }
+
+    /// The cached table, when there is one for this repetition penalty holding every pair of
+    /// `scope`.
+    pub fn cached_table_for(&self, repeat_penalty: f32, scope: &TableScope) -> Option<Arc<TransitionTable>> {
+        self.cached_table(repeat_penalty).filter(|t| t.scope().covers(scope))
     }
 
     /// Rescales every segment's intensity to the range of the library's segments of its count
@@ -794,16 +827,12 @@ impl SegmentLibrary {
         1.0 - self.similarity(a, b)
     }
 
-    /// The transition table of spec §G for this library with the given repetition penalty
-    /// (built once per library and penalty, then shared), reporting progress (0..1); the
-    /// callback returns `false` to cancel (then `None`, and nothing is cached).
+    /// The all-pairs transition table of spec §G for this library with the given repetition
+    /// penalty (built once per library and penalty, then shared), reporting progress (0..1);
+    /// the callback returns `false` to cancel (then `None`, and nothing is cached).
     pub fn transition_table_with_progress(&self, repeat_penalty: f32, progress: &mut dyn FnMut(f32) -> bool) -> Option<Arc<TransitionTable>> {
-        if let Ok(guard) = self.table.lock() {
-            if let Some(t) = guard.as_ref() {
-                if t.repeat_penalty() == repeat_penalty {
-                    return Some(t.clone());
-                }
-            }
+        if let Some(t) = self.cached_table_for(repeat_penalty, &TableScope::all_pairs()) {
+            return Some(t);
         }
         let t = Arc::new(TransitionTable::from_library_with_progress(self, repeat_penalty, progress)?);
         if let Ok(mut guard) = self.table.lock() {
@@ -812,19 +841,27 @@ impl SegmentLibrary {
         Some(t)
     }
 
-    /// The transition table of spec §G for this library with the given repetition penalty
-    /// (built once per library and penalty, then shared).
+    /// The all-pairs transition table of spec §G for this library with the given repetition
+    /// penalty (built once per library and penalty, then shared).
     pub fn transition_table(&self, repeat_penalty: f32) -> Arc<TransitionTable> {
+        self.transition_table_for(repeat_penalty, &TableScope::all_pairs())
+    }
+
+    /// A transition table holding (at least) the pairs of `scope` ([`TableScope`]): the cached
+    /// one when it does; else one built with the blocks missing from the cached one (same
+    /// penalty) added, then cached.
+    pub fn transition_table_for(&self, repeat_penalty: f32, scope: &TableScope) -> Arc<TransitionTable> {
         let mut guard = match self.table.lock() {
             Ok(g) => g,
             Err(poisoned) => poisoned.into_inner(),
         };
-        if let Some(t) = guard.as_ref() {
-            if t.repeat_penalty() == repeat_penalty {
-                return t.clone();
-            }
+        let cached = guard.as_ref().filter(|t| t.repeat_penalty() == repeat_penalty).cloned();
+        if let Some(t) = cached.as_ref().filter(|t| t.scope().covers(scope)) {
+            return t.clone();
         }
-        let t = Arc::new(TransitionTable::from_library(self, repeat_penalty));
+        let mut b = TableBuilder::for_scope(self, repeat_penalty, scope, cached.as_deref());
+        while !b.step(usize::MAX).is_done() {}
+        let t = Arc::new(b.finish().unwrap_or_else(|| TransitionTable::from_library(self, repeat_penalty)));
         *guard = Some(t.clone());
         t
     }

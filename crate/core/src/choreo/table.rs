@@ -21,9 +21,28 @@
 //! built by a [`TableBuilder`] in slices of columns, so a host can spread it over frames and
 //! show progress; the same builder run to the end is [`TransitionTable::from_library`].
 //!
-//! Layout. Costs are stored column by column (all predecessors of one segment contiguous) and
-//! row by row (for the filling's fast path), with each column's [`TOP_K`] cheapest
-//! predecessors and a lower bound on the rest.
+//! Which pairs. A bar of n beats takes only n-count segments ([`super::fill::Tempi::bar_counts`]),
+//! so a dance only ever joins a segment of bar t − 1's metre to one of bar t's. A table is
+//! built for a [`TableScope`]: blocks of pairs by (predecessor counts, successor counts), the
+//! (n, n) block for each metre two bars in a row have, and a cross block (p, n) only where a
+//! bar of p is followed by one of n (a corrected bar, a metre change). A 4/4 song builds the
+//! 4-count block alone; a bar whose metre no segment has (it takes any) needs every pair, one
+//! block of all segments (main's all-pairs table, [`TransitionTable::from_library`], kept for
+//! it and for comparisons). Cross blocks rather than costs computed per join in the filling:
+//! a cross join needs every pair of the two metres all the same (the filling relaxes every
+//! predecessor of every successor), a Generate runs the filling several times (its ladders
+//! and join repairs) and a person Generates again and again, so the block is built once, in
+//! the same slices with the same progress as the others, and cached with them. Costs are
+//! the same formula and the same floating-point operations in any block, so a block holds
+//! bit for bit what the all-pairs table holds; a pair outside the built blocks (a pinned
+//! segment of another metre) is computed when asked ([`TransitionTable::cost`]), the same value.
+//!
+//! Layout. Each block's costs are stored column by column (all predecessors of one segment
+//! contiguous); a within-metre block also row by row (for the filling's fast path), with each
+//! column's [`TOP_K`] cheapest predecessors and a lower bound on the rest.
+
+use std::collections::BTreeSet;
+use std::sync::Arc;
 
 use super::segment::{JoinEnds, SegmentLibrary, LINKS, LINK_COUNT};
 
@@ -58,165 +77,123 @@ pub fn link_weights() -> [f32; LINK_COUNT] {
     w.map(|x| x / sum)
 }
 
-/// The M × M edge costs C(a, b) (repetition penalty included), stored column by column (all
-/// predecessors `a` of one `b` are contiguous) and row by row, with each column's cheapest
-/// predecessors.
+/// Which ordered pairs of segments a [`TransitionTable`] holds, as blocks by metre: the
+/// (p, n) block holds C(a, b) for every segment a of p counts and b of n counts
+/// ([`super::Segment::counts`]). A dance joins bar t − 1 to bar t, and a bar of n beats takes
+/// only n-count segments, so a song needs the (n, n) block of each metre that two of its
+/// bars in a row have, and a cross block (p, n) only where a bar of p is followed by one of
+/// n (a corrected bar, a metre change): a 4/4 song needs the 4-count block alone. A bar whose
+/// metre no segment has takes segments of every metre; its song needs every pair, as one
+/// block ([`TableScope::all_pairs`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TableScope {
+    all_pairs: bool,
+    joins: BTreeSet<(usize, usize)>,
+}
+
+impl TableScope {
+    /// Every ordered pair of segments, whatever their counts (one block).
+    pub fn all_pairs() -> TableScope {
+        TableScope { all_pairs: true, joins: BTreeSet::new() }
+    }
+
+    /// No pair at all (no bars, or one: nothing to join).
+    pub fn none() -> TableScope {
+        TableScope::default()
+    }
+
+    /// The joins between consecutive bars of these counts ([`super::bar_counts`]: 0 for a bar
+    /// that takes segments of any metre, which needs every pair).
+    pub fn for_bar_counts(counts: &[usize]) -> TableScope {
+        if counts.contains(&0) {
+            return TableScope::all_pairs();
+        }
+        TableScope { all_pairs: false, joins: counts.windows(2).map(|w| (w[0], w[1])).collect() }
+    }
+
+    /// The within-metre blocks of these metres (each (n, n)), no cross block.
+    pub fn for_metres(metres: &[usize]) -> TableScope {
+        TableScope { all_pairs: false, joins: metres.iter().map(|&n| (n, n)).collect() }
+    }
+
+    /// This scope with the (p, n) block too.
+    pub fn with_join(mut self, p: usize, n: usize) -> TableScope {
+        if !self.all_pairs {
+            self.joins.insert((p, n));
+        }
+        self
+    }
+
+    pub fn is_all_pairs(&self) -> bool {
+        self.all_pairs
+    }
+
+    /// Its blocks by (predecessor counts, successor counts) (none listed for all pairs).
+    pub fn joins(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.joins.iter().copied()
+    }
+
+    /// Whether a table of this scope holds every pair one of `other` holds.
+    pub fn covers(&self, other: &TableScope) -> bool {
+        self.all_pairs || (!other.all_pairs && other.joins.is_subset(&self.joins))
+    }
+
+    /// The pairs of both.
+    pub fn union(&self, other: &TableScope) -> TableScope {
+        if self.all_pairs || other.all_pairs {
+            return TableScope::all_pairs();
+        }
+        TableScope { all_pairs: false, joins: self.joins.union(&other.joins).copied().collect() }
+    }
+}
+
+impl std::fmt::Display for TableScope {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.all_pairs {
+            return write!(f, "all pairs");
+        }
+        let parts: Vec<String> = self.joins.iter().map(|(p, n)| if p == n { format!("{p}") } else { format!("{p}→{n}") }).collect();
+        if parts.is_empty() {
+            write!(f, "none")
+        } else {
+            write!(f, "{}", parts.join(" + "))
+        }
+    }
+}
+
+/// The costs from one group of segments (a metre's, or all) to one group: `costs[lb * from.len() + la]`
+/// = C(from[la], to[lb]), a column per successor. A within-group block (`from == to`) also
+/// keeps the costs row by row (for the filling's fast path) and each column's [`TOP_K`]
+/// cheapest predecessors and a lower bound on the rest.
 #[derive(Clone, Debug, PartialEq)]
-pub struct TransitionTable {
-    pub(crate) m: usize,
-    /// `costs[b * m + a]` = C(a, b).
-    pub(crate) costs: Vec<f32>,
-    /// `rows[a * m + b]` = C(a, b): the same costs row by row, for the fast path.
+pub(crate) struct Block {
+    /// Its predecessors' and successors' library indices, ascending.
+    pub(crate) from: Vec<u32>,
+    pub(crate) to: Vec<u32>,
+    pub(crate) costs: Arc<[f32]>,
+    /// `rows[la * to.len() + lb]` = the same costs row by row (within-group blocks only).
     pub(crate) rows: Vec<f32>,
-    /// Per column, the [`TOP_K`] cheapest predecessors in increasing cost (then index).
+    /// Per column, the [`TOP_K`] cheapest predecessors (local indices) in increasing cost
+    /// (then index), within-group blocks only.
     pub(crate) top: Vec<u32>,
     /// Their costs, alongside.
     pub(crate) top_cost: Vec<f32>,
     /// Per column, the cheapest cost outside its top list (a lower bound for the rest).
     pub(crate) rest_min: Vec<f32>,
-    /// Segments that may fill an open bar (`false`: kept only for the bars that already hold
-    /// them, see [`SegmentLibrary::recut_clip`]).
-    pub(crate) available: Vec<bool>,
-    repeat_penalty: f32,
-    /// The library revision the table was built from (0 for tables built from given costs).
-    revision: u64,
 }
 
-impl TransitionTable {
-    /// A table from given costs (row-major by `a`: `costs[a * m + b]` = C(a, b)); for tests and
-    /// other libraries. Non-finite or negative costs are clamped to `0..=1e6`.
-    pub fn from_costs(m: usize, mut costs: Vec<f32>) -> TransitionTable {
-        costs.resize(m * m, 1e6);
-        let mut t = vec![0.0f32; m * m];
-        for a in 0..m {
-            for b in 0..m {
-                let c = costs[a * m + b];
-                t[b * m + a] = if c.is_finite() { c.clamp(0.0, 1e6) } else { 1e6 };
-            }
-        }
-        let mut b = TableBuilder::empty(m, t, vec![true; m], 0.0, 0);
-        b.next_col = m;
-        while !b.step(usize::MAX).is_done() {}
-        b.finish().unwrap_or_else(|| unreachable_empty(m))
-    }
-
-    /// Spec §G's costs between every pair of the library's segments, plus `repeat_penalty` on
-    /// pairs that share clip frames.
-    pub fn from_library(lib: &SegmentLibrary, repeat_penalty: f32) -> TransitionTable {
-        let mut b = TableBuilder::new(lib, repeat_penalty);
-        while !b.step(usize::MAX).is_done() {}
-        b.finish().unwrap_or_else(|| unreachable_empty(lib.len()))
-    }
-
-    /// [`TransitionTable::from_library`] reporting progress (0..1) after each slice of
-    /// columns; the callback returns `false` to cancel (then `None`).
-    pub fn from_library_with_progress(lib: &SegmentLibrary, repeat_penalty: f32, progress: &mut dyn FnMut(f32) -> bool) -> Option<TransitionTable> {
-        let mut b = TableBuilder::new(lib, repeat_penalty);
-        loop {
-            let p = b.step(SLICE_COLUMNS);
-            if !progress(p.fraction()) {
-                return None;
-            }
-            if p.is_done() {
-                return b.finish();
-            }
-        }
-    }
-
-    /// Number of segments.
-    pub fn len(&self) -> usize {
-        self.m
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.m == 0
-    }
-
-    /// C(a, b); infinite when out of range.
-    pub fn cost(&self, a: usize, b: usize) -> f32 {
-        if a < self.m && b < self.m {
-            self.costs[b * self.m + a]
-        } else {
-            f32::INFINITY
-        }
-    }
-
-    pub fn repeat_penalty(&self) -> f32 {
-        self.repeat_penalty
-    }
-
-    /// The library revision this table was built from.
-    pub fn revision(&self) -> u64 {
-        self.revision
-    }
-
-    /// Whether segment `s` may fill an open bar.
-    pub fn is_available(&self, s: usize) -> bool {
-        self.available.get(s).copied().unwrap_or(false)
-    }
-
-    /// All C(·, b), indexed by the predecessor.
-    pub(crate) fn column(&self, b: usize) -> &[f32] {
-        &self.costs[b * self.m..(b + 1) * self.m]
+impl Block {
+    /// All C(·, to[lb]), indexed by the predecessor's local index.
+    pub(crate) fn column(&self, lb: usize) -> &[f32] {
+        let n = self.from.len();
+        &self.costs[lb * n..(lb + 1) * n]
     }
 }
 
-/// A finished builder always yields a table; this keeps the constructors total without a panic.
-fn unreachable_empty(m: usize) -> TransitionTable {
-    debug_assert!(m == 0, "a finished table builder gave no table");
-    TransitionTable {
-        m: 0,
-        costs: Vec::new(),
-        rows: Vec::new(),
-        top: Vec::new(),
-        top_cost: Vec::new(),
-        rest_min: Vec::new(),
-        available: Vec::new(),
-        repeat_penalty: 0.0,
-        revision: 0,
-    }
-}
-
-/// Columns per progress report of [`TransitionTable::from_library_with_progress`].
-const SLICE_COLUMNS: usize = 256;
-/// Predecessors per block of the pair loop: their link data (9 floats × 20 links each) stays
-/// in cache while a slice of columns is filled.
-const BLOCK: usize = 256;
-/// Floats per link and predecessor: end link (3), β·h(end link) (3), β·h(end velocity) (3).
-const A_FLOATS: usize = 9;
-
-/// How far a [`TableBuilder`] has got.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TableProgress {
-    /// Units of work done and in all (a pair column counts [`PAIR_UNITS`], a column's top
-    /// list and its row of the transposed copy one each).
-    pub done: usize,
-    pub total: usize,
-}
-
-/// Work of one pair column relative to sorting out one column's top list.
-pub const PAIR_UNITS: usize = 8;
-
-impl TableProgress {
-    pub fn fraction(&self) -> f32 {
-        if self.total == 0 {
-            1.0
-        } else {
-            self.done as f32 / self.total as f32
-        }
-    }
-
-    pub fn is_done(&self) -> bool {
-        self.done >= self.total
-    }
-}
-
-/// Builds a [`TransitionTable`] in slices: [`TableBuilder::step`] does up to a given number
-/// of columns and says how far it got; [`TableBuilder::finish`] hands over the table. It owns
-/// copies of what it needs, so the library may be read (not changed) meanwhile; a table built
-/// from an older revision of the library is refused by [`SegmentLibrary::install_table`].
-#[derive(Clone, Debug)]
-pub struct TableBuilder {
+/// Every segment's end-of-segment link data, packed for the pair loop (see the module docs),
+/// and the clip-frame overlaps: what any pair's cost is computed from.
+#[derive(Clone, Debug, PartialEq)]
+struct Ends {
     m: usize,
     /// Predecessor side, `[l][A_FLOATS][m]`: end link xyz, β·h(end) xyz, β·h(end velocity) xyz.
     a_side: Vec<f32>,
@@ -227,31 +204,10 @@ pub struct TableBuilder {
     /// Successor end-effector positions at their start, `[b][GAP_FLOATS]`.
     b_gap: Vec<f32>,
     overlaps: Vec<Vec<usize>>,
-    costs: Vec<f32>,
-    available: Vec<bool>,
-    repeat_penalty: f32,
-    revision: u64,
-    /// Next column of pair costs to compute.
-    next_col: usize,
-    /// Next column whose top list is to be sorted out.
-    next_top: usize,
-    /// Next block of rows of the transposed copy.
-    next_row: usize,
-    top: Vec<u32>,
-    top_cost: Vec<f32>,
-    rest_min: Vec<f32>,
-    rows: Vec<f32>,
-    scratch: Vec<f32>,
 }
 
-/// The unit vector, or zero for a (near-)zero vector (h of the spec).
-fn unit(v: glam::Vec3) -> glam::Vec3 {
-    v.normalize_or_zero()
-}
-
-impl TableBuilder {
-    /// A builder for the library's table with the given repetition penalty.
-    pub fn new(lib: &SegmentLibrary, repeat_penalty: f32) -> TableBuilder {
+impl Ends {
+    fn from_library(lib: &SegmentLibrary) -> Ends {
         let m = lib.len();
         let beta = link_weights();
         let ends: &[JoinEnds] = &lib.ends;
@@ -289,37 +245,435 @@ impl TableBuilder {
                 }
             }
         }
-        let available = lib.segments().iter().map(|s| !s.retired).collect();
-        let mut b = TableBuilder::empty(m, vec![0.0f32; m * m], available, repeat_penalty, lib.revision());
-        b.a_side = a_side;
-        b.b_side = b_side;
-        b.a_gap = a_gap;
-        b.b_gap = b_gap;
-        b.overlaps = lib.overlaps.clone();
-        b
+        Ends { m, a_side, b_side, a_gap, b_gap, overlaps: lib.overlaps.clone() }
     }
 
-    fn empty(m: usize, costs: Vec<f32>, available: Vec<bool>, repeat_penalty: f32, revision: u64) -> TableBuilder {
-        TableBuilder {
-            m,
-            a_side: Vec::new(),
-            b_side: Vec::new(),
-            a_gap: Vec::new(),
-            b_gap: Vec::new(),
-            overlaps: Vec::new(),
-            costs,
-            available,
-            repeat_penalty,
-            revision,
-            next_col: 0,
-            next_top: 0,
-            next_row: 0,
-            top: Vec::new(),
-            top_cost: Vec::new(),
-            rest_min: Vec::new(),
-            rows: Vec::new(),
-            scratch: Vec::new(),
+    /// The predecessor side of the segments `from`, packed as [`Ends::a_side`] and
+    /// [`Ends::a_gap`] with `from.len()` in place of m.
+    fn gather(&self, from: &[u32]) -> (Vec<f32>, Vec<f32>) {
+        let (m, n) = (self.m, from.len());
+        let mut a_side = vec![0.0f32; LINK_COUNT * A_FLOATS * n];
+        for row in 0..LINK_COUNT * A_FLOATS {
+            let (src, dst) = (&self.a_side[row * m..(row + 1) * m], &mut a_side[row * n..(row + 1) * n]);
+            for (d, &a) in dst.iter_mut().zip(from) {
+                *d = src[a as usize];
+            }
         }
+        let mut a_gap = vec![0.0f32; GAP_FLOATS * n];
+        for row in 0..GAP_FLOATS {
+            let (src, dst) = (&self.a_gap[row * m..(row + 1) * m], &mut a_gap[row * n..(row + 1) * n]);
+            for (d, &a) in dst.iter_mut().zip(from) {
+                *d = src[a as usize];
+            }
+        }
+        (a_side, a_gap)
+    }
+
+    /// C(a, b) of one pair, by the very operations of the block loop (so bit for bit the
+    /// cost a block holds), repetition penalty included.
+    fn pair_cost(&self, a: usize, b: usize, repeat_penalty: f32) -> f32 {
+        let m = self.m;
+        if a >= m || b >= m {
+            return f32::INFINITY;
+        }
+        let mut acc = [0.0f32; 1];
+        for l in 0..LINK_COUNT {
+            let o = (b * LINK_COUNT + l) * 10;
+            let Ok(bs) = <&[f32; 10]>::try_from(&self.b_side[o..o + 10]) else { continue };
+            let base = l * A_FLOATS * m + a;
+            let col = |k: usize| &self.a_side[base + k * m..base + k * m + 1];
+            link_pairs(&mut acc, bs, [col(0), col(1), col(2), col(3), col(4), col(5), col(6), col(7), col(8)]);
+        }
+        let s = acc[0];
+        let mut c = [1.0 / if s > MIN_S { s } else { MIN_S }];
+        end_gaps(&mut c, &self.b_gap[b * GAP_FLOATS..(b + 1) * GAP_FLOATS], |k| &self.a_gap[k * m + a..k * m + a + 1]);
+        let mut c = c[0];
+        for &x in &self.overlaps[a] {
+            if x == b {
+                c += repeat_penalty;
+            }
+        }
+        c
+    }
+}
+
+/// The ordered pairs of spec §G's edge costs C(a, b) (repetition penalty included) that a
+/// [`TableScope`] asks for, in [`Block`]s by metre; [`TransitionTable::cost`] answers any
+/// pair (one outside the built blocks is computed then, bit for bit as a block would hold it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransitionTable {
+    pub(crate) m: usize,
+    scope: TableScope,
+    /// The counts of each group of segments (one group of every segment for all pairs: empty).
+    metres: Vec<usize>,
+    /// Per segment, its group and its index within it.
+    group: Vec<u8>,
+    local: Vec<u32>,
+    /// `blocks[g * groups + h]`: the costs from group g to group h, when built.
+    blocks: Vec<Option<Arc<Block>>>,
+    /// The costs of the one block of an all-pairs table (shared with it), `flat[b * m + a]`.
+    flat: Option<Arc<[f32]>>,
+    ends: Option<Arc<Ends>>,
+    /// Segments that may fill an open bar (`false`: kept only for the bars that already hold
+    /// them, see [`SegmentLibrary::recut_clip`]).
+    pub(crate) available: Vec<bool>,
+    repeat_penalty: f32,
+    /// The library revision the table was built from (0 for tables built from given costs).
+    revision: u64,
+}
+
+impl TransitionTable {
+    /// A table from given costs (row-major by `a`: `costs[a * m + b]` = C(a, b)); for tests and
+    /// other libraries. Non-finite or negative costs are clamped to `0..=1e6`.
+    pub fn from_costs(m: usize, mut costs: Vec<f32>) -> TransitionTable {
+        costs.resize(m * m, 1e6);
+        let mut t = vec![0.0f32; m * m];
+        for a in 0..m {
+            for b in 0..m {
+                let c = costs[a * m + b];
+                t[b * m + a] = if c.is_finite() { c.clamp(0.0, 1e6) } else { 1e6 };
+            }
+        }
+        let mut b = TableBuilder::with_groups(m, Layout::one_group(m), None, TableScope::all_pairs(), vec![true; m], 0.0, 0, None);
+        if let Some(job) = b.jobs.first_mut() {
+            job.costs = t;
+            job.next_col = m;
+        }
+        while !b.step(usize::MAX).is_done() {}
+        b.finish().unwrap_or_else(|| unreachable_empty(m))
+    }
+
+    /// Spec §G's costs between every pair of the library's segments, plus `repeat_penalty` on
+    /// pairs that share clip frames (one block, whatever the segments' counts).
+    pub fn from_library(lib: &SegmentLibrary, repeat_penalty: f32) -> TransitionTable {
+        TransitionTable::for_scope(lib, repeat_penalty, &TableScope::all_pairs())
+    }
+
+    /// The blocks of `scope` only ([`TableScope`]).
+    pub fn for_scope(lib: &SegmentLibrary, repeat_penalty: f32, scope: &TableScope) -> TransitionTable {
+        let mut b = TableBuilder::for_scope(lib, repeat_penalty, scope, None);
+        while !b.step(usize::MAX).is_done() {}
+        b.finish().unwrap_or_else(|| unreachable_empty(lib.len()))
+    }
+
+    /// [`TransitionTable::from_library`] reporting progress (0..1) after each slice of
+    /// columns; the callback returns `false` to cancel (then `None`).
+    pub fn from_library_with_progress(lib: &SegmentLibrary, repeat_penalty: f32, progress: &mut dyn FnMut(f32) -> bool) -> Option<TransitionTable> {
+        let mut b = TableBuilder::new(lib, repeat_penalty);
+        loop {
+            let p = b.step(SLICE_COLUMNS);
+            if !progress(p.fraction()) {
+                return None;
+            }
+            if p.is_done() {
+                return b.finish();
+            }
+        }
+    }
+
+    /// Number of segments.
+    pub fn len(&self) -> usize {
+        self.m
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.m == 0
+    }
+
+    /// The pairs it holds.
+    pub fn scope(&self) -> &TableScope {
+        &self.scope
+    }
+
+    /// Cost values stored (all blocks), e.g. to compare scopes.
+    pub fn stored_pairs(&self) -> usize {
+        self.blocks.iter().flatten().map(|b| b.costs.len()).sum()
+    }
+
+    /// C(a, b); infinite when out of range. A pair outside the built blocks is computed here
+    /// (the same value a block would hold).
+    #[inline]
+    pub fn cost(&self, a: usize, b: usize) -> f32 {
+        if a >= self.m || b >= self.m {
+            return f32::INFINITY;
+        }
+        // One block of all segments (all pairs): indexed as it is, through a slice held here
+        // (the loops that call this for every pair then run as fast as over a plain array).
+        if let Some(flat) = &self.flat {
+            return flat[b * self.m + a];
+        }
+        let (g, h) = (self.group[a] as usize, self.group[b] as usize);
+        if let Some(block) = self.block(g, h) {
+            return block.costs[self.local[b] as usize * block.from.len() + self.local[a] as usize];
+        }
+        match &self.ends {
+            Some(e) => e.pair_cost(a, b, self.repeat_penalty),
+            None => f32::INFINITY,
+        }
+    }
+
+    pub fn repeat_penalty(&self) -> f32 {
+        self.repeat_penalty
+    }
+
+    /// The library revision this table was built from.
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// Whether segment `s` may fill an open bar.
+    pub fn is_available(&self, s: usize) -> bool {
+        self.available.get(s).copied().unwrap_or(false)
+    }
+
+    /// The counts of each group of segments (empty: one group of all, an all-pairs table).
+    pub(crate) fn metres(&self) -> &[usize] {
+        &self.metres
+    }
+
+    /// Segment `s`'s group.
+    pub(crate) fn group_of(&self, s: usize) -> usize {
+        self.group.get(s).map_or(0, |&g| g as usize)
+    }
+
+    /// The block from group `g` to group `h`, when built.
+    pub(crate) fn block(&self, g: usize, h: usize) -> Option<&Block> {
+        let groups = self.metres.len().max(1);
+        if g >= groups || h >= groups {
+            return None;
+        }
+        self.blocks.get(g * groups + h).and_then(|b| b.as_deref())
+    }
+}
+
+/// A finished builder always yields a table; this keeps the constructors total without a panic.
+fn unreachable_empty(m: usize) -> TransitionTable {
+    debug_assert!(m == 0, "a finished table builder gave no table");
+    TransitionTable {
+        m: 0,
+        scope: TableScope::all_pairs(),
+        metres: Vec::new(),
+        group: Vec::new(),
+        local: Vec::new(),
+        blocks: Vec::new(),
+        flat: None,
+        ends: None,
+        available: Vec::new(),
+        repeat_penalty: 0.0,
+        revision: 0,
+    }
+}
+
+/// Columns per progress report of [`TransitionTable::from_library_with_progress`].
+const SLICE_COLUMNS: usize = 256;
+/// Predecessors per block of the pair loop: their link data (9 floats × 20 links each) stays
+/// in cache while a slice of columns is filled.
+const BLOCK: usize = 256;
+/// Floats per link and predecessor: end link (3), β·h(end link) (3), β·h(end velocity) (3).
+const A_FLOATS: usize = 9;
+
+/// How far a [`TableBuilder`] has got.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TableProgress {
+    /// Units of work done and in all (a pair counts [`PAIR_UNITS`]; sorting it into a top
+    /// list and copying it into the row-major copy one each).
+    pub done: usize,
+    pub total: usize,
+}
+
+/// Work of one pair cost relative to sorting it into its column's top list.
+pub const PAIR_UNITS: usize = 8;
+
+impl TableProgress {
+    pub fn fraction(&self) -> f32 {
+        if self.total == 0 {
+            1.0
+        } else {
+            self.done as f32 / self.total as f32
+        }
+    }
+
+    pub fn is_done(&self) -> bool {
+        self.done >= self.total
+    }
+}
+
+/// How a table groups the segments: per segment its group and index in it, per group its
+/// counts (none: one group of all) and members.
+#[derive(Clone, Debug)]
+struct Layout {
+    metres: Vec<usize>,
+    group: Vec<u8>,
+    local: Vec<u32>,
+    members: Vec<Vec<u32>>,
+}
+
+impl Layout {
+    fn one_group(m: usize) -> Layout {
+        Layout { metres: Vec::new(), group: vec![0; m], local: (0..m as u32).collect(), members: vec![(0..m as u32).collect()] }
+    }
+
+    /// Groups by counts ([`super::Segment::counts`]), ascending.
+    fn by_counts(lib: &SegmentLibrary) -> Layout {
+        let counts: Vec<usize> = lib.segments().iter().map(|s| s.counts()).collect();
+        let metres: Vec<usize> = counts.iter().copied().collect::<BTreeSet<_>>().into_iter().collect();
+        let mut members = vec![Vec::new(); metres.len()];
+        let (mut group, mut local) = (Vec::with_capacity(counts.len()), Vec::with_capacity(counts.len()));
+        for (s, n) in counts.iter().enumerate() {
+            let g = metres.binary_search(n).unwrap_or(0);
+            group.push(g as u8);
+            local.push(members[g].len() as u32);
+            members[g].push(s as u32);
+        }
+        Layout { metres, group, local, members }
+    }
+}
+
+/// The library's metres as a table groups them (for [`SegmentLibrary::install_table`]).
+pub(crate) fn library_metres(lib: &SegmentLibrary) -> Vec<usize> {
+    lib.segments().iter().map(|s| s.counts()).collect::<BTreeSet<_>>().into_iter().collect()
+}
+
+/// One block to build: pair costs first, then (within a group) top lists, then the
+/// row-major copy.
+#[derive(Clone, Debug)]
+struct Job {
+    g: usize,
+    h: usize,
+    diag: bool,
+    ends: Option<Arc<Ends>>,
+    from: Vec<u32>,
+    to: Vec<u32>,
+    /// The predecessors' link data, packed as [`Ends::a_side`] / [`Ends::a_gap`] over `from`.
+    a_side: Vec<f32>,
+    a_gap: Vec<f32>,
+    costs: Vec<f32>,
+    next_col: usize,
+    next_top: usize,
+    next_row: usize,
+    top: Vec<u32>,
+    top_cost: Vec<f32>,
+    rest_min: Vec<f32>,
+    rows: Vec<f32>,
+    scratch: Vec<f32>,
+}
+
+impl Job {
+    fn units(&self) -> (usize, usize) {
+        let (nf, nt) = (self.from.len(), self.to.len());
+        let total = nt * nf * PAIR_UNITS + if self.diag { 2 * nt * nf } else { 0 };
+        let done = self.next_col * nf * PAIR_UNITS + if self.diag { self.next_top * nf + self.next_row.min(nf) * nt } else { 0 };
+        (done, total)
+    }
+
+    fn is_done(&self) -> bool {
+        let (d, t) = self.units();
+        d >= t
+    }
+
+    fn into_block(self) -> Block {
+        let Job { from, to, costs, rows, top, top_cost, rest_min, .. } = self;
+        Block { from, to, costs: costs.into(), rows, top, top_cost, rest_min }
+    }
+}
+
+/// Builds a [`TransitionTable`] in slices: [`TableBuilder::step`] does up to a given number
+/// of columns and says how far it got; [`TableBuilder::finish`] hands over the table. It owns
+/// copies of what it needs, so the library may be read (not changed) meanwhile; a table built
+/// from an older revision of the library is refused by [`SegmentLibrary::install_table`].
+#[derive(Clone, Debug)]
+pub struct TableBuilder {
+    m: usize,
+    scope: TableScope,
+    layout: Layout,
+    /// Blocks already built (carried over from an earlier table of the same library).
+    blocks: Vec<Option<Arc<Block>>>,
+    ends: Option<Arc<Ends>>,
+    jobs: Vec<Job>,
+    /// The first job not finished.
+    job: usize,
+    available: Vec<bool>,
+    repeat_penalty: f32,
+    revision: u64,
+}
+
+/// The unit vector, or zero for a (near-)zero vector (h of the spec).
+fn unit(v: glam::Vec3) -> glam::Vec3 {
+    v.normalize_or_zero()
+}
+
+impl TableBuilder {
+    /// A builder for the library's all-pairs table with the given repetition penalty.
+    pub fn new(lib: &SegmentLibrary, repeat_penalty: f32) -> TableBuilder {
+        TableBuilder::for_scope(lib, repeat_penalty, &TableScope::all_pairs(), None)
+    }
+
+    /// A builder of the blocks of `scope` ([`TableScope`]), taking over the blocks `earlier`
+    /// already holds when it was built from this library (same revision and penalty): only the
+    /// missing blocks are built, and the table holds both.
+    pub fn for_scope(lib: &SegmentLibrary, repeat_penalty: f32, scope: &TableScope, earlier: Option<&TransitionTable>) -> TableBuilder {
+        let m = lib.len();
+        let available = lib.segments().iter().map(|s| !s.retired).collect();
+        let ends = Some(Arc::new(Ends::from_library(lib)));
+        let (layout, earlier) = if scope.is_all_pairs() {
+            (Layout::one_group(m), None)
+        } else {
+            let layout = Layout::by_counts(lib);
+            let earlier = earlier.filter(|t| t.revision == lib.revision() && t.m == m && t.repeat_penalty == repeat_penalty && !t.scope.is_all_pairs() && t.metres == layout.metres);
+            (layout, earlier)
+        };
+        TableBuilder::with_groups(m, layout, earlier, scope.clone(), available, repeat_penalty, lib.revision(), ends)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn with_groups(m: usize, layout: Layout, earlier: Option<&TransitionTable>, scope: TableScope, available: Vec<bool>, repeat_penalty: f32, revision: u64, ends: Option<Arc<Ends>>) -> TableBuilder {
+        let groups = layout.members.len().max(1);
+        let blocks: Vec<Option<Arc<Block>>> = match earlier {
+            Some(t) if t.blocks.len() == groups * groups => t.blocks.clone(),
+            _ => vec![None; groups * groups],
+        };
+        let scope = match earlier {
+            Some(t) => scope.union(&t.scope),
+            None => scope,
+        };
+        // The blocks to build, by group pair.
+        let wanted: Vec<(usize, usize)> = if scope.is_all_pairs() {
+            vec![(0, 0)]
+        } else {
+            scope.joins().filter_map(|(p, n)| Some((layout.metres.binary_search(&p).ok()?, layout.metres.binary_search(&n).ok()?))).collect()
+        };
+        let mut jobs = Vec::new();
+        for (g, h) in wanted {
+            if blocks[g * groups + h].is_some() {
+                continue;
+            }
+            let (from, to) = match (layout.members.get(g), layout.members.get(h)) {
+                (Some(f), Some(t)) => (f.clone(), t.clone()),
+                _ => (Vec::new(), Vec::new()),
+            };
+            let (a_side, a_gap) = ends.as_ref().map_or((Vec::new(), Vec::new()), |e| e.gather(&from));
+            let costs = vec![0.0f32; from.len() * to.len()];
+            jobs.push(Job {
+                g,
+                h,
+                diag: g == h,
+                ends: ends.clone(),
+                from,
+                to,
+                a_side,
+                a_gap,
+                costs,
+                next_col: 0,
+                next_top: 0,
+                next_row: 0,
+                top: Vec::new(),
+                top_cost: Vec::new(),
+                rest_min: Vec::new(),
+                rows: Vec::new(),
+                scratch: Vec::new(),
+            });
+        }
+        TableBuilder { m, scope, layout, blocks, ends, jobs, job: 0, available, repeat_penalty, revision }
     }
 
     /// The library revision it is building for.
@@ -331,43 +685,31 @@ impl TableBuilder {
         self.repeat_penalty
     }
 
-    /// How far it has got.
-    pub fn progress(&self) -> TableProgress {
-        let m = self.m;
-        TableProgress {
-            done: self.next_col * PAIR_UNITS + self.next_top + self.next_row.min(m),
-            total: m * (PAIR_UNITS + 2),
-        }
+    /// The pairs its table will hold.
+    pub fn scope(&self) -> &TableScope {
+        &self.scope
     }
 
-    /// Does up to `columns` columns of work (pair costs first, then top lists, then the
-    /// transposed copy, each counted in columns) and reports progress.
+    /// How far it has got (over the blocks it builds; none: done).
+    pub fn progress(&self) -> TableProgress {
+        let (mut done, mut total) = (0, 0);
+        for j in &self.jobs {
+            let (d, t) = j.units();
+            done += d;
+            total += t;
+        }
+        TableProgress { done, total }
+    }
+
+    /// Does up to `columns` columns of work on the block being built (pair costs first, then
+    /// top lists, then the transposed copy, each counted in columns) and reports progress.
     pub fn step(&mut self, columns: usize) -> TableProgress {
-        let m = self.m;
-        let mut budget = columns.max(1);
-        if self.next_col < m {
-            let end = self.next_col.saturating_add(budget).min(m);
-            self.pair_columns(self.next_col, end);
-            budget -= end - self.next_col;
-            self.next_col = end;
-            if self.next_col == m {
-                self.add_repeat_penalty();
-            }
+        while self.job < self.jobs.len() && self.jobs[self.job].is_done() {
+            self.job += 1;
         }
-        if budget > 0 && self.next_col == m && self.next_top < m {
-            let end = self.next_top.saturating_add(budget).min(m);
-            self.top_lists(self.next_top, end);
-            budget -= end - self.next_top;
-            self.next_top = end;
-        }
-        if budget > 0 && self.next_top == m && self.next_row < m {
-            if self.rows.is_empty() {
-                self.rows = vec![0.0f32; m * m];
-            }
-            // Whole tiles of rows.
-            let end = self.next_row.saturating_add(budget.max(TILE)).min(m);
-            transpose_rows(m, &self.costs, &mut self.rows, self.next_row, end);
-            self.next_row = end;
+        let (overlaps, group, local) = (self.ends.as_ref().map(|e| &e.overlaps), &self.layout.group, &self.layout.local);
+        if let Some(job) = self.jobs.get_mut(self.job) {
+            job.step(columns, self.repeat_penalty, overlaps.map(|o| (o.as_slice(), group.as_slice(), local.as_slice())));
         }
         self.progress()
     }
@@ -377,48 +719,107 @@ impl TableBuilder {
         if !self.progress().is_done() {
             return None;
         }
-        let TableBuilder { m, costs, rows, top, top_cost, rest_min, available, repeat_penalty, revision, .. } = self;
-        Some(TransitionTable { m, costs, rows, top, top_cost, rest_min, available, repeat_penalty, revision })
+        let TableBuilder { m, scope, layout, mut blocks, ends, jobs, available, repeat_penalty, revision, .. } = self;
+        let groups = layout.members.len().max(1);
+        for j in jobs {
+            let at = j.g * groups + j.h;
+            if let Some(slot) = blocks.get_mut(at) {
+                *slot = Some(Arc::new(j.into_block()));
+            }
+        }
+        let Layout { metres, group, local, .. } = layout;
+        let flat = match blocks.as_slice() {
+            [Some(b)] if metres.is_empty() && b.costs.len() == m * m => Some(b.costs.clone()),
+            _ => None,
+        };
+        Some(TransitionTable { m, scope, metres, group, local, blocks, flat, ends, available, repeat_penalty, revision })
+    }
+}
+
+impl Job {
+    /// Up to `columns` columns of work. `overlaps`: the library's overlaps and the segments'
+    /// groups and local indices (for the repetition penalty).
+    fn step(&mut self, columns: usize, repeat_penalty: f32, overlaps: Option<(&[Vec<usize>], &[u8], &[u32])>) {
+        let (nf, nt) = (self.from.len(), self.to.len());
+        let mut budget = columns.max(1);
+        if self.next_col < nt {
+            let end = self.next_col.saturating_add(budget).min(nt);
+            self.pair_columns(self.next_col, end);
+            budget -= end - self.next_col;
+            self.next_col = end;
+            if self.next_col == nt {
+                if let Some((ov, group, local)) = overlaps {
+                    self.add_repeat_penalty(repeat_penalty, ov, group, local);
+                }
+            }
+        }
+        if !self.diag {
+            return;
+        }
+        if budget > 0 && self.next_col == nt && self.next_top < nt {
+            let end = self.next_top.saturating_add(budget).min(nt);
+            self.top_lists(self.next_top, end);
+            budget -= end - self.next_top;
+            self.next_top = end;
+        }
+        if budget > 0 && self.next_top == nt && self.next_row < nf {
+            if self.rows.is_empty() {
+                self.rows = vec![0.0f32; nf * nt];
+            }
+            // Whole tiles of rows.
+            let end = self.next_row.saturating_add(budget.max(TILE)).min(nf);
+            transpose_rows(nf, &self.costs, &mut self.rows, self.next_row, end);
+            self.next_row = end;
+        }
     }
 
     /// Pair costs of columns `b0..b1`, blocked over predecessors.
     fn pair_columns(&mut self, b0: usize, b1: usize) {
-        let m = self.m;
+        let m = self.from.len();
+        let Some(ends) = self.ends.clone() else { return };
+        if self.a_side.len() != LINK_COUNT * A_FLOATS * m {
+            return;
+        }
         let mut acc = [0.0f32; BLOCK];
         for a0 in (0..m).step_by(BLOCK) {
             let n = BLOCK.min(m - a0);
-            for b in b0..b1 {
+            for lb in b0..b1 {
+                let b = self.to[lb] as usize;
                 let acc = &mut acc[..n];
                 acc.fill(0.0);
                 for l in 0..LINK_COUNT {
                     let o = (b * LINK_COUNT + l) * 10;
-                    let bs: &[f32; 10] = match self.b_side[o..o + 10].try_into() {
-                        Ok(x) => x,
-                        Err(_) => continue,
+                    let bs: &[f32; 10] = match ends.b_side.get(o..o + 10).and_then(|x| x.try_into().ok()) {
+                        Some(x) => x,
+                        None => continue,
                     };
                     let base = l * A_FLOATS * m + a0;
                     let col = |k: usize| &self.a_side[base + k * m..base + k * m + n];
                     link_pairs(acc, bs, [col(0), col(1), col(2), col(3), col(4), col(5), col(6), col(7), col(8)]);
                 }
-                for (slot, s) in self.costs[b * m + a0..b * m + a0 + n].iter_mut().zip(acc.iter()) {
+                for (slot, s) in self.costs[lb * m + a0..lb * m + a0 + n].iter_mut().zip(acc.iter()) {
                     *slot = 1.0 / if *s > MIN_S { *s } else { MIN_S };
                 }
-                if let Some(bg) = self.b_gap.get(b * GAP_FLOATS..(b + 1) * GAP_FLOATS) {
+                if let Some(bg) = ends.b_gap.get(b * GAP_FLOATS..(b + 1) * GAP_FLOATS) {
                     if self.a_gap.len() == GAP_FLOATS * m {
                         let col = |k: usize| &self.a_gap[k * m + a0..k * m + a0 + n];
-                        end_gaps(&mut self.costs[b * m + a0..b * m + a0 + n], bg, col);
+                        end_gaps(&mut self.costs[lb * m + a0..lb * m + a0 + n], bg, col);
                     }
                 }
             }
         }
     }
 
-    fn add_repeat_penalty(&mut self) {
-        let m = self.m;
-        for (a, ov) in self.overlaps.iter().enumerate() {
+    fn add_repeat_penalty(&mut self, repeat_penalty: f32, overlaps: &[Vec<usize>], group: &[u8], local: &[u32]) {
+        let (nf, nt) = (self.from.len(), self.to.len());
+        for (la, &a) in self.from.iter().enumerate() {
+            let Some(ov) = overlaps.get(a as usize) else { continue };
             for &b in ov {
-                if b < m && a < m {
-                    self.costs[b * m + a] += self.repeat_penalty;
+                if group.get(b).is_some_and(|&g| g as usize == self.h) {
+                    let lb = local[b] as usize;
+                    if lb < nt && la < nf {
+                        self.costs[lb * nf + la] += repeat_penalty;
+                    }
                 }
             }
         }
@@ -427,7 +828,7 @@ impl TableBuilder {
     /// The [`TOP_K`] cheapest predecessors (by cost, then index) of columns `b0..b1`, and the
     /// cheapest cost outside them.
     fn top_lists(&mut self, b0: usize, b1: usize) {
-        let m = self.m;
+        let m = self.from.len();
         let k = TOP_K.min(m);
         for b in b0..b1 {
             let col = &self.costs[b * m..(b + 1) * m];
@@ -598,8 +999,9 @@ mod tests {
         for b in [0, 1, 150, 299] {
             let mut order: Vec<u32> = (0..m as u32).collect();
             order.sort_by(|x, y| t.cost(*x as usize, b).total_cmp(&t.cost(*y as usize, b)).then(x.cmp(y)));
-            assert_eq!(&t.top[b * TOP_K..(b + 1) * TOP_K], &order[..TOP_K], "column {b}");
-            assert_eq!(t.rest_min[b], t.cost(order[TOP_K] as usize, b));
+            let block = t.block(0, 0).unwrap();
+            assert_eq!(&block.top[b * TOP_K..(b + 1) * TOP_K], &order[..TOP_K], "column {b}");
+            assert_eq!(block.rest_min[b], t.cost(order[TOP_K] as usize, b));
         }
     }
 }

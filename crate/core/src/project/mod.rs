@@ -483,6 +483,15 @@ impl Project {
         self.derived.choreography(&self.doc)
     }
 
+    /// The pairs of segments the filling of the song's bars reads
+    /// ([`crate::choreo::Choreography::table_scope`]; none without a song).
+    pub fn table_scope(&mut self) -> crate::choreo::TableScope {
+        match self.choreography() {
+            Ok(ch) => ch.table_scope(self.derived.library()),
+            Err(_) => crate::choreo::TableScope::none(),
+        }
+    }
+
     /// The segment library derived from the document (built-in moves and the cut clips).
     pub fn segment_library(&mut self) -> &crate::choreo::SegmentLibrary {
         self.derived().library()
