@@ -231,7 +231,8 @@ const HOLD_RULE_ROUNDS: usize = 4;
 /// - Per bar: a bar keeps its holds only if, with them, its BAS-music on its own counts is not
 ///   lower and its kinetic beats per count are not further from the beat-rate target
 ///   ([`super::beat_rate_cost`]) than without: holding feet changes the kinetic speed curve
-///   (§J) and may move a kinetic beat. And a join the holds make more abrupt than §J's goal
+///   (§J) and may move a kinetic beat; nor if its feet slide more (§J's foot skate) than
+///   without (a released foot catching up on the floor). And a join the holds make more abrupt than §J's goal
 ///   (and than unheld, [`super::document::JOIN_JUMP_GOAL`]) takes the holds of the bars either
 ///   side. Bars that fail are played unheld and the rest held again, up to
 ///   [`HOLD_RULE_ROUNDS`] times.
@@ -266,14 +267,16 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     };
     let source: Vec<[bool; 4]> = (0..frames).map(|f| [0, 1, 2, 3].map(|k| flag(f, k))).collect();
     // The rule's figures of a dance: per bar, BAS-music on its own counts, the beat-rate cost
-    // of its kinetic beats per count, and the join jump at its start (0 for the first bar).
-    let figures = |c: &Clip| -> Option<Vec<(f32, f32, f32)>> {
+    // of its kinetic beats per count, the join jump at its start (0 for the first bar) and its
+    // mean foot skate.
+    let figures = |c: &Clip| -> Option<Vec<(f32, f32, f32, f32)>> {
         let m = super::quality::QualityMotion::from_clip(c).ok()?;
         let kinetic = super::quality::kinetic_beats_secs(&m);
         let q_frames = m.frames();
         let frame_of = |t: f32| ((t * super::quality::QUALITY_FPS).round().max(0.0) as usize).min(q_frames);
         let joins: Vec<usize> = bars.iter().skip(1).map(|b| frame_of(b.start_secs)).collect();
         let jumps = super::quality::join_jumps(&m, &joins);
+        let skate = super::quality::foot_skate_samples(&m);
         Some(
             bars.iter()
                 .enumerate()
@@ -284,7 +287,8 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
                     let a = super::quality::beat_alignment(&counts, &kinetic, b.start_secs, b.end_secs);
                     let kb = kinetic.iter().filter(|&&t| t >= b.start_secs && t < b.end_secs).count();
                     let jump = i.checked_sub(1).and_then(|j| jumps.get(j)).copied().unwrap_or(0.0);
-                    (a.bas_music, super::fill::beat_rate_cost(kb as f32 / n as f32), jump)
+                    let slide = super::quality::summarize_skate(&skate, frame_of(b.start_secs)..frame_of(b.end_secs)).mean_cm_per_s;
+                    (a.bas_music, super::fill::beat_rate_cost(kb as f32 / n as f32), jump, slide)
                 })
                 .collect(),
         )
@@ -302,7 +306,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         let Some(with) = figures(&held) else { return (clip, Holds::default()) };
         let mut dropped = false;
         for (b, (w, u)) in with.iter().zip(&unheld).enumerate() {
-            if keep[b] && (w.0 < u.0 - 1e-4 || w.1 > u.1 + 1e-4) {
+            if keep[b] && (w.0 < u.0 - 1e-4 || w.1 > u.1 + 1e-4 || w.3 > u.3 + 1e-3) {
                 keep[b] = false;
                 dropped = true;
             }
