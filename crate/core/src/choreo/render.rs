@@ -235,7 +235,9 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   without (a released foot catching up on the floor). And a join the holds make more abrupt than §J's goal
 ///   (and than unheld, [`super::document::JOIN_JUMP_GOAL`]) takes the holds of the bars either
 ///   side. Bars that fail are played unheld and the rest held again, up to
-///   [`HOLD_RULE_ROUNDS`] times.
+///   [`HOLD_RULE_ROUNDS`] times. Last, the whole dance keeps its holds only if its BAS-music on
+///   its counts is still as far above that on the half-shifted counts, and its kinetic beats
+///   per count no further from the target, as unheld, and its feet slide no more in all.
 fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>]) -> (Clip, Holds) {
     use crate::character::{hold_feet_in_dance, planted_frames, DANCE_CATCH_UP_M_S};
     use crate::humanoid::Canon;
@@ -293,7 +295,27 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
                 .collect(),
         )
     };
+    // The whole dance's: BAS-music on every bar's counts less BAS-music on the counts moved by
+    // half a count (§J's control), and the beat-rate cost of its kinetic beats per count. Bars
+    // that each keep their figures can still add up to a dance that follows its counts less
+    // clearly (a kinetic beat gained between counts here, one lost on a count there) or that
+    // leaves the beat-rate band, or (a lifted foot catching up across a bar's edge) slides its
+    // feet more in all: then the dance is played unheld.
+    let whole = |c: &Clip| -> Option<(f32, f32, f32)> {
+        let m = super::quality::QualityMotion::from_clip(c).ok()?;
+        let kinetic = super::quality::kinetic_beats_secs(&m);
+        let counts: Vec<f32> =
+            bars.iter().flat_map(|b| { let n = b.beat_count().max(1); (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32) }).collect();
+        let (first, last) = (bars.first()?, bars.last()?);
+        let a = super::quality::beat_alignment(&counts, &kinetic, first.start_secs, last.end_secs);
+        let kb = kinetic.iter().filter(|&&t| t >= first.start_secs && t < last.end_secs).count();
+        let frame_of = |t: f32| ((t * super::quality::QUALITY_FPS).round().max(0.0) as usize).min(m.frames());
+        let skate = super::quality::summarize_skate(&super::quality::foot_skate_samples(&m), frame_of(first.start_secs)..frame_of(last.end_secs)).mean_cm_per_s;
+        Some((a.bas_music - a.bas_music_shifted, super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), skate))
+    };
     let Some(unheld) = figures(&clip) else { return (clip, Holds::default()) };
+    let Some(unheld_whole) = whole(&clip) else { return (clip, Holds::default()) };
+    let worse_whole = |held: &Clip| whole(held).is_none_or(|(margin, cost, skate)| margin < unheld_whole.0 - 1e-4 || cost > unheld_whole.1 + 1e-4 || skate > unheld_whole.2);
     let mut keep = vec![true; bars.len()];
     for round in 0..=HOLD_RULE_ROUNDS {
         let kept = |f: usize| bar_of[f].is_none_or(|b| keep.get(b).copied().unwrap_or(true));
@@ -301,6 +323,9 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         let planted = [(track(0), track(1)), (track(2), track(3))];
         let Some(held) = hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S) else { return (clip, Holds::default()) };
         if round == HOLD_RULE_ROUNDS {
+            if worse_whole(&held) {
+                break;
+            }
             return (held, Holds { planted: source, kept: keep });
         }
         let Some(with) = figures(&held) else { return (clip, Holds::default()) };
@@ -319,10 +344,14 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
             }
         }
         if !dropped {
+            if worse_whole(&held) {
+                break;
+            }
             return (held, Holds { planted: source, kept: keep });
         }
     }
-    (clip, Holds::default())
+    let kept = vec![false; bars.len()];
+    (clip, Holds { planted: source, kept })
 }
 
 /// Rewrites frames `j - n .. j + n` by cubic Hermite interpolation between frame `j - n - 1`
@@ -415,7 +444,11 @@ mod tests {
 
     #[test]
     fn planted_feet_stay_put_across_joins_and_the_dance_keeps_its_time() {
-        for bpm in [100.0, 150.0] {
+        // The whole-dance rule may play a dance unheld (then its frames are the unheld ones,
+        // checked above); at least two of these tempi keep their holds.
+        let mut held_dances = 0;
+        let (mut runs, mut across, mut slid_unheld, mut air) = (0, 0, 0.0f32, 0);
+        for bpm in [90.0, 100.0, 120.0, 150.0, 170.0] {
             let (lib, bars, choices) = dance(bpm, 30.0);
             let opts = RenderOptions::default();
             assert!(opts.hold_feet, "on by default");
@@ -439,8 +472,11 @@ mod tests {
             let joins = join_frames(&bars, fps);
             let frames = held.frame_count();
             let planted = |f: usize, k: usize| holds.kept[bar_of(&bars, f as f32 / fps)] && holds.planted[f][k];
-            assert!(holds.kept.iter().filter(|&&k| k).count() * 2 > bars.len(), "{bpm}: most bars keep their holds: {:?}", holds.kept);
-            let (mut runs, mut across, mut slid_unheld, mut air) = (0, 0, 0.0f32, 0);
+            if holds.kept.iter().all(|&k| !k) {
+                assert_eq!(held, free, "{bpm}: a dance without holds is the unheld one");
+                continue;
+            }
+            held_dances += 1;
             for (k, ankle) in [(0usize, Canon::LeftFoot), (2, Canon::RightFoot)] {
                 let mut f = 0;
                 while f < frames {
@@ -475,10 +511,11 @@ mod tests {
                     air += 1;
                 }
             }
-            assert!(runs > 20 && across > 0 && air > 0, "{bpm}: {runs} holds, {across} across a join, {air} frames in the air");
-            // The unheld dance slides those feet: the holds changed something.
-            assert!(slid_unheld > 0.02, "{bpm}: unheld, the planted feet slid at most {slid_unheld} m");
         }
+        assert!(held_dances >= 2, "{held_dances} of 5 dances kept their holds");
+        assert!(runs > 20 && across > 0 && air > 0, "{runs} holds, {across} across a join, {air} frames in the air");
+        // The unheld dance slides those feet: the holds changed something.
+        assert!(slid_unheld > 0.02, "unheld, the planted feet slid at most {slid_unheld} m");
     }
 
     #[test]
