@@ -31,7 +31,16 @@
 //! `ODORI_SKATE_BARS=1` also prints each bar's foot skate as the dance plays it (whole bar, and
 //! without the 4 frames either side of its joins) against its segment's own skate, sped up to
 //! the bar, and its source clip's.
-//! `ODORI_JOINS=1` also prints each song's five worst joins and the segments either side.
+//! `ODORI_JOINS=1` also prints each song's five worst joins (of the dance with its feet held)
+//! and the segments either side.
+//! Every generated dance is rendered twice, its feet held to their floor contacts (the
+//! product's default, `RenderOptions::hold_feet`) and unheld (the control): the table's row is
+//! the unheld dance, the line under it ("held") the same dance held, each against random
+//! dances rendered the same way, with the render time of each.
+//! `ODORI_FRESH=n` replaces the songs and the demo pieces by n fresh short pieces (8 bars,
+//! from the demo-song generator: tempo 70–170 BPM, 3/4 or 4/4, a third of them ramping by up to
+//! ±25 %, drawn by a fixed generator: the same pieces every run), and prints how many keep
+//! each goal held where it was met unheld. `ODORI_FRESH_SEED=x` draws another set.
 //! Prints figures; asserts nothing. `cargo bench -p odori-tests --bench choreo_quality`
 //! (release), or `cargo test -p odori-tests --bench choreo_quality` for a quicker build.
 
@@ -94,9 +103,45 @@ fn demo_pieces() -> Vec<(String, RmsEnvelope)> {
     out
 }
 
-fn quality(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], choices: &[Option<usize>]) -> DanceQuality {
-    let clip = odori_core::choreo::render(lib, bars, choices, &RenderOptions::default());
+/// Fresh short pieces ([`ODORI_FRESH`]): 8 bars of a demo song at a drawn tempo and metre
+/// (some ramping), from a drawn bar of the song.
+fn fresh_pieces(n: usize, seed: u64) -> Vec<(String, RmsEnvelope)> {
+    let mut x = seed;
+    let mut next = || {
+        x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (x >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let mut out = Vec::new();
+    for i in 0..n {
+        let bpb = if next() < 0.5 { 3 } else { 4 };
+        let bpm = 70.0 + 100.0 * next();
+        let end = if i % 3 == 2 { (bpm * (0.75 + 0.5 * next())).clamp(60.0, 190.0) } else { bpm };
+        let song = demo_song_with(22050.0, &DemoSongOptions { beats_per_bar: bpb, bpm, end_bpm: end }).expect("demo song");
+        let bar_secs = bpb as f32 * 60.0 / bpm.max(end);
+        let total = song.samples.len() as f32 / 22050.0;
+        let start = (next() * (total - 9.0 * bar_secs).max(0.0)).max(0.0);
+        let (a, b) = ((start * 22050.0) as usize, (((start + 8.0 * bar_secs) * 22050.0) as usize).min(song.samples.len()));
+        let label = if bpm == end { format!("fresh {i} in {bpb}, {bpm:.0} BPM") } else { format!("fresh {i} in {bpb}, {bpm:.0}→{end:.0} BPM") };
+        out.push((label, envelope(&[&song.samples[a..b]], 22050.0).expect("envelope")));
+    }
+    out
+}
+
+fn quality(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], choices: &[Option<usize>], hold_feet: bool) -> DanceQuality {
+    let clip = odori_core::choreo::render(lib, bars, choices, &RenderOptions { hold_feet, ..RenderOptions::default() });
     dance_quality(&clip, bars, beats).expect("dance quality")
+}
+
+/// The beat goals of a dance against its controls: gen − random ≥ +0.05, gen − shifted ≥
+/// +0.10, kinetic/song beat rate in 0.75..1.25 or 0.375..0.625; and join jump ≤ 1.5.
+fn goals(gen: &DanceQuality, random_bas: f32) -> [bool; 4] {
+    let r = gen.beats.kinetic_beats_per_sec / gen.beats.music_beats_per_sec.max(1e-6);
+    [
+        gen.beats.bas_music - random_bas >= 0.05,
+        gen.beats.bas_music - gen.beats.bas_music_shifted >= 0.10,
+        (0.75..=1.25).contains(&r) || (0.375..=0.625).contains(&r),
+        gen.join_jump_max <= 1.5,
+    ]
 }
 
 fn main() {
@@ -184,16 +229,24 @@ fn main() {
             }
         }
     }
-    let mut songs: Vec<(String, RmsEnvelope)> = music_audio::FULL_TRACKS
+    let fresh: Option<usize> = std::env::var("ODORI_FRESH").ok().and_then(|v| v.parse().ok());
+    let seed: u64 = std::env::var("ODORI_FRESH_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(0x5EED_F00D);
+    let mut songs: Vec<(String, RmsEnvelope)> = if fresh.is_some() { Vec::new() } else { music_audio::FULL_TRACKS
         .iter()
         .chain([&music_audio::TRUMPET, &music_audio::DRUMS])
         .map(|rel| {
             let env = music_audio::decode_data(rel).envelope().unwrap_or_else(|e| panic!("{rel}: {e}"));
             (rel.to_string(), env)
         })
-        .collect();
+        .collect() };
     // Pieces no setting was tuned on, from the demo-song generator (synthesised here).
-    songs.extend(demo_pieces());
+    match fresh {
+        Some(n) => songs.extend(fresh_pieces(n, seed)),
+        None => songs.extend(demo_pieces()),
+    }
+    // Held against unheld: pieces with held skate ≤ unheld, and goals kept where met unheld.
+    let (mut pieces, mut skate_ok, mut goals_kept, mut goals_lost) = (0usize, 0usize, 0usize, Vec::new());
+    let (mut render_unheld_ms, mut render_held_ms, mut longest) = (0.0f64, 0.0f64, 0.0f32);
     println!(
         "\n{:<44} {:>5} {:>5} | {:>11} {:>11} {:>11} | {:>9} {:>9} | {:>5} {:>5} | {:>9} {:>5} | {:>9} {:>9} | {:>8}",
         "song", "bars", "b/s", "BASm gen", "BASm rand", "BASm shift", "BASk gen", "BASk rnd", "kb/s", "rnd", "skate", "PFC", "jump mean", "jump max", "imported"
@@ -236,7 +289,18 @@ fn main() {
         let generate_ms = tg.elapsed().as_secs_f64() * 1e3;
         let chosen = doc.segments();
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
-        let gen = quality(&lib, &bars, &beats, &chosen);
+        let gen = quality(&lib, &bars, &beats, &chosen, false);
+        let tr = Instant::now();
+        let held_clip = odori_core::choreo::render(&lib, &bars, &chosen, &RenderOptions::default());
+        let held_ms = tr.elapsed().as_secs_f64() * 1e3;
+        let tr = Instant::now();
+        let unheld_clip = odori_core::choreo::render(&lib, &bars, &chosen, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
+        let unheld_ms = tr.elapsed().as_secs_f64() * 1e3;
+        drop(unheld_clip);
+        let held = dance_quality(&held_clip, &bars, &beats).expect("dance quality");
+        if bars.last().map_or(0.0, |b| b.end_secs) > longest {
+            (longest, render_unheld_ms, render_held_ms) = (bars.last().map_or(0.0, |b| b.end_secs), unheld_ms, held_ms);
+        }
         // Random segments on the same bars (a fixed LCG: the same draws every run).
         if std::env::var("ODORI_JOINS").is_ok() {
             // The five worst joins, with the segments either side (a diagnostic).
@@ -249,7 +313,9 @@ fn main() {
             let clip = odori_core::choreo::render(&lib, &bars, &chosen, &RenderOptions::default());
             let qm = QualityMotion::from_clip(&clip).expect("motion");
             let nj = odori_core::humanoid::CANON_COUNT;
-            let mut js: Vec<(f32, usize)> = gen.bars.iter().filter_map(|b| b.join_jump.map(|j| (j, b.bar))).collect();
+            // The dance as rendered (feet held), not the unheld control.
+            let hq = dance_quality(&clip, &bars, &beats).expect("dance quality");
+            let mut js: Vec<(f32, usize)> = hq.bars.iter().filter_map(|b| b.join_jump.map(|j| (j, b.bar))).collect();
             js.sort_by(|a, b| b.0.total_cmp(&a.0));
             for (j, bar) in js.iter().take(5) {
                 let name = |i: usize| chosen[i].map_or("-".to_string(), |s| format!("{} ({:.0}/min)", lib.segments()[s].name, lib.segments()[s].tempo_bpm));
@@ -298,7 +364,7 @@ fn main() {
             .iter()
             .map(|&n| lib.segments().iter().filter(|s| !s.retired && (n == 0 || s.counts() == n)).map(|s| s.index).collect())
             .collect();
-        let mut rnd = Vec::new();
+        let (mut rnd, mut rnd_held) = (Vec::new(), Vec::new());
         for _ in 0..random_draws(bars.len()) {
             let ch: Vec<Option<usize>> = (0..bars.len())
                 .map(|b| {
@@ -306,9 +372,11 @@ fn main() {
                     Some(live[b][(x >> 33) as usize % live[b].len()])
                 })
                 .collect();
-            rnd.push(quality(&lib, &bars, &beats, &ch));
+            rnd.push(quality(&lib, &bars, &beats, &ch, false));
+            rnd_held.push(quality(&lib, &bars, &beats, &ch, true));
         }
         let rm = |f: &dyn Fn(&DanceQuality) -> f32| rnd.iter().map(f).sum::<f32>() / rnd.len() as f32;
+        let rm_held = rnd_held.iter().map(|q| q.beats.bas_music).sum::<f32>() / rnd_held.len() as f32;
         let name = rel.rsplit('/').next().unwrap_or(rel);
         let name = &name[..name.len().min(44)];
         println!(
@@ -348,9 +416,43 @@ fn main() {
             (imported as f32 * mean(&skate_imp) + (bars.len() - imported) as f32 * mean(&skate_bi)) / bars.len().max(1) as f32,
             generate_ms
         );
+        let (g0, g1) = (goals(&gen, rm(&|q| q.beats.bas_music)), goals(&held, rm_held));
+        let mark = |g: [bool; 4]| g.iter().map(|&b| if b { '✓' } else { '✗' }).collect::<String>();
+        println!(
+            "{:<44}   held: BASm {:.3} (random held {:.3}, shifted {:.3}); margins {:+.3} / {:+.3}; kinetic/song {:.2}; skate {:.1}/{:.1} (unheld {:.1}/{:.1}); PFC {:.2}; jump {:.2}/{:.2}; goals rnd/shift/rate/jump unheld {} held {}; render {:.0} ms held, {:.0} ms unheld",
+            "",
+            held.beats.bas_music,
+            rm_held,
+            held.beats.bas_music_shifted,
+            held.beats.bas_music - rm_held,
+            held.beats.bas_music - held.beats.bas_music_shifted,
+            held.beats.kinetic_beats_per_sec / held.beats.music_beats_per_sec.max(1e-6),
+            held.foot_skate.mean_cm_per_s,
+            held.foot_skate.p95_cm_per_s,
+            gen.foot_skate.mean_cm_per_s,
+            gen.foot_skate.p95_cm_per_s,
+            held.pfc,
+            held.join_jump_mean,
+            held.join_jump_max,
+            mark(g0),
+            mark(g1),
+            held_ms,
+            unheld_ms
+        );
+        pieces += 1;
+        skate_ok += usize::from(held.foot_skate.mean_cm_per_s <= gen.foot_skate.mean_cm_per_s);
+        if (0..4).all(|k| !g0[k] || g1[k]) {
+            goals_kept += 1;
+        } else {
+            goals_lost.push(name.to_string());
+        }
     }
 
-    println!("\nsalsa partners (same take): cut tempo, counts per minute");
+    println!(
+        "\nheld feet: skate held ≤ unheld on {skate_ok}/{pieces} pieces; every goal met unheld still met held on {goals_kept}/{pieces}{}",
+        if goals_lost.is_empty() { String::new() } else { format!(" (not on: {})", goals_lost.join(", ")) }
+    );
+    println!("render of the longest dance ({longest:.0} s): {render_held_ms:.0} ms held, {render_unheld_ms:.0} ms unheld ({:.1}x)", render_held_ms / render_unheld_ms.max(1e-9));
     let tempo_of = |name: &str| lib.clips().iter().find(|c| c.clip.source.contains(name)).map(|c| c.tempo_bpm);
     for (a, b) in [("salsa_01", "salsa_16"), ("salsa_10", "salsa_25")] {
         match (tempo_of(a), tempo_of(b)) {

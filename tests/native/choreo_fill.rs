@@ -114,7 +114,7 @@ fn stats(v: &[f32]) -> (f32, f32) {
 
 /// Joint-speed jumps at the joins and inside segments of a rendering.
 pub fn join_report(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], join: usize) -> ((f32, f32), (f32, f32)) {
-    let opts = RenderOptions { fps: 60.0, join_frames: join };
+    let opts = RenderOptions { fps: 60.0, join_frames: join, ..RenderOptions::default() };
     let clip = odori_core::choreo::render(lib, bars, choices, &opts);
     let jumps = speed_jumps(&clip);
     let joins = join_frames(bars, opts.fps);

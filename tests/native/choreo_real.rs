@@ -82,7 +82,7 @@ fn stats(v: &[f32]) -> (f32, f32) {
 }
 
 fn joins(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], join: usize) -> ((f32, f32), (f32, f32)) {
-    let clip = odori_core::choreo::render(lib, bars, choices, &RenderOptions { fps: 60.0, join_frames: join });
+    let clip = odori_core::choreo::render(lib, bars, choices, &RenderOptions { fps: 60.0, join_frames: join, ..RenderOptions::default() });
     let jumps = speed_jumps(&clip);
     let jf = join_frames(bars, 60.0);
     let at: Vec<f32> = jf.iter().filter(|&&j| j + 1 < jumps.len()).map(|&j| jumps[j - 1].max(jumps[j]).max(jumps[j + 1])).collect();

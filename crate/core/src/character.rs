@@ -335,13 +335,19 @@ impl Character {
 
     /// [`Character::retarget`] with every choice spelled out (the benchmark's controls).
     pub fn retarget_options(&self, clip: &Clip, clip_map: &HumanoidMap, options: &RetargetOptions) -> Result<Clip, CharacterError> {
+        self.play(clip, clip_map, options, None)
+    }
+
+    /// [`Character::retarget_options`], with the planted frames and the release given instead
+    /// of read from the source ([`hold_feet_in_dance`]).
+    fn play(&self, clip: &Clip, clip_map: &HumanoidMap, options: &RetargetOptions, given: Option<&GivenHolds>) -> Result<Clip, CharacterError> {
         let transfer = options.transfer;
         let status = clip_map.status(&clip.skeleton, Some(clip));
         if let HumanoidStatus::NotHumanoid { reason } = status {
             return Err(CharacterError::SourceNotHumanoid { clip: clip.name.clone(), reason });
         }
         let mut src = if is_canonical(&clip.skeleton) { clip.clone() } else { to_canonical(clip, clip_map, clip.fps) };
-        if starts_on_calibration_frame(clip, clip_map) {
+        if given.is_none() && starts_on_calibration_frame(clip, clip_map) {
             hold_first_pose(&mut src);
         }
         // The canonical rest is the T-pose with identity rest rotations: a source bone's world
@@ -501,7 +507,10 @@ impl Character {
         }
         for pass in if hold { 0..2 } else { 1..2 } {
             if pass == 1 && hold {
-                (plant_target, shift_m) = hold_plan(&feet, src.fps);
+                (plant_target, shift_m) = match given {
+                    Some(g) => hold_plan_with(&feet, src.fps, Some(&g.contacts), g.release),
+                    None => hold_plan_with(&feet, src.fps, None, Release::Ease),
+                };
                 for hips in free_hip.iter_mut() {
                     for (h, shift) in hips.iter_mut().zip(&shift_m) {
                         *h += *shift;
@@ -608,6 +617,58 @@ impl Character {
     }
 }
 
+/// Planted frames and release for [`Character::play`], from outside the source's own tracks.
+struct GivenHolds {
+    /// Per leg (left, right) and frame: the point a planted foot stands on.
+    contacts: Vec<Vec<Option<Contact>>>,
+    release: Release,
+}
+
+/// Fastest a released foot in a rendered dance catches up with its free path, m/s (a
+/// foot stepping: a person's swing foot moves at 2–4 m/s, so this is a slow, visible-but-smooth
+/// glide, never a snap).
+pub(crate) const DANCE_CATCH_UP_M_S: f32 = 1.0;
+
+/// A dance on the canonical skeleton with its feet held where they were planted, the legs
+/// reaching by the retargeting's two-bone IK (the canonical figure playing the dance, as a
+/// character plays a source): `planted[leg]` = (ankle planted, toe planted) per frame of
+/// `clip`, legs left then right, read by the caller wherever the dance's source is (a
+/// rendered dance: each bar's source clip at its own pace). A released foot catches up with
+/// its free path at no more than `catch_up_m_s`, at its free height. Everything else as
+/// [`Character::retarget`] does it: body shift, pelvis drop, contact on ankle or toe.
+/// Returns `None` when the clip is not on the canonical skeleton.
+pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>); 2], catch_up_m_s: f32) -> Option<Clip> {
+    use std::sync::OnceLock;
+    static FIGURE: OnceLock<Character> = OnceLock::new();
+    if !is_canonical(&clip.skeleton) {
+        return None;
+    }
+    let figure = FIGURE.get_or_init(|| {
+        let sk = Arc::new(canonical_skeleton());
+        let map = HumanoidMap::from_skeleton(&sk);
+        Character::build("canonical", sk, SkinnedMesh::default(), map)
+    });
+    let frames = clip.frame_count();
+    let contacts = planted
+        .iter()
+        .map(|(ankle, toe)| {
+            (0..frames)
+                .map(|f| match (ankle.get(f).copied().unwrap_or(false), toe.get(f).copied().unwrap_or(false)) {
+                    (true, _) => Some(Contact::Ankle),
+                    (false, true) => Some(Contact::Toe),
+                    _ => None,
+                })
+                .collect()
+        })
+        .collect();
+    let given = GivenHolds { contacts, release: Release::CatchUp { speed: catch_up_m_s } };
+    let map = HumanoidMap::from_skeleton(&clip.skeleton);
+    let mut out = figure.play(clip, &map, &RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true }, Some(&given)).ok()?;
+    out.name = clip.name.clone();
+    out.source = clip.source.clone();
+    Some(out)
+}
+
 /// A take's first frame within this angle of its skeleton's rest pose on every humanoid bone
 /// is the capture's calibration frame, not motion (see [`starts_on_calibration_frame`]).
 /// Capture noise on a calibration pose is a few degrees (the CMU takes: under 8°); a danced
@@ -688,7 +749,7 @@ const RELEASE_S: f32 = 0.15;
 
 /// The source joint's planted frames: within [`PLANT_HEIGHT_M`] of its floor and slower than
 /// [`PLANT_SPEED_CM_S`] (`src` at the character's size).
-fn planted_frames(src: &[Vec3], fps: f32) -> Vec<bool> {
+pub(crate) fn planted_frames(src: &[Vec3], fps: f32) -> Vec<bool> {
     let frames = src.len();
     let heights: Vec<f32> = src.iter().map(|p| p.y).collect();
     let Some(floor) = motion::floor_height(&heights) else { return vec![false; frames] };
@@ -741,19 +802,44 @@ enum Contact {
 ///   where the smoothed shift — the body's real path — puts them.
 /// - Targets sit at the source's ankle height plus `y_offset` (the character's ground); a
 ///   released foot eases back onto its (shifted) free path over [`RELEASE_S`].
+#[cfg(test)]
 fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3>) {
+    hold_plan_with(feet, fps, None, Release::Ease)
+}
+
+/// How a released foot goes back onto its free path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Release {
+    /// Over [`RELEASE_S`], height included (retargeting: the free path is near the hold).
+    Ease,
+    /// Horizontally at no more than `speed` m/s, at its free (unheld) height, until it
+    /// reaches its free path (a rendered dance: a planted foot may have been held far from a
+    /// free path that the time warp, the placement or a join slid away; an ease over a fixed
+    /// time would snap it back). The gap closes at `speed`; the foot also moves with its free
+    /// path meanwhile (a dancer travelling faster than `speed` would otherwise never be
+    /// caught up with, and the leg would be stretched ever farther).
+    CatchUp { speed: f32 },
+}
+
+/// [`hold_plan`] with the planted frames given (`contacts`: per leg and frame, the point a
+/// planted foot stands on; `None`: read from the source tracks by [`planted_frames`]) and a
+/// choice of [`Release`].
+fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[Vec<Option<Contact>>]>, release: Release) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3>) {
     let legs = feet.len();
     let frames = feet.iter().flat_map(|t| [t.src_ankle.len(), t.free_ankle.len()]).min().unwrap_or(0);
     let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
-    let contact: Vec<Vec<Option<Contact>>> = feet
-        .iter()
-        .map(|t| {
-            let ankle = planted_frames(&t.src_ankle[..frames], fps);
-            let has_toe = t.src_toe.len() >= frames && t.free_toe.len() >= frames;
-            let toe = if has_toe { planted_frames(&t.src_toe[..frames], fps) } else { vec![false; frames] };
-            (0..frames).map(|f| if ankle[f] { Some(Contact::Ankle) } else if toe[f] { Some(Contact::Toe) } else { None }).collect()
-        })
-        .collect();
+    let contact: Vec<Vec<Option<Contact>>> = match contacts {
+        Some(given) => (0..legs).map(|k| (0..frames).map(|f| given.get(k).and_then(|c| c.get(f).copied().flatten())).collect()).collect(),
+        None => feet
+            .iter()
+            .map(|t| {
+                let ankle = planted_frames(&t.src_ankle[..frames], fps);
+                let has_toe = t.src_toe.len() >= frames && t.free_toe.len() >= frames;
+                let toe = if has_toe { planted_frames(&t.src_toe[..frames], fps) } else { vec![false; frames] };
+                (0..frames).map(|f| if ankle[f] { Some(Contact::Ankle) } else if toe[f] { Some(Contact::Toe) } else { None }).collect()
+            })
+            .collect(),
+    };
     // The character's toe from its ankle, horizontal, as its foot is turned on each frame.
     let toe_from_ankle = |k: usize, f: usize| -> Vec3 {
         let t = &feet[k];
@@ -792,9 +878,29 @@ fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3
                 let free = t.free_ankle[f] + body_at;
                 let Some(c) = contact[k][f] else {
                     point[k] = None;
-                    if let Some((held, end)) = last[k].filter(|(_, end)| f - end <= w) {
-                        let s = (f - end) as f32 / (w + 1) as f32;
-                        targets[k][f] = Some(held.lerp(free, motion::smoothstep(s)));
+                    match release {
+                        Release::Ease => {
+                            if let Some((held, end)) = last[k].filter(|(_, end)| f - end <= w) {
+                                let s = (f - end) as f32 / (w + 1) as f32;
+                                targets[k][f] = Some(held.lerp(free, motion::smoothstep(s)));
+                            }
+                        }
+                        Release::CatchUp { speed } => {
+                            // From where it was on the previous frame (held or catching up),
+                            // its gap to the free path closed by at most `speed`: the foot moves
+                            // with its free path (a dancer travelling faster than `speed` would
+                            // never be caught up with) and closes on it.
+                            if let Some(prev) = f.checked_sub(1).and_then(|g| targets[k][g]) {
+                                let was = t.free_ankle[f - 1] + body.as_ref().map_or(shift[f - 1], |b| b[f - 1]);
+                                let gap = flat(prev) - flat(was);
+                                let step = speed.max(0.0) / fps;
+                                let len = gap.length();
+                                if len > step.max(1e-4) {
+                                    let p = flat(free) + gap * (1.0 - step / len);
+                                    targets[k][f] = Some(Vec3::new(p.x, free.y, p.z));
+                                }
+                            }
+                        }
                     }
                     continue;
                 };
@@ -814,7 +920,7 @@ fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3
                 // hold sits at the source's height. Spread that step in height over the eased
                 // frames, so the foot does not snap to it in one.
                 if lands {
-                    if let Some((_, end)) = last[k].filter(|&(_, end)| end + 1 < f && f - end <= w + 1) {
+                    if let Some((_, end)) = last[k].filter(|&(_, end)| release == Release::Ease && end + 1 < f && f - end <= w + 1) {
                         if let Some(prev) = targets[k][f - 1] {
                             let step = target.y - prev.y;
                             for g in end + 1..f {
@@ -1185,6 +1291,50 @@ mod tests {
         assert!(step < 0.05, "no jump on release: {step}");
         // The brushing foot (on its floor but moving) is not held.
         assert!((30..60).all(|f| targets[1][f].is_none()));
+    }
+
+    #[test]
+    fn a_released_dance_foot_catches_up_slowly_at_its_free_height() {
+        // Both feet of a dance planted for frames 0..30 while their free paths part at 1.2 m/s
+        // each (a bar played faster than recorded): the body cannot follow both, so each held
+        // foot ends 60 cm from its free path. Then both are lifted, and their free paths rise
+        // and stop.
+        let fps = 60.0;
+        let frames = 120;
+        let path = |side: f32| -> Vec<Vec3> { (0..frames).map(|f| Vec3::new(side * (0.1 + 0.02 * f.min(30) as f32), if f < 30 { 0.1 } else { 0.25 }, 0.0)).collect() };
+        let (free_l, free_r) = (path(1.0), path(-1.0));
+        let feet = [tracks(free_l.clone(), Vec::new(), free_l.clone(), Vec::new()), tracks(free_r.clone(), Vec::new(), free_r.clone(), Vec::new())];
+        let planted: Vec<Option<Contact>> = (0..frames).map(|f| (f < 30).then_some(Contact::Ankle)).collect();
+        let contacts = vec![planted.clone(), planted];
+        let (targets, shift) = hold_plan_with(&feet, fps, Some(&contacts), Release::CatchUp { speed: 1.0 });
+        // Held where they landed.
+        for f in 0..30 {
+            assert!((flat_xz(targets[0][f].unwrap()) - flat_xz(targets[0][0].unwrap())).length() < 1e-5);
+        }
+        // Released: the gap to the free path closes at most 1 m/s, at the free path's height,
+        // until the foot is on it.
+        let at = |f: usize| targets[0][f].unwrap_or(free_l[f] + shift[f]);
+        let gap = |f: usize| (flat_xz(at(f)) - flat_xz(free_l[f] + shift[f])).length();
+        assert!(gap(29) > 0.5, "{}", gap(29));
+        let mut caught = None;
+        for f in 31..frames {
+            assert!(gap(f - 1) - gap(f) <= 1.0 / fps + 1e-4, "frame {f}: gap {} -> {}", gap(f - 1), gap(f));
+            assert!((flat_xz(at(f)) - flat_xz(at(f - 1))).length() <= 1.0 / fps + 1e-3, "frame {f}: a snap");
+            match targets[0][f] {
+                Some(t) => assert!((t.y - free_l[f].y).abs() < 1e-5, "frame {f}: catching up at {t}"),
+                None => caught = caught.or(Some(f)),
+            }
+        }
+        // It had far to go (so slower than an ease over a fixed time), and got there.
+        let caught = caught.expect("back on its free path");
+        assert!(caught > 55 && targets[0][caught..].iter().all(Option::is_none), "caught up at {caught}");
+        // The retargeting's release (an ease) is unchanged: back within RELEASE_S.
+        let (eased, _) = hold_plan_with(&feet, fps, Some(&contacts), Release::Ease);
+        assert!(eased[0][30 + (RELEASE_S * fps) as usize + 2].is_none());
+    }
+
+    fn flat_xz(v: Vec3) -> Vec3 {
+        Vec3::new(v.x, 0.0, v.z)
     }
 
     #[test]

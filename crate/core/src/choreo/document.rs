@@ -71,7 +71,9 @@ const JOIN_BAN: f32 = 100.0;
 pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<DanceFigures> {
     let (first, last) = (bars.first()?, bars.last()?);
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
-    let clip = render(lib, bars, &choices, &RenderOptions::default());
+    // Unheld: holding the feet (a cost on every measure of a refill) only lowers the skate the
+    // filling follows, and each bar keeps its holds only where they keep its beat figures.
+    let clip = render(lib, bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
     let m = QualityMotion::from_clip(&clip).ok()?;
     let kinetic = kinetic_beats_secs(&m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
     let frames = m.frames();
@@ -882,7 +884,7 @@ mod tests {
         // Count k of each bar's segment plays on the bar's k-th beat: the rendered pose there is
         // the clip's at that count (joints below the root; the root is placed and turned).
         let fps = 60.0;
-        let clip = doc.render(&lib, &RenderOptions { fps, join_frames: 5 });
+        let clip = doc.render(&lib, &RenderOptions { fps, join_frames: 5, hold_feet: false });
         let (mut rot, mut trans) = (Vec::new(), Vec::new());
         for (b, &s) in bars.iter().zip(&chosen) {
             let seg = &lib.segments()[s];

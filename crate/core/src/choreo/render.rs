@@ -27,11 +27,15 @@ pub struct RenderOptions {
     pub fps: f32,
     /// Frames rewritten on each side of a join (spec: 5); 0 turns joins off.
     pub join_frames: usize,
+    /// Hold each foot where it lands for as long as its bar's source clip has it planted, read
+    /// at the clip's own pace ([`hold_planted_feet`]); default on (and for files saved before
+    /// the option: missing reads as the default). Off: the control.
+    pub hold_feet: bool,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { fps: 60.0, join_frames: 5 }
+        Self { fps: 60.0, join_frames: 5, hold_feet: true }
     }
 }
 
@@ -59,7 +63,7 @@ fn sample_segment(lib: &SegmentLibrary, seg: usize, u: f32, rot: &mut Vec<Quat>,
 pub fn segment_clip(lib: &SegmentLibrary, seg: usize, duration_secs: f32, fps: f32) -> Option<Clip> {
     let beats = lib.segment(seg).map_or(4, |s| s.counts() as u32);
     let bar = Bar { index: 0, start_secs: 0.0, end_secs: duration_secs.max(1e-3), intensity: 0.5, beats };
-    let mut clip = render(lib, &[bar], &[Some(seg)], &RenderOptions { fps, join_frames: 0 });
+    let mut clip = render(lib, &[bar], &[Some(seg)], &RenderOptions { fps, join_frames: 0, hold_feet: false });
     clip.name = lib.segment(seg)?.name.clone();
     Some(clip)
 }
@@ -67,6 +71,11 @@ pub fn segment_clip(lib: &SegmentLibrary, seg: usize, duration_secs: f32, fps: f
 /// Renders one segment (or `None`: a neutral stance) per bar. Bars are taken in order;
 /// `choices` shorter than `bars` leaves the rest neutral.
 pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> Clip {
+    render_traced(lib, bars, choices, options).0
+}
+
+/// [`render`], with what its feet were held to.
+fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Holds) {
     let fps = if options.fps.is_finite() && options.fps > 0.0 { options.fps } else { 60.0 };
     let skeleton = Arc::new(canonical_skeleton());
     let end_secs = bars.iter().map(|b| b.end_secs).fold(0.0f32, f32::max);
@@ -85,6 +94,10 @@ pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], opt
     let mut xf: Option<(usize, Vec3, f32)> = None; // (bar index, source start ground pos, yaw delta)
     // The lead-in's placement: the first segment's start (ground position) and yaw offset.
     let mut lead_in_placement: Option<(Vec3, f32)> = None;
+    // Per frame: the library clip and its frame (at LIBRARY_FPS) the frame plays, and its bar
+    // (the lead-in counts as the first bar's).
+    let mut played: Vec<Option<(usize, f32)>> = Vec::with_capacity(frames);
+    let mut bar_of: Vec<Option<usize>> = Vec::with_capacity(frames);
     for f in 0..frames {
         let t = f as f32 / fps;
         while bar_i + 1 < bars.len() && t >= bars[bar_i + 1].start_secs {
@@ -130,6 +143,8 @@ pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], opt
             xf = Some((bar_i, start, dyaw));
         }
         let sampled = seg.and_then(|s| sample_segment(lib, s, u, &mut rot, &mut trans));
+        played.push(seg.and_then(|s| lib.segment(s)).filter(|_| sampled.is_some()).map(|s| (s.clip, s.frame_before(u))));
+        bar_of.push(bar.map(|_| bar_i));
         match (sampled, xf) {
             (Some((rt, _)), Some((_, start, dyaw))) => {
                 let q = Quat::from_rotation_y(dyaw);
@@ -175,14 +190,168 @@ pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], opt
             join_at(&mut rotations, &mut roots, j, options.join_frames);
         }
     }
-    Clip {
+    let clip = Clip {
         name: "Choreography".into(),
         source: "choreography".into(),
         fps,
         skeleton,
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: roots }],
+    };
+    if options.hold_feet {
+        hold_planted_feet(lib, bars, clip, &played, &bar_of)
+    } else {
+        (clip, Holds::default())
     }
+}
+
+/// What [`hold_planted_feet`] held: per frame, the source's planted flags (left ankle, left
+/// toe, right ankle, right toe; before the per-bar rule), and per bar whether it kept its holds.
+#[derive(Clone, Debug, Default)]
+#[cfg_attr(not(test), allow(dead_code))]
+struct Holds {
+    planted: Vec<[bool; 4]>,
+    kept: Vec<bool>,
+}
+
+/// Rounds of [`hold_planted_feet`]'s per-bar rule at most (each drops the holds of the bars
+/// they made worse, then holds again).
+const HOLD_RULE_ROUNDS: usize = 4;
+
+/// The rendered dance `clip` with its feet held to their floor contacts: a foot its bar's
+/// source clip has planted (spec §J's contact band, and slow: the retargeting's rule) stays
+/// where it landed until the source lifts it, the leg reaching it by two-bone IK, and a
+/// released foot catches up with its free path at no more than 1 m/s
+/// ([`crate::character::hold_feet_in_dance`], the retargeting's kernel). Without it a planted
+/// foot slides wherever the time warp speeds its source up, the placement moves it, or a join
+/// rewrites it.
+/// - Planted is read at the source's own pace: each frame's flags are those of the clip frame
+///   it plays (`played`), measured on the clip as recorded. Read on the rendered dance, a foot
+///   planted at 20 cm/s in a source played 1.5× faster would read 30 cm/s and not be held.
+/// - Per bar: a bar keeps its holds only if, with them, its BAS-music on its own counts is not
+///   lower and its kinetic beats per count are not further from the beat-rate target
+///   ([`super::beat_rate_cost`]) than without: holding feet changes the kinetic speed curve
+///   (§J) and may move a kinetic beat; nor if its feet slide more (§J's foot skate) than
+///   without (a released foot catching up on the floor). And a join the holds make more abrupt than §J's goal
+///   (and than unheld, [`super::document::JOIN_JUMP_GOAL`]) takes the holds of the bars either
+///   side. Bars that fail are played unheld and the rest held again, up to
+///   [`HOLD_RULE_ROUNDS`] times. Last, the whole dance keeps its holds only if its BAS-music on
+///   its counts is still as far above that on the half-shifted counts, and its kinetic beats
+///   per count no further from the target, as unheld, and its feet slide no more in all.
+fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>]) -> (Clip, Holds) {
+    use crate::character::{hold_feet_in_dance, planted_frames, DANCE_CATCH_UP_M_S};
+    use crate::humanoid::Canon;
+    let frames = clip.frame_count();
+    if frames < 3 || played.len() < frames {
+        return (clip, Holds::default());
+    }
+    // Planted flags of each clip the dance plays, per foot joint (left ankle, left toe, right
+    // ankle, right toe), at the clip's own frame rate.
+    let joints = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
+    let mut flags: std::collections::HashMap<usize, [Vec<bool>; 4]> = std::collections::HashMap::new();
+    for &(ci, _) in played.iter().flatten() {
+        if flags.contains_key(&ci) {
+            continue;
+        }
+        let Some(lc) = lib.clips().get(ci) else { continue };
+        let c = &lc.clip;
+        let pos = canonical_positions(c, &HumanoidMap::from_skeleton(&c.skeleton));
+        let n = pos.len() / CANON_COUNT;
+        let f = joints.map(|j| planted_frames(&(0..n).map(|k| pos[k * CANON_COUNT + j.index()]).collect::<Vec<_>>(), c.fps));
+        flags.insert(ci, f);
+    }
+    let flag = |f: usize, k: usize| -> bool {
+        let Some((ci, at)) = played[f] else { return false };
+        let (Some(fl), Some(lc)) = (flags.get(&ci), lib.clips().get(ci)) else { return false };
+        let v = &fl[k];
+        let i = ((at / LIBRARY_FPS * lc.clip.fps).round().max(0.0) as usize).min(v.len().saturating_sub(1));
+        v.get(i).copied().unwrap_or(false)
+    };
+    let source: Vec<[bool; 4]> = (0..frames).map(|f| [0, 1, 2, 3].map(|k| flag(f, k))).collect();
+    // The rule's figures of a dance: per bar, BAS-music on its own counts, the beat-rate cost
+    // of its kinetic beats per count, the join jump at its start (0 for the first bar) and its
+    // mean foot skate.
+    let figures = |c: &Clip| -> Option<Vec<(f32, f32, f32, f32)>> {
+        let m = super::quality::QualityMotion::from_clip(c).ok()?;
+        let kinetic = super::quality::kinetic_beats_secs(&m);
+        let q_frames = m.frames();
+        let frame_of = |t: f32| ((t * super::quality::QUALITY_FPS).round().max(0.0) as usize).min(q_frames);
+        let joins: Vec<usize> = bars.iter().skip(1).map(|b| frame_of(b.start_secs)).collect();
+        let jumps = super::quality::join_jumps(&m, &joins);
+        let skate = super::quality::foot_skate_samples(&m);
+        Some(
+            bars.iter()
+                .enumerate()
+                .map(|(i, b)| {
+                    let n = b.beat_count().max(1);
+                    let d = b.duration_secs();
+                    let counts: Vec<f32> = (0..n).map(|k| b.start_secs + d * k as f32 / n as f32).collect();
+                    let a = super::quality::beat_alignment(&counts, &kinetic, b.start_secs, b.end_secs);
+                    let kb = kinetic.iter().filter(|&&t| t >= b.start_secs && t < b.end_secs).count();
+                    let jump = i.checked_sub(1).and_then(|j| jumps.get(j)).copied().unwrap_or(0.0);
+                    let slide = super::quality::summarize_skate(&skate, frame_of(b.start_secs)..frame_of(b.end_secs)).mean_cm_per_s;
+                    (a.bas_music, super::fill::beat_rate_cost(kb as f32 / n as f32), jump, slide)
+                })
+                .collect(),
+        )
+    };
+    // The whole dance's: BAS-music on every bar's counts less BAS-music on the counts moved by
+    // half a count (§J's control), and the beat-rate cost of its kinetic beats per count. Bars
+    // that each keep their figures can still add up to a dance that follows its counts less
+    // clearly (a kinetic beat gained between counts here, one lost on a count there) or that
+    // leaves the beat-rate band, or (a lifted foot catching up across a bar's edge) slides its
+    // feet more in all: then the dance is played unheld.
+    let whole = |c: &Clip| -> Option<(f32, f32, f32)> {
+        let m = super::quality::QualityMotion::from_clip(c).ok()?;
+        let kinetic = super::quality::kinetic_beats_secs(&m);
+        let counts: Vec<f32> =
+            bars.iter().flat_map(|b| { let n = b.beat_count().max(1); (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32) }).collect();
+        let (first, last) = (bars.first()?, bars.last()?);
+        let a = super::quality::beat_alignment(&counts, &kinetic, first.start_secs, last.end_secs);
+        let kb = kinetic.iter().filter(|&&t| t >= first.start_secs && t < last.end_secs).count();
+        let frame_of = |t: f32| ((t * super::quality::QUALITY_FPS).round().max(0.0) as usize).min(m.frames());
+        let skate = super::quality::summarize_skate(&super::quality::foot_skate_samples(&m), frame_of(first.start_secs)..frame_of(last.end_secs)).mean_cm_per_s;
+        Some((a.bas_music - a.bas_music_shifted, super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), skate))
+    };
+    let Some(unheld) = figures(&clip) else { return (clip, Holds::default()) };
+    let Some(unheld_whole) = whole(&clip) else { return (clip, Holds::default()) };
+    let worse_whole = |held: &Clip| whole(held).is_none_or(|(margin, cost, skate)| margin < unheld_whole.0 - 1e-4 || cost > unheld_whole.1 + 1e-4 || skate > unheld_whole.2);
+    let mut keep = vec![true; bars.len()];
+    for round in 0..=HOLD_RULE_ROUNDS {
+        let kept = |f: usize| bar_of[f].is_none_or(|b| keep.get(b).copied().unwrap_or(true));
+        let track = |k: usize| -> Vec<bool> { (0..frames).map(|f| kept(f) && source[f][k]).collect() };
+        let planted = [(track(0), track(1)), (track(2), track(3))];
+        let Some(held) = hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S) else { return (clip, Holds::default()) };
+        if round == HOLD_RULE_ROUNDS {
+            if worse_whole(&held) {
+                break;
+            }
+            return (held, Holds { planted: source, kept: keep });
+        }
+        let Some(with) = figures(&held) else { return (clip, Holds::default()) };
+        let mut dropped = false;
+        for (b, (w, u)) in with.iter().zip(&unheld).enumerate() {
+            if keep[b] && (w.0 < u.0 - 1e-4 || w.1 > u.1 + 1e-4 || w.3 > u.3 + 1e-3) {
+                keep[b] = false;
+                dropped = true;
+            }
+            // A join the holds made more abrupt than the goal (and than unheld): neither bar
+            // beside it keeps its holds.
+            if w.2 > u.2.max(super::document::JOIN_JUMP_GOAL) + 1e-4 {
+                for a in [b.saturating_sub(1), b] {
+                    dropped |= std::mem::replace(&mut keep[a], false);
+                }
+            }
+        }
+        if !dropped {
+            if worse_whole(&held) {
+                break;
+            }
+            return (held, Holds { planted: source, kept: keep });
+        }
+    }
+    let kept = vec![false; bars.len()];
+    (clip, Holds { planted: source, kept })
 }
 
 /// Rewrites frames `j - n .. j + n` by cubic Hermite interpolation between frame `j - n - 1`
@@ -246,4 +415,141 @@ pub fn speed_jumps(clip: &Clip) -> Vec<f32> {
 /// First frame of each bar after the first (where joins are) for bars rendered at `fps`.
 pub fn join_frames(bars: &[Bar], fps: f32) -> Vec<usize> {
     bars.iter().skip(1).map(|b| (b.start_secs * fps).ceil() as usize).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::choreo::grid::bars_from_tempo;
+    use crate::humanoid::Canon;
+
+    /// A dance of built-in moves, bar i playing every 7th live segment, on bars at `bpm`: the
+    /// warp plays each move faster or slower than recorded, and every bar after the first starts
+    /// on a join.
+    fn dance(bpm: f32, secs: f32) -> (SegmentLibrary, Vec<Bar>, Vec<Option<usize>>) {
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(secs, bpm, 4, 0.0, |_, _| 0.5).unwrap();
+        let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired && s.counts() == 4).map(|s| s.index).collect();
+        let choices = (0..bars.len()).map(|i| Some(live[(i * 7) % live.len()])).collect();
+        (lib, bars, choices)
+    }
+
+    fn bar_of(bars: &[Bar], t: f32) -> usize {
+        bars.iter().rposition(|b| t >= b.start_secs).unwrap_or(0)
+    }
+
+    fn flat(v: Vec3) -> Vec3 {
+        Vec3::new(v.x, 0.0, v.z)
+    }
+
+    #[test]
+    fn planted_feet_stay_put_across_joins_and_the_dance_keeps_its_time() {
+        // The whole-dance rule may play a dance unheld (then its frames are the unheld ones,
+        // checked above); at least two of these tempi keep their holds.
+        let mut held_dances = 0;
+        let (mut runs, mut across, mut slid_unheld, mut air) = (0, 0, 0.0f32, 0);
+        for bpm in [90.0, 100.0, 120.0, 150.0, 170.0] {
+            let (lib, bars, choices) = dance(bpm, 30.0);
+            let opts = RenderOptions::default();
+            assert!(opts.hold_feet, "on by default");
+            let (held, holds) = render_traced(&lib, &bars, &choices, &opts);
+            let free = render(&lib, &bars, &choices, &RenderOptions { hold_feet: false, ..opts });
+            let fps = opts.fps;
+            // No time added: the same frames, song time 0 at frame 0, and everything above the
+            // legs posed as unheld (so every count still plays on its beat).
+            let end = bars.last().unwrap().end_secs;
+            assert_eq!(held.frame_count(), free.frame_count());
+            assert_eq!(held.frame_count(), (end * fps).ceil() as usize + 1);
+            for f in 0..held.frame_count() {
+                for c in [Canon::Spine, Canon::Chest, Canon::Head, Canon::LeftHand, Canon::RightForearm] {
+                    let (a, b) = (held.frame_rotations(f)[c.index()], free.frame_rotations(f)[c.index()]);
+                    assert!(a.angle_between(b) < 2e-3, "{bpm}: frame {f} {c:?}: {a} vs {b}, {}", a.angle_between(b));
+                }
+            }
+            let map = HumanoidMap::from_skeleton(&held.skeleton);
+            let (ph, pf) = (canonical_positions(&held, &map), canonical_positions(&free, &map));
+            let at = |p: &[Vec3], f: usize, c: Canon| p[f * CANON_COUNT + c.index()];
+            let joins = join_frames(&bars, fps);
+            let frames = held.frame_count();
+            let planted = |f: usize, k: usize| holds.kept[bar_of(&bars, f as f32 / fps)] && holds.planted[f][k];
+            if holds.kept.iter().all(|&k| !k) {
+                assert_eq!(held, free, "{bpm}: a dance without holds is the unheld one");
+                continue;
+            }
+            held_dances += 1;
+            for (k, ankle) in [(0usize, Canon::LeftFoot), (2, Canon::RightFoot)] {
+                let mut f = 0;
+                while f < frames {
+                    if !planted(f, k) {
+                        f += 1;
+                        continue;
+                    }
+                    let start = f;
+                    while f < frames && planted(f, k) {
+                        f += 1;
+                    }
+                    // Held on its ankle for frames start..f: it stays where it landed.
+                    let (anchor, anchor_free) = (flat(at(&ph, start, ankle)), flat(at(&pf, start, ankle)));
+                    for g in start..f {
+                        let d = (flat(at(&ph, g, ankle)) - anchor).length();
+                        assert!(d < 0.01, "{bpm}: {ankle:?} held from frame {start} moved {d} m by frame {g}");
+                        slid_unheld = slid_unheld.max((flat(at(&pf, g, ankle)) - anchor_free).length());
+                    }
+                    runs += 1;
+                    across += usize::from(joins.iter().any(|&j| (start + 1..f).contains(&j)));
+                }
+                // A foot off the floor for the last 0.6 s (past any catch-up) is where the
+                // unheld dance has it, relative to the body (which may have shifted).
+                let quiet = (0.6 * fps) as usize;
+                for f in quiet..frames {
+                    if (f - quiet..=f).any(|g| holds.planted[g][k] || holds.planted[g][k + 1]) {
+                        continue;
+                    }
+                    let moved = (at(&ph, f, ankle) - at(&pf, f, ankle)) - (at(&ph, f, Canon::Hips) - at(&pf, f, Canon::Hips));
+                    assert!(flat(moved).length() < 0.005, "{bpm}: {ankle:?} in the air at frame {f} moved {moved}");
+                    assert!((at(&ph, f, ankle).y - at(&pf, f, ankle).y).abs() < 0.005, "{bpm}: {ankle:?} height at frame {f}");
+                    air += 1;
+                }
+            }
+        }
+        assert!(held_dances >= 2, "{held_dances} of 5 dances kept their holds");
+        assert!(runs > 20 && across > 0 && air > 0, "{runs} holds, {across} across a join, {air} frames in the air");
+        // The unheld dance slides those feet: the holds changed something.
+        assert!(slid_unheld > 0.02, "unheld, the planted feet slid at most {slid_unheld} m");
+    }
+
+    #[test]
+    fn held_bars_keep_their_beat_figures() {
+        use crate::choreo::quality::{beat_alignment, kinetic_beats_secs, QualityMotion};
+        let (lib, bars, choices) = dance(128.0, 40.0);
+        let (held, holds) = render_traced(&lib, &bars, &choices, &RenderOptions::default());
+        let free = render(&lib, &bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
+        let figures = |c: &Clip| {
+            let kinetic = kinetic_beats_secs(&QualityMotion::from_clip(c).unwrap());
+            bars.iter()
+                .map(|b| {
+                    let counts: Vec<f32> = (0..4).map(|k| b.start_secs + b.duration_secs() * k as f32 / 4.0).collect();
+                    let kb = kinetic.iter().filter(|&&t| t >= b.start_secs && t < b.end_secs).count();
+                    (beat_alignment(&counts, &kinetic, b.start_secs, b.end_secs).bas_music, crate::choreo::beat_rate_cost(kb as f32 / 4.0))
+                })
+                .collect::<Vec<_>>()
+        };
+        let (h, u) = (figures(&held), figures(&free));
+        for (b, ((hb, hc), (ub, uc))) in h.iter().zip(&u).enumerate() {
+            if holds.kept[b] {
+                assert!(*hb >= ub - 1e-3 && *hc <= uc + 1e-3, "bar {b} kept its holds: BAS {hb} vs {ub}, rate cost {hc} vs {uc}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_dance_without_segments_renders_unheld() {
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(8.0, 120.0, 4, 0.0, |_, _| 0.5).unwrap();
+        let a = render(&lib, &bars, &[None; 4], &RenderOptions::default());
+        let b = render(&lib, &bars, &[None; 4], &RenderOptions { hold_feet: false, ..RenderOptions::default() });
+        assert_eq!(a.frame_count(), b.frame_count());
+        let old: RenderOptions = serde_json::from_str(r#"{"fps":30,"joinFrames":5}"#).unwrap();
+        assert!(old.hold_feet, "a file saved before the option holds feet");
+    }
 }
