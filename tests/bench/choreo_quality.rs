@@ -8,9 +8,10 @@
 //!   the half-beat-shifted beats;
 //! - kinetic beats per second against the song's beat rate;
 //! - foot skate (mean, p95 cm/s) and PFC against the source clips'; the skate goal in three
-//!   readings: each bar's own source clip at the bar's speed, each bar's own source clip at the
-//!   clip's own speed (the strict reading), and each kind's clips' mean (the loose reading, the
-//!   one the filling follows);
+//!   readings: each bar's own source clip at the bar's speed (the paced reading: the source as
+//!   the dance plays it; skate is a speed, so a clip played faster slides faster), each bar's own
+//!   source clip at the clip's own speed (the strictest), and each kind's clips' mean (the loose
+//!   reading, the one the filling follows);
 //! - join jump (mean, max);
 //! - the share of bars filled from imported clips.
 //!
@@ -401,7 +402,7 @@ fn main() {
             100.0 * imported as f32 / bars.len().max(1) as f32
         );
         println!(
-            "{:<44}   grid {:.0} BPM in {}; margins: gen − random {:+.3} (goal ≥ +0.05), gen − shifted {:+.3} (goal ≥ +0.10); kinetic/song beat rate {:.2} (goal 0.75..1.25 or 0.375..0.625); skate goal ≤ {:.1} (strict: each bar's own source clip at the bar's speed) / {:.1} (each bar's own source clip at its own speed) / {:.1} (loose: its kinds' source clips); generate {:.0} ms",
+            "{:<44}   grid {:.0} BPM in {}; margins: gen − random {:+.3} (goal ≥ +0.05), gen − shifted {:+.3} (goal ≥ +0.10); kinetic/song beat rate {:.2} (goal 0.75..1.25 or 0.375..0.625); skate goal ≤ {:.1} (paced: each bar's own source clip at the bar's speed) / {:.1} (strictest: each bar's own source clip at its own speed) / {:.1} (loose: its kinds' source clips); generate {:.0} ms",
             "",
             grid.bpm,
             grid.beats_per_bar,

@@ -30,7 +30,7 @@ export class SongPanel {
     $("#song-downbeat").addEventListener("click", () => this.correct({ firstDownbeatSecs: this.player.position() }));
     $("#song-reset").addEventListener("click", () => { if (this.song) { const g = this.song.reset(); if (this.onCorrect) this.onCorrect(null); this.setGrid(g); } });
     $("#song-metronome").addEventListener("change", (ev) => { this.player.metronome = ev.target.checked; });
-    $("#song-tap").addEventListener("click", () => this.tap());
+    $("#song-tap").addEventListener("click", (ev) => this.tap(ev.timeStamp));
     this.canvas.addEventListener("click", (ev) => {
       if (!this.song) return;
       const r = this.canvas.getBoundingClientRect();
@@ -57,8 +57,11 @@ export class SongPanel {
     this.setGrid(song.grid());
   }
 
-  tap() {
-    const now = performance.now() / 1000;
+  /** A tap at `atMs` (the click's own time stamp, on performance.now()'s clock: a tap that
+   * waits while the page is busy — the dance re-rendered on the last tap's grid — still
+   * counts when it was made, not when it is handled). */
+  tap(atMs = performance.now()) {
+    const now = (Number.isFinite(atMs) && atMs > 0 ? atMs : performance.now()) / 1000;
     if (this.taps.length && now - this.taps[this.taps.length - 1] > TAP_GAP_SECS) this.taps = [];
     this.taps.push(now);
     this.$("#song-tap").textContent = `Tap (${this.taps.length})`;
