@@ -239,39 +239,32 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   its counts is still as far above that on the half-shifted counts, and its kinetic beats
 ///   per count no further from the target, as unheld, and its feet slide no more in all.
 fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>]) -> (Clip, Holds) {
-    use crate::character::{hold_feet_in_dance, planted_frames, DANCE_CATCH_UP_M_S};
-    use crate::humanoid::Canon;
+    use crate::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
     let frames = clip.frame_count();
     if frames < 3 || played.len() < frames {
         return (clip, Holds::default());
     }
-    // Planted flags of each clip the dance plays, per foot joint (left ankle, left toe, right
-    // ankle, right toe), at the clip's own frame rate.
-    let joints = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
-    let mut flags: std::collections::HashMap<usize, [Vec<bool>; 4]> = std::collections::HashMap::new();
-    for &(ci, _) in played.iter().flatten() {
-        if flags.contains_key(&ci) {
-            continue;
-        }
-        let Some(lc) = lib.clips().get(ci) else { continue };
-        let c = &lc.clip;
-        let pos = canonical_positions(c, &HumanoidMap::from_skeleton(&c.skeleton));
-        let n = pos.len() / CANON_COUNT;
-        let f = joints.map(|j| planted_frames(&(0..n).map(|k| pos[k * CANON_COUNT + j.index()]).collect::<Vec<_>>(), c.fps));
-        flags.insert(ci, f);
-    }
+    // Each frame's flags: those of the clip frame it plays, at the clip's own frame rate
+    // (found once per library clip, [`super::segment::LibraryClip::planted_feet`]).
     let flag = |f: usize, k: usize| -> bool {
         let Some((ci, at)) = played[f] else { return false };
-        let (Some(fl), Some(lc)) = (flags.get(&ci), lib.clips().get(ci)) else { return false };
-        let v = &fl[k];
+        let Some(lc) = lib.clips().get(ci) else { return false };
+        let v = &lc.planted_feet()[k];
         let i = ((at / LIBRARY_FPS * lc.clip.fps).round().max(0.0) as usize).min(v.len().saturating_sub(1));
         v.get(i).copied().unwrap_or(false)
     };
     let source: Vec<[bool; 4]> = (0..frames).map(|f| [0, 1, 2, 3].map(|k| flag(f, k))).collect();
     // The rule's figures of a dance: per bar, BAS-music on its own counts, the beat-rate cost
     // of its kinetic beats per count, the join jump at its start (0 for the first bar) and its
-    // mean foot skate.
-    let figures = |c: &Clip| -> Option<Vec<(f32, f32, f32, f32)>> {
+    // mean foot skate; and, for the whole dance, BAS-music on every bar's counts less BAS-music on the counts
+    // moved by half a count (§J's control), the beat-rate cost of its kinetic beats per count
+    // and its mean foot skate. Bars that each keep their figures can still add up to a dance
+    // that follows its counts less clearly (a kinetic beat gained between counts here, one lost
+    // on a count there) or that leaves the beat-rate band, or (a lifted foot catching up across
+    // a bar's edge) slides its feet more in all: then the dance is played unheld. One pass of
+    // §J's measures per rendered dance gives both.
+    type BarFigures = (f32, f32, f32, f32);
+    let figures = |c: &Clip| -> Option<(Vec<BarFigures>, (f32, f32, f32))> {
         let m = super::quality::QualityMotion::from_clip(c).ok()?;
         let kinetic = super::quality::kinetic_beats_secs(&m);
         let q_frames = m.frames();
@@ -279,56 +272,44 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         let joins: Vec<usize> = bars.iter().skip(1).map(|b| frame_of(b.start_secs)).collect();
         let jumps = super::quality::join_jumps(&m, &joins);
         let skate = super::quality::foot_skate_samples(&m);
-        Some(
-            bars.iter()
-                .enumerate()
-                .map(|(i, b)| {
-                    let n = b.beat_count().max(1);
-                    let d = b.duration_secs();
-                    let counts: Vec<f32> = (0..n).map(|k| b.start_secs + d * k as f32 / n as f32).collect();
-                    let a = super::quality::beat_alignment(&counts, &kinetic, b.start_secs, b.end_secs);
-                    let kb = kinetic.iter().filter(|&&t| t >= b.start_secs && t < b.end_secs).count();
-                    let jump = i.checked_sub(1).and_then(|j| jumps.get(j)).copied().unwrap_or(0.0);
-                    let slide = super::quality::summarize_skate(&skate, frame_of(b.start_secs)..frame_of(b.end_secs)).mean_cm_per_s;
-                    (a.bas_music, super::fill::beat_rate_cost(kb as f32 / n as f32), jump, slide)
-                })
-                .collect(),
-        )
-    };
-    // The whole dance's: BAS-music on every bar's counts less BAS-music on the counts moved by
-    // half a count (§J's control), and the beat-rate cost of its kinetic beats per count. Bars
-    // that each keep their figures can still add up to a dance that follows its counts less
-    // clearly (a kinetic beat gained between counts here, one lost on a count there) or that
-    // leaves the beat-rate band, or (a lifted foot catching up across a bar's edge) slides its
-    // feet more in all: then the dance is played unheld.
-    let whole = |c: &Clip| -> Option<(f32, f32, f32)> {
-        let m = super::quality::QualityMotion::from_clip(c).ok()?;
-        let kinetic = super::quality::kinetic_beats_secs(&m);
-        let counts: Vec<f32> =
-            bars.iter().flat_map(|b| { let n = b.beat_count().max(1); (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32) }).collect();
+        fn bar_counts(b: &Bar) -> impl Iterator<Item = f32> + '_ {
+            let n = b.beat_count().max(1);
+            (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32)
+        }
+        let per_bar = bars
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let counts: Vec<f32> = bar_counts(b).collect();
+                let a = super::quality::beat_alignment(&counts, &kinetic, b.start_secs, b.end_secs);
+                let kb = kinetic.iter().filter(|&&t| t >= b.start_secs && t < b.end_secs).count();
+                let jump = i.checked_sub(1).and_then(|j| jumps.get(j)).copied().unwrap_or(0.0);
+                let slide = super::quality::summarize_skate(&skate, frame_of(b.start_secs)..frame_of(b.end_secs)).mean_cm_per_s;
+                (a.bas_music, super::fill::beat_rate_cost(kb as f32 / counts.len() as f32), jump, slide)
+            })
+            .collect();
+        let counts: Vec<f32> = bars.iter().flat_map(bar_counts).collect();
         let (first, last) = (bars.first()?, bars.last()?);
         let a = super::quality::beat_alignment(&counts, &kinetic, first.start_secs, last.end_secs);
         let kb = kinetic.iter().filter(|&&t| t >= first.start_secs && t < last.end_secs).count();
-        let frame_of = |t: f32| ((t * super::quality::QUALITY_FPS).round().max(0.0) as usize).min(m.frames());
-        let skate = super::quality::summarize_skate(&super::quality::foot_skate_samples(&m), frame_of(first.start_secs)..frame_of(last.end_secs)).mean_cm_per_s;
-        Some((a.bas_music - a.bas_music_shifted, super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), skate))
+        let slide = super::quality::summarize_skate(&skate, frame_of(first.start_secs)..frame_of(last.end_secs)).mean_cm_per_s;
+        Some((per_bar, (a.bas_music - a.bas_music_shifted, super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), slide)))
     };
-    let Some(unheld) = figures(&clip) else { return (clip, Holds::default()) };
-    let Some(unheld_whole) = whole(&clip) else { return (clip, Holds::default()) };
-    let worse_whole = |held: &Clip| whole(held).is_none_or(|(margin, cost, skate)| margin < unheld_whole.0 - 1e-4 || cost > unheld_whole.1 + 1e-4 || skate > unheld_whole.2);
+    let Some((unheld, unheld_whole)) = figures(&clip) else { return (clip, Holds::default()) };
+    let worse_whole = |(margin, cost, skate): (f32, f32, f32)| margin < unheld_whole.0 - 1e-4 || cost > unheld_whole.1 + 1e-4 || skate > unheld_whole.2;
     let mut keep = vec![true; bars.len()];
     for round in 0..=HOLD_RULE_ROUNDS {
         let kept = |f: usize| bar_of[f].is_none_or(|b| keep.get(b).copied().unwrap_or(true));
         let track = |k: usize| -> Vec<bool> { (0..frames).map(|f| kept(f) && source[f][k]).collect() };
         let planted = [(track(0), track(1)), (track(2), track(3))];
         let Some(held) = hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S) else { return (clip, Holds::default()) };
+        let Some((with, with_whole)) = figures(&held) else { return (clip, Holds::default()) };
         if round == HOLD_RULE_ROUNDS {
-            if worse_whole(&held) {
+            if worse_whole(with_whole) {
                 break;
             }
             return (held, Holds { planted: source, kept: keep });
         }
-        let Some(with) = figures(&held) else { return (clip, Holds::default()) };
         let mut dropped = false;
         for (b, (w, u)) in with.iter().zip(&unheld).enumerate() {
             if keep[b] && (w.0 < u.0 - 1e-4 || w.1 > u.1 + 1e-4 || w.3 > u.3 + 1e-3) {
@@ -344,7 +325,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
             }
         }
         if !dropped {
-            if worse_whole(&held) {
+            if worse_whole(with_whole) {
                 break;
             }
             return (held, Holds { planted: source, kept: keep });

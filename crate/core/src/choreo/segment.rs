@@ -194,6 +194,29 @@ pub struct LibraryClip {
     pub tempo_bpm: f32,
     /// The built-in move it renders, if any.
     pub builtin: Option<MoveInfo>,
+    /// Where its feet are planted, found the first time a rendered dance holds them
+    /// ([`LibraryClip::planted_feet`]); the clip never changes, so neither do they.
+    planted: std::sync::OnceLock<Arc<[Vec<bool>; 4]>>,
+}
+
+impl LibraryClip {
+    /// A library clip (its planted feet not yet found).
+    pub fn new(clip: Clip, beat_frames: Vec<f32>, tempo_bpm: f32, builtin: Option<MoveInfo>) -> LibraryClip {
+        LibraryClip { clip, beat_frames, tempo_bpm, builtin, planted: std::sync::OnceLock::new() }
+    }
+
+    /// Per frame of the clip as recorded, whether its left ankle, left toe, right ankle and
+    /// right toe are planted (the retargeting's rule, [`crate::character::planted_frames`]):
+    /// found once per clip, not on every render of a dance that plays it.
+    pub(crate) fn planted_feet(&self) -> &[Vec<bool>; 4] {
+        self.planted.get_or_init(|| {
+            let c = &self.clip;
+            let pos = canonical_positions(c, &HumanoidMap::from_skeleton(&c.skeleton));
+            let n = pos.len() / CANON_COUNT;
+            let joints = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
+            Arc::new(joints.map(|j| crate::character::planted_frames(&(0..n).map(|k| pos[k * CANON_COUNT + j.index()]).collect::<Vec<_>>(), c.fps)))
+        })
+    }
 }
 
 /// One 4-count segment.
@@ -473,7 +496,7 @@ impl SegmentLibrary {
             let frames = clip.frame_count();
             let last = frames.saturating_sub(1) as f32;
             let beats: Vec<f32> = (0..=SEGMENT_COUNTS).map(|k| last * k as f32 / SEGMENT_COUNTS as f32).collect();
-            let lc = LibraryClip { clip, beat_frames: beats, tempo_bpm: crate::library::BUILTIN_BPM, builtin: Some(info) };
+            let lc = LibraryClip::new(clip, beats, crate::library::BUILTIN_BPM, Some(info));
             self.push_clip(lc, SEGMENT_COUNTS);
             loader.done += 1;
         }
@@ -504,7 +527,7 @@ impl SegmentLibrary {
         }
         let hop = options.hop_counts.clamp(1, SEGMENT_COUNTS);
         let beat_count = beats.len();
-        let lc = LibraryClip { clip: canon, beat_frames: beats, tempo_bpm, builtin: None };
+        let lc = LibraryClip::new(canon, beats, tempo_bpm, None);
         let index = self.clips.len();
         let added = self.push_clip(lc, hop);
         self.rescale();
