@@ -1,7 +1,7 @@
 //! The canonical humanoid every rig is mapped onto, so clips from different sources compare.
 //!
 //! Mapping is by joint name first (Mixamo `mixamorig:*`, VRM humanoid bone names, CMU BVH and
-//! ASF names, iClone `CC_Base_*`, Blender `.L/.R` rigs such as RobotExpressive) and by
+//! ASF names, iClone `CC_Base_*`, Blender `.L/.R` rigs such as RobotExpressive, MMD's 左腕 / 下半身) and by
 //! structure second (the hip branch point, two legs going down, a spine going up that splits
 //! into neck and arms). A rig whose mapped body is not upright and two-legged in its rest pose
 //! (the Fox) is reported as not humanoid, with the reason.
@@ -189,6 +189,8 @@ fn words(name: &str) -> Vec<String> {
 
 /// Side and body-word of a joint name (`None` for names no canonical joint takes).
 fn classify(name: &str) -> Option<(Side, String)> {
+    // MMD's Japanese standard names (左腕, 下半身 …) read as their English body words.
+    let name = crate::mmd::english_alias(name).unwrap_or(name);
     let mut w = words(name);
     if w.is_empty() {
         return None;

@@ -16,6 +16,7 @@ pub mod history;
 pub mod humanoid;
 pub mod import;
 pub mod library;
+pub mod mmd;
 pub mod motion;
 pub mod music;
 pub mod normalize;
