@@ -7,10 +7,12 @@
 //! positions and x, y of rotations, as three's `MMDParser` does), so a pose can be compared with
 //! three.js's `MMDAnimationHelper` + `CCDIKSolver` point for point. Clips leave in metres.
 
+mod model;
 mod motion;
 mod names;
 mod standard;
 
+pub use model::{PmdBoneRecord, PmdIkRecord};
 pub use motion::{bezier_ratio, BoneKeys, MmdClipOptions, MmdMotion, MotionSampler, VmdBoneKey, METRES_PER_MMD_UNIT};
 pub use names::english_alias;
 pub use standard::standard_rig;
@@ -130,6 +132,9 @@ pub struct MmdRig {
     process_order: Vec<usize>,
     /// Per IK bone: the effector's ancestor path from the outermost link down to the effector.
     ik_paths: Vec<Option<Vec<usize>>>,
+    /// Per IK bone: the bones whose world transforms its solve reads (the IK bone's and the
+    /// effector's ancestors, themselves included), parents first.
+    ik_inputs: Vec<Option<Vec<usize>>>,
 }
 
 /// A posed rig: final local motion (grants and IK applied) and world transforms.
@@ -244,6 +249,20 @@ impl MmdRig {
             path.reverse();
             ik_paths[i] = Some(path);
         }
+        let ik_inputs = (0..n)
+            .map(|i| {
+                let ik = bones[i].ik.as_ref()?;
+                let mut needed = vec![false; n];
+                for start in [i, ik.effector] {
+                    let mut k = Some(start);
+                    while let Some(j) = k.filter(|&j| !needed[j]) {
+                        needed[j] = true;
+                        k = bones[j].parent;
+                    }
+                }
+                Some(fk_order.iter().copied().filter(|&j| needed[j]).collect())
+            })
+            .collect();
         // Deformation order, then grant parents first (three's MMDAnimationHelper does the same
         // by recursion); a grant cycle is an error.
         let mut deform: Vec<usize> = (0..n).collect();
@@ -269,7 +288,7 @@ impl MmdRig {
                 }
             }
         }
-        Ok(MmdRig { name: name.into(), bones, offsets, fk_order, process_order, ik_paths })
+        Ok(MmdRig { name: name.into(), bones, offsets, fk_order, process_order, ik_paths, ik_inputs })
     }
 
     pub fn len(&self) -> usize {
@@ -327,7 +346,6 @@ impl MmdRig {
         out.local_translations.extend(translations.iter().map(|t| if t.is_finite() { *t } else { Vec3::ZERO }));
         out.world_rotations.resize(n, Quat::IDENTITY);
         out.world_positions.resize(n, Vec3::ZERO);
-        let mut dirty = true;
         for &i in &self.process_order {
             let b = &self.bones[i];
             if let Some(g) = &b.grant {
@@ -339,19 +357,16 @@ impl MmdRig {
                     let t = out.local_translations[g.parent] * g.ratio;
                     out.local_translations[i] += t;
                 }
-                dirty = true;
             }
-            if let (Some(ik), Some(path)) = (&b.ik, &self.ik_paths[i]) {
-                if dirty {
-                    self.world_all(out);
+            if let (Some(ik), Some(path), Some(inputs)) = (&b.ik, &self.ik_paths[i], &self.ik_inputs[i]) {
+                // Only what this solve reads is brought up to date; everything at the end.
+                for &j in inputs {
+                    self.world_one(j, out);
                 }
                 self.solve_ccd(i, ik, path, out);
-                dirty = true;
             }
         }
-        if dirty {
-            self.world_all(out);
-        }
+        self.world_all(out);
         Ok(())
     }
 

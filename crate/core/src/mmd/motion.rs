@@ -95,6 +95,11 @@ pub fn bezier_ratio(x1: f32, x2: f32, y1: f32, y2: f32, x: f32) -> f32 {
 }
 
 fn ratio(curve: [u8; 4], w: f32) -> f32 {
+    let [x1, y1, x2, y2] = curve;
+    // x1 = y1 and x2 = y2 is the line y = x (MMD's default curve): no search needed.
+    if x1 == y1 && x2 == y2 {
+        return w;
+    }
     let [x1, y1, x2, y2] = curve.map(|v| v as f32 / 127.0);
     bezier_ratio(x1, x2, y1, y2, w)
 }
@@ -149,9 +154,11 @@ impl Track {
         let w = if f1 - f0 < 1.5 { 0.0 } else { (frame - f0) / (f1 - f0) };
         let c = self.curves[i1];
         let (t0, t1) = (self.translations[i0], self.translations[i1]);
-        let lerp = |a: f32, b: f32, r: f32| a * (1.0 - r) + b * r;
-        let t = Vec3::new(lerp(t0.x, t1.x, ratio(c[0], w)), lerp(t0.y, t1.y, ratio(c[1], w)), lerp(t0.z, t1.z, ratio(c[2], w)));
-        let q = self.rotations[i0].slerp(self.rotations[i1], ratio(c[3], w));
+        // A channel whose two keys agree needs no easing (most bones are not translated).
+        let lerp = |a: f32, b: f32, curve: [u8; 4]| if a == b { a } else { let r = ratio(curve, w); a * (1.0 - r) + b * r };
+        let t = Vec3::new(lerp(t0.x, t1.x, c[0]), lerp(t0.y, t1.y, c[1]), lerp(t0.z, t1.z, c[2]));
+        let (q0, q1) = (self.rotations[i0], self.rotations[i1]);
+        let q = if q0 == q1 { q0 } else { q0.slerp(q1, ratio(c[3], w)) };
         (q, t)
     }
 }
