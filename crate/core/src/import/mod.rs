@@ -13,6 +13,9 @@
 
 pub mod bvh;
 pub mod gltf;
+pub mod mmd_bytes;
+pub mod mmd_text;
+pub mod vmd;
 
 use std::sync::Arc;
 
