@@ -153,3 +153,231 @@ fn damaged_vmd_copies_give_typed_errors() {
         let _ = vmd::read("prefix.vmd", &bytes[..cut]);
     }
 }
+
+// ---- models ------------------------------------------------------------------------------
+
+use odori_core::import::mmd_model::{self, bone_flags, find_texture, MmdModel, ModelFormat, MorphData, Toon};
+
+const MIKU: &str = "mmd/miku_v2/miku_v2.pmd";
+const GENE: &str = "mmd/gene/Gene_light.pmx";
+
+fn model(rel: &str) -> MmdModel {
+    mmd_model::read_model(rel, &read(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+/// Files beside a model (relative to its folder, recursively, `/`-separated).
+fn files_beside(rel: &str) -> Vec<String> {
+    let dir = odori_tests::data_dir().join(rel).parent().unwrap().to_path_buf();
+    let mut out = Vec::new();
+    let mut stack = vec![dir.clone()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push(p.strip_prefix(&dir).unwrap().to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+    out
+}
+
+/// Structure every real model must have: the materials' runs cover the triangle list, each
+/// leg IK chain's links are ancestors of its target in order, every skin's weights are usable.
+fn check_structure(rel: &str, m: &MmdModel) {
+    let runs: u64 = m.materials.iter().map(|x| u64::from(x.index_count)).sum();
+    assert_eq!(runs, m.indices.len() as u64, "{rel}: material runs vs indices");
+    // The leg chains (足ＩＫ) follow the skeleton exactly; hair chains of some models skip a
+    // bone (mokou's 右髪ＣＩＫ), which MMD tolerates.
+    for (i, ik) in m.ik_bones().filter(|(i, _)| m.bones[*i].name.ends_with("足ＩＫ")) {
+        let mut chain = Vec::new();
+        let mut b = m.bones[ik.target].parent;
+        while let Some(p) = b {
+            chain.push(p);
+            b = m.bones[p].parent;
+        }
+        let links: Vec<usize> = ik.links.iter().map(|l| l.bone).collect();
+        assert_eq!(&chain[..links.len()], &links[..], "{rel}: IK {} links are not the target's ancestors", m.bones[i].name);
+    }
+    assert!(m.ik_bones().all(|(_, ik)| ik.loop_count > 0 && ik.limit_angle_rad > 0.0));
+    for v in &m.vertices {
+        let w: f32 = v.skin.weights.iter().sum();
+        assert!((w - 1.0).abs() < 1e-3, "{rel}: skin weights sum to {w}");
+    }
+}
+
+#[test]
+fn miku_v2_pmd_has_the_stated_parts() {
+    let m = model(MIKU);
+    assert_eq!(m.format, ModelFormat::Pmd);
+    assert_eq!(m.vertices.len(), 12_354);
+    assert_eq!(m.materials.len(), 17);
+    assert_eq!(m.bones.len(), 140);
+    assert_eq!(m.ik_bones().count(), 7);
+    // The file's 31 morphs count PMD's base morph, which holds the others' vertex list and is
+    // not a morph of its own (see MmdMorph).
+    assert_eq!(m.morphs.len() + 1, 31);
+    assert_eq!(m.rigid_bodies.len(), 45);
+    assert!(m.name.contains("ミク"), "name {}", m.name);
+    check_structure(MIKU, &m);
+    // The standard bones, an old-style rig without 全ての親 / グルーブ / 上半身2.
+    for n in ["センター", "上半身", "下半身", "頭", "左足ＩＫ", "右つま先ＩＫ", "左ひざ", "右手首"] {
+        assert!(m.bone_index(n).is_some(), "no bone {n}");
+    }
+    for n in ["全ての親", "グルーブ", "上半身2"] {
+        assert!(m.bone_index(n).is_none(), "miku_v2 should not have {n}");
+    }
+    // 左足ＩＫ moves 左ひざ and 左足 to put 左足首 on it; the knee bends one way.
+    let ik_bone = m.bone_index("左足ＩＫ").unwrap();
+    let ik = m.bones[ik_bone].ik.as_ref().unwrap();
+    assert_eq!(m.bones[ik.target].name, "左足首");
+    assert_eq!(ik.links.iter().map(|l| m.bones[l.bone].name.as_str()).collect::<Vec<_>>(), ["左ひざ", "左足"]);
+    let (lo, hi) = ik.links[0].limits.expect("knee limited");
+    assert!(lo.x < hi.x && hi.x < 0.0 && lo.y == 0.0 && hi.z == 0.0);
+    assert!(ik.links[1].limits.is_none());
+    assert!(m.bones[ik_bone].has(bone_flags::IK) && m.bones[ik_bone].has(bone_flags::TRANSLATABLE));
+    // Rigid bodies are placed in model space: near their bones, not near the origin.
+    let head = m.bone_index("頭").unwrap();
+    for rb in m.rigid_bodies.iter().filter(|rb| rb.bone == Some(head)) {
+        assert!((rb.position - m.bones[head].position).length() < 5.0, "{}: {} vs head {}", rb.name, rb.position, m.bones[head].position);
+    }
+    // PMD morphs became vertex morphs on real vertices.
+    assert!(m.morphs.iter().any(|x| x.name == "まばたき"));
+    assert!(m.morphs.iter().all(|x| matches!(&x.data, MorphData::Vertex(v) if !v.is_empty())));
+    assert!(!m.name_en.is_empty(), "miku_v2 has the English extension");
+    // Its eyes take 両目's rotation (PMD bone type 9: grant parent in the tail field).
+    let eye = &m.bones[m.bone_index("左目").unwrap()];
+    let g = eye.grant.expect("左目 grant");
+    assert_eq!(m.bones[g.parent].name, "両目");
+}
+
+#[test]
+fn gene_pmx_has_the_stated_parts() {
+    let m = model(GENE);
+    assert_eq!(m.format, ModelFormat::Pmx { version: 2.0 });
+    assert_eq!(m.vertices.len(), 28_646);
+    assert_eq!(m.materials.len(), 13);
+    assert_eq!(m.bones.len(), 224);
+    assert_eq!(m.ik_bones().count(), 6);
+    assert_eq!(m.morphs.len(), 184);
+    assert_eq!(m.rigid_bodies.len(), 87);
+    check_structure(GENE, &m);
+    for n in ["全ての親", "センター", "グルーブ", "上半身", "上半身2", "下半身", "首", "頭", "左足ＩＫ", "右つま先ＩＫ", "左腕捩", "右手捩"] {
+        assert!(m.bone_index(n).is_some(), "no bone {n}");
+    }
+    // Twist bones turn about a fixed axis; some bone takes a grant (付与) from another.
+    let twist = &m.bones[m.bone_index("左腕捩").unwrap()];
+    assert!(twist.fixed_axis.is_some_and(|a| (a.length() - 1.0).abs() < 1e-3), "左腕捩 axis {:?}", twist.fixed_axis);
+    assert!(m.bones.iter().any(|b| b.grant.is_some_and(|g| g.rotation && g.ratio > 0.0)));
+    // Knees: limited links.
+    let ik = m.bones[m.bone_index("右足ＩＫ").unwrap()].ik.as_ref().unwrap();
+    assert!(ik.links.iter().any(|l| m.bones[l.bone].name.contains("ひざ") && l.limits.is_some()));
+}
+
+#[test]
+fn every_real_model_reads_and_its_textures_resolve_beside_it() {
+    for rel in [MIKU, GENE, "mmd/gene/Gene_light.pmd", "mmd/low_poly/miku.pmd", "mmd/low_poly/gumi.pmd", "mmd/mokou/mokou_A.pmd", "mmd/mokou/mokou_B.pmd"] {
+        let m = model(rel);
+        check_structure(rel, &m);
+        let files = files_beside(rel);
+        let files: Vec<&str> = files.iter().map(String::as_str).collect();
+        let used: Vec<usize> = m.materials.iter().flat_map(|x| [x.texture, x.sphere, if let Toon::Texture(t) = x.toon { Some(t) } else { None }]).flatten().collect();
+        assert!(!used.is_empty(), "{rel}: no textures");
+        for t in used {
+            assert!(find_texture(&m.textures[t], &files).is_some(), "{rel}: texture {:?} not found among {files:?}", m.textures[t]);
+        }
+    }
+}
+
+#[test]
+fn vmd_bone_names_exist_in_the_model() {
+    let m = model(MIKU);
+    let names: HashSet<&str> = m.bones.iter().map(|b| b.name.as_str()).collect();
+    let w = vmd::read(WAVEFILE, &read(WAVEFILE)).unwrap();
+    let missing: HashSet<&str> = w.bone_keys.iter().map(|k| k.name.as_str()).filter(|n| !names.contains(n)).collect();
+    assert!(missing.is_empty(), "WAVEFILE bones not in miku_v2: {missing:?}");
+    let t = vmd::read(TOKINO, &read(TOKINO)).unwrap();
+    let found = t.bone_tracks().iter().filter(|tr| m.bones.iter().any(|b| odori_core::import::mmd_text::vmd_name_matches(&tr.name, &b.name, 15))).count();
+    assert_eq!(found, 93);
+}
+
+fn expect_model_err(file: &str, bytes: &[u8]) -> MmdError {
+    match mmd_model::read_model(file, bytes) {
+        Ok(_) => panic!("{file}: a damaged copy ({} bytes) was read without error", bytes.len()),
+        Err(e) => {
+            assert!(e.to_string().contains(file), "the message names the file: {e}");
+            e
+        }
+    }
+}
+
+#[test]
+fn damaged_pmd_copies_give_typed_errors() {
+    let bytes = read(MIKU);
+    // Header 283 bytes; vertex count at 283; vertices 38 bytes each; then the face count.
+    let nv = 12_354usize;
+    let faces = 283 + 4 + 38 * nv;
+    // Cut inside the vertices: the vertex count no longer fits.
+    assert!(matches!(expect_model_err("cut.pmd", &bytes[..283 + 4 + 38 * 100]), MmdError::CountTooLarge { ref section, .. } if section == "vertices"));
+    // Cut inside the header's comment.
+    assert!(matches!(expect_model_err("cut.pmd", &bytes[..100]), MmdError::Truncated { ref section, .. } if section == "header"));
+    // A face index past the last vertex.
+    let mut b = bytes.clone();
+    b[faces + 4..faces + 6].copy_from_slice(&(nv as u16 + 5).to_le_bytes());
+    match expect_model_err("face.pmd", &b) {
+        MmdError::IndexOutOfRange { what: "vertex", index, count, .. } => assert_eq!((index, count), (nv as i64 + 5, nv)),
+        e => panic!("{e:?}"),
+    }
+    // A vertex skinned to bone 500 of 140.
+    let mut b = bytes.clone();
+    b[287 + 32..287 + 34].copy_from_slice(&500u16.to_le_bytes());
+    b[287 + 36] = 100;
+    assert!(matches!(expect_model_err("skin.pmd", &b), MmdError::IndexOutOfRange { what: "bone", index: 500, count: 140, .. }));
+    // Bad version, bad magic.
+    let mut b = bytes.clone();
+    b[3..7].copy_from_slice(&2.0f32.to_le_bytes());
+    assert!(matches!(expect_model_err("version.pmd", &b), MmdError::BadVersion { .. }));
+    assert!(matches!(expect_model_err("magic.pmd", &bytes[1..]), MmdError::BadMagic { .. }));
+    // A vertex count of four billion: refused before allocating.
+    let mut b = bytes.clone();
+    b[283..287].copy_from_slice(&u32::MAX.to_le_bytes());
+    assert!(matches!(expect_model_err("count.pmd", &b), MmdError::CountTooLarge { .. }));
+    for cut in (0..bytes.len()).step_by(4_999) {
+        let _ = mmd_model::read_model("prefix.pmd", &bytes[..cut]);
+    }
+}
+
+#[test]
+fn damaged_pmx_copies_give_typed_errors() {
+    let bytes = read(GENE);
+    // Header: magic, version, globals count 8 at byte 8, globals at 9–16.
+    assert_eq!(bytes[8], 8);
+    let mut b = bytes.clone();
+    b[9 + 2] = 3; // vertex index size 3
+    assert!(matches!(expect_model_err("size.pmx", &b), MmdError::BadValue { what: "vertex index size", value: 3, .. }));
+    let mut b = bytes.clone();
+    b[9] = 7; // text encoding 7
+    assert!(matches!(expect_model_err("enc.pmx", &b), MmdError::BadValue { what: "text encoding", .. }));
+    let mut b = bytes.clone();
+    b[4..8].copy_from_slice(&3.0f32.to_le_bytes());
+    assert!(matches!(expect_model_err("version.pmx", &b), MmdError::BadVersion { .. }));
+    // Cuts in each part of the file: typed errors naming a section, never a panic.
+    let mut sections = HashSet::new();
+    for cut in (0..bytes.len()).step_by(20_011) {
+        match mmd_model::read_model("cut.pmx", &bytes[..cut]) {
+            Err(MmdError::Truncated { section, .. }) | Err(MmdError::CountTooLarge { section, .. }) => {
+                sections.insert(section);
+            }
+            Err(e) => {
+                assert!(matches!(e, MmdError::BadMagic { .. } | MmdError::Truncated { .. }), "cut at {cut}: {e:?}");
+            }
+            Ok(_) => panic!("a copy cut at {cut} of {} bytes read without error", bytes.len()),
+        }
+    }
+    for s in ["vertices", "faces", "bones", "morphs", "rigid bodies"] {
+        assert!(sections.contains(s), "no cut fell in {s}: {sections:?}");
+    }
+    // A one-byte-short copy.
+    assert!(mmd_model::read_model("short.pmx", &bytes[..bytes.len() - 1]).is_err());
+}

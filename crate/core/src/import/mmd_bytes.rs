@@ -100,10 +100,6 @@ impl<'a> Reader<'a> {
         self.pos >= self.bytes.len()
     }
 
-    pub(crate) fn file(&self) -> &str {
-        self.file
-    }
-
     pub(crate) fn truncated(&self, needed: usize) -> MmdError {
         MmdError::Truncated {
             file: self.file.to_string(),
