@@ -38,19 +38,14 @@ pub fn encode_sjis(name: &str) -> Result<Vec<u8>, char> {
     Ok(bytes.into_owned())
 }
 
-/// The Shift-JIS bytes of `name` cut to at most `width` bytes at a character boundary (so no
-/// character is split: MMD itself may split one, but a clean cut reads back as a valid prefix).
+/// The Shift-JIS bytes of `name` cut to at most `width` bytes the way MMD cuts them: byte-wise,
+/// even through a two-byte character. MMD finds a model's bone for a VMD key by comparing the
+/// model name's first `width` bytes with the field, so a cleaner cut at a character boundary
+/// would name no bone in MMD.
 pub fn encode_sjis_field(name: &str, width: usize) -> Result<Vec<u8>, char> {
-    let mut out = Vec::with_capacity(width);
-    for c in name.chars() {
-        let mut buf = [0u8; 4];
-        let b = encode_sjis(c.encode_utf8(&mut buf))?;
-        if out.len() + b.len() > width {
-            break;
-        }
-        out.extend_from_slice(&b);
-    }
-    Ok(out)
+    let mut b = encode_sjis(name)?;
+    b.truncate(width);
+    Ok(b)
 }
 
 /// Decodes UTF-16LE (PMX text); an odd trailing byte and unpaired surrogates become U+FFFD.
@@ -97,11 +92,12 @@ mod tests {
     }
 
     #[test]
-    fn field_encoding_cuts_at_a_character_boundary() {
-        // 8 two-byte characters = 16 bytes; 15 allow 7.
+    fn field_encoding_cuts_byte_wise_as_mmd_does() {
+        // 8 two-byte characters = 16 bytes; a 15-byte field keeps 7 and a half.
         let b = encode_sjis_field("あいうえおかきく", 15).unwrap();
-        assert_eq!(b.len(), 14);
-        assert_eq!(decode_sjis_field(&b), "あいうえおかき");
+        assert_eq!(b.len(), 15);
+        assert!(vmd_name_matches(&decode_sjis_field(&b), "あいうえおかきく", 15));
+        assert_eq!(encode_sjis_field("センター", 15).unwrap().len(), 8);
     }
 
     #[test]
