@@ -406,3 +406,84 @@ fn real_vmds_round_trip_through_the_writer() {
         }
     }
 }
+
+// ---- synthetic files (the fuzz seeds fuzz/make_seeds.py writes from the formats) ------------
+
+fn seed(name: &str) -> Vec<u8> {
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus").join(name);
+    std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e} (run fuzz/make_seeds.py)", p.display()))
+}
+
+/// The paths real files do not take: PMX 2.1 (QDEF, flip and impulse morphs, soft bodies),
+/// UTF-8 text, index sizes 1 and 4, additional UVs, SDEF; PMD's bone types 5 and 9, its base
+/// morph, English names and own toon file.
+#[test]
+fn synthetic_models_read_every_section() {
+    use odori_core::import::mmd_model::{SkinKind, SphereMode};
+    for (name, version, auv) in [("import_pmx/pmx20_utf16.pmx", 2.0, 0), ("import_pmx/pmx21_utf8_wide_indices.pmx", 2.1, 2), ("import_pmx/pmx21_byte_indices.pmx", 2.1, 1)] {
+        let m = mmd_model::read_model(name, &seed(name)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.format, ModelFormat::Pmx { version });
+        assert_eq!((m.name.as_str(), m.name_en.as_str()), ("テスト", "test"));
+        assert_eq!(m.vertices.len(), 4);
+        assert_eq!(m.additional_uvs.len(), 4 * auv);
+        let kinds: Vec<SkinKind> = m.vertices.iter().map(|v| v.skin.kind).collect();
+        let four = if version > 2.0 { SkinKind::Qdef } else { SkinKind::Bdef4 };
+        assert_eq!(kinds, [SkinKind::Bdef1, SkinKind::Bdef2, four, SkinKind::Sdef]);
+        assert_eq!(m.vertices[1].skin.weights, [0.25, 0.75, 0.0, 0.0]);
+        // The BDEF4 slot naming bone −1 reads as bone 0 at weight 0.
+        assert_eq!((m.vertices[2].skin.bones[3], m.vertices[2].skin.weights[3]), (0, 0.0));
+        assert_eq!(m.vertices[3].skin.sdef.unwrap().r0, glam::Vec3::new(0.0, 12.0, 0.0));
+        assert_eq!(m.indices, [0, 1, 2, 1, 3, 2]);
+        assert_eq!(m.textures, ["tex\\Body.png", "toon_own.bmp"]);
+        assert_eq!(m.materials[0].toon, Toon::Shared(0));
+        assert_eq!(m.materials[1].toon, Toon::Texture(1));
+        assert_eq!(find_texture(&m.textures[0], &["TEX/body.PNG"]), Some(0));
+        let leg = &m.bones[1];
+        assert_eq!(leg.grant.map(|g| (g.parent, g.ratio, g.rotation, g.translation)), Some((0, 0.5, true, false)));
+        assert_eq!(leg.fixed_axis, Some(glam::Vec3::X));
+        assert_eq!(leg.local_axes, Some((glam::Vec3::X, glam::Vec3::Z)));
+        let ik = m.bones[2].ik.as_ref().unwrap();
+        assert_eq!((ik.target, ik.loop_count, ik.links[0].bone), (1, 40, 1));
+        assert_eq!(ik.links[0].limits.unwrap().0.x, -3.14);
+        let morph_kinds: Vec<&str> = m.morphs.iter().map(|x| match &x.data {
+            MorphData::Group(_) => "group",
+            MorphData::Vertex(_) => "vertex",
+            MorphData::Bone(_) => "bone",
+            MorphData::Uv { .. } => "uv",
+            MorphData::Material(_) => "material",
+            MorphData::Flip(_) => "flip",
+            MorphData::Impulse(_) => "impulse",
+        }).collect();
+        let mut want = vec!["vertex", "bone", "uv", "material", "group"];
+        if version > 2.0 {
+            want.extend(["flip", "impulse"]);
+        }
+        assert_eq!(morph_kinds, want);
+        assert_eq!(m.display_frames.len(), 2);
+        assert_eq!((m.rigid_bodies.len(), m.joints.len()), (2, 1));
+        assert_eq!(m.soft_bodies.len(), usize::from(version > 2.0));
+    }
+    let m = mmd_model::read_model("pmd10.pmd", &seed("import_pmx/pmd10.pmd")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(m.format, ModelFormat::Pmd);
+    assert_eq!((m.vertices.len(), m.bones.len(), m.morphs.len()), (3, 6, 1));
+    assert_eq!(m.textures, ["body.bmp", "shine.sph", "own_toon.bmp"]);
+    assert_eq!((m.materials[0].texture, m.materials[0].sphere, m.materials[0].sphere_mode), (Some(0), Some(1), SphereMode::Multiply));
+    assert_eq!(m.materials[0].toon, Toon::Texture(2));
+    assert_eq!(m.bones[4].grant.map(|g| (g.parent, g.ratio)), Some((0, 1.0)));
+    assert_eq!(m.bones[5].grant.map(|g| (g.parent, g.ratio)), Some((0, 0.5)));
+    assert!(m.bones[3].ik.as_ref().unwrap().links[0].limits.is_some(), "a PMD knee is limited");
+    assert_eq!(m.bones[3].ik.as_ref().unwrap().limit_angle_rad, 2.0);
+    // まばたき's one offset, against base entry 1, moves model vertex 2.
+    assert_eq!(m.morphs[0].data, MorphData::Vertex(vec![(2, glam::Vec3::new(0.0, -0.5, 0.0))]));
+    assert_eq!(m.bones[1].name_en, "bone1");
+    // Rigid body 頭 on bone 0 at (0, 8, 0), stored relative: (0, 2, 0) → model (0, 10, 0).
+    assert_eq!(m.rigid_bodies[0].position, glam::Vec3::new(0.0, 10.0, 0.0));
+    assert!(mmd_model::read_model("p.pmd", &seed("import_pmx/pmd_no_extensions.pmd")).is_ok_and(|m| m.rigid_bodies.is_empty() && m.name_en.is_empty()));
+    for name in ["import_vmd/dance", "import_vmd/camera", "import_vmd/all_sections", "import_vmd/old_header"] {
+        let v = vmd::read(name, &seed(name)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(vmd::read("w", &odori_core::export::vmd::write("w", &v).unwrap()).unwrap().bone_keys, v.bone_keys);
+    }
+    let v = vmd::read("all", &seed("import_vmd/all_sections")).unwrap();
+    assert_eq!((v.camera_keys.len(), v.light_keys.len(), v.self_shadow_keys.len(), v.property_keys.len()), (1, 1, 1, 1));
+    assert_eq!(v.property_keys[0].ik, [("左足ＩＫ".to_string(), false), ("右足ＩＫ".to_string(), true)]);
+}

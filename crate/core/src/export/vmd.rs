@@ -6,8 +6,9 @@
 //! byte-wise to their fields as MMD cuts them (see [`mmd_text::encode_sjis_field`]). Reading the
 //! written file gives back every key exactly: names, frames, values and curves.
 //!
-//! Refused with a typed [`MmdError`]: a name Shift-JIS cannot hold (emoji, or the U+FFFD a
-//! reader put where a file cut a character), a value that is not finite, a curve control value
+//! A name the reader got from a field MMD cut through a two-byte character writes back as the
+//! same bytes (see [`mmd_text::CUT_LEAD_BYTE_BASE`]). Refused with a typed [`MmdError`]: a name
+//! Shift-JIS cannot hold (emoji, U+FFFD), a value that is not finite, a curve control value
 //! above 127, more keys than a u32 counts.
 
 use crate::import::mmd_bytes::MmdError;
@@ -108,7 +109,10 @@ pub fn write(file: &str, vmd: &Vmd) -> Result<Vec<u8>, MmdError> {
         return Ok(out);
     }
     count(&mut out, file, "the number of light keys", vmd.light_keys.len())?;
-    for k in &vmd.light_keys {
+    for (i, k) in vmd.light_keys.iter().enumerate() {
+        if !(k.colour.is_finite() && k.direction.is_finite()) {
+            return Err(MmdError::NotFinite { file: file.to_string(), what: "light value", key: i, name: "light".into(), frame: k.frame });
+        }
         out.extend_from_slice(&k.frame.to_le_bytes());
         floats(&mut out, &k.colour.to_array());
         floats(&mut out, &k.direction.to_array());
@@ -117,7 +121,10 @@ pub fn write(file: &str, vmd: &Vmd) -> Result<Vec<u8>, MmdError> {
         return Ok(out);
     }
     count(&mut out, file, "the number of self-shadow keys", vmd.self_shadow_keys.len())?;
-    for k in &vmd.self_shadow_keys {
+    for (i, k) in vmd.self_shadow_keys.iter().enumerate() {
+        if !k.distance.is_finite() {
+            return Err(MmdError::NotFinite { file: file.to_string(), what: "self-shadow distance", key: i, name: "self-shadow".into(), frame: k.frame });
+        }
         out.extend_from_slice(&k.frame.to_le_bytes());
         out.push(k.mode);
         floats(&mut out, &[k.distance]);

@@ -9,20 +9,68 @@
 //! A fixed field holds the name up to its first NUL; the bytes after it are garbage MMD left
 //! (often 0xFD) and are ignored. MMD cuts names that do not fit byte-wise, possibly through a
 //! two-byte character, so a VMD's 15-byte bone name may be a prefix of the model's 20-byte
-//! name: [`vmd_name_matches`] compares the way MMD does.
+//! name: [`vmd_name_matches`] compares the way MMD does, and the cut byte is kept (see
+//! [`CUT_LEAD_BYTE_BASE`]) so such a name writes back as it was.
 
 use encoding_rs::SHIFT_JIS;
 
-/// Decodes a fixed-width Shift-JIS field up to its first NUL. Bytes that are not valid cp932
-/// (a lead byte cut off at the end of the field) become U+FFFD.
-pub fn decode_sjis_field(field: &[u8]) -> String {
-    let end = field.iter().position(|&b| b == 0).unwrap_or(field.len());
-    let (text, _, _) = SHIFT_JIS.decode(&field[..end]);
-    text.into_owned()
+/// Where a field ends with the first byte of a two-byte character MMD cut off (0x81–0x9F,
+/// 0xE0–0xFC), the decoded name ends with this character plus that byte: U+10FF81–U+10FFFC in
+/// Unicode's private-use plane 16, which no Shift-JIS text decodes to (cp932's user-defined
+/// characters land in U+E000–U+E757). [`encode_sjis`] writes it back as the byte, so a VMD
+/// that names a bone by a cut name reads and writes back byte for byte.
+pub const CUT_LEAD_BYTE_BASE: u32 = 0x10_FF00;
+
+fn is_lead_byte(b: u8) -> bool {
+    matches!(b, 0x81..=0x9F | 0xE0..=0xFC)
 }
 
-/// Encodes a name into Shift-JIS. `Err(c)`: the first character Shift-JIS cannot hold.
+/// Decodes a fixed-width Shift-JIS field up to its first NUL. A two-byte character cut off at
+/// the end becomes the marker described at [`CUT_LEAD_BYTE_BASE`]; other bytes that are not
+/// valid cp932 become U+FFFD.
+pub fn decode_sjis_field(field: &[u8]) -> String {
+    let end = field.iter().position(|&b| b == 0).unwrap_or(field.len());
+    let field = &field[..end];
+    let mut i = 0;
+    let mut cut = None;
+    while i < field.len() {
+        if is_lead_byte(field[i]) {
+            if i + 1 == field.len() {
+                cut = Some(field[i]);
+            }
+            i += 2;
+        } else {
+            i += 1;
+        }
+    }
+    match cut {
+        Some(b) => {
+            let (text, _, _) = SHIFT_JIS.decode(&field[..field.len() - 1]);
+            let mut s = text.into_owned();
+            s.extend(char::from_u32(CUT_LEAD_BYTE_BASE + u32::from(b)));
+            s
+        }
+        None => SHIFT_JIS.decode(field).0.into_owned(),
+    }
+}
+
+/// Encodes a name into Shift-JIS (a cut-character marker, see [`CUT_LEAD_BYTE_BASE`], as its
+/// byte). `Err(c)`: the first character Shift-JIS cannot hold.
 pub fn encode_sjis(name: &str) -> Result<Vec<u8>, char> {
+    let cut_byte = |c: char| {
+        let v = u32::from(c).wrapping_sub(CUT_LEAD_BYTE_BASE);
+        u8::try_from(v).ok().filter(|&b| is_lead_byte(b))
+    };
+    if name.chars().any(|c| cut_byte(c).is_some()) {
+        let mut out = Vec::new();
+        for c in name.chars() {
+            match cut_byte(c) {
+                Some(b) => out.push(b),
+                None => out.extend(encode_sjis(c.encode_utf8(&mut [0u8; 4]))?),
+            }
+        }
+        return Ok(out);
+    }
     let (bytes, _, had_errors) = SHIFT_JIS.encode(name);
     if had_errors {
         // Find the culprit, character by character, to name it.
@@ -60,7 +108,7 @@ pub fn decode_utf16le(bytes: &[u8]) -> String {
 
 /// Whether a name read from a VMD field of `width` bytes (15 for bones and morphs) names the
 /// model's `model_name`: equal, or equal to the model's name cut to `width` Shift-JIS bytes as
-/// MMD cuts it (byte-wise, so a cut two-byte character decodes to U+FFFD on both sides).
+/// MMD cuts it (byte-wise: a cut two-byte character decodes to the same marker on both sides).
 pub fn vmd_name_matches(vmd_name: &str, model_name: &str, width: usize) -> bool {
     if vmd_name == model_name {
         return true;
@@ -105,7 +153,9 @@ mod tests {
         let model = "右人指１先ＸＹＺ"; // 16 bytes in Shift-JIS
         let bytes = encode_sjis(model).unwrap();
         let cut = decode_sjis_field(&bytes[..15]);
-        assert!(cut.ends_with('\u{FFFD}'));
+        assert_eq!(cut.chars().last(), char::from_u32(CUT_LEAD_BYTE_BASE + u32::from(bytes[14])));
+        // It writes back as the same 15 bytes.
+        assert_eq!(encode_sjis(&cut).unwrap(), &bytes[..15]);
         assert!(vmd_name_matches(&cut, model, 15));
         assert!(vmd_name_matches(model, model, 15));
         assert!(!vmd_name_matches("右人指１", model, 15));
