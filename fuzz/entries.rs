@@ -6,7 +6,7 @@
 // Each libFuzzer target uses one of these.
 #![allow(dead_code)]
 
-use odori_core::import::{bvh, gltf, ImportOptions};
+use odori_core::import::{bvh, gltf, mmd_model, vmd, ImportOptions};
 use odori_core::music::{analyze, AnalysisOptions, RmsEnvelope};
 use odori_core::text::{parse, Lexicon};
 
@@ -70,4 +70,42 @@ pub fn text_parse(data: &[u8]) {
 /// blobs; every check of `project::file::open` on hostile input).
 pub fn project_open(data: &[u8]) {
     let _ = odori_core::project::file::open(data);
+}
+
+/// The VMD reader on the bytes; what reads is sampled on every track and, where the writer
+/// takes it (finite values, Shift-JIS names, curves within 0–127), written and read back to
+/// the same keys.
+pub fn import_vmd(data: &[u8]) {
+    let Ok(v) = vmd::read("fuzz.vmd", data) else { return };
+    for t in v.bone_tracks() {
+        let last = t.keys.last().map_or(0.0, |k| k.frame as f32);
+        for f in [-1.0, 0.0, 0.5 * last, last - 0.25, last + 1.0] {
+            let _ = t.sample(f);
+        }
+    }
+    if let Ok(bytes) = odori_core::export::vmd::write("fuzz.vmd", &v) {
+        let back = vmd::read("fuzz.vmd", &bytes).expect("a written VMD reads back");
+        assert_eq!(back.bone_keys, v.bone_keys, "bone keys changed in a write/read round trip");
+        assert_eq!(back.morph_keys, v.morph_keys, "morph keys changed in a write/read round trip");
+    }
+}
+
+/// The model reader (PMX or PMD, chosen by magic) on the bytes; a model that reads has every
+/// index in range (what the reader promises its consumers).
+pub fn import_pmx(data: &[u8]) {
+    let Ok(m) = mmd_model::read_model("fuzz.pmx", data) else { return };
+    let (nv, nb, nt, nm, nr) = (m.vertices.len(), m.bones.len(), m.textures.len(), m.materials.len(), m.rigid_bodies.len());
+    assert!(m.indices.iter().all(|&i| (i as usize) < nv));
+    assert!(m.vertices.iter().all(|v| v.skin.bones.iter().all(|&b| (b as usize) < nb.max(1))));
+    for b in &m.bones {
+        let refs = [b.parent, b.grant.map(|g| g.parent), b.ik.as_ref().map(|ik| ik.target)];
+        assert!(refs.iter().flatten().all(|&i| i < nb));
+        assert!(b.ik.iter().flat_map(|ik| &ik.links).all(|l| l.bone < nb));
+    }
+    for x in &m.materials {
+        assert!([x.texture, x.sphere].iter().flatten().all(|&t| t < nt));
+    }
+    assert!(m.rigid_bodies.iter().all(|r| r.bone.is_none_or(|b| b < nb)));
+    assert!(m.joints.iter().all(|j| j.rigid_a < nr && j.rigid_b < nr));
+    let _ = nm;
 }

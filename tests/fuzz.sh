@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Coverage-guided fuzzing of the core's input boundaries (cargo-fuzz / libFuzzer, nightly):
-#   tests/fuzz.sh SECS [TARGET...]   each target for SECS seconds (default: all four targets)
+#   tests/fuzz.sh SECS [TARGET...]   each target for SECS seconds (default: every target)
 # `./dev fuzz [SECS]` runs it long (default 600 s per target); `./dev test` runs it short.
 # The committed seeds (fuzz/corpus/<target>/) are read, never written: what libFuzzer finds is
 # kept in fuzz/corpus-work/<target>/ (not committed; it carries over between runs). A crash is
@@ -14,7 +14,7 @@ export PATH="$HOME/.cargo/bin:$PATH"
 secs=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(import_bvh import_gltf music_envelope text_parse project_open)
+[ ${#targets[@]} -gt 0 ] || targets=(import_bvh import_gltf music_envelope text_parse project_open import_vmd import_pmx)
 
 if [ "$secs" = 0 ]; then
   echo "fuzz: skipped (0 s asked); the corpus is replayed by 'cargo test --test fuzz_corpus'."

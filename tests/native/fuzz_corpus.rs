@@ -61,3 +61,13 @@ fn project_open_corpus() {
     entries::project_open(&golden);
 }
 
+
+#[test]
+fn import_vmd_corpus() {
+    replay("import_vmd", entries::import_vmd);
+}
+
+#[test]
+fn import_pmx_corpus() {
+    replay("import_pmx", entries::import_pmx);
+}

@@ -9,6 +9,7 @@
 
 pub mod bvh;
 pub mod gltf;
+pub mod vmd;
 pub mod vrma;
 
 use thiserror::Error;

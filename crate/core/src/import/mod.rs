@@ -13,6 +13,12 @@
 
 pub mod bvh;
 pub mod gltf;
+pub mod mmd_bytes;
+pub mod mmd_model;
+pub mod mmd_text;
+pub mod pmd;
+pub mod pmx;
+pub mod vmd;
 
 use std::sync::Arc;
 

@@ -12,7 +12,7 @@ mod motion;
 mod names;
 mod standard;
 
-pub use model::{PmdBoneRecord, PmdIkRecord};
+pub use model::{vmd_to_clip, MmdImportError, MmdImportReport};
 pub use motion::{bezier_ratio, BoneKeys, MmdClipOptions, MmdMotion, MotionSampler, VmdBoneKey, METRES_PER_MMD_UNIT};
 pub use names::english_alias;
 pub use standard::standard_rig;

@@ -1,58 +1,126 @@
-//! MMD rigs from model files' bone records: PMD's bones and IK list, read the way MMD and
-//! three.js r171's MMDLoader read them (left-handed positions converted, PMD's IK control
-//! weight × 4 as the per-step limit in radians, links named ひざ bend one way about +X).
+//! MMD rigs from parsed models ([`MmdModel`], PMD or PMX), and a VMD's bone keys as an
+//! [`MmdMotion`]; [`vmd_to_clip`] poses a VMD on the model it names (or on the built-in standard
+//! skeleton) and returns the clip.
 //!
-//! PMD has no transform levels: the IK list order is carried as the IK bones' levels, so the
-//! chains solve in the file's order (つま先ＩＫ after 足ＩＫ) as MMD and three.js solve them. PMD's
-//! "rotation influenced" bone kinds (eyes, twist helpers) are not applied, as three.js does not.
+//! Read the way three.js r171's MMDLoader reads them: positions converted to right-handed; PMD
+//! links named ひざ bend one way about +X (three's `limitation`), PMX link limits converted
+//! (x and y negated and swapped, as three does); PMX transform levels and the after-physics flag
+//! give the deformation order. PMD has no levels: an IK bone below another IK bone (つま先ＩＫ under
+//! 足ＩＫ) is given a higher level so it solves after it, as MMD's IK list order does. PMD's
+//! "rotation influenced" bone kinds are not applied (three.js does not either).
 
 use glam::Vec3;
+use thiserror::Error;
 
-use super::{to_right_handed, AngleLimit, IkChain, IkLink, MmdBone, MmdRig, MmdRigError};
-
-/// One PMD bone record as a reader gives it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PmdBoneRecord {
-    pub name: String,
-    pub parent: Option<usize>,
-    /// Model-space position in the file's (left-handed) frame.
-    pub position: Vec3,
-}
-
-/// One PMD IK record.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PmdIkRecord {
-    /// The IK bone (its position is the target; 足ＩＫ).
-    pub ik_bone: usize,
-    /// The bone brought to the target (足首).
-    pub effector: usize,
-    pub iterations: u16,
-    /// PMD's control weight; MMD's per-step limit is 4 × this, radians.
-    pub control_weight: f32,
-    /// Links from the effector's parent upward.
-    pub links: Vec<usize>,
-}
+use super::{standard_rig, to_right_handed, AngleLimit, BoneKeys, Grant, IkChain, IkLink, MmdBone, MmdClipOptions, MmdMotion, MmdRig, MmdRigError, VmdBoneKey};
+use crate::clip::Clip;
+use crate::import::mmd_model::{bone_flags, MmdModel, ModelFormat};
+use crate::import::vmd::Vmd;
 
 impl MmdRig {
-    /// The rig of a PMD model's bones and IK list.
-    pub fn from_pmd_records(name: impl Into<String>, bones: &[PmdBoneRecord], iks: &[PmdIkRecord]) -> Result<MmdRig, MmdRigError> {
-        let n = bones.len();
-        let mut out: Vec<MmdBone> = bones.iter().map(|b| MmdBone::new(b.name.clone(), b.parent, to_right_handed(b.position))).collect();
-        for (order, ik) in iks.iter().enumerate() {
-            for (role, index) in [("IK bone", ik.ik_bone), ("effector", ik.effector)].into_iter().chain(ik.links.iter().map(|&l| ("link", l))) {
-                if index >= n {
-                    return Err(MmdRigError::IkBoneOutOfRange { bone: ik.ik_bone, name: format!("IK {order}"), role, index, count: n });
+    /// The rig of a parsed PMD/PMX model's bones.
+    pub fn from_model(model: &MmdModel) -> Result<MmdRig, MmdRigError> {
+        let n = model.bones.len();
+        let pmd = model.format == ModelFormat::Pmd;
+        let mut bones = Vec::with_capacity(n);
+        for b in &model.bones {
+            let mut bone = MmdBone::new(b.name.clone(), b.parent, to_right_handed(b.position));
+            bone.deform_level = b.layer;
+            bone.after_physics = b.has(bone_flags::AFTER_PHYSICS);
+            bone.fixed_axis = b.fixed_axis.map(to_right_handed);
+            bone.grant = b.grant.map(|g| Grant { parent: g.parent, ratio: g.ratio, rotate: g.rotation, translate: g.translation, local: g.local });
+            if let Some(ik) = &b.ik {
+                let mut links = Vec::with_capacity(ik.links.len());
+                for l in &ik.links {
+                    let named_knee = model.bones.get(l.bone).is_some_and(|lb| lb.name.contains("ひざ"));
+                    let limit = if pmd {
+                        named_knee.then_some(AngleLimit::KneeX)
+                    } else {
+                        l.limits.map(|(lo, hi)| AngleLimit::Euler { min_rad: Vec3::new(-hi.x, -hi.y, lo.z), max_rad: Vec3::new(-lo.x, -lo.y, hi.z) })
+                    };
+                    links.push(IkLink { bone: l.bone, limit });
                 }
+                bone.ik = Some(IkChain { effector: ik.target, loop_count: ik.loop_count, limit_angle_rad: ik.limit_angle_rad, links });
             }
-            let links = ik
-                .links
-                .iter()
-                .map(|&l| IkLink { bone: l, limit: bones[l].name.contains("ひざ").then_some(AngleLimit::KneeX) })
-                .collect();
-            let b = &mut out[ik.ik_bone];
-            b.ik = Some(IkChain { effector: ik.effector, loop_count: ik.iterations as u32, limit_angle_rad: ik.control_weight * 4.0, links });
-            b.deform_level = order as i32 + 1;
+            bones.push(bone);
         }
-        MmdRig::new(name, out)
+        if pmd {
+            // IK bones after the plain bones, each after the IK bones above it.
+            let levels: Vec<i32> = (0..n)
+                .map(|i| {
+                    if bones[i].ik.is_none() {
+                        return 0;
+                    }
+                    let (mut k, mut level, mut steps) = (bones[i].parent, 1, 0);
+                    while let Some(p) = k.filter(|&p| p < n && steps <= n) {
+                        if bones[p].ik.is_some() {
+                            level += 1;
+                        }
+                        steps += 1;
+                        k = bones[p].parent;
+                    }
+                    level
+                })
+                .collect();
+            for (b, l) in bones.iter_mut().zip(levels) {
+                b.deform_level = l;
+            }
+        }
+        MmdRig::new(model.name.clone(), bones)
     }
+}
+
+impl MmdMotion {
+    /// The bone keys of a parsed VMD, grouped by bone in file order.
+    pub fn from_vmd(vmd: &Vmd) -> MmdMotion {
+        let mut bones: Vec<BoneKeys> = Vec::new();
+        let mut index = std::collections::HashMap::new();
+        for k in &vmd.bone_keys {
+            let at = *index.entry(k.name.as_str()).or_insert_with(|| {
+                bones.push(BoneKeys { bone: k.name.clone(), keys: Vec::new() });
+                bones.len() - 1
+            });
+            let c = [k.curves.x, k.curves.y, k.curves.z, k.curves.rotation].map(|b| [b.x1, b.y1, b.x2, b.y2]);
+            bones[at].keys.push(VmdBoneKey { frame: k.frame, translation: k.translation, rotation: k.rotation, curves: c });
+        }
+        MmdMotion { model_name: vmd.model_name.clone(), bones }
+    }
+}
+
+#[derive(Debug, Error, PartialEq)]
+pub enum MmdImportError {
+    #[error("{file}: model '{model}': {source}")]
+    Rig { file: String, model: String, source: MmdRigError },
+    #[error("{file}: the motion has no bone keys")]
+    NoBoneKeys { file: String },
+}
+
+/// Which rig a VMD was posed on, and how well its names matched.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MmdImportReport {
+    /// The model's name, or "standard" for the built-in skeleton.
+    pub rig: String,
+    /// The VMD names a model and that model was given.
+    pub header_matched: bool,
+    /// Keyed bone names the rig lacks (their keys are ignored).
+    pub unmatched_bones: Vec<String>,
+}
+
+/// Poses a VMD's bone keys into a clip: on the given model whose name the VMD header names,
+/// else on the first model given, else on the built-in standard skeleton.
+pub fn vmd_to_clip(file: &str, vmd: &Vmd, models: &[MmdModel]) -> Result<(Clip, MmdImportReport), MmdImportError> {
+    let motion = MmdMotion::from_vmd(vmd);
+    if motion.bones.is_empty() {
+        return Err(MmdImportError::NoBoneKeys { file: file.into() });
+    }
+    let named = models.iter().find(|m| !vmd.model_name.is_empty() && m.name == vmd.model_name);
+    let rig = match named.or(models.first()) {
+        Some(m) => MmdRig::from_model(m).map_err(|source| MmdImportError::Rig { file: file.into(), model: m.name.clone(), source })?,
+        None => standard_rig(),
+    };
+    let name = crate::import::stem(file).to_string();
+    let opts = MmdClipOptions { name, source: file.into(), ..Default::default() };
+    let clip = rig.motion_to_clip(&motion, &opts).map_err(|source| MmdImportError::Rig { file: file.into(), model: rig.name.clone(), source })?;
+    let report = MmdImportReport { rig: rig.name.clone(), header_matched: named.is_some(), unmatched_bones: motion.unmatched_bones(&rig) };
+    Ok((clip, report))
 }
