@@ -252,3 +252,39 @@ fn vmd_import_picks_the_model_the_header_names() {
     empty.bone_keys.clear();
     assert!(matches!(vmd_to_clip("x.vmd", &empty, &[]), Err(odori_core::mmd::MmdImportError::NoBoneKeys { .. })));
 }
+
+/// The acceptance check, natively: world positions of センター, 頭, both 手首, 足首 and つま先 at 20
+/// frames of WAVEFILE on miku_v2, against three.js r171's MMDLoader + MMDAnimationHelper (physics
+/// off) as recorded by tests/tools/mmd_three_reference.mjs into tests/golden/mmd/. Pass: within
+/// 1 cm per metre of model height (0.2 units for a ~20-unit model).
+#[test]
+fn wavefile_on_miku_agrees_with_three_js() {
+    let golden: serde_json::Value = serde_json::from_str(include_str!("../golden/mmd/three_wavefile_miku.json")).expect("golden JSON");
+    let (rig, _) = miku();
+    let dance = motion("mmd/motion/wavefile_v2.vmd");
+    let mut sampler = MotionSampler::new(&rig, &dance);
+    let mut pose = MmdPose::default();
+    let rest = rig.rest_pose();
+    let height = rest.world_positions.iter().map(|p| p.y).fold(f32::MIN, f32::max) - rest.world_positions.iter().map(|p| p.y).fold(f32::MAX, f32::min);
+    let tolerance = 0.01 * height;
+    let frames = golden["frames"].as_array().expect("frames");
+    assert_eq!(frames.len(), 20);
+    let mut worst = (0.0f32, String::new());
+    let mut sum = 0.0;
+    let mut count = 0;
+    for fr in frames {
+        let f = fr["frame"].as_f64().expect("frame") as f32;
+        sampler.pose_at(f, &mut pose).unwrap();
+        for (name, p) in fr["positions"].as_object().expect("positions") {
+            let v: Vec<f32> = p.as_array().expect("xyz").iter().map(|x| x.as_f64().unwrap_or(f64::NAN) as f32).collect();
+            let d = (pose.world_positions[bone(&rig, name)] - glam::Vec3::new(v[0], v[1], v[2])).length();
+            sum += d;
+            count += 1;
+            if d > worst.0 {
+                worst = (d, format!("{name} at frame {f}"));
+            }
+        }
+    }
+    eprintln!("WAVEFILE on miku vs three.js r171: {count} positions, mean {:.4} units, worst {:.4} units ({}); tolerance {tolerance:.3} units (1% of {height:.1})", sum / count as f32, worst.0, worst.1);
+    assert!(worst.0 < tolerance, "{} is {:.3} units from three.js's (tolerance {tolerance:.3})", worst.1, worst.0);
+}
