@@ -5,14 +5,15 @@
 // it is not a project dependency:
 //   (cd /tmp && npm pack three@0.171.0 && mkdir -p three && tar xzf three-0.171.0.tgz -C three)
 //   node tests/tools/mmd_three_reference.mjs ../shared/data /tmp/three/package > tests/golden/mmd/three_wavefile_miku.json
-// (frame 2809, the clip's very end, is left out: three's mixer loops there and shows frame 0.)
+// Another pair: append MODEL MOTION (paths under DATA_DIR), e.g. mmd/gene/Gene_light.pmx mmd/motion/tokino_kakera.vmd.
+// (the clip's very last frame is left out: three's mixer loops there and shows frame 0.)
 // Runs in Node: the loader's texture loads fail quietly against a stub document; bones need none.
 import fs from 'node:fs';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
 
-const [data, threeDir] = process.argv.slice(2);
-if (!data || !threeDir) throw new Error('usage: mmd_three_reference.mjs DATA_DIR THREE_PACKAGE_DIR');
+const [data, threeDir, modelRel = 'mmd/miku_v2/miku_v2.pmd', motionRel = 'mmd/motion/wavefile_v2.vmd'] = process.argv.slice(2);
+if (!data || !threeDir) throw new Error('usage: mmd_three_reference.mjs DATA_DIR THREE_PACKAGE_DIR [MODEL MOTION]');
 globalThis.document = { createElementNS: () => ({ addEventListener() {}, removeEventListener() {}, style: {}, setAttribute() {} }), createElement: () => ({ getContext: () => null, style: {} }) };
 globalThis.self = globalThis;
 const mod = (rel) => import(pathToFileURL(path.join(threeDir, rel)).href);
@@ -22,16 +23,18 @@ const { MMDAnimationHelper } = await mod('examples/jsm/animation/MMDAnimationHel
 const { MMDParser } = await mod('examples/jsm/libs/mmdparser.module.js');
 const buf = (p) => { const b = fs.readFileSync(p); return b.buffer.slice(b.byteOffset, b.byteOffset + b.byteLength); };
 const parser = new MMDParser.Parser();
-const pmd = parser.parsePmd(buf(`${data}/mmd/miku_v2/miku_v2.pmd`), true);
-const vmd = parser.parseVmd(buf(`${data}/mmd/motion/wavefile_v2.vmd`), true);
+const modelBytes = buf(`${data}/${modelRel}`);
+const pmd = modelRel.endsWith('.pmx') ? parser.parsePmx(modelBytes, true) : parser.parsePmd(modelBytes, true);
+const vmd = parser.parseVmd(buf(`${data}/${motionRel}`), true);
 const loader = new MMDLoader();
-const mesh = loader.meshBuilder.build(pmd, `${data}/mmd/miku_v2/`, () => {}, () => {});
+const mesh = loader.meshBuilder.build(pmd, `${data}/${path.dirname(modelRel)}/`, () => {}, () => {});
 const clip = loader.animationBuilder.build(vmd, mesh);
 const helper = new MMDAnimationHelper({ afterglow: 0 });
 helper.add(mesh, { animation: clip, physics: false });
 const names = ['センター', '頭', '左手首', '右手首', '左足首', '右足首', '左つま先', '右つま先'];
-const frames = Array.from({ length: 20 }, (_, k) => Math.round((k * 2808) / 19));
-const out = { model: 'miku_v2.pmd', motion: 'wavefile_v2.vmd', three: THREE.REVISION, frames: [] };
+const last = Math.max(...vmd.motions.map((m) => m.frameNum)) - 1;
+const frames = Array.from({ length: 20 }, (_, k) => Math.round((k * last) / 19));
+const out = { model: path.basename(modelRel), motion: path.basename(motionRel), three: THREE.REVISION, frames: [] };
 let t = 0;
 for (const f of frames) {
   helper.update(f / 30 - t);
@@ -39,7 +42,9 @@ for (const f of frames) {
   mesh.updateMatrixWorld(true);
   const positions = {};
   for (const n of names) {
-    const v = mesh.skeleton.getBoneByName(n).getWorldPosition(new THREE.Vector3());
+    const bone = mesh.skeleton.getBoneByName(n);
+    if (!bone) continue; // a model without this bone (Gene's toes are 足先)
+    const v = bone.getWorldPosition(new THREE.Vector3());
     positions[n] = [v.x, v.y, v.z].map((x) => Math.round(x * 1e4) / 1e4);
   }
   out.frames.push({ frame: f, positions });
