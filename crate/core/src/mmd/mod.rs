@@ -104,6 +104,8 @@ pub enum MmdRigError {
     IkBoneOutOfRange { bone: usize, name: String, role: &'static str, index: usize, count: usize },
     #[error("IK bone {bone} '{name}': link {link} (bone {link_bone}) is not an ancestor of the effector {effector} and the links before it")]
     IkChainBroken { bone: usize, name: String, link: usize, link_bone: usize, effector: usize },
+    #[error("motion runs to frame {last_frame}: more than the {max_frames} frames (one hour at 30 fps) a clip may have")]
+    TooLong { last_frame: u32, max_frames: usize },
     #[error("pose has {got} {what} for a rig of {bones} bones")]
     PoseLength { what: &'static str, got: usize, bones: usize },
 }
@@ -655,6 +657,9 @@ mod tests {
             ],
         };
         assert_eq!(motion.unmatched_bones(&rig), vec!["存在しない".to_string()]);
+        let mut far = motion.clone();
+        far.bones[0].keys.push(key(u32::MAX, Vec3::ZERO, Quat::IDENTITY));
+        assert!(matches!(rig.motion_to_clip(&far, &MmdClipOptions::default()), Err(MmdRigError::TooLong { .. })));
         let clip = rig.motion_to_clip(&motion, &MmdClipOptions::default()).unwrap();
         clip.validate().unwrap();
         assert_eq!(clip.frame_count(), 31);

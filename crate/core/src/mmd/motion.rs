@@ -14,6 +14,10 @@ use super::{quat_to_right_handed, to_right_handed, MmdPose, MmdRig, MmdRigError}
 use crate::clip::{Clip, TranslationTrack};
 use crate::skeleton::{Joint, Skeleton};
 
+/// The longest motion turned into a clip: one hour at 30 fps (a key at frame 4 billion must
+/// not become a 4-billion-frame allocation).
+pub const MAX_CLIP_FRAMES: usize = 30 * 60 * 60;
+
 /// MMD's usual scale: one unit is 8 cm (a ~20-unit model is 1.6 m tall).
 pub const METRES_PER_MMD_UNIT: f32 = 0.08;
 
@@ -258,6 +262,9 @@ impl MmdRig {
         let (skeleton, rig_index) = self.deform_skeleton(opts.metres_per_unit);
         let joints = skeleton.len();
         let frames = motion.last_frame() as usize + 1;
+        if frames > MAX_CLIP_FRAMES {
+            return Err(MmdRigError::TooLong { last_frame: motion.last_frame(), max_frames: MAX_CLIP_FRAMES });
+        }
         let mut sampler = MotionSampler::new(self, motion);
         let mut pose = MmdPose::default();
         let mut rotations = Vec::with_capacity(frames * joints);
