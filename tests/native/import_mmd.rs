@@ -487,3 +487,28 @@ fn synthetic_models_read_every_section() {
     assert_eq!((v.camera_keys.len(), v.light_keys.len(), v.self_shadow_keys.len(), v.property_keys.len()), (1, 1, 1, 1));
     assert_eq!(v.property_keys[0].ik, [("左足ＩＫ".to_string(), false), ("右足ＩＫ".to_string(), true)]);
 }
+
+/// Indices out of range in a PMX: a face naming vertex 9 of 4, a material naming texture 7 of
+/// 2; each refused with where it is and what it names.
+#[test]
+fn pmx_indices_out_of_range_are_named() {
+    let bytes = seed("import_pmx/pmx20_utf16.pmx");
+    // The face list: count 6, then 0 1 2 1 3 2 as u16.
+    let faces: Vec<u8> = [6u32.to_le_bytes().to_vec(), [0u16, 1, 2, 1, 3, 2].iter().flat_map(|v| v.to_le_bytes()).collect()].concat();
+    let at = bytes.windows(faces.len()).position(|w| w == faces.as_slice()).expect("face list in the seed") + 4;
+    let mut b = bytes.clone();
+    b[at..at + 2].copy_from_slice(&9u16.to_le_bytes());
+    match expect_model_err("faces.pmx", &b) {
+        MmdError::IndexOutOfRange { section: "face index", entry: 0, what: "vertex", index: 9, count: 4, .. } => {}
+        e => panic!("{e:?}"),
+    }
+    // Material 0's texture index (1 byte, 0) follows its edge colour (0, 0, 0, 1) and size 1.
+    let edge: Vec<u8> = [0f32, 0.0, 0.0, 1.0, 1.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let at = bytes.windows(edge.len()).position(|w| w == edge.as_slice()).expect("material edge in the seed") + edge.len();
+    let mut b = bytes.clone();
+    b[at] = 7;
+    match expect_model_err("texture.pmx", &b) {
+        MmdError::IndexOutOfRange { section: "material", entry: 0, what: "texture", index: 7, count: 2, .. } => {}
+        e => panic!("{e:?}"),
+    }
+}
