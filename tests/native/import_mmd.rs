@@ -514,7 +514,7 @@ fn pmx_indices_out_of_range_are_named() {
 }
 
 /// The 40 gesture motions made for Gene: each reads, round-trips through the writer, and keys
-/// only bones Gene_light has. (Their morph keys name 65 morphs of the full Gene that the light
+/// only bones Gene_light has. (Their morph keys name 64 morphs of the full Gene that the light
 /// model lacks, e.g. ボトムス形状 and the 総合/色 expression sets: printed, not asserted.)
 #[test]
 fn gene_gesture_vmds_read_round_trip_and_key_genes_bones() {
