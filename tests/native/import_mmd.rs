@@ -487,3 +487,65 @@ fn synthetic_models_read_every_section() {
     assert_eq!((v.camera_keys.len(), v.light_keys.len(), v.self_shadow_keys.len(), v.property_keys.len()), (1, 1, 1, 1));
     assert_eq!(v.property_keys[0].ik, [("左足ＩＫ".to_string(), false), ("右足ＩＫ".to_string(), true)]);
 }
+
+/// Indices out of range in a PMX: a face naming vertex 9 of 4, a material naming texture 7 of
+/// 2; each refused with where it is and what it names.
+#[test]
+fn pmx_indices_out_of_range_are_named() {
+    let bytes = seed("import_pmx/pmx20_utf16.pmx");
+    // The face list: count 6, then 0 1 2 1 3 2 as u16.
+    let faces: Vec<u8> = [6u32.to_le_bytes().to_vec(), [0u16, 1, 2, 1, 3, 2].iter().flat_map(|v| v.to_le_bytes()).collect()].concat();
+    let at = bytes.windows(faces.len()).position(|w| w == faces.as_slice()).expect("face list in the seed") + 4;
+    let mut b = bytes.clone();
+    b[at..at + 2].copy_from_slice(&9u16.to_le_bytes());
+    match expect_model_err("faces.pmx", &b) {
+        MmdError::IndexOutOfRange { section: "face index", entry: 0, what: "vertex", index: 9, count: 4, .. } => {}
+        e => panic!("{e:?}"),
+    }
+    // Material 0's texture index (1 byte, 0) follows its edge colour (0, 0, 0, 1) and size 1.
+    let edge: Vec<u8> = [0f32, 0.0, 0.0, 1.0, 1.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let at = bytes.windows(edge.len()).position(|w| w == edge.as_slice()).expect("material edge in the seed") + edge.len();
+    let mut b = bytes.clone();
+    b[at] = 7;
+    match expect_model_err("texture.pmx", &b) {
+        MmdError::IndexOutOfRange { section: "material", entry: 0, what: "texture", index: 7, count: 2, .. } => {}
+        e => panic!("{e:?}"),
+    }
+}
+
+/// The 40 gesture motions made for Gene: each reads, round-trips through the writer, and keys
+/// only bones Gene_light has. (Their morph keys name 64 morphs of the full Gene that the light
+/// model lacks, e.g. ボトムス形状 and the 総合/色 expression sets: printed, not asserted.)
+#[test]
+fn gene_gesture_vmds_read_round_trip_and_key_genes_bones() {
+    let gene = model(GENE);
+    let dir = odori_tests::data_dir().join("mmd/gene/motion");
+    let mut files: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|x| x == "vmd")).collect();
+    files.sort();
+    assert_eq!(files.len(), 40, "{}", dir.display());
+    let bones: Vec<&str> = gene.bones.iter().map(|b| b.name.as_str()).collect();
+    let morphs: Vec<&str> = gene.morphs.iter().map(|m| m.name.as_str()).collect();
+    let named = |name: &str, names: &[&str]| names.iter().any(|n| odori_core::import::mmd_text::vmd_name_matches(name, n, 15));
+    let (mut missing_bones, mut missing_morphs) = (std::collections::BTreeSet::new(), std::collections::BTreeSet::new());
+    for p in &files {
+        let rel = p.file_name().unwrap().to_string_lossy().to_string();
+        let v = vmd::read(&rel, &std::fs::read(p).unwrap()).unwrap_or_else(|e| panic!("{e}"));
+        // Some are facial expressions only (morph keys, no bone keys). SOURCE.txt says ≤ 300
+        // frames each; 09_unexpected.vmd runs to frame 315.
+        assert!(v.bone_keys.len() + v.morph_keys.len() > 0 && v.last_frame() <= 320, "{rel}: {} + {} keys to frame {}", v.bone_keys.len(), v.morph_keys.len(), v.last_frame());
+        let back = vmd::read("w.vmd", &odori_core::export::vmd::write(&rel, &v).unwrap()).unwrap();
+        assert_eq!((back.bone_keys == v.bone_keys, back.morph_keys == v.morph_keys), (true, true), "{rel}");
+        for t in v.bone_tracks() {
+            if !named(&t.name, &bones) {
+                missing_bones.insert(t.name.clone());
+            }
+        }
+        for k in &v.morph_keys {
+            if !named(&k.name, &morphs) {
+                missing_morphs.insert(k.name.clone());
+            }
+        }
+    }
+    println!("bones not in Gene_light: {missing_bones:?}\nmorphs not in Gene_light: {missing_morphs:?}");
+    assert!(missing_bones.is_empty());
+}

@@ -362,7 +362,8 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<MmdModel, MmdError> {
         let n = r.count(CountWidth::U32, RIGID_BYTES)?;
         model.rigid_bodies.reserve_exact(n);
         for e in 0..n {
-            let name = r.sjis(20)?;
+            // Some files pad these names with a newline (miku_v2's rigid bodies start with one).
+            let name = r.sjis(20)?.trim().to_string();
             let bone_raw = r.u16()?;
             let bone = if bone_raw == NONE16 { None } else { Some(check_index(file, "rigid body", e, "bone", i64::from(bone_raw), n_bones)?) };
             let group = r.u8()?;
@@ -404,7 +405,7 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<MmdModel, MmdError> {
         let n_rigid = model.rigid_bodies.len();
         model.joints.reserve_exact(n);
         for e in 0..n {
-            let name = r.sjis(20)?;
+            let name = r.sjis(20)?.trim().to_string();
             let rigid_a = check_index(file, "joint", e, "rigid body A", i64::from(r.u32()?), n_rigid)?;
             let rigid_b = check_index(file, "joint", e, "rigid body B", i64::from(r.u32()?), n_rigid)?;
             model.joints.push(MmdJoint {

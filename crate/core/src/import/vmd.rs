@@ -370,10 +370,15 @@ impl BoneTrack {
         if frame >= last.frame as f32 {
             return (last.translation, last.rotation);
         }
-        // The first key after `frame`; it exists and is not the first key (checked above).
+        // The first key after `frame`: not the first key and not past the last for keys
+        // sorted by frame as `bone_tracks` makes them (for a hand-made unsorted track, the
+        // nearest end holds rather than a panic).
         let i = keys.partition_point(|k| k.frame as f32 <= frame);
-        let (a, b) = (&keys[i - 1], &keys[i]);
-        let x = (frame - a.frame as f32) / (b.frame - a.frame) as f32;
+        let (Some(a), Some(b)) = (i.checked_sub(1).and_then(|j| keys.get(j)), keys.get(i)) else {
+            return (last.translation, last.rotation);
+        };
+        let span = b.frame as f32 - a.frame as f32;
+        let x = if span > 0.0 { (frame - a.frame as f32) / span } else { 1.0 };
         let c = &b.curves;
         let t = Vec3::new(
             a.translation.x + (b.translation.x - a.translation.x) * c.x.ease(x),
@@ -508,6 +513,17 @@ mod tests {
         assert!((t.x - 0.2).abs() < 1e-6 && (t.z - 0.2).abs() < 1e-6);
         assert!((t.y - ease.ease(0.2)).abs() < 1e-6 && t.y < 0.05);
         assert!((q.angle_between(Quat::IDENTITY) - ease.ease(0.2)).abs() < 1e-4);
+    }
+
+    #[test]
+    fn unsorted_hand_made_tracks_do_not_panic() {
+        let tr = BoneTrack {
+            name: "x".into(),
+            keys: vec![key(20, Vec3::X, Quat::IDENTITY, BoneCurves::default()), key(0, Vec3::Y, Quat::IDENTITY, BoneCurves::default()), key(30, Vec3::Z, Quat::IDENTITY, BoneCurves::default())],
+        };
+        for f in [-1.0, 5.0, 25.0, 40.0] {
+            let _ = tr.sample(f);
+        }
     }
 
     #[test]
