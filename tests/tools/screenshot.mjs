@@ -2,7 +2,10 @@
 // (the browser tests' flags and server, tests/browser/harness.mjs) on the demo song, a dance
 // generated, one bar's six candidates shown side by side. Not a test.
 // Run after `./dev build`: node tests/tools/screenshot.mjs [webgl2|webgpu] [out.png]
-import { statSync } from "node:fs";
+// The PNG (about 160 KB) is then quantised by Debian's pngquant when it is installed
+// (`apt-get install pngquant`; about 55 KB), to keep the repository's picture small.
+import { statSync, renameSync } from "node:fs";
+import { spawnSync } from "node:child_process";
 import { join } from "node:path";
 import { startServer, launch, openApp, root } from "../browser/harness.mjs";
 
@@ -25,6 +28,9 @@ try {
   await page.waitForTimeout(1500);
   await page.screenshot({ path: out });
   console.log(`${out}: ${statSync(out).size} bytes (${backend})`);
+  const q = spawnSync("pngquant", ["--force", "--strip", "--quality=70-90", "--output", `${out}.q`, out], { stdio: "inherit" });
+  if (q.error || q.status !== 0) console.log("pngquant not available or failed: the PNG is kept as taken");
+  else { renameSync(`${out}.q`, out); console.log(`quantised by pngquant: ${statSync(out).size} bytes`); }
 } catch (e) {
   console.error(logs.join("\n"));
   throw e;
