@@ -10,24 +10,21 @@
 //    song, and on a song file), for which the player fetches the full engine.
 // Not a test. Run after `./dev build`: node tests/bench/embed.mjs [runs]
 import { readFileSync, statSync } from "node:fs";
-import { gzipSync } from "node:zlib";
 import { join, extname } from "node:path";
 import { root, data, launch } from "../browser/harness.mjs";
+import { bundleSizes, size } from "./bundle-sizes.mjs";
 
 const RUNS = Number(process.argv[2] || 5);
 const MV = join(root, "node_modules", "@google", "model-viewer", "dist", "model-viewer.min.js");
 const mvVersion = JSON.parse(readFileSync(join(root, "node_modules", "@google", "model-viewer", "package.json"), "utf8")).version;
 
-function size(files) {
-  const bufs = files.map((f) => readFileSync(f));
-  return { raw: bufs.reduce((s, b) => s + b.length, 0), gzip: bufs.reduce((s, b) => s + gzipSync(b, { level: 9 }).length, 0) };
-}
-const kb = (n) => `${(n / 1024).toFixed(0)} KB`;
-const mb = (n) => `${(n / 1048576).toFixed(2)} MB`;
+const kb = (n) => `${(n / 1024).toFixed(0)} KiB`;
+const mb = (n) => `${(n / 1048576).toFixed(2)} MiB`;
 
+const built = bundleSizes(join(root, "pkg"));
 const sizes = {
-  "odori player (odori/player)": size(["player/odori-player.js", "player/odori_player.js", "player/odori_player_bg.wasm"].map((f) => join(root, "pkg", f))),
-  "odori full engine (odori)": size(["odori.js", "odori_bg.wasm"].map((f) => join(root, "pkg", f))),
+  "odori player (odori/player)": built.player,
+  "odori full engine (odori)": built.full,
   [`model-viewer ${mvVersion}`]: size([MV]),
 };
 console.log("bundle sizes (wasm + JS):");

@@ -3,7 +3,7 @@
 #   tests/wasm_bench/run.sh          the web build's settings (wasm-pack.toml's rustflags)
 #   tests/wasm_bench/run.sh --both   also without them, to compare
 # Uses the active rustc's wasm32 std when it has one; otherwise Debian's rustc-web builds std
-# from source (as crate/xtask does; see README "The two commands").
+# from source (as crate/xtask does; see docs/architecture.md, "The build").
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
