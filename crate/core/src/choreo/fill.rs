@@ -137,10 +137,10 @@ pub struct FillWeights {
     /// already within it is filled as without it. Default true.
     #[serde(default = "yes")]
     pub follow_skate: bool,
-    /// Keep every join of the dance within [`super::document::JOIN_JUMP_GOAL`] (spec §J's join
+    /// Keep every join of the dance within [`super::quality::JOIN_JUMP_GOAL`] (spec §J's join
     /// jump): when the dance, rendered and measured ([`super::dance_figures`]), has a join above
     /// it, the move after its worst join is barred from that bar and the filling runs again, up
-    /// to [`super::document::JOIN_REPAIRS`] times; a refill is kept only when that join improves
+    /// to [`super::generate::JOIN_REPAIRS`] times; a refill is kept only when that join improves
     /// and the beat-rate band and skate goal the dance met still hold. A dance whose joins are
     /// within the goal is filled as without it (every 4/4 song of `choreo_quality`). Default
     /// true.

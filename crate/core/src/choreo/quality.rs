@@ -37,6 +37,11 @@ pub const JOIN_REACH_FRAMES: usize = 3;
 pub const JOIN_CLEAR_FRAMES: usize = 6;
 /// Frames both motions are time-normalised to by the perceptual distance (spec §J).
 pub const PERCEPTUAL_FRAMES: usize = 32;
+/// The largest join jump a generated dance should have (spec §J; the goal): joins no
+/// more abrupt than 1.5 times the sharpest moments (95th percentile) of the moves themselves.
+/// What Generate's join repair keeps to ([`super::GenerateOptions::join_jump_goal`]) and the
+/// rendered dance's held feet respect ([`super::render`]).
+pub const JOIN_JUMP_GOAL: f32 = 1.5;
 
 /// The feet joints foot skate watches: ankles and toes.
 const FOOT_JOINTS: [Canon; 4] = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];

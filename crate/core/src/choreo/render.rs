@@ -233,7 +233,7 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   ([`super::beat_rate_cost`]) than without: holding feet changes the kinetic speed curve
 ///   (§J) and may move a kinetic beat; nor if its feet slide more (§J's foot skate) than
 ///   without (a released foot catching up on the floor). And a join the holds make more abrupt than §J's goal
-///   (and than unheld, [`super::document::JOIN_JUMP_GOAL`]) takes the holds of the bars either
+///   (and than unheld, [`super::quality::JOIN_JUMP_GOAL`]) takes the holds of the bars either
 ///   side. Bars that fail are played unheld and the rest held again, up to
 ///   [`HOLD_RULE_ROUNDS`] times. Last, the whole dance keeps its holds only if its BAS-music on
 ///   its counts is still as far above that on the half-shifted counts, and its kinetic beats
@@ -318,7 +318,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
             }
             // A join the holds made more abrupt than the goal (and than unheld): neither bar
             // beside it keeps its holds.
-            if w.2 > u.2.max(super::document::JOIN_JUMP_GOAL) + 1e-4 {
+            if w.2 > u.2.max(super::quality::JOIN_JUMP_GOAL) + 1e-4 {
                 for a in [b.saturating_sub(1), b] {
                     dropped |= std::mem::replace(&mut keep[a], false);
                 }
