@@ -518,38 +518,6 @@ impl Choreography {
         Ok(())
     }
 
-    /// How much the objective may rise for a bar to take a segment whose feet slide less
-    /// ([`FillWeights::free_skate_slack`]), in 0..=10; 0 turns it off.
-    pub fn set_free_skate_slack(&mut self, slack: f32) -> Result<(), ChoreoError> {
-        if !(0.0..=10.0).contains(&slack) {
-            return Err(ChoreoError::BadSetting { name: "freeSkateSlack".into(), range: "0..=10".into(), value: slack });
-        }
-        self.record();
-        self.doc.settings.fill.free_skate_slack = slack;
-        Ok(())
-    }
-
-    /// Whether the filling keeps the dance's foot skate no worse than its source clips'
-    /// ([`FillWeights::follow_skate`]).
-    pub fn set_follow_skate(&mut self, on: bool) {
-        self.record();
-        self.doc.settings.fill.follow_skate = on;
-    }
-
-    /// Whether the filling keeps every join of the dance within [`JOIN_JUMP_GOAL`]
-    /// ([`FillWeights::follow_joins`]).
-    pub fn set_follow_joins(&mut self, on: bool) {
-        self.record();
-        self.doc.settings.fill.follow_joins = on;
-    }
-
-    /// Whether the filling keeps the dance's kinetic beat rate near the song's
-    /// ([`FillWeights::follow_beat_rate`]).
-    pub fn set_follow_beat_rate(&mut self, on: bool) {
-        self.record();
-        self.doc.settings.fill.follow_beat_rate = on;
-    }
-
     /// Repetition penalty of the filling, in 0..=100.
     pub fn set_repeat_penalty(&mut self, w: f32) -> Result<(), ChoreoError> {
         if !(0.0..=100.0).contains(&w) {
@@ -578,10 +546,17 @@ impl Choreography {
         TableScope::for_bar_counts(&bar_counts(lib, &self.doc.bars))
     }
 
-    /// Generate: fills every bar that is not pinned with the minimum-cost path of spec §G.
-    /// Pinned bars never change. With every bar pinned nothing changes (and nothing is
-    /// recorded for undo).
+    /// Generate: fills every bar that is not pinned by the pipeline of [`super::generate`] at
+    /// its default options. Pinned bars never change. With every bar pinned nothing changes
+    /// (and nothing is recorded for undo).
     pub fn generate(&mut self, lib: &SegmentLibrary) -> Result<GenerateReport, ChoreoError> {
+        self.generate_with(lib, &GenerateOptions::default())
+    }
+
+    /// [`Choreography::generate`] with the pipeline's stages set by `options` (benches and
+    /// tests turn a stage off to measure what it does); refused when an option is out of range.
+    pub fn generate_with(&mut self, lib: &SegmentLibrary, options: &GenerateOptions) -> Result<GenerateReport, ChoreoError> {
+        options.validate()?;
         if lib.is_empty() {
             return Err(ChoreoError::EmptyLibrary);
         }
@@ -605,7 +580,7 @@ impl Choreography {
             })
             .collect();
         let weights = self.doc.settings.fill;
-        let (path, cost) = generate::generate(lib, &self.doc.bars, &layers, weights, &GenerateOptions::from_weights(&weights))?;
+        let (path, cost) = generate::generate(lib, &self.doc.bars, &layers, weights, options)?;
         self.record();
         for (state, seg) in self.doc.states.iter_mut().zip(path) {
             if !matches!(state, BarState::Pinned { .. }) {
@@ -712,8 +687,7 @@ mod tests {
         assert!(f.join_jump_max <= JOIN_JUMP_GOAL, "{f:?}");
         assert!(f.worst_join_bar.is_some_and(|b| (1..bars.len()).contains(&b)), "{f:?}");
         let mut off = Choreography::new(bars).unwrap();
-        off.set_follow_joins(false);
-        off.generate(&lib).unwrap();
+        off.generate_with(&lib, &GenerateOptions { follow_joins: false, ..GenerateOptions::default() }).unwrap();
         assert_eq!(on.segments(), off.segments());
     }
 

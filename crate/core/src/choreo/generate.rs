@@ -21,7 +21,7 @@ use std::collections::BTreeSet;
 use std::sync::Arc;
 
 use super::fill::{
-    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, in_beat_rate_band, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
+    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
 };
 use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, JOIN_JUMP_GOAL, QUALITY_FPS};
 use super::render::{render, RenderOptions};
@@ -45,8 +45,8 @@ pub struct GenerateOptions {
     /// song).
     pub follow_beat_rate: bool,
     /// Stage 3, [`free_skate_stage`]: how much the objective may rise per bar to take a segment
-    /// whose feet slide less. Default [`super::FREE_SKATE_SLACK_DEFAULT`]; range 0..=1 (0:
-    /// stage off).
+    /// whose feet slide less. Default [`super::FREE_SKATE_SLACK_DEFAULT`]; range 0..=10
+    /// (0: stage off).
     pub free_skate_slack: f32,
     /// Stage 4, [`skate_stage`]: keep the dance's foot skate no worse than its source clips'.
     /// Default true.
@@ -62,23 +62,31 @@ pub struct GenerateOptions {
 
 impl Default for GenerateOptions {
     fn default() -> Self {
-        let w = FillWeights::default();
-        GenerateOptions::from_weights(&w)
+        GenerateOptions {
+            follow_beat_rate: true,
+            free_skate_slack: FREE_SKATE_SLACK_DEFAULT,
+            follow_skate: true,
+            follow_joins: true,
+            join_jump_goal: JOIN_JUMP_GOAL,
+            join_repairs: JOIN_REPAIRS,
+        }
     }
 }
 
 impl GenerateOptions {
-    /// The pipeline settings a document's [`FillWeights`] carry (the stages' switches and the
-    /// free-skate slack), with the join goal and repairs at their defaults.
-    pub fn from_weights(w: &FillWeights) -> Self {
-        GenerateOptions {
-            follow_beat_rate: w.follow_beat_rate,
-            free_skate_slack: w.free_skate_slack,
-            follow_skate: w.follow_skate,
-            follow_joins: w.follow_joins,
-            join_jump_goal: JOIN_JUMP_GOAL,
-            join_repairs: JOIN_REPAIRS,
+    /// Refused with the setting's name, range and value when a number is out of its range.
+    pub fn validate(&self) -> Result<(), super::ChoreoError> {
+        let bad = |name: &str, range: &str, value: f32| Err(super::ChoreoError::BadSetting { name: name.into(), range: range.into(), value });
+        if !(0.0..=10.0).contains(&self.free_skate_slack) {
+            return bad("freeSkateSlack", "0..=10", self.free_skate_slack);
         }
+        if !(0.0..=100.0).contains(&self.join_jump_goal) {
+            return bad("joinJumpGoal", "0..=100", self.join_jump_goal);
+        }
+        if self.join_repairs > 64 {
+            return bad("joinRepairs", "0..=64", self.join_repairs as f32);
+        }
+        Ok(())
     }
 }
 
@@ -168,6 +176,8 @@ pub struct Problem<'a> {
     beat_rate: Vec<Vec<f32>>,
     /// Whether stage 2 runs (its switch on, no fixed beat-rate weight, rates measured).
     follow_beat_rate: bool,
+    /// Stage 3's slack ([`GenerateOptions::free_skate_slack`]).
+    free_skate_slack: f32,
 }
 
 impl<'a> Problem<'a> {
@@ -196,7 +206,7 @@ impl<'a> Problem<'a> {
         };
         let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
         let follow_beat_rate = follow && !kinetic.is_empty();
-        Problem { lib, bars, layers, weights, table, intensity, node_cost, bar_counts, segment_counts, bar_bpm, segment_bpm, beat_rate, follow_beat_rate }
+        Problem { lib, bars, layers, weights, table, intensity, node_cost, bar_counts, segment_counts, bar_bpm, segment_bpm, beat_rate, follow_beat_rate, free_skate_slack: options.free_skate_slack }
     }
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
@@ -212,7 +222,7 @@ impl<'a> Problem<'a> {
     /// [`free_skate_pass`] over the problem with `weights` and `extra` costs.
     fn free_skate(&self, weights: &FillWeights, extra: &[Vec<f32>], path: &[usize]) -> (Vec<usize>, f32) {
         let excess = |t: usize, s: usize| self.skate_excess(t, s);
-        free_skate_pass(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(extra), weights, &excess, path)
+        free_skate_pass(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(extra), weights, self.free_skate_slack, &excess, path)
     }
 
     /// Segment `s`'s skate above its clip's as bar `t` plays it: its feet slide faster by the
@@ -375,7 +385,6 @@ pub fn generate(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: F
     let mut measured = Measured::default();
     let path = fill_stage(&p)?;
     let (path, weights) = beat_rate_stage(&p, path, &mut measured)?;
-    let weights = FillWeights { free_skate_slack: options.free_skate_slack, ..weights };
     let (path, cost) = free_skate_stage(&p, &weights, &path);
     let (path, cost) = if options.follow_skate { skate_stage(&p, &weights, path, cost, &mut measured)? } else { (path, cost) };
     if options.follow_joins {
@@ -471,15 +480,15 @@ mod tests {
         let path = fill_stage(&p).unwrap();
         let before = cost(&p, &p.weights, &path);
         // No slack: the path and its cost as they were.
-        let none = FillWeights { free_skate_slack: 0.0, ..p.weights };
-        let (same, c) = free_skate_stage(&p, &none, &path);
+        let none = Problem::new(&lib, &bars, &layers, FillWeights::default(), &GenerateOptions { free_skate_slack: 0.0, ..GenerateOptions::default() });
+        let (same, c) = free_skate_stage(&none, &none.weights, &path);
         assert_eq!(same, path);
         assert!((c - before).abs() < 1e-4);
         // A generous slack: each bar it changes slides less, and the objective rises by at most
         // the slack per bar changed.
         let slack = 0.5;
-        let loose = FillWeights { free_skate_slack: slack, ..p.weights };
-        let (q, c) = free_skate_stage(&p, &loose, &path);
+        let loose = Problem::new(&lib, &bars, &layers, FillWeights::default(), &GenerateOptions { free_skate_slack: slack, ..GenerateOptions::default() });
+        let (q, c) = free_skate_stage(&loose, &loose.weights, &path);
         let changed: Vec<usize> = (0..path.len()).filter(|&t| q[t] != path[t]).collect();
         for &t in &changed {
             assert!(p.skate_excess(t, q[t]) < p.skate_excess(t, path[t]), "bar {t} took a move that slides no less");
