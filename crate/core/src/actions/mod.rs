@@ -2,7 +2,7 @@
 //!
 //! The built-in library ([`ActionLibrary::builtin`]) holds the project's own procedural
 //! actions — walk, run, kick, jump, wave, clap, rejoice, gutsy pose, turn, bow, sit, stand,
-//! nod, point — authored as key poses on [`crate::builtin::canonical_skeleton`] with smooth
+//! nod, point — authored as key poses on [`crate::canon::builtin::canonical_skeleton`] with smooth
 //! interpolation, secondary motion and feet planted on the floor. Imported clips join the
 //! library with tags chosen by the person. The joins of spec §I live beside them: foot-ground
 //! contacts ([`contact`]), Connection and Transition with foot locking by two-bone IK
@@ -18,7 +18,7 @@ pub mod procedural;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::humanoid::Canon;
+use crate::canon::humanoid::Canon;
 
 pub use compose::{compose, ComposeOptions, CompositionReport, SwitchTimes};
 pub use contact::{detect_contacts, ContactEvent, ContactEventKind, Contacts, Foot};

@@ -622,7 +622,7 @@ mod tests {
     use crate::choreo::quality::JOIN_JUMP_GOAL;
     use crate::choreo::grid::bars_from_tempo;
     use crate::choreo::segment::LIBRARY_FPS;
-    use crate::humanoid::CANON_COUNT;
+    use crate::canon::humanoid::CANON_COUNT;
 
     #[test]
     fn a_bar_in_three_takes_a_three_count_segment_whose_counts_land_on_its_beats() {

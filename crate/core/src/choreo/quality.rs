@@ -17,10 +17,10 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::bars::Bar;
-use crate::builtin::canonical_skeleton;
+use crate::canon::builtin::canonical_skeleton;
 use crate::clip::Clip;
-use crate::humanoid::{canonical_positions, Canon, HumanoidMap, CANON_COUNT};
-use crate::normalize::{body_height, normalize_in_place, Origin};
+use crate::canon::humanoid::{canonical_positions, Canon, HumanoidMap, CANON_COUNT};
+use crate::canon::normalize::{body_height, normalize_in_place, Origin};
 
 /// Frame rate every measure works at (spec §J).
 pub const QUALITY_FPS: f32 = 30.0;

@@ -14,9 +14,9 @@ use serde::{Deserialize, Serialize};
 
 use super::segment::{SegmentLibrary, LIBRARY_FPS};
 use crate::bars::Bar;
-use crate::builtin::canonical_skeleton;
+use crate::canon::builtin::canonical_skeleton;
 use crate::clip::{Clip, TranslationTrack};
-use crate::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
+use crate::canon::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
 use crate::library::neutral_pose;
 
 /// How to render.
@@ -222,7 +222,7 @@ const HOLD_RULE_ROUNDS: usize = 4;
 /// source clip has planted (spec §J's contact band, and slow: the retargeting's rule) stays
 /// where it landed until the source lifts it, the leg reaching it by two-bone IK, and a
 /// released foot catches up with its free path at no more than 1 m/s
-/// ([`crate::character::hold_feet_in_dance`], the retargeting's kernel). Without it a planted
+/// ([`crate::canon::character::hold_feet_in_dance`], the retargeting's kernel). Without it a planted
 /// foot slides wherever the time warp speeds its source up, the placement moves it, or a join
 /// rewrites it.
 /// - Planted is read at the source's own pace: each frame's flags are those of the clip frame
@@ -239,7 +239,7 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   its counts is still as far above that on the half-shifted counts, and its kinetic beats
 ///   per count no further from the target, as unheld, and its feet slide no more in all.
 fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>]) -> (Clip, Holds) {
-    use crate::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
+    use crate::canon::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
     let frames = clip.frame_count();
     if frames < 3 || played.len() < frames {
         return (clip, Holds::default());
@@ -402,7 +402,7 @@ pub fn join_frames(bars: &[Bar], fps: f32) -> Vec<usize> {
 mod tests {
     use super::*;
     use crate::choreo::grid::bars_from_tempo;
-    use crate::humanoid::Canon;
+    use crate::canon::humanoid::Canon;
 
     /// A dance of built-in moves, bar i playing every 7th live segment, on bars at `bpm`: the
     /// warp plays each move faster or slower than recorded, and every bar after the first starts

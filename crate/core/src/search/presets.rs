@@ -4,8 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::humanoid::{Canon, CANON_COUNT};
-use crate::normalize::Origin;
+use crate::canon::humanoid::{Canon, CANON_COUNT};
+use crate::canon::normalize::Origin;
 
 /// The presets the UI offers. Each sets weight 1 on its joints and 0 elsewhere.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]

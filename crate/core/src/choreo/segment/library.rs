@@ -13,10 +13,10 @@ use super::tempo::{beat_fit, cut_beats, kinetic_per_count_by_rate};
 use super::types::{canonical_world_positions, intensity_weight, join_ends, ClipSummary, JoinEnds, LibraryClip, Recut, Segment};
 use super::{SegmentError, SegmentOptions, LIBRARY_FPS, SEGMENT_COUNTS, SEGMENT_METRES};
 use crate::clip::Clip;
-use crate::humanoid::{Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
+use crate::canon::humanoid::{Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
 use crate::library::{builtin_clips_lazily, builtin_moves, MoveInfo};
-use crate::normalize::{body_height, normalize_in_place, Origin};
-use crate::retarget::to_canonical;
+use crate::canon::normalize::{body_height, normalize_in_place, Origin};
+use crate::canon::retarget::to_canonical;
 
 /// The segments every choreography chooses from.
 #[derive(Debug, Default)]

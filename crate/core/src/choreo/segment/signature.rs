@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::super::eigen::Signature;
 use super::LIBRARY_FPS;
-use crate::humanoid::CANON_COUNT;
+use crate::canon::humanoid::CANON_COUNT;
 
 /// Eigen axes kept per signature.
 pub const SIGNATURE_AXES: usize = 5;

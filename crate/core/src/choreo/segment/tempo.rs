@@ -10,7 +10,7 @@ use super::super::quality::{bas_music, kinetic_beats_secs, QualityMotion, QUALIT
 use super::types::canonical_world_positions;
 use super::{SegmentOptions, LIBRARY_FPS};
 use crate::clip::Clip;
-use crate::humanoid::{Canon, CANON_COUNT};
+use crate::canon::humanoid::{Canon, CANON_COUNT};
 
 /// Overall joint speed per frame of a canonical clip (Σ over joints of world |ẋ|, m/s: a
 /// planted step and the end of a gesture both dip), lightly smoothed.

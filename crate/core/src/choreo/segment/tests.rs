@@ -7,8 +7,8 @@ use super::tempo::*;
 use super::types::*;
 use super::*;
 use super::super::eigen::Signature;
-use crate::humanoid::{Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
-use crate::normalize::{body_height, normalize_in_place, Origin};
+use crate::canon::humanoid::{Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
+use crate::canon::normalize::{body_height, normalize_in_place, Origin};
 use glam::Vec3;
 
 #[test]
@@ -162,7 +162,7 @@ fn kinetic_beats_per_count_follow_the_count_rate() {
     // minute; the turns 0.3 frame after the counts, off the resampling grid: an exactly
     // symmetric turn is a two-frame tie, no strict minimum): about one kinetic beat a count
     // at every rate, the first count included (the half count around it gives it a turn).
-    let rest = crate::builtin::canonical_skeleton().rest_positions();
+    let rest = crate::canon::builtin::canonical_skeleton().rest_positions();
     let frames = 240;
     let pos: Vec<Vec3> = (0..frames)
         .flat_map(|f| {

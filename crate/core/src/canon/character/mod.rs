@@ -45,12 +45,12 @@ use std::sync::Arc;
 use glam::{Quat, Vec3};
 use thiserror::Error;
 
-use crate::builtin::canonical_skeleton;
+use crate::canon::builtin::canonical_skeleton;
 use crate::clip::{Clip, TranslationTrack};
-use crate::humanoid::{Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
+use crate::canon::humanoid::{Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
 use crate::import::{Imported, SkinnedMesh};
 use crate::motion;
-use crate::retarget::{is_canonical, to_canonical};
+use crate::canon::retarget::{is_canonical, to_canonical};
 use crate::skeleton::Skeleton;
 
 mod hold;
@@ -795,7 +795,7 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::demo_clip;
+    use crate::canon::builtin::demo_clip;
     use crate::library::body::builtin_body;
 
     #[test]

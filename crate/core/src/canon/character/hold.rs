@@ -9,12 +9,12 @@ use std::sync::Arc;
 use glam::{Quat, Vec3};
 
 use super::{Character, Leg, RetargetOptions, Transfer};
-use crate::builtin::canonical_skeleton;
+use crate::canon::builtin::canonical_skeleton;
 use crate::clip::Clip;
-use crate::humanoid::HumanoidMap;
+use crate::canon::humanoid::HumanoidMap;
 use crate::import::SkinnedMesh;
 use crate::motion;
-use crate::retarget::is_canonical;
+use crate::canon::retarget::is_canonical;
 
 /// Planted frames and release for [`Character::play`], from outside the source's own tracks.
 pub(super) struct GivenHolds {
