@@ -52,7 +52,7 @@ use std::time::Instant;
 
 use odori_core::bars::Bar;
 use odori_core::choreo::quality::{dance_quality, motion_quality, DanceQuality, QualityMotion};
-use odori_core::choreo::{Choreography, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::choreo::{Choreography, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
@@ -270,23 +270,26 @@ fn main() {
         if let Some(w) = std::env::var("ODORI_SKATE_WEIGHT").ok().and_then(|v| v.parse().ok()) {
             doc.set_skate_weight(w).expect("skate weight");
         }
+        // The pipeline's stages (GenerateOptions): the core takes options, the bench reads them
+        // from the environment.
+        let mut options = GenerateOptions::default();
         if let Some(w) = std::env::var("ODORI_FREE_SKATE_SLACK").ok().and_then(|v| v.parse().ok()) {
-            doc.set_free_skate_slack(w).expect("free skate slack");
+            options.free_skate_slack = w;
         }
         if std::env::var("ODORI_FOLLOW_SKATE").is_ok_and(|v| v == "0") {
-            doc.set_follow_skate(false);
+            options.follow_skate = false;
         }
         if std::env::var("ODORI_FOLLOW_JOINS").is_ok_and(|v| v == "0") {
-            doc.set_follow_joins(false);
+            options.follow_joins = false;
         }
         if std::env::var("ODORI_FOLLOW_BEAT_RATE").is_ok_and(|v| v == "0") {
-            doc.set_follow_beat_rate(false);
+            options.follow_beat_rate = false;
         }
         if let Some(w) = std::env::var("ODORI_BEAT_RATE_WEIGHT").ok().and_then(|v| v.parse().ok()) {
             doc.set_beat_rate_weight(w).expect("beat-rate weight");
         }
         let tg = Instant::now();
-        doc.generate(&lib).expect("generate");
+        doc.generate_with(&lib, &options).expect("generate");
         let generate_ms = tg.elapsed().as_secs_f64() * 1e3;
         let chosen = doc.segments();
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();

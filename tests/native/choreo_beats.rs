@@ -13,7 +13,7 @@
 //! ramp, three bars), and on two pieces in 3/4: the 150 BPM waltz (printed only while the
 //! library had 4-count moves alone: −0.020 against the half-shifted beats, beat rate 1.30) and
 //! a 108 BPM piece in 3 (meant as held out, but its first run failed the join goal, 5.66, and
-//! `FillWeights::follow_joins` was made on it), two more in 3 held out for that change (126 BPM,
+//! `GenerateOptions::follow_joins` was made on it), two more in 3 held out for that change (126 BPM,
 //! which failed it at 2.92, and a 96 → 120 BPM ramp, which passed), after which 3-count
 //! segments were cut on every count; and two held out for that (138 and 84 BPM; their check, the
 //! same goals, fixed before their first run).
@@ -25,7 +25,7 @@
 mod music_audio;
 
 use odori_core::choreo::quality::{dance_quality, motion_quality, DanceQuality, QualityMotion};
-use odori_core::choreo::{bar_counts, Choreography, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::choreo::{bar_counts, Choreography, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
@@ -128,10 +128,9 @@ fn generated_dances_follow_the_beat_on_every_real_song() {
             bars.len()
         );
         if grid.beats_per_bar == 3 {
-            // What the join repair (FillWeights::follow_joins) did: the same dance without it.
+            // What the join repair (GenerateOptions::follow_joins) did: the same dance without it.
             let mut plain = Choreography::new(bars.clone()).unwrap();
-            plain.set_follow_joins(false);
-            plain.generate(&lib).unwrap();
+            plain.generate_with(&lib, &GenerateOptions { follow_joins: false, ..GenerateOptions::default() }).unwrap();
             let off = q(&plain.segments());
             println!("  without the join repair: join jump max {:.2}, BAS-music {:.3}", off.join_jump_max, off.beats.bas_music);
             assert!(gen.join_jump_max <= off.join_jump_max, "{rel}: the join repair made the worst join worse");

@@ -7,26 +7,27 @@
 
 pub mod actions;
 pub mod bars;
-pub mod builtin;
-pub mod character;
+pub mod canon;
 pub mod choreo;
 pub mod clip;
 pub mod export;
 pub mod history;
-pub mod humanoid;
 pub mod import;
 pub mod library;
 pub mod mmd;
 pub mod motion;
 pub mod music;
-pub mod normalize;
 pub mod project;
-pub mod retarget;
 pub mod search;
 pub mod skeleton;
 pub mod text;
 
+pub use canon::humanoid::{Canon, HumanoidMap, HumanoidStatus};
 pub use clip::{Clip, ClipError, TranslationTrack};
-pub use humanoid::{Canon, HumanoidMap, HumanoidStatus};
+
+// Transitional (issue 27): the canonical humanoid moved to `canon/`. These old paths keep the
+// branches made before the move compiling while they merge; in-crate code uses `crate::canon`.
+// Remove once nothing outside the core uses them.
+pub use canon::{builtin, character, humanoid, normalize, retarget};
 pub use import::{ImportError, ImportOptions, Imported};
 pub use skeleton::{Joint, Skeleton};

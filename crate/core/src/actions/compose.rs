@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::actions::{ActionError, BodyPart};
 use crate::clip::Clip;
-use crate::humanoid::{Canon, CANON_COUNT};
+use crate::canon::humanoid::{Canon, CANON_COUNT};
 
 /// Weights and windows of the Composition. Defaults in [`ComposeOptions::default`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

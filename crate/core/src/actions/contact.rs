@@ -9,7 +9,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::clip::Clip;
-use crate::humanoid::{Canon, CANON_COUNT};
+use crate::canon::humanoid::{Canon, CANON_COUNT};
 
 /// A sole within this height of the floor may be in contact, metres.
 pub const CONTACT_HEIGHT: f32 = 0.035;

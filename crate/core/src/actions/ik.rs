@@ -63,8 +63,8 @@ pub fn solve_leg_oriented(skeleton: &Skeleton, local: &mut [Quat], root: Vec3, f
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::canonical_skeleton;
-    use crate::humanoid::{Canon, CANON_COUNT};
+    use crate::canon::builtin::canonical_skeleton;
+    use crate::canon::humanoid::{Canon, CANON_COUNT};
 
     #[test]
     fn reaches_a_reachable_target_and_keeps_the_foot_orientation() {

@@ -34,7 +34,7 @@ use crate::actions::ik::{forward, solve_leg, solve_leg_oriented};
 use crate::actions::procedural::smooth;
 use crate::actions::ActionError;
 use crate::clip::{Clip, TranslationTrack};
-use crate::humanoid::{Canon, CANON_COUNT};
+use crate::canon::humanoid::{Canon, CANON_COUNT};
 
 /// How motion 2 follows motion 1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -801,7 +801,7 @@ mod tests {
         let walk = clip(&lib, "walk", 1.0);
         let short = walk.slice(0, 2, "short");
         assert!(matches!(join_serial(&walk, &short, JoinKind::Connection, &JoinOptions::default()), Err(ActionError::TooShort { .. })));
-        let demo = crate::builtin::demo_clip();
+        let demo = crate::canon::builtin::demo_clip();
         let mut odd = demo.clone();
         odd.fps = -1.0;
         assert!(matches!(join_serial(&odd, &walk, JoinKind::Connection, &JoinOptions::default()), Err(ActionError::BadClip { .. })));

@@ -2,7 +2,7 @@
 //!
 //! Every clip in the library lives on the canonical skeleton, so any two can be joined and
 //! composed. Built-in actions are authored there; an imported clip is retargeted onto it when
-//! it is added ([`ActionLibrary::add_clip`]) by the engine's retargeting ([`crate::retarget`]).
+//! it is added ([`ActionLibrary::add_clip`]) by the engine's retargeting ([`crate::canon::retarget`]).
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -10,8 +10,8 @@ use serde::{Deserialize, Serialize};
 use crate::actions::procedural::builtin_actions;
 use crate::actions::{ActionError, BodyPart};
 use crate::clip::Clip;
-use crate::humanoid::HumanoidMap;
-use crate::retarget::{is_canonical, to_canonical};
+use crate::canon::humanoid::HumanoidMap;
+use crate::canon::retarget::{is_canonical, to_canonical};
 
 /// One clip of the library.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -227,7 +227,7 @@ pub fn walk_out_of_place(clip: &mut Clip, advance: Vec3) -> Option<Vec3> {
 }
 
 /// A clip on the canonical skeleton: unchanged when it already is; otherwise retargeted by
-/// bone directions ([`crate::retarget::to_canonical`], the engine's one retargeting) at its own
+/// bone directions ([`crate::canon::retarget::to_canonical`], the engine's one retargeting) at its own
 /// frame rate. Refused when the skeleton is not humanoid.
 pub fn retarget_to_canonical(clip: &Clip) -> Result<Clip, ActionError> {
     if is_canonical(&clip.skeleton) {
@@ -244,7 +244,7 @@ pub fn retarget_to_canonical(clip: &Clip) -> Result<Clip, ActionError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::humanoid::Canon;
+    use crate::canon::humanoid::Canon;
     use std::sync::Arc;
 
     #[test]
@@ -262,7 +262,7 @@ mod tests {
     #[test]
     fn tagged_clip_wins_and_retargets_identity() {
         let mut lib = ActionLibrary::builtin();
-        let demo = crate::builtin::demo_clip();
+        let demo = crate::canon::builtin::demo_clip();
         let i = lib.add_clip(&demo, &["Walk".into(), "dance".into()], None).unwrap();
         assert_eq!(lib.find("walk", &[]), Some(i));
         // The demo dance loops seamlessly: it is recognised as a cycle.
@@ -286,7 +286,7 @@ mod tests {
         let want = walk.cycle_advance.unwrap();
         assert!((adv - want).length() < 0.15 * want.length(), "{adv} vs {want}");
         // A dance on the spot stays where it is.
-        let mut demo = crate::builtin::demo_clip();
+        let mut demo = crate::canon::builtin::demo_clip();
         let before = demo.translations[0].values.clone();
         assert!(walk_out_of_place(&mut demo, Vec3::ZERO).is_none());
         assert_eq!(demo.translations[0].values, before);

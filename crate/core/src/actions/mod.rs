@@ -2,7 +2,7 @@
 //!
 //! The built-in library ([`ActionLibrary::builtin`]) holds the project's own procedural
 //! actions — walk, run, kick, jump, wave, clap, rejoice, gutsy pose, turn, bow, sit, stand,
-//! nod, point — authored as key poses on [`crate::builtin::canonical_skeleton`] with smooth
+//! nod, point — authored as key poses on [`crate::canon::builtin::canonical_skeleton`] with smooth
 //! interpolation, secondary motion and feet planted on the floor. Imported clips join the
 //! library with tags chosen by the person. The joins of spec §I live beside them: foot-ground
 //! contacts ([`contact`]), Connection and Transition with foot locking by two-bone IK
@@ -18,7 +18,8 @@ pub mod procedural;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::humanoid::Canon;
+use crate::canon::body::{self, Region};
+use crate::canon::humanoid::Canon;
 
 pub use compose::{compose, ComposeOptions, CompositionReport, SwitchTimes};
 pub use contact::{detect_contacts, ContactEvent, ContactEventKind, Contacts, Foot};
@@ -39,16 +40,27 @@ pub enum BodyPart {
 }
 
 impl BodyPart {
-    /// The canonical joints the part covers (the root of the part first).
-    pub fn joints(self) -> &'static [Canon] {
-        use Canon::*;
+    /// Every part.
+    pub const ALL: [BodyPart; 6] = [BodyPart::RightArm, BodyPart::LeftArm, BodyPart::BothArms, BodyPart::RightLeg, BodyPart::LeftLeg, BodyPart::Head];
+
+    /// The regions of the canonical body it is made of ([`crate::canon::body`]).
+    pub fn regions(self) -> &'static [Region] {
         match self {
-            BodyPart::RightArm => &[RightShoulder, RightUpperArm, RightForearm, RightHand],
-            BodyPart::LeftArm => &[LeftShoulder, LeftUpperArm, LeftForearm, LeftHand],
-            BodyPart::BothArms => &[RightShoulder, RightUpperArm, RightForearm, RightHand, LeftShoulder, LeftUpperArm, LeftForearm, LeftHand],
-            BodyPart::RightLeg => &[RightUpperLeg, RightLowerLeg, RightFoot, RightToe],
-            BodyPart::LeftLeg => &[LeftUpperLeg, LeftLowerLeg, LeftFoot, LeftToe],
-            BodyPart::Head => &[Neck, Head],
+            BodyPart::RightArm => &[Region::RightArm],
+            BodyPart::LeftArm => &[Region::LeftArm],
+            BodyPart::BothArms => &[Region::RightArm, Region::LeftArm],
+            BodyPart::RightLeg => &[Region::RightLeg],
+            BodyPart::LeftLeg => &[Region::LeftLeg],
+            BodyPart::Head => &[Region::Head],
+        }
+    }
+
+    /// The canonical joints the part covers (the root of the part first): its regions' joints.
+    pub fn joints(self) -> &'static [Canon] {
+        const BOTH_ARMS: [Canon; 8] = body::union2(body::RIGHT_ARM, body::LEFT_ARM);
+        match self {
+            BodyPart::BothArms => &BOTH_ARMS,
+            _ => self.regions()[0].joints(),
         }
     }
 

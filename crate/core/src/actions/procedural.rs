@@ -15,15 +15,15 @@ use std::sync::Arc;
 
 use glam::{EulerRot, Quat, Vec3};
 
-use crate::builtin::canonical_skeleton;
+use crate::canon::builtin::canonical_skeleton;
 use crate::clip::{Clip, TranslationTrack};
-use crate::humanoid::{Canon, CANON_COUNT};
+use crate::canon::humanoid::{Canon, CANON_COUNT};
 use crate::skeleton::Skeleton;
 
 /// Frame rate of the built-in actions.
 pub const ACTION_FPS: f32 = 60.0;
-/// Height of the toe joint above the floor when the foot is flat (the sole's thickness).
-pub const SOLE_HEIGHT: f32 = 0.02;
+/// Height of the toe joint above the floor when the foot is flat: the canonical body's, one home.
+pub use crate::canon::SOLE_HEIGHT;
 const GRAVITY: f32 = 9.81;
 
 /// Number of scalar parameters of a [`Pose`].

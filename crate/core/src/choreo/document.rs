@@ -33,91 +33,13 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::feedback::{FeedbackSession, CANDIDATES_PER_ROUND};
-use super::fill::{bar_count_rate_bpm, count_rate_bpm, beat_rate_cost, fill_with_tempi, node_costs_with_skate, free_skate_pass, in_beat_rate_band, FillError, FillWeights, Layer, Tempi, beat_rate_ladder, skate_ladder};
+use super::fill::{FillError, FillWeights, Layer};
+use super::generate::{self, bar_counts, GenerateOptions};
 use super::render::{render, RenderOptions};
-use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
 use super::segment::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
 use super::table::TableScope;
 use crate::bars::Bar;
 use crate::clip::Clip;
-
-/// What the filling checks of a dance it made (spec §J, on the rendered dance within its bars).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DanceFigures {
-    /// Kinetic beats over the bars' beats (4 a bar in 4/4, 3 in 3/4): 1 turns on every count,
-    /// 0.5 on every other.
-    pub kinetic_per_count: f32,
-    /// Mean foot skate, centimetres per second.
-    pub foot_skate_cm_per_s: f32,
-    /// The largest join jump (spec §J, [`super::quality::join_jumps`]), 0 with one bar.
-    pub join_jump_max: f32,
-    /// The bar after that join (its first bar is 1), if any.
-    pub worst_join_bar: Option<usize>,
-}
-
-/// The largest join jump a generated dance should have (spec §J; the goal): joins no
-/// more abrupt than 1.5 times the sharpest moments (95th percentile) of the moves themselves.
-/// What [`FillWeights::follow_joins`] keeps to.
-pub const JOIN_JUMP_GOAL: f32 = 1.5;
-/// Refills [`FillWeights::follow_joins`] tries at most, each steering away from one more join.
-pub const JOIN_REPAIRS: usize = 16;
-/// Cost added to a segment in the bar after a join it made too abrupt, so the refill takes
-/// another there: far above any term of the objective (a ban that stays finite, so a bar
-/// whose every segment is banned still gets one).
-const JOIN_BAN: f32 = 100.0;
-
-/// [`DanceFigures`] of the dance `path` fills `bars` with; `None` when it cannot be measured
-/// (too short, no bars).
-pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<DanceFigures> {
-    let (first, last) = (bars.first()?, bars.last()?);
-    let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
-    // Unheld: holding the feet (a cost on every measure of a refill) only lowers the skate the
-    // filling follows, and each bar keeps its holds only where they keep its beat figures.
-    let clip = render(lib, bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
-    let m = QualityMotion::from_clip(&clip).ok()?;
-    let kinetic = kinetic_beats_secs(&m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
-    let frames = m.frames();
-    let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
-    let skate = summarize_skate(&foot_skate_samples(&m), frame_of(first.start_secs)..frame_of(last.end_secs));
-    let counts: usize = bars.iter().map(Bar::beat_count).sum();
-    // Join jumps as dance_quality measures them (joins at the bars' starts after the first).
-    let joins: Vec<(usize, usize)> = bars.iter().enumerate().skip(1).map(|(i, b)| (i, frame_of(b.start_secs))).filter(|&(_, f)| f + 1 < frames).collect();
-    let jumps = join_jumps(&m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
-    let worst = jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (joins[k].0, j));
-    Some(DanceFigures {
-        kinetic_per_count: kinetic as f32 / counts.max(1) as f32,
-        foot_skate_cm_per_s: skate.mean_cm_per_s,
-        join_jump_max: worst.map_or(0.0, |w| w.1),
-        worst_join_bar: worst.map(|w| w.0),
-    })
-}
-
-/// The counts each bar takes (spec §E, [`super::segment`]'s module docs): its beats, when the
-/// library holds a live segment of that many counts; 0 (any segment) when it holds none.
-pub fn bar_counts(lib: &SegmentLibrary, bars: &[Bar]) -> Vec<usize> {
-    let mut has = BTreeSet::new();
-    for s in lib.segments().iter().filter(|s| !s.retired) {
-        has.insert(s.counts());
-    }
-    bars.iter().map(|b| if has.contains(&b.beat_count()) { b.beat_count() } else { 0 }).collect()
-}
-
-/// The foot skate a dance on `path` should not exceed (spec §J: no worse than its source
-/// clips'): per bar, the mean skate of the source clips of its segment's kind (imported or
-/// built-in), averaged over the bars.
-fn skate_goal_cm_per_s(lib: &SegmentLibrary, path: &[usize]) -> f32 {
-    let mut seen = BTreeSet::new();
-    let (mut sum, mut n) = ([0.0f32; 2], [0usize; 2]);
-    for s in lib.segments() {
-        if seen.insert(s.clip) {
-            let k = usize::from(s.builtin.is_some());
-            sum[k] += s.clip_skate_cm_per_s;
-            n[k] += 1;
-        }
-    }
-    let mean = |k: usize| sum[k] / n[k].max(1) as f32;
-    path.iter().map(|&s| mean(usize::from(lib.segments()[s].builtin.is_some()))).sum::<f32>() / path.len().max(1) as f32
-}
 
 /// Most undo steps kept.
 pub const UNDO_LIMIT: usize = 500;
@@ -596,38 +518,6 @@ impl Choreography {
         Ok(())
     }
 
-    /// How much the objective may rise for a bar to take a segment whose feet slide less
-    /// ([`FillWeights::free_skate_slack`]), in 0..=10; 0 turns it off.
-    pub fn set_free_skate_slack(&mut self, slack: f32) -> Result<(), ChoreoError> {
-        if !(0.0..=10.0).contains(&slack) {
-            return Err(ChoreoError::BadSetting { name: "freeSkateSlack".into(), range: "0..=10".into(), value: slack });
-        }
-        self.record();
-        self.doc.settings.fill.free_skate_slack = slack;
-        Ok(())
-    }
-
-    /// Whether the filling keeps the dance's foot skate no worse than its source clips'
-    /// ([`FillWeights::follow_skate`]).
-    pub fn set_follow_skate(&mut self, on: bool) {
-        self.record();
-        self.doc.settings.fill.follow_skate = on;
-    }
-
-    /// Whether the filling keeps every join of the dance within [`JOIN_JUMP_GOAL`]
-    /// ([`FillWeights::follow_joins`]).
-    pub fn set_follow_joins(&mut self, on: bool) {
-        self.record();
-        self.doc.settings.fill.follow_joins = on;
-    }
-
-    /// Whether the filling keeps the dance's kinetic beat rate near the song's
-    /// ([`FillWeights::follow_beat_rate`]).
-    pub fn set_follow_beat_rate(&mut self, on: bool) {
-        self.record();
-        self.doc.settings.fill.follow_beat_rate = on;
-    }
-
     /// Repetition penalty of the filling, in 0..=100.
     pub fn set_repeat_penalty(&mut self, w: f32) -> Result<(), ChoreoError> {
         if !(0.0..=100.0).contains(&w) {
@@ -656,10 +546,17 @@ impl Choreography {
         TableScope::for_bar_counts(&bar_counts(lib, &self.doc.bars))
     }
 
-    /// Generate: fills every bar that is not pinned with the minimum-cost path of spec §G.
-    /// Pinned bars never change. With every bar pinned nothing changes (and nothing is
-    /// recorded for undo).
+    /// Generate: fills every bar that is not pinned by the pipeline of [`super::generate`] at
+    /// its default options. Pinned bars never change. With every bar pinned nothing changes
+    /// (and nothing is recorded for undo).
     pub fn generate(&mut self, lib: &SegmentLibrary) -> Result<GenerateReport, ChoreoError> {
+        self.generate_with(lib, &GenerateOptions::default())
+    }
+
+    /// [`Choreography::generate`] with the pipeline's stages set by `options` (benches and
+    /// tests turn a stage off to measure what it does); refused when an option is out of range.
+    pub fn generate_with(&mut self, lib: &SegmentLibrary, options: &GenerateOptions) -> Result<GenerateReport, ChoreoError> {
+        options.validate()?;
         if lib.is_empty() {
             return Err(ChoreoError::EmptyLibrary);
         }
@@ -683,150 +580,7 @@ impl Choreography {
             })
             .collect();
         let weights = self.doc.settings.fill;
-        // The joins this song's bars make (its metres, and any change between two bars).
-        let table = lib.transition_table_for(weights.repeat_penalty, &self.table_scope(lib));
-        let intensity: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
-        let beat_fit: Vec<f32> = lib.segments().iter().map(|s| s.beat_fit).collect();
-        let builtin: Vec<bool> = lib.segments().iter().map(|s| s.builtin.is_some()).collect();
-        // Skate beyond the source clip's own (the §J goal is "no worse than the source clips'").
-        let skate: Vec<f32> = lib.segments().iter().map(|s| (s.skate_cm_per_s - s.clip_skate_cm_per_s).max(0.0)).collect();
-        let node_cost = node_costs_with_skate(&weights, &beat_fit, &builtin, &skate);
-        // The bar's metre: a bar of n beats takes segments of n counts (0: any), played at n
-        // counts over the bar.
-        let bar_counts = bar_counts(lib, &self.doc.bars);
-        let segment_counts: Vec<usize> = lib.segments().iter().map(|s| s.counts()).collect();
-        let bar_bpm: Vec<f32> = self.doc.bars.iter().zip(&bar_counts).map(|(b, &n)| if n == 0 { bar_count_rate_bpm(b.duration_secs()) } else { count_rate_bpm(n, b.duration_secs()) }).collect();
-        let segment_bpm: Vec<f32> = lib.segments().iter().map(|s| s.tempo_bpm).collect();
-        // Each segment's kinetic beats per count at each bar's count rate, and its beat-rate cost.
-        let follow = weights.follow_beat_rate && weights.beat_rate_weight == 0.0;
-        let kinetic: Vec<Vec<f32>> = if follow || weights.beat_rate_weight > 0.0 {
-            bar_bpm.iter().map(|&r| lib.segments().iter().map(|s| s.kinetic_per_count_at(r)).collect()).collect()
-        } else {
-            Vec::new()
-        };
-        let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
-        let tempi = Tempi { bar_bpm: &bar_bpm, segment_bpm: &segment_bpm, beat_rate: &beat_rate, extra: &[], bar_counts: &bar_counts, segment_counts: &segment_counts };
-        let (mut path, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &weights)?;
-        // The dance's kinetic beat rate near the song's (FillWeights::follow_beat_rate),
-        // measured on the dance itself as §J measures it: the segments' own rates at the bars'
-        // count rates miss what the joins and neighbours add (0.2 a count on slow songs).
-        let bars = &self.doc.bars;
-        // The figures of the path last measured (a render and a measure each: kept, not redone).
-        let mut figures: Option<(Vec<usize>, Option<DanceFigures>)> = None;
-        let mut weights = weights;
-        if follow && !kinetic.is_empty() {
-            let first = dance_figures(lib, bars, &path);
-            figures = Some((path.clone(), first));
-            if first.is_some_and(|f| !in_beat_rate_band(f.kinetic_per_count)) {
-                for w in beat_rate_ladder() {
-                    let stronger = FillWeights { beat_rate_weight: w, ..weights };
-                    let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &tempi, &stronger)?;
-                    let f = dance_figures(lib, bars, &p);
-                    if f.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count)) {
-                        figures = Some((p.clone(), f));
-                        (path, weights) = (p, stronger);
-                        break;
-                    }
-                }
-            }
-        }
-        // Foot skate where it is free (FillWeights::free_skate_slack).
-        // The excess as the bar plays the segment: its feet slide faster by the factor it is
-        // sped up by (a salsa bar at 80 counts per minute on a bar at 140 slides 1.75 times as
-        // fast), against its clip's at the clip's own tempo.
-        let excess = |t: usize, s: usize| {
-            let seg = &lib.segments()[s];
-            let speed_up = if seg.tempo_bpm > 0.0 && bar_bpm[t] > 0.0 { bar_bpm[t] / seg.tempo_bpm } else { 1.0 };
-            seg.skate_cm_per_s * speed_up - seg.clip_skate_cm_per_s
-        };
-        let (mut path, mut cost) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &path);
-        // Foot skate no worse than the source clips' (FillWeights::follow_skate).
-        if weights.follow_skate {
-            let current = match &figures {
-                Some((p, f)) if *p == path => *f,
-                _ => dance_figures(lib, bars, &path),
-            };
-            figures = Some((path.clone(), current));
-            if let Some(before) = current.filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(lib, &path)) {
-                let on_beat = in_beat_rate_band(before.kinetic_per_count);
-                let over: Vec<Vec<f32>> = (0..layers.len()).map(|t| (0..lib.len()).map(|s| excess(t, s).max(0.0) / 100.0).collect()).collect();
-                for w in skate_ladder() {
-                    let extra: Vec<Vec<f32>> = over.iter().map(|v| v.iter().map(|x| w * x).collect()).collect();
-                    let with_skate = Tempi { extra: &extra, ..tempi };
-                    let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &with_skate, &weights)?;
-                    let (p, c) = free_skate_pass(&table, &layers, &intensity, &node_cost, &tempi, &weights, &excess, &p);
-                    let Some(f) = dance_figures(lib, bars, &p) else { continue };
-                    if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &p) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)) {
-                        figures = Some((p.clone(), Some(f)));
-                        (path, cost) = (p, c);
-                        break;
-                    }
-                }
-            }
-        }
-        // Joins no more abrupt than JOIN_JUMP_GOAL (FillWeights::follow_joins), measured on the
-        // dance: the table's cost (§G, link directions and end gaps) misses some abrupt joins,
-        // e.g. between two crouched moves of the Indian clips in 3/4, where fewer moves fit a bar.
-        if weights.follow_joins && layers.len() > 1 {
-            let current = match figures {
-                Some((p, f)) if p == path => f,
-                _ => dance_figures(lib, bars, &path),
-            };
-            // Each refill bars, from every bar, the move after the worst join of the last refill
-            // (the same move makes the same abrupt join wherever the filling puts it after a
-            // like move: barred from one bar only, on the 108 BPM piece in 3 it moved to the
-            // next), so the bars add up over the tries. A refill whose feet slide past the goal
-            // the dance met makes the next one charge skate too, at the next weight of
-            // skate_ladder (the moves with the smoothest joins are not always the cleanest).
-            // The best dance that keeps what the first one met is kept.
-            let (mut trial_path, mut trial) = (path.clone(), current);
-            let mut best = current;
-            let skate_met = current.is_some_and(|f| f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &path));
-            let on_beat = current.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
-            let mut ban: Vec<Vec<f32>> = Vec::new();
-            let mut skate_weights = skate_ladder();
-            let mut skate_weight = 0.0f32;
-            for _ in 0..JOIN_REPAIRS {
-                let Some(f) = trial else { break };
-                let joins_ok = f.join_jump_max <= JOIN_JUMP_GOAL;
-                let skate_ok = !skate_met || f.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &trial_path);
-                if joins_ok && skate_ok {
-                    break;
-                }
-                if ban.is_empty() {
-                    ban = vec![vec![0.0; lib.len()]; layers.len()];
-                }
-                if !joins_ok {
-                    // The bar after the join takes another move (the one before it, when that
-                    // one is pinned; both pinned: nothing to change).
-                    let Some(bar) = f.worst_join_bar else { break };
-                    let Some(t) = [bar, bar - 1].into_iter().find(|&t| matches!(layers[t], Layer::Open { .. })) else { break };
-                    let s = trial_path[t];
-                    for v in ban.iter_mut() {
-                        v[s] += JOIN_BAN;
-                    }
-                }
-                if !skate_ok {
-                    let Some(w) = skate_weights.next() else { break };
-                    skate_weight = w;
-                }
-                let extra: Vec<Vec<f32>> = ban.iter().enumerate().map(|(t, v)| v.iter().enumerate().map(|(s, b)| b + skate_weight * excess(t, s).max(0.0) / 100.0).collect()).collect();
-                let with = Tempi { extra: &extra, ..tempi };
-                let (p, _, _) = fill_with_tempi(&table, &layers, &intensity, &node_cost, &with, &weights)?;
-                let (p, c) = free_skate_pass(&table, &layers, &intensity, &node_cost, &with, &weights, &excess, &p);
-                let after = dance_figures(lib, bars, &p);
-                if let (Some(a), Some(b)) = (after, best) {
-                    // Kept only when its worst join is better and nothing the dance met is lost:
-                    // the beat rate's band, and the skate goal.
-                    let keeps_rate = !on_beat || in_beat_rate_band(a.kinetic_per_count);
-                    let keeps_skate = !skate_met || a.foot_skate_cm_per_s <= skate_goal_cm_per_s(lib, &p);
-                    if a.join_jump_max < b.join_jump_max && keeps_rate && keeps_skate {
-                        (path, cost, best) = (p.clone(), c, after);
-                    }
-                }
-                (trial_path, trial) = (p, after);
-            }
-        }
+        let (path, cost) = generate::generate(lib, &self.doc.bars, &layers, weights, options)?;
         self.record();
         for (state, seg) in self.doc.states.iter_mut().zip(path) {
             if !matches!(state, BarState::Pinned { .. }) {
@@ -864,9 +618,11 @@ impl Choreography {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::choreo::generate::dance_figures;
+    use crate::choreo::quality::JOIN_JUMP_GOAL;
     use crate::choreo::grid::bars_from_tempo;
     use crate::choreo::segment::LIBRARY_FPS;
-    use crate::humanoid::CANON_COUNT;
+    use crate::canon::humanoid::CANON_COUNT;
 
     #[test]
     fn a_bar_in_three_takes_a_three_count_segment_whose_counts_land_on_its_beats() {
@@ -931,8 +687,7 @@ mod tests {
         assert!(f.join_jump_max <= JOIN_JUMP_GOAL, "{f:?}");
         assert!(f.worst_join_bar.is_some_and(|b| (1..bars.len()).contains(&b)), "{f:?}");
         let mut off = Choreography::new(bars).unwrap();
-        off.set_follow_joins(false);
-        off.generate(&lib).unwrap();
+        off.generate_with(&lib, &GenerateOptions { follow_joins: false, ..GenerateOptions::default() }).unwrap();
         assert_eq!(on.segments(), off.segments());
     }
 

@@ -102,7 +102,7 @@ pub struct FillWeights {
     /// (in octaves) the segment's kinetic beats per count, played at the bar's count rate
     /// ([`super::Segment::kinetic_per_count_at`]), are from 1 or ½ (§J asks a dance's
     /// kinetic beat rate to be within 25 % of the song's beat rate or its half); see
-    /// [`beat_rate_cost`]. 0 (the default) leaves it to [`FillWeights::follow_beat_rate`],
+    /// [`beat_rate_cost`]. 0 (the default) leaves it to [`super::GenerateOptions::follow_beat_rate`],
     /// which applies the weakest weight that works, and only to a dance off the song's beat
     /// rate: a fixed weight acts on every song, and measured with the `choreo_quality` bench
     /// (`ODORI_BEAT_RATE_WEIGHT=x`, with `ODORI_FOLLOW_BEAT_RATE=0`) 0.07 turns Vibe Ace, which
@@ -110,61 +110,21 @@ pub struct FillWeights {
     /// cm/s). (The one-bar trumpet song's 1.50 that no weight moved came from its grid: its bar
     /// held 2 of its 4 beats.) A value above 0 is used as it is, on every song.
     pub beat_rate_weight: f32,
-    /// Foot skate where it is free: after the best path is found, each open bar whose segment's
-    /// feet slide more than its source clip's takes the segment with the least such excess
-    /// among those that raise the objective (every term above) by at most this much, its
-    /// neighbours unchanged ([`free_skate_pass`]). Where a cleaner segment fits a bar nearly as
-    /// well (a one-bar song, a near tie) the skate decides; where it would cost joins, the beat
-    /// or the person's moves, nothing changes. 0 turns it off. See [`FREE_SKATE_SLACK_DEFAULT`].
-    pub free_skate_slack: f32,
-    /// Keep the dance's kinetic beat rate near the song's (spec §J: within 25 % of the song's
-    /// beat rate or its half). When `beat_rate_weight` is 0 and the best path's dance, rendered
-    /// and measured as §J measures it ([`super::dance_figures`]), turns a number of
-    /// times a count outside [`BEAT_RATE_BAND`], the filling is run again with the beat-rate
-    /// term (each segment's kinetic beats per count at its bar's count rate,
-    /// [`super::Segment::kinetic_per_count_at`]) at each weight of [`beat_rate_ladder`],
-    /// weakest first, and the first dance inside the band is kept (none: the best path stays).
-    /// A song whose dance already turns on its beats is filled exactly as without it. Default
-    /// true.
-    #[serde(default = "yes")]
-    pub follow_beat_rate: bool,
-    /// Keep the dance's foot skate no worse than its source clips' (spec §J): when the dance,
-    /// rendered and measured ([`super::dance_figures`]), slides its feet more than the mean
-    /// skate of its kinds of source clip (imported, built-in; weighted by the bars of each),
-    /// the filling is run again with a skate term on each segment's skate above its clip's as
-    /// the bar plays it (sped up or slowed) at each weight of [`skate_ladder`], weakest first,
-    /// and the first dance within the goal (and not pushed off the beat rate) is kept. A dance
-    /// already within it is filled as without it. Default true.
-    #[serde(default = "yes")]
-    pub follow_skate: bool,
-    /// Keep every join of the dance within [`super::document::JOIN_JUMP_GOAL`] (spec §J's join
-    /// jump): when the dance, rendered and measured ([`super::dance_figures`]), has a join above
-    /// it, the move after its worst join is barred from that bar and the filling runs again, up
-    /// to [`super::document::JOIN_REPAIRS`] times; a refill is kept only when that join improves
-    /// and the beat-rate band and skate goal the dance met still hold. A dance whose joins are
-    /// within the goal is filled as without it (every 4/4 song of `choreo_quality`). Default
-    /// true.
-    #[serde(default = "yes")]
-    pub follow_joins: bool,
 }
 
 /// Skate weights (per m/s of skate above the source clip's) tried, weakest first, by
-/// [`FillWeights::follow_skate`]: 0.1 to 12.8, doubling.
+/// [`super::GenerateOptions::follow_skate`]: 0.1 to 12.8, doubling.
 pub fn skate_ladder() -> impl Iterator<Item = f32> {
     (0..8).map(|k| 0.1 * 2f32.powi(k))
 }
 
-fn yes() -> bool {
-    true
-}
-
-/// The kinetic beats per count [`FillWeights::follow_beat_rate`] accepts: one turn a count or
+/// The kinetic beats per count [`super::GenerateOptions::follow_beat_rate`] accepts: one turn a count or
 /// one every other count, each within 20 % (the §J goal is 25 %; the 5 % between is a margin
 /// for beats the grid's bars hold more or fewer of than 4).
 pub const BEAT_RATE_BAND: [(f32, f32); 2] = [(0.8, 1.2), (0.4, 0.6)];
 
 /// Beat-rate weights tried, weakest first, when the dance's beat rate is outside
-/// [`BEAT_RATE_BAND`] ([`FillWeights::follow_beat_rate`]): 0.01 to 0.45 in steps of √2 (the
+/// [`BEAT_RATE_BAND`] ([`super::GenerateOptions::follow_beat_rate`]): 0.01 to 0.45 in steps of √2 (the
 /// weakest that works is wanted: from about 0.1 a weight tips whole dances between kinds of
 /// move).
 pub fn beat_rate_ladder() -> impl Iterator<Item = f32> {
@@ -178,11 +138,11 @@ pub fn in_beat_rate_band(kinetic_per_count: f32) -> bool {
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, free_skate_slack: FREE_SKATE_SLACK_DEFAULT, follow_beat_rate: true, follow_skate: true, follow_joins: true }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0 }
     }
 }
 
-/// Default [`FillWeights::free_skate_slack`]: the same size as the default preference for the
+/// Default [`super::GenerateOptions::free_skate_slack`]: the same size as the default preference for the
 /// person's own moves (0.03), the amount the product already treats as a small difference
 /// between two moves that fit a bar. So a swap never trades an imported move that fits for a
 /// built-in one unless the built-in one is otherwise better.
@@ -206,8 +166,8 @@ pub const STRETCH_WEIGHT_DEFAULT: f32 = 0.0;
 /// 0 %), the near all-or-nothing choice between kinds of move that the stretch term shows too.
 /// Charging the skate itself rather than its excess fills every song with built-in moves from
 /// 0.1 up. A person may still turn it on. The product instead swaps where it is free
-/// ([`FillWeights::free_skate_slack`]) and steers only a dance that slides more than its sources
-/// ([`FillWeights::follow_skate`]).
+/// ([`super::GenerateOptions::free_skate_slack`]) and steers only a dance that slides more than
+/// its sources ([`super::GenerateOptions::follow_skate`]).
 pub const SKATE_WEIGHT_DEFAULT: f32 = 0.0;
 
 /// The beat-rate cost of a segment turning `kinetic_per_count` times a count: octaves from the
@@ -686,11 +646,11 @@ pub fn fill_with_tempi(
     Ok((path, cost, stats))
 }
 
-/// Foot skate where it is free ([`FillWeights::free_skate_slack`]): bar by bar in order, an
+/// Foot skate where it is free ([`super::GenerateOptions::free_skate_slack`]): bar by bar in order, an
 /// open bar whose segment's feet slide more than its source clip's there
 /// (`skate_excess_cm_per_s(bar, segment) > 0`) takes instead the segment with the least such excess among those that keep the whole
 /// objective ([`path_cost_with_tempi`], the same terms the path was found with) within
-/// `free_skate_slack` of the path's, its neighbours unchanged (ties: the cheaper). A local
+/// `slack` of the path's, its neighbours unchanged (ties: the cheaper). A local
 /// swap, not a weight on the whole search: a skate weight tips whole dances between kinds of
 /// move, since moves of one kind join each other best; a swap only happens where a cleaner
 /// segment fits that bar nearly as well. Returns the path and its objective.
@@ -702,12 +662,12 @@ pub fn free_skate_pass(
     node_cost: &[f32],
     tempi: &Tempi,
     weights: &FillWeights,
+    slack: f32,
     skate_excess_cm_per_s: &dyn Fn(usize, usize) -> f32,
     path: &[usize],
 ) -> (Vec<usize>, f32) {
     let mut path = path.to_vec();
     let mut cost = path_cost_with_tempi(table, layers, segment_intensity, node_cost, tempi, weights, &path);
-    let slack = weights.free_skate_slack;
     let excess_at = |t: usize, s: usize| Some(skate_excess_cm_per_s(t, s)).filter(|v| v.is_finite()).unwrap_or(0.0).max(0.0);
     if slack.is_nan() || slack <= 0.0 || path.len() != layers.len() || !cost.is_finite() {
         return (path, cost);
@@ -862,22 +822,20 @@ mod tests {
         // One bar (no joins): 0 is best; the pass moves it to the cheapest clean one, 3.
         let (path, _, _) = fill_with_tempi(&table, &one, &intensity, &[], &tempi, &w).unwrap();
         assert_eq!(path, vec![0]);
-        let (swapped, cost) = free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, &excess, &path);
+        let (swapped, cost) = free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, FREE_SKATE_SLACK_DEFAULT, &excess, &path);
         assert_eq!(swapped, vec![3]);
         assert!((cost - 0.01).abs() < 1e-5, "{cost}");
         // Off: nothing changes. A slack below the rise: nothing changes.
-        let off = FillWeights { free_skate_slack: 0.0, ..w };
-        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &off, &excess, &path).0, vec![0]);
-        let tight = FillWeights { free_skate_slack: 0.005, ..w };
-        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &tight, &excess, &path).0, vec![0]);
+        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, 0.0, &excess, &path).0, vec![0]);
+        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, 0.005, &excess, &path).0, vec![0]);
         // Between two pinned bars of segment 2, the swap keeps its neighbours and never takes
         // segment 3, whose joins would cost 1.0 more.
         let three = [Layer::Fixed { segment: 2 }, Layer::Open { intensity: 0.5 }, Layer::Fixed { segment: 2 }];
-        let (p3, c3) = free_skate_pass(&table, &three, &intensity, &[], &tempi, &w, &excess, &[2, 0, 2]);
+        let (p3, c3) = free_skate_pass(&table, &three, &intensity, &[], &tempi, &w, FREE_SKATE_SLACK_DEFAULT, &excess, &[2, 0, 2]);
         assert_eq!(p3, vec![2, 1, 2]);
         assert!((c3 - 2.02).abs() < 1e-5, "{c3}");
         // With no excess anywhere the path is kept.
-        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, &|_, _| 0.0, &path).0, vec![0]);
+        assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, FREE_SKATE_SLACK_DEFAULT, &|_, _| 0.0, &path).0, vec![0]);
     }
 
     #[test]

@@ -15,21 +15,23 @@ pub mod document;
 pub mod eigen;
 pub mod feedback;
 pub mod fill;
+pub mod generate;
 pub mod grid;
 pub mod quality;
 pub mod render;
 pub mod segment;
 pub mod table;
 
-pub use document::{bar_counts, dance_figures, recut_clip, DanceFigures, BarState, BarView, ChoreoError, Choreography, GenerateReport, RecutReport, Settings};
+pub use document::{recut_clip, BarState, BarView, ChoreoError, Choreography, GenerateReport, RecutReport, Settings};
 pub use eigen::Signature;
+pub use generate::{bar_counts, dance_figures, skate_goal_cm_per_s, DanceFigures, GenerateOptions, JOIN_REPAIRS};
 pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, CANDIDATES_PER_ROUND, TAU_DECAY};
 pub use fill::{
     bar_count_rate_bpm, beat_rate_cost, count_rate_bpm, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, free_skate_pass, node_costs, node_costs_with_skate, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
     FillWeights, Layer, Tempi, TransitionTable, FREE_SKATE_SLACK_DEFAULT, BEAT_RATE_BAND, beat_rate_ladder, in_beat_rate_band, skate_ladder,
 };
 pub use grid::{bars_from_tempo, GridError};
-pub use quality::{dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
+pub use quality::{JOIN_JUMP_GOAL, dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
 pub use render::{render, segment_clip, speed_jumps, RenderOptions};
 pub use table::{TableBuilder, TableProgress, TableScope};
 pub use segment::{kinetic_per_count_by_rate, KINETIC_RATES_BPM, SEGMENT_COUNTS, SEGMENT_METRES, BuiltinLoader, ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};

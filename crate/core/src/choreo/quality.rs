@@ -17,10 +17,10 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::bars::Bar;
-use crate::builtin::canonical_skeleton;
+use crate::canon::builtin::canonical_skeleton;
 use crate::clip::Clip;
-use crate::humanoid::{canonical_positions, Canon, HumanoidMap, CANON_COUNT};
-use crate::normalize::{body_height, normalize_in_place, Origin};
+use crate::canon::humanoid::{canonical_positions, Canon, HumanoidMap, CANON_COUNT};
+use crate::canon::normalize::{body_height, normalize_in_place, Origin};
 
 /// Frame rate every measure works at (spec §J).
 pub const QUALITY_FPS: f32 = 30.0;
@@ -37,6 +37,11 @@ pub const JOIN_REACH_FRAMES: usize = 3;
 pub const JOIN_CLEAR_FRAMES: usize = 6;
 /// Frames both motions are time-normalised to by the perceptual distance (spec §J).
 pub const PERCEPTUAL_FRAMES: usize = 32;
+/// The largest join jump a generated dance should have (spec §J; the goal): joins no
+/// more abrupt than 1.5 times the sharpest moments (95th percentile) of the moves themselves.
+/// What Generate's join repair keeps to ([`super::GenerateOptions::join_jump_goal`]) and the
+/// rendered dance's held feet respect ([`super::render`]).
+pub const JOIN_JUMP_GOAL: f32 = 1.5;
 
 /// The feet joints foot skate watches: ankles and toes.
 const FOOT_JOINTS: [Canon; 4] = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];

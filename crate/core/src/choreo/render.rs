@@ -14,9 +14,9 @@ use serde::{Deserialize, Serialize};
 
 use super::segment::{SegmentLibrary, LIBRARY_FPS};
 use crate::bars::Bar;
-use crate::builtin::canonical_skeleton;
+use crate::canon::builtin::canonical_skeleton;
 use crate::clip::{Clip, TranslationTrack};
-use crate::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
+use crate::canon::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
 use crate::library::neutral_pose;
 
 /// How to render.
@@ -222,7 +222,7 @@ const HOLD_RULE_ROUNDS: usize = 4;
 /// source clip has planted (spec §J's contact band, and slow: the retargeting's rule) stays
 /// where it landed until the source lifts it, the leg reaching it by two-bone IK, and a
 /// released foot catches up with its free path at no more than 1 m/s
-/// ([`crate::character::hold_feet_in_dance`], the retargeting's kernel). Without it a planted
+/// ([`crate::canon::character::hold_feet_in_dance`], the retargeting's kernel). Without it a planted
 /// foot slides wherever the time warp speeds its source up, the placement moves it, or a join
 /// rewrites it.
 /// - Planted is read at the source's own pace: each frame's flags are those of the clip frame
@@ -233,13 +233,13 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   ([`super::beat_rate_cost`]) than without: holding feet changes the kinetic speed curve
 ///   (§J) and may move a kinetic beat; nor if its feet slide more (§J's foot skate) than
 ///   without (a released foot catching up on the floor). And a join the holds make more abrupt than §J's goal
-///   (and than unheld, [`super::document::JOIN_JUMP_GOAL`]) takes the holds of the bars either
+///   (and than unheld, [`super::quality::JOIN_JUMP_GOAL`]) takes the holds of the bars either
 ///   side. Bars that fail are played unheld and the rest held again, up to
 ///   [`HOLD_RULE_ROUNDS`] times. Last, the whole dance keeps its holds only if its BAS-music on
 ///   its counts is still as far above that on the half-shifted counts, and its kinetic beats
 ///   per count no further from the target, as unheld, and its feet slide no more in all.
 fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>]) -> (Clip, Holds) {
-    use crate::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
+    use crate::canon::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
     let frames = clip.frame_count();
     if frames < 3 || played.len() < frames {
         return (clip, Holds::default());
@@ -318,7 +318,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
             }
             // A join the holds made more abrupt than the goal (and than unheld): neither bar
             // beside it keeps its holds.
-            if w.2 > u.2.max(super::document::JOIN_JUMP_GOAL) + 1e-4 {
+            if w.2 > u.2.max(super::quality::JOIN_JUMP_GOAL) + 1e-4 {
                 for a in [b.saturating_sub(1), b] {
                     dropped |= std::mem::replace(&mut keep[a], false);
                 }
@@ -402,7 +402,7 @@ pub fn join_frames(bars: &[Bar], fps: f32) -> Vec<usize> {
 mod tests {
     use super::*;
     use crate::choreo::grid::bars_from_tempo;
-    use crate::humanoid::Canon;
+    use crate::canon::humanoid::Canon;
 
     /// A dance of built-in moves, bar i playing every 7th live segment, on bars at `bpm`: the
     /// warp plays each move faster or slower than recorded, and every bar after the first starts

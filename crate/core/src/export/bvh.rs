@@ -105,7 +105,7 @@ pub fn bvh(clip: &Clip) -> Result<Vec<u8>, ExportError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::demo_clip;
+    use crate::canon::builtin::demo_clip;
     use crate::import::{import_bytes, ImportOptions};
     use glam::Quat;
 

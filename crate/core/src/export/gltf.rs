@@ -552,7 +552,7 @@ pub(super) fn finish(mut root: json::Root, mut bin: Bin, scene_nodes: Vec<json::
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::demo_clip;
+    use crate::canon::builtin::demo_clip;
     use crate::import::{import_bytes, ImportOptions};
 
     #[test]

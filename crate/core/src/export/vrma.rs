@@ -22,8 +22,8 @@ use serde::Serialize;
 use super::gltf::{animations, finish, joint_nodes, start};
 use super::{check_clips, ExportError};
 use crate::clip::Clip;
-use crate::humanoid::{Canon, HumanoidMap, HumanoidStatus};
-use crate::retarget::{is_canonical, to_canonical};
+use crate::canon::humanoid::{Canon, HumanoidMap, HumanoidStatus};
+use crate::canon::retarget::{is_canonical, to_canonical};
 
 /// The extension's name, as it appears in `extensionsUsed` and `extensions`.
 pub const EXTENSION: &str = "VRMC_vrm_animation";
@@ -86,7 +86,7 @@ pub fn vrma(clip: &Clip, map: &HumanoidMap) -> Result<Vec<u8>, ExportError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::demo_clip;
+    use crate::canon::builtin::demo_clip;
     use crate::import::{import_bytes, ImportOptions};
 
     fn json_of(glb: &[u8]) -> serde_json::Value {

@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::clip::Clip;
-use crate::humanoid::{HumanoidMap, HumanoidStatus};
+use crate::canon::humanoid::{HumanoidMap, HumanoidStatus};
 use crate::skeleton::Skeleton;
 
 pub use self::gltf::{MeshPart, MeshTexture, Sampler, SkinnedMesh, UvTransform};

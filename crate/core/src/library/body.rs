@@ -9,7 +9,7 @@ use std::f32::consts::PI;
 
 use glam::{Mat4, Vec3};
 
-use crate::humanoid::Canon;
+use crate::canon::humanoid::Canon;
 use crate::import::{MeshPart, SkinnedMesh};
 use crate::motion;
 use crate::skeleton::Skeleton;
@@ -102,7 +102,7 @@ pub fn builtin_body(skeleton: &Skeleton) -> SkinnedMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::canonical_skeleton;
+    use crate::canon::builtin::canonical_skeleton;
 
     #[test]
     fn body_is_closed_outward_and_bound_at_rest() {

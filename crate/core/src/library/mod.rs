@@ -8,7 +8,7 @@
 //!
 //! Limbs are placed by two-bone IK on authored foot and hand targets ([`pose`]), so planted
 //! feet stay on the floor; the root height is then corrected so the lowest point of the body
-//! never goes below the floor ([`crate::builtin::lowest_point`]).
+//! never goes below the floor ([`crate::canon::builtin::lowest_point`]).
 
 pub mod body;
 pub mod moves;
@@ -19,9 +19,9 @@ use std::sync::Arc;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::builtin::canonical_skeleton;
+use crate::canon::builtin::canonical_skeleton;
 use crate::clip::{Clip, TranslationTrack};
-use crate::humanoid::CANON_COUNT;
+use crate::canon::humanoid::CANON_COUNT;
 use crate::skeleton::Skeleton;
 
 pub use moves::{Arms, Energy, Step};
@@ -187,7 +187,7 @@ pub fn neutral_pose() -> (Vec<glam::Quat>, Vec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::humanoid::Canon;
+    use crate::canon::humanoid::Canon;
 
     #[test]
     fn at_least_two_hundred_distinct_moves() {

@@ -4,7 +4,7 @@
 
 use glam::{EulerRot, Quat, Vec3};
 
-use crate::humanoid::{Canon, CANON_COUNT};
+use crate::canon::humanoid::{Canon, CANON_COUNT};
 use crate::skeleton::Skeleton;
 
 /// Height of the ankle joint above the floor when the foot is flat (the canonical toe tip then
@@ -284,7 +284,7 @@ pub fn lowest_height(skeleton: &Skeleton, local: &[Quat; CANON_COUNT], root: Vec
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::canonical_skeleton;
+    use crate::canon::builtin::canonical_skeleton;
 
     #[test]
     fn planted_feet_reach_their_targets() {

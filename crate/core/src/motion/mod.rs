@@ -208,7 +208,7 @@ pub fn mean_p95(values: &[f32]) -> (f32, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::canonical_skeleton;
+    use crate::canon::builtin::canonical_skeleton;
 
     #[test]
     fn rest_world_matches_skeleton_rest_positions() {

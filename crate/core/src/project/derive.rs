@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{decode_envelope, BarDoc, BarKind, BlobHash, BlobStore, ClipRef, DanceDoc, MoveKey, ProjectDoc, ProjectError, SearchDoc, SongDoc, Source, SourceId};
 use crate::choreo::{BarState, BuiltinLoader, Choreography, ClipSummary, FeedbackSession, SegmentLibrary, SegmentOptions};
-use crate::humanoid::HumanoidStatus;
+use crate::canon::humanoid::HumanoidStatus;
 use crate::import::{import_bytes, ImportError, ImportOptions, Imported};
 use crate::music::{analyze, SongGrid};
 

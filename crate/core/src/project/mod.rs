@@ -284,7 +284,7 @@ pub enum ProjectError {
     #[error("bad song envelope: {message}")]
     BadEnvelope { message: String },
     #[error(transparent)]
-    Character(#[from] crate::character::CharacterError),
+    Character(#[from] crate::canon::character::CharacterError),
     #[error("there is no put-on clip {index}: the project has {count}")]
     NoSuchWorn { index: usize, count: usize },
     #[error("put on: give a clip of the project or a motion to put on the character")]
@@ -787,7 +787,7 @@ impl Project {
     fn make_worn(&mut self, worn: &Worn, bvh: Option<&[u8]>) -> Result<(Clip, std::sync::Arc<crate::import::Imported>), ProjectError> {
         let ch = self.imported_or_missing(worn.character.source)?;
         let file = self.doc.source(worn.character.source).map(|s| s.file_name.clone()).unwrap_or_default();
-        let character = crate::character::Character::from_imported(&file, &ch)?;
+        let character = crate::canon::character::Character::from_imported(&file, &ch)?;
         let (clip, map) = match &worn.motion {
             WornMotion::Clip { clip } => {
                 let im = self.imported_or_missing(clip.source)?;

@@ -224,14 +224,14 @@ mod tests {
         let cols = 60;
         let q = to_lanes(&(0..rows * FRAME_FLOATS).map(|_| next()).collect::<Vec<_>>());
         let t = to_lanes(&(0..cols * FRAME_FLOATS).map(|_| next() * 0.7).collect::<Vec<_>>());
-        let groups = weighted_groups(&[1.0; crate::humanoid::CANON_COUNT]);
+        let groups = weighted_groups(&[1.0; crate::canon::humanoid::CANON_COUNT]);
         let prep = Prepared {
             query_frames: rows,
             min_span: 5,
             max_span: 17,
             threshold: f32::INFINITY,
             max_results: 1,
-            origin: crate::normalize::Origin::Hips,
+            origin: crate::canon::normalize::Origin::Hips,
             groups: groups.clone(),
             query_lanes: &q,
         };

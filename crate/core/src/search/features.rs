@@ -9,8 +9,8 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::clip::Clip;
-use crate::humanoid::{canonical_positions, Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
-use crate::normalize::{body_height, normalize_in_place, Origin};
+use crate::canon::humanoid::{canonical_positions, Canon, HumanoidMap, HumanoidStatus, CANON_COUNT};
+use crate::canon::normalize::{body_height, normalize_in_place, Origin};
 
 use super::SearchError;
 
@@ -357,8 +357,8 @@ impl FeatureIndex {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::demo_clip;
-    use crate::normalize::normalized;
+    use crate::canon::builtin::demo_clip;
+    use crate::canon::normalize::normalized;
 
     #[test]
     fn shoulder_origin_matches_spec_normalisation() {

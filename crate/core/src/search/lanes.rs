@@ -9,7 +9,7 @@
 
 use super::features::FRAME_FLOATS;
 use super::DISTANCE_ORDER;
-use crate::humanoid::CANON_COUNT;
+use crate::canon::humanoid::CANON_COUNT;
 
 /// Joints per group (SIMD width).
 pub const LANES: usize = 4;
@@ -389,7 +389,7 @@ mod tests {
         // Groups without a weighted joint are skipped.
         assert!(weighted_groups(&weights).len() <= GROUPS);
         let mut feet = [0f32; CANON_COUNT];
-        feet[crate::humanoid::Canon::LeftFoot.index()] = 1.0;
+        feet[crate::canon::humanoid::Canon::LeftFoot.index()] = 1.0;
         assert_eq!(weighted_groups(&feet).len(), 1);
     }
 

@@ -34,8 +34,8 @@ use std::ops::ControlFlow;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::humanoid::{Canon, CANON_COUNT};
-use crate::normalize::Origin;
+use crate::canon::humanoid::{Canon, CANON_COUNT};
+use crate::canon::normalize::Origin;
 
 pub use features::{ClipFeatures, FeatureIndex, JointCurve, MotionFeatures, SkippedClip, DEFAULT_INDEX_FPS, FRAME_FLOATS};
 pub use presets::BodyPreset;

@@ -4,8 +4,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::humanoid::{Canon, CANON_COUNT};
-use crate::normalize::Origin;
+use crate::canon::body::{joints_of, Region};
+use crate::canon::humanoid::{Canon, CANON_COUNT};
+use crate::canon::normalize::Origin;
 
 /// The presets the UI offers. Each sets weight 1 on its joints and 0 elsewhere.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -42,21 +43,26 @@ impl BodyPreset {
         BodyPreset::FeetOnly,
     ];
 
-    /// The joints the preset compares.
+    /// The regions of the canonical body it compares ([`crate::canon::body`]); none for the
+    /// whole body (every joint).
+    pub fn regions(self) -> &'static [Region] {
+        match self {
+            BodyPreset::WholeBody => &[],
+            BodyPreset::UpperBody => &[Region::Torso, Region::Head, Region::LeftArm, Region::RightArm],
+            BodyPreset::LowerBody => &[Region::Hips, Region::LeftLeg, Region::RightLeg],
+            BodyPreset::Arms => &[Region::LeftArm, Region::RightArm],
+            BodyPreset::LeftArm => &[Region::LeftArm],
+            BodyPreset::RightArm => &[Region::RightArm],
+            BodyPreset::Legs => &[Region::LeftLeg, Region::RightLeg],
+            BodyPreset::FeetOnly => &[Region::LeftFoot, Region::RightFoot],
+        }
+    }
+
+    /// The joints the preset compares: its regions' joints (every joint for the whole body).
     pub fn joints(self) -> Vec<Canon> {
-        use Canon::*;
-        const LEFT_ARM: [Canon; 4] = [LeftShoulder, LeftUpperArm, LeftForearm, LeftHand];
-        const RIGHT_ARM: [Canon; 4] = [RightShoulder, RightUpperArm, RightForearm, RightHand];
-        const LEGS: [Canon; 8] = [LeftUpperLeg, LeftLowerLeg, LeftFoot, LeftToe, RightUpperLeg, RightLowerLeg, RightFoot, RightToe];
         match self {
             BodyPreset::WholeBody => Canon::ALL.to_vec(),
-            BodyPreset::UpperBody => [Spine, Chest, Neck, Head].into_iter().chain(LEFT_ARM).chain(RIGHT_ARM).collect(),
-            BodyPreset::LowerBody => std::iter::once(Hips).chain(LEGS).collect(),
-            BodyPreset::Arms => LEFT_ARM.into_iter().chain(RIGHT_ARM).collect(),
-            BodyPreset::LeftArm => LEFT_ARM.to_vec(),
-            BodyPreset::RightArm => RIGHT_ARM.to_vec(),
-            BodyPreset::Legs => LEGS.to_vec(),
-            BodyPreset::FeetOnly => vec![LeftFoot, LeftToe, RightFoot, RightToe],
+            _ => joints_of(self.regions()),
         }
     }
 

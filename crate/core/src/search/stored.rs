@@ -26,7 +26,7 @@ use thiserror::Error;
 use xxhash_rust::xxh3::{xxh3_128, Xxh3};
 
 use crate::clip::Clip;
-use crate::normalize::Origin;
+use crate::canon::normalize::Origin;
 
 use super::features::{
     ClipFeatures, FeatureIndex, MotionFeatures, SkippedClip, BOX_CHUNK_FRAMES, FRAME_FLOATS,
@@ -388,8 +388,8 @@ pub fn open_or_build<E>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::demo_clip;
-    use crate::humanoid::HumanoidMap;
+    use crate::canon::builtin::demo_clip;
+    use crate::canon::humanoid::HumanoidMap;
 
     fn demo_index() -> StoredIndex {
         let clip = demo_clip();

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use glam::{EulerRot, Quat, Vec3};
 
 use crate::clip::{Clip, TranslationTrack};
-use crate::humanoid::{Canon, CANON_COUNT};
+use crate::canon::humanoid::{Canon, CANON_COUNT};
 // 0..1 → 0..1 with zero slope at both ends: the motion kernel's one easing curve.
 use crate::motion::smoothstep as smooth;
 use crate::skeleton::{Joint, Skeleton};
@@ -133,7 +133,7 @@ pub fn demo_clip() -> Clip {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::humanoid::{HumanoidMap, HumanoidStatus};
+    use crate::canon::humanoid::{HumanoidMap, HumanoidStatus};
 
     #[test]
     fn canonical_skeleton_maps_onto_itself() {

@@ -11,11 +11,11 @@ use std::sync::Arc;
 
 use glam::{Mat3, Quat, Vec3};
 
-use crate::builtin::canonical_skeleton;
+use crate::canon::builtin::canonical_skeleton;
 use crate::clip::{Clip, TranslationTrack};
-use crate::humanoid::{canonical_positions, Canon, HumanoidMap, CANON_COUNT};
-use crate::actions::procedural::SOLE_HEIGHT;
-use crate::normalize::body_height;
+use crate::canon::humanoid::{canonical_positions, Canon, HumanoidMap, CANON_COUNT};
+use crate::canon::SOLE_HEIGHT;
+use crate::canon::normalize::body_height;
 use crate::skeleton::Skeleton;
 
 fn arc(from: Vec3, to: Vec3) -> Quat {
@@ -133,8 +133,8 @@ pub fn to_canonical(clip: &Clip, map: &HumanoidMap, fps: f32) -> Clip {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::builtin::demo_clip;
-    use crate::normalize::normalized;
+    use crate::canon::builtin::demo_clip;
+    use crate::canon::normalize::normalized;
 
     #[test]
     fn canonical_clip_round_trips_its_own_directions() {
@@ -142,8 +142,8 @@ mod tests {
         let map = HumanoidMap::from_skeleton(&demo.skeleton);
         let c = to_canonical(&demo, &map, 30.0);
         c.validate().unwrap();
-        let a = normalized(&canonical_positions(&demo.resampled(30.0), &map), crate::normalize::Origin::Hips);
-        let b = normalized(&canonical_positions(&c, &HumanoidMap::from_skeleton(&c.skeleton)), crate::normalize::Origin::Hips);
+        let a = normalized(&canonical_positions(&demo.resampled(30.0), &map), crate::canon::normalize::Origin::Hips);
+        let b = normalized(&canonical_positions(&c, &HumanoidMap::from_skeleton(&c.skeleton)), crate::canon::normalize::Origin::Hips);
         let err: f32 = a.iter().zip(&b).map(|(x, y)| (*x - *y).length()).sum::<f32>() / a.len() as f32;
         assert!(err < 0.01, "mean normalised joint error {err}");
     }

@@ -7,7 +7,7 @@
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::humanoid::{Canon, CANON_COUNT};
+use crate::canon::humanoid::{Canon, CANON_COUNT};
 
 /// Which midpoint becomes the origin.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

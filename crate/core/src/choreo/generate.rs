@@ -1,0 +1,569 @@
+//! Generate (spec §G, with §J's goals): how the open bars of a dance are filled, as five stages
+//! run in order, each a function of its inputs with the figure it checks.
+//!
+//! 1. [`fill_stage`]: the minimum-cost path of §G ([`super::fill`]) over the objective's terms.
+//! 2. [`beat_rate_stage`]: the dance's kinetic beats per count, measured on the rendered dance,
+//!    in [`super::BEAT_RATE_BAND`]; if not, refills with the beat-rate term at each weight of
+//!    [`beat_rate_ladder`] and keeps the first dance inside it.
+//! 3. [`free_skate_stage`]: foot skate where it is free ([`super::free_skate_pass`]).
+//! 4. [`skate_stage`]: the dance's foot skate no worse than its source clips'
+//!    ([`skate_goal_cm_per_s`]); if not, refills charging skate at each weight of
+//!    [`skate_ladder`].
+//! 5. [`join_repair_stage`]: every join within [`GenerateOptions::join_jump_goal`]; if not,
+//!    bars the move after the worst join and refills, up to [`GenerateOptions::join_repairs`]
+//!    times, keeping a refill only when it improves that join and keeps what the dance met.
+//!
+//! The measured stages render the dance unheld and measure it as §J does ([`dance_figures`]);
+//! a path's figures are measured once and kept ([`Measured`]). Deterministic: the same library,
+//! bars and options give the same dance.
+
+use std::collections::BTreeSet;
+use std::sync::Arc;
+
+use super::fill::{
+    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
+};
+use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, JOIN_JUMP_GOAL, QUALITY_FPS};
+use super::render::{render, RenderOptions};
+use super::segment::SegmentLibrary;
+use super::table::TableScope;
+use crate::bars::Bar;
+
+/// Refills the join repair tries at most by default ([`GenerateOptions::join_repairs`]).
+pub const JOIN_REPAIRS: usize = 16;
+/// Cost added to a segment in the bar after a join it made too abrupt, so the refill takes
+/// another there: far above any term of the objective (a ban that stays finite, so a bar
+/// whose every segment is banned still gets one).
+const JOIN_BAN: f32 = 100.0;
+
+/// The settings of the pipeline's measured stages (the objective's terms are
+/// [`FillWeights`]). Each field: its default, its range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GenerateOptions {
+    /// Stage 2, [`beat_rate_stage`]: follow the song's beat rate. Default true. Only when the
+    /// objective's own `beat_rate_weight` is 0 (a weight above 0 is used as it is, on every
+    /// song).
+    pub follow_beat_rate: bool,
+    /// Stage 3, [`free_skate_stage`]: how much the objective may rise per bar to take a segment
+    /// whose feet slide less. Default [`super::FREE_SKATE_SLACK_DEFAULT`]; range 0..=10
+    /// (0: stage off).
+    pub free_skate_slack: f32,
+    /// Stage 4, [`skate_stage`]: keep the dance's foot skate no worse than its source clips'.
+    /// Default true.
+    pub follow_skate: bool,
+    /// Stage 5, [`join_repair_stage`]: keep every join within `join_jump_goal`. Default true.
+    pub follow_joins: bool,
+    /// The largest join jump stage 5 accepts (spec §J). Default [`JOIN_JUMP_GOAL`] (1.5);
+    /// range 0..=100.
+    pub join_jump_goal: f32,
+    /// Refills stage 5 tries at most. Default [`JOIN_REPAIRS`] (16); range 0..=64.
+    pub join_repairs: usize,
+}
+
+impl Default for GenerateOptions {
+    fn default() -> Self {
+        GenerateOptions {
+            follow_beat_rate: true,
+            free_skate_slack: FREE_SKATE_SLACK_DEFAULT,
+            follow_skate: true,
+            follow_joins: true,
+            join_jump_goal: JOIN_JUMP_GOAL,
+            join_repairs: JOIN_REPAIRS,
+        }
+    }
+}
+
+impl GenerateOptions {
+    /// Refused with the setting's name, range and value when a number is out of its range.
+    pub fn validate(&self) -> Result<(), super::ChoreoError> {
+        let bad = |name: &str, range: &str, value: f32| Err(super::ChoreoError::BadSetting { name: name.into(), range: range.into(), value });
+        if !(0.0..=10.0).contains(&self.free_skate_slack) {
+            return bad("freeSkateSlack", "0..=10", self.free_skate_slack);
+        }
+        if !(0.0..=100.0).contains(&self.join_jump_goal) {
+            return bad("joinJumpGoal", "0..=100", self.join_jump_goal);
+        }
+        if self.join_repairs > 64 {
+            return bad("joinRepairs", "0..=64", self.join_repairs as f32);
+        }
+        Ok(())
+    }
+}
+
+/// What the pipeline checks of a dance it made (spec §J, on the rendered dance within its bars).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DanceFigures {
+    /// Kinetic beats over the bars' beats (4 a bar in 4/4, 3 in 3/4): 1 turns on every count,
+    /// 0.5 on every other.
+    pub kinetic_per_count: f32,
+    /// Mean foot skate, centimetres per second.
+    pub foot_skate_cm_per_s: f32,
+    /// The largest join jump (spec §J, [`super::quality::join_jumps`]), 0 with one bar.
+    pub join_jump_max: f32,
+    /// The bar after that join (its first bar is 1), if any.
+    pub worst_join_bar: Option<usize>,
+}
+
+/// [`DanceFigures`] of the dance `path` fills `bars` with; `None` when it cannot be measured
+/// (too short, no bars).
+pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<DanceFigures> {
+    let (first, last) = (bars.first()?, bars.last()?);
+    let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
+    // Unheld: holding the feet (a cost on every measure of a refill) only lowers the skate the
+    // filling follows, and each bar keeps its holds only where they keep its beat figures.
+    let clip = render(lib, bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
+    let m = QualityMotion::from_clip(&clip).ok()?;
+    let kinetic = kinetic_beats_secs(&m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
+    let frames = m.frames();
+    let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
+    let skate = summarize_skate(&foot_skate_samples(&m), frame_of(first.start_secs)..frame_of(last.end_secs));
+    let counts: usize = bars.iter().map(Bar::beat_count).sum();
+    // Join jumps as dance_quality measures them (joins at the bars' starts after the first).
+    let joins: Vec<(usize, usize)> = bars.iter().enumerate().skip(1).map(|(i, b)| (i, frame_of(b.start_secs))).filter(|&(_, f)| f + 1 < frames).collect();
+    let jumps = join_jumps(&m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
+    let worst = jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (joins[k].0, j));
+    Some(DanceFigures {
+        kinetic_per_count: kinetic as f32 / counts.max(1) as f32,
+        foot_skate_cm_per_s: skate.mean_cm_per_s,
+        join_jump_max: worst.map_or(0.0, |w| w.1),
+        worst_join_bar: worst.map(|w| w.0),
+    })
+}
+
+/// The counts each bar takes (spec §E, [`super::segment`]'s module docs): its beats, when the
+/// library holds a live segment of that many counts; 0 (any segment) when it holds none.
+pub fn bar_counts(lib: &SegmentLibrary, bars: &[Bar]) -> Vec<usize> {
+    let mut has = BTreeSet::new();
+    for s in lib.segments().iter().filter(|s| !s.retired) {
+        has.insert(s.counts());
+    }
+    bars.iter().map(|b| if has.contains(&b.beat_count()) { b.beat_count() } else { 0 }).collect()
+}
+
+/// The foot skate a dance on `path` should not exceed (spec §J: no worse than its source
+/// clips'): per bar, the mean skate of the source clips of its segment's kind (imported or
+/// built-in), averaged over the bars.
+pub fn skate_goal_cm_per_s(lib: &SegmentLibrary, path: &[usize]) -> f32 {
+    let mut seen = BTreeSet::new();
+    let (mut sum, mut n) = ([0.0f32; 2], [0usize; 2]);
+    for s in lib.segments() {
+        if seen.insert(s.clip) {
+            let k = usize::from(s.builtin.is_some());
+            sum[k] += s.clip_skate_cm_per_s;
+            n[k] += 1;
+        }
+    }
+    let mean = |k: usize| sum[k] / n[k].max(1) as f32;
+    path.iter().map(|&s| mean(usize::from(lib.segments()[s].builtin.is_some()))).sum::<f32>() / path.len().max(1) as f32
+}
+
+/// The filling problem every stage reads: the library, the bars and their layers (open or
+/// pinned), the objective's weights and what they are computed from (the transition table of
+/// the song's metres, each segment's node cost, the bars' and segments' count rates and
+/// metres, and each segment's beat-rate cost at each bar's count rate when a stage needs it).
+pub struct Problem<'a> {
+    pub lib: &'a SegmentLibrary,
+    pub bars: &'a [Bar],
+    pub layers: &'a [Layer],
+    pub weights: FillWeights,
+    table: Arc<TransitionTable>,
+    intensity: Vec<f32>,
+    node_cost: Vec<f32>,
+    bar_counts: Vec<usize>,
+    segment_counts: Vec<usize>,
+    bar_bpm: Vec<f32>,
+    segment_bpm: Vec<f32>,
+    beat_rate: Vec<Vec<f32>>,
+    /// Whether stage 2 runs (its switch on, no fixed beat-rate weight, rates measured).
+    follow_beat_rate: bool,
+    /// Stage 3's slack ([`GenerateOptions::free_skate_slack`]).
+    free_skate_slack: f32,
+}
+
+impl<'a> Problem<'a> {
+    /// The problem of filling `layers` (one per bar of `bars`) from `lib` with `weights`.
+    pub fn new(lib: &'a SegmentLibrary, bars: &'a [Bar], layers: &'a [Layer], weights: FillWeights, options: &GenerateOptions) -> Self {
+        // The joins this song's bars make (its metres, and any change between two bars).
+        let bar_counts = bar_counts(lib, bars);
+        let table = lib.transition_table_for(weights.repeat_penalty, &TableScope::for_bar_counts(&bar_counts));
+        let intensity: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
+        let beat_fit: Vec<f32> = lib.segments().iter().map(|s| s.beat_fit).collect();
+        let builtin: Vec<bool> = lib.segments().iter().map(|s| s.builtin.is_some()).collect();
+        // Skate beyond the source clip's own (the §J goal is "no worse than the source clips'").
+        let skate: Vec<f32> = lib.segments().iter().map(|s| (s.skate_cm_per_s - s.clip_skate_cm_per_s).max(0.0)).collect();
+        let node_cost = node_costs_with_skate(&weights, &beat_fit, &builtin, &skate);
+        // The bar's metre: a bar of n beats takes segments of n counts (0: any), played at n
+        // counts over the bar.
+        let segment_counts: Vec<usize> = lib.segments().iter().map(|s| s.counts()).collect();
+        let bar_bpm: Vec<f32> = bars.iter().zip(&bar_counts).map(|(b, &n)| if n == 0 { bar_count_rate_bpm(b.duration_secs()) } else { count_rate_bpm(n, b.duration_secs()) }).collect();
+        let segment_bpm: Vec<f32> = lib.segments().iter().map(|s| s.tempo_bpm).collect();
+        // Each segment's kinetic beats per count at each bar's count rate, and its beat-rate cost.
+        let follow = options.follow_beat_rate && weights.beat_rate_weight == 0.0;
+        let kinetic: Vec<Vec<f32>> = if follow || weights.beat_rate_weight > 0.0 {
+            bar_bpm.iter().map(|&r| lib.segments().iter().map(|s| s.kinetic_per_count_at(r)).collect()).collect()
+        } else {
+            Vec::new()
+        };
+        let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
+        let follow_beat_rate = follow && !kinetic.is_empty();
+        Problem { lib, bars, layers, weights, table, intensity, node_cost, bar_counts, segment_counts, bar_bpm, segment_bpm, beat_rate, follow_beat_rate, free_skate_slack: options.free_skate_slack }
+    }
+
+    /// The count rates and metres of the problem, with `extra` added per bar and segment.
+    fn tempi<'b>(&'b self, extra: &'b [Vec<f32>]) -> Tempi<'b> {
+        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts }
+    }
+
+    /// The minimum-cost path with `weights` and `extra` costs.
+    fn fill(&self, weights: &FillWeights, extra: &[Vec<f32>]) -> Result<Vec<usize>, FillError> {
+        Ok(fill_with_tempi(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(extra), weights)?.0)
+    }
+
+    /// [`free_skate_pass`] over the problem with `weights` and `extra` costs.
+    fn free_skate(&self, weights: &FillWeights, extra: &[Vec<f32>], path: &[usize]) -> (Vec<usize>, f32) {
+        let excess = |t: usize, s: usize| self.skate_excess(t, s);
+        free_skate_pass(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(extra), weights, self.free_skate_slack, &excess, path)
+    }
+
+    /// Segment `s`'s skate above its clip's as bar `t` plays it: its feet slide faster by the
+    /// factor it is sped up by (a salsa bar at 80 counts per minute on a bar at 140 slides 1.75
+    /// times as fast), against its clip's at the clip's own tempo.
+    pub fn skate_excess(&self, t: usize, s: usize) -> f32 {
+        let seg = &self.lib.segments()[s];
+        let speed_up = if seg.tempo_bpm > 0.0 && self.bar_bpm[t] > 0.0 { self.bar_bpm[t] / seg.tempo_bpm } else { 1.0 };
+        seg.skate_cm_per_s * speed_up - seg.clip_skate_cm_per_s
+    }
+}
+
+/// The figures of the paths measured so far (a render and a measure each: kept, not redone).
+#[derive(Default)]
+pub struct Measured {
+    done: Vec<(Vec<usize>, Option<DanceFigures>)>,
+}
+
+impl Measured {
+    /// [`dance_figures`] of `path`, measured once.
+    pub fn of(&mut self, p: &Problem, path: &[usize]) -> Option<DanceFigures> {
+        if let Some((_, f)) = self.done.iter().find(|(q, _)| q == path) {
+            return *f;
+        }
+        let f = dance_figures(p.lib, p.bars, path);
+        self.done.push((path.to_vec(), f));
+        f
+    }
+}
+
+/// Stage 1: the minimum-cost path of spec §G over the objective's terms ([`super::fill`]).
+pub fn fill_stage(p: &Problem) -> Result<Vec<usize>, FillError> {
+    p.fill(&p.weights, &[])
+}
+
+/// Stage 2: the dance's kinetic beat rate near the song's ([`GenerateOptions::follow_beat_rate`]),
+/// measured on the dance itself as §J measures it (the segments' own rates at the bars' count
+/// rates miss what the joins and neighbours add: 0.2 a count on slow songs). Figure: kinetic
+/// beats per count in [`super::BEAT_RATE_BAND`]. When `path`'s dance is outside it, refills with the
+/// beat-rate term at each weight of [`beat_rate_ladder`], weakest first, and returns the first
+/// dance inside it with the weights that made it; else `path` and the problem's weights.
+pub fn beat_rate_stage(p: &Problem, path: Vec<usize>, measured: &mut Measured) -> Result<(Vec<usize>, FillWeights), FillError> {
+    if !p.follow_beat_rate {
+        return Ok((path, p.weights));
+    }
+    let first = measured.of(p, &path);
+    if first.is_some_and(|f| !in_beat_rate_band(f.kinetic_per_count)) {
+        for w in beat_rate_ladder() {
+            let stronger = FillWeights { beat_rate_weight: w, ..p.weights };
+            let q = p.fill(&stronger, &[])?;
+            if measured.of(p, &q).is_some_and(|f| in_beat_rate_band(f.kinetic_per_count)) {
+                return Ok((q, stronger));
+            }
+        }
+    }
+    Ok((path, p.weights))
+}
+
+/// Stage 3: foot skate where it is free ([`free_skate_pass`] with
+/// [`GenerateOptions::free_skate_slack`]): returns the path and its cost (the full objective
+/// with `weights`).
+pub fn free_skate_stage(p: &Problem, weights: &FillWeights, path: &[usize]) -> (Vec<usize>, f32) {
+    p.free_skate(weights, &[], path)
+}
+
+/// Stage 4: foot skate no worse than the source clips' ([`GenerateOptions::follow_skate`]).
+/// Figure: the dance's mean foot skate ≤ [`skate_goal_cm_per_s`]. When `path`'s dance slides
+/// more, refills charging each segment's skate above its clip's as the bar plays it at each
+/// weight of [`skate_ladder`], weakest first, and returns the first dance within the goal (and
+/// still in the beat-rate band, if `path`'s was); else `path` and `cost`.
+pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
+    let Some(before) = measured.of(p, &path).filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(p.lib, &path)) else {
+        return Ok((path, cost));
+    };
+    let on_beat = in_beat_rate_band(before.kinetic_per_count);
+    let over: Vec<Vec<f32>> = (0..p.layers.len()).map(|t| (0..p.lib.len()).map(|s| p.skate_excess(t, s).max(0.0) / 100.0).collect()).collect();
+    for w in skate_ladder() {
+        let extra: Vec<Vec<f32>> = over.iter().map(|v| v.iter().map(|x| w * x).collect()).collect();
+        let q = p.fill(weights, &extra)?;
+        let (q, c) = p.free_skate(weights, &[], &q);
+        let Some(f) = measured.of(p, &q) else { continue };
+        if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)) {
+            return Ok((q, c));
+        }
+    }
+    Ok((path, cost))
+}
+
+/// Stage 5: joins no more abrupt than [`GenerateOptions::join_jump_goal`]
+/// ([`GenerateOptions::follow_joins`]), measured on the dance: the table's cost (§G, link
+/// directions and end gaps) misses some abrupt joins, e.g. between two crouched moves of the
+/// Indian clips in 3/4, where fewer moves fit a bar. Figure: the largest join jump.
+///
+/// Each refill bars, from every bar, the move after the worst join of the last refill (the same
+/// move makes the same abrupt join wherever the filling puts it after a like move), so the bars
+/// add up over the tries. A refill whose feet slide past the goal the dance met makes the next
+/// one charge skate too, at the next weight of [`skate_ladder`]. The best dance that keeps what
+/// the first one met (beat-rate band, skate goal) with a better worst join is returned; else
+/// `path` and `cost`.
+pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
+    let (mut path, mut cost) = (path, cost);
+    if p.layers.len() < 2 {
+        return Ok((path, cost));
+    }
+    let current = measured.of(p, &path);
+    let (mut trial_path, mut trial) = (path.clone(), current);
+    let mut best = current;
+    let skate_met = current.is_some_and(|f| f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &path));
+    let on_beat = current.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
+    let mut ban: Vec<Vec<f32>> = Vec::new();
+    let mut skate_weights = skate_ladder();
+    let mut skate_weight = 0.0f32;
+    for _ in 0..options.join_repairs {
+        let Some(f) = trial else { break };
+        let joins_ok = f.join_jump_max <= options.join_jump_goal;
+        let skate_ok = !skate_met || f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &trial_path);
+        if joins_ok && skate_ok {
+            break;
+        }
+        if ban.is_empty() {
+            ban = vec![vec![0.0; p.lib.len()]; p.layers.len()];
+        }
+        if !joins_ok {
+            // The bar after the join takes another move (the one before it, when that one is
+            // pinned; both pinned: nothing to change).
+            let Some(bar) = f.worst_join_bar else { break };
+            let Some(t) = [bar, bar - 1].into_iter().find(|&t| matches!(p.layers[t], Layer::Open { .. })) else { break };
+            let s = trial_path[t];
+            for v in ban.iter_mut() {
+                v[s] += JOIN_BAN;
+            }
+        }
+        if !skate_ok {
+            let Some(w) = skate_weights.next() else { break };
+            skate_weight = w;
+        }
+        let extra: Vec<Vec<f32>> = ban.iter().enumerate().map(|(t, v)| v.iter().enumerate().map(|(s, b)| b + skate_weight * p.skate_excess(t, s).max(0.0) / 100.0).collect()).collect();
+        let q = p.fill(weights, &extra)?;
+        let (q, c) = p.free_skate(weights, &extra, &q);
+        let after = measured.of(p, &q);
+        if let (Some(a), Some(b)) = (after, best) {
+            // Kept only when its worst join is better and nothing the dance met is lost: the
+            // beat rate's band, and the skate goal.
+            let keeps_rate = !on_beat || in_beat_rate_band(a.kinetic_per_count);
+            let keeps_skate = !skate_met || a.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q);
+            if a.join_jump_max < b.join_jump_max && keeps_rate && keeps_skate {
+                (path, cost, best) = (q.clone(), c, after);
+            }
+        }
+        (trial_path, trial) = (q, after);
+    }
+    Ok((path, cost))
+}
+
+/// The whole pipeline: stages 1 to 5 in order on the problem of filling `layers` (one per bar
+/// of `bars`) from `lib`. Returns one segment per bar (pinned bars keep theirs) and the path's
+/// cost (the full objective).
+pub fn generate(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: FillWeights, options: &GenerateOptions) -> Result<(Vec<usize>, f32), FillError> {
+    let p = Problem::new(lib, bars, layers, weights, options);
+    let mut measured = Measured::default();
+    let path = fill_stage(&p)?;
+    let (path, weights) = beat_rate_stage(&p, path, &mut measured)?;
+    let (path, cost) = free_skate_stage(&p, &weights, &path);
+    let (path, cost) = if options.follow_skate { skate_stage(&p, &weights, path, cost, &mut measured)? } else { (path, cost) };
+    if options.follow_joins {
+        join_repair_stage(&p, &weights, options, path, cost, &mut measured)
+    } else {
+        Ok((path, cost))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::choreo::fill::path_cost_with_tempi;
+    use crate::choreo::grid::bars_from_tempo;
+    use std::sync::OnceLock;
+
+    /// The built-in library, made once for every test here.
+    fn builtin() -> &'static SegmentLibrary {
+        static LIB: OnceLock<SegmentLibrary> = OnceLock::new();
+        LIB.get_or_init(SegmentLibrary::builtin)
+    }
+
+    fn open_layers(bars: &[Bar]) -> Vec<Layer> {
+        bars.iter().map(|b| Layer::Open { intensity: b.intensity }).collect()
+    }
+
+    /// Eight bars at `bpm` in 4/4, the intensity rising over the song.
+    fn bars_at(bpm: f32) -> Vec<Bar> {
+        let secs = 8.0 * 4.0 * 60.0 / bpm + 0.01;
+        bars_from_tempo(secs, bpm, 4, 0.0, |a, _| (a / secs).clamp(0.0, 1.0)).unwrap()
+    }
+
+    fn cost(p: &Problem, weights: &FillWeights, path: &[usize]) -> f32 {
+        path_cost_with_tempi(&p.table, p.layers, &p.intensity, &p.node_cost, &p.tempi(&[]), weights, path)
+    }
+
+    #[test]
+    fn stage_1_no_one_bar_change_lowers_the_objective() {
+        let lib = builtin();
+        let bars = bars_at(120.0);
+        let layers = open_layers(&bars);
+        let opts = GenerateOptions::default();
+        let p = Problem::new(lib, &bars, &layers, FillWeights { repeat_window: 1, ..FillWeights::default() }, &opts);
+        let path = fill_stage(&p).unwrap();
+        assert_eq!(path.len(), bars.len());
+        let best = cost(&p, &p.weights, &path);
+        assert!(best.is_finite());
+        // A reference the filling does not use: every path that differs from it in one bar.
+        for t in 0..path.len() {
+            for s in 0..lib.len() {
+                let mut q = path.clone();
+                q[t] = s;
+                assert!(cost(&p, &p.weights, &q) >= best - 1e-4, "bar {t} → segment {s} is cheaper than the filling's path");
+            }
+        }
+    }
+
+    #[test]
+    fn stage_2_brings_a_dance_off_the_beat_rate_into_the_band_and_leaves_one_on_it() {
+        let lib = builtin();
+        let bars = bars_at(120.0);
+        let layers = open_layers(&bars);
+        let p = Problem::new(lib, &bars, &layers, FillWeights::default(), &GenerateOptions::default());
+        let mut m = Measured::default();
+        // The segment that turns most often a count at this count rate, in every bar: far off
+        // one or one-half turn a count.
+        let rate = count_rate_bpm(4, bars[0].duration_secs());
+        let busiest = (0..lib.len()).max_by(|&a, &b| lib.segments()[a].kinetic_per_count_at(rate).total_cmp(&lib.segments()[b].kinetic_per_count_at(rate))).unwrap();
+        let off: Vec<usize> = (0..bars.len()).map(|t| if t % 2 == 0 { busiest } else { (busiest + 1) % lib.len() }).collect();
+        let before = m.of(&p, &off).unwrap();
+        assert!(!in_beat_rate_band(before.kinetic_per_count), "the control is on the beat rate: {before:?}");
+        let (fixed, w) = beat_rate_stage(&p, off.clone(), &mut m).unwrap();
+        assert_ne!(fixed, off);
+        assert!(w.beat_rate_weight > 0.0);
+        let after = m.of(&p, &fixed).unwrap();
+        assert!(in_beat_rate_band(after.kinetic_per_count), "{after:?}");
+        // A dance inside the band is left as it is, with the problem's weights.
+        let (same, w) = beat_rate_stage(&p, fixed.clone(), &mut m).unwrap();
+        assert_eq!((same, w), (fixed, p.weights));
+        // Off: nothing measured, nothing changed.
+        let q = Problem::new(lib, &bars, &layers, FillWeights::default(), &GenerateOptions { follow_beat_rate: false, ..GenerateOptions::default() });
+        let mut fresh = Measured::default();
+        assert_eq!(beat_rate_stage(&q, off.clone(), &mut fresh).unwrap().0, off);
+        assert!(fresh.done.is_empty());
+    }
+
+    #[test]
+    fn stage_3_trades_at_most_its_slack_per_bar_for_less_skate() {
+        let lib = crate::choreo::segment::tests::small_library_with_an_imported_clip();
+        let bars = bars_at(120.0);
+        let layers = open_layers(&bars);
+        let p = Problem::new(&lib, &bars, &layers, FillWeights::default(), &GenerateOptions::default());
+        let path = fill_stage(&p).unwrap();
+        let before = cost(&p, &p.weights, &path);
+        // No slack: the path and its cost as they were.
+        let none = Problem::new(&lib, &bars, &layers, FillWeights::default(), &GenerateOptions { free_skate_slack: 0.0, ..GenerateOptions::default() });
+        let (same, c) = free_skate_stage(&none, &none.weights, &path);
+        assert_eq!(same, path);
+        assert!((c - before).abs() < 1e-4);
+        // A generous slack: each bar it changes slides less, and the objective rises by at most
+        // the slack per bar changed.
+        let slack = 0.5;
+        let loose = Problem::new(&lib, &bars, &layers, FillWeights::default(), &GenerateOptions { free_skate_slack: slack, ..GenerateOptions::default() });
+        let (q, c) = free_skate_stage(&loose, &loose.weights, &path);
+        let changed: Vec<usize> = (0..path.len()).filter(|&t| q[t] != path[t]).collect();
+        for &t in &changed {
+            assert!(p.skate_excess(t, q[t]) < p.skate_excess(t, path[t]), "bar {t} took a move that slides no less");
+        }
+        assert!(c <= before + slack * changed.len() as f32 + 1e-4, "cost {c} from {before} over {} bars", changed.len());
+    }
+
+    #[test]
+    fn stage_4_brings_a_sliding_dance_within_its_sources_skate() {
+        let lib = crate::choreo::segment::tests::small_library_with_an_imported_clip();
+        let bars = bars_at(160.0);
+        let layers = open_layers(&bars);
+        let p = Problem::new(&lib, &bars, &layers, FillWeights::default(), &GenerateOptions::default());
+        let mut m = Measured::default();
+        // The control: of the dances that hold one segment or alternate two (bars sped up to
+        // 160 BPM, where feet slide faster), the one whose feet slide most above its goal.
+        let n = lib.len();
+        let mut scored: Vec<(f32, Vec<usize>)> = (0..n * n)
+            .map(|k| {
+                let q: Vec<usize> = (0..bars.len()).map(|t| if t % 2 == 0 { k / n } else { k % n }).collect();
+                (m.of(&p, &q).map_or(f32::MIN, |f| f.foot_skate_cm_per_s - skate_goal_cm_per_s(&lib, &q)), q)
+            })
+            .collect();
+        scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let sliding = scored.pop().unwrap().1;
+        let before = m.of(&p, &sliding).unwrap();
+        let goal = skate_goal_cm_per_s(&lib, &sliding);
+        assert!(before.foot_skate_cm_per_s > goal, "the control does not slide past its goal: {before:?} against {goal}");
+        let (q, _) = skate_stage(&p, &p.weights, sliding.clone(), 0.0, &mut m).unwrap();
+        let after = m.of(&p, &q).unwrap();
+        assert!(after.foot_skate_cm_per_s <= skate_goal_cm_per_s(&lib, &q), "{after:?}");
+        // A dance within the goal is left as it is (its cost too).
+        let (same, c) = skate_stage(&p, &p.weights, q.clone(), 7.0, &mut m).unwrap();
+        assert_eq!((same, c), (q, 7.0));
+    }
+
+    #[test]
+    fn stage_5_smooths_an_abrupt_join_and_leaves_smooth_ones() {
+        let lib = builtin();
+        let bars = bars_at(120.0);
+        let layers = open_layers(&bars);
+        let opts = GenerateOptions::default();
+        let p = Problem::new(lib, &bars, &layers, FillWeights::default(), &opts);
+        let mut m = Measured::default();
+        // The filling's own dance at 120 BPM has smooth joins: left as it was.
+        let path = fill_stage(&p).unwrap();
+        let f = m.of(&p, &path).unwrap();
+        assert!(f.join_jump_max <= opts.join_jump_goal, "{f:?}");
+        let (same, _) = join_repair_stage(&p, &p.weights, &opts, path.clone(), 0.0, &mut m).unwrap();
+        assert_eq!(same, path);
+        // A strict goal (below what this dance has) makes it look for smoother joins: the dance
+        // it returns has a smaller worst join than the one it was given, or is that one.
+        let strict = GenerateOptions { join_jump_goal: f.join_jump_max * 0.5, ..opts };
+        let (q, _) = join_repair_stage(&p, &p.weights, &strict, path.clone(), 0.0, &mut m).unwrap();
+        let g = m.of(&p, &q).unwrap();
+        assert!(q == path || g.join_jump_max < f.join_jump_max, "{g:?} against {f:?}");
+        // No tries: nothing changes.
+        let none = GenerateOptions { join_repairs: 0, ..strict };
+        assert_eq!(join_repair_stage(&p, &p.weights, &none, path.clone(), 0.0, &mut m).unwrap().0, path);
+    }
+
+    #[test]
+    fn the_pipeline_is_its_stages_in_order() {
+        let lib = crate::choreo::segment::tests::small_library_with_an_imported_clip();
+        let bars = bars_at(100.0);
+        let layers = open_layers(&bars);
+        let opts = GenerateOptions::default();
+        let (whole, cost) = generate(&lib, &bars, &layers, FillWeights::default(), &opts).unwrap();
+        let p = Problem::new(&lib, &bars, &layers, FillWeights::default(), &opts);
+        let mut m = Measured::default();
+        let path = fill_stage(&p).unwrap();
+        let (path, w) = beat_rate_stage(&p, path, &mut m).unwrap();
+        let (path, c) = free_skate_stage(&p, &w, &path);
+        let (path, c) = skate_stage(&p, &w, path, c, &mut m).unwrap();
+        let (path, c) = join_repair_stage(&p, &w, &opts, path, c, &mut m).unwrap();
+        assert_eq!((whole, cost), (path, c));
+    }
+}
