@@ -1,5 +1,5 @@
 // Odori app bootstrap: loads the wasm engine, opens the viewer, wires the UI modules.
-import init, { Library, Viewer, Song, DemoSong, TextAnimator, Project, SearchIndex, tempoLimits, version } from "./pkg/odori.js";
+import init, { Library, Viewer, Song, DemoSong, TextAnimator, Project, SearchIndex, tempoLimits, envelopeDefinition, version } from "./pkg/odori.js";
 import { LibraryPanel } from "./ui/library-panel.js";
 import { Player } from "./ui/player.js";
 import { FileLoader } from "./ui/files.js";
@@ -301,7 +301,7 @@ function bindPage(messages) {
 
 /** The song's analysis and the envelope it was made from (the project keeps the envelope). */
 async function analyse(buffer) {
-  const env = await rmsEnvelope(buffer);
+  const env = await rmsEnvelope(buffer, envelopeDefinition());
   return { song: Song.fromEnvelope(env.hopSecs, env.bands), env };
 }
 

@@ -12,7 +12,8 @@
 // centimetres), for Blender and other tools.
 import { readFileSync, writeFileSync } from "node:fs";
 import { fileURLToPath } from "node:url";
-import { initSync, Library, Song, DemoSong, Choreographer, version } from "odori";
+import { basename } from "node:path";
+import { initSync, Library, DemoSong, Project, rmsEnvelope, version } from "odori";
 
 initSync({ module: readFileSync(fileURLToPath(import.meta.resolve("odori/odori_bg.wasm"))) });
 
@@ -72,12 +73,15 @@ if (songPath) {
   channels = [demo.samples];
   sampleRate = demo.sampleRateHz;
 }
-const song = Song.fromSamples(channels, sampleRate);
-const grid = song.grid();
-const choreo = new Choreographer();
-choreo.setBars(grid.bars);
-const { filled } = choreo.generate();
+// The project holds the dance: the song (its bytes and the loudness envelope the engine
+// computes from the samples), its grid, and the moves by stable keys.
+const project = new Project();
+const env = rmsEnvelope(channels, sampleRate);
+project.setSong(songPath ? basename(songPath) : "demo", songPath ? new Uint8Array(readFileSync(songPath)) : undefined, env.hopSecs, env.bands);
+const grid = project.grid();
+const { filled } = project.generate();
 const library = new Library();
-const dance = choreo.renderDance(library);
+const dance = project.renderDance(library);
+// `project.save()` gives the .odori file (the app and <odori-player> open it).
 const out = writeDance(outPath, library, dance, grid);
 console.log(`${songPath || "demo song"}: ${grid.bpm.toFixed(1)} BPM, ${grid.bars.length} bars, ${filled} filled with built-in moves → ${outPath} (${out.frames.length} frames × ${out.joints.length} joints)`);

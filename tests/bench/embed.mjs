@@ -119,11 +119,11 @@ for (const [key, songFile] of [["demo", null], ["song", SONG]]) {
     const p = new engine.Project();
     if (songB64) {
       const bytes = Uint8Array.from(atob(songB64), (c) => c.charCodeAt(0));
-      const env = await rmsEnvelope(await decodeSong(bytes, "song.ogg"));
+      const env = await rmsEnvelope(await decodeSong(bytes, "song.ogg"), engine.envelopeDefinition());
       p.setSong("song.ogg", bytes, env.hopSecs, env.bands, undefined);
     } else {
       const demo = engine.DemoSong.render(44100);
-      const env = await rmsEnvelope(bufferFromSamples(demo.samples, demo.sampleRateHz));
+      const env = await rmsEnvelope(bufferFromSamples(demo.samples, demo.sampleRateHz), engine.envelopeDefinition());
       p.setSong("Demo song (built-in)", undefined, env.hopSecs, env.bands, undefined);
     }
     p.generate();

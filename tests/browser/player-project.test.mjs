@@ -40,13 +40,13 @@ async function makeProject(page, songFile, characterFile, times) {
     if (songB64) {
       const bytes = Uint8Array.from(atob(songB64), (c) => c.charCodeAt(0));
       buffer = await decodeSong(bytes, "song.ogg");
-      env = await rmsEnvelope(buffer);
+      env = await rmsEnvelope(buffer, engine.envelopeDefinition());
       p.setSong("song.ogg", bytes, env.hopSecs, env.bands, undefined);
     } else {
       const demo = engine.DemoSong.render(44100);
       buffer = bufferFromSamples(demo.samples, demo.sampleRateHz);
       demo.free();
-      env = await rmsEnvelope(buffer);
+      env = await rmsEnvelope(buffer, engine.envelopeDefinition());
       p.setSong("Demo song (built-in)", undefined, env.hopSecs, env.bands, undefined);
     }
     p.setName("Test dance");

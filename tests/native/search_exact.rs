@@ -9,7 +9,7 @@ use common::{reference_search, Rng};
 use odori_core::humanoid::CANON_COUNT;
 use odori_core::normalize::Origin;
 use odori_core::search::{
-    joined_bound, no_progress, search, search_bounded_cached, search_plain, search_probe_cached, search_threads, SearchCache, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures,
+    joined_bound, merge_parts, no_progress, search, search_bounded_cached, search_plain, search_probe_cached, search_threads, SearchCache, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures,
     SearchError, SearchOutcome, SearchParams, FRAME_FLOATS,
 };
 
@@ -121,20 +121,20 @@ fn split_search(index: &FeatureIndex, parts: usize, query: &ClipFeatures, params
         .collect();
     let lists: Vec<&[f32]> = probes.iter().map(|p| p.as_slice()).collect();
     let bound = joined_bound(&lists, params.max_results);
-    let mut matches = Vec::new();
+    let mut answers = Vec::new();
     for (p, cache) in owned.iter().zip(&mut caches) {
         let r = search_bounded_cached(&p.0, query, params, bound, cache, &mut no_progress());
         if !usable(&r) {
             continue;
         }
-        for mut m in r.expect("bounded search").matches {
+        let mut answer = r.expect("bounded search");
+        for m in &mut answer.matches {
             m.clip_index = p.1[m.clip_index];
-            matches.push(m);
         }
+        answers.push(answer);
     }
-    matches.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.clip_index.cmp(&b.clip_index)).then(a.end_frame.cmp(&b.end_frame)));
-    matches.truncate(params.max_results);
-    (SearchOutcome { matches, ..SearchOutcome::default() }, bound)
+    // The merge the app's page asks the engine for (SearchIndex.mergeOutcomes).
+    (merge_parts(answers, params.max_results), bound)
 }
 
 fn random_params(rng: &mut Rng, round: usize) -> SearchParams {
@@ -205,6 +205,9 @@ fn fast_equals_reference_on_random_motion() {
         // The web app's workers: whole clips in 2–3 parts, round 2 from the joined probes' bound.
         let (split, bound) = split_search(&index, 2 + round % 2, &query, &params);
         assert_same(&format!("split in {} parts from bound {bound}, {what}", 2 + round % 2), &split, &reference, (&query, &index, &params));
+        // The merged shortfall is the whole library's (every part's counts are exact when short).
+        assert_eq!(split.shortfall, fast.shortfall, "{what}: merged shortfall");
+        assert_eq!(split.stats.frames_searched, fast.stats.frames_searched, "{what}: merged frames searched");
         if let Some(kth) = reference.get(params.max_results - 1) {
             assert!(bound >= kth.3, "{what}: the joined bound {bound} is below the k-th result's distance {}", kth.3);
         }

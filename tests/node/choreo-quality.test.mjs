@@ -1,6 +1,6 @@
-// The dance quality readout (spec §J) from Node, as an npm user gets it: a dance generated on the
-// demo song with a real salsa clip in the library, measured per bar and whole; bad beats are a
-// typed error.
+// The dance quality readout (spec §J) from Node, as an npm user gets it: a Project's dance
+// generated on the demo song with a real salsa clip in its library, measured per bar and whole;
+// bad beats are a typed error; the filling's settings are project edits.
 import { test } from "node:test";
 import assert from "node:assert/strict";
 import { readFileSync, existsSync } from "node:fs";
@@ -12,20 +12,28 @@ const data = join(root, "..", "shared", "data");
 if (!existsSync(data)) throw new Error(`../shared/data is missing: these tests read the shared real data beside the repository (${data})`);
 const pkg = await import(join(root, "pkg", "odori.js"));
 pkg.initSync({ module: readFileSync(join(root, "pkg", "odori_bg.wasm")) });
-const { Library, Song, DemoSong, Choreographer } = pkg;
+const { Library, DemoSong, Project, rmsEnvelope } = pkg;
+
+const demo = DemoSong.render(44100);
+const env = rmsEnvelope([demo.samples], demo.sampleRateHz);
+
+/** A project on the demo song with a real salsa clip in its dance library. */
+function salsaProject() {
+  const lib = new Library();
+  const p = new Project();
+  p.setSong("Demo song (built-in)", undefined, env.hopSecs, env.bands, undefined);
+  const report = p.importInto(lib, "salsa_01.bvh", new Uint8Array(readFileSync(join(data, "mocap/cmu-salsa/salsa_01.bvh"))), { fpsOverride: 60 });
+  assert.equal(report.clips.length, 1);
+  assert.ok(p.clips()[0].cut, `salsa_01 is cut into moves: ${JSON.stringify(p.clips()[0])}`);
+  return p;
+}
 
 test("quality of a generated dance: beat alignment above its half-shifted control, per bar and whole", () => {
-  const lib = new Library();
-  const salsa = lib.importFile("salsa_01.bvh", new Uint8Array(readFileSync(join(data, "mocap/cmu-salsa/salsa_01.bvh"))), { fpsOverride: 60 }).clips[0];
-  const demo = DemoSong.render(44100);
-  const song = Song.fromSamples([demo.samples], demo.sampleRateHz);
-  const grid = song.grid();
-  const ch = new Choreographer();
-  ch.setBars(grid.bars);
-  ch.addClip(lib, salsa.id);
-  while (ch.prepareTable(256) < 1) { /* slices of the join table */ }
-  ch.generate();
-  const q = ch.quality(new Float32Array(grid.beatTimesSecs));
+  const p = salsaProject();
+  const grid = p.grid();
+  while (p.prepareTable(256) < 1) { /* slices of the join table */ }
+  p.generate();
+  const q = p.quality(new Float32Array(grid.beatTimesSecs));
   assert.equal(q.bars.length, grid.bars.length);
   assert.ok(q.bars[0].joinJump == null, "the first bar has no join");
   assert.ok(q.bars.slice(1).every((b) => Number.isFinite(b.joinJump)), "every bar after the first has a join jump");
@@ -34,39 +42,39 @@ test("quality of a generated dance: beat alignment above its half-shifted contro
   assert.ok(Number.isFinite(q.footSkate.meanCmPerS) && q.footSkate.contacts > 0, JSON.stringify(q.footSkate));
   assert.ok(q.joinJumpMean <= q.joinJumpMax && Number.isFinite(q.pfc));
   // Without beats the bars' quarters are used.
-  const own = ch.quality();
+  const own = p.quality();
   assert.ok(own.beats.basMusic > 0 && own.bars.length === q.bars.length);
   // Beats out of order are refused with the offending one named.
-  assert.throws(() => ch.quality(new Float32Array([1, 0.5])), (e) => e.name === "OdoriError" && e.kind === "bad-argument" && /beat 1/.test(e.message));
-  // The filling's new settings are checked.
-  ch.setBeatWeight(0.5);
-  ch.setOwnMovesPreference(0);
-  assert.throws(() => ch.setBeatWeight(-1), (e) => e.name === "OdoriError" && /beatWeight/.test(e.message));
+  assert.throws(() => p.quality(new Float32Array([1, 0.5])), (e) => e.name === "OdoriError" && e.kind === "bad-argument" && /beat 1/.test(e.message));
+  // The filling's settings are project edits, kept in the document and checked.
+  p.setBeatWeight(0.5);
+  p.setOwnMovesPreference(0);
+  const fill = p.doc().dance.settings.fill;
+  assert.deepEqual([fill.beatWeight, fill.ownMovesPreference], [0.5, 0], JSON.stringify(fill));
+  assert.throws(() => p.setBeatWeight(-1), (e) => e.name === "OdoriError" && /beatWeight/.test(e.message));
+  assert.throws(() => p.setOwnMovesPreference(101), (e) => e.name === "OdoriError" && /ownMovesPreference/.test(e.message));
+  assert.equal(p.undo(), true);
+  const back = p.doc().dance.settings.fill.ownMovesPreference;
+  assert.ok(Math.abs(back - 0.03) < 1e-6, `undo takes the preference back to its default 0.03: ${back}`);
 });
 
 test("a bar in 3 is danced with 3-count moves, a bar set back to 4 with 4-count ones", () => {
-  const lib = new Library();
-  const salsa = lib.importFile("salsa_01.bvh", new Uint8Array(readFileSync(join(data, "mocap/cmu-salsa/salsa_01.bvh"))), { fpsOverride: 60 }).clips[0];
-  const demo = DemoSong.render(44100);
-  const song = Song.fromSamples([demo.samples], demo.sampleRateHz);
+  const p = salsaProject();
   // The person sets the metre to 3: every bar has 3 beats.
-  const inThree = song.correct({ beatsPerBar: 3 });
+  p.correctGrid({ beatsPerBar: 3 });
+  const inThree = p.grid();
   assert.ok(inThree.bars.length > 4 && inThree.bars.every((b) => b.beats === 3), JSON.stringify(inThree.bars[0]));
-  const ch = new Choreographer();
-  ch.setBars(inThree.bars);
-  ch.addClip(lib, salsa.id);
-  while (ch.prepareTable(256) < 1) { /* slices of the join table */ }
-  const counts = (i) => ch.segment(i).countFrames.length - 1;
-  assert.ok(ch.candidates(0).every((s) => counts(s) === 3), "a bar in 3 shows only 3-count moves");
-  ch.generate();
-  const moves = ch.view().map((v) => v.state.segment);
+  while (p.prepareTable(256) < 1) { /* slices of the join table */ }
+  const counts = (i) => p.segment(i).countFrames.length - 1;
+  assert.ok(p.candidateSegments(0).every((s) => counts(s) === 3), "a bar in 3 shows only 3-count moves");
+  p.generate();
+  const moves = p.danceView().map((v) => v.state.segment);
   assert.ok(moves.every((s) => counts(s) === 3), `moves in 3: ${moves.map(counts)}`);
   // Each bar's beats, spread over it, are what quality() uses without beats: 3 a bar.
-  const own = ch.quality();
+  const own = p.quality();
   assert.ok(Math.abs(own.beats.musicBeatsPerSec - 3 / (inThree.bars[0].endSecs - inThree.bars[0].startSecs)) < 0.1, JSON.stringify(own.beats));
   // Back to 4: the next Generate fills the bars with 4-count moves.
-  const inFour = song.correct({ beatsPerBar: 4 });
-  ch.setBars(inFour.bars);
-  ch.generate();
-  assert.ok(ch.view().every((v) => counts(v.state.segment) === 4));
+  p.correctGrid({ beatsPerBar: 4 });
+  p.generate();
+  assert.ok(p.danceView().every((v) => counts(v.state.segment) === 4));
 });

@@ -86,10 +86,19 @@ test("bad files and bad arguments throw listed kinds (both builds)", () => {
 test("the player build keeps Library and Viewer and leaves authoring out", () => {
   assert.equal(full.hasAuthoring(), true);
   assert.equal(player.hasAuthoring(), false);
-  for (const name of ["Song", "DemoSong", "SearchIndex", "TextAnimator", "Choreographer"]) {
+  for (const name of ["Song", "DemoSong", "SearchIndex", "TextAnimator", "Project"]) {
     assert.equal(typeof full[name], "function", `the full engine has ${name}`);
     assert.equal(player[name], undefined, `the player build has no ${name}`);
   }
+  // One handle holds a dance: the Choreographer it replaced is gone from both builds.
+  assert.equal(full.Choreographer, undefined, "the full engine has no Choreographer (Project replaced it)");
+  assert.equal(player.Choreographer, undefined);
+  // The .d.ts says so too: its handles are Project (the dance) and stateless helpers (song,
+  // search, text) besides Library and Viewer. A new handle belongs here only if it holds no dance.
+  const dts = readFileSync(join(root, "pkg", "odori.d.ts"), "utf8");
+  assert.doesNotMatch(dts, /Choreographer/);
+  const classes = [...dts.matchAll(/^export class (\w+)/gm)].map((m) => m[1]).sort();
+  assert.deepEqual(classes, ["DemoSong", "Library", "Project", "SearchIndex", "Song", "TextAnimator", "Viewer"], "the full engine's handles");
   const lib = new player.Library();
   const demo = lib.addBuiltinDemo();
   assert.equal(demo.humanoid.kind, "complete");

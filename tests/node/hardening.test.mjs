@@ -9,7 +9,7 @@ import { dirname, join } from "node:path";
 const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
 const pkg = await import(join(root, "pkg", "odori.js"));
 pkg.initSync({ module: readFileSync(join(root, "pkg", "odori_bg.wasm")) });
-const { Library, Choreographer, TextAnimator, SearchIndex, Song, DemoSong } = pkg;
+const { Library, Project, TextAnimator, SearchIndex, Song, DemoSong, rmsEnvelope } = pkg;
 
 const odori = (kind, re) => (e) => {
   assert.equal(e.name, "OdoriError", String(e));
@@ -77,23 +77,33 @@ test("an error about 10,000 characters of unknown words stays short", () => {
   });
 });
 
-test("choreographer indices: -1 is not bar 4294967295, intensity must be 0..1", () => {
-  const c = new Choreographer();
-  const bars = [0, 1, 2, 3].map((i) => ({ index: i, startSecs: i * 2, endSecs: i * 2 + 2, intensity: 0.5 }));
-  assert.throws(() => c.setBars(bars.map((b, i) => (i === 2 ? { ...b, intensity: 5 } : b))), odori("choreo", /bar 2 has intensity 5/));
-  c.setBars(bars);
+test("project dance indices: -1 is not bar 4294967295; a dance needs a song", () => {
+  const p = new Project();
+  // No song: a dance edit is refused with what to do first.
+  assert.throws(() => p.candidateSegments(0), odori("no-song", /no song/));
+  const demo = DemoSong.render(22050);
+  const env = rmsEnvelope([demo.samples], demo.sampleRateHz);
+  assert.throws(() => rmsEnvelope([demo.samples], 100), odori("music", /100/));
+  p.setSong("demo", undefined, env.hopSecs, env.bands, undefined);
+  const bars = p.danceView().length;
+  assert.ok(bars > 4, `${bars} bars`);
   for (const [bar, seg] of [[-1, 0], [0.5, 0], [NaN, 0], [0, -3]]) {
-    assert.throws(() => c.set(bar, seg), (e) => {
+    assert.throws(() => p.setSegment(bar, seg), (e) => {
       odori("bad-argument")(e);
       assert.doesNotMatch(e.message, /4294967295/);
       assert.ok(e.message.includes(String(bar)) || e.message.includes(String(seg)), e.message);
       return true;
     });
   }
-  assert.throws(() => c.candidates(-1), odori("bad-argument", /bar -1/));
-  assert.throws(() => c.set(99, 0), odori("choreo", /no bar 99/));
-  const cand = c.candidates(0);
-  c.set(0, cand[0]);
+  const key = p.keyOf(0);
+  for (const f of [() => p.candidateSegments(-1), () => p.candidates(-1), () => p.set(-1, key), () => p.unpin(-1), () => p.clear(-1), () => p.resetSearch(-1), () => p.search(-1, [])]) {
+    assert.throws(f, odori("bad-argument", /bar -1/));
+  }
+  assert.throws(() => p.setSegment(bars + 90, 0), odori("choreo", new RegExp(`no bar ${bars + 90}`)));
+  assert.throws(() => p.set(0, { kind: "builtin", move: { step: "moonwalk", arms: "swing", energy: "low", mirrored: false } }), (e) => e.name === "OdoriError" && ["bad-argument", "not-found"].includes(e.kind));
+  const cand = p.candidateSegments(0);
+  p.setSegment(0, cand[0]);
+  assert.equal(p.danceView()[0].state.kind, "pinned");
 });
 
 test("a progress callback that throws stops the search with its message", () => {

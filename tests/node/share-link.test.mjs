@@ -1,5 +1,6 @@
 // Share links (www/share.js) in Node with the real engine: a dance generated on the demo song
-// is written as a link and rebuilt in a second Choreographer, by stable move keys (version 2)
+// is written as a link and rebuilt in a second Project (through the dance panel's engine,
+// www/project/dance.js, as the app does), by stable move keys (version 2)
 // and from an old version-1 link (segment indices); a song file's identity (a name outside
 // ASCII, length, SHA-256) survives the link; damaged links name what is wrong. The browser
 // test (tests/browser/share.test.mjs) does the same through the app.
@@ -10,23 +11,28 @@ import { readFileSync, existsSync } from "node:fs";
 import { fileURLToPath } from "node:url";
 import { dirname, join } from "node:path";
 import { danceLink, parseDanceHash, applyDance, sha256Hex } from "../../www/share.js";
+import { ProjectDance } from "../../www/project/dance.js";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
 const data = join(root, "..", "shared", "data");
 if (!existsSync(data)) throw new Error(`../shared/data is missing: these tests read the shared real data beside the repository (${data})`);
 const pkg = await import(join(root, "pkg", "odori.js"));
 pkg.initSync({ module: readFileSync(join(root, "pkg", "odori_bg.wasm")) });
-const { Song, DemoSong, Choreographer } = pkg;
+const { DemoSong, Project, rmsEnvelope } = pkg;
 
 const demo = DemoSong.render(44100);
-const grid = Song.fromSamples([demo.samples], demo.sampleRateHz).grid();
+const env = rmsEnvelope([demo.samples], demo.sampleRateHz);
 const BASE = "https://example.org/odori/?backend=webgl2";
 
+/** A project on the demo song, seen through the dance panel's engine (www/project/dance.js). */
+function dancing(project) {
+  return new ProjectDance({ project, edited() {}, undo: () => project.undo(), redo: () => project.redo() });
+}
 function choreographer() {
-  const ch = new Choreographer();
-  ch.setBars(grid.bars);
-  while (ch.prepareTable(512) < 1) { /* the join table, a slice at a time */ }
-  return ch;
+  const p = new Project();
+  p.setSong("Demo song (built-in)", undefined, env.hopSecs, env.bands, undefined, false);
+  while (p.prepareTable(512) < 1) { /* the join table, a slice at a time */ }
+  return dancing(p);
 }
 const dance = (ch) => ch.view().map((v) => ({ kind: v.state.kind, segment: v.state.segment ?? null }));
 
@@ -57,6 +63,9 @@ test("a dance on the demo song: link (moves by key) â†’ a fresh choreographer â†
   const b = choreographer();
   assert.deepEqual(applyDance(b, parsed), [], "generation gives the same moves: no bar set by hand");
   assert.deepEqual(dance(b), original);
+  // The whole link is one edit of the project: one undo takes it back.
+  assert.equal(b.undo(), true);
+  assert.ok(dance(b).every((d) => d.kind === "empty"), "one undo empties the dance the link made");
   console.log(`demo-song link: ${link.length} characters for ${original.length} bars`);
 
   // A version-1 link of the same dance (segment indices in base 36) opens the same.
@@ -77,7 +86,7 @@ test("a song file's identity survives the link; the hash is the file's SHA-256",
   assert.deepEqual(parsed.song, { name: song.name, durationSecs: 12.346, sha256: sha });
   // A song not known well enough (no hash) cannot be linked; nor a dance with no bars.
   assert.throws(() => danceLink(a, { name: "x.ogg", durationSecs: 3 }, BASE), /not known well enough/);
-  const empty = new Choreographer();
+  const empty = dancing(new Project());
   assert.throws(() => danceLink(empty, { demo: true }, BASE), /no dance yet/);
 });
 

@@ -1,26 +1,28 @@
-// The song's RMS envelope computed with WebAudio, exactly as the core defines it
-// (crate/core/src/music/rms.rs: mono mix-down, four bands of cookbook biquads, frames of 2H
-// samples centred every H = round(fs / 100) samples). Native tests compute the same in Rust.
-const BANDS = [
-  null,                                                         // 0 full: the mono mix
-  { type: "lowpass",  frequency: 150,  Q: -3.0103, stages: 2 }, // 1 low
-  { type: "bandpass", frequency: 800,  Q: 0.7,     stages: 1 }, // 2 mid
-  { type: "highpass", frequency: 4000, Q: -3.0103, stages: 2 }, // 3 high
-];
+// The song's RMS envelope computed with WebAudio, as the core defines it (crate/core/src/music/
+// rms.rs: mono mix-down, bands of cookbook biquads, frames of 2H samples centred every
+// H = round(fs · hopTargetSecs) samples). The definition — the bands' filter types, frequencies,
+// Q and stages, and the hop — comes from the engine (`envelopeDefinition()`), never restated
+// here; WebAudio computes the filtering. Native tests compute the same in Rust.
 
-/** RMS envelope of an AudioBuffer: { hopSecs, bands: Float32Array[] }. */
-export async function rmsEnvelope(buffer) {
+/**
+ * RMS envelope of an AudioBuffer: `{ hopSecs, bands: Float32Array[] }`, one band per
+ * `definition.bands` entry, in its order. `definition` is the engine's `envelopeDefinition()`.
+ */
+export async function rmsEnvelope(buffer, definition) {
+  const specs = definition?.bands;
+  if (!Array.isArray(specs) || !specs.length || !(definition.hopTargetSecs > 0)) throw new Error("rmsEnvelope needs the engine's envelopeDefinition()");
   const fs = buffer.sampleRate, len = buffer.length;
-  const ctx = new OfflineAudioContext({ numberOfChannels: BANDS.length, length: len, sampleRate: fs });
+  const ctx = new OfflineAudioContext({ numberOfChannels: specs.length, length: len, sampleRate: fs });
   ctx.destination.channelInterpretation = "discrete";
   const src = new AudioBufferSourceNode(ctx, { buffer });
   const mono = new GainNode(ctx, { channelCount: 1, channelCountMode: "explicit", channelInterpretation: "speakers" });
-  const merge = new ChannelMergerNode(ctx, { numberOfInputs: BANDS.length });
+  const merge = new ChannelMergerNode(ctx, { numberOfInputs: specs.length });
   src.connect(mono);
-  BANDS.forEach((b, i) => {
+  specs.forEach((b, i) => {
     let node = mono;
-    for (let s = 0; b && s < b.stages; s++) {
-      const f = new BiquadFilterNode(ctx, { type: b.type, frequency: b.frequency, Q: b.Q });
+    // "full": the mono mix itself; otherwise `stages` identical BiquadFilterNodes of that type.
+    for (let s = 0; b.kind !== "full" && s < Math.max(1, b.stages); s++) {
+      const f = new BiquadFilterNode(ctx, { type: b.kind, frequency: b.frequencyHz, Q: b.q });
       node.connect(f);
       node = f;
     }
@@ -29,8 +31,8 @@ export async function rmsEnvelope(buffer) {
   merge.connect(ctx.destination);
   src.start(0);
   const out = await ctx.startRendering();
-  const H = Math.max(1, Math.round(fs * 0.01)), N = Math.ceil(len / H);
-  const bands = BANDS.map((_, i) => {
+  const H = Math.max(1, Math.round(fs * definition.hopTargetSecs)), N = Math.ceil(len / H);
+  const bands = specs.map((_, i) => {
     const y = out.getChannelData(i), rms = new Float32Array(N);
     let prev = 0; // energy of the previous hop-long block
     for (let n = 0; n < N; n++) {

@@ -95,8 +95,8 @@ const AUDIO_TYPES = { mp3: "audio/mpeg", ogg: "audio/ogg", oga: "audio/ogg", opu
  * demo song is synthesised again by the engine, the same samples the grid was found on).
  * Returns `{ library, clip, musicUrl, demoSong }`; `musicUrl` is an object URL the caller
  * revokes, null for the demo song (`demoSong`: made by `demoSongUrl`, after the first pose).
- * Throws the engine's typed errors (`not-odori`, `truncated`, `corrupt`, `newer-version`, …),
- * and `no-dance` when the project holds no dance to play.
+ * Throws the engine's typed errors (`not-odori`, `truncated`, `corrupt`, `newer-version`, …;
+ * from `Project.playInto`: `no-song`, `choreo` when no bar holds a move, `missing-blob`).
  */
 function openProject(engine, fileName, bytes) {
   let project;
@@ -108,39 +108,21 @@ function openProject(engine, fileName, bytes) {
   }
   const library = new engine.Library();
   try {
-    const doc = project.doc();
-    // Kinds from the engine's own list (errorKinds()), so a page handles one vocabulary.
-    if (!doc.song) {
-      throw Object.assign(new Error(`${fileName}: the project has no song, so no dance to play`), { name: "OdoriError", kind: "no-song", file: fileName });
+    // The engine reads the project (song, dance, character) and says what to play: the page
+    // never reads the document's schema. Its errors carry the engine's kinds ("no-song",
+    // "choreo" for an empty dance, "missing-blob"), one vocabulary with errorKinds().
+    let play;
+    try {
+      play = project.playInto(library);
+    } catch (e) {
+      throw Object.assign(e, { message: e.message.startsWith(fileName) ? e.message : `${fileName}: ${e.message}` });
     }
-    if (!(doc.dance?.bars || []).some((b) => b.state !== "empty")) {
-      throw Object.assign(new Error(`${fileName}: the project's dance is empty (no bar holds a move)`), { name: "OdoriError", kind: "choreo", file: fileName });
+    let musicUrl = null; // the demo song: synthesised later (it takes a while), see demoSongUrl
+    if (play.audio) {
+      const ext = (play.songName.split(".").pop() || "").toLowerCase();
+      musicUrl = URL.createObjectURL(new Blob([play.audio], AUDIO_TYPES[ext] ? { type: AUDIO_TYPES[ext] } : {}));
     }
-    const id = project.renderDance(library, undefined);
-    const clip = library.clip(id);
-    let musicUrl;
-    if (doc.song.audio) {
-      const audio = project.blob(doc.song.audio);
-      if (!audio) throw Object.assign(new Error(`${fileName}: the song "${doc.song.fileName}" is missing from the project`), { name: "OdoriError", kind: "missing-blob", file: fileName });
-      const ext = (doc.song.fileName.split(".").pop() || "").toLowerCase();
-      musicUrl = URL.createObjectURL(new Blob([audio], AUDIO_TYPES[ext] ? { type: AUDIO_TYPES[ext] } : {}));
-    } else {
-      musicUrl = null; // the demo song: synthesised later (it takes a while), see demoSongUrl
-    }
-    // The project's character (an imported skinned humanoid), when it has one.
-    let characterClip = null, characterName = null;
-    const source = doc.character && doc.sources.find((x) => x.id === doc.character.source);
-    const characterBytes = source && project.blob(source.blob);
-    if (characterBytes) {
-      const o = source.options || {};
-      const options = Object.fromEntries(Object.entries({ fpsOverride: o.fps_override, unitScale: o.unit_scale, gltfFps: o.gltf_fps }).filter(([, v]) => v !== null && v !== undefined));
-      const character = library.importFile(source.fileName, characterBytes, options).clips[doc.character.clip];
-      if (character) {
-        characterClip = library.putOnCharacter(clip.id, character.id).id;
-        characterName = source.fileName;
-      }
-    }
-    return { library, clip, musicUrl, demoSong: !doc.song.audio, name: doc.name || fileName, songName: doc.song.fileName, characterClip, characterName };
+    return { library, clip: play.clip, musicUrl, demoSong: play.demoSong, name: play.name || fileName, songName: play.songName, characterClip: play.characterClip, characterName: play.characterName };
   } catch (e) {
     library.free();
     throw Object.assign(e, { file: e.file || fileName });

@@ -1,18 +1,14 @@
 // Talks to the search workers. The library is split across several Web Workers (one per core,
 // at most four), each holding whole clips, balanced by frames; a search sends every worker the
-// same normalised query and merges their answers exactly: matches only knock each other out
-// within one clip, so each worker's best-first list is the whole library's list restricted to
-// its clips, and the merged list is the best `maxResults` of their union in the same order
-// (distance, then clip in library order, then end frame).
+// same normalised query and has the engine merge their answers exactly (`mergeOutcomes`: the
+// core's `merge_parts`, which states why the merge is exact).
 // With more than one worker a search runs in two rounds, so that every worker prunes with the
 // whole library's bound and not only its own part's (a worker whose own best matches are poor
 // would otherwise do most of the work): round 1, each worker's cheap probe returns distances of
 // real admissible paths whose ends are pairwise far apart (`probeFeatures`); their union's
-// k-th smallest is a proven upper bound of the whole library's k-th result, because ends in
-// different workers lie in different clips and so are far apart too (see `joined_bound` in
-// crate/core/src/search/mod.rs); round 2, each worker searches its clips from that bound
-// (`searchFeaturesBounded`). Each worker still returns every match of its clips within its
-// final bound, so the merge below stays exact.
+// k-th smallest (`joinedBound`, asked of the engine) bounds the whole library's k-th result
+// (the proof is at `joined_bound` in crate/core/src/search/mod.rs); round 2, each worker
+// searches its clips from that bound (`searchFeaturesBounded`).
 // Cancel terminates the workers (a running DP cannot be interrupted from outside) and starts
 // fresh ones with the same clips.
 //
@@ -22,6 +18,8 @@
 // back, and only the others are indexed from their features. Once the library has been still
 // for a moment the workers' indexes are saved under the library's key (its clips' content keys
 // in library order). `indexStats` says what came from where.
+import { SearchIndex, searchFrameFloats } from "../pkg/odori.js";
+
 const SAVE_AFTER_MS = 1500;
 /** Longest a stored index's clips wait for the library's before the index is saved without them. */
 const RESERVE_MS = 20000;
@@ -85,7 +83,7 @@ export class SearchClient {
   /** Sends a clip's positions to the worker holding the fewest frames. */
   place(id, f, positions) {
     const slot = this.workers.reduce((a, b) => (b.frames < a.frames ? b : a));
-    f.frames = positions.length / 63;
+    f.frames = positions.length / searchFrameFloats();
     slot.frames += f.frames;
     f.worker = this.workers.indexOf(slot);
     slot.worker.postMessage({ type: "add", id, name: f.name, positions, key: f.key || undefined }, [positions.buffer]);
@@ -343,38 +341,15 @@ export class SearchClient {
   }
 }
 
-/** The bound round 2 starts from: the k-th smallest of every worker's probe distances
- * (`SearchIndex.probeFeatures`), or Infinity when they hold fewer than k together. Ends in
- * one worker's list are pairwise far apart, and ends in different workers lie in different
- * clips, so the k smallest are k far ends of real paths: the library has at least k results
- * within this distance (the proof is at `joined_bound` in crate/core/src/search/mod.rs, which
- * computes the same). */
+/** The bound round 2 starts from, asked of the engine (`SearchIndex.joinedBound`, the core's
+ * `joined_bound`, where the proof is): the k-th smallest of every worker's probe distances, or
+ * Infinity when they hold fewer than k together. */
 export function joinedBound(lists, k) {
-  const all = lists.flatMap((l) => Array.from(l)).filter((d) => !Number.isNaN(d)).sort((a, b) => a - b);
-  return all.length >= k ? all[k - 1] : Infinity;
+  return SearchIndex.joinedBound(lists.map((l) => Float32Array.from(l)), k);
 }
 
-/** Merges per-worker outcomes exactly (see the top of this file). `order` lists clip ids in
- * library order. */
+/** Merges per-worker outcomes exactly, asked of the engine (`SearchIndex.mergeOutcomes`, the
+ * core's `merge_parts`, which says why it is exact). `order` lists clip ids in library order. */
 export function mergeOutcomes(outcomes, order, maxResults) {
-  const rank = new Map(order.map((id, k) => [id, k]));
-  const matches = outcomes.flatMap((o) => o.matches);
-  matches.sort((a, b) => a.distance - b.distance || rank.get(a.clipId) - rank.get(b.clipId) || a.endFrame - b.endFrame);
-  matches.length = Math.min(matches.length, maxResults);
-  const sum = (f) => outcomes.reduce((a, o) => a + f(o), 0);
-  const stats = {
-    framesSearched: sum((o) => o.stats.framesSearched),
-    cellsTotal: sum((o) => o.stats.cellsTotal),
-    distancesComputed: sum((o) => o.stats.distancesComputed),
-    workers: outcomes.length,
-  };
-  // Short only if every worker was short; then each worker's counts are exact.
-  const shortfall = matches.length < maxResults ? {
-    asked: maxResults,
-    shown: matches.length,
-    admissibleEnds: sum((o) => (o.shortfall ? o.shortfall.admissibleEnds : 0)),
-    endsWithinThreshold: sum((o) => (o.shortfall ? o.shortfall.endsWithinThreshold : 0)),
-    threshold: outcomes[0].shortfall ? outcomes[0].shortfall.threshold : null,
-  } : null;
-  return { matches, skipped: outcomes.flatMap((o) => o.skipped), stats, shortfall };
+  return SearchIndex.mergeOutcomes(outcomes, Uint32Array.from(order), maxResults);
 }

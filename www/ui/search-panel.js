@@ -3,7 +3,7 @@
 // in a worker, list the matches; a match plays overlaid on the query, aligned along the
 // warping path, beside a plot of one joint's x, y, z over time.
 import { redrawOnResize } from "./canvas.js";
-import { bodyVocabulary } from "../pkg/odori.js";
+import { bodyVocabulary, searchFrameFloats } from "../pkg/odori.js";
 
 // The canonical joints and the body-part presets come from the engine (one place for the
 // vocabulary, crate/core: humanoid::Canon, search::BodyPreset), read once the engine is loaded.
@@ -151,8 +151,10 @@ export class SearchPanel {
 
   hipsAt(id, frame) {
     const positions = this.client.positions(id);
-    const n = positions.length / 63;
-    const k = Math.max(0, Math.min(n - 1, frame)) * 63;
+    // Flat frames × joints × xyz, the stride the engine gives (hips first).
+    const stride = searchFrameFloats();
+    const n = positions.length / stride;
+    const k = Math.max(0, Math.min(n - 1, frame)) * stride;
     return [positions[k], positions[k + 1], positions[k + 2]];
   }
 

@@ -1,8 +1,9 @@
 //! WebAssembly bindings of the Odori engine: the only crate that knows about JavaScript.
 //!
-//! Two handles: [`Library`] (motion clips: import, inspect, pose; no rendering, usable from
-//! Node or a worker) and [`Viewer`] (wgpu on a canvas: WebGPU when the browser has it, WebGL2
-//! otherwise). Every error becomes a JS `Error` named `OdoriError` with a `kind` and, for
+//! Two handles in every build: [`Library`] (motion clips: import, inspect, pose; no rendering,
+//! usable from Node or a worker) and [`Viewer`] (wgpu on a canvas: WebGPU when the browser has
+//! it, WebGL2 otherwise). The full engine adds [`Project`], the one handle that holds a dance,
+//! and stateless helpers (`Song`, `DemoSong`, `SearchIndex`, `TextAnimator`). Every error becomes a JS `Error` named `OdoriError` with a `kind` and, for
 //! imports, the `file`; no panic crosses into JS with a bad file (and if a bug panics, the
 //! panic hook prints it to the console).
 
@@ -11,8 +12,6 @@ mod export;
 mod library;
 mod viewer;
 // Authoring (feature "authoring", on by default): left out of the player build.
-#[cfg(feature = "authoring")]
-mod choreo;
 #[cfg(feature = "authoring")]
 mod music;
 #[cfg(feature = "authoring")]
@@ -25,8 +24,6 @@ mod text;
 pub use error::{OdoriError, ERROR_KINDS};
 pub use library::Library;
 pub use viewer::Viewer;
-#[cfg(feature = "authoring")]
-pub use choreo::Choreographer;
 #[cfg(feature = "authoring")]
 pub use music::{DemoSong, Song};
 #[cfg(feature = "authoring")]

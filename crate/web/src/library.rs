@@ -153,6 +153,12 @@ impl Library {
         to_js(&report)
     }
 
+    /// Ids of the clips added since the library held `count` clips (those of the last import).
+    #[cfg_attr(not(feature = "authoring"), allow(dead_code))]
+    pub(crate) fn ids_from(&self, count: usize) -> Vec<u32> {
+        self.entries.iter().skip(count).map(|e| e.id).collect()
+    }
+
     pub(crate) fn entry(&self, id: u32) -> JsResult<&Entry> {
         self.entries.iter().find(|e| e.id == id).ok_or_else(|| OdoriError::new("not-found", format!("no clip with id {id} in the library")))
     }

@@ -100,6 +100,31 @@ impl Song {
     }
 }
 
+/// The RMS envelope of decoded audio (one `Float32Array` per channel), computed in Rust with
+/// the definition the browser host uses (`envelopeDefinition()`): `{ hopSecs, bands }`, what
+/// `Project.setSong` and `Song.fromEnvelope` take. For hosts without WebAudio (Node).
+#[wasm_bindgen(js_name = rmsEnvelope, unchecked_return_type = "{ hopSecs: number; bands: Float32Array[] }")]
+pub fn rms_envelope(channels: Array, sample_rate_hz: f32) -> Result<JsValue, OdoriError> {
+    let chans = arrays(&channels, "channels")?;
+    let refs: Vec<&[f32]> = chans.iter().map(Vec::as_slice).collect();
+    let env = music::rms::envelope(&refs, sample_rate_hz).map_err(music_err)?;
+    let out = js_sys::Object::new();
+    let bands: Array = env.bands.iter().map(|b| JsValue::from(Float32Array::from(b.as_slice()))).collect();
+    js_sys::Reflect::set(&out, &JsValue::from_str("hopSecs"), &JsValue::from(env.hop_secs)).map_err(|_| OdoriError::new("bad-argument", "envelope"))?;
+    js_sys::Reflect::set(&out, &JsValue::from_str("bands"), &bands).map_err(|_| OdoriError::new("bad-argument", "envelope"))?;
+    Ok(out.into())
+}
+
+/// How the song's loudness envelope is defined, from the one place the engine keeps it
+/// (crate/core music/rms.rs): `{ bands: { name, kind, frequencyHz, q, stages }[], hopTargetSecs,
+/// minSampleRateHz }`. `kind` is a `BiquadFilterNode` type ("lowpass", "bandpass",
+/// "highpass") or "full" (the mono mix, no filter); `q` in WebAudio's units for the type. The
+/// browser host (www/audio/rms.js) builds its WebAudio graph and frames from it.
+#[wasm_bindgen(js_name = envelopeDefinition, unchecked_return_type = "EnvelopeDefinition")]
+pub fn envelope_definition() -> JsValue {
+    to_js(&music::rms::envelope_definition())
+}
+
 /// The built-in demo song, rendered at a sample rate: mono samples and its true grid.
 #[wasm_bindgen]
 pub struct DemoSong {
@@ -146,6 +171,8 @@ export interface SongGrid {
   clearBeat: boolean;
   loudness: { hopSecs: number; values: number[] };
 }
+export interface EnvelopeBand { name: string; kind: "full" | "lowpass" | "bandpass" | "highpass"; frequencyHz: number; q: number; stages: number; }
+export interface EnvelopeDefinition { bands: EnvelopeBand[]; hopTargetSecs: number; minSampleRateHz: number; }
 export interface GridCorrection { bpm?: number; tapTimesSecs?: number[]; beatsPerBar?: number; firstDownbeatSecs?: number; nudgeSecs?: number; }
 export interface AnalysisOptions { beatsPerBar?: number; minBpm?: number; maxBpm?: number; priorBpm?: number; priorOctaves?: number; tightness?: number; followTempo?: boolean; }
 export interface DemoSongInfo { bpm: number; beatsPerBar: number; firstDownbeatSecs: number; barCount: number; sampleRateHz: number; sections: { name: string; startBar: number; barCount: number; startSecs: number; endSecs: number }[]; }

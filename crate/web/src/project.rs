@@ -1,19 +1,21 @@
-//! `Project`: one handle over the core's project (spec §K) — everything a person made, every
+//! `Project`: the one handle that holds a dance — everything a person made (spec §K), every
 //! edit with undo/redo, `.odori` save and open, and the manifest + blobs that autosave writes
-//! to IndexedDB. Moves are named by stable keys (`MoveKey`), never by segment numbers.
+//! to IndexedDB. Moves are kept by stable keys (`MoveKey`), never by segment numbers.
 //!
-//! It is also the page's engine (the app holds no other state of the work): `importInto` /
-//! `clipsInto` show a source's clips in a `Library` from the project's own parse, and the
-//! dance methods by segment number (`danceView`, `candidateSegments`, `searchSegments`,
-//! `setSegment`, `segment`, `previewSegment`, `quality`, `prepareTable`, `loadBuiltin`) let a
-//! panel work on the project's segment library while every edit is kept by key in the project.
+//! It is the whole dance API (the `Choreographer` handle it replaced is gone; see
+//! pkg/README.md's changelog): the song and its grid (`setSong`, `correctGrid`), the segment
+//! library (`importInto` / `addSource`, `setClipTempo`, `loadBuiltin`, `segment`, `keyOf`),
+//! the dance by key (`candidates`, `search`, `set`) or by segment number for a panel
+//! (`danceView`, `candidateSegments`, `searchSegments`, `setSegment`), the filling's settings,
+//! `generate`, `quality`, `renderDance`, `prepareTable`, and what a player needs to play a
+//! saved project (`playInto`), so no page reads the project's schema itself.
 
 use js_sys::{Array, Float32Array, Function, Uint8Array};
 use odori_core::choreo::{segment_clip, RenderOptions, TableBuilder};
 use odori_core::music::{AnalysisOptions, GridCorrection, RmsEnvelope};
-use odori_core::project::{self, BlobHash, Camera, ClipRef, MoveKey, Project as CoreProject};
+use odori_core::project::{self, BarKind, BlobHash, Camera, ClipRef, MoveKey, Project as CoreProject, ProjectError};
 use odori_core::ImportOptions;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 
 use crate::error::{from_js, to_js, JsResult, OdoriError};
@@ -149,8 +151,7 @@ impl Project {
         }
     }
 
-    /// The segment a move key names now (for previews through `Choreographer`-style calls),
-    /// or undefined.
+    /// The segment a move key names now (for the calls by segment number), or undefined.
     #[wasm_bindgen(js_name = segmentOf)]
     pub fn segment_of(&mut self, key: JsValue) -> Result<Option<u32>, OdoriError> {
         let key: MoveKey = arg(key, "key")?;
@@ -223,38 +224,43 @@ impl Project {
     }
 
     /// The bar's current candidates (`MoveKey[]`), opening its search when none is open.
-    pub fn candidates(&mut self, bar: usize) -> Result<JsValue, OdoriError> {
-        let r = self.inner.candidates(bar)?;
+    pub fn candidates(&mut self, bar: f64) -> Result<JsValue, OdoriError> {
+        let r = self.inner.candidates(index_arg("bar", bar)?)?;
         Ok(self.changed(to_js(&r)))
     }
 
     /// Likes `liked` (keys from the current round) and returns the next round.
-    pub fn search(&mut self, bar: usize, liked: JsValue) -> Result<JsValue, OdoriError> {
+    pub fn search(&mut self, bar: f64, liked: JsValue) -> Result<JsValue, OdoriError> {
+        let bar = index_arg("bar", bar)?;
         let liked: Vec<MoveKey> = arg(liked, "liked")?;
         let r = self.inner.search(bar, &liked)?;
         Ok(self.changed(to_js(&r)))
     }
 
+    /// Starts the bar's search over (τ back to 1, nothing shown).
     #[wasm_bindgen(js_name = resetSearch)]
-    pub fn reset_search(&mut self, bar: usize) -> Result<bool, OdoriError> {
-        let r = self.inner.reset_search(bar)?;
+    pub fn reset_search(&mut self, bar: f64) -> Result<bool, OdoriError> {
+        let r = self.inner.reset_search(index_arg("bar", bar)?)?;
         Ok(self.changed(r))
     }
 
     /// Pins a move (a `MoveKey`) to a bar.
-    pub fn set(&mut self, bar: usize, key: JsValue) -> Result<(), OdoriError> {
+    pub fn set(&mut self, bar: f64, key: JsValue) -> Result<(), OdoriError> {
+        let bar = index_arg("bar", bar)?;
         let key: MoveKey = arg(key, "key")?;
         self.inner.set(bar, &key)?;
         Ok(self.changed(()))
     }
 
-    pub fn unpin(&mut self, bar: usize) -> Result<(), OdoriError> {
-        self.inner.unpin(bar)?;
+    /// Unpins a bar (its move stays, as generated).
+    pub fn unpin(&mut self, bar: f64) -> Result<(), OdoriError> {
+        self.inner.unpin(index_arg("bar", bar)?)?;
         Ok(self.changed(()))
     }
 
-    pub fn clear(&mut self, bar: usize) -> Result<(), OdoriError> {
-        self.inner.clear(bar)?;
+    /// Empties a bar.
+    pub fn clear(&mut self, bar: f64) -> Result<(), OdoriError> {
+        self.inner.clear(index_arg("bar", bar)?)?;
         Ok(self.changed(()))
     }
 
@@ -264,15 +270,33 @@ impl Project {
         Ok(self.changed(to_js(&r)))
     }
 
+    /// ρ of spec §F eq. 1 (0..=1): music fit against diversity and preference.
     #[wasm_bindgen(js_name = setRho)]
     pub fn set_rho(&mut self, rho: f32) -> Result<(), OdoriError> {
         self.inner.set_rho(rho)?;
         Ok(self.changed(()))
     }
 
+    /// Weight of the music term (bar intensity vs segment intensity) in the filling, 0..=100.
     #[wasm_bindgen(js_name = setMusicWeight)]
     pub fn set_music_weight(&mut self, w: f32) -> Result<(), OdoriError> {
         self.inner.set_music_weight(w)?;
+        Ok(self.changed(()))
+    }
+
+    /// Weight of the beat term in the filling (segments whose counts fall on their kinetic
+    /// beats; 0 turns it off; default 0.3), 0..=100.
+    #[wasm_bindgen(js_name = setBeatWeight)]
+    pub fn set_beat_weight(&mut self, w: f32) -> Result<(), OdoriError> {
+        self.inner.set_beat_weight(w)?;
+        Ok(self.changed(()))
+    }
+
+    /// Preference of the filling for the person's imported moves that fit the beat over
+    /// built-in ones (0: none; default 0.03), 0..=100.
+    #[wasm_bindgen(js_name = setOwnMovesPreference)]
+    pub fn set_own_moves_preference(&mut self, w: f32) -> Result<(), OdoriError> {
+        self.inner.set_own_moves_preference(w)?;
         Ok(self.changed(()))
     }
 
@@ -546,7 +570,11 @@ impl Project {
         Ok(self.changed(()))
     }
 
-    /// Quality of the dance as it stands (spec §J; as `Choreographer.quality`).
+    /// Quality of the dance as it stands (spec §J), per bar and whole: `{ beats: { basMusic,
+    /// basMusicShifted, basMotion, basMotionShifted, kineticBeatsPerSec, musicBeatsPerSec },
+    /// footSkate: { meanCmPerS, p95CmPerS, contacts }, pfc, joinJumpMean, joinJumpMax, bars:
+    /// [{ bar, beats, footSkate, joinJump }] }`. `beatTimesSecs`: the song's beats (the grid's
+    /// `beatTimesSecs`); omitted: each bar's beats spread evenly over it.
     pub fn quality(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
         let ch = self.inner.choreography()?;
         let bars = ch.bars();
@@ -565,6 +593,59 @@ impl Project {
         Ok(library.insert_clip(clip, "dance", replace))
     }
 
+    /// What a player needs to play the saved dance, read by the engine (so a page never reads
+    /// the document's schema): renders the dance into `library` and returns `PlayableDance`:
+    /// `{ clip: ClipInfo, name, songName, demoSong, audio?: Uint8Array, characterClip,
+    /// characterName }`. `audio` is the song file's bytes as given (absent for the demo song,
+    /// which `DemoSong.render` makes again, the samples its grid was found on);
+    /// `characterClip` is the dance put on the project's character (an imported skinned
+    /// humanoid), added to `library` too, or null. Throws "no-song" without a song, "choreo"
+    /// when no bar holds a move, "missing-blob" when the song's bytes are missing.
+    #[wasm_bindgen(js_name = playInto, unchecked_return_type = "PlayableDance")]
+    pub fn play_into(&mut self, library: &mut Library) -> Result<JsValue, OdoriError> {
+        #[derive(Serialize)]
+        #[serde(rename_all = "camelCase")]
+        struct Playable<'a, C: Serialize> {
+            clip: C,
+            name: &'a str,
+            song_name: &'a str,
+            demo_song: bool,
+            character_clip: Option<u32>,
+            character_name: Option<String>,
+        }
+        let doc = self.inner.doc().clone();
+        let Some(song) = doc.song.as_ref() else { return Err(ProjectError::NoSong.into()) };
+        if doc.dance.bars.iter().all(|b| b.state == BarKind::Empty) {
+            return Err(OdoriError::new("choreo", "the project's dance is empty (no bar holds a move)"));
+        }
+        let audio = match &song.audio {
+            None => None,
+            Some(h) => Some(self.inner.blobs().get(h).map(|b| b.to_vec()).ok_or_else(|| OdoriError::new("missing-blob", format!("the song \"{}\" is missing from the project", song.file_name)))?),
+        };
+        let clip = self.inner.render_dance(&RenderOptions::default())?;
+        let id = library.insert_clip(clip, "dance", None);
+        // The project's character, when its file is there (a missing one plays on the built-in body).
+        let (mut character_clip, mut character_name) = (None, None);
+        if let Some(c) = doc.character {
+            if let (Some(source), Some(imported)) = (doc.source(c.source), self.inner.imported(c.source)) {
+                let before = library.size();
+                let imported = imported?;
+                library.add_imported(&source.file_name, &imported);
+                if let Some(&character) = library.ids_from(before).get(c.clip as usize) {
+                    let on = library.put_on_character(id, character)?;
+                    character_clip = js_sys::Reflect::get(&on, &JsValue::from_str("id")).ok().and_then(|v| v.as_f64()).map(|v| v as u32);
+                    character_name = Some(source.file_name.clone());
+                }
+            }
+        }
+        let info = crate::library::info_of(library.entry(id)?);
+        let out = to_js(&Playable { clip: info, name: &doc.name, song_name: &song.file_name, demo_song: song.audio.is_none(), character_clip, character_name });
+        if let Some(bytes) = audio {
+            js_sys::Reflect::set(&out, &JsValue::from_str("audio"), &Uint8Array::from(bytes.as_slice())).map_err(|_| OdoriError::new("bad-argument", "playable dance"))?;
+        }
+        Ok(out)
+    }
+
     /// Renders the dance into `library` (replacing clip `replace`) for the viewer; frame time
     /// is song time. Returns the clip id.
     #[wasm_bindgen(js_name = renderDance)]
@@ -574,8 +655,29 @@ impl Project {
     }
 }
 
+/// The tempo limits, from the one place the engine keeps them: `{ moveMinBpm, moveMaxBpm }`
+/// (a clip's stated tempo, counts per minute) and `{ songMinBpm, songMaxBpm }` (a song's
+/// corrected grid). The page's tempo fields and messages use them.
+#[wasm_bindgen(js_name = tempoLimits, unchecked_return_type = "{ moveMinBpm: number; moveMaxBpm: number; songMinBpm: number; songMaxBpm: number }")]
+pub fn tempo_limits() -> JsValue {
+    #[derive(Serialize)]
+    #[serde(rename_all = "camelCase")]
+    struct Limits {
+        move_min_bpm: f32,
+        move_max_bpm: f32,
+        song_min_bpm: f32,
+        song_max_bpm: f32,
+    }
+    use odori_core::music::grid::{MAX_GRID_BPM, MIN_GRID_BPM};
+    to_js(&Limits { move_min_bpm: odori_core::choreo::MIN_MOVE_BPM, move_max_bpm: odori_core::choreo::MAX_MOVE_BPM, song_min_bpm: MIN_GRID_BPM, song_max_bpm: MAX_GRID_BPM })
+}
+
 #[wasm_bindgen(typescript_custom_section)]
 const TS_PROJECT: &'static str = r#"
+/** One bar as `danceView()` shows it, by segment numbers of the project's library now. */
+export interface BarView { bar: Bar; state: { kind: "empty" | "pinned" | "generated"; segment?: number }; tau: number; candidates: number[]; liked: number[]; shownCount: number; rounds: number; }
+/** What `playInto` gives a player. */
+export interface PlayableDance { clip: ClipInfo; name: string; songName: string; demoSong: boolean; audio?: Uint8Array; characterClip: number | null; characterName: string | null; }
 export interface ClipRef { source: number; clip: number; }
 export type MoveKey =
   | { kind: "builtin"; move: { step: string; arms: string; energy: string; mirrored: boolean } }

@@ -381,6 +381,57 @@ impl SearchIndex {
         self.run(&query, params, progress, Method::Bounded(bound as f32))
     }
 
+    /// The bound round 2 of a split search starts from: the `maxResults`-th smallest of every
+    /// part's `probeFeatures` distances (+Infinity when they hold fewer). The proof that it
+    /// bounds the whole library's k-th result is at `joined_bound` in the core's search module.
+    #[wasm_bindgen(js_name = joinedBound)]
+    pub fn joined_bound(#[wasm_bindgen(unchecked_param_type = "Float32Array[]")] lists: js_sys::Array, max_results: u32) -> Result<f32, OdoriError> {
+        let lists = lists
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v.dyn_into::<Float32Array>().map(|a| a.to_vec()).map_err(|_| OdoriError::new("bad-argument", format!("lists[{i}] must be a Float32Array"))))
+            .collect::<Result<Vec<_>, _>>()?;
+        let refs: Vec<&[f32]> = lists.iter().map(Vec::as_slice).collect();
+        Ok(search::joined_bound(&refs, max_results as usize))
+    }
+
+    /// Merges the parts' round-2 answers (`searchFeaturesBounded` in every worker) into the
+    /// whole library's answer, exactly (the core's `merge_parts`): matches best first by
+    /// distance, then clip in library order (`order`: clip ids in library order), then end
+    /// frame, cut to `maxResults`; work counters summed (`stats.workers`: the parts merged);
+    /// a shortfall with the parts' counts summed when the merged answer is short. Throws
+    /// "bad-argument" for an answer that is not a search outcome or a clip not in `order`.
+    #[wasm_bindgen(js_name = mergeOutcomes, unchecked_return_type = "SearchOutcome")]
+    pub fn merge_outcomes(#[wasm_bindgen(unchecked_param_type = "SearchOutcome[]")] outcomes: js_sys::Array, order: Vec<u32>, max_results: u32) -> Result<JsValue, OdoriError> {
+        let rank: std::collections::HashMap<u32, usize> = order.iter().enumerate().map(|(k, &id)| (id, k)).collect();
+        let workers = outcomes.length() as usize;
+        let mut parts = Vec::with_capacity(workers);
+        for (k, o) in outcomes.iter().enumerate() {
+            let o: PartOutcome = serde_wasm_bindgen::from_value(o).map_err(|e| OdoriError::new("bad-argument", format!("outcome {k}: {e}")))?;
+            let matches = o
+                .matches
+                .into_iter()
+                .map(|m| {
+                    let at = rank.get(&m.clip_id).copied().ok_or_else(|| OdoriError::new("bad-argument", format!("outcome {k}: clip {} is not in the library order", m.clip_id)))?;
+                    Ok(search::SearchMatch { clip_index: at, ..m.inner })
+                })
+                .collect::<Result<Vec<_>, OdoriError>>()?;
+            parts.push(search::SearchOutcome { matches, skipped: o.skipped, stats: o.stats, shortfall: o.shortfall });
+        }
+        let merged = search::merge_parts(parts, max_results as usize);
+        let matches: Vec<JsMatch> = merged.matches.iter().map(|m| JsMatch { clip_id: order.get(m.clip_index).copied().unwrap_or(u32::MAX), inner: m }).collect();
+        let mut stats = to_json(&merged.stats);
+        if let Some(s) = stats.as_object_mut() {
+            s.insert("workers".into(), workers.into());
+        }
+        Ok(to_js(&serde_json::json!({
+            "matches": to_json(&matches),
+            "skipped": to_json(&merged.skipped),
+            "stats": stats,
+            "shortfall": to_json(&merged.shortfall),
+        })))
+    }
+
     /// `searchPlain` with the query given as normalised features from `queryFeatures` (the
     /// benchmark's baseline for a query from outside the index).
     #[wasm_bindgen(js_name = searchPlainFeatures)]
@@ -475,8 +526,36 @@ export type BodyPreset = "wholeBody" | "upperBody" | "lowerBody" | "arms" | "lef
 export interface SearchParamsJs { preset?: BodyPreset; weights?: number[]; threshold?: number; maxResults?: number; }
 export interface SearchShortfall { asked: number; shown: number; admissibleEnds: number; endsWithinThreshold: number; threshold: number | null; }
 export interface SearchMatch { clipId: number; clipIndex: number; clipName: string; startFrame: number; endFrame: number; lengthFrames: number; startSecs: number; endSecs: number; distance: number; cost: number; path: [number, number][]; }
+export interface SearchOutcome { matches: SearchMatch[]; skipped: { name: string; reason: string }[]; stats: { framesSearched: number; cellsTotal: number; distancesComputed: number; workers?: number }; shortfall: SearchShortfall | null; }
 export interface JointCurve { joint: string; fps: number; x: number[]; y: number[]; z: number[]; }
 "#;
+
+/// Floats per frame of the search's features and `Library.searchFeatures` (x, y, z of each
+/// canonical joint): the stride a page walks those arrays with.
+#[wasm_bindgen(js_name = searchFrameFloats)]
+pub fn search_frame_floats() -> u32 {
+    search::FRAME_FLOATS as u32
+}
+
+/// A match as a part (a worker's index) returned it, read back for the merge.
+#[derive(Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct PartMatch {
+    clip_id: u32,
+    #[serde(flatten)]
+    inner: search::SearchMatch,
+}
+
+/// One part's answer as `searchFeaturesBounded` returned it.
+#[derive(Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct PartOutcome {
+    matches: Vec<PartMatch>,
+    #[serde(default)]
+    skipped: Vec<search::SkippedClip>,
+    stats: search::SearchStats,
+    shortfall: Option<search::Shortfall>,
+}
 
 /// One body-part preset as the page offers it (`bodyVocabulary`).
 #[derive(Serialize)]

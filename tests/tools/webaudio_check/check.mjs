@@ -24,6 +24,10 @@ const server = createServer((req, res) => {
   } else if (req.url === "/rms.js") {
     res.setHeader("content-type", "text/javascript");
     res.end(readFileSync(join(here, "../../../www/audio/rms.js")));
+  } else if (/^\/pkg\/[\w.-]+$/.test(req.url)) {
+    // The engine (built into pkg/ by `./dev build`): the page asks it for the envelope's definition.
+    res.setHeader("content-type", req.url.endsWith(".wasm") ? "application/wasm" : "text/javascript");
+    res.end(readFileSync(join(here, "../../..", req.url)));
   } else if (req.url === "/audio") {
     res.end(readFileSync(join(dataDir, rel)));
   } else {

@@ -326,6 +326,26 @@ pub fn envelope_with_bands(
     Ok(RmsEnvelope { hop_secs: (hop as f64 / f64::from(sample_rate_hz)) as f32, bands: out })
 }
 
+/// What a host needs to compute the envelope itself (the browser's WebAudio graph): the
+/// bands, the hop rule and the lowest sample rate. The host asks for it instead of restating
+/// the constants, so a change here reaches the page and the native path together.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct EnvelopeDefinition {
+    /// The bands in envelope order ([`STANDARD_BANDS`]).
+    pub bands: &'static [BandSpec],
+    /// The hop is `max(1, round(fs · hop_target_secs))` samples ([`hop_samples`]).
+    pub hop_target_secs: f64,
+    /// The lowest sample rate [`envelope`] accepts, Hz.
+    pub min_sample_rate_hz: f32,
+}
+
+/// The envelope's definition as [`envelope`] computes it: what the browser host builds its
+/// filters and frames from.
+pub fn envelope_definition() -> EnvelopeDefinition {
+    EnvelopeDefinition { bands: &STANDARD_BANDS, hop_target_secs: HOP_TARGET_SECS, min_sample_rate_hz: MIN_SAMPLE_RATE_HZ }
+}
+
 /// [`envelope_with_bands`] with [`STANDARD_BANDS`]: the native twin of the browser host.
 pub fn envelope(channels: &[&[f32]], sample_rate_hz: f32) -> Result<RmsEnvelope, MusicError> {
     envelope_with_bands(channels, sample_rate_hz, &STANDARD_BANDS)

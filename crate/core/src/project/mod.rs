@@ -900,6 +900,18 @@ impl Project {
         self.dance_edit(|ch, _| ch.set_music_weight(w))
     }
 
+    /// Weight of the beat term of the filling (segments whose counts fall on their kinetic
+    /// beats; 0 turns it off).
+    pub fn set_beat_weight(&mut self, w: f32) -> Result<(), ProjectError> {
+        self.dance_edit(|ch, _| ch.set_beat_weight(w))
+    }
+
+    /// Preference of the filling for the person's imported moves that fit the beat over
+    /// built-in ones (0: none).
+    pub fn set_own_moves_preference(&mut self, w: f32) -> Result<(), ProjectError> {
+        self.dance_edit(|ch, _| ch.set_own_moves_preference(w))
+    }
+
     /// The filling's weights in force.
     pub fn fill_weights(&self) -> FillWeights {
         self.doc.dance.settings.fill

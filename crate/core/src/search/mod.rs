@@ -396,6 +396,40 @@ pub fn search_bounded_cached(
     fast::run_bounded(index, &prep, cache.get(index, &prep), bound, progress)
 }
 
+/// Joins the parts' round-2 answers ([`search_bounded`] in every part) into the whole
+/// library's answer: the matches best first — by distance, then clip in library order, then
+/// end frame — cut to `max_results`; the parts' work counters summed, their skipped clips
+/// listed together; a shortfall (only when the merged answer is short, and then every part's
+/// counts are exact: see [`search_bounded`]) with the parts' counts summed.
+///
+/// Each match's `clip_index` must already be its clip's place in the whole library (a part's
+/// own index maps through the clips it holds): the merged answer is then [`search`] over the
+/// whole library, match for match. Why that is exact: matches only knock each other out within
+/// one clip, and a part holds whole clips, so each part's best-first list is the library's list
+/// restricted to its clips.
+pub fn merge_parts(parts: Vec<SearchOutcome>, max_results: usize) -> SearchOutcome {
+    let mut stats = SearchStats::default();
+    let mut skipped = Vec::new();
+    let (mut admissible_ends, mut ends_within_threshold, mut threshold) = (0u64, 0u64, None);
+    let mut matches = Vec::new();
+    for part in parts {
+        stats.frames_searched += part.stats.frames_searched;
+        stats.cells_total += part.stats.cells_total;
+        stats.distances_computed += part.stats.distances_computed;
+        skipped.extend(part.skipped);
+        if let Some(s) = part.shortfall {
+            admissible_ends += s.admissible_ends;
+            ends_within_threshold += s.ends_within_threshold;
+            threshold = threshold.or(s.threshold);
+        }
+        matches.extend(part.matches);
+    }
+    matches.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.clip_index.cmp(&b.clip_index)).then(a.end_frame.cmp(&b.end_frame)));
+    matches.truncate(max_results);
+    let shortfall = (matches.len() < max_results).then(|| Shortfall { asked: max_results, shown: matches.len(), admissible_ends, ends_within_threshold, threshold });
+    SearchOutcome { matches, skipped, stats, shortfall }
+}
+
 /// The plain subsequence DP (every cell of every clip computed): the reference the fast search
 /// must agree with, and the benchmark baseline. Same arguments and results as [`search`].
 pub fn search_plain(
