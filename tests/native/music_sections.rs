@@ -8,7 +8,8 @@
 mod music_audio;
 
 use music_audio::*;
-use odori_core::music::{analyze, demo_song, sections, AnalysisOptions, RmsEnvelope, SectionOptions, Sections, SongGrid};
+use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
+use odori_core::music::{analyze, sections, AnalysisOptions, RmsEnvelope, SectionOptions, Sections, SongGrid};
 
 /// Sections cover every bar in order, at least `min` bars each (the last may be shorter only
 /// when the song is), with labels numbered by first appearance and repeats pointing back.
@@ -54,7 +55,12 @@ struct Demo {
 }
 
 fn demo() -> Demo {
-    let song = demo_song(44100.0).expect("demo song");
+    demo_with(&DemoSongOptions::default())
+}
+
+/// The demo song or a variant of it (another metre, a tempo ramp), analysed.
+fn demo_with(options: &DemoSongOptions) -> Demo {
+    let song = demo_song_with(44100.0, options).expect("demo song");
     let env = odori_core::music::envelope(&[&song.samples], song.sample_rate_hz).expect("envelope");
     let grid = analyze(&env, &AnalysisOptions::default()).expect("analysis");
     let bar_at = |t: f32| {
@@ -80,23 +86,36 @@ fn recovered(found: &[usize], truth: &[usize]) -> usize {
 
 #[test]
 fn demo_song_sections_are_recovered_and_the_choruses_share_a_label() {
-    let d = demo();
+    check_demo("demo song", &demo());
+}
+
+#[test]
+fn demo_variants_in_3_4_and_on_a_tempo_ramp_too() {
+    for (name, options) in [
+        ("demo in 3/4", DemoSongOptions { beats_per_bar: 3, ..DemoSongOptions::default() }),
+        ("demo ramping 110 -> 130 BPM", DemoSongOptions { bpm: 110.0, end_bpm: 130.0, ..DemoSongOptions::default() }),
+    ] {
+        check_demo(name, &demo_with(&options));
+    }
+}
+
+fn check_demo(name: &str, d: &Demo) {
     let started = std::time::Instant::now();
     let s = sections(&d.grid, &d.env, &SectionOptions::default()).expect("sections");
     let ms = started.elapsed().as_secs_f64() * 1e3;
     let found = s.boundaries();
-    println!("demo song ({} bars, {ms:.1} ms): {} | boundaries {found:?}, true {:?}", d.grid.bars.len(), describe(&s), d.boundaries);
+    println!("{name} ({} bars, {ms:.1} ms): {} | boundaries {found:?}, true {:?}", d.grid.bars.len(), describe(&s), d.boundaries);
     println!("  novelty {:?}", s.novelty.iter().map(|v| (v * 100.0).round() as i32).collect::<Vec<_>>());
-    assert_sane("demo", &d.grid, &s, 2);
-    assert_eq!(recovered(&found, &d.boundaries), d.boundaries.len(), "every true boundary within 1 bar: found {found:?}, true {:?}", d.boundaries);
+    assert_sane(name, &d.grid, &s, 2);
+    assert_eq!(recovered(&found, &d.boundaries), d.boundaries.len(), "{name}: every true boundary within 1 bar: found {found:?}, true {:?}", d.boundaries);
     // Not a cut every phrase: at most one boundary beyond the true ones.
-    assert!(found.len() <= d.boundaries.len() + 1, "too many boundaries: {found:?}");
+    assert!(found.len() <= d.boundaries.len() + 1, "{name}: too many boundaries: {found:?}");
     let label = |name: &str, nth: usize| {
         let bar = d.middles.iter().filter(|m| m.0 == name).nth(nth).expect("section").1;
         s.sections[section_of(&s, bar)].label
     };
-    assert_eq!(label("chorus", 0), label("chorus", 1), "the two choruses share a label: {}", s.letters());
-    assert_ne!(label("verse", 0), label("chorus", 0), "the verse is not a chorus: {}", s.letters());
+    assert_eq!(label("chorus", 0), label("chorus", 1), "{name}: the two choruses share a label: {}", s.letters());
+    assert_ne!(label("verse", 0), label("chorus", 0), "{name}: the verse is not a chorus: {}", s.letters());
     let second = section_of(&s, d.middles.iter().filter(|m| m.0 == "chorus").nth(1).expect("second chorus").1);
     assert_eq!(s.sections[second].repeat_of, Some(section_of(&s, d.middles.iter().find(|m| m.0 == "chorus").expect("chorus").1)));
 }
