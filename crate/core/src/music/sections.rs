@@ -6,13 +6,14 @@
 //! vector from the song's banded RMS envelope — per band the bar's mean level and its spread
 //! (dB), and its per-beat loudness pattern (each beat's level against the bar's) — each feature
 //! z-scored over the song with a floor on its spread, so a steady signal stays one section. A
-//! bar-level self-similarity matrix (`exp(−d²)` of the weighted feature distance) is scanned
+//! bar-level self-similarity (`exp(−d²)` of the weighted feature distance, [`BarSimilarity`]) is scanned
 //! with Foote's checkerboard kernel: the novelty at a bar line is how much more alike the bars
 //! on each side are among themselves than across it. Boundaries are novelty peaks on bar lines,
 //! favoured (not forced) at phrase starts (multiples of 4 bars from the first downbeat), at
 //! least [`SectionOptions::min_section_bars`] apart. Each section is then compared with the
 //! earlier ones bar against bar (the repetition stripe of the matrix); one alike enough takes
-//! its label. Deterministic, and O(bars² · features): a few milliseconds for a long song.
+//! its label. Deterministic, O(bars · kernel² · features) for the novelty and O(sections² · bars) for the labels, memory
+//! linear in the bars: about a millisecond for a 3-minute song natively.
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -203,49 +204,67 @@ pub fn bar_features(grid: &SongGrid, envelope: &RmsEnvelope) -> Result<Vec<Vec<f
     Ok(out)
 }
 
-/// The bar-level self-similarity matrix (row-major, `bars × bars`, values in 0..=1, 1 on the
-/// diagonal) of [`bar_features`]: each feature z-scored over the song (spread at least
-/// 1 dB), the squared distance averaged within the three groups (levels, spreads, beat
-/// patterns; weights 1, ½, ½), similarity `exp(−d²)`.
-pub fn self_similarity(features: &[Vec<f32>], band_count: usize) -> Vec<f32> {
-    let n = features.len();
-    let dims = features.first().map_or(0, Vec::len);
-    // Z-score each dimension, with a floor on its spread.
-    let mut z = vec![vec![0.0f32; dims]; n];
-    for d in 0..dims {
-        let mean = features.iter().map(|f| f[d]).sum::<f32>() / n as f32;
-        let var = features.iter().map(|f| (f[d] - mean) * (f[d] - mean)).sum::<f32>() / n as f32;
-        let spread = var.sqrt().max(MIN_FEATURE_SPREAD_DB);
-        for (zi, f) in z.iter_mut().zip(features) {
-            zi[d] = (f[d] - mean) / spread;
-        }
-    }
-    let bands = band_count.min(dims / 2);
-    let groups: [(std::ops::Range<usize>, f32); 3] = [(0..bands, 1.0), (bands..2 * bands, 0.5), (2 * bands..dims, 0.5)];
-    let mut s = vec![1.0f32; n * n];
-    for i in 0..n {
-        for j in (i + 1)..n {
-            let mut d2 = 0.0f32;
-            for (range, weight) in &groups {
-                if range.is_empty() {
-                    continue;
-                }
-                let sum: f32 = range.clone().map(|d| (z[i][d] - z[j][d]).powi(2)).sum();
-                d2 += weight * sum / range.len() as f32;
+/// Bar-against-bar similarity of [`bar_features`], computed on demand (no `bars × bars` matrix
+/// is stored, so memory stays linear in the song's length): each feature z-scored over the
+/// song (spread at least 1 dB), the squared distance averaged within the three groups (levels,
+/// spreads, beat patterns; weights 1, ½, ½), similarity `exp(−d²)` in 0..=1, 1 for a bar with
+/// itself.
+pub struct BarSimilarity {
+    z: Vec<Vec<f32>>,
+    groups: [(std::ops::Range<usize>, f32); 3],
+}
+
+impl BarSimilarity {
+    /// From the features of each bar, `band_count` bands each.
+    pub fn new(features: &[Vec<f32>], band_count: usize) -> Self {
+        let n = features.len().max(1);
+        let dims = features.first().map_or(0, Vec::len);
+        let mut z = vec![vec![0.0f32; dims]; features.len()];
+        for d in 0..dims {
+            let mean = features.iter().map(|f| f[d]).sum::<f32>() / n as f32;
+            let var = features.iter().map(|f| (f[d] - mean) * (f[d] - mean)).sum::<f32>() / n as f32;
+            let spread = var.sqrt().max(MIN_FEATURE_SPREAD_DB);
+            for (zi, f) in z.iter_mut().zip(features) {
+                zi[d] = (f[d] - mean) / spread;
             }
-            let v = (-d2).exp();
-            s[i * n + j] = v;
-            s[j * n + i] = v;
         }
+        let bands = band_count.min(dims / 2);
+        Self { z, groups: [(0..bands, 1.0), (bands..2 * bands, 0.5), (2 * bands..dims, 0.5)] }
     }
-    s
+
+    /// Number of bars.
+    pub fn len(&self) -> usize {
+        self.z.len()
+    }
+
+    /// True when there are no bars.
+    pub fn is_empty(&self) -> bool {
+        self.z.is_empty()
+    }
+
+    /// Similarity of bars `i` and `j` (0..=1); 0 for a bar out of range.
+    pub fn at(&self, i: usize, j: usize) -> f32 {
+        let (Some(a), Some(b)) = (self.z.get(i), self.z.get(j)) else {
+            return 0.0;
+        };
+        let mut d2 = 0.0f32;
+        for (range, weight) in &self.groups {
+            if range.is_empty() {
+                continue;
+            }
+            let sum: f32 = range.clone().map(|d| (a[d] - b[d]).powi(2)).sum();
+            d2 += weight * sum / range.len() as f32;
+        }
+        (-d2).exp()
+    }
 }
 
 /// Foote's checkerboard novelty at each bar line `i` (between bars `i − 1` and `i`) over
 /// `kernel` bars a side: the mean similarity within each side (off the diagonal) less the mean
 /// similarity across, clamped to 0..=1; 0 where either side has fewer than `min_side` bars.
-pub fn novelty(similarity: &[f32], n: usize, kernel: usize, min_side: usize) -> Vec<f32> {
-    let at = |i: usize, j: usize| similarity[i * n + j];
+pub fn novelty(similarity: &BarSimilarity, kernel: usize, min_side: usize) -> Vec<f32> {
+    let n = similarity.len();
+    let at = |i: usize, j: usize| similarity.at(i, j);
     let mut out = vec![0.0f32; n];
     for (i, slot) in out.iter_mut().enumerate() {
         let lo = i.saturating_sub(kernel);
@@ -295,8 +314,8 @@ pub fn sections(grid: &SongGrid, envelope: &RmsEnvelope, options: &SectionOption
             novelty: vec![0.0; n],
         });
     }
-    let s = self_similarity(&features, envelope.bands.len());
-    let nov = novelty(&s, n, options.kernel_bars, min_bars);
+    let s = BarSimilarity::new(&features, envelope.bands.len());
+    let nov = novelty(&s, options.kernel_bars, min_bars);
     // Phrase starts are favoured: their novelty counts for more when boundaries are chosen.
     let phrase = options.phrase_bars;
     let half = phrase / 2;
@@ -306,7 +325,7 @@ pub fn sections(grid: &SongGrid, envelope: &RmsEnvelope, options: &SectionOption
         .map(|(i, &v)| {
             let bonus = if i % phrase == 0 {
                 options.phrase_bonus
-            } else if half >= 1 && phrase % 2 == 0 && i % half == 0 {
+            } else if half >= 1 && phrase.is_multiple_of(2) && i.is_multiple_of(half) {
                 0.5 * options.phrase_bonus
             } else {
                 0.0
@@ -339,7 +358,7 @@ pub fn sections(grid: &SongGrid, envelope: &RmsEnvelope, options: &SectionOption
         let mut best: Option<(usize, f32)> = None;
         for (k, earlier) in out.iter().enumerate() {
             let len = bars.min(earlier.bars);
-            let sim = (0..len).map(|b| s[(earlier.first_bar + b) * n + first + b]).sum::<f32>() / len as f32;
+            let sim = (0..len).map(|b| s.at(earlier.first_bar + b, first + b)).sum::<f32>() / len as f32;
             if best.is_none_or(|(_, v)| sim > v) {
                 best = Some((k, sim));
             }
