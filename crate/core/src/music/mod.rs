@@ -1,6 +1,6 @@
 //! Song analysis (spec §D): from the banded RMS envelope the host computes with WebAudio
 //! ([`rms`]) to tempo, beats, downbeats and bars with intensity ([`SongGrid`]), plus the grid
-//! corrections the user makes ([`grid`]), the product's own demo song ([`mod@demo_song`]) and the
+//! corrections the user makes ([`grid`]), the song's sections ([`mod@sections`]), the product's own demo song ([`mod@demo_song`]) and the
 //! beat-tracking evaluation measure ([`eval`]).
 //!
 //! The pipeline of [`analyze`]: onset strength per band (log RMS flux, [`onset`]) → global tempo
@@ -20,6 +20,7 @@ pub mod eval;
 pub mod grid;
 pub mod onset;
 pub mod rms;
+pub mod sections;
 pub mod tempo;
 
 use serde::{Deserialize, Serialize};
@@ -29,6 +30,7 @@ pub use demo_song::{demo_song, DemoSong};
 pub use eval::f_measure;
 pub use grid::{bpm_from_taps, GridCorrection, LoudnessCurve, SongGrid};
 pub use rms::{envelope, RmsEnvelope, STANDARD_BANDS};
+pub use sections::{sections, Section, SectionError, SectionOptions, Sections};
 
 /// The shortest audio [`analyze`] accepts, seconds (a few bars at slow tempi are needed to see
 /// a tempo; shorter clips get a grid from [`SongGrid::regular`]).
