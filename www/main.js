@@ -65,7 +65,13 @@ async function main() {
   const waitingForDance = [], waitingForSearch = [];
   const player = new Player({ viewer, library, canvas, scrub: $("#scrub"), label: $("#frame-label"), playButton: $("#play"), loop: $("#loop") });
   bindDrawCap(player, viewer.adapterInfo, badge);
+  // The library's order and selection as the person left them, kept per project in this browser.
+  const viewKey = () => (session.store && session.store.projectId ? `odori.view.${session.store.projectId}` : null);
   const panel = new LibraryPanel($("#library tbody"), library, {
+    view: {
+      load: () => { try { const k = viewKey(); return k ? JSON.parse(localStorage.getItem(k) || "null") : null; } catch { return null; } },
+      save: (state) => { try { const k = viewKey(); if (k) localStorage.setItem(k, JSON.stringify(state)); } catch { /* storage off */ } },
+    },
     onSelect: (id) => { player.select(id); if (searchPanel) searchPanel.clipChanged(); },
     onOverlay: (ids) => player.setOverlays(ids),
     onRemove: (id) => {
@@ -80,6 +86,7 @@ async function main() {
       if (choreo) { choreo.refreshClips(); choreo.refresh(); }
     },
   });
+  let exporter = null;
   const imported = (report) => {
     for (const c of report.clips) {
       if (searchClient) searchClient.add(c.id); else waitingForSearch.push(c.id);
@@ -90,6 +97,8 @@ async function main() {
     if (first) {
       panel.select(first.id);
     }
+    // An imported character is offered at once in the Character list.
+    if (exporter) exporter.refreshCharacters();
   };
   const restored = await sessionReady;
   const loader = new FileLoader({
@@ -103,12 +112,18 @@ async function main() {
     onFiles: (files) => session.takeProjectFiles(files),
   });
   loader.bindInput($("#file-input"));
-  const exporter = new ExportPanel({
+  exporter = new ExportPanel({
     button: $("#export"), format: $("#export-format"), character: $("#character"), putOn: $("#put-on"), library, player, messages,
     onAdded: (info) => { if (searchClient) searchClient.add(info.id); else waitingForSearch.push(info.id); panel.refresh(); panel.select(info.id); },
   });
   loader.bindDrop(document.body, $("#drop"));
   $("#stick-figure").addEventListener("change", (ev) => player.setStick(ev.target.checked));
+  // What Export offers first: the dance, once it has a move (rendered if it is not yet).
+  exporter.dance = () => {
+    if (!choreo || !(choreo.view || []).some((v) => v.state.kind !== "empty")) return null;
+    if (choreo.danceId == null) choreo.renderDance();
+    return choreo.danceId == null ? null : { id: choreo.danceId, bars: choreo.view.map((v) => ({ startSecs: v.bar.startSecs, endSecs: v.bar.endSecs })) };
+  };
   // The chosen character and the clips put on it are project edits (kept, undone, saved).
   exporter.wear = (id, character) => session.putOn(id, character);
   exporter.onCharacter = (id) => session.setCharacter(id);
@@ -223,9 +238,14 @@ async function main() {
   // reads its bars and open searches from the project).
   const demoSong = nextTask().then(async () => {
     if (restored) {
-      await session.reconcile();
-      choreo.renderDance();
+      // Shown again as it was left: what it says was said when it was done (log, no toasts).
+      await messages.replay(async () => {
+        await session.reconcile();
+        choreo.renderDance();
+      });
     }
+    // The library as it was left (order, selected clip); from here on it is kept.
+    panel.restore();
     if (!session.project.doc().song) await loadDemoSong(songPanel, messages, session);
     performance.mark("odori:project-ready");
     document.body.dataset.project = "ready";

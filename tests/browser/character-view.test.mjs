@@ -227,8 +227,12 @@ for (const backend of ["webgl2", "webgpu"]) {
       await page.selectOption("#character", String(charId));
       // Export GLB (the dance on Xbot) through a real download, and re-open it in the app.
       await page.evaluate((id) => { window.odori.panel.select(id); window.odori.player.pause(); }, danceId);
+      // The Export dialog opens on the dance, on the chosen character (Xbot), as GLB.
+      await page.click("#export");
+      assert.equal(await page.evaluate(() => document.querySelector("input[name=export-what]:checked").value), "dance");
       await page.selectOption("#export-format", "glb");
-      const [download] = await Promise.all([page.waitForEvent("download"), page.click("#export")]);
+      assert.match(await page.textContent("#export-summary"), /The dance .* on Xbot\.glb, as GLB/);
+      const [download] = await Promise.all([page.waitForEvent("download"), page.click("#export-go")]);
       const bytes = readFileSync(await download.path());
       assert.equal(bytes.subarray(0, 4).toString(), "glTF", "the download is a GLB");
       const before = await page.evaluate(() => window.odori.library.size);

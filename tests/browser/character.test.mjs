@@ -53,8 +53,12 @@ for (const backend of ["webgl2", "webgpu"]) {
         const covered = inside.filter(([x, y]) => countNear(img, x, y, 3, (c) => !isBackground(c)) > 0).length;
         assert.ok(inside.length > 10 && covered >= inside.length * 0.7, `${file}: body drawn at ${covered} of ${inside.length} projected joints`);
         // Export GLB through a real download, then re-open it in the app.
+        // The Export dialog: the clip on screen (the one put on the character), as GLB.
+        await page.click("#export");
+        await page.check('input[name=export-what][value=clip]');
+        await page.selectOption("#export-clip", String(await page.evaluate(() => window.odori.player.clip)));
         await page.selectOption("#export-format", "glb");
-        const [download] = await Promise.all([page.waitForEvent("download"), page.click("#export")]);
+        const [download] = await Promise.all([page.waitForEvent("download"), page.click("#export-go")]);
         const bytes = readFileSync(await download.path());
         assert.equal(bytes.subarray(0, 4).toString(), "glTF", `${file}: the download is a GLB`);
         const n = await page.evaluate(() => window.odori.library.size);

@@ -7,7 +7,10 @@ import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";
 import { join } from "node:path";
-import { startServer, launch, data, artifacts, countAll, isOrange, isBackground } from "./harness.mjs";
+import { startServer, launch, data, artifacts, countAll, isOrange, isBackground, isWarmFigure } from "./harness.mjs";
+
+/** The built-in body's clay (linear 0.72, 0.45, 0.32: blue well above the sticks' orange), whatever the shading. */
+const isClay = ([r, g, b]) => r > 80 && r > g && g > b && b > 0.5 * r && r - b > 20;
 
 let server;
 before(async () => { server = await startServer(); });
@@ -137,7 +140,8 @@ for (const c of CASES) {
       }, times);
       assert.equal(r.error, undefined, `error event: ${r.error}`);
       assert.equal(r.gpu, c.backend);
-      assert.deepEqual(JSON.parse(r.loaded), { name: "Test dance", song: c.song ? "song.ogg" : "Demo song (built-in)", character: c.character ? "Xbot.glb" : null });
+      // No character chosen: the built-in body, as the app draws such a project (pkg/README.md).
+      assert.deepEqual(JSON.parse(r.loaded), { name: "Test dance", song: c.song ? "song.ogg" : "Demo song (built-in)", character: c.character ? "Xbot.glb" : null, body: c.character ? "character" : "builtin" });
       assert.deepEqual(r.clip, made.clip, "the player renders the same dance clip");
       for (let i = 0; i < times.length; i++) {
         assert.equal(r.poses[i].length, made.poses[i].length);
@@ -184,12 +188,28 @@ for (const c of CASES) {
       await player.waitForTimeout(500);
       const b = await shot(`player-project-${c.backend}-b.png`);
       const img = (px) => ({ rgba: px });
-      // Orange: the stick figure's colour; with a character, whatever is not the dark background.
-      const coloured = c.character ? a.length / 4 - countAll(img(a), isBackground) : countAll(img(a), isOrange);
+      // The built-in body's clay (not the stick figure's orange); with a character, whatever is
+      // not the dark background.
+      const coloured = c.character ? a.length / 4 - countAll(img(a), isBackground) : countAll(img(a), isClay);
       let moved = 0;
       for (let i = 0; i < a.length; i += 4) if (Math.abs(a[i] - b[i]) + Math.abs(a[i + 1] - b[i + 1]) + Math.abs(a[i + 2] - b[i + 2]) > 60) moved++;
       assert.ok(coloured > 300, `no figure drawn (${coloured} figure pixels)`);
       assert.ok(moved > 100, `the figure did not move (${moved} pixels changed)`);
+      if (!c.character) {
+        // The same pose, paused, on the body and then as stick figures (character="stick", the
+        // control): the body is clay and covers far more of the view; the sticks are orange.
+        await player.evaluate(() => { const p = document.getElementById("p"); p.pause(); p.currentTime = 3.1; });
+        const body = await shot(`player-project-${c.backend}-body.png`);
+        const drawn = await player.evaluate(() => { const p = document.getElementById("p"); const n = p.framesDrawn; p.setAttribute("character", "stick"); return n; });
+        await player.waitForFunction((n) => document.getElementById("p").framesDrawn > n, drawn, { timeout: 30000 });
+        const sticks = await shot(`player-project-${c.backend}-sticks.png`);
+        const [bodyClay, stickClay, bodyWarm, stickWarm, stickOrange] = [countAll(img(body), isClay), countAll(img(sticks), isClay), countAll(img(body), isWarmFigure), countAll(img(sticks), isWarmFigure), countAll(img(sticks), isOrange)];
+        console.log(`${c.backend}: no character chosen: the body ${bodyClay} clay / ${bodyWarm} warm px; as sticks ${stickClay} clay / ${stickWarm} warm / ${stickOrange} orange px`);
+        assert.ok(bodyClay > 300 && bodyClay > 5 * Math.max(1, stickClay), `the project plays on the built-in body (${bodyClay} clay px; sticks ${stickClay})`);
+        assert.ok(bodyWarm > 2 * stickWarm, `the body (${bodyWarm} px) is drawn, not a stick figure (${stickWarm} px)`);
+        assert.ok(stickOrange > 100, "the control draws orange sticks");
+        await player.evaluate(() => document.getElementById("p").setAttribute("character", "auto"));
+      }
 
       // Bad .odori files: each player reports the kind the engine gives for the same bytes.
       const bad = await ctx.newPage();

@@ -182,3 +182,211 @@ fn every_real_rig_maps_its_limbs_to_the_right_side() {
         assert!(median_gap(Canon::LeftHand, Canon::RightHand) > 0.0, "{rel}: hands");
     }
 }
+
+// ---- Units (issue #30, item 8): the unit is guessed from the rig, not the figure's extent ----
+
+use odori_core::import::bvh::figure_height_m;
+
+/// A BVH text rewritten as another tool would have written the same motion: every ROOT/JOINT
+/// renamed by `rename`, and every length (OFFSETs, end sites, position channels in every frame)
+/// multiplied by `factor`. Parsed here independently of the importer: channel kinds are read
+/// from the CHANNELS lines in file order, which is the order of the values in a frame row.
+fn rewrite_bvh(text: &str, rename: &dyn Fn(&str) -> String, factor: f32) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut is_position: Vec<bool> = Vec::new();
+    let mut in_motion = false;
+    let mut header_lines = 0;
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        let first = words.next().unwrap_or("");
+        if in_motion {
+            if header_lines < 2 {
+                header_lines += 1;
+                out.push_str(line);
+            } else if !line.trim().is_empty() {
+                let row: Vec<String> = line
+                    .split_whitespace()
+                    .zip(is_position.iter())
+                    .map(|(v, &pos)| {
+                        let x: f32 = v.parse().unwrap();
+                        if pos { (x * factor).to_string() } else { v.to_string() }
+                    })
+                    .collect();
+                assert_eq!(row.len(), is_position.len(), "frame row width");
+                out.push_str(&row.join(" "));
+            }
+        } else {
+            match first {
+                "ROOT" | "JOINT" => {
+                    let name = words.next().unwrap();
+                    let indent = &line[..line.len() - line.trim_start().len()];
+                    out.push_str(&format!("{indent}{first} {}", rename(name)));
+                }
+                "OFFSET" => {
+                    let v: Vec<String> = words.map(|w| (w.parse::<f32>().unwrap() * factor).to_string()).collect();
+                    let indent = &line[..line.len() - line.trim_start().len()];
+                    out.push_str(&format!("{indent}OFFSET {}", v.join(" ")));
+                }
+                "CHANNELS" => {
+                    let _count = words.next();
+                    is_position.extend(words.map(|w| w.ends_with("position")));
+                    out.push_str(line);
+                }
+                "MOTION" => {
+                    in_motion = true;
+                    out.push_str(line);
+                }
+                _ => out.push_str(line),
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// The CMU Daz-style rig's joints (the acLSTM salsa/indian/martial files) under Mixamo names;
+/// joints Mixamo lacks keep a `mixamorig:` name of what they are.
+fn mixamo_name(n: &str) -> String {
+    let side = |s: &str| if s.starts_with('l') { "Left" } else { "Right" };
+    let m = match n {
+        "hip" => "Hips".to_string(),
+        "abdomen" => "Spine".into(),
+        "chest" => "Spine1".into(),
+        "neck" => "Neck".into(),
+        "head" => "Head".into(),
+        "leftEye" => "LeftEye".into(),
+        "rightEye" => "RightEye".into(),
+        _ => {
+            let (s, rest) = n.split_at(1);
+            let s = side(s);
+            match rest {
+                "Collar" => format!("{s}Shoulder"),
+                "Shldr" => format!("{s}Arm"),
+                "ForeArm" => format!("{s}ForeArm"),
+                "Hand" => format!("{s}Hand"),
+                "Buttock" => format!("{s}UpLeg"),
+                "Thigh" => format!("{s}UpLegRoll"),
+                "Shin" => format!("{s}Leg"),
+                "Foot" => format!("{s}Foot"),
+                finger => format!("{s}Hand{}", finger.replace("Mid", "Middle")),
+            }
+        }
+    };
+    format!("mixamorig:{m}")
+}
+
+/// The same rig under CMU ASF names (lfemur, lhumerus, lowerback, ...).
+fn cmu_asf_name(n: &str) -> String {
+    match n {
+        "hip" => "root".into(),
+        "abdomen" => "lowerback".into(),
+        "chest" => "thorax".into(),
+        "neck" => "lowerneck".into(),
+        "head" => "head".into(),
+        _ => {
+            let (s, rest) = n.split_at(1);
+            let w = match rest {
+                "Collar" => "clavicle",
+                "Shldr" => "humerus",
+                "ForeArm" => "radius",
+                "Hand" => "hand",
+                "Buttock" => "hipjoint",
+                "Thigh" => "femur",
+                "Shin" => "tibia",
+                "Foot" => "foot",
+                _ => return n.to_string(),
+            };
+            format!("{s}{w}")
+        }
+    }
+}
+
+/// Height of the figure as imported with the given options, and the warnings.
+fn height(rel: &str, text: &str, unit_scale: Option<f32>) -> (f32, Vec<String>) {
+    let im = import_bytes(rel, text.as_bytes(), &ImportOptions { unit_scale, ..Default::default() }).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    (figure_height_m(&im.clips[0]), im.warnings)
+}
+
+#[test]
+fn the_guessed_unit_gives_the_documented_height_on_every_real_bvh() {
+    // Both sources state centimetres (mocap/SOURCE-cmu-acrnn.txt, cmu-modern/SOURCE.txt): the
+    // guess must give the height those give, within 10 %, with no warning.
+    let files = all_bvh();
+    assert_eq!(files.len(), 29, "expected the 29 BVH files of ../shared/data/mocap, found {files:?}");
+    let mut ratios = Vec::new();
+    for rel in &files {
+        let text = String::from_utf8(read(rel)).unwrap();
+        let (documented, _) = height(rel, &text, Some(0.01));
+        assert!((1.3..2.1).contains(&documented), "{rel}: {documented} m in centimetres: the reference itself is not a person");
+        let (guessed, warnings) = height(rel, &text, None);
+        assert!((guessed / documented - 1.0).abs() < 0.1, "{rel}: guessed {guessed:.2} m, documented unit {documented:.2} m");
+        assert!(warnings.is_empty(), "{rel}: {warnings:?}");
+        ratios.push(guessed / documented);
+    }
+    let (lo, hi) = ratios.iter().fold((f32::MAX, f32::MIN), |(a, b), &r| (a.min(r), b.max(r)));
+    println!("{} real BVH files: guessed height / documented-unit height from {lo:.3} to {hi:.3}", ratios.len());
+}
+
+#[test]
+fn the_guessed_unit_follows_a_real_rig_rewritten_in_other_units_and_names() {
+    // Real motion made into the files other tools write: renamed joints (Mixamo, CMU ASF, or
+    // as they are) and every length in metres, centimetres, millimetres, inches or CMU's ASF
+    // unit. The figure must come out at the height of the original in centimetres (within 10 %)
+    // without a warning. Two rigs: the 43-joint Daz-style CMU rig and the 100-joint iClone one.
+    use odori_core::import::bvh::units::{CENTIMETRE, CMU_ASF_UNIT, INCH, METRE, MILLIMETRE};
+    let same = |n: &str| n.to_string();
+    let cases: [(&str, &str, &dyn Fn(&str) -> String); 4] = [
+        ("mocap/cmu-salsa/salsa_01.bvh", "Mixamo", &mixamo_name),
+        ("mocap/cmu-indian/indian_04.bvh", "Mixamo", &mixamo_name),
+        ("mocap/cmu-salsa/salsa_01.bvh", "as is", &same),
+        ("mocap/cmu-modern/005_02.bvh", "as is", &same),
+    ];
+    for (rel, naming, rename) in cases {
+        let text = String::from_utf8(read(rel)).unwrap();
+        let (reference, _) = height(rel, &text, Some(0.01));
+        for unit in [CENTIMETRE, METRE, MILLIMETRE, INCH] {
+            let made = rewrite_bvh(&text, rename, 0.01 / unit.metres);
+            if naming == "Mixamo" {
+                assert!(made.contains("ROOT mixamorig:Hips") && made.contains("JOINT mixamorig:LeftUpLeg"), "renaming");
+            }
+            let (h, warnings) = height(rel, &made, None);
+            assert!((h / reference - 1.0).abs() < 0.1, "{rel} ({naming} names, {}): {h:.2} m, in centimetres {reference:.2} m", unit.name);
+            assert!(warnings.is_empty(), "{rel} ({naming} names, {}): {warnings:?}", unit.name);
+            // Control: the importer really read the rewritten lengths (the same file read as
+            // centimetres is off by the factor, unless it is centimetres).
+            let (as_cm, _) = height(rel, &made, Some(0.01));
+            assert!((as_cm / reference - 0.01 / unit.metres).abs() < 0.01 * (0.01 / unit.metres), "{}: {as_cm}", unit.name);
+        }
+    }
+    // CMU's own naming in its ASF unit (1/0.45 inch): the naming tells; by size alone inches
+    // would be taken (a 0.7 m figure).
+    let rel = "mocap/cmu-salsa/salsa_01.bvh";
+    let text = String::from_utf8(read(rel)).unwrap();
+    let (reference, _) = height(rel, &text, Some(0.01));
+    let made = rewrite_bvh(&text, &cmu_asf_name, 0.01 / CMU_ASF_UNIT.metres);
+    assert!(made.contains("JOINT lfemur") && made.contains("JOINT lhumerus"));
+    let (h, warnings) = height(rel, &made, None);
+    assert!((h / reference - 1.0).abs() < 0.1, "CMU ASF names and unit: {h:.2} m vs {reference:.2} m");
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let anonymous = rewrite_bvh(&text, &|n: &str| format!("j_{n}").replace("j_hip", "j_pelvis"), 0.01 / CMU_ASF_UNIT.metres);
+    let (h_anon, _) = height(rel, &anonymous, None);
+    assert!((h_anon / reference - 1.0).abs() > 0.3, "without CMU names the ASF unit is not guessed: {h_anon:.2} m");
+}
+
+#[test]
+fn the_old_extent_rule_fails_the_rewritten_files() {
+    // Control for the test above: the figure's vertical extent alone (the rule this replaced:
+    // over 20 units centimetres, over 3 decimetres, else metres) misreads millimetres and
+    // inches, so the test above can fail.
+    let rel = "mocap/cmu-salsa/salsa_01.bvh";
+    let text = String::from_utf8(read(rel)).unwrap();
+    let (reference, _) = height(rel, &text, Some(0.01));
+    for (per_cm, wrong) in [(10.0f32, "millimetres"), (1.0 / 2.54, "inches")] {
+        let made = rewrite_bvh(&text, &mixamo_name, per_cm);
+        let (as_cm, _) = height(rel, &made, Some(0.01));
+        let extent_units = as_cm * 100.0;
+        let old_scale = if extent_units > 20.0 { 0.01 } else if extent_units > 3.0 { 0.1 } else { 1.0 };
+        let old_h = as_cm * 100.0 * old_scale;
+        assert!((old_h / reference - 1.0).abs() > 0.1, "{wrong}: the extent rule gives {old_h:.2} m");
+    }
+}

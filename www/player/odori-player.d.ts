@@ -23,11 +23,16 @@ export interface OdoriPlayerClip {
   durationSecs: number;
 }
 
-/** With a `.odori` src: the project's name, its song's file name, and its character's file (or null). */
+/**
+ * With a `.odori` src: the project's name, its song's file name, its character's file (or null),
+ * and what `character="auto"` draws the dance on: the project's character, else the built-in
+ * body (as the app does), or stick figures when the project chose them.
+ */
 export interface OdoriPlayerProject {
   name: string;
   song: string;
   character: string | null;
+  body: "character" | "builtin" | "stick";
 }
 
 /** The player's own events (its `progress` and `error` are CustomEvents, as <model-viewer>'s). */

@@ -4,7 +4,7 @@
 // engine (odori_player.js: Library + Viewer, no authoring). Attribute names follow
 // <model-viewer> where they mean the same: src, poster, loading, autoplay, camera-controls,
 // animation-name; plus music (an audio URL, or "#id" of an <audio> on the page: its clock
-// drives the figure), loop, character ("auto" | "stick"), backend ("auto" | "webgpu" |
+// drives the figure), loop, character ("auto" | "stick" | "builtin" | a character's URL), backend ("auto" | "webgpu" |
 // "webgl2") and max-fps (draws per second while playing: a number, or "none"). Methods play(), pause(); properties currentTime, duration, paused; events load,
 // progress, error, ended.
 //
@@ -122,7 +122,9 @@ function openProject(engine, fileName, bytes) {
       const ext = (play.songName.split(".").pop() || "").toLowerCase();
       musicUrl = URL.createObjectURL(new Blob([play.audio], AUDIO_TYPES[ext] ? { type: AUDIO_TYPES[ext] } : {}));
     }
-    return { library, clip: play.clip, musicUrl, demoSong: play.demoSong, name: play.name || fileName, songName: play.songName, characterClip: play.characterClip, characterName: play.characterName };
+    // No character chosen: the built-in body, as the app draws it (stick figures only when the
+    // project chose them).
+    return { library, clip: play.clip, musicUrl, demoSong: play.demoSong, name: play.name || fileName, songName: play.songName, characterClip: play.characterClip, characterName: play.characterName, stickFigures: play.stickFigures };
   } catch (e) {
     library.free();
     throw Object.assign(e, { file: e.file || fileName });
@@ -372,8 +374,14 @@ export class OdoriPlayer extends HTMLElement {
   get audioElement() { return this.#audio; }
   /** The clip being played (ClipInfo), or null. */
   get clip() { return this.#clip; }
-  /** With a `.odori` src: `{ name, song }` of the project playing, else null. */
-  get project() { return this.#project ? { name: this.#project.name, song: this.#project.songName, character: this.#project.characterName } : null; }
+  /** With a `.odori` src: `{ name, song, character, body }` of the project playing, else null. */
+  get project() {
+    const p = this.#project;
+    if (!p) return null;
+    // What "auto" draws it on: the project's character, the built-in body, or stick figures.
+    const body = p.characterClip != null ? "character" : p.stickFigures ? "stick" : "builtin";
+    return { name: p.name, song: p.songName, character: p.characterName, body };
+  }
 
   /**
    * Joint positions (metres; x, y, z per point) of the figure at `clipTimeSecs` of its clip
@@ -571,7 +579,7 @@ export class OdoriPlayer extends HTMLElement {
       if (projectSource) {
         const opened = openProject(engine, name, bytes);
         this.#library = opened.library;
-        this.#project = { name: opened.name, songName: opened.songName, musicUrl: opened.musicUrl, characterClip: opened.characterClip, characterName: opened.characterName };
+        this.#project = { name: opened.name, songName: opened.songName, musicUrl: opened.musicUrl, characterClip: opened.characterClip, characterName: opened.characterName, stickFigures: opened.stickFigures };
         // The demo song is synthesised once the first pose is up (or at play()), not before.
         this.#pendingDemo = opened.demoSong && !this.music;
         clip = opened.clip;
@@ -736,7 +744,8 @@ export class OdoriPlayer extends HTMLElement {
 
   /**
    * Puts the motion on the `character` the attribute names: "auto" (the source's own mesh,
-   * else a stick figure), "stick", "builtin" (the engine's built-in body: the clip exported as
+   * else a stick figure; for a `.odori` project its chosen character, else the built-in body
+   * as in the app, or stick figures when the project chose them), "stick", "builtin" (the engine's built-in body: the clip exported as
    * GLB with that body and read back, so the player build needs nothing more), or the URL of a
    * skinned humanoid GLB/glTF (retargeted with the engine's putOnCharacter, spec §L). A
    * character that cannot be used is reported (`error` event, with the engine's kind) and the
@@ -748,9 +757,16 @@ export class OdoriPlayer extends HTMLElement {
     for (const id of this.#dressClips) library.remove(id);
     this.#dressClips = [];
     this.#dressed = null;
-    const want = (this.getAttribute("character") || "auto").trim();
-    // "auto" on a project: the project's own character, if it has one.
-    if (want === "auto" && this.#project?.characterClip != null) this.#dressed = this.#project.characterClip;
+    let want = (this.getAttribute("character") || "auto").trim();
+    // "auto" on a project: what the app draws it on — its own character if it chose one, else
+    // the built-in body (stick figures if the project chose those).
+    if (want === "auto" && this.#project) {
+      if (this.#project.characterClip != null) {
+        this.#dressed = this.#project.characterClip;
+        return;
+      }
+      want = this.#project.stickFigures ? "stick" : "builtin";
+    }
     if (want === "auto" || want === "stick" || !this.#clip) return;
     const clip = this.#clip;
     try {

@@ -76,7 +76,8 @@ export class ProjectSession {
     }
     if (!this.project) {
       this.project = new this.Project();
-      this.project.setName("Untitled");
+      // Each project is listed once by its name in Recent projects: a new one takes a free name.
+      this.project.setName(this.store ? await this.store.freeName("Untitled") : "Untitled");
       if (this.store) await this.store.attach(this.project);
     }
     return restored;
@@ -332,6 +333,20 @@ export class ProjectSession {
     }
     for (const m of p.missing()) this.messages.error(`${name} lacks ${m.what}: the rest is opened.`);
     if (!this.store) { this.messages.error(`${name}: opening needs the browser's storage, which is not available here`); return false; }
+    // The same project opened again (a file saved from here, unchanged) is the stored one, not
+    // a second entry; another project of the same name gets a name of its own.
+    const same = await this.store.findSame(p.manifest());
+    if (same) {
+      p.free?.();
+      if (same !== this.store.projectId) await this.switchTo(same);
+      else this.messages.info(`${name} is the project already open`);
+      return true;
+    }
+    // A project never named (Untitled…) takes its file's name.
+    const docName = p.doc().name || "";
+    const base = docName && !/^Untitled( \d+)?$/.test(docName) ? docName : name.replace(/\.odori$/i, "").trim() || "Untitled";
+    const free = await this.store.freeName(base);
+    if (free !== p.doc().name) p.setName(free);
     await this.store.attach(p);
     await this.store.flush();
     if (this.store.lastError) return false;
@@ -351,6 +366,12 @@ export class ProjectSession {
       const bytes = this.project.save();
       const r = await saveBytes(bytes, fileNameFor(this.project.doc().name));
       if (r) this.messages.info(`Saved ${r.name} (${(bytes.length / 1024).toFixed(0)} KiB)`);
+      // Named where it was saved ("my dance.odori" → "my dance"): how Recent projects lists it.
+      const named = r && r.name.replace(/\.odori$/i, "").trim();
+      if (named && named !== this.project.doc().name && this.store) {
+        this.project.setName(await this.store.freeName(named, this.store.projectId));
+        this.edited();
+      }
       return bytes;
     } catch (e) { this.messages.error(`Save as: ${e.message}`); return null; }
   }
@@ -368,8 +389,10 @@ export class ProjectSession {
   async fillRecent(select) {
     const list = this.store ? await this.store.recent() : [];
     const opts = [new Option("Recent projects…", "")];
+    // Once per project, by its name (the time it was last changed in its tooltip).
     for (const r of list) {
-      const o = new Option(`${r.name || "Untitled"} — ${new Date(r.updatedAt).toLocaleString()}${r.id === this.store.projectId ? " (open)" : ""}`, r.id);
+      const o = new Option(`${r.name || "Untitled"}${r.id === this.store.projectId ? " (open)" : ""}`, r.id);
+      o.title = `last changed ${new Date(r.updatedAt).toLocaleString()}`;
       o.disabled = r.id === this.store.projectId;
       opts.push(o);
     }

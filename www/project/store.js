@@ -247,6 +247,23 @@ export class ProjectStore {
     }
   }
 
+  /** The stored project whose last saved manifest is these bytes (the same project opened again), or null. */
+  async findSame(manifestBytes) {
+    const tx = this.db.transaction(["projects", "manifests"]);
+    for (const rec of await tx.objectStore("projects").getAll()) {
+      const m = await tx.objectStore("manifests").get(rec.manifestKey);
+      if (m && m.bytes.length === manifestBytes.length && m.bytes.every((b, i) => b === manifestBytes[i])) return rec.id;
+    }
+    return null;
+  }
+
+  /** `name`, or `name 2`, `name 3`… : the first no other stored project has (each is listed once by its name). */
+  async freeName(name, exceptId = null) {
+    const taken = new Set((await this.recent()).filter((r) => r.id !== exceptId).map((r) => r.name));
+    if (!taken.has(name)) return name;
+    for (let n = 2; ; n++) if (!taken.has(`${name} ${n}`)) return `${name} ${n}`;
+  }
+
   /** Forgets a stored project; its blobs go unless another project uses them. */
   async remove(id) {
     const tx = this.db.transaction(["projects", "manifests"], "readwrite");

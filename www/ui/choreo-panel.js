@@ -120,7 +120,15 @@ export class ChoreoPanel {
       this.refreshClips(info.id);
       this.prepareJoins();
     } catch (e) {
-      this.messages.warning(`Dance: ${e.message}`);
+      // A clip too short to hold a bar's move (a character's one-frame T-pose, a 1 s gesture)
+      // is no fault: said plainly, in the Messages log only. Other refusals are warnings.
+      if (info.frames <= 1 || info.durationSecs < 0.5) {
+        this.messages.note(`${info.name}: a still pose, so no dance moves are made from it (it can still be a character)`);
+      } else if (/needs? \d+ counts/.test(e.message)) {
+        this.messages.note(`${info.name}: ${info.durationSecs.toFixed(1)} s is too short to make dance moves from (a move is a whole bar: 3 or 4 counts)`);
+      } else {
+        this.messages.warning(`Dance: ${e.message}`);
+      }
     }
   }
 

@@ -3,9 +3,10 @@
 // humanoid (glTF): the viewer draws the dance, the candidates and text animations on it
 // (`onCharacter`; the *Stick* checkbox draws stick figures for a moment); *Put on* plays the clip on screen (the dance, a text animation, a move, a BVH) on an
 // imported one as a new library clip, drawn skinned.
-// Export the clip on screen (an imported clip, a text animation, the composed dance) as a GLB
-// (with the character's mesh, or the built-in body for the engine's own skeleton), a VRM
-// animation (.vrma, for VRM avatars) or a BVH file, through the engine's exporters; the browser downloads the bytes. Errors go to the
+// *Export…* opens a dialog that names what it exports (the dance, bars a–b of it, or a clip),
+// on whom (the chosen character or the built-in body, any VRM avatar, the skeleton written),
+// in which format (GLB, VRMA, BVH: one entry each of EXPORT_FORMATS) and how large the file
+// is, through the engine's exporters; the browser downloads those bytes. Errors go to the
 // message list with the engine's words; nothing in the library changes.
 export class ExportPanel {
   /** `wear(clipId, characterId)` → ClipInfo may be set by the page (its project keeps the clip). */
@@ -17,7 +18,7 @@ export class ExportPanel {
     this.character = character;
     this.onAdded = onAdded;
     this.onCharacter = onCharacter;
-    button.addEventListener("click", () => this.exportSelected());
+    if (button) this.bindDialog({ dialog: document.querySelector("#export-dialog"), button });
     if (character && putOn) {
       character.addEventListener("focus", () => this.refreshCharacters());
       character.addEventListener("pointerdown", () => this.refreshCharacters());
@@ -86,20 +87,131 @@ export class ExportPanel {
     }
   }
 
-  exportSelected() {
-    const id = this.player.clip;
-    if (id == null) { this.messages.warning("Export: select a clip first."); return null; }
+  /**
+   * The Export dialog: what (the dance — the default when there is one —, bars a–b of it, or a
+   * clip), on whom (the chosen character or the built-in body for GLB; any VRM avatar for
+   * VRMA; the skeleton written for BVH), the format (one entry of EXPORT_FORMATS each), and the
+   * file's size, from the very bytes Download saves. `dance()` (set by the page) gives
+   * `{ id, bars: [{ startSecs, endSecs }] }` of the rendered dance, or null.
+   */
+  bindDialog({ dialog, button }) {
+    this.dialog = dialog;
+    const $ = (sel) => dialog.querySelector(sel);
+    this.ui = { what: [...dialog.querySelectorAll("input[name=export-what]")], from: $("#export-bar-from"), to: $("#export-bar-to"), clip: $("#export-clip"), summary: $("#export-summary"), danceLabel: $("#export-dance-label"), go: $("#export-go") };
+    this.format.replaceChildren(...EXPORT_FORMATS.map((f) => new Option(f.label, f.id)));
+    button.addEventListener("click", () => this.open());
+    const changed = () => this.update();
+    for (const r of this.ui.what) r.addEventListener("change", changed);
+    for (const el of [this.ui.from, this.ui.to, this.ui.clip, this.format]) el.addEventListener("input", changed);
+    for (const el of [this.ui.from, this.ui.to]) el.addEventListener("focus", () => { this.ui.what.find((r) => r.value === "bars").checked = true; });
+    this.ui.clip.addEventListener("change", () => { this.ui.what.find((r) => r.value === "clip").checked = true; changed(); });
+    this.ui.go.addEventListener("click", (ev) => {
+      ev.preventDefault();
+      if (this.download()) dialog.close();
+    });
+  }
+
+  /** Opens the dialog on the dance (when there is one), else the clip on screen. */
+  open() {
+    const dance = this.dance ? this.dance() : null;
+    const onScreen = this.player.clip;
+    const clips = this.library.clips().filter((c) => c.source !== "candidate" && (!dance || c.id !== dance.id));
+    this.ui.clip.replaceChildren(...clips.map((c) => new Option(c.name, String(c.id))));
+    if (clips.some((c) => c.id === onScreen)) this.ui.clip.value = String(onScreen);
+    const danceRadio = this.ui.what.find((r) => r.value === "dance");
+    const barsRadio = this.ui.what.find((r) => r.value === "bars");
+    danceRadio.disabled = barsRadio.disabled = this.ui.from.disabled = this.ui.to.disabled = !dance;
+    if (dance) {
+      const n = dance.bars.length;
+      Object.assign(this.ui.from, { max: String(n), value: "1" });
+      Object.assign(this.ui.to, { max: String(n), value: String(n) });
+      const d = this.library.clip(dance.id);
+      this.ui.danceLabel.textContent = `The dance (bars 1–${n}, ${d.durationSecs.toFixed(1)} s)`;
+    } else {
+      this.ui.danceLabel.textContent = "The dance (none yet: Generate makes one)";
+    }
+    this.ui.what.find((r) => r.value === (dance ? "dance" : "clip")).checked = true;
+    if (!dance && !clips.length) { this.messages.warning("Export: there is nothing to export yet."); return; }
+    this.update();
+    if (!this.dialog.open) this.dialog.showModal();
+  }
+
+  /**
+   * What the dialog names now: `{ id, info, range, what, on, format, body }` (`range`: the
+   * export's { startSecs, endSecs } or {}), or `{ error }`.
+   */
+  plan() {
+    const what = this.ui.what.find((r) => r.checked)?.value || "clip";
+    const format = EXPORT_FORMATS.find((f) => f.id === this.format.value) || EXPORT_FORMATS[0];
+    const dance = this.dance ? this.dance() : null;
+    let id, range = {}, label;
+    if (what === "clip") {
+      id = Number(this.ui.clip.value);
+      if (!this.ui.clip.value || !this.library.clip(id)) return { error: "choose a clip" };
+      label = this.library.clip(id).name;
+    } else {
+      if (!dance) return { error: "there is no dance yet (Generate makes one)" };
+      id = dance.id;
+      const n = dance.bars.length;
+      if (what === "bars") {
+        const a = Number(this.ui.from.value), b = Number(this.ui.to.value);
+        if (!Number.isInteger(a) || !Number.isInteger(b) || a < 1 || b > n || a > b) return { error: `bars go from 1 to ${n}, the first not after the last` };
+        range = { startSecs: dance.bars[a - 1].startSecs, endSecs: dance.bars[b - 1].endSecs };
+        label = `bars ${a}–${b} of the dance`;
+      } else {
+        label = "the dance";
+      }
+    }
     const info = this.library.clip(id);
-    const kind = ["bvh", "vrma"].includes(this.format.value) ? this.format.value : "glb";
+    // A humanoid clip with no mesh of its own goes out on the chosen character, else on the
+    // built-in body (with stick figures on screen too: every GLB has a body).
+    const chosen = this.chosen();
+    const bodyless = !info.hasMesh && info.humanoid.kind !== "notHumanoid";
+    const character = typeof chosen === "number" ? chosen : "builtin";
+    const characterName = typeof chosen === "number" ? this.library.clip(chosen)?.source.replace(/^.*[\\/]/, "") || "the character" : "the built-in body";
+    const ctx = { info, bodyless, character, characterName };
+    return { id, info, range, what, label, format, ctx, on: format.on(ctx) };
+  }
+
+  /** The bytes the dialog would save (made again only when what it names changes). */
+  bytesFor(plan) {
+    const key = JSON.stringify([plan.id, this.library.clip(plan.id)?.frames, plan.range, plan.format.id, plan.ctx.character]);
+    if (this.made && this.made.key === key) return this.made.bytes;
+    const bytes = plan.format.make(this.library, plan.id, plan.range, plan.ctx);
+    this.made = { key, bytes };
+    return bytes;
+  }
+
+  update() {
+    const plan = this.plan();
+    this.ui.go.disabled = !!plan.error;
+    if (plan.error) { this.ui.summary.textContent = `Nothing to export: ${plan.error}.`; return plan; }
     try {
-      // A humanoid clip with no mesh of its own goes out on the chosen character, else on the
-      // built-in body (with stick figures on screen too: every GLB has a body).
-      const bodyless = !info.hasMesh && info.humanoid.kind !== "notHumanoid";
-      const chosen = this.chosen();
-      const bytes = kind === "bvh" ? this.library.exportBvh(id) : kind === "vrma" ? this.library.exportVrma(id)
-        : this.library.exportGlb(id, bodyless ? { character: typeof chosen === "number" ? chosen : "builtin" } : undefined);
-      const name = `${info.name.replace(/[^\p{L}\p{N}_.-]+/gu, "_") || "odori"}.${kind}`;
-      const url = URL.createObjectURL(new Blob([bytes], { type: kind === "bvh" ? "text/plain" : "model/gltf-binary" }));
+      const bytes = this.bytesFor(plan);
+      const secs = plan.range.endSecs != null ? plan.range.endSecs - plan.range.startSecs : plan.info.durationSecs;
+      plan.fileName = this.fileName(plan);
+      this.ui.summary.textContent = `${capital(plan.label)} (${secs.toFixed(1)} s) on ${plan.on}, as ${plan.format.label}: ${plan.fileName}, ${size(bytes.length)}.`;
+      this.ui.summary.dataset.bytes = String(bytes.length);
+    } catch (e) {
+      this.ui.go.disabled = true;
+      this.ui.summary.textContent = `${capital(plan.label)} cannot be exported as ${plan.format.label}: ${e.message}`;
+    }
+    return plan;
+  }
+
+  fileName(plan) {
+    const base = plan.what === "clip" ? plan.info.name : plan.what === "bars" ? `${plan.info.name} ${plan.label.replace(/ of the dance$/, "")}` : plan.info.name;
+    return `${base.replace(/[^\p{L}\p{N}_.-]+/gu, "_") || "odori"}.${plan.format.ext}`;
+  }
+
+  /** Saves what the dialog names; returns `{ name, bytes, plan }` or null (said why). */
+  download() {
+    const plan = this.plan();
+    if (plan.error) { this.messages.warning(`Export: ${plan.error}.`); return null; }
+    try {
+      const bytes = this.bytesFor(plan);
+      const name = this.fileName(plan);
+      const url = URL.createObjectURL(new Blob([bytes], { type: plan.format.mime }));
       const a = document.createElement("a");
       a.href = url;
       a.download = name;
@@ -107,11 +219,44 @@ export class ExportPanel {
       a.click();
       a.remove();
       setTimeout(() => URL.revokeObjectURL(url), 10_000);
-      this.messages.info(`Exported ${info.name} as ${name} (${(bytes.length / 1024).toFixed(0)} KiB)`);
-      return { name, bytes };
+      this.messages.info(`Exported ${plan.label} on ${plan.on} as ${name} (${size(bytes.length)})`);
+      this.last = { name, bytes, plan };
+      return this.last;
     } catch (e) {
-      this.messages.error(`Export of ${info.name} failed: ${e.message}`);
+      this.messages.error(`Export of ${plan.label} failed: ${e.message}`);
       return null;
     }
   }
 }
+
+const capital = (s) => s.charAt(0).toUpperCase() + s.slice(1);
+const size = (n) => (n < 1024 * 1024 ? `${Math.max(1, Math.round(n / 1024))} KiB` : `${(n / 1024 / 1024).toFixed(1)} MiB`);
+
+/** Where a humanoid clip without a mesh of its own, exported as BVH, gets its skeleton from. */
+function skeletonOf(info) {
+  return info.format === "bvh" || info.format === "gltf" || info.format === "character" ? `its own skeleton (${info.joints} joints)` : "the canonical skeleton";
+}
+
+/**
+ * The export formats, one entry each: adding a format (MMD's VMD, a video) is one entry here.
+ * `on(ctx)` says on whom the motion goes out; `make(library, clipId, range, ctx)` gives the
+ * file's bytes (`range`: `{ startSecs, endSecs }` or `{}`; `ctx`: `{ info, bodyless,
+ * character, characterName }`).
+ */
+export const EXPORT_FORMATS = [
+  {
+    id: "glb", label: "GLB (glTF 2.0)", ext: "glb", mime: "model/gltf-binary",
+    on: (c) => (c.bodyless ? c.characterName : c.info.hasMesh ? `its own character (${c.info.source.replace(/^.*[\\/]/, "")})` : skeletonOf(c.info)),
+    make: (library, id, range, c) => library.exportGlb(id, { ...range, ...(c.bodyless ? { character: c.character } : {}) }),
+  },
+  {
+    id: "vrma", label: "VRM animation (.vrma)", ext: "vrma", mime: "application/octet-stream",
+    on: () => "any VRM avatar (VRM humanoid bones)",
+    make: (library, id, range) => library.exportVrma(id, range),
+  },
+  {
+    id: "bvh", label: "BVH (centimetres)", ext: "bvh", mime: "text/plain",
+    on: (c) => skeletonOf(c.info),
+    make: (library, id, range) => library.exportBvh(id, range),
+  },
+];

@@ -8,7 +8,7 @@ const ACCEPT = /\.(bvh|glb|gltf)$/i;
 const BVH = /\.bvh$/i;
 
 /** Units a BVH file may be in: metres per file unit ("" = guessed from the skeleton's size). */
-const UNITS = [["", "guess from size"], ["0.01", "centimetres"], ["1", "metres"], ["0.001", "millimetres"], ["0.0254", "inches"]];
+const UNITS = [["", "guess from the rig"], ["0.01", "centimetres"], ["1", "metres"], ["0.001", "millimetres"], ["0.0254", "inches"]];
 
 /**
  * The frame rate a BVH file's header states (1 / "Frame Time"), or null when the header cannot
@@ -182,6 +182,9 @@ export class FileLoader {
       const how = [];
       if (fpsOverride) how.push(`played at ${fpsOverride} fps${headerFps ? ` instead of the file's ${Number(headerFps.toFixed(2))}` : ""}`);
       if (unitScale) how.push(`in ${UNITS.find(([v]) => Number(v) === unitScale)?.[1] ?? `${unitScale} m units`}`);
+      // A skinned humanoid is a character the person may want to dance: say where to choose it.
+      const character = report.clips.some((c) => c.hasMesh && c.humanoid.kind !== "notHumanoid" && c.format === "gltf");
+      if (character) how.push("a character: choose it in Character to dance on it");
       this.messages.info(`${file.name}: ${n} clip${n === 1 ? "" : "s"} added${how.length ? ` (${how.join(", ")})` : ""}`);
       this.status.textContent = "";
       this.onImported(report, { fileName: file.name, bytes, options });

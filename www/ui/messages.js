@@ -1,6 +1,10 @@
 // Messages: each one shows at once as a toast over the page, where the person is looking
 // (a broken file, a refused tempo, "filled 41 bars"), and is kept in the Messages log. Errors
 // stay until dismissed; information and warnings fade after a few seconds. Nothing modal.
+// A toast answers something the person just did: what the page says while it shows a stored
+// project again (a reload, Open…, a Recent pick: `replay`) was said when it was done, so then
+// only errors are toasts and the rest goes to the log; `note` is for the log only (a detail
+// worth keeping, not worth interrupting for).
 const FADE_MS = { info: 5000, warning: 9000 };
 const MAX_TOASTS = 4;
 
@@ -8,15 +12,27 @@ export class Messages {
   constructor(list, toasts = null) {
     this.list = list;
     this.toasts = toasts;
+    /** How many `replay`s are running: while any is, only errors are toasts. */
+    this.replaying = 0;
   }
 
-  add(kind, text) {
+  /** Runs `f` (async: showing a stored project again) with its messages kept in the log, errors still toasts. */
+  async replay(f) {
+    this.replaying++;
+    try { return await f(); } finally { this.replaying--; }
+  }
+
+  /**
+   * Adds a message to the log and, unless `toast` is false or a replay is running (errors
+   * always), shows it as a toast.
+   */
+  add(kind, text, { toast = true } = {}) {
     const li = document.createElement("li");
     li.className = kind;
     li.textContent = text;
     this.list.prepend(li);
     while (this.list.children.length > 30) this.list.lastChild.remove();
-    if (this.toasts) this.toast(kind, text);
+    if (this.toasts && (kind === "error" || (toast && this.replaying === 0))) this.toast(kind, text);
     if (kind === "error") console.warn(text);
     return li;
   }
@@ -46,4 +62,6 @@ export class Messages {
   error(text) { return this.add("error", text); }
   warning(text) { return this.add("warning", text); }
   info(text) { return this.add("info", text); }
+  /** Information for the log only (no toast). */
+  note(text) { return this.add("info", text, { toast: false }); }
 }

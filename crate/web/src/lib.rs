@@ -102,7 +102,7 @@ export interface ClipInfo {
 export interface ImportOptions {
   /** Play at this frame rate instead of the file's (CMU salsa BVH headers say 120, the data is 60). */
   fpsOverride?: number;
-  /** Metres per BVH unit, 0.0001..=10 (refused outside); guessed from the skeleton's size when absent (a humanoid of implausible height is then reported in `warnings`). */
+  /** Metres per BVH unit, 0.0001..=10 (refused outside); guessed from the rig when absent (its joint naming and bone lengths against a person's) (a humanoid of implausible height is then reported in `warnings`). */
   unitScale?: number;
   /** Resampling rate for glTF animations (default 30). */
   gltfFps?: number;

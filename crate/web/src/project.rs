@@ -599,7 +599,8 @@ impl Project {
     /// characterName }`. `audio` is the song file's bytes as given (absent for the demo song,
     /// which `DemoSong.render` makes again, the samples its grid was found on);
     /// `characterClip` is the dance put on the project's character (an imported skinned
-    /// humanoid), added to `library` too, or null. Throws "no-song" without a song, "choreo"
+    /// humanoid), added to `library` too, or null; `stickFigures` is true when the project chose
+    /// stick figures (no character and not: the built-in body). Throws "no-song" without a song, "choreo"
     /// when no bar holds a move, "missing-blob" when the song's bytes are missing.
     #[wasm_bindgen(js_name = playInto, unchecked_return_type = "PlayableDance")]
     pub fn play_into(&mut self, library: &mut Library) -> Result<JsValue, OdoriError> {
@@ -612,6 +613,7 @@ impl Project {
             demo_song: bool,
             character_clip: Option<u32>,
             character_name: Option<String>,
+            stick_figures: bool,
         }
         let doc = self.inner.doc().clone();
         let Some(song) = doc.song.as_ref() else { return Err(ProjectError::NoSong.into()) };
@@ -639,7 +641,7 @@ impl Project {
             }
         }
         let info = crate::library::info_of(library.entry(id)?);
-        let out = to_js(&Playable { clip: info, name: &doc.name, song_name: &song.file_name, demo_song: song.audio.is_none(), character_clip, character_name });
+        let out = to_js(&Playable { clip: info, name: &doc.name, song_name: &song.file_name, demo_song: song.audio.is_none(), character_clip, character_name, stick_figures: doc.stick_figures });
         if let Some(bytes) = audio {
             js_sys::Reflect::set(&out, &JsValue::from_str("audio"), &Uint8Array::from(bytes.as_slice())).map_err(|_| OdoriError::new("bad-argument", "playable dance"))?;
         }
@@ -677,7 +679,7 @@ const TS_PROJECT: &'static str = r#"
 /** One bar as `danceView()` shows it, by segment numbers of the project's library now. */
 export interface BarView { bar: Bar; state: { kind: "empty" | "pinned" | "generated"; segment?: number }; tau: number; candidates: number[]; liked: number[]; shownCount: number; rounds: number; }
 /** What `playInto` gives a player. */
-export interface PlayableDance { clip: ClipInfo; name: string; songName: string; demoSong: boolean; audio?: Uint8Array; characterClip: number | null; characterName: string | null; }
+export interface PlayableDance { clip: ClipInfo; name: string; songName: string; demoSong: boolean; audio?: Uint8Array; characterClip: number | null; characterName: string | null; stickFigures: boolean; }
 export interface ClipRef { source: number; clip: number; }
 export type MoveKey =
   | { kind: "builtin"; move: { step: string; arms: string; energy: string; mirrored: boolean } }

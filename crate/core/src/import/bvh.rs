@@ -1,6 +1,9 @@
 //! BVH (Biovision Hierarchy) reader: any channel order per joint, 3- and 6-channel joints,
 //! end sites, frame time, a frame-rate override and unit scaling to metres.
 //!
+//! The unit, when not given, is guessed from the rig (joint naming and bone lengths against
+//! human proportions, [`units`]).
+//!
 //! Rotation channels compose in the order they are listed: `Zrotation Xrotation Yrotation`
 //! means `R = Rz · Rx · Ry` applied to the child's offset, the usual BVH convention.
 
@@ -11,6 +14,8 @@ use glam::{Quat, Vec3};
 use super::{finish, stem, Format, ImportError, ImportOptions, Imported};
 use crate::clip::{Clip, TranslationTrack};
 use crate::skeleton::{Joint, Skeleton};
+
+pub mod units;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Channel {
@@ -177,18 +182,10 @@ fn parse_joint(lx: &mut Lexer, raw: &mut Raw, name: String, parent: Option<usize
     }
 }
 
-/// Metres per file unit guessed from the rest skeleton's vertical extent.
+/// Metres per file unit guessed from the rig's naming and bone lengths at rest (see
+/// [`units::guess`], which the importer calls with the first frame's translations too).
 pub fn guess_unit_scale(skeleton: &Skeleton) -> f32 {
-    let p = skeleton.rest_positions();
-    let (lo, hi) = p.iter().fold((f32::MAX, f32::MIN), |(lo, hi), v| (lo.min(v.y), hi.max(v.y)));
-    let extent = if p.is_empty() { 0.0 } else { hi - lo };
-    if extent > 20.0 {
-        0.01 // centimetres
-    } else if extent > 3.0 {
-        0.1 // decimetres, or a rig in "units" around 10
-    } else {
-        1.0
-    }
+    units::guess(skeleton, &[]).unit.metres
 }
 
 fn axis_rotation(axis: usize, degrees: f32) -> Quat {
@@ -254,9 +251,7 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
     // the remaining bytes can hold is found out while reading, so reserve only what can exist.
     let room_frames = (lx.src.len() - lx.pos) / (2 * n_channels).max(1) + 1;
     let reserve_frames = frames.min(room_frames);
-    let skeleton_unscaled = Skeleton { joints: raw.joints.clone() };
     let guessed = options.unit_scale.is_none();
-    let scale = options.unit_scale.unwrap_or_else(|| guess_unit_scale(&skeleton_unscaled));
 
     // Joints with position channels get a translation track.
     let mut track_of = vec![usize::MAX; n_joints];
@@ -319,7 +314,7 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
             }
             rotations.push(q.normalize());
             if track_of[j] != usize::MAX {
-                tracks[track_of[j]].values.push(pos * scale);
+                tracks[track_of[j]].values.push(pos);
             }
         }
     }
@@ -330,8 +325,27 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
             warnings.push(format!("{file}: data after the {frames} declared frames was ignored"));
         }
     }
+    // The unit: as given, or guessed from the rig as the first frame draws it (a joint's
+    // position channels, where it has them, stand for its offset). Values were read in file
+    // units and are scaled once here.
+    let unscaled = Skeleton { joints: raw.joints };
+    let guess = guessed.then(|| {
+        let mut local: Vec<Vec3> = unscaled.joints.iter().map(|j| j.rest_offset).collect();
+        for t in &tracks {
+            if let (Some(l), Some(v)) = (local.get_mut(t.joint), t.values.first()) {
+                *l = *v;
+            }
+        }
+        units::guess(&unscaled, &local)
+    });
+    let scale = options.unit_scale.or(guess.map(|g| g.unit.metres)).unwrap_or(1.0);
+    for t in &mut tracks {
+        for v in &mut t.values {
+            *v *= scale;
+        }
+    }
     let joints: Vec<Joint> =
-        raw.joints.into_iter().map(|mut j| {
+        unscaled.joints.into_iter().map(|mut j| {
             j.rest_offset *= scale;
             j
         }).collect();
@@ -347,7 +361,7 @@ pub fn import(file: &str, bytes: &[u8], options: &ImportOptions) -> Result<Impor
     };
     let mut imported = finish(Format::Bvh, file, skeleton, vec![clip], None, warnings)?;
     if imported.status.is_humanoid() {
-        if let Some(w) = height_warning(file, &imported.clips[0], scale, guessed) {
+        if let Some(w) = height_warning(file, &imported.clips[0], scale, guess.as_ref()) {
             imported.warnings.push(w);
         }
     }
@@ -370,12 +384,12 @@ pub fn figure_height_m(clip: &Clip) -> f32 {
 /// A warning when a humanoid figure's height is implausible for the unit scale used (a file in
 /// centimetres read as decimetres stands 10× too tall): the clip is kept as read, and the
 /// person is told the height and how to fix it.
-fn height_warning(file: &str, clip: &Clip, scale: f32, guessed: bool) -> Option<String> {
+fn height_warning(file: &str, clip: &Clip, scale: f32, guess: Option<&units::UnitGuess>) -> Option<String> {
     let h = figure_height_m(clip);
     if PLAUSIBLE_HEIGHT_M.contains(&h) {
         return None;
     }
-    let how = if guessed { "guessed from the skeleton's size" } else { "as given" };
+    let how = guess.map_or_else(|| "as given".to_string(), units::UnitGuess::describe);
     Some(format!(
         "{file}: the figure is {h:.2} m tall at {scale} m per file unit ({how}); a person is {:.1}–{:.1} m: if the unit is wrong, import again with the right unitScale (metres per unit, e.g. 0.01 for centimetres)",
         PLAUSIBLE_HEIGHT_M.start(),

@@ -38,9 +38,8 @@ pub struct ImportOptions {
     /// Play the file at this frame rate instead of the one its header states (the CMU salsa
     /// BVH files say 120 fps but were recorded at 60). `None`: trust the file.
     pub fps_override: Option<f32>,
-    /// Metres per file unit for BVH. `None`: guess from the skeleton's size (a figure taller
-    /// than 20 units is taken to be in centimetres, taller than 3 in decimetres... see
-    /// [`bvh::guess_unit_scale`]).
+    /// Metres per file unit for BVH. `None`: guess from the rig's joint naming and bone
+    /// lengths against human proportions (see [`bvh::units::guess`]).
     pub unit_scale: Option<f32>,
     /// Rate glTF animations are resampled to, frames per second. Default 30.
     pub gltf_fps: f32,
