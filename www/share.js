@@ -212,11 +212,16 @@ export function installShare({ choreo, messages, songReady, song, loadSong }) {
   };
   const generate = choreo.root.querySelector("#dance-generate");
   if (generate) {
-    const button = document.createElement("button");
-    button.type = "button";
-    button.id = "dance-share";
-    button.textContent = "Share link";
-    button.title = "A link that opens this dance (built-in moves; a song file is asked for again)";
+    // In the page from the start (its place kept: nothing moves when it is wired), else made here.
+    let button = choreo.root.querySelector("#dance-share");
+    if (!button) {
+      button = document.createElement("button");
+      button.type = "button";
+      button.id = "dance-share";
+      button.textContent = "Share link";
+      button.title = "A link that opens this dance (built-in moves; a song file is asked for again)";
+      generate.after(button);
+    }
     button.addEventListener("click", async () => {
       try {
         const url = share.link();
@@ -227,7 +232,6 @@ export function installShare({ choreo, messages, songReady, song, loadSong }) {
         messages.error(`Share link: ${e.message}`);
       }
     });
-    generate.after(button);
   }
   share.applied = (async () => {
     let dance;

@@ -3,7 +3,7 @@
 // start is cached at install; anything else it fetches is cached as it goes.
 const CACHE = "odori-v2";
 const SHELL = [
-  "./", "./index.html", "./style.css", "./favicon.svg", "./main.js", "./search-worker.js", "./demo-song-worker.js",
+  "./", "./index.html", "./style.css", "./favicon.svg", "./boot.js", "./main.js", "./search-worker.js", "./demo-song-worker.js",
   "./ui/messages.js", "./ui/library-panel.js", "./ui/player.js", "./ui/files.js", "./ui/song-panel.js",
   "./ui/search-panel.js", "./ui/text-panel.js", "./ui/choreo-panel.js", "./ui/export-panel.js", "./ui/canvas.js",
   "./audio/rms.js", "./audio/song-player.js", "./search/client.js", "./share.js",

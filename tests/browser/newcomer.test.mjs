@@ -1,6 +1,11 @@
-// A newcomer's path (issue #30), on both back ends: import a BVH and a GLB character (Xbot,
-// whose clips are one-frame poses), choose the character, Generate, export the dance through
-// the Export dialog, then reload and Open the saved file. Asserted:
+// A newcomer's path (issue #30), on both back ends, at 1280×800 and on a 390×844 phone: open a
+// song, Generate, Play dance, import a BVH and a GLB character (Xbot, whose clips are one-frame
+// poses), choose the character, Generate, export the dance through the Export dialog, then
+// reload and Open the saved file. Asserted:
+// - the page does not move: the layout shift (PerformanceObserver "layout-shift" entries not
+//   caused by input, summed over the whole path, every load) stays under 0.05;
+// - each control the next step needs is on screen when that step comes (at 1280×800 in the
+//   viewport as the page stands; on the phone within one screen-height of scroll);
 // - messages in a person's words: a one-frame pose is said plainly and kept in the Messages
 //   log (no toast, no "segment needs 4 counts"); a reload and an Open show no toast but errors;
 // - the Export dialog opens on the dance, names it, the character and the format, and its
@@ -8,7 +13,9 @@
 //   2–3 when those are named);
 // - after a reload the library's order, the selected clip, the character and the project's
 //   name are as left; Recent projects lists each project once, by its name (the same file
-//   opened twice is one project).
+//   opened twice is one project);
+// - a reload and an Open are waited on by state (the project shown, the join costs, the search
+//   index, a drawn frame), not a fixed sleep, before asserting that no late toast came.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";
@@ -19,9 +26,23 @@ let server;
 before(async () => { server = await startServer(); });
 after(() => server && server.stop());
 
-/** Records every toast the page shows, from the first script on (survives nothing: set per load). */
+/** Records every toast the page shows and every layout shift not caused by input, from the first
+ * script on (survives nothing: set per load). */
 function recordToasts() {
   window.__toasts = [];
+  window.__shifts = [];
+  new PerformanceObserver((list) => {
+    for (const e of list.getEntries()) {
+      if (e.hadRecentInput) continue;
+      const what = (e.sources || []).map((x) => {
+        const n = x.node;
+        const name = n && n.nodeType === 1 ? `${n.tagName.toLowerCase()}${n.id ? "#" + n.id : ""}${n.className && typeof n.className === "string" ? "." + n.className.trim().split(/\s+/).join(".") : ""}` : String(n && n.nodeName);
+        const r = (b) => `${Math.round(b.x)},${Math.round(b.y)} ${Math.round(b.width)}×${Math.round(b.height)}`;
+        return `${name} ${r(x.previousRect)} → ${r(x.currentRect)}`;
+      });
+      window.__shifts.push({ atMs: Math.round(e.startTime), value: e.value, what });
+    }
+  }).observe({ type: "layout-shift", buffered: true });
   const start = () => {
     const box = document.querySelector("#toasts");
     if (!box) { requestAnimationFrame(start); return; }
@@ -36,6 +57,50 @@ async function waitReady(page) {
   await page.waitForFunction(() => document.body.dataset.ready && document.body.dataset.project === "ready", null, { timeout: 120000 });
   const ready = await page.evaluate(() => document.body.dataset.ready);
   if (ready !== "1") throw new Error(`the app did not start: ${await page.textContent("#messages")}`);
+}
+
+/**
+ * Waits until the page has settled after a load: the project shown, the dance's join costs
+ * built, a shared link applied, the search index's pending batches done, then one more drawn
+ * frame. Anything a restore says, it has said by then (no fixed sleep).
+ */
+async function waitSettled(page) {
+  await waitReady(page);
+  await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready" && Number(document.querySelector("#dance").dataset.bars) > 0, null, { timeout: 120000 });
+  await page.evaluate(async () => {
+    const o = window.odori;
+    // A batch may chain another: wait until the chain stops growing.
+    for (let last = null; last !== o.searchClient.loading;) { last = o.searchClient.loading; await o.share.applied; await last; }
+    await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+  });
+}
+
+/** The layout shifts seen since the last call (in this load), labelled with `phase`. */
+async function takeShifts(page, phase, into) {
+  const got = await page.evaluate(() => window.__shifts.splice(0));
+  for (const x of got) into.push({ phase, ...x });
+}
+
+/**
+ * Whether the control `sel` (a label wrapping a hidden file input is given by its input) is
+ * where the person sees it: at the laptop size inside the viewport as the page stands, not
+ * covered; on the phone within one screen-height of scroll from the top of the page.
+ */
+async function placeOf(page, sel, phone) {
+  return page.evaluate(({ sel, phone }) => {
+    let el = document.querySelector(sel);
+    if (el && el.matches("input[type=file]")) el = el.closest("label");
+    if (!el) return { sel, ok: false, why: "missing" };
+    const r = el.getBoundingClientRect();
+    const top = r.top + (phone ? scrollY : 0), bottom = r.bottom + (phone ? scrollY : 0);
+    const limit = phone ? 2 * innerHeight : innerHeight;
+    let ok = r.width > 0 && r.height > 0 && top >= 0 && bottom <= limit && r.left >= 0 && r.right <= innerWidth;
+    if (ok && !phone) {
+      const at = document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2);
+      ok = at != null && (el.contains(at) || at.contains(el));
+    }
+    return { sel, ok, top: Math.round(top), bottom: Math.round(bottom), limit };
+  }, { sel, phone });
 }
 
 /** The GLB's JSON chunk, read here (not by the engine). */
@@ -67,15 +132,46 @@ async function state(page) {
   });
 }
 
-for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
-  test(`a newcomer's path on ${backend}: plain messages, the Export dialog, reopened as left`, async () => {
+const SIZES = [{ name: "laptop", width: 1280, height: 800, phone: false }, { name: "phone", width: 390, height: 844, phone: true }];
+const SONG = "music/Kevin_MacLeod_-_Vibe_Ace.hq.ogg";
+/** Layout shift allowed over the whole path (Web Vitals call under 0.1 good). */
+const MAX_SHIFT = 0.05;
+
+for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) for (const size of SIZES) {
+  test(`a newcomer's path on ${backend} at ${size.width}×${size.height}: no layout shift, the next step in view, plain messages, the Export dialog, reopened as left`, async () => {
     const { browser, page, logs } = await launch(backend);
+    const shifts = [];
+    const places = [];
+    // The control the next step needs is where the person sees it, asserted when the step comes.
+    const inView = async (sel, step) => {
+      const p = await placeOf(page, sel, size.phone);
+      places.push({ step, ...p });
+      assert.ok(p.ok, `${size.name}: ${step}: ${sel} is not in view: ${JSON.stringify(p)}`);
+    };
     try {
+      await page.setViewportSize({ width: size.width, height: size.height });
       await page.addInitScript(recordToasts);
       await page.goto(server.url + BACKENDS[backend].query);
-      await waitReady(page);
+      await waitSettled(page);
+      await takeShifts(page, "load", shifts);
+      // Open a song, Generate, Play dance.
+      await inView("#song-input", "open a song");
+      await page.setInputFiles("#song-input", join(data, SONG));
+      await page.waitForFunction((n) => document.body.dataset.song === n && document.querySelector("#dance").dataset.joins === "ready", SONG.split("/").pop(), { timeout: 120000 });
+      await takeShifts(page, "open a song", shifts);
+      await inView("#dance-generate", "Generate");
+      await page.click("#dance-generate");
+      await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.length > 3 && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 120000 });
+      await takeShifts(page, "Generate", shifts);
+      await inView("#dance-play", "Play dance");
+      await page.click("#dance-play");
+      await page.waitForFunction(() => window.odori.player.clip === window.odori.choreo.danceId && window.odori.player.playing, null, { timeout: 30000 });
+      await page.click("#play"); // pause
+      await takeShifts(page, "Play dance", shifts);
+      await inView("#file-input", "import");
       await importFiles(page, join(data, "mocap/cmu-salsa/salsa_01.bvh"), { "salsa_01.bvh": { fps: 60 } });
       await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /salsa_01.*dance segments/.test(li.textContent)), null, { timeout: 60000 });
+      await inView("#file-input", "import a character");
       await page.setInputFiles("#file-input", join(data, "gltf/Xbot.glb"));
       await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /Xbot.glb: \d+ clips? added/.test(li.textContent)), null, { timeout: 60000 });
       await waitUntil(() => page.evaluate(() => [...document.querySelectorAll("#messages li")].some((li) => /still pose|too short to make dance moves/.test(li.textContent))), { what: "the pose clips said plainly in Messages" });
@@ -85,12 +181,15 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       assert.ok(!said.toasts.some((t) => /still pose|too short to make/.test(t.text)), "the pose note is not a toast");
       assert.ok(said.toasts.some((t) => /Xbot\.glb: \d+ clips? added.*choose it in Character/.test(t.text)), `the character is offered: ${JSON.stringify(said.toasts)}`);
       assert.ok(await page.evaluate(() => [...document.querySelector("#character").options].some((o) => o.textContent === "Xbot.glb")), "Xbot is in the Character list at once");
+      await takeShifts(page, "import", shifts);
       // Choose the character, Generate the dance.
+      await inView("#character", "choose the character");
       await page.focus("#character");
       await page.selectOption("#character", { label: "Xbot.glb" });
       await page.click("#dance-generate");
       await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.length > 3 && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 120000 });
-
+      await takeShifts(page, "character, Generate", shifts);
+      await inView("#export", "Export");
       // Export: the dialog opens on the dance, on Xbot, and says the size of the file it saves.
       await page.evaluate(() => { const row = [...document.querySelectorAll("#library tbody tr")].find((tr) => tr.textContent.includes("salsa_01")); row.children[0].click(); });
       await page.click("#export");
@@ -125,12 +224,14 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       // Leave it: a clip selected (salsa_01), the library in its order; the autosave written.
       await page.evaluate(() => { const row = [...document.querySelectorAll("#library tbody tr")].find((tr) => tr.textContent.includes("salsa_01")); row.children[0].click(); });
       await page.evaluate(() => window.odori.project.store.flush());
+      await page.evaluate(() => window.odori.project.fillRecent(document.querySelector("#project-recent")));
       const left = await state(page);
       const saved = await page.evaluate(() => { const b = window.odori.project.project.save(); let s = ""; for (let i = 0; i < b.length; i += 0x8000) s += String.fromCharCode(...b.subarray(i, i + 0x8000)); return btoa(s); });
 
+      await takeShifts(page, "export, save", shifts);
       await page.reload();
-      await waitReady(page);
-      await page.waitForTimeout(1500); // anything the restore says late would be shown by now
+      await waitSettled(page);
+      await takeShifts(page, "reload", shifts);
       const back = await state(page);
       const toasts = await page.evaluate(() => window.__toasts);
       console.log(`${backend}: left ${JSON.stringify(left)}\n  back ${JSON.stringify(back)}\n  toasts on reload: ${JSON.stringify(toasts)}`);
@@ -146,7 +247,8 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       // New project, then Open the saved file (dropped on the page): it is the stored project
       // (not a second entry), shown as left, with no toast but errors on the way.
       await Promise.all([page.waitForNavigation({ timeout: 60000 }), page.click("#project-new")]);
-      await waitReady(page);
+      await waitSettled(page);
+      await takeShifts(page, "New", shifts);
       const fresh = await state(page);
       assert.equal(fresh.recent.length, back.recent.length + 1, `a new project is one more entry: ${fresh.recent}`);
       await Promise.all([
@@ -158,8 +260,8 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
           document.body.dispatchEvent(new DragEvent("drop", { dataTransfer: dt, bubbles: true, cancelable: true }));
         }, saved),
       ]);
-      await waitReady(page);
-      await page.waitForTimeout(1500);
+      await waitSettled(page);
+      await takeShifts(page, "Open", shifts);
       const opened = await state(page);
       assert.deepEqual((await page.evaluate(() => window.__toasts)).filter((t) => t.kind !== "error"), [], "Open shows no toast but errors");
       assert.equal(opened.recent.length, fresh.recent.length, `the same project opened again is not listed twice: ${opened.recent}`);
@@ -168,6 +270,16 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       assert.equal(opened.selected, left.selected, "opened: the selected clip");
       assert.equal(opened.name, left.name, "opened: the project's name");
       assert.ok(!logs.some((l) => l.includes("[pageerror]")), logs.join("\n"));
+
+      // The page did not move, over the whole path.
+      const total = shifts.reduce((a, x) => a + x.value, 0);
+      const byPhase = {};
+      for (const x of shifts) byPhase[x.phase] = (byPhase[x.phase] || 0) + x.value;
+      console.log(`# ${backend} ${size.name}: layout shift ${total.toFixed(4)} over the path (${shifts.length} shifts; by step ${JSON.stringify(Object.fromEntries(Object.entries(byPhase).map(([k, v]) => [k, +v.toFixed(4)])))})`);
+      console.log(`# ${backend} ${size.name}: controls ${places.map((p) => `${p.step} ${p.top}–${p.bottom}/${p.limit}`).join("; ")}`);
+      const worst = [...shifts].sort((a, b) => b.value - a.value).slice(0, 5);
+      for (const x of worst) console.log(`#   ${x.phase} +${x.atMs} ms: ${x.value.toFixed(4)} ${x.what.join(" | ")}`);
+      assert.ok(total < MAX_SHIFT, `${size.name}: layout shift ${total.toFixed(4)} ≥ ${MAX_SHIFT}; the largest: ${JSON.stringify(worst, null, 1)}`);
     } catch (e) {
       console.log(logs.slice(-40).join("\n"));
       console.log("Messages:\n" + (await page.evaluate(() => [...document.querySelectorAll("#messages li")].map((li) => `${li.className}: ${li.textContent}`).join("\n")).catch(() => "")));
