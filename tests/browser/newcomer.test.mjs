@@ -13,7 +13,8 @@
 //   2–3 when those are named);
 // - after a reload the library's order, the selected clip, the character and the project's
 //   name are as left; Recent projects lists each project once, by its name (the same file
-//   opened twice is one project);
+//   opened twice is one project); no project is stored until the person makes something
+//   (opening the page, New);
 // - a reload and an Open are waited on by state (the project shown, the join costs, the search
 //   index, a drawn frame), not a fixed sleep, before asserting that no late toast came.
 import { test, before, after } from "node:test";
@@ -154,6 +155,9 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) for 
       await page.goto(server.url + BACKENDS[backend].query);
       await waitSettled(page);
       await takeShifts(page, "load", shifts);
+      // A fresh profile stores no project until the person makes something (the demo song set
+      // for the new project is the page's doing).
+      assert.deepEqual(await page.evaluate(async () => ({ stored: (await window.odori.project.store.recent()).length, listed: document.querySelector("#project-recent").options.length - 1 })), { stored: 0, listed: 0 }, "nothing stored on opening the page");
       // Open a song, Generate, Play dance.
       await inView("#song-input", "open a song");
       await page.setInputFiles("#song-input", join(data, SONG));
@@ -226,6 +230,7 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) for 
       await page.evaluate(() => window.odori.project.store.flush());
       await page.evaluate(() => window.odori.project.fillRecent(document.querySelector("#project-recent")));
       const left = await state(page);
+      assert.equal(left.recent.length, 1, `what the person made is one project, listed once: ${left.recent}`);
       const saved = await page.evaluate(() => { const b = window.odori.project.project.save(); let s = ""; for (let i = 0; i < b.length; i += 0x8000) s += String.fromCharCode(...b.subarray(i, i + 0x8000)); return btoa(s); });
 
       await takeShifts(page, "export, save", shifts);
@@ -250,7 +255,9 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) for 
       await waitSettled(page);
       await takeShifts(page, "New", shifts);
       const fresh = await state(page);
-      assert.equal(fresh.recent.length, back.recent.length + 1, `a new project is one more entry: ${fresh.recent}`);
+      // Nothing made in it yet: not stored, not listed (the projects made before all are).
+      assert.equal(await page.evaluate(async () => (await window.odori.project.store.recent()).length), back.recent.length, "a new, untouched project is not stored");
+      assert.deepEqual(fresh.recent.map((t) => t.replace(/ \(open\)$/, "")), back.recent.map((t) => t.replace(/ \(open\)$/, "")), `Recent after New: ${fresh.recent}`);
       await Promise.all([
         page.waitForNavigation({ timeout: 60000 }),
         page.evaluate((b) => {

@@ -24,7 +24,7 @@
 // "last project" and reload the page, so one rebuild path serves all of them. Save as writes
 // `Project.save()` through the File System Access API where the browser has it, a download
 // otherwise.
-import { ProjectStore, openStore } from "./store.js";
+import { ProjectStore, openStore, NEW_PROJECT } from "./store.js";
 import { saveBytes, pickFile, fileNameFor, isOdoriFile } from "./file.js";
 
 const LAST_KEY = "odori.lastProject";
@@ -78,24 +78,26 @@ export class ProjectSession {
       this.project = new this.Project();
       // Each project is listed once by its name in Recent projects: a new one takes a free name.
       this.project.setName(this.store ? await this.store.freeName("Untitled") : "Untitled");
-      if (this.store) await this.store.attach(this.project);
+      // Not stored until the person makes something (the demo song set for it is not that).
+      if (this.store) await this.store.attach(this.project, null, { pristine: true });
     }
     return restored;
   }
 
-  /** After every edit: autosave, and the undo/redo buttons. */
-  edited() {
-    if (this.store) this.store.schedule();
+  /** After every edit: autosave, and the undo/redo buttons. `automatic`: an edit the page made
+   * by itself (a new project's demo song), which does not store a project not yet stored. */
+  edited(automatic = false) {
+    if (this.store && !(automatic && this.store.pristine)) this.store.schedule();
     if (this.onEdited) this.onEdited();
   }
 
   /** Runs a project edit; a refusal is reported, never thrown into the panel that made it. */
-  mirror(what, f) {
+  mirror(what, f, automatic = false) {
     if (!this.project) return undefined;
     try {
       const r = f(this.project);
       this.markShown();
-      this.edited();
+      this.edited(automatic);
       return r;
     } catch (e) {
       this.messages.error(`Project: ${what} is not kept in the project: ${e.message}`);
@@ -149,7 +151,8 @@ export class ProjectSession {
   setSong(fileName, bytes, env) {
     // A new project's first song (the demo song) starts its history: undo never takes it away.
     const first = !this.project.doc().song;
-    this.mirror(`the song ${fileName}`, (p) => p.setSong(fileName, bytes, env.hopSecs, env.bands, undefined, !first));
+    // The built-in demo song given to a new project is the page's doing, not the person's.
+    this.mirror(`the song ${fileName}`, (p) => p.setSong(fileName, bytes, env.hopSecs, env.bands, undefined, !first), first && bytes === undefined);
   }
 
   correctGrid(correction) { this.mirror("the grid correction", (p) => p.correctGrid(correction)); }
@@ -313,13 +316,10 @@ export class ProjectSession {
     location.reload();
   }
 
+  /** A new project: opened empty by the reload, stored once the person makes something in it. */
   async newProject() {
-    if (!this.store) { location.reload(); return; }
-    const p = new this.Project();
-    p.setName(`Project ${new Date().toLocaleString()}`);
-    await this.store.attach(p);
-    await this.store.flush();
-    await this.switchTo(this.store.projectId);
+    if (this.store) await this.switchTo(NEW_PROJECT);
+    else location.reload();
   }
 
   /** Opens `.odori` bytes: the open project stays untouched when the file is bad. */

@@ -23,6 +23,8 @@ const DB_VERSION = 1;
 /** Manifest writes wait this long after the last edit (spec: at most 0.5 s). */
 export const DEBOUNCE_MS = 400;
 const LAST_KEY = "odori.lastProject";
+/** LAST_KEY's value after New: the next start opens a new project (stored once something is made). */
+export const NEW_PROJECT = "new";
 
 function newId() {
   return (crypto.randomUUID && crypto.randomUUID()) || `p${Date.now().toString(36)}${Math.random().toString(36).slice(2)}`;
@@ -90,6 +92,7 @@ export class ProjectStore {
    */
   async lastId() {
     const id = localStorage.getItem(LAST_KEY);
+    if (id === NEW_PROJECT) return null;
     if (id && (await this.db.get("projects", id))) return id;
     const recent = await this.recent();
     return recent.length ? recent[0].id : null;
@@ -120,13 +123,19 @@ export class ProjectStore {
    * Makes `project` the one this store keeps (`id`: its stored id; none: a new project).
    * Takes the project's lock; when another tab holds it this tab is told and never writes.
    */
-  async attach(project, id = null) {
+  /**
+   * Keeps `project` stored under `id` (a stored project), or under a new id. `pristine` (a new
+   * project): nothing is written, and it is not the last project, until its first `schedule`
+   * (the person's first edit), so opening the page and leaving stores nothing.
+   */
+  async attach(project, id = null, { pristine = false } = {}) {
     await this.detach();
     this.project = project;
     if (!id) this.lastHashes = new Set();
     this.projectId = id || newId();
     this.readOnly = false;
-    localStorage.setItem(LAST_KEY, this.projectId);
+    this.pristine = !id && pristine;
+    if (!this.pristine) localStorage.setItem(LAST_KEY, this.projectId);
     if (navigator.locks) {
       const got = await new Promise((resolve) => {
         navigator.locks.request(`odori-project-${this.projectId}`, { ifAvailable: true }, (lock) => {
@@ -140,7 +149,7 @@ export class ProjectStore {
         this.hooks.onConflict?.("This project is open in another tab: changes here are not saved to the browser (use Save as, or close the other tab and reload).");
       }
     }
-    if (!id) this.schedule();
+    if (!id && !this.pristine) this.schedule();
     return this.projectId;
   }
 
@@ -153,6 +162,10 @@ export class ProjectStore {
   /** Call after every edit: the manifest is written within DEBOUNCE_MS. */
   schedule() {
     if (!this.project || this.readOnly) return;
+    if (this.pristine) {
+      this.pristine = false;
+      localStorage.setItem(LAST_KEY, this.projectId);
+    }
     this.dirty = true;
     clearTimeout(this.timer);
     this.timer = setTimeout(() => this.flush(), DEBOUNCE_MS);
