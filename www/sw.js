@@ -5,7 +5,7 @@ const CACHE = "odori-v2";
 const SHELL = [
   "./", "./index.html", "./style.css", "./favicon.svg", "./boot.js", "./main.js", "./search-worker.js", "./demo-song-worker.js",
   "./ui/messages.js", "./ui/library-panel.js", "./ui/player.js", "./ui/files.js", "./ui/song-panel.js",
-  "./ui/search-panel.js", "./ui/text-panel.js", "./ui/choreo-panel.js", "./ui/export-panel.js", "./ui/canvas.js",
+  "./ui/search-panel.js", "./ui/text-panel.js", "./ui/choreo-panel.js", "./ui/candidate-layout.js", "./ui/export-panel.js", "./ui/canvas.js",
   "./audio/rms.js", "./audio/song-player.js", "./search/client.js", "./share.js",
   "./project/store.js", "./project/index-store.js", "./project/file.js", "./project/app.js", "./project/dance.js", "./vendor/idb.js",
   "./pkg/odori.js", "./pkg/odori_bg.wasm",

@@ -21,7 +21,7 @@ import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { readFileSync } from "node:fs";
 import { join } from "node:path";
-import { startServer, launch, data, BACKENDS, importFiles, waitUntil } from "./harness.mjs";
+import { startServer, launch, data, BACKENDS, importFiles, waitUntil, canvasPixels } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -291,6 +291,85 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) for 
       console.log(logs.slice(-40).join("\n"));
       console.log("Messages:\n" + (await page.evaluate(() => [...document.querySelectorAll("#messages li")].map((li) => `${li.className}: ${li.textContent}`).join("\n")).catch(() => "")));
       throw e;
+    } finally {
+      await browser.close();
+    }
+  });
+}
+
+for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
+  test(`six candidates on ${backend}, each visible: screen boxes overlap pairwise < 20 % over whole bars of imported mocap (fixed 1.3 m spacing as the control)`, async () => {
+    const { browser, page, logs } = await launch(backend);
+    try {
+      await page.goto(server.url + BACKENDS[backend].query);
+      await waitSettled(page);
+      const D = join(data, "mocap");
+      await importFiles(page, [join(D, "cmu-salsa/salsa_01.bvh"), join(D, "cmu-modern/005_01.bvh"), join(D, "cmu-indian/indian_04.bvh"), join(D, "cmu-martial/martial_04.bvh")], { "salsa_01.bvh": { fps: 60 } });
+      await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].filter((li) => /dance segments/.test(li.textContent)).length >= 3, null, { timeout: 120000 });
+      await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready", null, { timeout: 120000 });
+      // The largest pairwise overlap (intersection / the smaller box) of the figures' screen
+      // boxes — each the bounding box of its joints projected by the viewer's own camera — at
+      // 13 times over the bar, for the figures the player shows (`figures(t)`) or given ones.
+      const measure = () => page.evaluate(() => {
+        const { library, viewer, player, choreo } = window.odori;
+        const bar = choreo.view[choreo.bar].bar;
+        const dur = bar.endSecs - bar.startSecs;
+        const box = (f, t) => {
+          const p = library.jointPositions(f.clip, t);
+          const o = f.offset || [0, 0, 0];
+          let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+          for (let i = 0; i < p.length; i += 3) {
+            const q = viewer.project(p[i] + o[0], p[i + 1] + o[1], p[i + 2] + o[2]);
+            if (!q) continue;
+            x0 = Math.min(x0, q[0]); x1 = Math.max(x1, q[0]); y0 = Math.min(y0, q[1]); y1 = Math.max(y1, q[1]);
+          }
+          return [x0, y0, x1, y1];
+        };
+        const area = (b) => Math.max(1, (b[2] - b[0]) * (b[3] - b[1]));
+        let worst = 0, figures = 0;
+        for (let s = 0; s <= 12; s++) {
+          const t = (dur * s) / 12;
+          const boxes = player.figures().map((f) => box(f, t));
+          figures = boxes.length;
+          for (let a = 0; a < boxes.length; a++) for (let b = a + 1; b < boxes.length; b++) {
+            const A = boxes[a], B = boxes[b];
+            const iw = Math.max(0, Math.min(A[2], B[2]) - Math.max(A[0], B[0])), ih = Math.max(0, Math.min(A[3], B[3]) - Math.max(A[1], B[1]));
+            worst = Math.max(worst, (iw * ih) / Math.min(area(A), area(B)));
+          }
+        }
+        return { worst, figures };
+      });
+      // The control: the same figures at the fixed 1.3 m spacing the panel used before.
+      const control = () => page.evaluate(() => {
+        const { player } = window.odori;
+        const shown = player.compare;
+        const fixed = { ...shown, figures: (t) => shown.figures(t).map((f, k, all) => ({ ...f, offset: [(k - (all.length - 1) / 2) * 1.3, 0, 0] })) };
+        player.setCompare(fixed);
+        return true;
+      });
+      const rows = [];
+      const bars = await page.evaluate(() => window.odori.choreo.view.length);
+      for (const bar of [0, 2, 3, 5, 7, 10, 11, 13, 15, 18, 19, 22].filter((b) => b < bars)) {
+        for (const round of ["first", "after Search"]) {
+          if (round === "first") await page.evaluate((b) => window.odori.choreo.selectBar(b), bar);
+          else await page.evaluate(() => window.odori.choreo.search());
+          await page.waitForFunction(() => document.querySelector("#dance").dataset.candidates === "6");
+          const laid = await measure();
+          await control();
+          const fixed = await measure();
+          // Back to the panel's own layout, on the same candidates (selectBar would start over).
+          await page.evaluate(() => { const c = window.odori.choreo; c.showCandidates(c.candidates); });
+          rows.push({ bar, round, figures: laid.figures, overlap: +laid.worst.toFixed(3), control: +fixed.worst.toFixed(3) });
+        }
+      }
+      console.log(`# ${backend}: candidates' largest pairwise screen-box overlap per bar (laid out / fixed 1.3 m control): ${rows.map((r) => `${r.bar + 1} ${r.round} ${r.overlap}/${r.control}`).join("; ")}`);
+      assert.ok(rows.every((r) => r.figures === 6), "six figures each time");
+      const worst = Math.max(...rows.map((r) => r.overlap));
+      assert.ok(worst < 0.2, `candidates overlap by ${worst} (≥ 0.2): ${JSON.stringify(rows)}`);
+      // The control shows the measure can fail: at fixed spacing travelling moves run into each other.
+      assert.ok(Math.max(...rows.map((r) => r.control)) >= 0.2, `the fixed-spacing control never overlaps: ${JSON.stringify(rows)}`);
+      await canvasPixels(page, `newcomer-${backend}-candidates.png`);
+      assert.ok(!logs.some((l) => l.includes("[pageerror]")), logs.join("\n"));
     } finally {
       await browser.close();
     }

@@ -2,9 +2,9 @@
 // 6 candidates playing side by side in sync with that bar of the music, Set / Search /
 // Generate, τ and ρ, undo/redo, and the whole dance played with the music.
 import { tempoLimits } from "../pkg/odori.js";
+import { candidateOffsets, screenRight } from "./candidate-layout.js";
 
 const CHIP_COLOURS = ["#f9b25a", "#5cd3ea", "#c79cf5", "#b5e96b", "#f38aa9", "#9dc2fb"];
-const SPACING = 1.3;
 /** Target time of one slice of the join-table build, so frames keep coming. */
 const SLICE_MS = 8;
 
@@ -276,11 +276,19 @@ export class ChoreoPanel {
     const dur = bar.endSecs - bar.startSecs;
     this.previewIds = cands.map((seg, k) => this.choreographer.previewSegment(this.library, seg, dur, this.previewIds[k] ?? undefined));
     const ids = this.previewIds;
-    this.player.setCompare({
-      duration: dur,
-      songStart: bar.startSecs,
-      figures: (t) => ids.map((clip, k) => ({ clip, timeSecs: t, offset: [(k - (ids.length - 1) / 2) * SPACING, 0, 0] })),
-    });
+    // Each in a slot of its own, as wide as its move's reach over the bar (candidate-layout.js),
+    // along the screen's horizontal as seen once the camera is framed on them (a second pass).
+    let offsets = [];
+    const place = () => {
+      offsets = candidateOffsets(ids, dur, screenRight(this.player.viewer), (id, t) => this.library.jointPositions(id, t));
+      this.player.setCompare({
+        duration: dur,
+        songStart: bar.startSecs,
+        figures: (t) => ids.map((clip, k) => ({ clip, timeSecs: t, offset: offsets[k] })),
+      });
+    };
+    place();
+    place();
     this.renderCandidates();
     this.refresh();
   }
