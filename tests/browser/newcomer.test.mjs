@@ -297,7 +297,107 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) for 
   });
 }
 
+/** A copy of a GLB with no base-colour texture on any material (the untextured control). */
+function withoutTextures(bytes) {
+  const jsonLen = bytes.readUInt32LE(12);
+  const json = JSON.parse(bytes.subarray(20, 20 + jsonLen).toString());
+  for (const m of json.materials || []) if (m.pbrMetallicRoughness) delete m.pbrMetallicRoughness.baseColorTexture;
+  let text = JSON.stringify(json);
+  while (text.length % 4) text += " ";
+  const rest = bytes.subarray(20 + jsonLen);
+  const head = Buffer.alloc(20);
+  head.write("glTF", 0);
+  head.writeUInt32LE(2, 4);
+  head.writeUInt32LE(20 + text.length + rest.length, 8);
+  head.writeUInt32LE(text.length, 12);
+  head.write("JSON", 16);
+  return Buffer.concat([head, Buffer.from(text), rest]);
+}
+
+/**
+ * Watches every frame the viewer puts on screen; the first one that draws a clip of `source`
+ * with its own mesh is copied at once (before the browser shows another) and, around each of
+ * its projected joints (a 9×9 window), its pixels are counted: fur orange (the Fox's texture),
+ * untextured white-grey, or other. Setting `window.__again = source` has the next frame of it
+ * counted into `window.__later` (the same pose drawn long after, textures surely in).
+ */
+function watchFirstFrames() {
+  const v = window.odori.viewer;
+  const draw = Object.getPrototypeOf(v).draw;
+  window.__first = {};
+  window.__later = {};
+  v.draw = function (lib, figs) {
+    const shown = draw.call(this, lib, figs);
+    if (!shown) return shown;
+    for (const d of this.lastDrawn()) {
+      const source = lib.clip(d.clip).source;
+      const into = !window.__first[source] ? window.__first : window.__again === source ? window.__later : null;
+      if (d.body !== "own" || !into) continue;
+      if (into === window.__later) window.__again = null;
+      const c = document.querySelector("#view");
+      const g = new OffscreenCanvas(c.width, c.height).getContext("2d");
+      g.drawImage(c, 0, 0);
+      const img = g.getImageData(0, 0, c.width, c.height);
+      const p = lib.jointPositions(d.clip, d.timeSecs);
+      const at = (x, y) => { const i = (y * img.width + x) * 4; return [img.data[i], img.data[i + 1], img.data[i + 2]]; };
+      const orange = ([r, g, b]) => r > 90 && r > g * 1.25 && g > b * 1.2 && r - b > 60;
+      const white = ([r, g, b]) => Math.min(r, g, b) > 110 && Math.max(r, g, b) - Math.min(r, g, b) < 30;
+      const joints = { seen: 0, orange: 0, white: 0 };
+      for (let i = 0; i < p.length; i += 3) {
+        const q = this.project(p[i], p[i + 1], p[i + 2]);
+        if (!q) continue;
+        const [x, y] = q.map(Math.round);
+        if (x < 5 || y < 5 || x >= img.width - 5 || y >= img.height - 5) continue;
+        let o = 0, w = 0;
+        for (let dy = -4; dy <= 4; dy++) for (let dx = -4; dx <= 4; dx++) { const px = at(x + dx, y + dy); if (orange(px)) o++; else if (white(px)) w++; }
+        joints.seen++;
+        if (o > w && o > 0) joints.orange++; else if (w > o) joints.white++;
+      }
+      into[source] = { ...joints, clip: d.clip, timeSecs: d.timeSecs, texturesLoading: this.texturesLoading };
+    }
+    return shown;
+  };
+}
+
 for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
+  test(`an imported character on ${backend} is drawn textured from its first frame (the Fox; the same file without its texture as the control)`, async () => {
+    const { browser, page, logs } = await launch(backend);
+    try {
+      await page.goto(server.url + BACKENDS[backend].query);
+      await waitSettled(page);
+      await page.evaluate(watchFirstFrames);
+      const fox = readFileSync(join(data, "gltf/Fox.glb"));
+      await page.setInputFiles("#file-input", { name: "Fox.glb", mimeType: "model/gltf-binary", buffer: fox });
+      await page.waitForFunction(() => window.__first["Fox.glb"], null, { timeout: 60000 });
+      await page.setInputFiles("#file-input", { name: "Fox-untextured.glb", mimeType: "model/gltf-binary", buffer: withoutTextures(fox) });
+      await page.waitForFunction(() => window.__first["Fox-untextured.glb"], null, { timeout: 60000 });
+      // The same pose of the textured Fox drawn again, its textures long in: what it looks like.
+      const first = await page.evaluate(() => window.__first);
+      await page.evaluate(({ clip, timeSecs }) => {
+        const { panel, player } = window.odori;
+        window.__again = "Fox.glb";
+        panel.select(clip);
+        player.pause();
+        player.time = timeSecs;
+        player.drawNow();
+      }, first["Fox.glb"]);
+      await page.waitForFunction(() => window.__later["Fox.glb"], null, { timeout: 30000 });
+      const later = await page.evaluate(() => window.__later["Fox.glb"]);
+      const count = (x) => ({ seen: x.seen, orange: x.orange, white: x.white });
+      console.log(`# ${backend}: joints by colour around them — the Fox's first drawn frame ${JSON.stringify(count(first["Fox.glb"]))}, the same pose later ${JSON.stringify(count(later))}, the untextured control's first frame ${JSON.stringify(count(first["Fox-untextured.glb"]))}`);
+      const tex = first["Fox.glb"], bare = first["Fox-untextured.glb"];
+      // The control: drawn without its texture the Fox is white, and the count says so.
+      assert.ok(bare.seen >= 10 && bare.white >= bare.seen * 0.8 && bare.orange === 0, `the untextured control is not seen as white: ${JSON.stringify(bare)}`);
+      // The first frame is the textured Fox: its fur where the later frame has it (its white
+      // chest and tail tip are white in the texture too), not the control's white.
+      assert.ok(tex.seen >= 10 && tex.orange >= tex.seen * 0.5, `the Fox's first drawn frame is not textured: ${JSON.stringify(tex)}`);
+      assert.deepEqual(count(tex), count(later), "the first frame's colours are those of the same pose drawn with its textures in");
+      assert.ok(!logs.some((l) => l.includes("[pageerror]")), logs.join("\n"));
+    } finally {
+      await browser.close();
+    }
+  });
+
   test(`six candidates on ${backend}, each visible: screen boxes overlap pairwise < 20 % over whole bars of imported mocap (fixed 1.3 m spacing as the control)`, async () => {
     const { browser, page, logs } = await launch(backend);
     try {

@@ -847,6 +847,9 @@ export class OdoriPlayer extends HTMLElement {
     try {
       if (this.#viewer.draw(this.#library, this.#figures(clipTime))) this.framesDrawn++;
       this.lastFrame = { songTimeSecs: song, clipTimeSecs: clipTime };
+      // The character's textures are still being decoded: the frame was held (never drawn
+      // untextured); paused, draw again next frame (playing, the next tick does).
+      if (this.#viewer.waitingForTextures && !this.#playing) requestAnimationFrame(() => this.#drawNow());
     } catch (e) {
       this.pause();
       this.#fail(e);

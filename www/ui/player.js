@@ -314,7 +314,9 @@ export class Player {
         if (ended || this.frameDue(now, this.drawRate(cap))) this.drawNow();
       } else {
         this.last = null;
-        if (this.cameraMoved && this.frameDue(now, cap)) this.drawNow();
+        // Paused: draw when the camera moved, or while the viewer holds a frame for a
+        // character's textures being decoded (it is never shown untextured).
+        if ((this.cameraMoved || this.viewer.waitingForTextures) && this.frameDue(now, cap)) this.drawNow();
       }
       if (this.playing) this.cameraMoved = false;
       requestAnimationFrame(tick);

@@ -80,6 +80,10 @@ enum Body {
 #[cfg(feature = "authoring")]
 const DEFER_FRAME_JOINTS: usize = 8_000;
 
+/// Longest a frame is held back for a skinned figure's textures (ms): the browser decodes
+/// Fox-sized images in well under a second; an image that never decodes is then drawn without.
+const TEXTURE_WAIT_MS: f64 = 3_000.0;
+
 /// A library clip on the chosen body, at the clip's revision `rev`.
 struct OnBody {
     rev: u64,
@@ -148,8 +152,12 @@ pub struct Viewer {
     #[cfg(feature = "authoring")]
     defer: bool,
     last_drawn: Vec<Drawn>,
-    /// What the last presented frame showed (`None`: nothing yet, or the surface was lost).
+    /// What the last presented frame showed (`None`: nothing yet, the surface was lost, or a
+    /// frame held back for textures).
     shown: Option<Shown>,
+    /// Since when (ms, `Date.now()`) frames are held back because a skinned figure's
+    /// base-colour images are still being decoded (see `draw`).
+    held_since_ms: Option<f64>,
     /// Bumped when the body's clips change outside a draw (`setCharacter`, `prepareBodies`),
     /// so the next draw is not taken for a repeat.
     body_generation: u32,
@@ -468,6 +476,7 @@ impl Viewer {
             defer: true,
             last_drawn: Vec::new(),
             shown: None,
+            held_since_ms: None,
             body_generation: 0,
             adapter: adapter_info,
             #[cfg(feature = "authoring")]
@@ -660,6 +669,13 @@ impl Viewer {
         Ok(crate::error::to_js(&FigureJoints { names, positions, body }))
     }
 
+    /// Whether the last `draw` was held back until a skinned figure's textures are decoded
+    /// (the canvas shows the frame before): draw again (each animation frame) until false.
+    #[wasm_bindgen(getter, js_name = waitingForTextures)]
+    pub fn waiting_for_textures(&self) -> bool {
+        self.held_since_ms.is_some()
+    }
+
     /// Base-colour images still being decoded (a texture shows from the first draw after
     /// this reaches 0).
     #[wasm_bindgen(getter, js_name = texturesLoading)]
@@ -743,7 +759,8 @@ impl Viewer {
     }
 
     /// Draws one frame: each figure is a clip at a time. Returns false, drawing nothing, when
-    /// the frame would repeat the last one drawn (same poses, camera, size and body).
+    /// the frame would repeat the last one drawn (same poses, camera, size and body), or while
+    /// a skinned figure's textures are still being decoded (`waitingForTextures`).
     pub fn draw(
         &mut self,
         library: &Library,
@@ -825,6 +842,20 @@ impl Viewer {
                 head: e.head,
             })
             .collect();
+        // A skinned figure is never shown untextured while its base-colour images are being
+        // decoded (a character just imported or chosen, for about a second): the canvas keeps
+        // the frame it has (the previous character or clip) until they are in, and a frame
+        // comes once they are (`waitingForTextures` tells the page to draw again); at most
+        // TEXTURE_WAIT_MS, after which an image that never decodes is drawn without.
+        if !palettes.is_empty() && self.decoding.get() > 0 {
+            let now = js_sys::Date::now();
+            let since = *self.held_since_ms.get_or_insert(now);
+            if now - since < TEXTURE_WAIT_MS {
+                self.shown = None;
+                return Ok(false);
+            }
+        }
+        self.held_since_ms = None;
         let meshes: Vec<MeshDraw> = palettes.iter().map(|(h, p, tint)| MeshDraw { mesh: *h, palette: p, tint: *tint }).collect();
         self.last_drawn = drawn;
         if let Some(y) = self.follow_y {
