@@ -245,7 +245,7 @@ test("video (webgl2): a WebM streamed into a file, a cancelled stream leaves it 
     // Cancel at 50 % in the app's dialog: no download, no error, the project unchanged.
     const downloads = [];
     page.on("download", (d) => downloads.push(d.suggestedFilename()));
-    const before = await page.evaluate(() => { delete window.showSaveFilePicker; return { rev: window.odori.project.project.revision(), doc: JSON.stringify(window.odori.project.project.doc()) }; });
+    const before = await page.evaluate(() => { delete window.showSaveFilePicker; return { rev: window.odori.project.project.revision, doc: JSON.stringify(window.odori.project.project.doc()) }; });
     await page.click("#export");
     await page.selectOption("#export-format", "video");
     await page.click("#export-go");
@@ -257,7 +257,7 @@ test("video (webgl2): a WebM streamed into a file, a cancelled stream leaves it 
     await page.waitForFunction(() => /Cancelled/.test(document.querySelector("#video-status").textContent), null, { timeout: 60000 });
     await new Promise((r) => setTimeout(r, 500));
     const after = await page.evaluate(() => ({
-      rev: window.odori.project.project.revision(), doc: JSON.stringify(window.odori.project.project.doc()),
+      rev: window.odori.project.project.revision, doc: JSON.stringify(window.odori.project.project.doc()),
       errors: [...document.querySelectorAll("#messages li.error")].map((li) => li.textContent),
       status: document.querySelector("#video-status").textContent,
     }));
