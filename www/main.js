@@ -126,6 +126,9 @@ async function main() {
   };
   // The chosen character and the clips put on it are project edits (kept, undone, saved).
   exporter.wear = (id, character) => session.putOn(id, character);
+  // The video export (www/video/): the engine draws on a canvas of its own, with the song and
+  // the project's grid and sections (for the camera's cuts).
+  exporter.video = { engine: { Viewer }, song: () => songPlayer.buffer, grid: () => session.project.grid(), sections: () => session.project.sections() };
   exporter.onCharacter = (id) => session.setCharacter(id);
   // Every figure has a body from the first pose: the built-in one, unless the project chose
   // stick figures (an imported character it chose follows once its file is shown, `reconcile`).

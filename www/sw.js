@@ -8,6 +8,7 @@ const SHELL = [
   "./ui/search-panel.js", "./ui/text-panel.js", "./ui/choreo-panel.js", "./ui/candidate-layout.js", "./ui/export-panel.js", "./ui/canvas.js",
   "./audio/rms.js", "./audio/song-player.js", "./search/client.js", "./share.js",
   "./project/store.js", "./project/index-store.js", "./project/file.js", "./project/app.js", "./project/dance.js", "./vendor/idb.js",
+  "./video/export-video.js", "./video/video-panel.js", "./video/mediabunny.js",
   "./pkg/odori.js", "./pkg/odori_bg.wasm",
 ];
 

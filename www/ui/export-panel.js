@@ -8,6 +8,8 @@
 // in which format (GLB, VRMA, BVH: one entry each of EXPORT_FORMATS) and how large the file
 // is, through the engine's exporters; the browser downloads those bytes. Errors go to the
 // message list with the engine's words; nothing in the library changes.
+import { VIDEO_FORMAT } from "../video/video-panel.js";
+
 export class ExportPanel {
   /** `wear(clipId, characterId)` → ClipInfo may be set by the page (its project keeps the clip). */
   constructor({ button, format, character, putOn, library, player, messages, onAdded, onCharacter }) {
@@ -186,6 +188,8 @@ export class ExportPanel {
     const plan = this.plan();
     this.ui.go.disabled = !!plan.error;
     if (plan.error) { this.ui.summary.textContent = `Nothing to export: ${plan.error}.`; return plan; }
+    // A format made by its own dialog (the video) says what it will make instead of a size.
+    if (plan.format.summary) { this.ui.summary.textContent = plan.format.summary(plan); delete this.ui.summary.dataset.bytes; return plan; }
     try {
       const bytes = this.bytesFor(plan);
       const secs = plan.range.endSecs != null ? plan.range.endSecs - plan.range.startSecs : plan.info.durationSecs;
@@ -208,6 +212,7 @@ export class ExportPanel {
   download() {
     const plan = this.plan();
     if (plan.error) { this.messages.warning(`Export: ${plan.error}.`); return null; }
+    if (plan.format.run) return plan.format.run(this, plan);
     try {
       const bytes = this.bytesFor(plan);
       const name = this.fileName(plan);
@@ -259,4 +264,6 @@ export const EXPORT_FORMATS = [
     on: (c) => skeletonOf(c.info),
     make: (library, id, range) => library.exportBvh(id, range),
   },
+  // The dance as a video with its song (www/video/, issue 29).
+  VIDEO_FORMAT,
 ];

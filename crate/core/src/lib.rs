@@ -7,6 +7,7 @@
 
 pub mod actions;
 pub mod bars;
+pub mod camera;
 pub mod canon;
 pub mod choreo;
 pub mod clip;

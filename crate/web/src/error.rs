@@ -62,6 +62,7 @@ error_kinds! {
     "character-not-humanoid": "character: the rig does not map onto the canonical humanoid",
     "character-missing-limbs": "character: the rig lacks limbs the motion needs (named in the message)",
     "motion-not-humanoid": "character: the motion to put on the character is not humanoid",
+    "camera": "video camera: no frames, joints or bars to plan over, or a bad camera option or pose",
 }
 
 /// Builds the `OdoriError` thrown to JS.
@@ -74,6 +75,12 @@ pub struct OdoriError {
 impl OdoriError {
     pub fn new(kind: &'static str, message: impl Into<String>) -> Self {
         OdoriError { kind, message: message.into(), file: None }
+    }
+}
+
+impl From<odori_core::camera::CameraError> for OdoriError {
+    fn from(e: odori_core::camera::CameraError) -> Self {
+        OdoriError::new("camera", e.to_string())
     }
 }
 

@@ -151,6 +151,23 @@ impl Project {
         }
     }
 
+    /// The song's sections (`music::sections` with its default options over the project's
+    /// grid and envelope): `{ sections: [{ firstBar, bars, label, intensity, repeatOf,
+    /// similarity }], novelty: number[] }`, or undefined without a song. The video camera cuts
+    /// at their boundaries (`Viewer.planCamera`).
+    pub fn sections(&mut self) -> Result<JsValue, OdoriError> {
+        let Some(song) = self.inner.doc().song.clone() else { return Ok(JsValue::UNDEFINED) };
+        let grid = match self.inner.derived().grid() {
+            None => return Ok(JsValue::UNDEFINED),
+            Some(Ok(g)) => g.clone(),
+            Some(Err(e)) => return Err(e.clone().into()),
+        };
+        let bytes = self.inner.blobs().get(&song.envelope).ok_or_else(|| OdoriError::new("missing-blob", format!("the envelope of {} is missing", song.file_name)))?;
+        let env = odori_core::project::decode_envelope(bytes)?;
+        let s = odori_core::music::sections(&grid, &env, &odori_core::music::SectionOptions::default()).map_err(|e| OdoriError::new("music", e.to_string()))?;
+        Ok(to_js(&s))
+    }
+
     /// The segment a move key names now (for the calls by segment number), or undefined.
     #[wasm_bindgen(js_name = segmentOf)]
     pub fn segment_of(&mut self, key: JsValue) -> Result<Option<u32>, OdoriError> {

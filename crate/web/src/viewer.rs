@@ -32,6 +32,7 @@ use std::rc::Rc;
 
 use glam::{Mat4, Quat, Vec3};
 use odori_core::builtin::canonical_skeleton;
+use odori_core::camera::CameraPose;
 use odori_core::character::Character;
 use odori_core::import::{MeshTexture, SkinnedMesh};
 use odori_core::library::body::builtin_body;
@@ -60,6 +61,31 @@ struct FigureSpec {
     offset: Option<[f32; 3]>,
     style: Option<String>,
 }
+
+/// What `planCamera` plans over (see there).
+#[cfg(feature = "authoring")]
+#[derive(Deserialize, Default)]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+struct CameraRequest {
+    times_secs: Vec<f32>,
+    bars: Vec<odori_core::bars::Bar>,
+    #[serde(default)]
+    sections: Option<odori_core::music::Sections>,
+    #[serde(default)]
+    camera: odori_core::camera::CameraOptions,
+}
+
+#[wasm_bindgen(typescript_custom_section)]
+const TS_CAMERA: &'static str = r#"
+/** Where the camera is (metres, radians): it looks at `target` from `distance` away, turned `yaw` about +Y (0: from the front, +Z) and `pitch` above the ground, through a vertical field of view `fovY`. */
+export interface CameraPose { target: [number, number, number]; yaw: number; pitch: number; distance: number; fovY: number; }
+/** A video camera's settings (`Viewer.planCamera`); every field may be left out. */
+export interface CameraOptions { mode?: "fixed" | "orbit" | "follow" | "director"; aspect?: number; phraseBars?: number; minShotBars?: number; intensityJump?: number; noveltyCut?: number; orbitBars?: number; followSmoothSecs?: number; }
+/** What `Viewer.planCamera` plans over: the video's frame times (song seconds), the range's bars as the grid gives them, the song's sections (`Project.sections()`). */
+export interface CameraRequest { timesSecs: number[] | Float32Array; bars: { index: number; startSecs: number; endSecs: number; intensity: number; beats?: number }[]; sections?: unknown; camera?: CameraOptions; }
+/** A planned camera: a pose per frame, and the shots (the first at frame 0; each later one a cut on a bar line at a phrase start). */
+export interface CameraPlan { poses: CameraPose[]; shots: { frame: number; bar: number; shot: "wide" | "medium" | "close" | "lowAngle" }[]; phraseBars: number; }
+"#;
 
 /// Mesh key of the built-in body in the viewer's uploads (library mesh ids count up from 1).
 const BUILTIN_MESH_KEY: u32 = u32::MAX;
@@ -701,6 +727,75 @@ impl Viewer {
         }
         let ndc = clip.truncate() / clip.w;
         Some(vec![(ndc.x * 0.5 + 0.5) * self.config.width as f32, (0.5 - ndc.y * 0.5) * self.config.height as f32])
+    }
+
+    /// Puts the camera at `pose` (`CameraPose`: `{ target: [x, y, z], yaw, pitch, distance,
+    /// fovY }`, metres and radians): one frame of a planned video camera (`planCamera`), or of
+    /// any camera track. The camera stays there (a following camera set by `frameFigures`
+    /// stops following) until moved.
+    #[wasm_bindgen(js_name = setCamera)]
+    pub fn set_camera(&mut self, #[wasm_bindgen(unchecked_param_type = "CameraPose")] pose: JsValue) -> Result<(), OdoriError> {
+        let p: CameraPose = serde_wasm_bindgen::from_value(pose).map_err(|e| OdoriError::new("camera", format!("camera pose: {e}")))?;
+        let finite = p.target.iter().chain([&p.yaw, &p.pitch, &p.distance, &p.fov_y]).all(|v| v.is_finite());
+        if !finite || p.distance <= 0.0 || !(0.01..3.1).contains(&p.fov_y) {
+            return Err(OdoriError::new("camera", format!("camera pose {p:?}: needs finite values, a positive distance and a field of view in 0.01..3.1 rad")));
+        }
+        self.camera = OrbitCamera { target: Vec3::from(p.target), yaw: p.yaw, pitch: p.pitch, distance: p.distance, fov_y: p.fov_y };
+        self.follow_y = None;
+        // The next draw is drawn even when it repeats the last image: a video captures the
+        // canvas after each draw, and a WebGL canvas keeps its image only until the task ends.
+        self.shown = None;
+        Ok(())
+    }
+
+    /// The camera now, as a `CameraPose`.
+    #[wasm_bindgen(getter, unchecked_return_type = "CameraPose")]
+    pub fn camera(&self) -> JsValue {
+        let c = &self.camera;
+        crate::error::to_js(&CameraPose { target: c.target.to_array(), yaw: c.yaw, pitch: c.pitch, distance: c.distance, fov_y: c.fov_y })
+    }
+
+    /// Plans a video camera (the core's `camera::plan`) over `figures` (clip and offset; their
+    /// `timeSecs` is ignored) at the times `request.timesSecs` (song seconds, one per video
+    /// frame), posed as this viewer draws them (on the chosen body). `request`: `{ timesSecs,
+    /// bars (the range's song bars, as the grid gives them), sections? (a project's
+    /// `sections()`), camera?: { mode: "fixed" | "orbit" | "follow" | "director", aspect,
+    /// phraseBars, minShotBars, intensityJump, noveltyCut, orbitBars, followSmoothSecs } }`.
+    /// Returns `{ poses: CameraPose[], shots: [{ frame, bar, shot }], phraseBars }`.
+    #[cfg(feature = "authoring")]
+    #[wasm_bindgen(js_name = planCamera, unchecked_return_type = "CameraPlan")]
+    pub fn plan_camera(
+        &mut self,
+        library: &Library,
+        #[wasm_bindgen(unchecked_param_type = "FigureSpec[]")] figures: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "CameraRequest")] request: JsValue,
+    ) -> Result<JsValue, OdoriError> {
+        let specs = parse_figures(figures)?;
+        let req: CameraRequest = from_js(request, "camera request", &["timesSecs", "bars", "sections", "camera"])?;
+        let mut posed: Vec<(Rc<Clip>, Vec3)> = Vec::with_capacity(specs.len());
+        for s in &specs {
+            let e = library.entry(s.clip)?;
+            let on = if s.style.as_deref() == Some("stick") { None } else { self.on_body(e, false) };
+            let clip = on.map(|o| o.0).unwrap_or_else(|| Rc::new(e.clip.clone()));
+            posed.push((clip, Vec3::from(s.offset.unwrap_or([0.0; 3]))));
+        }
+        let (mut r, mut t, mut p) = (Vec::new(), Vec::new(), Vec::new());
+        let joints: Vec<Vec<Vec3>> = req
+            .times_secs
+            .iter()
+            .map(|&time| {
+                let mut all = Vec::new();
+                for (clip, off) in &posed {
+                    clip.sample_into(time, &mut r, &mut t);
+                    clip.skeleton.forward_kinematics(&r, &t, &mut p, None);
+                    all.extend(p.iter().map(|q| *q + *off));
+                }
+                all
+            })
+            .collect();
+        let input = odori_core::camera::CameraInput { times_secs: &req.times_secs, joints: &joints, bars: &req.bars, sections: req.sections.as_ref() };
+        let plan = odori_core::camera::plan(&input, &req.camera)?;
+        Ok(crate::error::to_js(&plan))
     }
 
     /// Points the camera so the figures of `figures` fill the view. Figures that stay in place

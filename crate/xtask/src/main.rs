@@ -323,6 +323,7 @@ fn build_web(dev: bool, only: Option<&str>) {
         (".".into(), cond(format!("./{name}.d.ts"), format!("./{name}.js"))),
         ("./player".into(), cond(format!("./{player_rel}/odori-player.d.ts"), format!("./{player_rel}/odori-player.js"))),
         ("./player/engine".into(), cond(format!("./{player_rel}/{pname}.d.ts"), format!("./{player_rel}/{pname}.js"))),
+        ("./video".into(), Entry::Path("./video/export-video.js".into())),
         (format!("./{name}_bg.wasm"), Entry::Path(format!("./{name}_bg.wasm"))),
         (format!("./player/{pname}_bg.wasm"), Entry::Path(format!("./{player_rel}/{pname}_bg.wasm"))),
         ("./package.json".into(), Entry::Path("./package.json".into())),
@@ -354,7 +355,7 @@ fn build_web(dev: bool, only: Option<&str>) {
         module: format!("{name}.js"),
         types: format!("{name}.d.ts"),
         exports,
-        files: vec![format!("{name}_bg.wasm"), format!("{name}.js"), format!("{name}.d.ts"), format!("{name}_bg.wasm.d.ts"), format!("{player_rel}/"), "README.md".into()],
+        files: vec![format!("{name}_bg.wasm"), format!("{name}.js"), format!("{name}.d.ts"), format!("{name}_bg.wasm.d.ts"), format!("{player_rel}/"), "video/".into(), "README.md".into()],
         side_effects: vec!["./snippets/*".into(), format!("./{player_rel}/odori-player.js")],
         keywords: vec!["dance", "motion", "animation", "bvh", "gltf", "wasm", "webgpu", "web-component"],
     };
@@ -369,6 +370,25 @@ fn build_web(dev: bool, only: Option<&str>) {
     }
     std::fs::create_dir_all(root.join("www/vendor")).expect("create www/vendor/");
     std::fs::copy(&idb, root.join("www/vendor/idb.js")).expect("copy idb into www/vendor/");
+
+    // 6. The video export (issue 29): www/video/export-video.js imports Mediabunny (the MP4 /
+    //    WebM muxer) from beside itself. esbuild bundles only what it uses
+    //    (www/video/mediabunny-entry.js, tree-shaken: about 255 kB against the 689 kB of
+    //    Mediabunny's whole minified build) into www/video/mediabunny.js (not committed) and,
+    //    with the module, into the package's full engine (pkg/video/: `import { exportVideo }
+    //    from "odori/video"`).
+    if !root.join("node_modules/mediabunny/package.json").exists() {
+        fail("node_modules/mediabunny is missing: run npm install (./dev setup does)");
+    }
+    let bundled = root.join("www/video/mediabunny.js");
+    run(Command::new(root.join("node_modules/.bin/esbuild"))
+        .arg(root.join("www/video/mediabunny-entry.js"))
+        .args(["--bundle", "--minify", "--format=esm", "--target=es2022", "--log-level=warning"])
+        .arg(format!("--outfile={}", bundled.display())));
+    let video_dir = out_dir.join("video");
+    std::fs::create_dir_all(&video_dir).expect("create pkg/video/");
+    std::fs::copy(&bundled, video_dir.join("mediabunny.js")).expect("copy mediabunny into pkg/video/");
+    std::fs::copy(root.join("www/video/export-video.js"), video_dir.join("export-video.js")).expect("copy export-video.js into pkg/video/");
 }
 
 fn content_type(path: &Path) -> &'static str {

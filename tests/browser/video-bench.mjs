@@ -1,0 +1,111 @@
+// Benchmark of the video export (issue 29); prints figures, asserts nothing.
+//   node tests/browser/video-bench.mjs [--secs 60] [--backends webgl2,webgpu] [--stream 60,180]
+// For each back end: the demo song's dance, `--secs` seconds (from the lead-in) at 1280×720,
+// 30 fps, MP4 into a Blob: wall time ÷ video time, the longest main-thread task during the
+// export (a PerformanceObserver of long tasks: tasks over 50 ms), and peak memory (the page's
+// JS heap from the DevTools protocol, and the proportional set size of every Chromium process,
+// sampled every 250 ms). With `--stream a,b`: 1920×1080 videos of a and b seconds written
+// through a stream into a file (the Origin Private File System), peak memory of each.
+import { mkdtempSync, readFileSync, readdirSync, rmSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
+import { execFileSync } from "node:child_process";
+import { startServer, startChromium, BACKENDS } from "./harness.mjs";
+
+const arg = (name, dflt) => { const i = process.argv.indexOf(`--${name}`); return i > 0 ? process.argv[i + 1] : dflt; };
+const SECS = Number(arg("secs", "60"));
+const BACKS = arg("backends", "webgl2,webgpu").split(",");
+const STREAM = arg("stream", "").split(",").filter(Boolean).map(Number);
+
+/** PSS (kB) of `pid` and every process below it. */
+function treePssKb(pid) {
+  let out = "";
+  try { out = execFileSync("ps", ["-e", "-o", "pid=,ppid="]).toString(); } catch { return 0; }
+  const kids = new Map();
+  for (const line of out.trim().split("\n")) {
+    const [p, pp] = line.trim().split(/\s+/).map(Number);
+    if (!kids.has(pp)) kids.set(pp, []);
+    kids.get(pp).push(p);
+  }
+  let total = 0;
+  const stack = [pid];
+  while (stack.length) {
+    const p = stack.pop();
+    try {
+      const m = readFileSync(`/proc/${p}/smaps_rollup`, "utf8").match(/^Pss:\s+(\d+)/m);
+      if (m) total += Number(m[1]);
+    } catch { /* gone */ }
+    stack.push(...(kids.get(p) || []));
+  }
+  return total;
+}
+
+async function run(backend, server, jobs) {
+  const profile = mkdtempSync(join(tmpdir(), "odori-video-bench-"));
+  const { proc, browser, page } = await startChromium(profile, backend);
+  const cdp = await page.context().newCDPSession(page);
+  await cdp.send("Performance.enable");
+  try {
+    await page.goto(server.url + BACKENDS[backend].query);
+    await page.waitForFunction(() => document.body.dataset.ready === "1", null, { timeout: 120000 });
+    await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 120000 });
+    await page.click("#dance-generate");
+    await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 120000 });
+    for (const job of jobs) {
+      let peakHeap = 0, peakPss = 0, sampling = true;
+      const sampler = (async () => {
+        while (sampling) {
+          const m = await cdp.send("Performance.getMetrics").catch(() => null);
+          const heap = m?.metrics.find((x) => x.name === "JSHeapUsedSize")?.value || 0;
+          peakHeap = Math.max(peakHeap, heap);
+          peakPss = Math.max(peakPss, treePssKb(proc.pid));
+          await new Promise((r) => setTimeout(r, 250));
+        }
+      })();
+      const basePss = treePssKb(proc.pid);
+      const r = await page.evaluate(async ({ secs, w, h, stream, backend }) => {
+        const { exportVideo, danceRange } = await import("/video/export-video.js");
+        const { choreo, library, songPlayer, project, exporter } = window.odori;
+        choreo.renderDance();
+        const grid = project.project.grid();
+        const { startSecs } = danceRange(grid.bars, 0, 0, grid.beatsPerBar);
+        const endSecs = startSecs + secs;
+        const bars = grid.bars.filter((b) => b.endSecs <= endSecs + 1e-3);
+        let longest = 0;
+        const obs = new PerformanceObserver((l) => { for (const e of l.getEntries()) longest = Math.max(longest, e.duration); });
+        obs.observe({ type: "longtask" });
+        let target = null, fh = null;
+        if (stream) {
+          const opfs = await navigator.storage.getDirectory();
+          fh = await opfs.getFileHandle(`bench-${secs}.mp4`, { create: true });
+          target = await fh.createWritable();
+        }
+        const t0 = performance.now();
+        const res = await exportVideo({ engine: exporter.video.engine, library, clip: choreo.danceId, startSecs, endSecs, bars, sections: project.project.sections(), character: "builtin", width: w, height: h, fps: 30, container: "mp4", song: songPlayer.buffer, stream: target, backend });
+        const wall = (performance.now() - t0) / 1000;
+        await new Promise((r) => setTimeout(r, 100));
+        obs.disconnect();
+        const size = res.blob ? res.blob.size : (await fh.getFile()).size;
+        return { wall, longest, frames: res.frames, codecs: `${res.codecs.videoName} + ${res.codecs.audioName}`, size };
+      }, job);
+      sampling = false;
+      await sampler;
+      console.log(`${backend} ${job.w}×${job.h} ${job.secs} s${job.stream ? " (stream)" : " (Blob)"}: ${r.frames} frames in ${r.wall.toFixed(1)} s = ${(r.wall / job.secs).toFixed(2)} × real time; longest main-thread task ${r.longest ? `${r.longest.toFixed(0)} ms` : "< 50 ms"}; peak JS heap ${(peakHeap / 2 ** 20).toFixed(0)} MiB; peak Chromium PSS ${(peakPss / 1024).toFixed(0)} MiB (${(basePss / 1024).toFixed(0)} MiB before); ${r.codecs}; ${(r.size / 2 ** 20).toFixed(1)} MiB`);
+    }
+  } finally {
+    await browser.close().catch(() => {});
+    try { process.kill(-proc.pid); } catch { /* gone */ }
+    rmSync(profile, { recursive: true, force: true });
+  }
+}
+
+const server = await startServer();
+try {
+  for (const backend of BACKS) {
+    const jobs = [{ secs: SECS, w: 1280, h: 720, stream: false, backend }];
+    for (const s of STREAM) jobs.push({ secs: s, w: 1920, h: 1080, stream: true, backend });
+    await run(backend, server, jobs);
+  }
+} finally {
+  server.stop();
+}
