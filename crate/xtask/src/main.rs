@@ -87,8 +87,20 @@ struct ProfileSettings {
     rustflags: Vec<String>,
 }
 
+/// The checkout to work on: the current directory when it is one (so a `target/` copied from
+/// another checkout, with that checkout's path compiled in, still serves and builds this one),
+/// else the checkout this binary was built from.
 fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().expect("repository root")
+    let is_checkout = |d: &std::path::Path| d.join("crate/xtask/Cargo.toml").is_file() && d.join("www").is_dir();
+    if let Ok(cwd) = std::env::current_dir() {
+        if is_checkout(&cwd) {
+            return cwd;
+        }
+    }
+    match PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize() {
+        Ok(p) => p,
+        Err(e) => fail(format!("the repository root ({}/../..) is gone ({e}); run from the checkout", env!("CARGO_MANIFEST_DIR"))),
+    }
 }
 
 fn fail(msg: impl AsRef<str>) -> ! {
