@@ -520,8 +520,8 @@ impl Project {
     /// without a song).
     #[wasm_bindgen(js_name = danceView, unchecked_return_type = "BarView[]")]
     pub fn dance_view(&mut self) -> JsValue {
-        match self.inner.choreography() {
-            Ok(ch) => to_js(&ch.view()),
+        match self.inner.dance_view() {
+            Ok(view) => to_js(&view),
             Err(_) => to_js(&Vec::<u8>::new()),
         }
     }
@@ -576,11 +576,10 @@ impl Project {
     /// [{ bar, beats, footSkate, joinJump }] }`. `beatTimesSecs`: the song's beats (the grid's
     /// `beatTimesSecs`); omitted: each bar's beats spread evenly over it.
     pub fn quality(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
-        let ch = self.inner.choreography()?;
-        let bars = ch.bars();
+        let bars = self.inner.song_bars()?;
         let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect());
-        let clip = ch.render(self.inner.segment_library(), &RenderOptions::default());
-        let q = odori_core::choreo::dance_quality(&clip, bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
+        let clip = self.inner.render_dance(&RenderOptions::default())?;
+        let q = odori_core::choreo::dance_quality(&clip, &bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
         Ok(to_js(&q))
     }
 
