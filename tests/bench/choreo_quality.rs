@@ -207,7 +207,7 @@ fn main() {
         let t = Instant::now();
         let mut n = 0;
         for (ci, c) in lib.clips().iter().enumerate() {
-            let pos = odori_core::humanoid::canonical_positions(&c.clip, &odori_core::humanoid::HumanoidMap::from_skeleton(&c.clip.skeleton));
+            let pos = odori_core::canon::humanoid::canonical_positions(&c.clip, &odori_core::canon::humanoid::HumanoidMap::from_skeleton(&c.clip.skeleton));
             for s in lib.segments().iter().filter(|s| s.clip == ci) {
                 n += odori_core::choreo::kinetic_per_count_by_rate(&pos, &s.count_frames).len();
             }
@@ -319,7 +319,7 @@ fn main() {
             }
             let clip = odori_core::choreo::render(&lib, &bars, &chosen, &RenderOptions::default());
             let qm = QualityMotion::from_clip(&clip).expect("motion");
-            let nj = odori_core::humanoid::CANON_COUNT;
+            let nj = odori_core::canon::humanoid::CANON_COUNT;
             // The dance as rendered (feet held), not the unheld control.
             let hq = dance_quality(&clip, &bars, &beats).expect("dance quality");
             let mut js: Vec<(f32, usize)> = hq.bars.iter().filter_map(|b| b.join_jump.map(|j| (j, b.bar))).collect();

@@ -9,7 +9,7 @@ use odori_core::choreo::{
     FillWeights, GenerateOptions, GenerateReport, GridError, Layer, RenderOptions, SegmentError, SegmentLibrary, SegmentOptions, Setting, Settings, TransitionTable,
 };
 use odori_core::project::Project;
-use odori_core::humanoid::HumanoidMap;
+use odori_core::canon::humanoid::HumanoidMap;
 
 /// A small deterministic generator (SplitMix64).
 struct Rng(u64);
@@ -256,7 +256,7 @@ fn bad_input_gives_clear_errors() {
     println!("empty library: {e}");
     assert_eq!(open_search(&lib, &song(4)[0], &Settings::default()).unwrap_err(), ChoreoError::EmptyLibrary);
     // A clip shorter than 4 counts.
-    let demo = odori_core::builtin::demo_clip();
+    let demo = odori_core::canon::builtin::demo_clip();
     let short = demo.slice(0, 50, "short");
     let e = lib.add_clip(&short, &HumanoidMap::from_skeleton(&short.skeleton), &odori_core::HumanoidStatus::Complete, &SegmentOptions { tempo_bpm: Some(120.0), ..Default::default() }).unwrap_err();
     assert!(matches!(e, SegmentError::TooShort { .. }), "{e:?}");

@@ -12,7 +12,7 @@ use odori_core::choreo::{
     SegmentOptions, Settings, LIBRARY_FPS,
 };
 use odori_core::clip::{Clip, TranslationTrack};
-use odori_core::humanoid::HumanoidMap;
+use odori_core::canon::humanoid::HumanoidMap;
 use odori_core::library::{builtin_clips, BUILTIN_BPM};
 use odori_core::HumanoidStatus;
 

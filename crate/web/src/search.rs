@@ -7,8 +7,8 @@ use std::cell::RefCell;
 use std::ops::ControlFlow;
 
 use js_sys::Float32Array;
-use odori_core::humanoid::{canonical_positions, Canon, CANON_COUNT};
-use odori_core::normalize::Origin;
+use odori_core::canon::humanoid::{canonical_positions, Canon, CANON_COUNT};
+use odori_core::canon::normalize::Origin;
 use odori_core::search::{self, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchParams, StoredClip, DEFAULT_INDEX_FPS};
 use odori_core::HumanoidStatus;
 use serde::{Deserialize, Serialize};
