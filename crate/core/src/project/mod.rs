@@ -311,6 +311,23 @@ impl ProjectError {
     }
 }
 
+/// What re-cutting a clip meant for the dance ([`Project::recut_clip`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct RecutReport {
+    /// The new cut.
+    pub clip: crate::choreo::ClipSummary,
+    /// Segments of the earlier cut removed from the library.
+    pub removed: usize,
+    /// Moves of the earlier cut kept because bars of the dance hold them.
+    pub kept: usize,
+    /// Bars pinned to a move of the earlier cut: they keep that motion.
+    pub pinned_bars: Vec<usize>,
+    /// Bars the engine filled with a move of the earlier cut: they keep it until the next
+    /// Generate, which fills them from the new cut.
+    pub generated_bars: Vec<usize>,
+}
+
 /// What adding a source gave.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -649,6 +666,26 @@ impl Project {
         }
         self.commit(doc);
         Ok(info)
+    }
+
+    /// [`Project::set_clip_tempo`], saying what the re-cut meant for the dance: the new cut,
+    /// how many segments of the earlier cut left the library and how many stay (held by bars),
+    /// and the bars pinned to, or generated with, a move of the earlier cut (they keep it).
+    pub fn recut_clip(&mut self, clip: ClipRef, tempo_bpm: Option<f32>) -> Result<RecutReport, ProjectError> {
+        let before = self.derived().clip(clip).and_then(|c| c.cut.as_ref().map(|c| c.segments));
+        let info = self.set_clip_tempo(clip, tempo_bpm)?;
+        // `set_clip_tempo` refuses a clip it could not cut, so the cut is there.
+        let summary = info.cut.ok_or_else(|| ProjectError::NotDanceable { file_name: info.file_name.clone(), clip: clip.clip, reason: "it has no cut".into() })?;
+        let earlier = |k: &MoveKey| matches!(k, MoveKey::Cut { clip: c, cut_tempo_bpm, .. } if *c == clip && *cut_tempo_bpm != tempo_bpm);
+        let (mut pinned_bars, mut generated_bars, mut kept) = (Vec::new(), Vec::new(), BTreeSet::new());
+        for (i, b) in self.doc.dance.bars.iter().enumerate() {
+            if let Some(k) = b.r#move.as_ref().filter(|k| earlier(k)) {
+                kept.insert(k.id());
+                if b.state == BarKind::Pinned { pinned_bars.push(i) } else { generated_bars.push(i) }
+            }
+        }
+        let removed = before.map_or(0, |n| n.saturating_sub(kept.len()));
+        Ok(RecutReport { clip: summary, removed, kept: kept.len(), pinned_bars, generated_bars })
     }
 
     /// Sets the song: its file name and bytes as given (`None` for the demo song), the
