@@ -72,7 +72,7 @@ pub fn builtin_medley_library() -> odori_core::choreo::SegmentLibrary {
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: root }],
     };
-    let map = odori_core::humanoid::HumanoidMap::from_skeleton(&sk);
+    let map = odori_core::canon::humanoid::HumanoidMap::from_skeleton(&sk);
     let opts = SegmentOptions { tempo_bpm: Some(odori_core::library::BUILTIN_BPM), first_beat_secs: Some(0.0), hop_counts: 1 };
     lib.add_clip(&medley, &map, &odori_core::HumanoidStatus::Complete, &opts).expect("the medley of built-in moves cuts into segments");
     lib
@@ -101,8 +101,8 @@ pub fn foot_stay_drift_cm(clip: &odori_core::Clip) -> f32 {
 }
 
 /// The feet joints [`foot_stay_drift_cm`] measures: left and right ankle, left and right toe.
-pub const DRIFT_JOINTS: [odori_core::humanoid::Canon; 4] =
-    [odori_core::humanoid::Canon::LeftFoot, odori_core::humanoid::Canon::RightFoot, odori_core::humanoid::Canon::LeftToe, odori_core::humanoid::Canon::RightToe];
+pub const DRIFT_JOINTS: [odori_core::canon::humanoid::Canon; 4] =
+    [odori_core::canon::humanoid::Canon::LeftFoot, odori_core::canon::humanoid::Canon::RightFoot, odori_core::canon::humanoid::Canon::LeftToe, odori_core::canon::humanoid::Canon::RightToe];
 
 /// The floor under each of [`DRIFT_JOINTS`] over a clip: the 1st percentile of its height.
 pub fn foot_floors_m(clip: &odori_core::Clip) -> [f32; 4] {
@@ -125,7 +125,7 @@ pub fn foot_stay_drift_on_floors_cm(clip: &odori_core::Clip, floors: &[f32; 4]) 
     let all = clip.all_world_positions();
     let n = clip.joint_count();
     let frames = clip.frame_count();
-    if frames == 0 || n <= odori_core::humanoid::Canon::RightToe.index() {
+    if frames == 0 || n <= odori_core::canon::humanoid::Canon::RightToe.index() {
         return 0.0;
     }
     let mut worst = 0.0f32;

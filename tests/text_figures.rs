@@ -6,7 +6,7 @@
 
 use glam::{Quat, Vec3};
 use odori_core::actions::{compose, join_serial, ActionLibrary, BodyPart, ComposeOptions, CompositionReport, JoinKind, JoinOptions, JoinReport, SwitchTimes};
-use odori_core::humanoid::Canon;
+use odori_core::canon::humanoid::Canon;
 use odori_core::Clip;
 
 /// One Transition measured with and without foot locking.

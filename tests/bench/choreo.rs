@@ -222,14 +222,16 @@ fn main() {
         // A copy shares the cached all-pairs table (built in 3.).
         let with_all = lib.clone();
         assert!(with_all.cached_table(penalty).is_some_and(|t| t.scope().is_all_pairs()));
-        let mut doc = odori_core::choreo::Choreography::new(bars.clone()).unwrap();
-        // Best of two Generates on copies of `doc` (each checked by `check`), ms.
-        let best_of_two = |lib: &SegmentLibrary, check: &dyn Fn(&odori_core::choreo::Choreography)| {
+        type States = Vec<odori_core::choreo::BarState>;
+        let generate = |lib: &SegmentLibrary| -> States {
+            odori_core::choreo::generate_states(lib, &bars, &[], odori_core::choreo::FillWeights::default(), &odori_core::choreo::GenerateOptions::default()).unwrap().0
+        };
+        // Best of two Generates (each checked by `check`), ms.
+        let best_of_two = |lib: &SegmentLibrary, check: &dyn Fn(&States)| {
             (0..2)
                 .map(|_| {
-                    let mut d = doc.clone();
                     let t = Instant::now();
-                    d.generate(lib).unwrap();
+                    let d = generate(lib);
                     let took = ms(t);
                     check(&d);
                     took
@@ -239,18 +241,16 @@ fn main() {
         let all_gen = best_of_two(&with_all, &|_| {});
         let scoped = lib.clone();
         scoped.drop_table();
-        let mut first = doc.clone();
         let t = Instant::now();
-        first.generate(&scoped).unwrap();
+        let first = generate(&scoped);
         let first_ms = ms(t);
         let built = scoped.cached_table(penalty).expect("cached");
-        let cached_gen = best_of_two(&scoped, &|d| assert_eq!(d.states(), first.states()));
-        doc.generate(&with_all).unwrap();
-        assert_eq!(doc.states(), first.states(), "the table by metre changed the dance");
+        let cached_gen = best_of_two(&scoped, &|d| assert_eq!(d, &first));
+        assert_eq!(generate(&with_all), first, "the table by metre changed the dance");
         println!(
-            "Choreography::generate over {} bars in {beats}/4: all-pairs table cached {all_gen:.0} ms; table by metre ({}) cached {cached_gen:.0} ms ({:.2}x faster), \
+            "generate_states over {} bars in {beats}/4: all-pairs table cached {all_gen:.0} ms; table by metre ({}) cached {cached_gen:.0} ms ({:.2}x faster), \
              first Generate building it {first_ms:.0} ms (against all-pairs build + Generate {:.0} ms: {:.2}x); same dance",
-            doc.bars().len(),
+            bars.len(),
             built.scope(),
             all_gen / cached_gen,
             all_ms + all_gen,
@@ -260,9 +260,8 @@ fn main() {
 
     // 7. Render 90 bars.
     let bars = odori_core::choreo::bars_from_tempo(181.0, 120.0, 4, 0.0, |_, _| 0.5).unwrap();
-    let mut doc = odori_core::choreo::Choreography::new(bars).unwrap();
-    doc.generate(&lib).unwrap();
+    let (states, _) = odori_core::choreo::generate_states(&lib, &bars, &[], odori_core::choreo::FillWeights::default(), &odori_core::choreo::GenerateOptions::default()).unwrap();
     let t = Instant::now();
-    let clip = doc.render(&lib, &RenderOptions::default());
-    println!("render of {} bars at 60 fps ({} frames) {:.1} ms", doc.bars().len(), clip.frame_count(), ms(t));
+    let clip = odori_core::choreo::render_states(&lib, &bars, &states, &RenderOptions::default());
+    println!("render of {} bars at 60 fps ({} frames) {:.1} ms", bars.len(), clip.frame_count(), ms(t));
 }

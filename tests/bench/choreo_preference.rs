@@ -23,7 +23,7 @@
 use glam::Vec3;
 use odori_core::choreo::quality::perceptual_distance;
 use odori_core::choreo::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, SegmentLibrary, SegmentOptions, Settings, CANDIDATES_PER_ROUND};
-use odori_core::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
+use odori_core::canon::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
 use odori_core::import::import_bytes;
 use odori_core::ImportOptions;
 use odori_tests::{all_bvh, fps_override_for, read, simulated_likes, spearman};

@@ -39,8 +39,8 @@ mod preference;
 use glam::Vec3;
 use odori_core::choreo::quality::perceptual_frames;
 use odori_core::choreo::{feedback::relevance, SegmentLibrary, Settings, Signature};
-use odori_core::humanoid::{Canon, CANON_COUNT};
-use odori_core::normalize::{body_height, normalize_in_place, Origin};
+use odori_core::canon::humanoid::{Canon, CANON_COUNT};
+use odori_core::canon::normalize::{body_height, normalize_in_place, Origin};
 use odori_tests::{simulated_likes, spearman};
 
 const ROUNDS: usize = 5;

@@ -37,9 +37,9 @@
 use glam::Vec3;
 use odori_core::choreo::quality::{perceptual_distance, perceptual_frames};
 use odori_core::choreo::segment::{SIGNATURE_AXES, SIGNATURE_OFFSET};
-use odori_core::humanoid::Canon;
+use odori_core::canon::humanoid::Canon;
 use odori_core::choreo::{feedback::relevance, SegmentLibrary, SegmentOptions, Settings, Signature};
-use odori_core::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
+use odori_core::canon::humanoid::{canonical_positions, HumanoidMap, CANON_COUNT};
 use odori_core::import::import_bytes;
 use odori_core::ImportOptions;
 use odori_tests::{all_bvh, fps_override_for, read, simulated_likes, spearman};

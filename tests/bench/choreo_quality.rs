@@ -52,7 +52,7 @@ use std::time::Instant;
 
 use odori_core::bars::Bar;
 use odori_core::choreo::quality::{dance_quality, motion_quality, DanceQuality, QualityMotion};
-use odori_core::choreo::{Choreography, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::choreo::{generate_states, BarState, FillWeights, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
@@ -207,7 +207,7 @@ fn main() {
         let t = Instant::now();
         let mut n = 0;
         for (ci, c) in lib.clips().iter().enumerate() {
-            let pos = odori_core::humanoid::canonical_positions(&c.clip, &odori_core::humanoid::HumanoidMap::from_skeleton(&c.clip.skeleton));
+            let pos = odori_core::canon::humanoid::canonical_positions(&c.clip, &odori_core::canon::humanoid::HumanoidMap::from_skeleton(&c.clip.skeleton));
             for s in lib.segments().iter().filter(|s| s.clip == ci) {
                 n += odori_core::choreo::kinetic_per_count_by_rate(&pos, &s.count_frames).len();
             }
@@ -257,18 +257,21 @@ fn main() {
         let grid = analyze(env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{rel}: {e}"));
         let bars = grid.bars.clone();
         let beats = grid.beat_times_secs.clone();
-        let mut doc = Choreography::new(bars.clone()).expect("bars");
-        if let Some(w) = std::env::var("ODORI_BEAT_WEIGHT").ok().and_then(|v| v.parse().ok()) {
-            doc.set_beat_weight(w).expect("beat weight");
+        // The objective's weights (FillWeights) and the pipeline's stages (GenerateOptions): the
+        // core takes them as plain inputs, the bench reads them from the environment.
+        let mut weights = FillWeights::default();
+        let env_f32 = |name: &str| std::env::var(name).ok().and_then(|v| v.parse::<f32>().ok());
+        if let Some(w) = env_f32("ODORI_BEAT_WEIGHT") {
+            weights.beat_weight = w;
         }
-        if let Some(w) = std::env::var("ODORI_OWN_MOVES").ok().and_then(|v| v.parse().ok()) {
-            doc.set_own_moves_preference(w).expect("own-moves preference");
+        if let Some(w) = env_f32("ODORI_OWN_MOVES") {
+            weights.own_moves_preference = w;
         }
-        if let Some(w) = std::env::var("ODORI_STRETCH_WEIGHT").ok().and_then(|v| v.parse().ok()) {
-            doc.set_stretch_weight(w).expect("stretch weight");
+        if let Some(w) = env_f32("ODORI_STRETCH_WEIGHT") {
+            weights.stretch_weight = w;
         }
-        if let Some(w) = std::env::var("ODORI_SKATE_WEIGHT").ok().and_then(|v| v.parse().ok()) {
-            doc.set_skate_weight(w).expect("skate weight");
+        if let Some(w) = env_f32("ODORI_SKATE_WEIGHT") {
+            weights.skate_weight = w;
         }
         // The pipeline's stages (GenerateOptions): the core takes options, the bench reads them
         // from the environment.
@@ -285,13 +288,13 @@ fn main() {
         if std::env::var("ODORI_FOLLOW_BEAT_RATE").is_ok_and(|v| v == "0") {
             options.follow_beat_rate = false;
         }
-        if let Some(w) = std::env::var("ODORI_BEAT_RATE_WEIGHT").ok().and_then(|v| v.parse().ok()) {
-            doc.set_beat_rate_weight(w).expect("beat-rate weight");
+        if let Some(w) = env_f32("ODORI_BEAT_RATE_WEIGHT") {
+            weights.beat_rate_weight = w;
         }
         let tg = Instant::now();
-        doc.generate_with(&lib, &options).expect("generate");
+        let (states, _) = generate_states(&lib, &bars, &[], weights, &options).expect("generate");
         let generate_ms = tg.elapsed().as_secs_f64() * 1e3;
-        let chosen = doc.segments();
+        let chosen: Vec<Option<usize>> = states.iter().map(BarState::segment).collect();
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
         let gen = quality(&lib, &bars, &beats, &chosen, false);
         let tr = Instant::now();
@@ -316,7 +319,7 @@ fn main() {
             }
             let clip = odori_core::choreo::render(&lib, &bars, &chosen, &RenderOptions::default());
             let qm = QualityMotion::from_clip(&clip).expect("motion");
-            let nj = odori_core::humanoid::CANON_COUNT;
+            let nj = odori_core::canon::humanoid::CANON_COUNT;
             // The dance as rendered (feet held), not the unheld control.
             let hq = dance_quality(&clip, &bars, &beats).expect("dance quality");
             let mut js: Vec<(f32, usize)> = hq.bars.iter().filter_map(|b| b.join_jump.map(|j| (j, b.bar))).collect();

@@ -20,8 +20,8 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use odori_core::character::{measured_source, report, Character, RetargetOptions, Transfer};
-use odori_core::humanoid::{Canon, HumanoidMap};
+use odori_core::canon::character::{measured_source, report, Character, RetargetOptions, Transfer};
+use odori_core::canon::humanoid::{Canon, HumanoidMap};
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::Clip;
 use odori_tests::{fps_override_for, read};
@@ -60,7 +60,7 @@ fn main() {
             let free_clip = ch.retarget_options(clip, map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
             let free = report(clip, map, &ch, &free_clip);
             // How far holding the feet moves the body off the free (scaled source) path, m.
-            let hips = ch.map.get(odori_core::humanoid::Canon::Hips).unwrap();
+            let hips = ch.map.get(odori_core::canon::humanoid::Canon::Hips).unwrap();
             let drift_m = (0..out.frame_count()).map(|f| {
                 let d = out.world_positions(f)[hips] - free_clip.world_positions(f)[hips];
                 (d.x * d.x + d.z * d.z).sqrt()

@@ -13,7 +13,7 @@
 mod common;
 
 use common::mirrored;
-use odori_core::normalize::Origin;
+use odori_core::canon::normalize::Origin;
 use odori_core::search::{no_progress, search, BodyPreset, ClipFeatures, FeatureIndex, SearchParams};
 
 fn main() {

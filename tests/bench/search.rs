@@ -12,7 +12,7 @@ mod common;
 use std::time::Instant;
 
 use common::Rng;
-use odori_core::normalize::Origin;
+use odori_core::canon::normalize::Origin;
 use odori_core::search::{
     joined_bound, no_progress, search, search_bounded_cached, search_plain, search_probe_cached, search_threads, SearchCache, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS,
 };

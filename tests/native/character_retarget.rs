@@ -4,10 +4,10 @@
 //! exported on the character's own mesh and skin and re-imported; and the bad characters
 //! (not humanoid, no skin, limbs missing) refused with messages naming what is wrong.
 
-use odori_core::builtin::demo_clip;
-use odori_core::character::{report, Character, CharacterError, RetargetOptions, Transfer};
+use odori_core::canon::builtin::demo_clip;
+use odori_core::canon::character::{report, Character, CharacterError, RetargetOptions, Transfer};
 use odori_core::export::gltf::{glb, GlbOptions};
-use odori_core::humanoid::{Canon, HumanoidMap};
+use odori_core::canon::humanoid::{Canon, HumanoidMap};
 use odori_core::import::{import_bytes, ImportOptions, Imported};
 use odori_core::Clip;
 use odori_tests::{fps_override_for, read};

@@ -25,7 +25,7 @@
 mod music_audio;
 
 use odori_core::choreo::quality::{dance_quality, motion_quality, DanceQuality, QualityMotion};
-use odori_core::choreo::{bar_counts, Choreography, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::choreo::{bar_counts, generate_states, BarState, FillWeights, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
@@ -84,9 +84,10 @@ fn generated_dances_follow_the_beat_on_every_real_song() {
             let clip = odori_core::choreo::render(&lib, &bars, choices, &RenderOptions::default());
             dance_quality(&clip, &bars, &beats).unwrap()
         };
-        let mut doc = Choreography::new(bars.clone()).unwrap();
-        doc.generate(&lib).unwrap();
-        let chosen = doc.segments();
+        let generate = |options: &GenerateOptions| -> Vec<Option<usize>> {
+            generate_states(&lib, &bars, &[], FillWeights::default(), options).unwrap().0.iter().map(BarState::segment).collect()
+        };
+        let chosen = generate(&GenerateOptions::default());
         let gen = q(&chosen);
         let mut x = 0x2545_F491_4F6C_DD1Du64;
         // Per bar, the live segments it can take (its count; any when the library has none).
@@ -129,9 +130,7 @@ fn generated_dances_follow_the_beat_on_every_real_song() {
         );
         if grid.beats_per_bar == 3 {
             // What the join repair (GenerateOptions::follow_joins) did: the same dance without it.
-            let mut plain = Choreography::new(bars.clone()).unwrap();
-            plain.generate_with(&lib, &GenerateOptions { follow_joins: false, ..GenerateOptions::default() }).unwrap();
-            let off = q(&plain.segments());
+            let off = q(&generate(&GenerateOptions { follow_joins: false, ..GenerateOptions::default() }));
             println!("  without the join repair: join jump max {:.2}, BAS-music {:.3}", off.join_jump_max, off.beats.bas_music);
             assert!(gen.join_jump_max <= off.join_jump_max, "{rel}: the join repair made the worst join worse");
         }

@@ -16,7 +16,7 @@
 use odori_core::choreo::segment::clip_count_period;
 use odori_core::choreo::{SegmentLibrary, SegmentOptions, LIBRARY_FPS};
 use odori_core::import::import_bytes;
-use odori_core::retarget::to_canonical;
+use odori_core::canon::retarget::to_canonical;
 use odori_core::ImportOptions;
 use odori_tests::{all_bvh, fps_override_for, read};
 

@@ -1,13 +1,15 @@
-//! Filling (spec §G) and the choreography document: optimality against brute force, join
-//! quality on a 32-bar song against random choices, bad input, determinism, undo/redo.
+//! Filling (spec §G) and the dance commands: optimality against brute force, join quality on a
+//! 32-bar song against random choices, bad input, determinism, and undo/redo of every dance edit
+//! in the project (the one dance document).
 
 use odori_core::bars::Bar;
 use odori_core::choreo::render::join_frames;
 use odori_core::choreo::{
-    bars_from_tempo, fill, path_cost, speed_jumps, BarState, ChoreoError, Choreography, FillWeights, GridError, Layer, RenderOptions, SegmentError,
-    SegmentLibrary, SegmentOptions, TransitionTable,
+    bars_from_tempo, check_bar, check_bars, fill, generate_states, next_round, open_search, path_cost, render_states, speed_jumps, BarState, ChoreoError, FeedbackSession,
+    FillWeights, GenerateOptions, GenerateReport, GridError, Layer, RenderOptions, SegmentError, SegmentLibrary, SegmentOptions, Setting, Settings, TransitionTable,
 };
-use odori_core::humanoid::HumanoidMap;
+use odori_core::project::Project;
+use odori_core::canon::humanoid::HumanoidMap;
 
 /// A small deterministic generator (SplitMix64).
 struct Rng(u64);
@@ -140,20 +142,33 @@ fn song(bars: usize) -> Vec<Bar> {
     bars_from_tempo(bars as f32 * 2.0 + 0.3, 120.0, 4, 0.0, |s, _| 0.5 + 0.45 * (s / 16.0).sin()).unwrap()
 }
 
+/// Generate over `bars` with `states` (the pinned bars) at `weights` and the default pipeline.
+fn generate(lib: &SegmentLibrary, bars: &[Bar], states: &[BarState], weights: FillWeights) -> Result<(Vec<BarState>, GenerateReport), ChoreoError> {
+    generate_states(lib, bars, states, weights, &GenerateOptions::default())
+}
+
+/// `bars` empty but for the pins (bar, segment).
+fn pinned(bars: usize, pins: &[(usize, usize)]) -> Vec<BarState> {
+    let mut states = vec![BarState::Empty; bars];
+    for &(bar, segment) in pins {
+        states[bar] = BarState::Pinned { segment };
+    }
+    states
+}
+
+fn segments(states: &[BarState]) -> Vec<Option<usize>> {
+    states.iter().map(BarState::segment).collect()
+}
+
 #[test]
 fn generated_joins_are_smoother_than_random_choices() {
     let lib = SegmentLibrary::builtin();
     let bars = song(32);
-    let mut doc = Choreography::new(bars.clone()).unwrap();
-    // The transition cost's own effect: without the beat term (checked with it below).
-    doc.set_beat_weight(0.0).unwrap();
     let pins = [(0usize, 5usize), (8, 120), (16, 260), (24, 333)];
-    for (bar, seg) in pins {
-        doc.set(&lib, bar, seg).unwrap();
-    }
-    let report = doc.generate(&lib).unwrap();
+    // The transition cost's own effect: without the beat term (checked with it below).
+    let (states, report) = generate(&lib, &bars, &pinned(bars.len(), &pins), FillWeights { beat_weight: 0.0, ..FillWeights::default() }).unwrap();
     assert_eq!(report.filled, 28);
-    let generated = doc.segments();
+    let generated = segments(&states);
     let mut distinct: Vec<usize> = generated.iter().flatten().copied().collect();
     distinct.sort();
     distinct.dedup();
@@ -184,18 +199,15 @@ fn generated_joins_are_smoother_than_random_choices() {
     assert!(gen_joined.0 <= gen_raw.0 + 1e-3, "the Hermite joins must not make joins rougher");
     // With the default beat term (spec §G + §J: dances that turn on the beat), the joins the
     // person sees (Hermite on) stay about as smooth as without it and clearly smoother than random.
-    let mut beat = Choreography::new(bars.clone()).unwrap();
-    for (bar, seg) in pins {
-        beat.set(&lib, bar, seg).unwrap();
-    }
-    beat.generate(&lib).unwrap();
-    let ((bm, bp), _) = join_report(&lib, &bars, &beat.segments(), 5);
+    let (beat, _) = generate(&lib, &bars, &pinned(bars.len(), &pins), FillWeights::default()).unwrap();
+    let ((bm, bp), _) = join_report(&lib, &bars, &segments(&beat), 5);
     println!("  with the beat term, joins on: at joins mean {bm:.3} p95 {bp:.3}");
     assert!(bm <= 1.25 * gen_joined.0 && bp <= 1.25 * gen_joined.1, "beat term made joins rougher: mean {bm} p95 {bp} vs {gen_joined:?}");
     assert!(bm < 0.75 * rand_joined.0, "with the beat term, joins ({bm}) not clearly smoother than random ({})", rand_joined.0);
     // Pinned bars unchanged.
     for (bar, seg) in pins {
-        assert_eq!(doc.states()[bar], BarState::Pinned { segment: seg });
+        assert_eq!(states[bar], BarState::Pinned { segment: seg });
+        assert_eq!(beat[bar], BarState::Pinned { segment: seg });
     }
 }
 
@@ -226,7 +238,7 @@ fn bad_input_gives_clear_errors() {
     let e = bars_from_tempo(1.2, 120.0, 4, 0.0, |_, _| 0.5).unwrap_err();
     assert!(matches!(e, GridError::ShorterThanABar { .. }));
     println!("song shorter than a bar: {e}");
-    let e = Choreography::new(Vec::new()).unwrap_err();
+    let e = check_bars(&[]).unwrap_err();
     assert_eq!(e, ChoreoError::NoBars);
     println!("no bars: {e}");
     // A library with no humanoid clip: the Fox is refused; generating from the empty library
@@ -239,13 +251,12 @@ fn bad_input_gives_clear_errors() {
         println!("non-humanoid clip: {e}");
     }
     assert!(lib.is_empty());
-    let mut doc = Choreography::new(song(4)).unwrap();
-    let e = doc.generate(&lib).unwrap_err();
+    let e = generate(&lib, &song(4), &[], FillWeights::default()).unwrap_err();
     assert_eq!(e, ChoreoError::EmptyLibrary);
     println!("empty library: {e}");
-    assert_eq!(doc.candidates(&lib, 0).unwrap_err(), ChoreoError::EmptyLibrary);
+    assert_eq!(open_search(&lib, &song(4)[0], &Settings::default()).unwrap_err(), ChoreoError::EmptyLibrary);
     // A clip shorter than 4 counts.
-    let demo = odori_core::builtin::demo_clip();
+    let demo = odori_core::canon::builtin::demo_clip();
     let short = demo.slice(0, 50, "short");
     let e = lib.add_clip(&short, &HumanoidMap::from_skeleton(&short.skeleton), &odori_core::HumanoidStatus::Complete, &SegmentOptions { tempo_bpm: Some(120.0), ..Default::default() }).unwrap_err();
     assert!(matches!(e, SegmentError::TooShort { .. }), "{e:?}");
@@ -254,23 +265,21 @@ fn bad_input_gives_clear_errors() {
     assert!(matches!(e, SegmentError::TooShort { .. }), "{e:?}");
     // Every bar pinned: Generate changes nothing and says so.
     let lib = SegmentLibrary::builtin();
-    let mut doc = Choreography::new(song(3)).unwrap();
-    for b in 0..3 {
-        doc.set(&lib, b, 10 + b).unwrap();
-    }
-    let before = doc.clone();
-    let r = doc.generate(&lib).unwrap();
+    let bars = song(3);
+    let all = pinned(3, &[(0, 10), (1, 11), (2, 12)]);
+    let (states, r) = generate(&lib, &bars, &all, FillWeights::default()).unwrap();
     assert_eq!(r.filled, 0);
-    assert_eq!(doc, before);
-    // Out-of-range bars and segments.
-    assert!(matches!(doc.set(&lib, 9, 0), Err(ChoreoError::NoSuchBar { .. })));
-    assert!(matches!(doc.set(&lib, 0, 99_999), Err(ChoreoError::NoSuchSegment { .. })));
-    assert!(matches!(doc.search(&lib, 1, &[]), Err(ChoreoError::NoSearch { .. })));
-    let round = doc.candidates(&lib, 1).unwrap();
-    let not_shown = (0..lib.len()).find(|s| !round.contains(s)).unwrap();
-    assert!(matches!(doc.search(&lib, 1, &[not_shown]), Err(ChoreoError::NotACandidate { .. })));
-    assert!(matches!(doc.set_rho(1.5), Err(ChoreoError::BadSetting { .. })));
-    let e = Choreography::new(vec![Bar { index: 0, start_secs: 2.0, end_secs: 1.0, intensity: 0.5, beats: 4 }]).unwrap_err();
+    assert_eq!(states, all);
+    // Out-of-range bars and segments, a like that was not shown, a setting out of range.
+    assert!(matches!(check_bar(&bars, 9), Err(ChoreoError::NoSuchBar { bar: 9, bars: 3 })));
+    assert!(matches!(generate(&lib, &bars, &pinned(3, &[(0, 99_999)]), FillWeights::default()), Err(ChoreoError::NoSuchSegment { segment: 99_999, .. })));
+    let mut search = open_search(&lib, &bars[1], &Settings::default()).unwrap();
+    let not_shown = (0..lib.len()).find(|s| !search.round.contains(s)).unwrap();
+    let before = search.clone();
+    assert!(matches!(next_round(&lib, &bars[1], &mut search, &[not_shown], &Settings::default()), Err(ChoreoError::NotACandidate { .. })));
+    assert_eq!(search, before, "a refused like changed the search");
+    assert!(matches!(Settings::default().apply(Setting::Rho(1.5)), Err(ChoreoError::BadSetting { .. })));
+    let e = check_bars(&[Bar { index: 0, start_secs: 2.0, end_secs: 1.0, intensity: 0.5, beats: 4 }]).unwrap_err();
     assert!(matches!(e, ChoreoError::BadBar { .. }));
 }
 
@@ -279,16 +288,16 @@ fn support_fox() -> odori_core::Imported {
     odori_core::import::import_bytes("Fox.glb", &bytes, &odori_core::ImportOptions::default()).unwrap()
 }
 
-/// A session of commands: the UI's flow (select, Search twice, Set, Generate, edit more).
-fn session(lib: &SegmentLibrary) -> Choreography {
-    let mut doc = Choreography::new(song(12)).unwrap();
-    let round = doc.candidates(lib, 3).unwrap();
-    let round = doc.search(lib, 3, &[round[1], round[4]]).unwrap();
-    let round = doc.search(lib, 3, &[round[0]]).unwrap();
-    doc.set(lib, 3, round[2]).unwrap();
-    doc.set(lib, 7, 42).unwrap();
-    doc.generate(lib).unwrap();
-    doc
+/// A session of commands: the UI's flow (select, Search twice, Set, Generate): the bars, their
+/// states and bar 3's search.
+fn session(lib: &SegmentLibrary) -> (Vec<Bar>, Vec<BarState>, FeedbackSession) {
+    let (bars, settings) = (song(12), Settings::default());
+    let mut search = open_search(lib, &bars[3], &settings).unwrap();
+    let round = search.round.clone();
+    let round = next_round(lib, &bars[3], &mut search, &[round[1], round[4]], &settings).unwrap();
+    let round = next_round(lib, &bars[3], &mut search, &[round[0]], &settings).unwrap();
+    let (states, _) = generate(lib, &bars, &pinned(bars.len(), &[(3, round[2]), (7, 42)]), settings.fill).unwrap();
+    (bars, states, search)
 }
 
 #[test]
@@ -299,80 +308,87 @@ fn same_inputs_give_the_same_dance() {
     let da = session(&a);
     let db = session(&b);
     assert_eq!(da, db);
-    let ca = da.render(&a, &RenderOptions::default());
-    let cb = db.render(&b, &RenderOptions::default());
+    let ca = render_states(&a, &da.0, &da.1, &RenderOptions::default());
+    let cb = render_states(&b, &db.0, &db.1, &RenderOptions::default());
     assert_eq!(ca, cb);
     // Re-generating changes nothing the person pinned, and is itself deterministic.
-    let mut dc = da.clone();
-    dc.generate(&a).unwrap();
-    assert_eq!(dc.segments(), da.segments());
+    let (again, _) = generate(&a, &da.0, &da.1, FillWeights::default()).unwrap();
+    assert_eq!(again, da.1);
+}
+
+/// The demo song's loudness envelope (the project's song in the tests below).
+fn demo_envelope() -> odori_core::music::RmsEnvelope {
+    let song = odori_core::music::demo_song::demo_song(22050.0).expect("demo song");
+    odori_core::music::envelope(&[&song.samples], 22050.0).expect("demo envelope")
 }
 
 #[test]
-fn undo_and_redo_walk_every_edit() {
-    let lib = SegmentLibrary::builtin();
-    let mut doc = Choreography::new(song(8)).unwrap();
-    let mut history = vec![doc.clone()];
-    // Looking at a bar's candidates is not an edit: no undo step.
-    let round = doc.candidates(&lib, 2).unwrap();
-    assert!(!doc.can_undo(), "opening a bar's candidates made an undo step");
-    history[0] = doc.clone();
-    doc.search(&lib, 2, &[round[0]]).unwrap();
-    history.push(doc.clone());
-    let pick = doc.view()[2].candidates[3];
-    doc.set(&lib, 2, pick).unwrap();
-    history.push(doc.clone());
-    doc.generate(&lib).unwrap();
-    history.push(doc.clone());
-    doc.set_rho(0.8).unwrap();
-    history.push(doc.clone());
-    doc.set_repeat_window(6).unwrap();
-    history.push(doc.clone());
-    doc.generate(&lib).unwrap();
-    history.push(doc.clone());
-    doc.unpin(2).unwrap();
-    history.push(doc.clone());
-    doc.reset_search(2).unwrap();
-    history.push(doc.clone());
-    doc.clear(5).unwrap();
-    history.push(doc.clone());
-    // A corrected grid: 10 bars at 126 BPM; bar 2 keeps its search, new bars start empty.
-    doc.set_bars(bars_from_tempo(19.5, 126.0, 4, 0.1, |_, _| 0.4).unwrap()).unwrap();
-    assert_eq!(doc.bars().len(), 10);
-    assert_eq!(doc.states()[9], BarState::Empty);
-    history.push(doc.clone());
-    let same = |a: &Choreography, b: &Choreography| a.states() == b.states() && a.view() == b.view() && a.settings() == b.settings() && a.bars() == b.bars();
+fn undo_and_redo_walk_every_dance_edit_of_the_project() {
+    let mut p = Project::new();
+    p.set_initial_song("demo", None, &demo_envelope(), odori_core::music::AnalysisOptions::default()).unwrap();
+    let mut history = vec![p.doc().clone()];
+    // Looking at a bar's candidates is not an edit: no undo step (the open search is kept).
+    let round = p.candidates(2).unwrap();
+    assert!(!p.can_undo(), "opening a bar's candidates made an undo step");
+    history[0] = p.doc().clone();
+    let mut edits: Vec<(&str, Box<dyn Fn(&mut Project)>)> = vec![
+        ("search", Box::new(move |p: &mut Project| drop(p.search(2, &round[..1]).unwrap()))),
+        ("set", Box::new(|p: &mut Project| {
+            let pick = p.dance_view().unwrap()[2].candidates[3];
+            let key = p.derived().key(pick).cloned().unwrap();
+            p.set(2, &key).unwrap()
+        })),
+        ("generate", Box::new(|p: &mut Project| drop(p.generate().unwrap()))),
+        ("rho", Box::new(|p: &mut Project| p.set_rho(0.8).unwrap())),
+        ("repeat window", Box::new(|p: &mut Project| p.set_setting(Setting::RepeatWindow(6)).unwrap())),
+        ("music weight", Box::new(|p: &mut Project| p.set_music_weight(0.0).unwrap())),
+        ("generate again", Box::new(|p: &mut Project| drop(p.generate().unwrap()))),
+        ("unpin", Box::new(|p: &mut Project| p.unpin(2).unwrap())),
+        ("reset search", Box::new(|p: &mut Project| assert!(p.reset_search(2).unwrap()))),
+        ("clear", Box::new(|p: &mut Project| p.clear(5).unwrap())),
+        ("corrected grid", Box::new(|p: &mut Project| p.correct_grid(odori_core::music::GridCorrection { bpm: Some(126.0), ..Default::default() }).unwrap())),
+    ];
+    for (name, edit) in edits.drain(..) {
+        edit(&mut p);
+        assert_ne!(p.doc(), history.last().unwrap(), "{name} changed nothing");
+        history.push(p.doc().clone());
+    }
+    assert!(matches!(p.doc().dance.bars[2].state, odori_core::project::BarKind::Generated), "unpinned bar 2 keeps its move");
+    assert!(p.doc().dance.bars[5].r#move.is_none(), "bar 5 cleared");
     for k in (0..history.len() - 1).rev() {
-        assert!(doc.undo());
-        assert!(same(&doc, &history[k]), "undo to step {k}");
+        assert!(p.undo());
+        assert_eq!(p.doc(), &history[k], "undo to step {k}");
     }
-    assert!(!doc.undo());
+    assert!(!p.undo());
     for (k, h) in history.iter().enumerate().skip(1) {
-        assert!(doc.redo());
-        assert!(same(&doc, h), "redo to step {k}");
+        assert!(p.redo());
+        assert_eq!(p.doc(), h, "redo to step {k}");
     }
-    assert!(!doc.redo());
-    // The same grid again (the song panel re-sends it after any correction) is no edit either.
-    let steps = { let mut d = doc.clone(); let mut n = 0; while d.undo() { n += 1; } n };
-    doc.set_bars(doc.bars().to_vec()).unwrap();
-    let after = { let mut d = doc.clone(); let mut n = 0; while d.undo() { n += 1; } n };
-    assert_eq!(after, steps, "an unchanged grid made an undo step");
+    assert!(!p.redo());
+    // An edit that changes nothing makes no undo step; a refused one changes nothing.
+    let steps = p.undo_history().len();
+    p.set_rho(0.8).unwrap();
+    p.unpin(2).unwrap();
+    assert_eq!(p.undo_history().len(), steps, "an edit that changed nothing made an undo step");
+    let doc = p.doc().clone();
+    assert!(p.set_rho(1.5).is_err() && p.set_setting(Setting::RepeatWindow(0)).is_err() && p.clear(999).is_err() && p.search(0, &[]).is_err());
+    assert_eq!(p.doc(), &doc);
     // A new edit after undo drops the redo branch.
-    doc.undo();
-    doc.set(&lib, 0, 1).unwrap();
-    assert!(!doc.can_redo());
+    p.undo();
+    p.clear(0).unwrap();
+    assert!(!p.can_redo());
 }
 
 #[test]
 fn rendered_dance_follows_the_bars() {
     let lib = SegmentLibrary::builtin();
-    let doc = session(&lib);
-    let clip = doc.render(&lib, &RenderOptions::default());
+    let (bars, states, _) = session(&lib);
+    let clip = render_states(&lib, &bars, &states, &RenderOptions::default());
     clip.validate().unwrap();
-    let last = doc.bars().last().unwrap().end_secs;
+    let last = bars.last().unwrap().end_secs;
     assert!((clip.duration_secs() - last).abs() < 0.05, "{} vs {last}", clip.duration_secs());
     // The figure moves in every bar and stays on the floor.
-    for b in doc.bars() {
+    for b in &bars {
         let f0 = (b.start_secs * clip.fps) as usize + 2;
         let f1 = (b.end_secs * clip.fps) as usize - 2;
         let mut moved = 0.0;
@@ -386,8 +402,8 @@ fn rendered_dance_follows_the_bars() {
         assert!(moved > 0.5, "bar {} barely moves ({moved})", b.index);
     }
     // The pinned bar plays its segment: frame-by-frame the same body pose as the segment alone.
-    let pinned = doc.bars()[7];
-    let seg = doc.states()[7].segment().unwrap();
+    let pinned = bars[7];
+    let seg = states[7].segment().unwrap();
     let alone = odori_core::choreo::segment_clip(&lib, seg, pinned.duration_secs(), clip.fps).unwrap();
     let rel = |c: &odori_core::Clip, f: usize| {
         let p = c.world_positions(f);

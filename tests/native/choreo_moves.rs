@@ -4,7 +4,7 @@
 
 mod png;
 
-use odori_core::humanoid::Canon;
+use odori_core::canon::humanoid::Canon;
 use odori_core::library::{builtin_clips, builtin_moves, Arms, Energy, Step};
 
 #[test]

@@ -12,7 +12,7 @@ use std::time::Instant;
 use odori_core::bars::Bar;
 use odori_core::choreo::render::join_frames;
 use odori_core::choreo::{
-    mean_pairwise_dissimilarity, speed_jumps, Choreography, FeedbackSession, RenderOptions, SegmentLibrary, SegmentOptions,
+    generate_states, mean_pairwise_dissimilarity, speed_jumps, BarState, FeedbackSession, FillWeights, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions,
 };
 use odori_core::import::import_bytes;
 use odori_core::music::{analyze, AnalysisOptions};
@@ -106,12 +106,12 @@ fn real_library_and_real_song() {
     // Pin three bars to real salsa/indian segments, generate the rest.
     let real: Vec<usize> = lib.segments().iter().filter(|s| s.builtin.is_none()).map(|s| s.index).collect();
     let pins = [(0usize, real[3]), (10, real[real.len() / 2]), (20, real[real.len() - 5])];
-    let mut doc = Choreography::new(bars.clone()).unwrap();
+    let mut states = vec![BarState::Empty; bars.len()];
     for (b, s) in pins {
-        doc.set(&lib, b, s).unwrap();
+        states[b] = BarState::Pinned { segment: s };
     }
     let t = Instant::now();
-    let rep = doc.generate(&lib).unwrap();
+    let (states, rep) = generate_states(&lib, &bars, &states, FillWeights::default(), &GenerateOptions::default()).unwrap();
     println!(
         "generate: {} open bars from {} segments in {:.1} ms incl. the transition table (dev profile), path cost {:.2}",
         rep.filled,
@@ -119,7 +119,7 @@ fn real_library_and_real_song() {
         t.elapsed().as_secs_f64() * 1e3,
         rep.cost
     );
-    let chosen = doc.segments();
+    let chosen: Vec<Option<usize>> = states.iter().map(BarState::segment).collect();
     let from_real = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
     println!("  bars using real-mocap segments: {from_real} of {}", bars.len());
     let mut x = 12345u64;

@@ -1,15 +1,18 @@
-//! Stating an imported clip's tempo after the fact: the clip is re-cut into 4-count segments
-//! at that tempo, and nothing of the dance is lost — bars pinned (or filled) with a segment
-//! of the earlier cut keep that motion, other clips' pinned bars keep theirs, the undo/redo
-//! history still holds, and the earlier cut is never offered or chosen again.
+//! Stating an imported clip's tempo after the fact: the library re-cuts the clip into 4-count
+//! segments at that tempo, and nothing of a dance is lost — segments of the earlier cut that
+//! the dance (or its history: the project passes what its undo and redo steps hold) uses stay,
+//! retired, with the same motion, other clips' segments keep theirs, and the earlier cut is
+//! never offered or chosen again. (The project's own re-cut, by keys, across save and open:
+//! `project_roundtrip::recut_keeps_pinned_moves_across_save`.)
 
 use std::sync::Arc;
 
 use odori_core::choreo::{
-    bars_from_tempo, recut_clip, BarState, Choreography, RenderOptions, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS,
+    bars_from_tempo, generate_states, next_round, open_search, render_states, BarState, FillWeights, GenerateOptions, RenderOptions, SegmentError, SegmentLibrary,
+    SegmentOptions, Settings, LIBRARY_FPS,
 };
 use odori_core::clip::{Clip, TranslationTrack};
-use odori_core::humanoid::HumanoidMap;
+use odori_core::canon::humanoid::HumanoidMap;
 use odori_core::library::{builtin_clips, BUILTIN_BPM};
 use odori_core::HumanoidStatus;
 
@@ -49,91 +52,98 @@ fn stating_a_tempo_recuts_the_clip_and_keeps_the_dance() {
     let first_cut = of_clip(&lib, clip);
     assert!(first_cut.len() >= 10);
     let builtin = 57;
-    let mut doc = Choreography::new(bars_from_tempo(33.0, 120.0, 4, 0.0, |_, _| 0.5).unwrap()).unwrap();
+    let bars = bars_from_tempo(33.0, 120.0, 4, 0.0, |_, _| 0.5).unwrap();
+    let generate = |lib: &SegmentLibrary, states: &[BarState]| generate_states(lib, &bars, states, FillWeights::default(), &GenerateOptions::default()).unwrap().0;
     // Bar 2 pinned to the medley's earlier cut, bar 5 to a built-in move, bar 8 filled by
-    // the engine with a medley segment (pinned, then unpinned), bar 11 pinned and undone
-    // (that pin lives only in the redo history).
-    doc.set(&lib, 2, first_cut[3]).unwrap();
-    doc.set(&lib, 5, builtin).unwrap();
-    doc.generate(&lib).unwrap();
-    doc.set(&lib, 8, first_cut[6]).unwrap();
-    doc.unpin(8).unwrap();
-    doc.set(&lib, 11, first_cut[1]).unwrap();
-    assert!(doc.undo());
+    // the engine with a medley segment (pinned, then unpinned); bar 11 pinned in a state only
+    // the history holds (an undone edit: `redo`).
+    let mut states = vec![BarState::Empty; bars.len()];
+    states[2] = BarState::Pinned { segment: first_cut[3] };
+    states[5] = BarState::Pinned { segment: builtin };
+    let mut states = generate(&lib, &states);
+    states[8] = BarState::Generated { segment: first_cut[6] };
+    let mut redo = states.clone();
+    redo[11] = BarState::Pinned { segment: first_cut[1] };
     let bar2_name = lib.segments()[first_cut[3]].name.clone();
     let bar11_segment_name = lib.segments()[first_cut[1]].name.clone();
-    let before = doc.render(&lib, &RenderOptions::default());
+    let before = render_states(&lib, &bars, &states, &RenderOptions::default());
     let len_before = lib.len();
-    // The bars Generate filled with the earlier cut: bar 8 (pinned, then unpinned) and any the
-    // engine chose from the medley itself (which depends on the filling's terms).
-    let filled: Vec<usize> = (0..doc.states().len())
-        .filter(|&b| matches!(doc.states()[b], BarState::Generated { segment } if first_cut.contains(&segment)))
-        .collect();
-    assert!(filled.contains(&8), "bar 8 lost the medley segment it was unpinned with: {:?}", doc.states()[8]);
-    let mut held: Vec<usize> = filled.iter().filter_map(|&b| doc.states()[b].segment()).chain([first_cut[3], first_cut[1]]).collect();
-    held.sort_unstable();
-    held.dedup();
+    // The bars Generate filled with the earlier cut: bar 8 and any the engine chose from the
+    // medley itself (which depends on the filling's terms).
+    let filled: Vec<usize> = (0..states.len()).filter(|&b| matches!(states[b], BarState::Generated { segment } if first_cut.contains(&segment))).collect();
+    assert!(filled.contains(&8));
+    let in_use: std::collections::BTreeSet<usize> = states.iter().chain(&redo).filter_map(BarState::segment).collect();
+    let held: Vec<usize> = in_use.iter().copied().filter(|s| first_cut.contains(s)).collect();
+    assert!(held.contains(&first_cut[3]) && held.contains(&first_cut[1]));
 
-    let report = recut_clip(&mut lib, Some(&mut doc), clip, &SegmentOptions { tempo_bpm: Some(90.0), ..Default::default() }).unwrap();
+    let recut = lib.recut_clip(clip, &SegmentOptions { tempo_bpm: Some(90.0), ..Default::default() }, &|i| in_use.contains(&i)).unwrap();
+    let remap = |states: &mut [BarState]| {
+        for st in states.iter_mut() {
+            *st = match *st {
+                BarState::Pinned { segment } => BarState::Pinned { segment: recut.remap[segment].expect("a segment in use was removed") },
+                BarState::Generated { segment } => BarState::Generated { segment: recut.remap[segment].expect("a segment in use was removed") },
+                BarState::Empty => BarState::Empty,
+            }
+        }
+    };
+    remap(&mut states);
+    remap(&mut redo);
 
     // The new cut: 4 counts at 90 per minute are 80 frames (and the 3-count segments for bars
     // in 3, 60).
-    assert!(!report.clip.tempo_detected);
-    assert_eq!(report.clip.tempo_bpm, 90.0);
+    assert!(!recut.summary.tempo_detected);
+    assert_eq!(recut.summary.tempo_bpm, 90.0);
     let new_cut = of_clip(&lib, clip);
-    assert_eq!(new_cut.len(), report.clip.segments);
+    assert_eq!(new_cut.len(), recut.summary.segments);
     for &s in &new_cut {
         let seg = &lib.segments()[s];
         let counts = seg.counts() as f32;
         assert!(((seg.end_frame - seg.start_frame) - counts * 60.0 / 90.0 * LIBRARY_FPS).abs() <= 1.0, "{}: {} frames", seg.name, seg.end_frame - seg.start_frame);
     }
-    assert_eq!(lib.len(), len_before - report.removed + report.clip.segments);
-    // Kept: the segments of bar 2, of the filled bars and (in the redo history) of bar 11; all
-    // others of the earlier cut went.
-    assert_eq!(report.kept, held.len(), "{report:?}");
-    assert_eq!(report.removed, first_cut.len() - held.len());
-    assert_eq!(report.pinned_bars, vec![2]);
-    assert_eq!(report.generated_bars, filled, "{report:?}");
+    assert_eq!(lib.len(), len_before - recut.removed + recut.summary.segments);
+    // Kept: the segments the dance and its history use; all others of the earlier cut went.
+    assert_eq!(recut.kept.len(), held.len(), "{recut:?}");
+    assert_eq!(recut.removed, first_cut.len() - held.len());
     // Nothing of the dance changed: the same motion in every bar, the built-in pin untouched.
-    assert_eq!(doc.render(&lib, &RenderOptions::default()), before);
-    assert_eq!(doc.states()[5], BarState::Pinned { segment: builtin });
-    let BarState::Pinned { segment: s2 } = doc.states()[2] else { panic!("bar 2 lost its pin: {:?}", doc.states()[2]) };
+    assert_eq!(render_states(&lib, &bars, &states, &RenderOptions::default()), before);
+    assert_eq!(states[5], BarState::Pinned { segment: builtin });
+    let BarState::Pinned { segment: s2 } = states[2] else { panic!("bar 2 lost its pin: {:?}", states[2]) };
     assert!(lib.segments()[s2].retired);
     assert!(lib.segments()[s2].name.starts_with(&bar2_name), "{}", lib.segments()[s2].name);
-    // Redo brings back the pin that lived only in the history, with its motion.
-    assert!(doc.redo());
-    let BarState::Pinned { segment: s11 } = doc.states()[11] else { panic!("redo lost bar 11's pin") };
+    let BarState::Pinned { segment: s11 } = redo[11] else { panic!("the history lost bar 11's pin") };
     assert!(lib.segments()[s11].name.starts_with(&bar11_segment_name));
 
     // The earlier cut is never offered, and Generate refills bar 8 from what is available.
     let mut shown = Vec::new();
+    let settings = Settings::default();
     for bar in [0, 1, 3] {
-        let mut round = doc.candidates(&lib, bar).unwrap();
+        let mut search = open_search(&lib, &bars[bar], &settings).unwrap();
+        let mut round = search.round.clone();
         for _ in 0..5 {
             shown.extend_from_slice(&round);
-            round = doc.search(&lib, bar, &round[..1]).unwrap();
+            round = next_round(&lib, &bars[bar], &mut search, &round[..1], &settings).unwrap();
         }
     }
     assert!(shown.iter().all(|&s| !lib.segments()[s].retired), "a retired segment was offered");
-    let table = lib.transition_table(doc.settings().fill.repeat_penalty);
+    let table = lib.transition_table(settings.fill.repeat_penalty);
     assert_eq!(table.len(), lib.len());
     assert!(!table.is_available(s2) && table.is_available(new_cut[0]));
-    doc.generate(&lib).unwrap();
-    for (bar, st) in doc.states().iter().enumerate() {
+    let states = generate(&lib, &states);
+    for (bar, st) in states.iter().enumerate() {
         match *st {
             BarState::Generated { segment } => assert!(!lib.segments()[segment].retired, "bar {bar} generated from the earlier cut"),
-            BarState::Pinned { .. } => assert!([2, 5, 11].contains(&bar)),
+            BarState::Pinned { .. } => assert!([2, 5].contains(&bar)),
             BarState::Empty => panic!("bar {bar} empty after Generate"),
         }
     }
-    assert_eq!(doc.states()[2], BarState::Pinned { segment: s2 });
+    assert_eq!(states[2], BarState::Pinned { segment: s2 });
 
-    // Back to detected beats: the pins stay, the 90-count cut goes (nothing uses it).
-    let bar2 = lib.segments()[s2].name.clone();
-    let back = recut_clip(&mut lib, Some(&mut doc), clip, &SegmentOptions::default()).unwrap();
-    assert!(back.clip.tempo_detected);
-    let BarState::Pinned { segment } = doc.states()[2] else { panic!("bar 2 lost its pin") };
-    assert_eq!(lib.segments()[segment].name, bar2);
+    // Back to detected beats: the pin stays, the 90-count cut goes (nothing uses it).
+    let in_use: std::collections::BTreeSet<usize> = states.iter().filter_map(BarState::segment).collect();
+    let back = lib.recut_clip(clip, &SegmentOptions::default(), &|i| in_use.contains(&i)).unwrap();
+    assert!(back.summary.tempo_detected);
+    let segment = back.remap[s2].expect("bar 2's segment kept");
+    assert!(lib.segments()[segment].name.starts_with(&bar2_name));
     assert!(lib.segments().iter().enumerate().all(|(i, s)| s.index == i));
 }
 
@@ -143,10 +153,10 @@ fn recutting_refuses_bad_requests_and_changes_nothing() {
     let (len, rev) = (lib.len(), lib.revision());
     let names: Vec<String> = lib.segments().iter().map(|s| s.name.clone()).collect();
     let opts = |bpm| SegmentOptions { tempo_bpm: Some(bpm), ..Default::default() };
-    assert!(matches!(recut_clip(&mut lib, None, clip, &opts(500.0)), Err(SegmentError::BadTempo { .. })));
-    assert!(matches!(recut_clip(&mut lib, None, clip, &opts(f32::NAN)), Err(SegmentError::BadTempo { .. })));
-    assert!(matches!(recut_clip(&mut lib, None, 0, &opts(100.0)), Err(SegmentError::BuiltinClip { .. })));
-    assert!(matches!(recut_clip(&mut lib, None, 9999, &opts(100.0)), Err(SegmentError::NoSuchClip { clip: 9999, .. })));
+    assert!(matches!(lib.recut_clip(clip, &opts(500.0), &|_| false), Err(SegmentError::BadTempo { .. })));
+    assert!(matches!(lib.recut_clip(clip, &opts(f32::NAN), &|_| false), Err(SegmentError::BadTempo { .. })));
+    assert!(matches!(lib.recut_clip(0, &opts(100.0), &|_| false), Err(SegmentError::BuiltinClip { .. })));
+    assert!(matches!(lib.recut_clip(9999, &opts(100.0), &|_| false), Err(SegmentError::NoSuchClip { clip: 9999, .. })));
     // 30 counts per minute over a 48 s clip: 24 counts, fine; the clip holds no 4 counts at a
     // tempo so slow only when it is shorter: a 4 s piece.
     let mut short = medley();
@@ -155,7 +165,7 @@ fn recutting_refuses_bad_requests_and_changes_nothing() {
     let map = HumanoidMap::from_skeleton(&short.skeleton);
     let s = lib.add_clip(&short, &map, &HumanoidStatus::Complete, &opts(120.0)).unwrap();
     let (len2, rev2) = (lib.len(), lib.revision());
-    let e = recut_clip(&mut lib, None, s.clip, &opts(40.0)).unwrap_err();
+    let e = lib.recut_clip(s.clip, &opts(40.0), &|_| false).unwrap_err();
     assert!(matches!(e, SegmentError::TooShort { .. }), "{e:?}");
     assert!(e.to_string().contains("4 counts"), "{e}");
     assert_eq!((lib.len(), lib.revision()), (len2, rev2));

@@ -8,7 +8,7 @@
 //! source clips' own skate.
 
 use odori_core::actions::{join_serial, ActionLibrary, JoinKind, JoinOptions};
-use odori_core::humanoid::Canon;
+use odori_core::canon::humanoid::Canon;
 use odori_core::Clip;
 
 /// Spec §J foot skate over a whole clip: (mean, 95th percentile) in cm/s over every frame

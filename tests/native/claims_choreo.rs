@@ -5,7 +5,7 @@
 //! search of the full objective on small cases.
 
 use odori_core::choreo::{fill, path_cost, FeedbackSession, FillWeights, Layer, SegmentLibrary, TransitionTable, CANDIDATES_PER_ROUND};
-use odori_core::humanoid::Canon;
+use odori_core::canon::humanoid::Canon;
 use odori_core::library::{builtin_clips, builtin_moves};
 
 /// SplitMix64.

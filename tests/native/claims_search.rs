@@ -8,7 +8,7 @@
 //! whatever the search rule becomes.
 
 use odori_core::import::{import_bytes, ImportOptions};
-use odori_core::normalize::Origin;
+use odori_core::canon::normalize::Origin;
 use odori_core::search::{no_progress, search, search_plain, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchOutcome, SearchParams, FRAME_FLOATS};
 
 const LIBRARY_FRAMES: usize = 72_000;

@@ -4,11 +4,11 @@
 //! (Xbot, RobotExpressive) on their own mesh and skin. The third-party checks (Khronos
 //! validator, three.js) are in tests/node/export.test.mjs.
 
-use odori_core::builtin::demo_clip;
+use odori_core::canon::builtin::demo_clip;
 use odori_core::export::{bvh::bvh, gltf::{glb, GlbOptions}, ExportError};
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::library::body::builtin_body;
-use odori_core::normalize::body_height;
+use odori_core::canon::normalize::body_height;
 use odori_core::Clip;
 use odori_tests::{fps_override_for, read};
 

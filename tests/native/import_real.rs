@@ -1,6 +1,6 @@
 //! Every real motion file in ../shared/data imports, and what comes out agrees with the file.
 
-use odori_core::humanoid::{canonical_positions, Canon};
+use odori_core::canon::humanoid::{canonical_positions, Canon};
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::HumanoidStatus;
 use odori_tests::{all_bvh, fps_override_for, read};
@@ -54,7 +54,7 @@ fn every_bvh_imports_with_the_files_counts_and_rigid_bones() {
         }
         assert!(worst < 1e-4, "{rel}: a bone length changes by {worst} m across frames");
         let canon = canonical_positions(clip, &im.humanoid);
-        let h = odori_core::normalize::body_height(&canon);
+        let h = odori_core::canon::normalize::body_height(&canon);
         assert!((1.0..2.2).contains(&h), "{rel}: body height {h} m is not human (units wrong?)");
         // Head above hips in the first frame: Y is up.
         let head = canon[Canon::Head.index()];
@@ -166,12 +166,12 @@ fn every_real_rig_maps_its_limbs_to_the_right_side() {
     for rel in ["mocap/cmu-salsa/salsa_02.bvh", "mocap/cmu-modern/005_01.bvh", "mocap/cmu-indian/indian_04.bvh", "gltf/RobotExpressive.glb"] {
         let im = import_bytes(rel, &read(rel), &ImportOptions { fps_override: fps_override_for(rel), ..Default::default() }).unwrap();
         let c = canonical_positions(&im.clips[0], &im.humanoid);
-        let n = odori_core::normalize::normalized(&c, Default::default());
-        let frames = n.len() / odori_core::humanoid::CANON_COUNT;
+        let n = odori_core::canon::normalize::normalized(&c, Default::default());
+        let frames = n.len() / odori_core::canon::humanoid::CANON_COUNT;
         // Median over frames of left-minus-right along the normalised hip axis (+Z).
         let median_gap = |l: Canon, r: Canon| {
             let mut d: Vec<f32> = (0..frames)
-                .map(|f| n[f * odori_core::humanoid::CANON_COUNT + l.index()].z - n[f * odori_core::humanoid::CANON_COUNT + r.index()].z)
+                .map(|f| n[f * odori_core::canon::humanoid::CANON_COUNT + l.index()].z - n[f * odori_core::canon::humanoid::CANON_COUNT + r.index()].z)
                 .collect();
             d.sort_by(f32::total_cmp);
             d[d.len() / 2]

@@ -3,7 +3,7 @@
 //! skeleton, and 時間のカケラ (made for another model) on miku.
 
 use glam::Quat;
-use odori_core::humanoid::{canonical_positions, HumanoidMap, HumanoidStatus};
+use odori_core::canon::humanoid::{canonical_positions, HumanoidMap, HumanoidStatus};
 use odori_core::import::{mmd_model, vmd};
 use odori_core::mmd::{standard_rig, to_right_handed, vmd_to_clip, AngleLimit, MmdClipOptions, MmdMotion, MmdPose, MmdRig, MotionSampler, METRES_PER_MMD_UNIT};
 use odori_tests::read;
@@ -121,7 +121,7 @@ fn wavefile_clip_is_a_complete_humanoid_of_plausible_height() {
     let rest = clip.skeleton.rest_positions();
     let floor = rest.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
     let head = rest[map.get(Head).unwrap()].y - floor;
-    let body = odori_core::normalize::body_height(&canonical_positions(&clip, &map));
+    let body = odori_core::canon::normalize::body_height(&canonical_positions(&clip, &map));
     eprintln!("miku_v2 at 8 cm per unit: head joint {head:.3} m above her toes; body height (spine + leg) {body:.3} m");
     assert!((1.2..1.6).contains(&head), "head joint at {head} m: a 1.4–1.8 m figure's head joint is 1.2–1.6 m up");
     assert!((1.0..1.6).contains(&body), "body height {body} m");

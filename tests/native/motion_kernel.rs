@@ -161,7 +161,7 @@ fn forward_kinematics_pose_and_lowest_points_are_bit_identical() {
             old_forward_kinematics(sk, local, &offsets, &mut origin, None);
             assert_eq!(sk.posed_at_origin(local), origin, "'{}' frame {f}: posed_at_origin", clip.name);
             let lowest = origin.iter().map(|p| p.y).fold(f32::MAX, f32::min);
-            assert_eq!(odori_core::builtin::lowest_point(sk, local).to_bits(), lowest.to_bits(), "'{}' frame {f}: lowest_point", clip.name);
+            assert_eq!(odori_core::canon::builtin::lowest_point(sk, local).to_bits(), lowest.to_bits(), "'{}' frame {f}: lowest_point", clip.name);
             frames += 1;
             joints += n;
         }
@@ -179,7 +179,7 @@ fn canonical_pose_helpers_are_bit_identical() {
             let local = clip.frame_rotations(f);
             let root = clip.root_translation(f);
             assert_eq!(odori_core::actions::ik::forward(sk, local, root), old_ik_forward(sk, local, root), "'{}' frame {f}: ik::forward", clip.name);
-            let arr: [Quat; odori_core::humanoid::CANON_COUNT] = local.try_into().unwrap();
+            let arr: [Quat; odori_core::canon::humanoid::CANON_COUNT] = local.try_into().unwrap();
             let (mut rot, mut pos) = ([Quat::IDENTITY; 21], [Vec3::ZERO; 21]);
             old_pose_into(sk, local, root, &mut rot, &mut pos);
             let old = pos.iter().map(|p| p.y).fold(f32::MAX, f32::min);
@@ -283,7 +283,7 @@ fn old_retarget_leg(hip: Vec3, thigh: Quat, thigh_local: Vec3, shin: Quat, shin_
 fn one_two_bone_solver_for_joins_and_retargeting() {
     use odori_core::actions::ik::solve_leg;
     use odori_core::actions::Foot;
-    use odori_core::humanoid::{Canon, HumanoidMap};
+    use odori_core::canon::humanoid::{Canon, HumanoidMap};
     let mut k = 7u32;
     let mut next = || {
         k = k.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
@@ -300,7 +300,7 @@ fn one_two_bone_solver_for_joins_and_retargeting() {
     let apart = |a: Quat, b: Quat| 2.0 * (a - b).length().min((a + b).length());
     // The joins' leg IK on the canonical skeleton: poses of the built-in moves, targets near
     // the ankle (reachable) and far (stretched).
-    let canon = odori_core::builtin::canonical_skeleton();
+    let canon = odori_core::canon::builtin::canonical_skeleton();
     for clip in odori_core::library::builtin_clips().into_iter().step_by(25) {
         for f in (0..clip.frame_count()).step_by(17) {
             let root = clip.root_translation(f);

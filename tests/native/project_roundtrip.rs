@@ -245,7 +245,11 @@ fn recut_keeps_pinned_moves_across_save() {
         .expect("the salsa clip is cut into segments");
     p.set(2, &key).expect("pin");
     let before = dance_poses(&mut p);
-    p.set_clip_tempo(clip, Some(100.0)).expect("re-cut at 100");
+    let first_cut = p.derived().clip(clip).and_then(|c| c.cut.clone()).expect("first cut").segments;
+    let r = p.recut_clip(clip, Some(100.0)).expect("re-cut at 100");
+    // What the engine says the re-cut meant: the new cut, bar 2 keeps its move, one move kept.
+    assert_eq!((r.clip.tempo_bpm, r.clip.tempo_detected), (100.0, false));
+    assert_eq!((r.pinned_bars, r.generated_bars, r.kept, r.removed), (vec![2], vec![], 1, first_cut - 1));
     assert_eq!(p.doc().dance.bars[2].r#move.as_ref(), Some(&key), "the pinned move keeps its key");
     assert_eq!(dance_poses(&mut p), before, "the pinned move plays as before after the re-cut");
     let mut q = project::open(&project::save(&p).unwrap()).unwrap().project;

@@ -170,7 +170,7 @@ pub fn ref_distance(params: &SearchParams, a: &[f32], b: &[f32]) -> f32 {
 /// Left/right mirror of normalised hip-origin features: swap the sides, negate the lateral axis
 /// (+Z is the hips' right → left direction after normalisation); `flip_forward` also negates x.
 pub fn mirrored(f: &MotionFeatures, flip_forward: bool) -> MotionFeatures {
-    use odori_core::humanoid::Canon::*;
+    use odori_core::canon::humanoid::Canon::*;
     let pairs = [
         (LeftShoulder, RightShoulder),
         (LeftUpperArm, RightUpperArm),

@@ -3,10 +3,10 @@
 
 use std::ops::ControlFlow;
 
-use odori_core::builtin::demo_clip;
-use odori_core::humanoid::HumanoidMap;
+use odori_core::canon::builtin::demo_clip;
+use odori_core::canon::humanoid::HumanoidMap;
 use odori_core::import::{import_bytes, ImportOptions};
-use odori_core::normalize::Origin;
+use odori_core::canon::normalize::Origin;
 use odori_core::search::{
     no_progress, search, search_plain, search_threads, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchError, SearchParams, FRAME_FLOATS,
 };

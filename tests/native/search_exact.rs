@@ -6,8 +6,8 @@
 mod common;
 
 use common::{reference_search, Rng};
-use odori_core::humanoid::CANON_COUNT;
-use odori_core::normalize::Origin;
+use odori_core::canon::humanoid::CANON_COUNT;
+use odori_core::canon::normalize::Origin;
 use odori_core::search::{
     joined_bound, merge_parts, no_progress, search, search_bounded_cached, search_plain, search_probe_cached, search_threads, SearchCache, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures,
     SearchError, SearchOutcome, SearchParams, FRAME_FLOATS,

@@ -10,8 +10,8 @@ use std::sync::OnceLock;
 
 use common::{reference_search, Rng};
 use glam::{Quat, Vec3};
-use odori_core::humanoid::{canonical_positions, Canon, CANON_COUNT};
-use odori_core::normalize::Origin;
+use odori_core::canon::humanoid::{canonical_positions, Canon, CANON_COUNT};
+use odori_core::canon::normalize::Origin;
 use odori_core::search::{no_progress, search, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchParams, FRAME_FLOATS};
 
 struct Real {

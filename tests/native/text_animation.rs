@@ -6,7 +6,7 @@
 mod figures;
 
 use odori_core::actions::{detect_contacts, ActionLibrary, BodyPart};
-use odori_core::humanoid::Canon;
+use odori_core::canon::humanoid::Canon;
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::text::{animate_table, animate_text, animate_text_with_progress, parse, DiagnosticKind, JoinType, Lexicon, TextError};
 use odori_tests::read;
@@ -118,7 +118,7 @@ fn planted_feet_stay_put_during_transitions() {
 fn person_tagged_clip_is_found_by_its_tags() {
     let mut lib = lib();
     assert!(parse("太郎は踊って、蹴る。", &Lexicon::for_library(&lib)).diagnostics.iter().any(|d| d.kind == DiagnosticKind::UnknownVerb));
-    let demo = odori_core::builtin::demo_clip();
+    let demo = odori_core::canon::builtin::demo_clip();
     let i = lib.add_clip(&demo, &["dance".into(), "踊る".into()], None).unwrap();
     let a = animate_text("太郎は踊って、蹴る。", &lib).unwrap();
     assert!(a.diagnostics.iter().all(|d| d.kind != DiagnosticKind::UnknownVerb), "{:?}", a.diagnostics);

@@ -115,3 +115,36 @@ test("edits are refused with typed errors and change nothing", () => {
   assert.throws(() => p.correctGrid({ bmp: 120 }), (e) => e.kind === "bad-argument");
   assert.deepEqual(p.doc(), doc);
 });
+
+test("recutClip says what a re-cut meant for the dance, as the document shows it", () => {
+  const { p, src } = sampleProject();
+  const clip = { source: src.id, clip: 0 };
+  const before = p.clips().find((c) => c.clip.source === src.id).cut;
+  // Pin bar 2 to a move of this clip's current cut (its tempo: the detected one).
+  const key = p.candidates(2).find((k) => k.kind === "cut") ?? { kind: "cut", clip, cutTempoBpm: null, firstCount: 0 };
+  p.set(2, key);
+  const r = p.recutClip(clip, 100);
+  assert.deepEqual([r.clip.tempoBpm, r.clip.tempoDetected], [100, false]);
+  // The control: the bars the document holds with a move of the earlier cut, read from it here.
+  const earlier = (m) => m && m.kind === "cut" && m.clip.source === src.id && m.cutTempoBpm !== 100;
+  const bars = p.doc().dance.bars;
+  const pinned = bars.flatMap((b, i) => (earlier(b.move) && b.state === "pinned" ? [i] : []));
+  const generated = bars.flatMap((b, i) => (earlier(b.move) && b.state !== "pinned" ? [i] : []));
+  const kept = new Set(bars.filter((b) => earlier(b.move)).map((b) => JSON.stringify(b.move))).size;
+  assert.ok(pinned.includes(2), `bar 2 pinned to the earlier cut: ${pinned}`);
+  assert.deepEqual([r.pinnedBars, r.generatedBars, r.kept, r.removed], [pinned, generated, kept, before.segments - kept]);
+  assert.throws(() => p.recutClip(clip, 5000), (e) => e.kind === "choreo" || e.kind === "bad-argument" || e.kind === "not-humanoid");
+});
+
+test("bodyVocabulary derives every list of body parts from the regions", () => {
+  const v = pkg.bodyVocabulary();
+  assert.equal(v.joints.length, 21);
+  const byRegion = new Map(v.regions.map((r) => [r.name, r.joints]));
+  for (const part of [...v.searchPresets, ...v.compositionParts]) {
+    if (part.regions.length === 0) continue; // the whole body: every joint
+    const union = [...new Set(part.regions.flatMap((r) => byRegion.get(r)))];
+    assert.deepEqual([...part.joints].sort(), union.sort(), part.name);
+  }
+  assert.deepEqual(v.searchPresets.map((p) => p.name), v.presets.map((p) => p.name));
+  assert.ok(v.compositionParts.length >= 6 && v.searchPresets.length === 8);
+});

@@ -4,7 +4,7 @@
 //! dance on the built-in body (GLB, BVH), Xbot and RobotExpressive with their animations on
 //! their own mesh (GLB).
 
-use odori_core::builtin::demo_clip;
+use odori_core::canon::builtin::demo_clip;
 use odori_core::export::{bvh::bvh, gltf::{glb, GlbOptions}};
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::library::body::builtin_body;

@@ -68,19 +68,8 @@ export class ProjectDance {
   recutClip(clipId, tempoBpm) {
     const ref = this.session.clipRefs.get(clipId);
     if (!ref) throw new Error(`clip ${clipId} is not in the dance library (only humanoid clips of the project's files are)`);
-    const before = this.project.clips().find((c) => c.clip.source === ref.source && c.clip.clip === ref.clip);
-    const clip = this.edit((p) => p.setClipTempo(ref, tempoBpm)).cut;
-    const tempo = tempoBpm === undefined ? null : tempoBpm;
-    const earlier = (m) => m && m.kind === "cut" && m.clip.source === ref.source && m.clip.clip === ref.clip && m.cutTempoBpm !== tempo;
-    const pinnedBars = [], generatedBars = [];
-    const kept = new Set();
-    this.project.doc().dance.bars.forEach((b, i) => {
-      if (!earlier(b.move)) return;
-      kept.add(JSON.stringify(b.move));
-      (b.state === "pinned" ? pinnedBars : generatedBars).push(i);
-    });
-    const removed = before && before.cut ? Math.max(0, before.cut.segments - kept.size) : 0;
-    return { clip, removed, kept: kept.size, pinnedBars, generatedBars };
+    // The engine says what the re-cut meant for the dance (the page never reads the schema).
+    return this.edit((p) => p.recutClip(ref, tempoBpm));
   }
 
   segment(index) { return this.project.segment(index); }

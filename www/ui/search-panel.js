@@ -6,15 +6,18 @@ import { redrawOnResize } from "./canvas.js";
 import { bodyVocabulary, searchFrameFloats } from "../pkg/odori.js";
 
 // The canonical joints and the body-part presets come from the engine (one place for the
-// vocabulary, crate/core: humanoid::Canon, search::BodyPreset), read once the engine is loaded.
+// vocabulary, crate/core canon::body_vocabulary), read once the engine is loaded.
 let vocabulary = null;
 function vocab() {
   if (!vocabulary) {
     const v = bodyVocabulary();
-    vocabulary = { joints: v.joints, presets: new Map(v.presets.map((p) => [p.name, p])) };
+    vocabulary = { joints: v.joints, order: v.searchPresets.map((p) => p.name), presets: new Map(v.presets.map((p) => [p.name, p])) };
   }
   return vocabulary;
 }
+
+/** "wholeBody" → "whole body": a preset's name as the page shows it. */
+const words = (name) => name.replace(/[A-Z]/g, (c) => " " + c.toLowerCase());
 
 export class SearchPanel {
   constructor(root, { client, library, player, messages }) {
@@ -29,6 +32,8 @@ export class SearchPanel {
   }
 
   buildWeights() {
+    const presets = this.$("#search-preset");
+    for (const name of vocab().order) presets.append(new Option(words(name), name));
     const box = this.$("#search-weights");
     for (const j of vocab().joints) {
       const label = document.createElement("label");

@@ -1,5 +1,5 @@
 //! Prints what the importer makes of a motion file: `cargo run -p odori-core --example inspect FILE [fps]`.
-use odori_core::humanoid::Canon;
+use odori_core::canon::humanoid::Canon;
 use odori_core::import::{import_bytes, ImportOptions};
 
 fn main() {

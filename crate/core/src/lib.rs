@@ -26,9 +26,5 @@ pub mod text;
 pub use canon::humanoid::{Canon, HumanoidMap, HumanoidStatus};
 pub use clip::{Clip, ClipError, TranslationTrack};
 
-// Transitional (issue 27): the canonical humanoid moved to `canon/`. These old paths keep the
-// branches made before the move compiling while they merge; in-crate code uses `crate::canon`.
-// Remove once nothing outside the core uses them.
-pub use canon::{builtin, character, humanoid, normalize, retarget};
 pub use import::{ImportError, ImportOptions, Imported};
 pub use skeleton::{Joint, Skeleton};

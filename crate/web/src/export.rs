@@ -2,12 +2,12 @@
 //! composed dance) as GLB, VRM animation (`.vrma`) or BVH bytes, returned to JS as a `Uint8Array`; and any humanoid
 //! clip put on an imported character (spec §L), so it is drawn and exported on that body.
 
-use odori_core::character::Character;
+use odori_core::canon::character::Character;
 use odori_core::export::{bvh::bvh, gltf::{glb, GlbOptions}, vrma::vrma};
-use odori_core::humanoid::HumanoidMap;
+use odori_core::canon::humanoid::HumanoidMap;
 use odori_core::import::SkinnedMesh;
 use odori_core::library::body::builtin_body;
-use odori_core::retarget::is_canonical;
+use odori_core::canon::retarget::is_canonical;
 use odori_core::Clip;
 use std::rc::Rc;
 
@@ -97,7 +97,7 @@ impl Library {
         // only: the player exports its own canonical dances.)
         #[cfg(feature = "authoring")]
         let carried = (named == "builtin" && e.mesh.is_none() && e.status.is_humanoid() && !is_canonical(&e.clip.skeleton))
-            .then(|| odori_core::retarget::to_canonical(&e.clip, &e.humanoid, e.clip.fps));
+            .then(|| odori_core::canon::retarget::to_canonical(&e.clip, &e.humanoid, e.clip.fps));
         #[cfg(feature = "authoring")]
         let source = carried.as_ref().unwrap_or(&e.clip);
         #[cfg(not(feature = "authoring"))]

@@ -2,9 +2,10 @@
 
 use std::rc::Rc;
 
-use odori_core::humanoid::{Canon, HumanoidMap};
+use odori_core::canon::humanoid::{Canon, HumanoidMap};
 use odori_core::import::{import_bytes, Format, ImportOptions, Imported, SkinnedMesh};
-use odori_core::{builtin, Clip, HumanoidStatus};
+use odori_core::canon::builtin;
+use odori_core::{Clip, HumanoidStatus};
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 

@@ -206,6 +206,17 @@ impl Project {
         Ok(self.changed(to_js(&r)))
     }
 
+    /// [`setClipTempo`] that says what it meant for the dance: `RecutReport` `{ clip (the new
+    /// cut), removed, kept, pinnedBars, generatedBars }` (segments of the earlier cut removed
+    /// from the library and kept because bars hold them; the bars pinned to, or generated with,
+    /// a move of the earlier cut, which keep it).
+    #[wasm_bindgen(js_name = recutClip, unchecked_return_type = "RecutReport")]
+    pub fn recut_clip(&mut self, clip: JsValue, tempo_bpm: Option<f32>) -> Result<JsValue, OdoriError> {
+        let clip: ClipRef = arg(clip, "clip")?;
+        let r = self.inner.recut_clip(clip, tempo_bpm)?;
+        Ok(self.changed(to_js(&r)))
+    }
+
     /// Sets the song: file name, its bytes as given (undefined for the demo song), the RMS
     /// envelope the host computed (`hopSecs`, one `Float32Array` per band) and analysis
     /// options. `record: false`: no undo step (the song a new project starts with).
@@ -537,8 +548,8 @@ impl Project {
     /// without a song).
     #[wasm_bindgen(js_name = danceView, unchecked_return_type = "BarView[]")]
     pub fn dance_view(&mut self) -> JsValue {
-        match self.inner.choreography() {
-            Ok(ch) => to_js(&ch.view()),
+        match self.inner.dance_view() {
+            Ok(view) => to_js(&view),
             Err(_) => to_js(&Vec::<u8>::new()),
         }
     }
@@ -593,11 +604,10 @@ impl Project {
     /// [{ bar, beats, footSkate, joinJump }] }`. `beatTimesSecs`: the song's beats (the grid's
     /// `beatTimesSecs`); omitted: each bar's beats spread evenly over it.
     pub fn quality(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
-        let ch = self.inner.choreography()?;
-        let bars = ch.bars();
+        let bars = self.inner.song_bars()?;
         let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect());
-        let clip = ch.render(self.inner.segment_library(), &RenderOptions::default());
-        let q = odori_core::choreo::dance_quality(&clip, bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
+        let clip = self.inner.render_dance(&RenderOptions::default())?;
+        let q = odori_core::choreo::dance_quality(&clip, &bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
         Ok(to_js(&q))
     }
 
@@ -693,6 +703,9 @@ pub fn tempo_limits() -> JsValue {
 
 #[wasm_bindgen(typescript_custom_section)]
 const TS_PROJECT: &'static str = r#"
+/** What `recutClip` did: the new cut, segments of the earlier cut removed and kept, and the bars
+ * (0-based) that keep a move of the earlier cut. */
+export interface RecutReport { clip: { clip: number; name: string; tempoBpm: number; tempoDetected: boolean; beats: number; segments: number }; removed: number; kept: number; pinnedBars: number[]; generatedBars: number[] }
 /** One bar as `danceView()` shows it, by segment numbers of the project's library now. */
 export interface BarView { bar: Bar; state: { kind: "empty" | "pinned" | "generated"; segment?: number }; tau: number; candidates: number[]; liked: number[]; shownCount: number; rounds: number; }
 /** What `playInto` gives a player. */

@@ -7,8 +7,8 @@ use std::cell::RefCell;
 use std::ops::ControlFlow;
 
 use js_sys::Float32Array;
-use odori_core::humanoid::{canonical_positions, Canon, CANON_COUNT};
-use odori_core::normalize::Origin;
+use odori_core::canon::humanoid::{canonical_positions, Canon, CANON_COUNT};
+use odori_core::canon::normalize::Origin;
 use odori_core::search::{self, BodyPreset, ClipFeatures, FeatureIndex, MotionFeatures, SearchParams, StoredClip, DEFAULT_INDEX_FPS};
 use odori_core::HumanoidStatus;
 use serde::{Deserialize, Serialize};
@@ -567,23 +567,36 @@ struct PresetInfo {
     shoulders: bool,
 }
 
-/// The canonical skeleton's vocabulary, from the one place the engine keeps it: `{ joints:
-/// string[] (the 21 canonical joints, camelCase, in index order), presets: { name, joints,
-/// shoulders }[] (body parts, in UI order) }`. The page builds its joint lists and body-part
-/// choices from it instead of copying them.
-#[wasm_bindgen(js_name = bodyVocabulary, unchecked_return_type = "{ joints: string[]; presets: { name: BodyPreset; joints: string[]; shoulders: boolean }[] }")]
+/// The body's vocabulary, from the one place the engine keeps it (`canon::body_vocabulary`):
+/// `{ joints: string[] (the 21 canonical joints, camelCase, in index order), regions,
+/// searchPresets, compositionParts: { name, regions, joints }[] (the body's regions, the search
+/// presets in UI order, the parts text composition switches), presets: { name, joints,
+/// shoulders }[] (the search presets with where they are normalised) }`. The page builds its
+/// joint lists and body-part choices from it instead of copying them.
+#[wasm_bindgen(
+    js_name = bodyVocabulary,
+    unchecked_return_type = "{ joints: string[]; regions: NamedBodyPart[]; searchPresets: NamedBodyPart[]; compositionParts: NamedBodyPart[]; presets: { name: BodyPreset; joints: string[]; shoulders: boolean }[] }"
+)]
 pub fn body_vocabulary() -> JsValue {
     #[derive(Serialize)]
     struct Vocabulary {
-        joints: Vec<&'static str>,
+        #[serde(flatten)]
+        body: odori_core::canon::BodyVocabulary,
         presets: Vec<PresetInfo>,
     }
     let presets = BodyPreset::ALL
         .iter()
         .map(|&p| PresetInfo { name: p, joints: p.joints().into_iter().map(Canon::name).collect(), shoulders: matches!(p.origin(), Origin::Shoulders) })
         .collect();
-    to_js(&Vocabulary { joints: Canon::ALL.iter().map(|c| c.name()).collect(), presets })
+    to_js(&Vocabulary { body: odori_core::canon::body_vocabulary(), presets })
 }
+
+#[wasm_bindgen(typescript_custom_section)]
+const BODY_PART_TS: &str = r#"
+/** A named part of the body (`bodyVocabulary()`): its name as the API spells it, the regions it
+ * is made of and their canonical joints. */
+export interface NamedBodyPart { name: string; regions: string[]; joints: string[] }
+"#;
 
 /// A query given as normalised features (flat `frames × 21 × 3`, hip origin), checked.
 fn feature_query(features: Float32Array) -> Result<ClipFeatures, OdoriError> {

@@ -31,12 +31,12 @@ use std::collections::HashMap;
 use std::rc::Rc;
 
 use glam::{Mat4, Quat, Vec3};
-use odori_core::builtin::canonical_skeleton;
 use odori_core::camera::CameraPose;
-use odori_core::character::Character;
+use odori_core::canon::builtin::canonical_skeleton;
+use odori_core::canon::character::Character;
 use odori_core::import::{MeshTexture, SkinnedMesh};
 use odori_core::library::body::builtin_body;
-use odori_core::retarget::{is_canonical, to_canonical};
+use odori_core::canon::retarget::{is_canonical, to_canonical};
 use odori_core::Clip;
 use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, PipelineKind, Renderer, FIGURE_COLORS};
 use serde::{Deserialize, Serialize};

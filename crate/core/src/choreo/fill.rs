@@ -437,7 +437,7 @@ pub fn node_costs(weights: &FillWeights, beat_fit: &[f32], builtin: &[bool]) -> 
 }
 
 /// [`node_costs`] plus the foot-skate term `skate_weight · skate_cm_per_s[s] / 100` (the skate
-/// charged, in m/s: [`super::Choreography::generate`] passes each segment's excess over its source
+/// charged, in m/s: [`super::generate`] passes each segment's excess over its source
 /// clip's; [`FillWeights::skate_weight`]); a segment missing from `skate_cm_per_s` pays none.
 pub fn node_costs_with_skate(weights: &FillWeights, beat_fit: &[f32], builtin: &[bool], skate_cm_per_s: &[f32]) -> Vec<f32> {
     let any_imported = builtin.iter().any(|b| !b);

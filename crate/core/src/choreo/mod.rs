@@ -1,7 +1,7 @@
 //! Choreography authoring (spec §E–G, paper 000): a song's bars, a library of 4-count (and 3-count)
 //! segments cut from any humanoid clip at the motion's own beats, relevance-feedback candidate
 //! search per bar, automatic filling of the open bars by a shortest path, cubic joins, the quality measures of §J, and the
-//! editable document with undo/redo that the web layer drives. Everything here is
+//! dance commands as pure functions the project (the one dance document) calls. Everything here is
 //! deterministic: the same library, bars and commands give the same dance.
 
 /// Slowest and fastest tempo, in counts per minute, at which a move is cut or bars are laid
@@ -22,7 +22,7 @@ pub mod render;
 pub mod segment;
 pub mod table;
 
-pub use document::{recut_clip, BarState, BarView, ChoreoError, Choreography, GenerateReport, RecutReport, Settings};
+pub use document::{bar_views, check_bar, check_bars, generate_states, next_round, open_search, render_states, BarState, BarView, ChoreoError, GenerateReport, Setting, Settings};
 pub use eigen::Signature;
 pub use generate::{bar_counts, dance_figures, skate_goal_cm_per_s, DanceFigures, GenerateOptions, JOIN_REPAIRS};
 pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, CANDIDATES_PER_ROUND, TAU_DECAY};

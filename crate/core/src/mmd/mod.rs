@@ -487,7 +487,7 @@ pub fn quat_from_euler_xyz(e: Vec3) -> Quat {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::humanoid::{HumanoidMap, HumanoidStatus};
+    use crate::canon::humanoid::{HumanoidMap, HumanoidStatus};
 
     /// Distance between two rotations' quaternions, up to sign.
     fn qdist(a: Quat, b: Quat) -> f32 {

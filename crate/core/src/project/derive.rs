@@ -10,8 +10,8 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::{decode_envelope, BarDoc, BarKind, BlobHash, BlobStore, ClipRef, DanceDoc, MoveKey, ProjectDoc, ProjectError, SearchDoc, SongDoc, Source, SourceId};
-use crate::choreo::{BarState, BuiltinLoader, Choreography, ClipSummary, FeedbackSession, SegmentLibrary, SegmentOptions};
+use super::{decode_envelope, BarDoc, BarKind, BlobHash, BlobStore, ClipRef, MoveKey, ProjectDoc, ProjectError, SearchDoc, SongDoc, Source, SourceId};
+use crate::choreo::{BarState, BuiltinLoader, ClipSummary, FeedbackSession, SegmentLibrary, SegmentOptions};
 use crate::canon::humanoid::HumanoidStatus;
 use crate::import::{import_bytes, ImportError, ImportOptions, Imported};
 use crate::music::{analyze, SongGrid};
@@ -343,53 +343,37 @@ impl Derived {
         keys.iter().map(|k| self.index_of(k).ok_or_else(|| ProjectError::UnknownMove { key: k.id() })).collect()
     }
 
-    /// The dance as a [`Choreography`] over this library (moves not in it leave their bar
-    /// empty, shown candidates not in it are forgotten).
-    pub(crate) fn choreography(&self, doc: &ProjectDoc) -> Result<Choreography, ProjectError> {
-        let grid = match &self.grid {
-            None => return Err(ProjectError::NoSong),
-            Some(Err(e)) => return Err(e.clone()),
-            Some(Ok(g)) => g,
-        };
-        let resolve = |v: &[MoveKey]| -> Vec<usize> { v.iter().filter_map(|k| self.index_of(k)).collect() };
-        let states = doc
-            .dance
-            .bars
-            .iter()
-            .map(|b| match (b.state, b.r#move.as_ref().and_then(|k| self.index_of(k))) {
-                (BarKind::Pinned, Some(segment)) => BarState::Pinned { segment },
-                (BarKind::Generated, Some(segment)) => BarState::Generated { segment },
-                _ => BarState::Empty,
-            })
-            .collect();
-        let sessions = doc
-            .dance
-            .bars
-            .iter()
-            .map(|b| b.search.as_ref().map(|s| FeedbackSession { tau: s.tau, shown: resolve(&s.shown), liked: resolve(&s.liked), round: resolve(&s.round), rounds: s.rounds, ..FeedbackSession::new() }))
-            .collect();
-        Ok(Choreography::from_parts(grid.bars.clone(), states, sessions, doc.dance.settings)?)
+    /// The segments `keys` name that are in the library, in order (the rest are left out).
+    pub(crate) fn resolve(&self, keys: &[MoveKey]) -> Vec<usize> {
+        keys.iter().filter_map(|k| self.index_of(k)).collect()
     }
 
-    /// A choreography's dance by keys.
-    pub(crate) fn dance_doc(&self, ch: &Choreography) -> DanceDoc {
-        let bars = ch
-            .states()
-            .iter()
-            .zip(ch.sessions())
-            .map(|(state, session)| {
-                let (kind, seg) = match *state {
-                    BarState::Empty => (BarKind::Empty, None),
-                    BarState::Pinned { segment } => (BarKind::Pinned, Some(segment)),
-                    BarState::Generated { segment } => (BarKind::Generated, Some(segment)),
-                };
-                BarDoc {
-                    state: kind,
-                    r#move: seg.and_then(|s| self.keys.get(s).cloned()),
-                    search: session.as_ref().map(|s| SearchDoc { tau: s.tau, shown: self.keys_of(&s.shown), liked: self.keys_of(&s.liked), round: self.keys_of(&s.round), rounds: s.rounds }),
-                }
-            })
-            .collect();
-        DanceDoc { bars, settings: *ch.settings() }
+    /// A bar's state by segment number (a move not in the library leaves the bar empty).
+    pub(crate) fn state_of(&self, bar: &BarDoc) -> BarState {
+        match (bar.state, bar.r#move.as_ref().and_then(|k| self.index_of(k))) {
+            (BarKind::Pinned, Some(segment)) => BarState::Pinned { segment },
+            (BarKind::Generated, Some(segment)) => BarState::Generated { segment },
+            _ => BarState::Empty,
+        }
+    }
+
+    /// A bar's state by key (what the document keeps).
+    pub(crate) fn bar_doc(&self, state: BarState, search: Option<SearchDoc>) -> BarDoc {
+        let (kind, seg) = match state {
+            BarState::Empty => (BarKind::Empty, None),
+            BarState::Pinned { segment } => (BarKind::Pinned, Some(segment)),
+            BarState::Generated { segment } => (BarKind::Generated, Some(segment)),
+        };
+        BarDoc { state: kind, r#move: seg.and_then(|s| self.keys.get(s).cloned()), search }
+    }
+
+    /// A bar's search by segment number (moves not in the library are forgotten).
+    pub(crate) fn session_of(&self, s: &SearchDoc) -> FeedbackSession {
+        FeedbackSession { tau: s.tau, shown: self.resolve(&s.shown), liked: self.resolve(&s.liked), round: self.resolve(&s.round), rounds: s.rounds, ..FeedbackSession::new() }
+    }
+
+    /// A bar's search by key.
+    pub(crate) fn search_doc(&self, s: &FeedbackSession) -> SearchDoc {
+        SearchDoc { tau: s.tau, shown: self.keys_of(&s.shown), liked: self.keys_of(&s.liked), round: self.keys_of(&s.round), rounds: s.rounds }
     }
 }

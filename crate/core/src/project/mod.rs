@@ -26,7 +26,8 @@ use std::collections::BTreeSet;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::choreo::{ChoreoError, FillWeights, GenerateReport, SegmentError, Settings};
+use crate::bars::Bar;
+use crate::choreo::{ChoreoError, FillWeights, GenerateReport, SegmentError, Setting, Settings};
 use crate::clip::Clip;
 use crate::import::{ImportError, ImportOptions};
 use crate::library::MoveInfo;
@@ -310,6 +311,23 @@ impl ProjectError {
     }
 }
 
+/// What re-cutting a clip meant for the dance ([`Project::recut_clip`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct RecutReport {
+    /// The new cut.
+    pub clip: crate::choreo::ClipSummary,
+    /// Segments of the earlier cut removed from the library.
+    pub removed: usize,
+    /// Moves of the earlier cut kept because bars of the dance hold them.
+    pub kept: usize,
+    /// Bars pinned to a move of the earlier cut: they keep that motion.
+    pub pinned_bars: Vec<usize>,
+    /// Bars the engine filled with a move of the earlier cut: they keep it until the next
+    /// Generate, which fills them from the new cut.
+    pub generated_bars: Vec<usize>,
+}
+
 /// What adding a source gave.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -475,19 +493,35 @@ impl Project {
         self.derived.load_builtin(count)
     }
 
-    /// The dance as a [`crate::choreo::Choreography`] over the derived segment library
-    /// ([`Project::segment_library`]): what a page shows (bars, states, searches by segment
-    /// number). Edits go through the project's own methods, never through this copy.
-    pub fn choreography(&mut self) -> Result<crate::choreo::Choreography, ProjectError> {
+    /// The dance as the timeline shows it: each bar with its state and search by segment number
+    /// of the derived library ([`Project::segment_library`]). Edits go through the project's
+    /// own methods.
+    pub fn dance_view(&mut self) -> Result<Vec<crate::choreo::BarView>, ProjectError> {
+        let bars = self.song_bars()?;
+        let d = &self.derived;
+        let states: Vec<_> = self.doc.dance.bars.iter().map(|b| d.state_of(b)).collect();
+        let sessions: Vec<_> = self.doc.dance.bars.iter().map(|b| b.search.as_ref().map(|s| d.session_of(s))).collect();
+        Ok(crate::choreo::bar_views(&bars, &states, &sessions))
+    }
+
+    /// The song's bars (its grid's, after every correction), checked: refused without a song,
+    /// when its grid cannot be made, or when it has no complete bar.
+    pub fn song_bars(&mut self) -> Result<Vec<Bar>, ProjectError> {
         self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
-        self.derived.choreography(&self.doc)
+        let bars = match self.derived.grid() {
+            None => return Err(ProjectError::NoSong),
+            Some(Err(e)) => return Err(e.clone()),
+            Some(Ok(g)) => g.bars.clone(),
+        };
+        crate::choreo::check_bars(&bars)?;
+        Ok(bars)
     }
 
     /// The pairs of segments the filling of the song's bars reads
-    /// ([`crate::choreo::Choreography::table_scope`]; none without a song).
+    /// ([`crate::choreo::TableScope::for_bar_counts`]; none without a song).
     pub fn table_scope(&mut self) -> crate::choreo::TableScope {
-        match self.choreography() {
-            Ok(ch) => ch.table_scope(self.derived.library()),
+        match self.song_bars() {
+            Ok(bars) => crate::choreo::TableScope::for_bar_counts(&crate::choreo::bar_counts(self.derived.library(), &bars)),
             Err(_) => crate::choreo::TableScope::none(),
         }
     }
@@ -632,6 +666,26 @@ impl Project {
         }
         self.commit(doc);
         Ok(info)
+    }
+
+    /// [`Project::set_clip_tempo`], saying what the re-cut meant for the dance: the new cut,
+    /// how many segments of the earlier cut left the library and how many stay (held by bars),
+    /// and the bars pinned to, or generated with, a move of the earlier cut (they keep it).
+    pub fn recut_clip(&mut self, clip: ClipRef, tempo_bpm: Option<f32>) -> Result<RecutReport, ProjectError> {
+        let before = self.derived().clip(clip).and_then(|c| c.cut.as_ref().map(|c| c.segments));
+        let info = self.set_clip_tempo(clip, tempo_bpm)?;
+        // `set_clip_tempo` refuses a clip it could not cut, so the cut is there.
+        let summary = info.cut.ok_or_else(|| ProjectError::NotDanceable { file_name: info.file_name.clone(), clip: clip.clip, reason: "it has no cut".into() })?;
+        let earlier = |k: &MoveKey| matches!(k, MoveKey::Cut { clip: c, cut_tempo_bpm, .. } if *c == clip && *cut_tempo_bpm != tempo_bpm);
+        let (mut pinned_bars, mut generated_bars, mut kept) = (Vec::new(), Vec::new(), BTreeSet::new());
+        for (i, b) in self.doc.dance.bars.iter().enumerate() {
+            if let Some(k) = b.r#move.as_ref().filter(|k| earlier(k)) {
+                kept.insert(k.id());
+                if b.state == BarKind::Pinned { pinned_bars.push(i) } else { generated_bars.push(i) }
+            }
+        }
+        let removed = before.map_or(0, |n| n.saturating_sub(kept.len()));
+        Ok(RecutReport { clip: summary, removed, kept: kept.len(), pinned_bars, generated_bars })
     }
 
     /// Sets the song: its file name and bytes as given (`None` for the demo song), the
@@ -822,36 +876,38 @@ impl Project {
         Ok(())
     }
 
-    /// Runs a choreography command on the dance (see [`crate::choreo::Choreography`]) and keeps
-    /// the result by keys.
-    fn dance_edit<R>(&mut self, f: impl FnOnce(&mut crate::choreo::Choreography, &crate::choreo::SegmentLibrary) -> Result<R, ChoreoError>) -> Result<R, ProjectError> {
-        self.dance_change(true, f)
-    }
-
-    /// [`Project::dance_edit`], recorded in the history or not (`record`).
-    fn dance_change<R>(&mut self, record: bool, f: impl FnOnce(&mut crate::choreo::Choreography, &crate::choreo::SegmentLibrary) -> Result<R, ChoreoError>) -> Result<R, ProjectError> {
+    /// The song's bars for a dance edit and the document to edit, its dance fitted to them
+    /// (one entry per bar). Refused while a source's bytes are missing (the edit could not keep
+    /// the moves it does not see).
+    fn dance_edit_start(&mut self) -> Result<(Vec<Bar>, ProjectDoc), ProjectError> {
         if let Some(m) = self.missing.first() {
             if self.doc.sources.iter().any(|s| self.missing.iter().any(|m| m.hash == s.blob)) {
                 return Err(ProjectError::Incomplete { count: self.missing.len(), first: m.what.clone() });
             }
         }
-        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
-        let mut ch = self.derived.choreography(&self.doc)?;
-        let out = f(&mut ch, self.derived.library())?;
+        let bars = self.song_bars()?;
         let mut doc = self.doc.clone();
-        doc.dance = self.derived.dance_doc(&ch);
-        if record {
-            self.commit(doc);
-        } else {
-            self.set_unrecorded(doc);
-        }
-        Ok(out)
+        doc.dance.bars.resize(bars.len(), BarDoc::default());
+        Ok((bars, doc))
     }
 
     /// The bar's current candidates, opening its search when none is open. Looking at a bar
     /// is not an edit: no undo step is recorded (the open search is kept and saved).
     pub fn candidates(&mut self, bar: usize) -> Result<Vec<MoveKey>, ProjectError> {
-        let round = self.dance_change(false, |ch, lib| ch.candidates(lib, bar))?;
+        let (bars, mut doc) = self.dance_edit_start()?;
+        let b = crate::choreo::check_bar(&bars, bar)?;
+        if self.derived.library().is_empty() {
+            return Err(ChoreoError::EmptyLibrary.into());
+        }
+        let round = match &doc.dance.bars[bar].search {
+            Some(s) => self.derived.session_of(s).round,
+            None => {
+                let session = crate::choreo::open_search(self.derived.library(), b, &doc.dance.settings)?;
+                doc.dance.bars[bar].search = Some(self.derived.search_doc(&session));
+                self.set_unrecorded(doc);
+                session.round
+            }
+        };
         Ok(self.derived.keys_of(&round))
     }
 
@@ -859,57 +915,109 @@ impl Project {
     pub fn search(&mut self, bar: usize, liked: &[MoveKey]) -> Result<Vec<MoveKey>, ProjectError> {
         self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
         let liked = self.derived.indices_of(liked)?;
-        let round = self.dance_edit(|ch, lib| ch.search(lib, bar, &liked))?;
+        let (bars, mut doc) = self.dance_edit_start()?;
+        let b = crate::choreo::check_bar(&bars, bar)?;
+        let mut session = doc.dance.bars[bar].search.as_ref().map(|s| self.derived.session_of(s)).ok_or(ChoreoError::NoSearch { bar })?;
+        let round = crate::choreo::next_round(self.derived.library(), b, &mut session, &liked, &doc.dance.settings)?;
+        doc.dance.bars[bar].search = Some(self.derived.search_doc(&session));
+        self.commit(doc);
         Ok(self.derived.keys_of(&round))
     }
 
-    /// Forgets the bar's search.
+    /// Forgets the bar's search. Returns whether there was one.
     pub fn reset_search(&mut self, bar: usize) -> Result<bool, ProjectError> {
-        self.dance_edit(|ch, _| ch.reset_search(bar))
+        let (bars, mut doc) = self.dance_edit_start()?;
+        crate::choreo::check_bar(&bars, bar)?;
+        let had = doc.dance.bars[bar].search.take().is_some();
+        self.commit(doc);
+        Ok(had)
     }
 
     /// Pins a move to a bar.
     pub fn set(&mut self, bar: usize, key: &MoveKey) -> Result<(), ProjectError> {
         self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
-        let seg = self.derived.indices_of(std::slice::from_ref(key))?[0];
-        self.dance_edit(|ch, lib| ch.set(lib, bar, seg))
+        self.derived.indices_of(std::slice::from_ref(key))?;
+        let (bars, mut doc) = self.dance_edit_start()?;
+        crate::choreo::check_bar(&bars, bar)?;
+        let b = &mut doc.dance.bars[bar];
+        (b.state, b.r#move) = (BarKind::Pinned, Some(key.clone()));
+        self.commit(doc);
+        Ok(())
     }
 
     /// Unpins a bar (its move stays, as generated).
     pub fn unpin(&mut self, bar: usize) -> Result<(), ProjectError> {
-        self.dance_edit(|ch, _| ch.unpin(bar))
+        let (bars, mut doc) = self.dance_edit_start()?;
+        crate::choreo::check_bar(&bars, bar)?;
+        let b = &mut doc.dance.bars[bar];
+        if b.state == BarKind::Pinned && b.r#move.is_some() {
+            b.state = BarKind::Generated;
+        }
+        self.commit(doc);
+        Ok(())
     }
 
-    /// Empties a bar.
+    /// Empties a bar (its search stays).
     pub fn clear(&mut self, bar: usize) -> Result<(), ProjectError> {
-        self.dance_edit(|ch, _| ch.clear(bar))
+        let (bars, mut doc) = self.dance_edit_start()?;
+        crate::choreo::check_bar(&bars, bar)?;
+        let b = &mut doc.dance.bars[bar];
+        (b.state, b.r#move) = (BarKind::Empty, None);
+        self.commit(doc);
+        Ok(())
     }
 
-    /// Fills every bar that is not pinned (spec §G).
+    /// Fills every bar that is not pinned (spec §G) by the pipeline of
+    /// [`crate::choreo::generate`] at its default options. Pinned bars never change.
     pub fn generate(&mut self) -> Result<GenerateReport, ProjectError> {
-        self.dance_edit(|ch, lib| ch.generate(lib))
+        self.generate_with(&crate::choreo::GenerateOptions::default())
+    }
+
+    /// [`Project::generate`] with the pipeline's stages set by `options` (benches and tests turn
+    /// a stage off to measure what it does); refused when an option is out of range.
+    pub fn generate_with(&mut self, options: &crate::choreo::GenerateOptions) -> Result<GenerateReport, ProjectError> {
+        let (bars, mut doc) = self.dance_edit_start()?;
+        let d = &self.derived;
+        let states: Vec<_> = doc.dance.bars.iter().map(|b| d.state_of(b)).collect();
+        let (states, report) = crate::choreo::generate_states(d.library(), &bars, &states, doc.dance.settings.fill, options)?;
+        for (b, state) in doc.dance.bars.iter_mut().zip(states) {
+            if !matches!(state, crate::choreo::BarState::Pinned { .. }) {
+                *b = d.bar_doc(state, b.search.take());
+            }
+        }
+        self.commit(doc);
+        Ok(report)
+    }
+
+    /// Changes one setting of the search or the filling; refused, with nothing changed, when
+    /// its value is out of range. Undoable.
+    pub fn set_setting(&mut self, setting: Setting) -> Result<(), ProjectError> {
+        let (_, mut doc) = self.dance_edit_start()?;
+        doc.dance.settings.apply(setting)?;
+        self.commit(doc);
+        Ok(())
     }
 
     /// ρ of spec §F eq. 1, in 0..=1.
     pub fn set_rho(&mut self, rho: f32) -> Result<(), ProjectError> {
-        self.dance_edit(|ch, _| ch.set_rho(rho))
+        self.set_setting(Setting::Rho(rho))
     }
 
     /// Weight of the music term of the filling, in 0..=100.
     pub fn set_music_weight(&mut self, w: f32) -> Result<(), ProjectError> {
-        self.dance_edit(|ch, _| ch.set_music_weight(w))
+        self.set_setting(Setting::MusicWeight(w))
     }
 
     /// Weight of the beat term of the filling (segments whose counts fall on their kinetic
     /// beats; 0 turns it off).
     pub fn set_beat_weight(&mut self, w: f32) -> Result<(), ProjectError> {
-        self.dance_edit(|ch, _| ch.set_beat_weight(w))
+        self.set_setting(Setting::BeatWeight(w))
     }
 
     /// Preference of the filling for the person's imported moves that fit the beat over
     /// built-in ones (0: none).
     pub fn set_own_moves_preference(&mut self, w: f32) -> Result<(), ProjectError> {
-        self.dance_edit(|ch, _| ch.set_own_moves_preference(w))
+        self.set_setting(Setting::OwnMovesPreference(w))
     }
 
     /// The filling's weights in force.
@@ -920,9 +1028,10 @@ impl Project {
     /// The whole dance as one canonical clip; frame 0 is song time 0. Bars whose move cannot
     /// be found (a missing source) stand neutral.
     pub fn render_dance(&mut self, options: &crate::choreo::RenderOptions) -> Result<Clip, ProjectError> {
-        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
-        let ch = self.derived.choreography(&self.doc)?;
-        let mut clip = ch.render(self.derived.library(), options);
+        let bars = self.song_bars()?;
+        let d = &self.derived;
+        let states: Vec<_> = self.doc.dance.bars.iter().map(|b| d.state_of(b)).collect();
+        let mut clip = crate::choreo::render_states(d.library(), &bars, &states, options);
         clip.name = "Dance".into();
         clip.source = "choreography".into();
         Ok(clip)

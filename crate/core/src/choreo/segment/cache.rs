@@ -53,7 +53,7 @@ impl SegmentLibrary {
     }
 
     /// A builder of the blocks of `scope` ([`TableScope`]: what a song's bars need,
-    /// [`super::Choreography::table_scope`]) that the cached table (same penalty) lacks; its
+    /// [`TableScope::for_bar_counts`]) that the cached table (same penalty) lacks; its
     /// table holds the cached blocks too. Hand its result to
     /// [`SegmentLibrary::install_table_for`].
     pub fn table_builder_for(&self, repeat_penalty: f32, scope: &TableScope) -> TableBuilder {

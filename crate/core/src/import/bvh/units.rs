@@ -8,7 +8,7 @@
 
 use glam::Vec3;
 
-use crate::humanoid::{Canon, HumanoidMap};
+use crate::canon::humanoid::{Canon, HumanoidMap};
 use crate::skeleton::Skeleton;
 
 /// A length unit a motion file may be written in.
