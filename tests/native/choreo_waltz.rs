@@ -161,3 +161,27 @@ fn builtin_moves_in_three_dance_the_three_four_pieces_on_the_beat() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The built-in moves in 3 keep the built-in moves' foot rules: planted feet stay put (their
+/// foot skate, spec §J, no worse on average than the moves in 4, and no move in 3 beyond the
+/// worst move in 4).
+#[test]
+fn builtin_moves_in_three_plant_their_feet() {
+    use odori_core::choreo::quality::{motion_quality, QualityMotion};
+    let lib = SegmentLibrary::builtin();
+    let (mut four, mut three) = (Vec::new(), Vec::new());
+    for c in lib.clips() {
+        let skate = motion_quality(&QualityMotion::from_clip(&c.clip).unwrap()).foot_skate.mean_cm_per_s;
+        match c.builtin.map(|m| m.counts()) {
+            Some(3) => three.push(skate),
+            Some(_) => four.push(skate),
+            None => {}
+        }
+    }
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+    let max = |v: &[f32]| v.iter().copied().fold(0.0f32, f32::max);
+    println!("foot skate, built-in moves in 4: mean {:.1} cm/s, worst {:.1}; in 3: mean {:.1}, worst {:.1} ({} moves)", mean(&four), max(&four), mean(&three), max(&three), three.len());
+    assert_eq!(three.len(), 90);
+    assert!(mean(&three) <= mean(&four), "the moves in 3 skate {} cm/s on average, the moves in 4 {}", mean(&three), mean(&four));
+    assert!(max(&three) <= max(&four), "a move in 3 skates {} cm/s, the worst move in 4 {}", max(&three), max(&four));
+}
