@@ -73,7 +73,7 @@ pub fn builtin_medley_library() -> odori_core::choreo::SegmentLibrary {
         translations: vec![TranslationTrack { joint: 0, values: root }],
     };
     let map = odori_core::canon::humanoid::HumanoidMap::from_skeleton(&sk);
-    let opts = SegmentOptions { tempo_bpm: Some(odori_core::library::BUILTIN_BPM), first_beat_secs: Some(0.0), hop_counts: 1 };
+    let opts = SegmentOptions { tempo_bpm: Some(odori_core::library::BUILTIN_BPM), first_beat_secs: Some(0.0), hop_counts: 1 , ..Default::default() };
     lib.add_clip(&medley, &map, &odori_core::HumanoidStatus::Complete, &opts).expect("the medley of built-in moves cuts into segments");
     lib
 }

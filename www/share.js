@@ -232,6 +232,34 @@ export function installShare({ choreo, messages, songReady, song, loadSong }) {
         messages.error(`Share link: ${e.message}`);
       }
     });
+    // Where Share is offered: a dance with moves from the person's own files cannot go in a
+    // link (the files would not be on the other machine); say so and offer the .odori file.
+    const note = document.createElement("span");
+    note.id = "dance-share-note";
+    note.className = "share-note";
+    note.hidden = true;
+    note.setAttribute("role", "note");
+    const text = document.createElement("span");
+    const save = document.createElement("button");
+    save.type = "button";
+    save.id = "dance-share-save";
+    save.textContent = "Save the .odori file";
+    save.title = "The project file holds your motion files too: whoever opens it sees this dance";
+    save.addEventListener("click", () => document.getElementById("project-save")?.click());
+    note.append(text, save);
+    button.after(note);
+    choreo.root.addEventListener("dance-refresh", (e) => {
+      const own = (e.detail?.notes ?? []).filter((n) => n.segment != null && !n.builtin);
+      note.hidden = own.length === 0;
+      button.disabled = own.length > 0;
+      if (own.length) {
+        const files = [...new Set(own.map((n) => n.source))];
+        text.textContent = `A link cannot share this dance: ${own.length} bar${own.length === 1 ? "" : "s"} use${own.length === 1 ? "s" : ""} moves from your own file${files.length === 1 ? "" : "s"} (${files.join(", ")}), which a link cannot carry. Share the project file instead. `;
+        button.title = "Links carry built-in moves only: this dance uses moves from your own files";
+      } else {
+        button.title = "A link that opens this dance (built-in moves; a song file is asked for again)";
+      }
+    });
   }
   share.applied = (async () => {
     let dance;

@@ -78,3 +78,38 @@ test("a bar in 3 is danced with 3-count moves, a bar set back to 4 with 4-count 
   p.generate();
   assert.ok(p.danceView().every((v) => counts(v.state.segment) === 4));
 });
+
+test("bar notes name each bar's move and source and word its flags; candidate notes rank clean ones first", () => {
+  const p = salsaProject();
+  const grid = p.grid();
+  const beats = new Float32Array(grid.beatTimesSecs);
+  assert.equal(p.barNotes(beats).quality, null, "no readout while no bar holds a move");
+  while (p.prepareTable(256) < 1) { /* slices of the join table */ }
+  p.generate();
+  // A salsa move on bar 2, so an imported source is named.
+  let salsa = -1;
+  for (let i = 0; i < p.segmentCount; i++) { const s = p.segment(i); if (!s.builtin && !/\(in 3\)/.test(s.name)) { salsa = i; break; } }
+  p.setSegment(1, salsa);
+  const { quality, notes } = p.barNotes(beats);
+  assert.equal(notes.length, grid.bars.length);
+  const view = p.danceView();
+  notes.forEach((n, i) => {
+    assert.equal(n.segment, view[i].state.segment);
+    assert.equal(n.name, p.segment(n.segment).name);
+    // Each flag is the readout's, in words.
+    const bq = quality.bars[i];
+    assert.equal(n.flags.some((f) => f.kind === "offBeat"), bq.beats.basMusic - bq.beats.basMusicShifted < 0.1, `bar ${i + 1}`);
+    assert.equal(n.flags.some((f) => f.kind === "joinJump"), bq.joinJump != null && bq.joinJump > 1.5, `bar ${i + 1}`);
+    assert.ok(n.flags.every((f) => typeof f.words === "string" && f.words.length > 5));
+  });
+  assert.equal(notes[1].builtin, false);
+  assert.equal(notes[1].source, "salsa_01");
+  assert.ok(notes.filter((n) => n.builtin).every((n) => n.source === "built-in"));
+  const cands = Array.from(p.candidateSegments(4));
+  const cn = p.candidateNotes(4, cands, beats);
+  assert.deepEqual([...cn.map((n) => n.segment)].sort((a, b) => a - b), [...cands].sort((a, b) => a - b));
+  const flags = cn.map((n) => n.flags.length);
+  assert.deepEqual(flags, [...flags].sort((a, b) => a - b), "clean candidates first");
+  assert.throws(() => p.candidateNotes(9999, cands, beats), (e) => e.name === "OdoriError" && /bar 9999/.test(e.message));
+  assert.throws(() => p.candidateNotes(4, [1e7], beats), (e) => e.name === "OdoriError" && /segment/.test(e.message));
+});

@@ -89,6 +89,10 @@ export class ProjectDance {
   generate() { return this.edit((p) => p.generate()); }
 
   quality(beatTimesSecs) { return this.project.quality(beatTimesSecs); }
+  /** Each bar's move (name, source) and weak spots in words, with the readout: `{ quality, notes }`. */
+  barNotes(beatTimesSecs) { return this.project.barNotes(beatTimesSecs); }
+  /** Candidates' notes, each measured in place, clean ones first (the engine's ranking). */
+  candidateNotes(bar, segments, beatTimesSecs) { return this.project.candidateNotes(bar, Array.from(segments), beatTimesSecs); }
   renderDance(library, replace) { return this.project.renderDance(library, replace); }
   previewSegment(library, segment, durationSecs, replace) { return this.project.previewSegment(library, segment, durationSecs, replace); }
 

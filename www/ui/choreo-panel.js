@@ -5,6 +5,8 @@ import { tempoLimits } from "../pkg/odori.js";
 import { candidateOffsets, screenRight } from "./candidate-layout.js";
 
 const CHIP_COLOURS = ["#f9b25a", "#5cd3ea", "#c79cf5", "#b5e96b", "#f38aa9", "#9dc2fb"];
+/** A bar's flags in a word each on the strip (the full words are in its title). */
+const FLAG_WORDS = { offBeat: "off-beat", joinJump: "join jump", footSkate: "foot skate" };
 /** Target time of one slice of the join-table build, so frames keep coming. */
 const SLICE_MS = 8;
 
@@ -214,38 +216,60 @@ export class ChoreoPanel {
     this.view = view;
     if (this.onChange) this.onChange(view);
     const total = view.length ? view[view.length - 1].bar.endSecs : 1;
-    // Spec §J readout on the bar row: where the dance is weak (off the beat, or a rough join).
+    // Spec §J readout on the bar row, from the engine: each bar's move (name and source) and
+    // where it is weak, in words (off the beat, a rough join, foot skate).
     let q = null;
+    let notes = [];
     if (view.some((v) => v.state.kind !== "empty")) {
-      try { q = this.choreographer.quality(this.beats); } catch (e) { this.messages.warning(`Dance quality: ${e.message}`); }
+      try { ({ quality: q, notes } = this.choreographer.barNotes(this.beats)); } catch (e) { this.messages.warning(`Dance quality: ${e.message}`); }
     }
     this.quality = q;
+    this.notes = notes;
     const cells = view.map((v, i) => {
       const b = document.createElement("button");
       b.type = "button";
       b.dataset.bar = i;
       b.className = `bar ${v.state.kind}${i === this.bar ? " selected" : ""}`;
       b.style.flexGrow = String(v.bar.endSecs - v.bar.startSecs);
-      b.title = `Bar ${i + 1}: ${v.state.kind}${v.state.segment != null ? ` (${this.choreographer.segment(v.state.segment).name})` : ""}, music intensity ${v.bar.intensity.toFixed(2)}`;
-      b.textContent = String(i + 1);
       b.style.setProperty("--intensity", v.bar.intensity.toFixed(2));
-      const bq = q && v.state.kind !== "empty" ? q.bars[i] : null;
-      if (bq) {
-        const j = bq.joinJump == null ? "" : `, join jump ${bq.joinJump.toFixed(2)}`;
-        b.title += `\nbeat alignment ${bq.beats.basMusic.toFixed(2)} (half a beat off: ${bq.beats.basMusicShifted.toFixed(2)}), foot skate ${bq.footSkate.meanCmPerS.toFixed(0)} cm/s${j}`;
-        // Weak: no clearer on the beats than off them, or a join rougher than the moves' sharpest moments.
-        if (bq.beats.basMusic < bq.beats.basMusicShifted + 0.1 || (bq.joinJump ?? 0) > 1.5) {
+      const note = v.state.kind !== "empty" ? notes[i] : null;
+      const num = document.createElement("span");
+      num.className = "bar-n";
+      num.textContent = String(i + 1);
+      const move = document.createElement("span");
+      move.className = "bar-move";
+      const src = document.createElement("span");
+      src.className = "bar-src";
+      const flags = document.createElement("span");
+      flags.className = "bar-flags";
+      b.append(num, move, src, flags);
+      b.title = `Bar ${i + 1}: ${v.state.kind}, music intensity ${v.bar.intensity.toFixed(2)}`;
+      if (note && note.segment != null) {
+        move.textContent = note.name;
+        src.textContent = note.builtin ? "built-in" : note.source;
+        b.dataset.source = note.builtin ? "built-in" : "imported";
+        b.title += `\n${note.name} — from ${note.builtin ? "the built-in moves" : note.source}`;
+        const bq = q ? q.bars[i] : null;
+        if (bq) {
+          const j = bq.joinJump == null ? "" : `, join jump ${bq.joinJump.toFixed(2)}`;
+          b.title += `\nbeat alignment ${bq.beats.basMusic.toFixed(2)} (half a beat off: ${bq.beats.basMusicShifted.toFixed(2)}), foot skate ${bq.footSkate.meanCmPerS.toFixed(0)} cm/s${j}`;
+        }
+        if (note.flags.length) {
           b.dataset.weak = "1";
-          b.style.boxShadow = "inset 0 -3px 0 #d9534f";
+          flags.textContent = note.flags.map((f) => FLAG_WORDS[f.kind] ?? f.kind).join(" · ");
+          b.title += `\nweak: ${note.flags.map((f) => f.words).join("; ")}`;
         }
       }
+      b.setAttribute("aria-label", b.title.replace(/\n/g, ". "));
       return b;
     });
     this.$("#dance-bars").replaceChildren(...cells);
     this.$("#dance-bars").title = q
-      ? `Whole dance: beat alignment ${q.beats.basMusic.toFixed(2)} (half a beat off: ${q.beats.basMusicShifted.toFixed(2)}), ${q.beats.kineticBeatsPerSec.toFixed(1)} moves/s on ${q.beats.musicBeatsPerSec.toFixed(1)} beats/s, foot skate ${q.footSkate.meanCmPerS.toFixed(0)} cm/s, join jump mean ${q.joinJumpMean.toFixed(2)} max ${q.joinJumpMax.toFixed(2)}; bars underlined in red are weak`
+      ? `Whole dance: beat alignment ${q.beats.basMusic.toFixed(2)} (half a beat off: ${q.beats.basMusicShifted.toFixed(2)}), ${q.beats.kineticBeatsPerSec.toFixed(1)} moves/s on ${q.beats.musicBeatsPerSec.toFixed(1)} beats/s, foot skate ${q.footSkate.meanCmPerS.toFixed(0)} cm/s, join jump mean ${q.joinJumpMean.toFixed(2)} max ${q.joinJumpMax.toFixed(2)}; each bar names its move, its source and, in red, where it is weak`
       : "";
     this.root.dataset.bars = String(view.length);
+    // For whoever shows what the dance is made of (the share note).
+    this.root.dispatchEvent(new CustomEvent("dance-refresh", { detail: { notes } }));
     this.$("#dance-undo").disabled = !this.choreographer.canUndo();
     this.$("#dance-redo").disabled = !this.choreographer.canRedo();
     const v = this.bar != null ? view[this.bar] : null;
@@ -271,6 +295,14 @@ export class ChoreoPanel {
   }
 
   showCandidates(cands) {
+    // The engine measures each candidate as the bar would play once Set and ranks clean ones
+    // first (among equals, the search's order); a flagged one says so in words.
+    this.candidateNotes = new Map();
+    try {
+      const notes = this.choreographer.candidateNotes(this.bar, cands, this.beats);
+      cands = notes.map((n) => n.segment);
+      for (const n of notes) this.candidateNotes.set(n.segment, n);
+    } catch (e) { this.messages.warning(`Dance candidates: ${e.message}`); }
     this.candidates = cands;
     const bar = this.view[this.bar].bar;
     const dur = bar.endSecs - bar.startSecs;
@@ -301,8 +333,17 @@ export class ChoreoPanel {
       b.className = `chip${this.ticked.has(k) ? " ticked" : ""}`;
       b.style.setProperty("--chip", CHIP_COLOURS[k % CHIP_COLOURS.length]);
       const s = this.choreographer.segment(seg);
+      const note = this.candidateNotes?.get(seg);
       b.textContent = `${k + 1} ${s.name}`;
       b.title = `${s.name} — from ${s.source}, intensity ${s.intensity01.toFixed(2)}; click to tick (liked / to set)`;
+      if (note && note.flags.length) {
+        const w = document.createElement("span");
+        w.className = "chip-flags";
+        w.textContent = ` — ${note.flags.map((f) => f.words).join("; ")}`;
+        b.append(w);
+        b.dataset.weak = "1";
+        b.title += `\nweak once set: ${note.flags.map((f) => f.words).join("; ")}`;
+      }
       return b;
     });
     this.$("#dance-candidates").replaceChildren(...chips);
@@ -360,7 +401,8 @@ export class ChoreoPanel {
     this.renderDance();
     if (this.bar == null || !this.view || this.bar >= this.view.length) return;
     const cands = this.act(() => this.choreographer.candidates(this.bar));
-    if (cands && (cands.length !== this.candidates.length || [...cands].some((c, k) => c !== this.candidates[k]))) {
+    // Compared as sets: the shown order is the engine's ranking by flags, not the search's.
+    if (cands && (cands.length !== this.candidates.length || [...cands].some((c) => !this.candidates.includes(c)))) {
       this.ticked.clear();
       this.showCandidates([...cands]);
     }

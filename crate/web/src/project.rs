@@ -478,7 +478,7 @@ impl Project {
     }
 
     /// Makes up to `count` more built-in moves of the dance library; returns the fraction
-    /// made (1: all). Call between frames until 1, so the page never blocks for all 420.
+    /// made (1: all). Call between frames until 1, so the page never blocks for all 510.
     #[wasm_bindgen(js_name = loadBuiltin)]
     pub fn load_builtin(&mut self, count: u32) -> f32 {
         self.inner.load_builtin(count as usize)
@@ -609,6 +609,45 @@ impl Project {
         let clip = self.inner.render_dance(&RenderOptions::default())?;
         let q = odori_core::choreo::dance_quality(&clip, &bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
         Ok(to_js(&q))
+    }
+
+    /// Each bar's move and its weak spots in words, with the readout they come from (one
+    /// render): `{ quality: DanceQuality | null, notes: MoveNote[] }`, a `MoveNote` being `{ bar,
+    /// segment, name, source, builtin, flags: [{ kind: "offBeat" | "joinJump" | "footSkate",
+    /// words, value, goal }] }`; `quality` is null while no bar holds a move. `beatTimesSecs`
+    /// as for `quality`.
+    #[wasm_bindgen(js_name = barNotes)]
+    pub fn bar_notes(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
+        #[derive(Serialize)]
+        struct Notes {
+            quality: Option<odori_core::choreo::DanceQuality>,
+            notes: Vec<odori_core::choreo::MoveNote>,
+        }
+        let ch = self.inner.choreography()?;
+        let bars = ch.bars();
+        let choices = ch.segments();
+        let lib = self.inner.segment_library();
+        if choices.iter().all(Option::is_none) {
+            return Ok(to_js(&Notes { quality: None, notes: odori_core::choreo::bar_notes(lib, bars, &choices, &[]) }));
+        }
+        let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect());
+        let clip = ch.render(lib, &RenderOptions::default());
+        let q = odori_core::choreo::dance_quality(&clip, bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
+        let notes = odori_core::choreo::bar_notes(lib, bars, &choices, &q.bars);
+        Ok(to_js(&Notes { quality: Some(q), notes }))
+    }
+
+    /// The notes (`MoveNote[]`) of candidate segments `segments` for bar `bar`, each measured
+    /// as the bar would play once Set, ranked clean first (among equals in the given order).
+    #[wasm_bindgen(js_name = candidateNotes)]
+    pub fn candidate_notes(&mut self, bar: f64, segments: Vec<f64>, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
+        let bar = index_arg("bar", bar)?;
+        let segments: Vec<usize> = segments.iter().map(|&s| index_arg("segment", s)).collect::<Result<_, _>>()?;
+        let ch = self.inner.choreography()?;
+        let bars = ch.bars();
+        let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect());
+        let notes = odori_core::choreo::candidate_notes(self.inner.segment_library(), bars, &ch.segments(), &beats, bar, &segments).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
+        Ok(to_js(&notes))
     }
 
     /// One segment time-resampled to `durationSecs` (a candidate preview) into `library`.

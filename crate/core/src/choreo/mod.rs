@@ -17,6 +17,7 @@ pub mod feedback;
 pub mod fill;
 pub mod generate;
 pub mod grid;
+pub mod notes;
 pub mod quality;
 pub mod render;
 pub mod segment;
@@ -31,6 +32,7 @@ pub use fill::{
     FillWeights, Layer, Tempi, TransitionTable, FREE_SKATE_SLACK_DEFAULT, BEAT_RATE_BAND, beat_rate_ladder, in_beat_rate_band, skate_ladder,
 };
 pub use grid::{bars_from_tempo, GridError};
+pub use notes::{bar_notes, candidate_notes, Flag, FlagKind, MoveNote, NotesError};
 pub use quality::{JOIN_JUMP_GOAL, dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
 pub use render::{render, segment_clip, speed_jumps, RenderOptions};
 pub use table::{TableBuilder, TableProgress, TableScope};

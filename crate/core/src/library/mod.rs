@@ -1,10 +1,13 @@
-//! The built-in dance-move library: the engine's own starter set of 4-count moves on the
-//! canonical skeleton (no data from outside the project). Every combination of a step
+//! The built-in dance-move library: the engine's own starter set of moves on the canonical
+//! skeleton (no data from outside the project). In 4: every combination of a step
 //! (step-touch, grapevine, box step, kick-ball-change, chassé, pivot turn, jump, bounce, hip
 //! sway, body roll) with an arm pattern (swing, waves, punches, claps, arm rolls, overhead
 //! reaches, arm wave), at three energy levels, leading with the right or (mirrored) the left:
-//! 420 moves. Each is one bar of 4 counts at 120 BPM, 30 fps, with one extra frame (the next
-//! bar's first pose) so segment ends have a velocity.
+//! 420 moves of one bar of 4 counts. In 3, so a waltz needs no mocap: every combination of a
+//! step in 3 (the forward and back halves of the waltz box, balancé, a waltz turn, a
+//! hesitation) with an arm pattern in 3 (waltz frame, port de bras, open arms), at the same
+//! energies and sides: 90 moves of one bar of 3 counts. Each at 120 counts per minute, 30 fps,
+//! with one extra frame (the next bar's first pose) so segment ends have a velocity.
 //!
 //! Limbs are placed by two-bone IK on authored foot and hand targets ([`pose`]), so planted
 //! feet stay on the floor; the root height is then corrected so the lowest point of the body
@@ -30,8 +33,12 @@ pub use moves::{Arms, Energy, Step};
 pub const BUILTIN_BPM: f32 = 120.0;
 /// Frame rate of every built-in move.
 pub const BUILTIN_FPS: f32 = 30.0;
-/// Counts per built-in move (one bar).
+/// Counts per built-in move in 4 (one bar); the moves in 3 have 3 ([`MoveInfo::counts`]).
 pub const COUNTS: usize = 4;
+/// Built-in moves in 4 (the first of [`builtin_moves`]).
+pub const MOVES_IN_FOUR: usize = 420;
+/// Built-in moves in 3 (after those in 4).
+pub const MOVES_IN_THREE: usize = 90;
 /// Standing hips height of the built-in figure with soft knees, metres.
 pub const STANDING_HIPS_HEIGHT: f32 = 0.935;
 
@@ -47,6 +54,11 @@ pub struct MoveInfo {
 }
 
 impl MoveInfo {
+    /// Counts of the move (one bar): 3 for a step in 3, else 4.
+    pub fn counts(&self) -> usize {
+        self.step.counts()
+    }
+
     /// Display name, e.g. "grapevine + claps (high, left)".
     pub fn name(&self) -> String {
         format!(
@@ -59,14 +71,17 @@ impl MoveInfo {
     }
 }
 
-/// Every built-in move, in a fixed order (step, arms, energy, side).
+/// Every built-in move, in a fixed order: the moves in 4 (step, arms, energy, side), then
+/// those in 3 (the same order), so the moves in 4 keep their places.
 pub fn builtin_moves() -> Vec<MoveInfo> {
-    let mut out = Vec::with_capacity(420);
-    for step in Step::ALL {
-        for arms in Arms::ALL {
-            for energy in Energy::ALL {
-                for mirrored in [false, true] {
-                    out.push(MoveInfo { step, arms, energy, mirrored });
+    let mut out = Vec::with_capacity(MOVES_IN_FOUR + MOVES_IN_THREE);
+    for (steps, arm_patterns) in [(&Step::ALL[..], &Arms::ALL[..]), (&Step::THREE[..], &Arms::THREE[..])] {
+        for &step in steps {
+            for &arms in arm_patterns {
+                for energy in Energy::ALL {
+                    for mirrored in [false, true] {
+                        out.push(MoveInfo { step, arms, energy, mirrored });
+                    }
                 }
             }
         }
@@ -74,15 +89,20 @@ pub fn builtin_moves() -> Vec<MoveInfo> {
     out
 }
 
-/// Frames of one built-in move (4 counts plus the closing frame).
+/// Frames of one built-in move in 4 (4 counts plus the closing frame).
 pub fn move_frame_count() -> usize {
-    (COUNTS as f32 * 60.0 / BUILTIN_BPM * BUILTIN_FPS).round() as usize + 1
+    frame_count_of(COUNTS)
+}
+
+/// Frames of one built-in move of `counts` counts (plus the closing frame).
+pub fn frame_count_of(counts: usize) -> usize {
+    (counts as f32 * 60.0 / BUILTIN_BPM * BUILTIN_FPS).round() as usize + 1
 }
 
 /// Renders one built-in move as a clip on `skeleton` (the canonical skeleton).
 pub fn build_move(info: &MoveInfo, skeleton: &Arc<Skeleton>) -> Clip {
     let legs = moves::leg_poses(info.step, info.energy);
-    let track = leg_track(&legs, info.mirrored, skeleton);
+    let track = leg_track(&legs, info.step.counts(), info.mirrored, skeleton);
     build_move_on_legs(info, skeleton, &legs, &track)
 }
 
@@ -94,8 +114,8 @@ fn frame_counts(f: usize) -> f32 {
 /// The solved legs of a step's key poses (at one energy, on one side), frame by frame: the
 /// same for every arm pattern, so [`builtin_clips`] solves them once per step, energy and
 /// side instead of once per move.
-fn leg_track(legs: &[pose::KeyPose], mirrored: bool, skeleton: &Skeleton) -> Vec<pose::LegSolution> {
-    (0..move_frame_count())
+fn leg_track(legs: &[pose::KeyPose], counts: usize, mirrored: bool, skeleton: &Skeleton) -> Vec<pose::LegSolution> {
+    (0..frame_count_of(counts))
         .map(|f| {
             // The legs' fields of `moves::pose_at`: the leg keys interpolated (arms change
             // nothing below the hips).
@@ -108,7 +128,7 @@ fn leg_track(legs: &[pose::KeyPose], mirrored: bool, skeleton: &Skeleton) -> Vec
 
 /// [`build_move`] on legs already solved by [`leg_track`] for the move's step, energy and side.
 fn build_move_on_legs(info: &MoveInfo, skeleton: &Arc<Skeleton>, legs: &[pose::KeyPose], track: &[pose::LegSolution]) -> Clip {
-    let frames = move_frame_count();
+    let frames = frame_count_of(info.counts());
     let mut rotations = Vec::with_capacity(frames * CANON_COUNT);
     let mut root = Vec::with_capacity(frames);
     for (f, leg) in track.iter().enumerate().take(frames) {
@@ -157,7 +177,8 @@ pub fn builtin_clips_lazily() -> impl Iterator<Item = (Clip, MoveInfo)> {
                     // Moves come step by step: the previous step's tracks are done with.
                     tracks.retain(|(s, _, _, _)| *s == m.step);
                     let keys = moves::leg_poses(m.step, m.energy);
-                    let sides = [leg_track(&keys, false, &skeleton), leg_track(&keys, true, &skeleton)];
+                    let counts = m.step.counts();
+                    let sides = [leg_track(&keys, counts, false, &skeleton), leg_track(&keys, counts, true, &skeleton)];
                     tracks.push((m.step, m.energy, keys, sides));
                     tracks.len() - 1
                 }
@@ -202,7 +223,7 @@ mod tests {
     #[test]
     fn moves_stay_on_the_floor_and_plant_feet() {
         let sk = Arc::new(canonical_skeleton());
-        for info in builtin_moves().iter().step_by(7) {
+        for info in builtin_moves().iter().step_by(7).chain(builtin_moves()[MOVES_IN_FOUR..].iter().step_by(3)) {
             let c = build_move(info, &sk);
             c.validate().unwrap();
             let mut min_low = f32::MAX;
@@ -228,12 +249,12 @@ mod tests {
         let clips = builtin_clips();
         let moves = builtin_moves();
         assert_eq!(clips.len(), moves.len());
-        for (i, info) in moves.iter().enumerate().step_by(11) {
+        for (i, info) in moves.iter().enumerate().step_by(11).chain(moves.iter().enumerate().skip(MOVES_IN_FOUR).step_by(7)) {
             // Every frame's whole key pose solved at once, as a move is defined.
             let keys = moves::leg_poses(info.step, info.energy);
             let mut rotations = Vec::new();
             let mut root = Vec::new();
-            for f in 0..move_frame_count() {
+            for f in 0..frame_count_of(info.counts()) {
                 let p = moves::pose_at(info.arms, info.energy, frame_counts(f), &keys);
                 let p = if info.mirrored { p.mirrored() } else { p };
                 let (local, mut r, lowest) = pose::solve(&sk, &p, STANDING_HIPS_HEIGHT);

@@ -28,6 +28,16 @@ pub enum Step {
     Bounce,
     HipSway,
     BodyRoll,
+    /// The forward half of the waltz box: forward, side, close (one bar of 3).
+    WaltzBoxForward,
+    /// The back half of the waltz box: back, side, close (one bar of 3).
+    WaltzBoxBack,
+    /// Balancé: step to the side, rise onto the ball behind, step in place (one bar of 3).
+    Balance,
+    /// A waltz turn: step, side, close while turning half round (one bar of 3).
+    WaltzTurn,
+    /// Hesitation: one step taken, then held for two counts while the free foot draws in.
+    Hesitation,
 }
 
 impl Step {
@@ -44,8 +54,25 @@ impl Step {
         Step::BodyRoll,
     ];
 
+    /// The steps in 3 (one bar of 3/4 each).
+    pub const THREE: [Step; 5] = [Step::WaltzBoxForward, Step::WaltzBoxBack, Step::Balance, Step::WaltzTurn, Step::Hesitation];
+
+    /// Counts of one bar of the step: 3 for the steps in 3, else 4.
+    pub fn counts(self) -> usize {
+        if Step::THREE.contains(&self) {
+            3
+        } else {
+            4
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
+            Step::WaltzBoxForward => "waltz box (forward)",
+            Step::WaltzBoxBack => "waltz box (back)",
+            Step::Balance => "balancé",
+            Step::WaltzTurn => "waltz turn",
+            Step::Hesitation => "hesitation",
             Step::StepTouch => "step-touch",
             Step::Grapevine => "grapevine",
             Step::BoxStep => "box step",
@@ -71,13 +98,25 @@ pub enum Arms {
     ArmRolls,
     OverheadReaches,
     ArmWave,
+    /// Arms held in a ballroom frame, rising and falling with the bar (in 3).
+    Frame,
+    /// Port de bras: one arm sweeps from the front up overhead and opens to the side (in 3).
+    PortDeBras,
+    /// Both arms open from low in front to wide at shoulder height and close again (in 3).
+    OpenArms,
 }
 
 impl Arms {
     pub const ALL: [Arms; 7] = [Arms::Swing, Arms::Waves, Arms::Punches, Arms::Claps, Arms::ArmRolls, Arms::OverheadReaches, Arms::ArmWave];
 
+    /// The arm patterns of the steps in 3 (each one bar of 3 counts, ending where it began).
+    pub const THREE: [Arms; 3] = [Arms::Frame, Arms::PortDeBras, Arms::OpenArms];
+
     pub fn name(self) -> &'static str {
         match self {
+            Arms::Frame => "waltz frame",
+            Arms::PortDeBras => "port de bras",
+            Arms::OpenArms => "open arms",
             Arms::Swing => "arm swing",
             Arms::Waves => "waves",
             Arms::Punches => "punches",
@@ -135,10 +174,20 @@ fn lk(l: [f32; 3], r: [f32; 3], w_left: f32, drop: f32) -> LegKey {
     LegKey { l: Vec3::from(l), r: Vec3::from(r), w_left, drop, yaw: 0.0, torso: [0.0; 4] }
 }
 
-/// Half-count keys (9: counts 1, &, 2, &, 3, &, 4, &, next 1) of each step, for the figure's
-/// right side leading (mirroring gives the left-leading version).
+/// Half-count keys (2 per count and the next bar's one: 9 for a step in 4, 7 for one in 3) of
+/// each step, for the figure's right side leading (mirroring gives the left-leading version).
 fn leg_keys(step: Step) -> Vec<LegKey> {
+    if step.counts() == 3 {
+        leg_keys_in_three(step)
+    } else {
+        leg_keys_in_four(step)
+    }
+}
+
+/// Half-count keys (9: counts 1, &, 2, &, 3, &, 4, &, next 1) of each step in 4.
+fn leg_keys_in_four(step: Step) -> Vec<LegKey> {
     match step {
+        Step::WaltzBoxForward | Step::WaltzBoxBack | Step::Balance | Step::WaltzTurn | Step::Hesitation => leg_keys_in_three(step),
         Step::StepTouch => vec![
             lk([0.25, 0.0, 0.0], [-0.25, 0.0, 0.0], 0.3, -0.07),
             lk([0.09, 0.07, 0.0], [-0.25, 0.0, 0.0], 0.0, -0.02),
@@ -262,6 +311,83 @@ fn leg_keys(step: Step) -> Vec<LegKey> {
     }
 }
 
+/// Half-count keys (7: counts 1, &, 2, &, 3, &, next 1) of each step in 3, right side leading.
+/// Waltz style: down on the one, rising through two and three; each count lands a foot (a
+/// dip of the body's speed on the count). A foot on the floor keeps its place from key to key;
+/// a foot travels lifted.
+fn leg_keys_in_three(step: Step) -> Vec<LegKey> {
+    match step {
+        Step::WaltzBoxForward => vec![
+            lk([0.1, 0.0, 0.0], [-0.1, 0.0, 0.0], 0.5, -0.08),
+            lk([0.1, 0.0, 0.0], [-0.1, 0.1, 0.16], 1.0, -0.04),
+            lk([0.1, 0.0, 0.0], [-0.1, 0.0, 0.3], 0.25, -0.02),
+            lk([0.2, 0.1, 0.22], [-0.1, 0.0, 0.3], 0.0, 0.0),
+            lk([0.3, 0.0, 0.3], [-0.1, 0.0, 0.3], 0.7, 0.01),
+            lk([0.3, 0.0, 0.3], [0.0, 0.1, 0.3], 1.0, -0.01),
+            lk([0.3, 0.0, 0.3], [0.1, 0.0, 0.3], 0.5, -0.08),
+        ],
+        Step::WaltzBoxBack => vec![
+            lk([0.1, 0.0, 0.0], [-0.1, 0.0, 0.0], 0.5, -0.08),
+            lk([0.1, 0.1, -0.16], [-0.1, 0.0, 0.0], 0.0, -0.04),
+            lk([0.1, 0.0, -0.3], [-0.1, 0.0, 0.0], 0.75, -0.02),
+            lk([0.1, 0.0, -0.3], [-0.2, 0.1, -0.22], 1.0, 0.0),
+            lk([0.1, 0.0, -0.3], [-0.3, 0.0, -0.3], 0.3, 0.01),
+            lk([0.0, 0.1, -0.3], [-0.3, 0.0, -0.3], 0.0, -0.01),
+            lk([-0.1, 0.0, -0.3], [-0.3, 0.0, -0.3], 0.5, -0.08),
+        ],
+        Step::Balance => vec![
+            lk([0.1, 0.0, 0.0], [-0.1, 0.0, 0.0], 0.5, -0.06),
+            lk([0.1, 0.0, 0.0], [-0.22, 0.1, 0.0], 1.0, -0.03),
+            lk([0.1, 0.0, 0.0], [-0.34, 0.0, 0.0], 0.2, -0.09),
+            lk([0.02, 0.1, -0.06], [-0.34, 0.0, 0.0], 0.0, -0.02),
+            lk([-0.12, 0.0, -0.1], [-0.34, 0.0, 0.0], 0.6, 0.02),
+            lk([-0.12, 0.0, -0.1], [-0.34, 0.1, 0.0], 1.0, -0.02),
+            lk([-0.12, 0.0, -0.1], [-0.34, 0.0, 0.0], 0.3, -0.07),
+        ],
+        Step::WaltzTurn => {
+            let mut k = vec![
+                lk([0.1, 0.0, 0.0], [-0.1, 0.0, 0.0], 0.5, -0.08),
+                lk([0.1, 0.0, 0.0], [-0.08, 0.1, 0.14], 1.0, -0.04),
+                lk([0.1, 0.0, 0.0], [-0.05, 0.0, 0.25], 0.2, -0.02),
+                lk([0.15, 0.1, 0.15], [-0.05, 0.0, 0.25], 0.0, 0.0),
+                lk([0.2, 0.0, 0.25], [-0.05, 0.0, 0.25], 0.7, 0.01),
+                lk([0.2, 0.0, 0.25], [0.02, 0.1, 0.26], 1.0, -0.01),
+                lk([0.2, 0.0, 0.25], [0.0, 0.0, 0.27], 0.5, -0.08),
+            ];
+            // A half turn to the left (yaw +) over the bar, most of it on the rise.
+            for (key, turn) in k.iter_mut().zip([0.0, 0.1, 0.3, 0.55, 0.8, 0.95, 1.0]) {
+                key.yaw = turn * PI;
+            }
+            k
+        }
+        Step::Hesitation => vec![
+            lk([0.1, 0.0, 0.0], [-0.1, 0.0, 0.0], 0.5, -0.08),
+            lk([0.24, 0.1, 0.05], [-0.1, 0.0, 0.0], 0.0, -0.04),
+            lk([0.34, 0.0, 0.08], [-0.1, 0.0, 0.0], 0.8, -0.03),
+            lk([0.34, 0.0, 0.08], [-0.1, 0.0, 0.0], 1.0, 0.0),
+            lk([0.34, 0.0, 0.08], [0.02, 0.1, 0.06], 1.0, 0.01),
+            lk([0.34, 0.0, 0.08], [0.1, 0.1, 0.08], 1.0, -0.02),
+            lk([0.34, 0.0, 0.08], [0.14, 0.0, 0.08], 0.5, -0.08),
+        ],
+        // The steps in 4 have no keys in 3.
+        _ => leg_keys_in_four(step),
+    }
+}
+
+/// `values[k]` on count k (0..=3 over a bar in 3), eased from each count to the next.
+fn through_counts(values: &[f32; 4], t: f32) -> f32 {
+    let x = t.clamp(0.0, 3.0);
+    let i = (x.floor() as usize).min(2);
+    values[i] + (values[i + 1] - values[i]) * smooth01(x - i as f32)
+}
+
+/// [`through_counts`] for points.
+fn through_points(points: &[Vec3; 4], t: f32) -> Vec3 {
+    let x = t.clamp(0.0, 3.0);
+    let i = (x.floor() as usize).min(2);
+    points[i].lerp(points[i + 1], smooth01(x - i as f32))
+}
+
 /// Left-hand target relative to the left shoulder (chest frame) and the right's, at time
 /// `t_counts` in 0..=4, with the chest twist the pattern asks for.
 fn arm_targets(arms: Arms, t: f32, amp: f32) -> (Vec3, Vec3, f32) {
@@ -337,6 +463,36 @@ fn arm_targets(arms: Arms, t: f32, amp: f32) -> (Vec3, Vec3, f32) {
             let r = down_r.lerp(up_r, rr * (0.7 + 0.3 * amp.min(1.0)));
             let l = down_l.lerp(up_l, rl * (0.7 + 0.3 * amp.min(1.0)));
             (l, r, 0.15 * (rl - rr))
+        }
+        // The arm patterns in 3 move between poses held on the counts (a smoothstep from each
+        // count to the next), so the arms, like the feet, turn on the counts (§J's kinetic beats).
+        Arms::Frame => {
+            // A ballroom hold (left hand raised to the side, right hand at the partner's back),
+            // rising on two and three with the body and settling on the one.
+            let rise = 0.06 * amp * through_counts(&[0.0, 0.5, 1.0, 0.0], t);
+            let l = Vec3::new(0.32, 0.02 + rise, 0.22);
+            let r = Vec3::new(-0.12, -0.12 + rise, 0.32);
+            (l, r, 0.16 * amp * through_counts(&[-0.5, 0.0, 0.5, -0.5], t))
+        }
+        Arms::PortDeBras => {
+            // The right arm: low in front on the one, overhead on two, open to the side on
+            // three, back low in front by the next one; the left answers low and open.
+            let front = Vec3::new(-0.08, -0.2, 0.4);
+            let over = Vec3::new(-0.1, 0.2 + 0.25 * amp.min(1.2), 0.12);
+            let side = Vec3::new(-0.48, 0.02, 0.05);
+            let r = through_points(&[front, over, side, front], t);
+            let open_l = Vec3::new(0.3, -0.25, 0.12);
+            let l = through_points(&[down_l, down_l.lerp(open_l, 0.6 * amp.min(1.2)), open_l, down_l], t);
+            (l, r, 0.12 * amp * through_counts(&[0.0, -1.0, 1.0, 0.0], t))
+        }
+        Arms::OpenArms => {
+            // Both arms open from low in front (one) to wide (two), float up (three) and close.
+            let low_l = Vec3::new(-0.04, -0.35, 0.25);
+            let wide_l = Vec3::new(0.42, -0.02 + 0.08 * (amp - 1.0), 0.08);
+            let high_l = wide_l + Vec3::new(-0.05, 0.12 * amp, 0.05);
+            let l = through_points(&[low_l, wide_l, high_l, low_l], t);
+            let r = Vec3::new(-l.x, l.y, l.z);
+            (l, r, 0.0)
         }
         Arms::ArmWave => {
             let ph = t * PI;

@@ -64,14 +64,14 @@ impl SegmentLibrary {
         Self::default()
     }
 
-    /// The built-in library: one segment per built-in move.
+    /// The built-in library: one segment per built-in move (in 4, and in 3).
     pub fn builtin() -> Self {
         let mut lib = Self::new();
         lib.add_builtin();
         lib
     }
 
-    /// Adds every built-in move (one 4-count segment each).
+    /// Adds every built-in move (one segment of its own counts each).
     pub fn add_builtin(&mut self) -> usize {
         let before = self.segments.len();
         let mut loader = BuiltinLoader::new();
@@ -90,9 +90,11 @@ impl SegmentLibrary {
             let Some((clip, info)) = loader.clips.next() else { break };
             let frames = clip.frame_count();
             let last = frames.saturating_sub(1) as f32;
-            let beats: Vec<f32> = (0..=SEGMENT_COUNTS).map(|k| last * k as f32 / SEGMENT_COUNTS as f32).collect();
+            // One bar of the move's own counts (4, or 3 for a move in 3).
+            let n = info.counts();
+            let beats: Vec<f32> = (0..=n).map(|k| last * k as f32 / n as f32).collect();
             let lc = LibraryClip::new(clip, beats, crate::library::BUILTIN_BPM, Some(info));
-            self.push_clip(lc, SEGMENT_COUNTS);
+            self.push_clip(lc, n, false);
             loader.done += 1;
         }
         if loader.done >= loader.total {
@@ -124,22 +126,23 @@ impl SegmentLibrary {
         let beat_count = beats.len();
         let lc = LibraryClip::new(canon, beats, tempo_bpm, None);
         let index = self.clips.len();
-        let added = self.push_clip(lc, hop);
+        let added = self.push_clip(lc, hop, options.steps_in_three);
         self.rescale();
         Ok(ClipSummary { clip: index, name, tempo_bpm, tempo_detected: detected, beats: beat_count, segments: added })
     }
 
-    fn push_clip(&mut self, lc: LibraryClip, hop: usize) -> usize {
+    fn push_clip(&mut self, lc: LibraryClip, hop: usize, stepped: bool) -> usize {
         let clip_index = self.clips.len();
         self.clips.push(lc);
-        let added = self.cut_segments(clip_index, hop);
+        let added = self.cut_segments(clip_index, hop, stepped);
         self.changed();
         added
     }
 
     /// Appends the segments of clip `clip_index` at its beats (every `hop` counts), and sets
-    /// the overlaps among all its segments.
-    fn cut_segments(&mut self, clip_index: usize, hop: usize) -> usize {
+    /// the overlaps among all its segments; its segments in 3 on its steps when `stepped` and it
+    /// steps twice a count ([`steps_in_three`]).
+    fn cut_segments(&mut self, clip_index: usize, hop: usize, stepped: bool) -> usize {
         let Some(lc) = self.clips.get(clip_index) else { return 0 };
         // Library clips are on the canonical skeleton: world positions are the canonical ones.
         let positions = canonical_world_positions(&lc.clip);
@@ -170,12 +173,22 @@ impl SegmentLibrary {
         let quality_frame = |f: usize| ((f as f32 / lc.clip.fps) * QUALITY_FPS).round() as usize;
         let first_new = self.segments.len();
         let beats = &lc.beat_frames;
-        // Built-in moves: their one 4-count bar only (module docs); imported clips: bars of each
-        // metre at the same counts.
-        let metres: &[usize] = if lc.builtin.is_some() { &[SEGMENT_COUNTS] } else { &SEGMENT_METRES };
+        // Built-in moves: their one bar only, of their own counts (module docs); imported clips:
+        // bars of each metre at the same counts.
+        let own = lc.builtin.map(|info| [info.counts()]);
+        let metres: &[usize] = match &own {
+            Some(n) => n,
+            None => &SEGMENT_METRES,
+        };
+        // A clip that steps twice a count is cut in 3 on its steps (see [`steps_in_three`]).
+        let stepped = if stepped && lc.builtin.is_none() { steps_in_three(beats, &kinetic) } else { None };
         for &n in metres {
         // 3-count windows on every count (module docs).
         let hop = if n == SEGMENT_COUNTS { hop.clamp(1, n) } else { 1 };
+        let (beats, unit) = match &stepped {
+            Some(steps) if n == 3 => (steps, "steps"),
+            _ => (beats, "counts"),
+        };
         let mut k = 0;
         while k + n < beats.len() {
             let (s, e) = (beats[k], beats[k + n]);
@@ -188,7 +201,7 @@ impl SegmentLibrary {
                 let name = match &lc.builtin {
                     Some(info) => info.name(),
                     None if n == SEGMENT_COUNTS => format!("{} · counts {}–{}", lc.clip.name, k + 1, k + n),
-                    None => format!("{} · counts {}–{} (in {n})", lc.clip.name, k + 1, k + n),
+                    None => format!("{} · {unit} {}–{} (in {n})", lc.clip.name, k + 1, k + n),
                 };
                 let mut count_frames: Vec<f32> = beats[k..=k + n].to_vec();
                 count_frames[0] = si as f32;
@@ -282,7 +295,7 @@ impl SegmentLibrary {
         let beat_count = beats.len();
         self.clips[clip].beat_frames = beats;
         self.clips[clip].tempo_bpm = tempo_bpm;
-        let added = self.cut_segments(clip, options.hop_counts.clamp(1, SEGMENT_COUNTS));
+        let added = self.cut_segments(clip, options.hop_counts.clamp(1, SEGMENT_COUNTS), options.steps_in_three);
         self.rescale();
         self.changed();
         let summary = ClipSummary { clip, name, tempo_bpm, tempo_detected: detected, beats: beat_count, segments: added };
@@ -371,6 +384,42 @@ impl SegmentLibrary {
         1.0 - self.similarity(a, b)
     }
 
+}
+
+/// Kinetic beats per count at and above which a clip steps twice a count: halfway between
+/// one and two.
+pub const STEPS_TWICE_A_COUNT: f32 = 1.5;
+
+/// The counts a clip's segments in 3 are cut on when it steps twice a count (its kinetic
+/// beats, §J, run at [`STEPS_TWICE_A_COUNT`] or more per count over the clip): its counts with
+/// the half counts between them, each half count at the clip's kinetic beat nearest to it
+/// within a quarter of a count (else the midpoint); `None` otherwise (cut on the counts).
+///
+/// Why: such a clip (slow phrases counted by the bar, steps between the counts: CMU subject
+/// 5's trials 12 and 19 at 61 and 68 counts per minute, 1.66 and 1.72 kinetic beats a count)
+/// played as a bar in 3 of a fast waltz is sped up 2.5 times; its turns on the counts and
+/// between them merge and the ones left fall between the song's beats, while the filling,
+/// seeing one turn a count at that rate, prefers it: with the CMU modern-dance clips as the
+/// library, the 150 and 138 BPM demo waltzes danced off the beat (BAS-music 0.43 and 0.46
+/// against 0.50 and 0.48 on the half-shifted beats). Cut on its steps, a window of 3 is three
+/// steps, each on a count. Bars of 4 keep the clip's counts (its phrase is in 4: the comb's
+/// bar).
+pub fn steps_in_three(beats: &[f32], kinetic: &[f32]) -> Option<Vec<f32>> {
+    let (first, last) = (*beats.first()?, *beats.last()?);
+    let counts = beats.len().checked_sub(1).filter(|&c| c > 0)? as f32;
+    let turns = kinetic.iter().filter(|&&f| f >= first && f < last).count() as f32;
+    if turns / counts < STEPS_TWICE_A_COUNT {
+        return None;
+    }
+    let mut out = Vec::with_capacity(2 * beats.len());
+    for w in beats.windows(2) {
+        out.push(w[0]);
+        let (mid, reach) = (0.5 * (w[0] + w[1]), 0.25 * (w[1] - w[0]));
+        let near = kinetic.iter().copied().filter(|&f| (f - mid).abs() <= reach).min_by(|a, b| (a - mid).abs().total_cmp(&(b - mid).abs()));
+        out.push(near.unwrap_or(mid));
+    }
+    out.push(last);
+    Some(out)
 }
 
 /// Keeps the items whose `mask` entry is true.

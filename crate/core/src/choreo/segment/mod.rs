@@ -22,7 +22,7 @@ mod types;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-pub use library::{BuiltinLoader, SegmentLibrary};
+pub use library::{steps_in_three, BuiltinLoader, SegmentLibrary, STEPS_TWICE_A_COUNT};
 pub use signature::{signature_of, SIGNATURE_AXES, SIGNATURE_OFFSET, SIGNATURE_REFERENCE, SIGNATURE_VELOCITY_SECS};
 pub use tempo::{beat_fit, clip_count_period, detect_beats, detect_counts, joint_speed, kinetic_per_count_by_rate, KINETIC_RATES_BPM};
 pub(crate) use types::JoinEnds;
@@ -66,11 +66,14 @@ pub struct SegmentOptions {
     /// Counts between the starts of consecutive segments (1..=4; default 2: segments overlap
     /// by half a bar, giving the filling more ways to join).
     pub hop_counts: usize,
+    /// Cut the segments in 3 of a clip that steps twice a count on its steps, not its counts
+    /// (default true; [`steps_in_three`]). Off: the cut before issue 26 (the control).
+    pub steps_in_three: bool,
 }
 
 impl Default for SegmentOptions {
     fn default() -> Self {
-        Self { tempo_bpm: None, first_beat_secs: None, hop_counts: 2 }
+        Self { tempo_bpm: None, first_beat_secs: None, hop_counts: 2, steps_in_three: true }
     }
 }
 

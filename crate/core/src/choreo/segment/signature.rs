@@ -12,8 +12,9 @@ use crate::canon::humanoid::CANON_COUNT;
 pub const SIGNATURE_AXES: usize = 5;
 /// The pose the signature's features are measured from: the mean §B-normalised position (body
 /// heights; x, y, z) of every canonical joint (in [`Canon::ALL`]'s order) over the built-in
-/// moves (a unit test recomputes it). A fixed pose, not the current library's mean, so a
-/// segment's signature never changes when clips are added.
+/// moves in 4 (a unit test recomputes it; the moves in 3, added later, leave it as it was). A
+/// fixed pose, not the current library's mean, so a segment's signature never changes when
+/// clips (or moves) are added.
 pub const SIGNATURE_REFERENCE: [[f32; 3]; CANON_COUNT] = [
     [0.000, 0.035, 0.0],    // hips
     [0.000, 0.106, 0.0],    // spine

@@ -1,0 +1,214 @@
+//! What a bar's move is and where it is weak, in words (issue 26 item 5): the move's name and
+//! source (built-in, or the imported clip it was cut from) and the flags the app's §J readouts
+//! raise on it: off the beat, a join jump over the goal, foot skate beyond its source's. The
+//! Dance strip shows them on every bar, and the relevance-feedback candidates carry them too
+//! (measured in place, as the bar would play them once Set), so no candidate the app would flag
+//! is shown without saying so; [`candidate_notes`] ranks clean candidates first.
+//!
+//! The rules are the strip's: a bar is off the beat when its BAS-music is not at least 0.10
+//! above the same bar scored on half-shifted beats (§J's control), its join is rough when its
+//! join jump passes [`JOIN_JUMP_GOAL`], and it skates when its feet slide faster than its source
+//! clip's do played at the bar's pace (§N: skate is a speed).
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use super::quality::{dance_quality, BarQuality, QualityError, JOIN_JUMP_GOAL};
+use super::render::{render, RenderOptions};
+use super::segment::SegmentLibrary;
+use crate::bars::Bar;
+
+/// Margin of BAS-music over the half-shifted control below which a bar is off the beat.
+pub const OFF_BEAT_MARGIN: f32 = 0.10;
+
+/// Why notes could not be made.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum NotesError {
+    #[error("bar {bar} is out of range: the dance has {bars} bars")]
+    NoSuchBar { bar: usize, bars: usize },
+    #[error("there is no segment {segment} in the library (it has {segments})")]
+    NoSuchSegment { segment: usize, segments: usize },
+    #[error("{choices} moves given for {bars} bars")]
+    ChoicesMismatch { choices: usize, bars: usize },
+    #[error("the dance cannot be measured: {0}")]
+    Quality(#[from] QualityError),
+}
+
+/// What a flag is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum FlagKind {
+    OffBeat,
+    JoinJump,
+    FootSkate,
+}
+
+/// One weak spot of a bar, in words, with the figure and the goal it missed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Flag {
+    pub kind: FlagKind,
+    /// For the person, e.g. "foot skate 47 cm/s (its source 12 cm/s)".
+    pub words: String,
+    pub value: f32,
+    pub goal: f32,
+}
+
+/// A bar's move and its flags.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct MoveNote {
+    pub bar: usize,
+    /// The segment, or `None` for an empty bar.
+    pub segment: Option<usize>,
+    /// The move's name ("" for an empty bar).
+    pub name: String,
+    /// "built-in", or the imported clip's name.
+    pub source: String,
+    pub builtin: bool,
+    pub flags: Vec<Flag>,
+}
+
+impl MoveNote {
+    /// The flags as one line ("" when clean).
+    pub fn words(&self) -> String {
+        self.flags.iter().map(|f| f.words.as_str()).collect::<Vec<_>>().join("; ")
+    }
+}
+
+/// The note of bar `bar` holding `segment`, from its readout `q` (of the dance it plays in).
+fn note_of(lib: &SegmentLibrary, bars: &[Bar], bar: usize, segment: Option<usize>, q: Option<&BarQuality>) -> MoveNote {
+    let seg = segment.and_then(|s| lib.segment(s));
+    let (name, source, builtin) = match seg {
+        Some(s) if s.builtin.is_some() => (s.name.clone(), "built-in".to_string(), true),
+        Some(s) => (s.name.clone(), lib.clips().get(s.clip).map_or_else(|| s.source.clone(), |c| c.clip.name.clone()), false),
+        None => (String::new(), String::new(), false),
+    };
+    let mut flags = Vec::new();
+    if let (Some(s), Some(q)) = (seg, q) {
+        let margin = q.beats.bas_music - q.beats.bas_music_shifted;
+        if margin < OFF_BEAT_MARGIN {
+            flags.push(Flag {
+                kind: FlagKind::OffBeat,
+                words: format!("off the beat (beat alignment {:.2}, half a beat off {:.2})", q.beats.bas_music, q.beats.bas_music_shifted),
+                value: margin,
+                goal: OFF_BEAT_MARGIN,
+            });
+        }
+        if let Some(j) = q.join_jump.filter(|&j| j > JOIN_JUMP_GOAL) {
+            flags.push(Flag { kind: FlagKind::JoinJump, words: format!("join jump {j:.2} (goal ≤ {JOIN_JUMP_GOAL})"), value: j, goal: JOIN_JUMP_GOAL });
+        }
+        // The source clip's skate at the bar's pace (§N).
+        let rate = super::count_rate_bpm(s.counts(), bars.get(bar).map_or(1.0, Bar::duration_secs));
+        let paced = s.clip_skate_cm_per_s * if s.tempo_bpm > 0.0 { rate / s.tempo_bpm } else { 1.0 };
+        let skate = q.foot_skate.mean_cm_per_s;
+        if skate.is_finite() && paced.is_finite() && skate > paced {
+            flags.push(Flag { kind: FlagKind::FootSkate, words: format!("foot skate {skate:.0} cm/s (its source {paced:.0} cm/s)"), value: skate, goal: paced });
+        }
+    }
+    MoveNote { bar, segment, name, source, builtin, flags }
+}
+
+/// Every bar's note, from the dance's readout `quality` (`dance_quality` of the rendered dance
+/// of `choices` on `bars`).
+pub fn bar_notes(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], quality: &[BarQuality]) -> Vec<MoveNote> {
+    (0..bars.len()).map(|i| note_of(lib, bars, i, choices.get(i).copied().flatten(), quality.get(i))).collect()
+}
+
+/// The notes of `candidates` for bar `bar` of the dance `choices` on `bars`: each measured as the
+/// bar would play once Set (the bar and its neighbours rendered with the candidate in place,
+/// feet held as the app renders them), its flags those of the bar and of the join into the next
+/// bar. Returned clean first, then by fewer flags; among equals in the given order (the
+/// search's, by relevance).
+pub fn candidate_notes(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], beats_secs: &[f32], bar: usize, candidates: &[usize]) -> Result<Vec<MoveNote>, NotesError> {
+    if bar >= bars.len() {
+        return Err(NotesError::NoSuchBar { bar, bars: bars.len() });
+    }
+    if choices.len() != bars.len() {
+        return Err(NotesError::ChoicesMismatch { choices: choices.len(), bars: bars.len() });
+    }
+    if let Some(&bad) = candidates.iter().find(|&&c| c >= lib.len()) {
+        return Err(NotesError::NoSuchSegment { segment: bad, segments: lib.len() });
+    }
+    // The window: the bar before (its end leads in), the bar, the bar after (the join out).
+    let (a, b) = (bar.saturating_sub(1), (bar + 2).min(bars.len()));
+    let shift = bars[a].start_secs;
+    let window: Vec<Bar> = bars[a..b]
+        .iter()
+        .enumerate()
+        .map(|(i, x)| Bar { index: i, start_secs: x.start_secs - shift, end_secs: x.end_secs - shift, ..x.clone() })
+        .collect();
+    let end = window.last().map_or(0.0, |x| x.end_secs);
+    let beats: Vec<f32> = beats_secs.iter().map(|t| t - shift).filter(|&t| (-1e-3..=end + 1e-3).contains(&t)).collect();
+    let beats = if beats.len() >= 2 {
+        beats
+    } else {
+        window.iter().flat_map(|x| (0..x.beat_count()).map(move |k| x.start_secs + x.duration_secs() * k as f32 / x.beat_count() as f32)).collect()
+    };
+    let at = bar - a;
+    let mut notes = Vec::with_capacity(candidates.len());
+    for &c in candidates {
+        let mut ch: Vec<Option<usize>> = choices[a..b].to_vec();
+        ch[at] = Some(c);
+        let clip = render(lib, &window, &ch, &RenderOptions::default());
+        let q = dance_quality(&clip, &window, &beats)?;
+        let mut note = note_of(lib, &window, at, Some(c), q.bars.get(at));
+        note.bar = bar;
+        // The join into the next bar, when it holds a move.
+        if let (Some(next), Some(Some(_))) = (q.bars.get(at + 1), ch.get(at + 1)) {
+            if let Some(j) = next.join_jump.filter(|&j| j > JOIN_JUMP_GOAL) {
+                note.flags.push(Flag { kind: FlagKind::JoinJump, words: format!("join jump {j:.2} into the next bar (goal ≤ {JOIN_JUMP_GOAL})"), value: j, goal: JOIN_JUMP_GOAL });
+            }
+        }
+        notes.push(note);
+    }
+    // Stable: among equals, the search's order.
+    notes.sort_by_key(|n| n.flags.len());
+    Ok(notes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::choreo::bars_from_tempo;
+
+    #[test]
+    fn notes_name_every_move_and_rank_clean_candidates_first() {
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(16.0, 120.0, 4, 0.0, |_, _| 0.5).unwrap();
+        let choices: Vec<Option<usize>> = (0..bars.len()).map(|i| Some((i * 37) % 420)).collect();
+        let beats: Vec<f32> = (0..40).map(|k| k as f32 * 0.5).collect();
+        let clip = render(&lib, &bars, &choices, &RenderOptions::default());
+        let q = dance_quality(&clip, &bars, &beats).unwrap();
+        let notes = bar_notes(&lib, &bars, &choices, &q.bars);
+        assert_eq!(notes.len(), bars.len());
+        for (n, c) in notes.iter().zip(&choices) {
+            assert_eq!(n.name, lib.segments()[c.unwrap()].name);
+            assert_eq!(n.source, "built-in");
+            // Each flag agrees with the readout it words.
+            let bq = &q.bars[n.bar];
+            assert_eq!(n.flags.iter().any(|f| f.kind == FlagKind::OffBeat), bq.beats.bas_music - bq.beats.bas_music_shifted < OFF_BEAT_MARGIN);
+            assert_eq!(n.flags.iter().any(|f| f.kind == FlagKind::JoinJump), bq.join_jump.is_some_and(|j| j > JOIN_JUMP_GOAL));
+        }
+        // Candidates: ranked by flags, the search's order kept among equals.
+        let candidates: Vec<usize> = (0..12).map(|i| i * 31 % 420).collect();
+        let cn = candidate_notes(&lib, &bars, &choices, &beats, 3, &candidates).unwrap();
+        assert_eq!(cn.len(), candidates.len());
+        assert!(cn.windows(2).all(|w| w[0].flags.len() <= w[1].flags.len()));
+        for w in cn.windows(2).filter(|w| w[0].flags.len() == w[1].flags.len()) {
+            let pos = |s: Option<usize>| candidates.iter().position(|&c| Some(c) == s).unwrap();
+            assert!(pos(w[0].segment) < pos(w[1].segment));
+        }
+        // A candidate measured in place is the bar as the dance would play it once Set.
+        let c = cn[0].segment.unwrap();
+        let mut set = choices.clone();
+        set[3] = Some(c);
+        let whole = dance_quality(&render(&lib, &bars, &set, &RenderOptions::default()), &bars, &beats).unwrap();
+        let bq = &whole.bars[3];
+        assert_eq!(cn[0].flags.iter().any(|f| f.kind == FlagKind::OffBeat), bq.beats.bas_music - bq.beats.bas_music_shifted < OFF_BEAT_MARGIN, "{:?} vs {:?}", cn[0], bq.beats);
+        // Bad input: typed errors.
+        assert_eq!(candidate_notes(&lib, &bars, &choices, &beats, 99, &candidates), Err(NotesError::NoSuchBar { bar: 99, bars: bars.len() }));
+        assert!(matches!(candidate_notes(&lib, &bars, &choices, &beats, 3, &[100_000]), Err(NotesError::NoSuchSegment { .. })));
+        assert!(matches!(candidate_notes(&lib, &bars, &choices[..2], &beats, 1, &candidates), Err(NotesError::ChoicesMismatch { .. })));
+    }
+}
