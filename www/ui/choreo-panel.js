@@ -61,6 +61,7 @@ export class ChoreoPanel {
   bind() {
     const $ = this.$;
     $("#dance-generate").addEventListener("click", () => this.generate());
+    $("#dance-another-take").addEventListener("click", () => this.generate(true));
     $("#dance-recut").addEventListener("click", () => this.recut());
     $("#dance-clip").addEventListener("change", () => this.showClip());
     $("#dance-clip-bpm").addEventListener("keydown", (ev) => { if (ev.key === "Enter") this.recut(); });
@@ -94,6 +95,7 @@ export class ChoreoPanel {
       else if (k === "]") this.step(1);
       else if (k === "s") this.set();
       else if (k === "f") this.search();
+      else if (ev.key === "G") this.generate(true);
       else if (k === "g") this.generate();
       else if (k === "p") this.playDance();
     });
@@ -315,16 +317,18 @@ export class ChoreoPanel {
     this.renderDance();
   }
 
-  /** Fills the open bars, once the join costs are ready. */
-  async generate() {
+  /** Fills the open bars, once the join costs are ready: take 0, or (`another`) the take after the dance's (64 takes, then take 0 again). */
+  async generate(another = false) {
     if (this.generating) return;
     this.generating = true;
     this.root.dataset.busy = "generate";
     try {
       await this.prepareJoins();
-      const r = this.act(() => this.choreographer.generate());
+      const take = another ? ((this.choreographer.take ?? 0) + 1) % 64 : 0;
+      const r = this.act(() => this.choreographer.generate({ take }));
       if (r) {
-        this.messages.info(`Dance: filled ${r.filled} bars (${r.pinned} pinned kept)`);
+        this.root.dataset.take = String(take);
+        this.messages.info(`Dance: ${take ? `take ${take + 1}: ` : ""}filled ${r.filled} bars (${r.pinned} pinned kept)`);
         this.renderDance();
       }
     } finally {

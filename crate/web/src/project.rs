@@ -25,6 +25,13 @@ fn arg<T: serde::de::DeserializeOwned>(value: JsValue, what: &str) -> JsResult<T
     serde_wasm_bindgen::from_value(value).map_err(|e| OdoriError::new("bad-argument", format!("{what}: {e}")))
 }
 
+/// `Project.generate`'s options (`GenerateOptions` in the `.d.ts`).
+#[derive(Deserialize, Default)]
+#[serde(rename_all = "camelCase", default, deny_unknown_fields)]
+struct JsGenerateOptions {
+    take: Option<u32>,
+}
+
 #[derive(Deserialize, Default)]
 #[serde(rename_all = "camelCase", default, deny_unknown_fields)]
 struct JsImportOptions {
@@ -264,10 +271,19 @@ impl Project {
         Ok(self.changed(()))
     }
 
-    /// Fills every open bar: `{ filled, pinned, cost }`.
-    pub fn generate(&mut self) -> Result<JsValue, OdoriError> {
-        let r = self.inner.generate()?;
+    /// Fills every open bar: `{ filled, pinned, cost }`. `{ take }` (0..=63, default 0): which
+    /// take of Generate; each take above 0 is a different dance of comparable cost, kept with
+    /// its number (`take`). One undo step.
+    pub fn generate(&mut self, #[wasm_bindgen(unchecked_param_type = "GenerateOptions | undefined")] options: JsValue) -> Result<JsValue, OdoriError> {
+        let o: JsGenerateOptions = from_js(options, "generate options", &["take"])?;
+        let r = self.inner.generate_take(o.take.unwrap_or(0))?;
         Ok(self.changed(to_js(&r)))
+    }
+
+    /// The take of Generate the dance's generated bars come from (0 until another take).
+    #[wasm_bindgen(getter)]
+    pub fn take(&self) -> u32 {
+        self.inner.take()
     }
 
     /// ρ of spec §F eq. 1 (0..=1): music fit against diversity and preference.

@@ -13,6 +13,12 @@
 //!    bars the move after the worst join and refills, up to [`GenerateOptions::join_repairs`]
 //!    times, keeping a refill only when it improves that join and keeps what the dance met.
 //!
+//! Another take ([`GenerateOptions::take`], issue 26): take k > 0 runs the same stages on the
+//! objective plus a penalty on the moves the earlier takes chose in each bar
+//! ([`take_penalties`]), the weakest of [`TAKE_LADDER`] that makes it differ from each earlier
+//! take in at least [`TAKE_DIFFER`] of the open bars while its objective stays within
+//! [`TAKE_SLACK`] of the best; take 0 is the dance without it.
+//!
 //! The measured stages render the dance unheld and measure it as §J does ([`dance_figures`]);
 //! a path's figures are measured once and kept ([`Measured`]). Deterministic: the same library,
 //! bars and options give the same dance.
@@ -21,7 +27,7 @@ use std::collections::BTreeSet;
 use std::sync::Arc;
 
 use super::fill::{
-    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
+    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, path_cost_with_tempi, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
 };
 use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, JOIN_JUMP_GOAL, QUALITY_FPS};
 use super::render::{render, RenderOptions};
@@ -31,6 +37,17 @@ use crate::bars::Bar;
 
 /// Refills the join repair tries at most by default ([`GenerateOptions::join_repairs`]).
 pub const JOIN_REPAIRS: usize = 16;
+/// The largest take [`GenerateOptions::take`] accepts: take k fills the bars of the k takes
+/// before it first (one shortest path per weight tried), so its cost grows with k.
+pub const MAX_TAKE: u32 = 63;
+/// Penalties tried per bar on an earlier take's move, as multiples of the best path's mean
+/// cost per open bar, weakest first ([`take_penalties`]).
+pub const TAKE_LADDER: [f32; 7] = [0.05, 0.1, 0.2, 0.3, 0.5, 0.75, 1.0];
+/// The share of open bars a take should differ in from each earlier take.
+pub const TAKE_DIFFER: f32 = 0.5;
+/// How far above the best path's objective a take's may be (a fraction of it).
+pub const TAKE_SLACK: f32 = 0.1;
+
 /// Cost added to a segment in the bar after a join it made too abrupt, so the refill takes
 /// another there: far above any term of the objective (a ban that stays finite, so a bar
 /// whose every segment is banned still gets one).
@@ -58,6 +75,10 @@ pub struct GenerateOptions {
     pub join_jump_goal: f32,
     /// Refills stage 5 tries at most. Default [`JOIN_REPAIRS`] (16); range 0..=64.
     pub join_repairs: usize,
+    /// Which take (issue 26, "another take"): 0 is the dance of least cost; take k > 0 is a
+    /// different dance of comparable cost ([`take_penalties`]). Deterministic: the same take of
+    /// the same problem is the same dance. Default 0; range 0..=[`MAX_TAKE`].
+    pub take: u32,
 }
 
 impl Default for GenerateOptions {
@@ -69,6 +90,7 @@ impl Default for GenerateOptions {
             follow_joins: true,
             join_jump_goal: JOIN_JUMP_GOAL,
             join_repairs: JOIN_REPAIRS,
+            take: 0,
         }
     }
 }
@@ -85,6 +107,9 @@ impl GenerateOptions {
         }
         if self.join_repairs > 64 {
             return bad("joinRepairs", "0..=64", self.join_repairs as f32);
+        }
+        if self.take > MAX_TAKE {
+            return bad("take", "0..=63", self.take as f32);
         }
         Ok(())
     }
@@ -178,6 +203,9 @@ pub struct Problem<'a> {
     follow_beat_rate: bool,
     /// Stage 3's slack ([`GenerateOptions::free_skate_slack`]).
     free_skate_slack: f32,
+    /// Per layer, per segment: a cost every fill of this problem adds (a take's penalty on the
+    /// earlier takes' moves, [`take_penalties`]). Empty: none.
+    base: Vec<Vec<f32>>,
 }
 
 impl<'a> Problem<'a> {
@@ -206,7 +234,24 @@ impl<'a> Problem<'a> {
         };
         let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
         let follow_beat_rate = follow && !kinetic.is_empty();
-        Problem { lib, bars, layers, weights, table, intensity, node_cost, bar_counts, segment_counts, bar_bpm, segment_bpm, beat_rate, follow_beat_rate, free_skate_slack: options.free_skate_slack }
+        Problem { lib, bars, layers, weights, table, intensity, node_cost, bar_counts, segment_counts, bar_bpm, segment_bpm, beat_rate, follow_beat_rate, free_skate_slack: options.free_skate_slack, base: Vec::new() }
+    }
+
+    /// `extra` with the problem's base cost added (each as it is when the other is empty).
+    fn with_base<'b>(&'b self, extra: &'b [Vec<f32>]) -> std::borrow::Cow<'b, [Vec<f32>]> {
+        if self.base.is_empty() {
+            return std::borrow::Cow::Borrowed(extra);
+        }
+        if extra.is_empty() {
+            return std::borrow::Cow::Borrowed(&self.base);
+        }
+        std::borrow::Cow::Owned(self.base.iter().zip(extra).map(|(b, e)| b.iter().zip(e).map(|(x, y)| x + y).collect()).collect())
+    }
+
+    /// The objective of `path` with the problem's own weights and no added cost: what takes
+    /// are compared by.
+    pub fn objective(&self, path: &[usize]) -> f32 {
+        path_cost_with_tempi(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&[]), &self.weights, path)
     }
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
@@ -216,13 +261,15 @@ impl<'a> Problem<'a> {
 
     /// The minimum-cost path with `weights` and `extra` costs.
     fn fill(&self, weights: &FillWeights, extra: &[Vec<f32>]) -> Result<Vec<usize>, FillError> {
-        Ok(fill_with_tempi(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(extra), weights)?.0)
+        let extra = self.with_base(extra);
+        Ok(fill_with_tempi(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&extra), weights)?.0)
     }
 
     /// [`free_skate_pass`] over the problem with `weights` and `extra` costs.
     fn free_skate(&self, weights: &FillWeights, extra: &[Vec<f32>], path: &[usize]) -> (Vec<usize>, f32) {
         let excess = |t: usize, s: usize| self.skate_excess(t, s);
-        free_skate_pass(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(extra), weights, self.free_skate_slack, &excess, path)
+        let extra = self.with_base(extra);
+        free_skate_pass(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&extra), weights, self.free_skate_slack, &excess, path)
     }
 
     /// Segment `s`'s skate above its clip's as bar `t` plays it: its feet slide faster by the
@@ -377,18 +424,87 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
     Ok((path, cost))
 }
 
+/// The share of `open` bars in which paths `a` and `b` differ.
+fn differ(a: &[usize], b: &[usize], open: &[usize]) -> f32 {
+    open.iter().filter(|&&t| a.get(t) != b.get(t)).count() as f32 / open.len().max(1) as f32
+}
+
+/// The cost take `take` adds per bar and segment (empty for take 0): a penalty on each move an
+/// earlier take chose in that bar. The earlier takes are their stage-1 paths, each found by
+/// this same rule (take 0's is the shortest path). Per take, the penalty is the weakest of
+/// [`TAKE_LADDER`] (times the shortest path's mean cost per open bar) whose path differs from
+/// every earlier take in at least [`TAKE_DIFFER`] of the open bars with an objective within
+/// [`TAKE_SLACK`] of the shortest path's; when none does both, the strongest within the slack
+/// (the weakest when none is within it). Pinned bars never change, so they never differ.
+pub fn take_penalties(p: &Problem, take: u32) -> Result<Vec<Vec<f32>>, FillError> {
+    if take == 0 {
+        return Ok(Vec::new());
+    }
+    let open: Vec<usize> = p.layers.iter().enumerate().filter(|(_, l)| matches!(l, Layer::Open { .. })).map(|(t, _)| t).collect();
+    let first = p.fill(&p.weights, &[])?;
+    let best = p.objective(&first);
+    let per_bar = if best.is_finite() && best > 0.0 { best / open.len().max(1) as f32 } else { 1.0 };
+    let penalties = |earlier: &[Vec<usize>], penalty: f32| -> Vec<Vec<f32>> {
+        let mut m = vec![vec![0.0f32; p.lib.len()]; p.layers.len()];
+        for path in earlier {
+            for &t in &open {
+                if let Some(c) = path.get(t).and_then(|&s| m[t].get_mut(s)) {
+                    *c += penalty;
+                }
+            }
+        }
+        m
+    };
+    let within = |obj: f32| obj <= best * (1.0 + TAKE_SLACK) + 1e-6;
+    let mut earlier = vec![first];
+    let mut chosen = Vec::new();
+    for _ in 0..take {
+        // (path, its penalties, objective)
+        let mut tried: Vec<(Vec<usize>, Vec<Vec<f32>>, f32)> = Vec::new();
+        for f in TAKE_LADDER {
+            let m = penalties(&earlier, f * per_bar);
+            let q = fill_with_tempi(&p.table, p.layers, &p.intensity, &p.node_cost, &p.tempi(&m), &p.weights)?.0;
+            let obj = p.objective(&q);
+            let least = earlier.iter().map(|e| differ(&q, e, &open)).fold(1.0f32, f32::min);
+            let stop = !within(obj) || least >= TAKE_DIFFER;
+            tried.push((q, m, obj));
+            if stop {
+                break;
+            }
+        }
+        let k = tried.iter().rposition(|x| within(x.2)).unwrap_or(0);
+        let (q, m, _) = tried.swap_remove(k);
+        earlier.push(q);
+        chosen = m;
+    }
+    Ok(chosen)
+}
+
 /// The whole pipeline: stages 1 to 5 in order on the problem of filling `layers` (one per bar
-/// of `bars`) from `lib`. Returns one segment per bar (pinned bars keep theirs) and the path's
-/// cost (the full objective).
+/// of `bars`) from `lib`, for take [`GenerateOptions::take`]. Returns one segment per bar
+/// (pinned bars keep theirs) and the path's cost (the objective with `weights`, without any
+/// stage's or take's charge, so dances and takes compare: [`Problem::objective`]).
 pub fn generate(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: FillWeights, options: &GenerateOptions) -> Result<(Vec<usize>, f32), FillError> {
-    let p = Problem::new(lib, bars, layers, weights, options);
+    let mut p = Problem::new(lib, bars, layers, weights, options);
+    if options.take > 0 {
+        p.base = take_penalties(&p, options.take)?;
+    }
+    let (path, _) = stages(&p, options)?;
+    // The objective with the problem's weights, without any stage's or take's charge, so
+    // dances (and takes) compare.
+    let cost = p.objective(&path);
+    Ok((path, cost))
+}
+
+/// Stages 1 to 5 in order on `p`.
+fn stages(p: &Problem, options: &GenerateOptions) -> Result<(Vec<usize>, f32), FillError> {
     let mut measured = Measured::default();
-    let path = fill_stage(&p)?;
-    let (path, weights) = beat_rate_stage(&p, path, &mut measured)?;
-    let (path, cost) = free_skate_stage(&p, &weights, &path);
-    let (path, cost) = if options.follow_skate { skate_stage(&p, &weights, path, cost, &mut measured)? } else { (path, cost) };
+    let path = fill_stage(p)?;
+    let (path, weights) = beat_rate_stage(p, path, &mut measured)?;
+    let (path, cost) = free_skate_stage(p, &weights, &path);
+    let (path, cost) = if options.follow_skate { skate_stage(p, &weights, path, cost, &mut measured)? } else { (path, cost) };
     if options.follow_joins {
-        join_repair_stage(&p, &weights, options, path, cost, &mut measured)
+        join_repair_stage(p, &weights, options, path, cost, &mut measured)
     } else {
         Ok((path, cost))
     }
@@ -551,6 +667,40 @@ mod tests {
     }
 
     #[test]
+    fn takes_differ_in_half_the_bars_at_comparable_cost_and_take_0_is_the_dance() {
+        let lib = builtin();
+        let bars = bars_at(120.0);
+        let mut layers = open_layers(&bars);
+        let opts = GenerateOptions::default();
+        let (zero, zero_cost) = generate(lib, &bars, &layers, FillWeights::default(), &opts).unwrap();
+        // Take 0 is the pipeline as it was, its stages in order.
+        let p = Problem::new(lib, &bars, &layers, FillWeights::default(), &opts);
+        let (staged, _) = stages(&p, &opts).unwrap();
+        assert_eq!((zero.clone(), zero_cost), (staged.clone(), p.objective(&staged)));
+        let takes: Vec<Vec<usize>> = (0..5).map(|take| generate(lib, &bars, &layers, FillWeights::default(), &GenerateOptions { take, ..opts }).unwrap().0).collect();
+        assert_eq!(takes[0], zero);
+        let objective: Vec<f32> = takes.iter().map(|q| p.objective(q)).collect();
+        let best = objective.iter().copied().fold(f32::INFINITY, f32::min);
+        for (k, q) in takes.iter().enumerate() {
+            assert!(objective[k] <= best * (1.0 + TAKE_SLACK) + 1e-4, "take {k}: objective {} against the best {best}", objective[k]);
+            for (j, r) in takes.iter().enumerate().take(k) {
+                let d = q.iter().zip(r).filter(|(a, b)| a != b).count();
+                assert!(2 * d >= bars.len(), "takes {j} and {k} differ in {d} of {} bars", bars.len());
+            }
+        }
+        // The same take twice is the same dance.
+        assert_eq!(generate(lib, &bars, &layers, FillWeights::default(), &GenerateOptions { take: 3, ..opts }).unwrap().0, takes[3]);
+        // A pinned bar stays in every take.
+        layers[2] = Layer::Fixed { segment: 7 };
+        for take in 0..3 {
+            assert_eq!(generate(lib, &bars, &layers, FillWeights::default(), &GenerateOptions { take, ..opts }).unwrap().0[2], 7);
+        }
+        // Out of range: refused with its name.
+        let err = GenerateOptions { take: MAX_TAKE + 1, ..opts }.validate().unwrap_err();
+        assert!(err.to_string().contains("take"), "{err}");
+    }
+
+    #[test]
     fn the_pipeline_is_its_stages_in_order() {
         let lib = crate::choreo::segment::tests::small_library_with_an_imported_clip();
         let bars = bars_at(100.0);
@@ -563,7 +713,7 @@ mod tests {
         let (path, w) = beat_rate_stage(&p, path, &mut m).unwrap();
         let (path, c) = free_skate_stage(&p, &w, &path);
         let (path, c) = skate_stage(&p, &w, path, c, &mut m).unwrap();
-        let (path, c) = join_repair_stage(&p, &w, &opts, path, c, &mut m).unwrap();
-        assert_eq!((whole, cost), (path, c));
+        let (path, _) = join_repair_stage(&p, &w, &opts, path, c, &mut m).unwrap();
+        assert_eq!((whole, cost), (path.clone(), p.objective(&path)));
     }
 }

@@ -390,6 +390,6 @@ impl Derived {
                 }
             })
             .collect();
-        DanceDoc { bars, settings: *ch.settings() }
+        DanceDoc { bars, settings: *ch.settings(), take: 0 }
     }
 }

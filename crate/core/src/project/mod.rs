@@ -26,7 +26,7 @@ use std::collections::BTreeSet;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::choreo::{ChoreoError, FillWeights, GenerateReport, SegmentError, Settings};
+use crate::choreo::{ChoreoError, FillWeights, GenerateOptions, GenerateReport, SegmentError, Settings};
 use crate::clip::Clip;
 use crate::import::{ImportError, ImportOptions};
 use crate::library::MoveInfo;
@@ -165,6 +165,10 @@ pub struct BarDoc {
 pub struct DanceDoc {
     pub bars: Vec<BarDoc>,
     pub settings: Settings,
+    /// The take of Generate its generated bars come from ([`crate::choreo::GenerateOptions::take`]:
+    /// 0 for Generate, counted up by "another take"); kept from schema 3 (older files read 0).
+    #[serde(default)]
+    pub take: u32,
 }
 
 /// Words a person attached to a clip so text can call it.
@@ -830,6 +834,11 @@ impl Project {
 
     /// [`Project::dance_edit`], recorded in the history or not (`record`).
     fn dance_change<R>(&mut self, record: bool, f: impl FnOnce(&mut crate::choreo::Choreography, &crate::choreo::SegmentLibrary) -> Result<R, ChoreoError>) -> Result<R, ProjectError> {
+        self.dance_change_take(record, None, f)
+    }
+
+    /// [`Project::dance_change`] that also sets the dance's take number (`None`: kept).
+    fn dance_change_take<R>(&mut self, record: bool, take: Option<u32>, f: impl FnOnce(&mut crate::choreo::Choreography, &crate::choreo::SegmentLibrary) -> Result<R, ChoreoError>) -> Result<R, ProjectError> {
         if let Some(m) = self.missing.first() {
             if self.doc.sources.iter().any(|s| self.missing.iter().any(|m| m.hash == s.blob)) {
                 return Err(ProjectError::Incomplete { count: self.missing.len(), first: m.what.clone() });
@@ -840,6 +849,7 @@ impl Project {
         let out = f(&mut ch, self.derived.library())?;
         let mut doc = self.doc.clone();
         doc.dance = self.derived.dance_doc(&ch);
+        doc.dance.take = take.unwrap_or(self.doc.dance.take);
         if record {
             self.commit(doc);
         } else {
@@ -887,7 +897,21 @@ impl Project {
 
     /// Fills every bar that is not pinned (spec §G).
     pub fn generate(&mut self) -> Result<GenerateReport, ProjectError> {
-        self.dance_edit(|ch, lib| ch.generate(lib))
+        self.generate_take(0)
+    }
+
+    /// Fills every bar that is not pinned with take `take` of Generate (issue 26: take 0 is
+    /// [`Project::generate`]'s dance, each further take a different dance of comparable cost,
+    /// [`crate::choreo::generate::take_penalties`]) and keeps the take's number with its bars;
+    /// one undo step. A take above [`crate::choreo::generate::MAX_TAKE`] is refused.
+    pub fn generate_take(&mut self, take: u32) -> Result<GenerateReport, ProjectError> {
+        let options = GenerateOptions { take, ..GenerateOptions::default() };
+        self.dance_change_take(true, Some(take), |ch, lib| ch.generate_with(lib, &options))
+    }
+
+    /// The take of Generate the dance's generated bars come from (0 until "another take").
+    pub fn take(&self) -> u32 {
+        self.doc.dance.take
     }
 
     /// ρ of spec §F eq. 1, in 0..=1.
