@@ -15,9 +15,16 @@
 //!   step, one arm pattern and one move, and distinct moves ÷ bars (goals: ≤ 1/3, ≤ 1/3 in 4/4;
 //!   ≤ 1/3 for one move in 3/4; distinct ≥ 0.7).
 //!
+//! Then, per song and library, `ODORI_TAKES=n` (default 5) takes of Generate
+//! ([`GenerateOptions::take`]): the least share of bars any two takes differ in (goal ≥ 50 %),
+//! each take's objective against the best take's (goal within 10 %), and how many takes meet
+//! the beat goals; with the time of each Generate.
+//!
 //! Prints figures; asserts nothing. `cargo bench -p odori-tests --bench choreo_person` (release),
 //! or `cargo test -p odori-tests --bench choreo_person` for a quicker build.
-//! `ODORI_SONGS=substring` keeps the songs whose label contains it.
+//! `ODORI_SONGS=substring` keeps the songs whose label contains it. `ODORI_MOVES=mine|mixed|builtin`
+//! sets the person library's moves source (`FillWeights::moves_source`; default: the product's).
+//! `ODORI_VARIETY=1` turns on the (unfinished) variety stage for the built-in dances.
 
 #[path = "../native/music_audio.rs"]
 mod music_audio;
@@ -27,7 +34,7 @@ use std::time::Instant;
 
 use odori_core::bars::Bar;
 use odori_core::choreo::quality::{dance_quality, DanceQuality};
-use odori_core::choreo::{Choreography, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::choreo::{Choreography, GenerateOptions, MovesSource, RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
@@ -122,6 +129,16 @@ fn paced_source_skate(lib: &SegmentLibrary, bars: &[Bar], chosen: &[Option<usize
     v.iter().sum::<f32>() / v.len().max(1) as f32
 }
 
+/// `ODORI_MOVES`, when set.
+fn moves_source() -> Option<MovesSource> {
+    match std::env::var("ODORI_MOVES").ok()?.as_str() {
+        "mine" => Some(MovesSource::Mine),
+        "mixed" => Some(MovesSource::Mixed),
+        "builtin" => Some(MovesSource::Builtin),
+        other => panic!("ODORI_MOVES={other}: mine, mixed or builtin"),
+    }
+}
+
 fn mark(ok: bool) -> char {
     if ok {
         '✓'
@@ -152,6 +169,7 @@ fn main() {
     let builtin = SegmentLibrary::builtin();
     let imported_segments = person.segments().iter().filter(|s| s.builtin.is_none()).count();
     println!("person library: {} segments ({} built-in, {imported_segments} imported) in {:.1} s", person.len(), person.len() - imported_segments, t.elapsed().as_secs_f64());
+    let takes: u32 = std::env::var("ODORI_TAKES").ok().and_then(|v| v.parse().ok()).unwrap_or(5);
     let songs = songs();
 
     println!("\n== person library (built-in + every dance clip), default settings, feet held ==");
@@ -165,6 +183,9 @@ fn main() {
         let grid = analyze(env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{label}: {e}"));
         let (bars, beats) = (grid.bars.clone(), grid.beat_times_secs.clone());
         let mut doc = Choreography::new(bars.clone()).expect("bars");
+        if let Some(source) = moves_source() {
+            doc.set_moves_source(source).expect("moves source");
+        }
         let tg = Instant::now();
         doc.generate(&person).expect("generate");
         let ms = tg.elapsed().as_secs_f64() * 1e3;
@@ -201,7 +222,8 @@ fn main() {
     let mut variety_met = 0usize;
     for (label, bars, _, bpb, _) in &grids {
         let mut doc = Choreography::new(bars.clone()).expect("bars");
-        doc.generate(&builtin).expect("generate");
+        let follow_variety = std::env::var("ODORI_VARIETY").is_ok_and(|v| v == "1");
+        doc.generate_with(&builtin, &GenerateOptions { follow_variety, ..GenerateOptions::default() }).expect("generate");
         let chosen: Vec<usize> = doc.segments().into_iter().flatten().collect();
         let n = bars.len();
         let info = |s: usize| builtin.segments()[s].builtin;
@@ -230,5 +252,39 @@ fn main() {
     }
     println!("every variety goal met on {variety_met}/{} songs with 3 bars or more", grids.iter().filter(|g| g.1.len() >= 3).count());
 
+    if takes > 1 {
+        println!("\n== {takes} takes of Generate per song ==");
+        println!("{:<40} {:<9} | {:>12} | {:>14} | {:>10} | {:>8}", "song", "library", "least differ", "worst/best obj", "beat goals", "ms/take");
+        for (label, bars, beats, _, rnd) in &grids {
+            for (name, lib) in [("person", &person), ("built-in", &builtin)] {
+                let rnd = if name == "person" { *rnd } else { random_bas(lib, bars, beats) };
+                let mut paths: Vec<Vec<Option<usize>>> = Vec::new();
+                let (mut costs, mut on_beat, mut ms) = (Vec::new(), 0usize, 0.0f64);
+                for take in 0..takes {
+                    let mut doc = Choreography::new(bars.clone()).expect("bars");
+                    if let (Some(source), "person") = (moves_source(), name) {
+                        doc.set_moves_source(source).expect("moves source");
+                    }
+                    let tg = Instant::now();
+                    let report = doc.generate_with(lib, &GenerateOptions { take, ..GenerateOptions::default() }).expect("generate");
+                    ms += tg.elapsed().as_secs_f64() * 1e3;
+                    let chosen = doc.segments();
+                    on_beat += usize::from(beat_goals(&quality(lib, bars, beats, &chosen), rnd).iter().all(|&b| b));
+                    costs.push(report.cost);
+                    paths.push(chosen);
+                }
+                let mut least = 1.0f32;
+                for a in 0..paths.len() {
+                    for b in a + 1..paths.len() {
+                        let d = paths[a].iter().zip(&paths[b]).filter(|(x, y)| x != y).count() as f32 / bars.len().max(1) as f32;
+                        least = least.min(d);
+                    }
+                }
+                let best = costs.iter().copied().fold(f32::INFINITY, f32::min);
+                let worst = costs.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                println!("{label:<40} {name:<9} | {:>11.0}% | {:>13.3}x | {on_beat:>5}/{takes:<4} | {:>8.0}", 100.0 * least, worst / best.max(1e-9), ms / takes as f64);
+            }
+        }
+    }
     println!("total {:.1} s", t.elapsed().as_secs_f64());
 }

@@ -96,6 +96,9 @@ export class ProjectDance {
   resetSearch(bar) { return this.edit((p) => p.resetSearch(bar)); }
   setRho(rho) { return this.edit((p) => p.setRho(rho)); }
   setMusicWeight(w) { return this.edit((p) => p.setMusicWeight(w)); }
+  /** Which moves Generate uses: "mine", "mixed" or "builtin". */
+  setMovesSource(source) { return this.edit((p) => p.setMovesSource(source)); }
+  get movesSource() { return this.project.movesSource; }
   /** Fills every open bar: one project edit (one undo takes the whole Generate back). `{ take }`: which take (0: Generate's dance; another take: a different dance of comparable cost). */
   generate(options) { return this.edit((p) => p.generate(options)); }
   /** The take of Generate the dance comes from. */

@@ -74,6 +74,7 @@ export class ChoreoPanel {
     $("#dance-reset").addEventListener("click", () => this.act(() => this.choreographer.resetSearch(this.bar), true));
     $("#dance-rho").addEventListener("change", (ev) => this.act(() => this.choreographer.setRho(Number(ev.target.value))));
     $("#dance-music").addEventListener("change", (ev) => this.act(() => this.choreographer.setMusicWeight(Number(ev.target.value))));
+    $("#dance-moves-source").addEventListener("change", (ev) => this.act(() => this.choreographer.setMovesSource(ev.target.value)));
     $("#dance-bars").addEventListener("click", (ev) => {
       const b = ev.target.closest("[data-bar]");
       if (b) this.selectBar(Number(b.dataset.bar));
@@ -317,14 +318,14 @@ export class ChoreoPanel {
     this.renderDance();
   }
 
-  /** Fills the open bars, once the join costs are ready: take 0, or (`another`) the take after the dance's (64 takes, then take 0 again). */
+  /** Fills the open bars, once the join costs are ready: take 0, or (`another`) the take after the dance's (16 takes, then take 0 again). */
   async generate(another = false) {
     if (this.generating) return;
     this.generating = true;
     this.root.dataset.busy = "generate";
     try {
       await this.prepareJoins();
-      const take = another ? ((this.choreographer.take ?? 0) + 1) % 64 : 0;
+      const take = another ? ((this.choreographer.take ?? 0) + 1) % 16 : 0;
       const r = this.act(() => this.choreographer.generate({ take }));
       if (r) {
         this.root.dataset.take = String(take);
@@ -364,6 +365,9 @@ export class ChoreoPanel {
 
   renderDance() {
     try {
+      // The moves-source choice as the project has it (after an undo, a reopened project).
+      const source = this.choreographer.movesSource;
+      if (source) this.$("#dance-moves-source").value = source;
       this.danceId = this.choreographer.renderDance(this.library, this.danceId ?? undefined);
       this.panel.refresh();
     } catch (e) { this.messages.error(`Dance: ${e.message}`); }

@@ -100,7 +100,7 @@ export interface ClipInfo {
   hasMesh: boolean;
 }
 export interface GenerateOptions {
-  /** Which take of Generate, 0..=63 (default 0): each take above 0 is a different dance of comparable cost (issue 26). */
+  /** Which take of Generate, 0..=15 (default 0): each take above 0 is a different dance of comparable cost (issue 26). */
   take?: number;
 }
 export interface ImportOptions {

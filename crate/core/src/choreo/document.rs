@@ -488,6 +488,14 @@ impl Choreography {
         Ok(())
     }
 
+    /// Which moves Generate fills the open bars with ([`super::MovesSource`]: the person's own
+    /// first, mixed, or built-in only).
+    pub fn set_moves_source(&mut self, source: super::MovesSource) -> Result<(), ChoreoError> {
+        self.record();
+        self.doc.settings.fill.moves_source = source;
+        Ok(())
+    }
+
     /// Weight of the filling's tempo-stretch term ([`FillWeights::stretch_weight`]), in 0..=100.
     pub fn set_stretch_weight(&mut self, w: f32) -> Result<(), ChoreoError> {
         if !(0.0..=100.0).contains(&w) {

@@ -902,7 +902,7 @@ impl Project {
 
     /// Fills every bar that is not pinned with take `take` of Generate (issue 26: take 0 is
     /// [`Project::generate`]'s dance, each further take a different dance of comparable cost,
-    /// [`crate::choreo::generate::take_penalties`]) and keeps the take's number with its bars;
+    /// [`crate::choreo::generate::takes`]) and keeps the take's number with its bars;
     /// one undo step. A take above [`crate::choreo::generate::MAX_TAKE`] is refused.
     pub fn generate_take(&mut self, take: u32) -> Result<GenerateReport, ProjectError> {
         let options = GenerateOptions { take, ..GenerateOptions::default() };
@@ -934,6 +934,12 @@ impl Project {
     /// built-in ones (0: none).
     pub fn set_own_moves_preference(&mut self, w: f32) -> Result<(), ProjectError> {
         self.dance_edit(|ch, _| ch.set_own_moves_preference(w))
+    }
+
+    /// Which moves Generate fills the open bars with (issue 26: the person's own first, mixed,
+    /// or built-in only); one undo step.
+    pub fn set_moves_source(&mut self, source: crate::choreo::MovesSource) -> Result<(), ProjectError> {
+        self.dance_edit(|ch, _| ch.set_moves_source(source))
     }
 
     /// The filling's weights in force.
