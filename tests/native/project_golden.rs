@@ -1,22 +1,36 @@
-//! The golden `.odori` file of schema version 1 (`tests/golden/project_v1.odori`, written once by
-//! `tests/tools/make_golden_project.rs` and reviewed; never written by the tests) opens with
-//! this build: everything its maker put in is there, it renders, and its history works. When
-//! the schema changes, this file must keep opening (through `project::file::migrate`).
+//! The golden `.odori` files of schema versions 1 and 2 (`tests/golden/project_v1.odori`,
+//! `project_v2.odori`, each written once by `tests/tools/make_golden_project.rs` with the build of
+//! its schema and reviewed; never written by the tests) open with this build: everything its
+//! maker put in is there, it renders, and its history works. When the schema changes, these
+//! files must keep opening (through `project::file::migrate`).
 
 use odori_core::choreo::RenderOptions;
 use odori_core::library::builtin_moves;
 use odori_core::project::{self, BarKind, MoveKey};
 
 const GOLDEN: &[u8] = include_bytes!("../golden/project_v1.odori");
+/// Written by the tool at main 8823db9 (schema 2: the history as changes, no take).
+const GOLDEN_V2: &[u8] = include_bytes!("../golden/project_v2.odori");
 
 #[test]
 fn golden_v1_opens_with_everything_in_it() {
-    let opened = project::open(GOLDEN).expect("the golden v1 file opens");
-    assert!(opened.missing.is_empty(), "{:?}", opened.missing);
     // Schema 2 keeps the history as changes: the v1 file (whole documents) is migrated.
-    assert_eq!(opened.migrated_from, Some(1));
+    golden_opens_with_everything_in_it(GOLDEN, 1);
+}
+
+#[test]
+fn golden_v2_opens_with_everything_in_it() {
+    // Schema 3 keeps the dance's take (issue 26): a v2 dance is take 0.
+    golden_opens_with_everything_in_it(GOLDEN_V2, 2);
+}
+
+fn golden_opens_with_everything_in_it(bytes: &[u8], version: u32) {
+    let opened = project::open(bytes).unwrap_or_else(|e| panic!("the golden v{version} file opens: {e}"));
+    assert!(opened.missing.is_empty(), "{:?}", opened.missing);
+    assert_eq!(opened.migrated_from, Some(version));
     let mut p = opened.project;
     let doc = p.doc().clone();
+    assert_eq!(doc.dance.take, 0, "a dance saved before takes is take 0");
     assert_eq!(doc.name, "golden v1");
     assert_eq!(doc.sources.len(), 1);
     assert_eq!(doc.sources[0].file_name, "tiny.bvh");

@@ -393,6 +393,35 @@ fn looking_is_not_an_edit_and_one_undo_takes_a_generate_back() {
     assert!(p.doc().dance.bars.iter().all(|b| b.state != BarKind::Empty), "redo brings it back");
 }
 
+/// Another take (issue 26): a different dance in at least half the bars, one undo step, kept
+/// with its number in the file; the same take again is the same dance; a take out of range is
+/// refused with the project untouched.
+#[test]
+fn another_take_differs_is_one_undo_step_and_is_kept_in_the_file() {
+    let (_, env) = song();
+    let mut p = Project::new();
+    p.set_initial_song("Vibe_Ace.ogg", None, env, AnalysisOptions::default()).expect("song");
+    p.generate().expect("generate");
+    assert_eq!(p.take(), 0);
+    let first = p.doc().dance.clone();
+    p.generate_take(1).expect("take 1");
+    assert_eq!(p.take(), 1);
+    let second = p.doc().dance.clone();
+    let differ = first.bars.iter().zip(&second.bars).filter(|(a, b)| a.r#move != b.r#move).count();
+    assert!(2 * differ >= first.bars.len(), "take 1 differs from take 0 in {differ} of {} bars", first.bars.len());
+    let reopened = project::open(&project::save(&p).expect("save")).expect("open").project;
+    assert_eq!(reopened.doc().dance, second, "the take and its bars come back from the file");
+    assert!(p.undo());
+    assert_eq!(p.doc().dance, first, "one undo brings take 0 back");
+    assert!(p.redo());
+    assert_eq!(p.doc().dance, second);
+    p.generate_take(1).expect("take 1 again");
+    assert_eq!(p.doc().dance, second, "the same take is the same dance");
+    let err = p.generate_take(16).expect_err("take 16 is out of range");
+    assert!(err.to_string().contains("take"), "{err}");
+    assert_eq!(p.doc().dance, second, "a refused take changes nothing");
+}
+
 /// The built-in moves made a slice at a time (as the page does, between frames) give the
 /// same library — same segments, same keys — and the same dance as made at once.
 #[test]

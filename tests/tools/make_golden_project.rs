@@ -1,4 +1,5 @@
-//! Writes the golden `.odori` file of schema version 1 (`tests/golden/project_v1.odori`), made
+//! Writes the golden `.odori` file of the build's schema version (`tests/golden/project_v1.odori`;
+//! `project_v2.odori` was written by it at main 8823db9, schema 2), made
 //! from the engine's own content only (the demo song's envelope, a three-joint BVH written
 //! here, built-in moves), so it can be committed. Run once per released schema version and
 //! review the result; the test run only reads it:

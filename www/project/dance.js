@@ -85,8 +85,13 @@ export class ProjectDance {
   resetSearch(bar) { return this.edit((p) => p.resetSearch(bar)); }
   setRho(rho) { return this.edit((p) => p.setRho(rho)); }
   setMusicWeight(w) { return this.edit((p) => p.setMusicWeight(w)); }
-  /** Fills every open bar: one project edit (one undo takes the whole Generate back). */
-  generate() { return this.edit((p) => p.generate()); }
+  /** Which moves Generate uses: "mine", "mixed" or "builtin". */
+  setMovesSource(source) { return this.edit((p) => p.setMovesSource(source)); }
+  get movesSource() { return this.project.movesSource; }
+  /** Fills every open bar: one project edit (one undo takes the whole Generate back). `{ take }`: which take (0: Generate's dance; another take: a different dance of comparable cost). */
+  generate(options) { return this.edit((p) => p.generate(options)); }
+  /** The take of Generate the dance comes from. */
+  get take() { return this.project.take; }
 
   quality(beatTimesSecs) { return this.project.quality(beatTimesSecs); }
   /** Each bar's move (name, source) and weak spots in words, with the readout: `{ quality, notes }`. */

@@ -63,6 +63,7 @@ export class ChoreoPanel {
   bind() {
     const $ = this.$;
     $("#dance-generate").addEventListener("click", () => this.generate());
+    $("#dance-another-take").addEventListener("click", () => this.generate(true));
     $("#dance-recut").addEventListener("click", () => this.recut());
     $("#dance-clip").addEventListener("change", () => this.showClip());
     $("#dance-clip-bpm").addEventListener("keydown", (ev) => { if (ev.key === "Enter") this.recut(); });
@@ -75,6 +76,7 @@ export class ChoreoPanel {
     $("#dance-reset").addEventListener("click", () => this.act(() => this.choreographer.resetSearch(this.bar), true));
     $("#dance-rho").addEventListener("change", (ev) => this.act(() => this.choreographer.setRho(Number(ev.target.value))));
     $("#dance-music").addEventListener("change", (ev) => this.act(() => this.choreographer.setMusicWeight(Number(ev.target.value))));
+    $("#dance-moves-source").addEventListener("change", (ev) => this.act(() => this.choreographer.setMovesSource(ev.target.value)));
     $("#dance-bars").addEventListener("click", (ev) => {
       const b = ev.target.closest("[data-bar]");
       if (b) this.selectBar(Number(b.dataset.bar));
@@ -96,6 +98,7 @@ export class ChoreoPanel {
       else if (k === "]") this.step(1);
       else if (k === "s") this.set();
       else if (k === "f") this.search();
+      else if (ev.key === "G") this.generate(true);
       else if (k === "g") this.generate();
       else if (k === "p") this.playDance();
     });
@@ -364,16 +367,18 @@ export class ChoreoPanel {
     this.renderDance();
   }
 
-  /** Fills the open bars, once the join costs are ready. */
-  async generate() {
+  /** Fills the open bars, once the join costs are ready: take 0, or (`another`) the take after the dance's (16 takes, then take 0 again). */
+  async generate(another = false) {
     if (this.generating) return;
     this.generating = true;
     this.root.dataset.busy = "generate";
     try {
       await this.prepareJoins();
-      const r = this.act(() => this.choreographer.generate());
+      const take = another ? ((this.choreographer.take ?? 0) + 1) % 16 : 0;
+      const r = this.act(() => this.choreographer.generate({ take }));
       if (r) {
-        this.messages.info(`Dance: filled ${r.filled} bars (${r.pinned} pinned kept)`);
+        this.root.dataset.take = String(take);
+        this.messages.info(`Dance: ${take ? `take ${take + 1}: ` : ""}filled ${r.filled} bars (${r.pinned} pinned kept)`);
         this.renderDance();
       }
     } finally {
@@ -410,6 +415,9 @@ export class ChoreoPanel {
 
   renderDance() {
     try {
+      // The moves-source choice as the project has it (after an undo, a reopened project).
+      const source = this.choreographer.movesSource;
+      if (source) this.$("#dance-moves-source").value = source;
       this.danceId = this.choreographer.renderDance(this.library, this.danceId ?? undefined);
       this.panel.refresh();
     } catch (e) { this.messages.error(`Dance: ${e.message}`); }

@@ -99,6 +99,10 @@ export interface ClipInfo {
   /** True when the clip drives a skinned character (glTF). */
   hasMesh: boolean;
 }
+export interface GenerateOptions {
+  /** Which take of Generate, 0..=15 (default 0): each take above 0 is a different dance of comparable cost (issue 26). */
+  take?: number;
+}
 export interface ImportOptions {
   /** Play at this frame rate instead of the file's (CMU salsa BVH headers say 120, the data is 60). */
   fpsOverride?: number;

@@ -25,6 +25,13 @@ fn arg<T: serde::de::DeserializeOwned>(value: JsValue, what: &str) -> JsResult<T
     serde_wasm_bindgen::from_value(value).map_err(|e| OdoriError::new("bad-argument", format!("{what}: {e}")))
 }
 
+/// `Project.generate`'s options (`GenerateOptions` in the `.d.ts`).
+#[derive(Deserialize, Default)]
+#[serde(rename_all = "camelCase", default, deny_unknown_fields)]
+struct JsGenerateOptions {
+    take: Option<u32>,
+}
+
 #[derive(Deserialize, Default)]
 #[serde(rename_all = "camelCase", default, deny_unknown_fields)]
 struct JsImportOptions {
@@ -292,10 +299,19 @@ impl Project {
         Ok(self.changed(()))
     }
 
-    /// Fills every open bar: `{ filled, pinned, cost }`.
-    pub fn generate(&mut self) -> Result<JsValue, OdoriError> {
-        let r = self.inner.generate()?;
+    /// Fills every open bar: `{ filled, pinned, cost }`. `{ take }` (0..=15, default 0): which
+    /// take of Generate; each take above 0 is a different dance of comparable cost, kept with
+    /// its number (`take`). One undo step.
+    pub fn generate(&mut self, #[wasm_bindgen(unchecked_param_type = "GenerateOptions | undefined")] options: JsValue) -> Result<JsValue, OdoriError> {
+        let o: JsGenerateOptions = from_js(options, "generate options", &["take"])?;
+        let r = self.inner.generate_take(o.take.unwrap_or(0))?;
         Ok(self.changed(to_js(&r)))
+    }
+
+    /// The take of Generate the dance's generated bars come from (0 until another take).
+    #[wasm_bindgen(getter)]
+    pub fn take(&self) -> u32 {
+        self.inner.take()
     }
 
     /// ρ of spec §F eq. 1 (0..=1): music fit against diversity and preference.
@@ -326,6 +342,32 @@ impl Project {
     pub fn set_own_moves_preference(&mut self, w: f32) -> Result<(), OdoriError> {
         self.inner.set_own_moves_preference(w)?;
         Ok(self.changed(()))
+    }
+
+    /// Which moves Generate fills the open bars with: `"mine"` (the person's imported moves
+    /// first: built-in moves only in bars no imported move fits), `"mixed"` (both, as the
+    /// filling weighs them; the default) or `"builtin"`. One undo step.
+    #[wasm_bindgen(js_name = setMovesSource)]
+    pub fn set_moves_source(&mut self, #[wasm_bindgen(unchecked_param_type = "\"mine\" | \"mixed\" | \"builtin\"")] source: &str) -> Result<(), OdoriError> {
+        let s = match source {
+            "mine" => odori_core::choreo::MovesSource::Mine,
+            "mixed" => odori_core::choreo::MovesSource::Mixed,
+            "builtin" => odori_core::choreo::MovesSource::Builtin,
+            other => return Err(OdoriError::new("bad-argument", format!("moves source: {other:?} is none of \"mine\", \"mixed\", \"builtin\""))),
+        };
+        self.inner.set_moves_source(s)?;
+        Ok(self.changed(()))
+    }
+
+    /// Which moves Generate fills the open bars with (`setMovesSource`).
+    #[wasm_bindgen(getter, js_name = movesSource)]
+    pub fn moves_source(&self) -> String {
+        match self.inner.fill_weights().moves_source {
+            odori_core::choreo::MovesSource::Mine => "mine",
+            odori_core::choreo::MovesSource::Mixed => "mixed",
+            odori_core::choreo::MovesSource::Builtin => "builtin",
+        }
+        .into()
     }
 
     /// Tags a clip (`{ source, clip }`) with words text can call it by.

@@ -76,6 +76,9 @@ pub enum Setting {
     /// Bars within which a repeated segment is penalised ([`FillWeights::repeat_window`]), in
     /// 1..=32.
     RepeatWindow(usize),
+    /// Which moves Generate fills the open bars with ([`super::MovesSource`]: the person's own
+    /// first, mixed, or built-in only).
+    MovesSource(super::MovesSource),
 }
 
 impl Settings {
@@ -95,6 +98,7 @@ impl Settings {
             Setting::BeatWeight(v) => self.fill.beat_weight = check("beatWeight", 0.0..=100.0, v)?,
             Setting::OwnMovesPreference(v) => self.fill.own_moves_preference = check("ownMovesPreference", 0.0..=100.0, v)?,
             Setting::RepeatPenalty(v) => self.fill.repeat_penalty = check("repeatPenalty", 0.0..=100.0, v)?,
+            Setting::MovesSource(source) => self.fill.moves_source = source,
             Setting::RepeatWindow(n) => {
                 if !(1..=32).contains(&n) {
                     return Err(ChoreoError::BadSetting { name: "repeatWindow".into(), range: "1..=32".into(), value: n as f32 });

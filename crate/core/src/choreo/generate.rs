@@ -2,6 +2,10 @@
 //! run in order, each a function of its inputs with the figure it checks.
 //!
 //! 1. [`fill_stage`]: the minimum-cost path of §G ([`super::fill`]) over the objective's terms.
+//! 1b. [`variety_stage`] (off by default, unfinished: [`GenerateOptions::follow_variety`]): no step, arm pattern or move holds more than [`VARIETY_SHARE`] of
+//!    the open bars and distinct moves are at least [`VARIETY_DISTINCT`] of them; if not,
+//!    refills charging what dominates, more at each try, within [`VARIETY_SLACK`] of the
+//!    objective, and keeps that charge for the stages after it.
 //! 2. [`beat_rate_stage`]: the dance's kinetic beats per count, measured on the rendered dance,
 //!    in [`super::BEAT_RATE_BAND`]; if not, refills with the beat-rate term at each weight of
 //!    [`beat_rate_ladder`] and keeps the first dance inside it.
@@ -13,15 +17,21 @@
 //!    bars the move after the worst join and refills, up to [`GenerateOptions::join_repairs`]
 //!    times, keeping a refill only when it improves that join and keeps what the dance met.
 //!
+//! Another take ([`GenerateOptions::take`], issue 26): take k > 0 runs the same stages on the
+//! objective plus a penalty on the moves the earlier takes' dances chose in each bar
+//! ([`takes`]), the weakest of [`TAKE_LADDER`] that makes it differ from each earlier take in at
+//! least [`TAKE_DIFFER`] of the open bars while its objective stays within [`TAKE_SLACK`] of the
+//! best; take 0 is the dance without it.
+//!
 //! The measured stages render the dance unheld and measure it as §J does ([`dance_figures`]);
 //! a path's figures are measured once and kept ([`Measured`]). Deterministic: the same library,
 //! bars and options give the same dance.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 
 use super::fill::{
-    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
+    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, path_cost_with_tempi, MovesSource, MOVES_SOURCE_CHARGE, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
 };
 use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, JOIN_JUMP_GOAL, QUALITY_FPS};
 use super::render::{render, RenderOptions};
@@ -31,6 +41,32 @@ use crate::bars::Bar;
 
 /// Refills the join repair tries at most by default ([`GenerateOptions::join_repairs`]).
 pub const JOIN_REPAIRS: usize = 16;
+/// The largest share of the open bars one step, one arm pattern or one move may hold
+/// ([`variety_stage`]).
+pub const VARIETY_SHARE: f32 = 1.0 / 3.0;
+/// The least share of the open bars distinct moves should be ([`variety_stage`]).
+pub const VARIETY_DISTINCT: f32 = 0.7;
+/// How far above stage 1's objective (a fraction of it) [`variety_stage`] may go: varying the
+/// arms of built-in moves that all join best with the same arms can double the table's join
+/// costs, while the measured joins stay within their goal (stage 5 keeps them there).
+pub const VARIETY_SLACK: f32 = 1.0;
+/// Refills [`variety_stage`] tries at most.
+pub const VARIETY_TRIES: usize = 12;
+/// What [`variety_stage`] adds per try to the cost of a dominating kind, as a multiple of stage
+/// 1's mean cost per open bar.
+pub const VARIETY_STEP: f32 = 0.25;
+
+/// The largest take [`GenerateOptions::take`] accepts: take k makes the k takes before it
+/// first (the whole pipeline each), so its time grows with k.
+pub const MAX_TAKE: u32 = 15;
+/// Penalties tried per bar on an earlier take's move, as multiples of the best path's mean
+/// cost per open bar, weakest first ([`takes`]).
+pub const TAKE_LADDER: [f32; 7] = [0.05, 0.1, 0.2, 0.3, 0.5, 0.75, 1.0];
+/// The share of open bars a take should differ in from each earlier take.
+pub const TAKE_DIFFER: f32 = 0.5;
+/// How far above the best path's objective a take's may be (a fraction of it).
+pub const TAKE_SLACK: f32 = 0.1;
+
 /// Cost added to a segment in the bar after a join it made too abrupt, so the refill takes
 /// another there: far above any term of the objective (a ban that stays finite, so a bar
 /// whose every segment is banned still gets one).
@@ -58,6 +94,19 @@ pub struct GenerateOptions {
     pub join_jump_goal: f32,
     /// Refills stage 5 tries at most. Default [`JOIN_REPAIRS`] (16); range 0..=64.
     pub join_repairs: usize,
+    /// Stage 1b, [`variety_stage`]: no step, arm pattern or move dominates the dance. Default
+    /// false: unfinished (issue 26 item 2). Measured by `tests/native/choreo_variety.rs` (ignored
+    /// until it passes), a charge on every bar alike switches a built-in dance wholesale from
+    /// one arm pattern to another rather than mixing them (Let's Go Fishin': one arm pattern in
+    /// 46 of 48 bars without the stage, 48 of 48 with it at a step of 0.25 and a slack of 1;
+    /// Sugar Plum Fairy 53/53 → 47/53, Vibe Ace 32/33 → 16/33), because the moves that join a
+    /// move best share its arms: the next try is a term on the edges (two bars in a row sharing
+    /// a step or arm pattern) or along the path, as the repeat window is.
+    pub follow_variety: bool,
+    /// Which take (issue 26, "another take"): 0 is the dance of least cost; take k > 0 is a
+    /// different dance of comparable cost ([`takes`]). Deterministic: the same take of
+    /// the same problem is the same dance. Default 0; range 0..=[`MAX_TAKE`].
+    pub take: u32,
 }
 
 impl Default for GenerateOptions {
@@ -69,6 +118,8 @@ impl Default for GenerateOptions {
             follow_joins: true,
             join_jump_goal: JOIN_JUMP_GOAL,
             join_repairs: JOIN_REPAIRS,
+            follow_variety: false,
+            take: 0,
         }
     }
 }
@@ -85,6 +136,9 @@ impl GenerateOptions {
         }
         if self.join_repairs > 64 {
             return bad("joinRepairs", "0..=64", self.join_repairs as f32);
+        }
+        if self.take > MAX_TAKE {
+            return bad("take", "0..=15", self.take as f32);
         }
         Ok(())
     }
@@ -178,6 +232,9 @@ pub struct Problem<'a> {
     follow_beat_rate: bool,
     /// Stage 3's slack ([`GenerateOptions::free_skate_slack`]).
     free_skate_slack: f32,
+    /// Per layer, per segment: a cost every fill of this problem adds (a take's penalty on the
+    /// earlier takes' moves, [`takes`]). Empty: none.
+    base: Vec<Vec<f32>>,
 }
 
 impl<'a> Problem<'a> {
@@ -206,7 +263,45 @@ impl<'a> Problem<'a> {
         };
         let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
         let follow_beat_rate = follow && !kinetic.is_empty();
-        Problem { lib, bars, layers, weights, table, intensity, node_cost, bar_counts, segment_counts, bar_bpm, segment_bpm, beat_rate, follow_beat_rate, free_skate_slack: options.free_skate_slack }
+        Problem { lib, bars, layers, weights, table, intensity, node_cost, bar_counts, segment_counts, bar_bpm, segment_bpm, beat_rate, follow_beat_rate, free_skate_slack: options.free_skate_slack, base: Vec::new() }
+    }
+
+    /// `extra` with the problem's base cost added (each as it is when the other is empty).
+    fn with_base<'b>(&'b self, extra: &'b [Vec<f32>]) -> std::borrow::Cow<'b, [Vec<f32>]> {
+        if self.base.is_empty() {
+            return std::borrow::Cow::Borrowed(extra);
+        }
+        if extra.is_empty() {
+            return std::borrow::Cow::Borrowed(&self.base);
+        }
+        std::borrow::Cow::Owned(self.base.iter().zip(extra).map(|(b, e)| b.iter().zip(e).map(|(x, y)| x + y).collect()).collect())
+    }
+
+    /// The objective of `path` with the problem's own weights and no added cost: what takes
+    /// are compared by.
+    pub fn objective(&self, path: &[usize]) -> f32 {
+        path_cost_with_tempi(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&[]), &self.weights, path)
+    }
+
+    /// The charge of [`FillWeights::moves_source`] per open bar and segment (empty: none):
+    /// [`MOVES_SOURCE_CHARGE`] on a move of the kind put second, in a bar the library holds a
+    /// live move of the other kind and of the bar's count for.
+    fn moves_source_charge(&self) -> Vec<Vec<f32>> {
+        let second_is_builtin = match self.weights.moves_source {
+            MovesSource::Mixed => return Vec::new(),
+            MovesSource::Mine => true,
+            MovesSource::Builtin => false,
+        };
+        let builtin: Vec<bool> = self.lib.segments().iter().map(|s| s.builtin.is_some()).collect();
+        let first_kind = |t: usize| self.lib.segments().iter().any(|s| !s.retired && builtin[s.index] != second_is_builtin && (self.bar_counts[t] == 0 || s.counts() == self.bar_counts[t]));
+        self.layers
+            .iter()
+            .enumerate()
+            .map(|(t, l)| {
+                let charged = matches!(l, Layer::Open { .. }) && first_kind(t);
+                builtin.iter().map(|&b| if charged && b == second_is_builtin { MOVES_SOURCE_CHARGE } else { 0.0 }).collect()
+            })
+            .collect()
     }
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
@@ -216,13 +311,15 @@ impl<'a> Problem<'a> {
 
     /// The minimum-cost path with `weights` and `extra` costs.
     fn fill(&self, weights: &FillWeights, extra: &[Vec<f32>]) -> Result<Vec<usize>, FillError> {
-        Ok(fill_with_tempi(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(extra), weights)?.0)
+        let extra = self.with_base(extra);
+        Ok(fill_with_tempi(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&extra), weights)?.0)
     }
 
     /// [`free_skate_pass`] over the problem with `weights` and `extra` costs.
     fn free_skate(&self, weights: &FillWeights, extra: &[Vec<f32>], path: &[usize]) -> (Vec<usize>, f32) {
         let excess = |t: usize, s: usize| self.skate_excess(t, s);
-        free_skate_pass(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(extra), weights, self.free_skate_slack, &excess, path)
+        let extra = self.with_base(extra);
+        free_skate_pass(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&extra), weights, self.free_skate_slack, &excess, path)
     }
 
     /// Segment `s`'s skate above its clip's as bar `t` plays it: its feet slide faster by the
@@ -256,6 +353,76 @@ impl Measured {
 /// Stage 1: the minimum-cost path of spec §G over the objective's terms ([`super::fill`]).
 pub fn fill_stage(p: &Problem) -> Result<Vec<usize>, FillError> {
     p.fill(&p.weights, &[])
+}
+
+/// What a segment is made of, for [`variety_stage`]: a built-in move's step and arm pattern
+/// (an imported segment: none; its source clip may be the person's only one).
+fn kinds(lib: &SegmentLibrary, s: usize) -> [Option<(u8, &'static str)>; 2] {
+    match lib.segments().get(s).and_then(|seg| seg.builtin) {
+        Some(m) => [Some((0, m.step.name())), Some((1, m.arms.name()))],
+        None => [None, None],
+    }
+}
+
+/// What breaks [`variety_stage`]'s goals on `path`: the kinds (step, arm pattern) and the moves
+/// holding more than [`VARIETY_SHARE`] of the `open` bars, and, when distinct moves are fewer than
+/// [`VARIETY_DISTINCT`] of them, every move used more than once.
+fn variety_faults(lib: &SegmentLibrary, path: &[usize], open: &[usize]) -> (Vec<(u8, &'static str)>, Vec<usize>) {
+    let mut by_kind: BTreeMap<(u8, &'static str), usize> = BTreeMap::new();
+    let mut by_move: BTreeMap<usize, usize> = BTreeMap::new();
+    for &t in open {
+        let Some(&s) = path.get(t) else { continue };
+        *by_move.entry(s).or_default() += 1;
+        for k in kinds(lib, s).into_iter().flatten() {
+            *by_kind.entry(k).or_default() += 1;
+        }
+    }
+    let most = VARIETY_SHARE * open.len() as f32;
+    let kinds: Vec<(u8, &'static str)> = by_kind.into_iter().filter(|&(_, n)| n as f32 > most + 1e-4).map(|(k, _)| k).collect();
+    let few = (by_move.len() as f32) < VARIETY_DISTINCT * open.len() as f32 - 1e-4;
+    let moves: Vec<usize> = by_move.into_iter().filter(|&(_, n)| n as f32 > most + 1e-4 || (few && n > 1)).map(|(s, _)| s).collect();
+    (kinds, moves)
+}
+
+/// Stage 1b: variety (issue 26). Figure: on the open bars, no step or arm pattern of the
+/// built-in moves and no move in more than [`VARIETY_SHARE`] of them, distinct moves at least
+/// [`VARIETY_DISTINCT`] of them (a song of fewer than 3 open bars has no goal). While `path`
+/// breaks it, adds [`VARIETY_STEP`] times stage 1's mean cost per open bar to every segment of
+/// each dominating kind and to each move at fault, in every open bar, and refills, up to
+/// [`VARIETY_TRIES`] times; a refill whose objective is more than [`VARIETY_SLACK`] above
+/// `path`'s ends the tries. Returns the last refill within the slack (or `path`) and the charge
+/// that made it (empty: none), which the stages after it keep.
+pub fn variety_stage(p: &Problem, path: Vec<usize>) -> Result<(Vec<usize>, Vec<Vec<f32>>), FillError> {
+    let open: Vec<usize> = p.layers.iter().enumerate().filter(|(_, l)| matches!(l, Layer::Open { .. })).map(|(t, _)| t).collect();
+    if open.len() < 3 {
+        return Ok((path, Vec::new()));
+    }
+    let start = p.objective(&path);
+    let per_bar = if start.is_finite() && start > 0.0 { start / open.len() as f32 } else { 1.0 };
+    let kind_of: Vec<[Option<(u8, &'static str)>; 2]> = (0..p.lib.len()).map(|s| kinds(p.lib, s)).collect();
+    let mut kind_cost: BTreeMap<(u8, &'static str), f32> = BTreeMap::new();
+    let mut move_cost = vec![0.0f32; p.lib.len()];
+    let (mut best, mut charge) = (path, Vec::new());
+    for _ in 0..VARIETY_TRIES {
+        let (kinds, moves) = variety_faults(p.lib, &best, &open);
+        if kinds.is_empty() && moves.is_empty() {
+            break;
+        }
+        for k in kinds {
+            *kind_cost.entry(k).or_default() += VARIETY_STEP * per_bar;
+        }
+        for s in moves {
+            move_cost[s] += VARIETY_STEP * per_bar;
+        }
+        let row: Vec<f32> = (0..p.lib.len()).map(|s| move_cost[s] + kind_of[s].iter().flatten().map(|k| kind_cost.get(k).copied().unwrap_or(0.0)).sum::<f32>()).collect();
+        let extra: Vec<Vec<f32>> = p.layers.iter().map(|l| if matches!(l, Layer::Open { .. }) { row.clone() } else { vec![0.0; row.len()] }).collect();
+        let q = p.fill(&p.weights, &extra)?;
+        if p.objective(&q) > start * (1.0 + VARIETY_SLACK) + 1e-6 {
+            break;
+        }
+        (best, charge) = (q, extra);
+    }
+    Ok((best, charge))
 }
 
 /// Stage 2: the dance's kinetic beat rate near the song's ([`GenerateOptions::follow_beat_rate`]),
@@ -377,18 +544,124 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
     Ok((path, cost))
 }
 
+/// The share of `open` bars in which paths `a` and `b` differ.
+fn differ(a: &[usize], b: &[usize], open: &[usize]) -> f32 {
+    open.iter().filter(|&&t| a.get(t) != b.get(t)).count() as f32 / open.len().max(1) as f32
+}
+
+/// `penalty` on each move `earlier` dances chose in each open bar, per bar and segment.
+fn take_penalty(p: &Problem, earlier: &[Vec<usize>], open: &[usize], penalty: f32) -> Vec<Vec<f32>> {
+    let mut m = vec![vec![0.0f32; p.lib.len()]; p.layers.len()];
+    for path in earlier {
+        for &t in open {
+            if let Some(c) = path.get(t).and_then(|&s| m[t].get_mut(s)) {
+                *c += penalty;
+            }
+        }
+    }
+    m
+}
+
+/// Stage 1 and 1b on `p` (its base charge as it is): the shortest path, then the variety stage
+/// when on; returns the path and `p`'s base with the variety charge added.
+fn fill_and_vary(p: &Problem, options: &GenerateOptions) -> Result<(Vec<usize>, Vec<Vec<f32>>), FillError> {
+    let path = fill_stage(p)?;
+    if !options.follow_variety {
+        return Ok((path, p.base.clone()));
+    }
+    let (path, charge) = variety_stage(p, path)?;
+    Ok((path, if charge.is_empty() { p.base.clone() } else { p.with_base(&charge).into_owned() }))
+}
+
+/// One take's dance on `p` whose base is `base` (stages 1 to 5).
+fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -> Result<Vec<usize>, FillError> {
+    p.base = base;
+    let (path, charged) = fill_and_vary(p, options)?;
+    p.base = charged;
+    Ok(stages(p, options, path)?.0)
+}
+
+/// Takes 0 to `take` in order (issue 26, [`GenerateOptions::take`]); returns the last. Take 0 is
+/// the pipeline on `p`. Take k > 0 adds a penalty on the move each earlier take's dance (as the
+/// whole pipeline made it) chose in each open bar: of [`TAKE_LADDER`] (times take 0's mean cost
+/// per open bar), weakest first, the first whose shortest path differs from every earlier take
+/// in at least [`TAKE_DIFFER`] of the open bars and whose dance, after every stage, does too,
+/// with objectives within [`TAKE_SLACK`] of take 0's shortest path's, and whose kinetic beats per
+/// count stay in [`super::BEAT_RATE_BAND`] when take 0's are; when none does, the last
+/// dance made within the slack (in the band, if any was) (the weakest penalty's when none is). Pinned bars never change,
+/// so they never differ. Take k runs the pipeline at least k + 1 times.
+pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Vec<usize>, FillError> {
+    let base = p.base.clone();
+    let open: Vec<usize> = p.layers.iter().enumerate().filter(|(_, l)| matches!(l, Layer::Open { .. })).map(|(t, _)| t).collect();
+    let best = p.objective(&fill_stage(p)?);
+    let per_bar = if best.is_finite() && best > 0.0 { best / open.len().max(1) as f32 } else { 1.0 };
+    let within = |obj: f32| obj <= best * (1.0 + TAKE_SLACK) + 1e-6;
+    let mut earlier: Vec<Vec<usize>> = vec![take_dance(p, options, base.clone())?];
+    // A take keeps take 0's beat rate in its band (when take 0's is): measured on the dance.
+    let (lib, bars) = (p.lib, p.bars);
+    let in_band = |d: &[usize]| dance_figures(lib, bars, d).is_none_or(|f| in_beat_rate_band(f.kinetic_per_count));
+    let keep_band = take > 0 && in_band(&earlier[0]);
+    for _ in 0..take {
+        let least = |q: &[usize], earlier: &[Vec<usize>]| earlier.iter().map(|e| differ(q, e, &open)).fold(1.0f32, f32::min);
+        let mut chosen: Option<(bool, Vec<usize>)> = None;
+        for f in TAKE_LADDER {
+            p.base = base.clone();
+            let penalty = take_penalty(p, &earlier, &open, f * per_bar);
+            let charged = p.with_base(&penalty).into_owned();
+            p.base = charged.clone();
+            let first = fill_stage(p)?;
+            if !within(p.objective(&first)) {
+                break;
+            }
+            if least(&first, &earlier) < TAKE_DIFFER {
+                continue;
+            }
+            let dance = take_dance(p, options, charged)?;
+            let banded = !keep_band || in_band(&dance);
+            let done = within(p.objective(&dance)) && least(&dance, &earlier) >= TAKE_DIFFER && banded;
+            // A dance in the band replaces one out of it, not the other way round.
+            if banded || chosen.as_ref().is_none_or(|c: &(bool, Vec<usize>)| !c.0) {
+                chosen = Some((banded, dance));
+            }
+            if done {
+                break;
+            }
+        }
+        let dance = match chosen {
+            Some((_, d)) => d,
+            None => {
+                p.base = base.clone();
+                let penalty = take_penalty(p, &earlier, &open, TAKE_LADDER[0] * per_bar);
+                let charged = p.with_base(&penalty).into_owned();
+                take_dance(p, options, charged)?
+            }
+        };
+        earlier.push(dance);
+    }
+    p.base = base;
+    Ok(earlier.pop().unwrap_or_default())
+}
+
 /// The whole pipeline: stages 1 to 5 in order on the problem of filling `layers` (one per bar
-/// of `bars`) from `lib`. Returns one segment per bar (pinned bars keep theirs) and the path's
-/// cost (the full objective).
+/// of `bars`) from `lib`, for take [`GenerateOptions::take`] ([`takes`]). Returns one segment per
+/// bar (pinned bars keep theirs) and the path's cost (the objective with `weights`, without any
+/// stage's or take's charge, so dances and takes compare: [`Problem::objective`]).
 pub fn generate(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: FillWeights, options: &GenerateOptions) -> Result<(Vec<usize>, f32), FillError> {
-    let p = Problem::new(lib, bars, layers, weights, options);
+    let mut p = Problem::new(lib, bars, layers, weights, options);
+    p.base = p.moves_source_charge();
+    let path = takes(&mut p, options, options.take)?;
+    let cost = p.objective(&path);
+    Ok((path, cost))
+}
+
+/// Stages 2 to 5 in order on `p`, from stage 1's (and 1b's) `path`.
+fn stages(p: &Problem, options: &GenerateOptions, path: Vec<usize>) -> Result<(Vec<usize>, f32), FillError> {
     let mut measured = Measured::default();
-    let path = fill_stage(&p)?;
-    let (path, weights) = beat_rate_stage(&p, path, &mut measured)?;
-    let (path, cost) = free_skate_stage(&p, &weights, &path);
-    let (path, cost) = if options.follow_skate { skate_stage(&p, &weights, path, cost, &mut measured)? } else { (path, cost) };
+    let (path, weights) = beat_rate_stage(p, path, &mut measured)?;
+    let (path, cost) = free_skate_stage(p, &weights, &path);
+    let (path, cost) = if options.follow_skate { skate_stage(p, &weights, path, cost, &mut measured)? } else { (path, cost) };
     if options.follow_joins {
-        join_repair_stage(&p, &weights, options, path, cost, &mut measured)
+        join_repair_stage(p, &weights, options, path, cost, &mut measured)
     } else {
         Ok((path, cost))
     }
@@ -551,19 +824,75 @@ mod tests {
     }
 
     #[test]
+    fn takes_differ_in_half_the_bars_at_comparable_cost_and_take_0_is_the_dance() {
+        let lib = builtin();
+        let bars = bars_at(120.0);
+        let mut layers = open_layers(&bars);
+        let opts = GenerateOptions::default();
+        let (zero, zero_cost) = generate(lib, &bars, &layers, FillWeights::default(), &opts).unwrap();
+        // Take 0 is the pipeline without a take's charge, its stages in order (the variety
+        // stage is off by default).
+        let p = Problem::new(lib, &bars, &layers, FillWeights::default(), &opts);
+        let (staged, _) = stages(&p, &opts, fill_stage(&p).unwrap()).unwrap();
+        assert_eq!((zero.clone(), zero_cost), (staged.clone(), p.objective(&staged)));
+        let takes: Vec<Vec<usize>> = (0..5).map(|take| generate(lib, &bars, &layers, FillWeights::default(), &GenerateOptions { take, ..opts }).unwrap().0).collect();
+        assert_eq!(takes[0], zero);
+        let objective: Vec<f32> = takes.iter().map(|q| p.objective(q)).collect();
+        let best = objective.iter().copied().fold(f32::INFINITY, f32::min);
+        for (k, q) in takes.iter().enumerate() {
+            assert!(objective[k] <= best * (1.0 + TAKE_SLACK) + 1e-4, "take {k}: objective {} against the best {best}", objective[k]);
+            for (j, r) in takes.iter().enumerate().take(k) {
+                let d = q.iter().zip(r).filter(|(a, b)| a != b).count();
+                assert!(2 * d >= bars.len(), "takes {j} and {k} differ in {d} of {} bars", bars.len());
+            }
+        }
+        // The same take twice is the same dance.
+        assert_eq!(generate(lib, &bars, &layers, FillWeights::default(), &GenerateOptions { take: 3, ..opts }).unwrap().0, takes[3]);
+        // A pinned bar stays in every take.
+        layers[2] = Layer::Fixed { segment: 7 };
+        for take in 0..3 {
+            assert_eq!(generate(lib, &bars, &layers, FillWeights::default(), &GenerateOptions { take, ..opts }).unwrap().0[2], 7);
+        }
+        // Out of range: refused with its name.
+        let err = GenerateOptions { take: MAX_TAKE + 1, ..opts }.validate().unwrap_err();
+        assert!(err.to_string().contains("take"), "{err}");
+    }
+
+    #[test]
+    fn the_moves_source_puts_one_kind_first_and_mixed_is_the_default() {
+        let lib = crate::choreo::segment::tests::small_library_with_an_imported_clip();
+        let bars = bars_at(100.0);
+        let mut layers = open_layers(&bars);
+        let opts = GenerateOptions::default();
+        let dance = |source: MovesSource, layers: &[Layer]| generate(&lib, &bars, layers, FillWeights { moves_source: source, ..FillWeights::default() }, &opts).unwrap().0;
+        let imported = |path: &[usize]| path.iter().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
+        assert_eq!(FillWeights::default().moves_source, MovesSource::Mixed);
+        assert_eq!(dance(MovesSource::Mixed, &layers), generate(&lib, &bars, &layers, FillWeights::default(), &opts).unwrap().0);
+        let mine = dance(MovesSource::Mine, &layers);
+        assert_eq!(imported(&mine), bars.len(), "my moves: every bar imported, {mine:?}");
+        let builtin = dance(MovesSource::Builtin, &layers);
+        assert_eq!(imported(&builtin), 0, "built-in: no bar imported, {builtin:?}");
+        // A pinned bar keeps its move whatever the source.
+        let pinned = builtin[0];
+        layers[3] = Layer::Fixed { segment: pinned };
+        assert_eq!(dance(MovesSource::Mine, &layers)[3], pinned);
+    }
+
+    #[test]
     fn the_pipeline_is_its_stages_in_order() {
         let lib = crate::choreo::segment::tests::small_library_with_an_imported_clip();
         let bars = bars_at(100.0);
         let layers = open_layers(&bars);
         let opts = GenerateOptions::default();
         let (whole, cost) = generate(&lib, &bars, &layers, FillWeights::default(), &opts).unwrap();
+        // (The variety stage, off by default, is not among them.)
         let p = Problem::new(&lib, &bars, &layers, FillWeights::default(), &opts);
         let mut m = Measured::default();
         let path = fill_stage(&p).unwrap();
         let (path, w) = beat_rate_stage(&p, path, &mut m).unwrap();
         let (path, c) = free_skate_stage(&p, &w, &path);
         let (path, c) = skate_stage(&p, &w, path, c, &mut m).unwrap();
-        let (path, c) = join_repair_stage(&p, &w, &opts, path, c, &mut m).unwrap();
-        assert_eq!((whole, cost), (path, c));
+        let (path, _) = join_repair_stage(&p, &w, &opts, path, c, &mut m).unwrap();
+        assert_eq!((whole, cost), (path.clone(), p.objective(&path)));
     }
 }

@@ -31,7 +31,7 @@ use super::{BlobHash, BlobStore, Project, ProjectDoc};
 
 /// The schema version this build writes. Bump it with a step in [`migrate`] and a golden file
 /// of the old version in `tests/golden/`.
-pub const CURRENT_SCHEMA_VERSION: u32 = 2;
+pub const CURRENT_SCHEMA_VERSION: u32 = 3;
 /// The oldest schema version this build opens.
 pub const OLDEST_SCHEMA_VERSION: u32 = 1;
 /// The value of the manifest's `format` field.
@@ -332,7 +332,15 @@ fn read_error(size_bytes: usize, what: &str, e: std::io::Error) -> FileError {
 /// The steps from each schema version to the next: `MIGRATIONS[v - OLDEST_SCHEMA_VERSION]`
 /// rewrites a version-`v` manifest (as JSON) into version `v + 1` (a renamed field, a new
 /// field's default...).
-const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes];
+const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes, dance_take];
+
+/// 2 → 3: the dance keeps the take of Generate its bars come from (issue 26); a dance saved
+/// before takes existed is take 0 (what Generate made then).
+fn dance_take(m: &mut serde_json::Value) {
+    if let Some(serde_json::Value::Object(dance)) = m.get_mut("project").and_then(|p| p.get_mut("dance")) {
+        dance.entry("take").or_insert(0.into());
+    }
+}
 
 /// 1 → 2: the undo and redo stacks, whole documents in schema 1, as changes (see the module
 /// doc). A stack that is not a list of objects is left for the reader to refuse.

@@ -166,6 +166,10 @@ pub struct BarDoc {
 pub struct DanceDoc {
     pub bars: Vec<BarDoc>,
     pub settings: Settings,
+    /// The take of Generate its generated bars come from ([`crate::choreo::GenerateOptions::take`]:
+    /// 0 for Generate, counted up by "another take"); kept from schema 3 (older files read 0).
+    #[serde(default)]
+    pub take: u32,
 }
 
 /// Words a person attached to a clip so text can call it.
@@ -985,8 +989,22 @@ impl Project {
                 *b = d.bar_doc(state, b.search.take());
             }
         }
+        doc.dance.take = options.take;
         self.commit(doc);
         Ok(report)
+    }
+
+    /// Fills every bar that is not pinned with take `take` of Generate (issue 26: take 0 is
+    /// [`Project::generate`]'s dance, each further take a different dance of comparable cost,
+    /// [`crate::choreo::generate::takes`]) and keeps the take's number with its bars;
+    /// one undo step. A take above [`crate::choreo::generate::MAX_TAKE`] is refused.
+    pub fn generate_take(&mut self, take: u32) -> Result<GenerateReport, ProjectError> {
+        self.generate_with(&crate::choreo::GenerateOptions { take, ..crate::choreo::GenerateOptions::default() })
+    }
+
+    /// The take of Generate the dance's generated bars come from (0 until "another take").
+    pub fn take(&self) -> u32 {
+        self.doc.dance.take
     }
 
     /// Changes one setting of the search or the filling; refused, with nothing changed, when
@@ -1018,6 +1036,12 @@ impl Project {
     /// built-in ones (0: none).
     pub fn set_own_moves_preference(&mut self, w: f32) -> Result<(), ProjectError> {
         self.set_setting(Setting::OwnMovesPreference(w))
+    }
+
+    /// Which moves Generate fills the open bars with (issue 26: the person's own first, mixed,
+    /// or built-in only); one undo step.
+    pub fn set_moves_source(&mut self, source: crate::choreo::MovesSource) -> Result<(), ProjectError> {
+        self.set_setting(Setting::MovesSource(source))
     }
 
     /// The filling's weights in force.
