@@ -13,7 +13,7 @@ mod names;
 mod standard;
 
 pub use model::{vmd_to_clip, MmdImportError, MmdImportReport};
-pub use motion::{bezier_ratio, BoneKeys, MmdClipOptions, MmdMotion, MotionSampler, VmdBoneKey, METRES_PER_MMD_UNIT};
+pub use motion::{bezier_ratio, BoneKeys, BoneSampler, MmdClipOptions, MmdMotion, MotionSampler, VmdBoneKey, METRES_PER_MMD_UNIT};
 pub use names::english_alias;
 pub use standard::standard_rig;
 
