@@ -416,7 +416,10 @@ impl MmdRig {
                 if effector_vec == Vec3::ZERO || target_vec == Vec3::ZERO {
                     continue;
                 }
-                let mut angle = target_vec.dot(effector_vec).clamp(-1.0, 1.0).acos();
+                // three computes acos(dot) in f64; in f32 acos near 1 has a floor of ~3e-4 rad,
+                // so an effector already on its target would turn. atan2(|e × t|, e · t) is
+                // exact near 0 in f32 and equals three's angle everywhere else.
+                let mut angle = effector_vec.cross(target_vec).length().atan2(target_vec.dot(effector_vec));
                 if angle < 1e-5 {
                     continue;
                 }
