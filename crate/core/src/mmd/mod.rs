@@ -7,6 +7,8 @@
 //! positions and x, y of rotations, as three's `MMDParser` does), so a pose can be compared with
 //! three.js's `MMDAnimationHelper` + `CCDIKSolver` point for point. Clips leave in metres.
 
+pub mod export;
+pub mod files;
 mod model;
 mod motion;
 mod names;
