@@ -79,8 +79,10 @@ pub fn import_vmd(data: &[u8]) {
     let Ok(v) = vmd::read("fuzz.vmd", data) else { return };
     for t in v.bone_tracks() {
         let last = t.keys.last().map_or(0.0, |k| k.frame as f32);
+        let keys: Vec<_> = t.keys.iter().map(odori_core::mmd::VmdBoneKey::from_vmd_key).collect();
+        let s = odori_core::mmd::BoneSampler::new(&keys);
         for f in [-1.0, 0.0, 0.5 * last, last - 0.25, last + 1.0] {
-            let _ = t.sample(f);
+            let _ = s.sample(f);
         }
     }
     if let Ok(bytes) = odori_core::export::vmd::write("fuzz.vmd", &v) {

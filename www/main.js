@@ -87,9 +87,11 @@ async function main() {
     },
   });
   let exporter = null;
-  const imported = (report) => {
+  const imported = (report, how) => {
     for (const c of report.clips) {
       if (searchClient) searchClient.add(c.id); else waitingForSearch.push(c.id);
+      // MMD files stay out of the project (their creators' terms): not in its dance library yet.
+      if (how && how.mmd) continue;
       if (choreo) choreo.addClip(c); else waitingForDance.push(c);
     }
     panel.refresh();
@@ -108,7 +110,7 @@ async function main() {
     optionsDialog: $("#import-options"),
     // The project parses the file (once) and shows its clips in the library.
     importer: (fileName, bytes, options) => session.importFile(fileName, bytes, options),
-    onImported: (report) => imported(report),
+    onImported: (report, how) => imported(report, how),
     onFiles: (files) => session.takeProjectFiles(files),
   });
   loader.bindInput($("#file-input"));

@@ -182,7 +182,7 @@ fn main() {
     for (label, env) in &songs {
         let grid = analyze(env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{label}: {e}"));
         let (bars, beats) = (grid.bars.clone(), grid.beat_times_secs.clone());
-        let mut doc = odori_tests::Dance::new(bars.clone()).expect("bars");
+        let mut doc = odori_tests::Dance::new(bars.clone());
         if let Some(source) = moves_source() {
             doc.set_moves_source(source);
         }
@@ -221,7 +221,7 @@ fn main() {
     println!("{:<40} {:>4} {:>3} | {:>9} {:>9} {:>9} | {:>8} | goals step/arms/move/distinct", "song", "bars", "bpb", "top step", "top arms", "top move", "distinct");
     let mut variety_met = 0usize;
     for (label, bars, _, bpb, _) in &grids {
-        let mut doc = odori_tests::Dance::new(bars.clone()).expect("bars");
+        let mut doc = odori_tests::Dance::new(bars.clone());
         let follow_variety = std::env::var("ODORI_VARIETY").is_ok_and(|v| v == "1");
         doc.generate_with(&builtin, &GenerateOptions { follow_variety, ..GenerateOptions::default() }).expect("generate");
         let chosen: Vec<usize> = doc.segments().into_iter().flatten().collect();
@@ -261,7 +261,7 @@ fn main() {
                 let mut paths: Vec<Vec<Option<usize>>> = Vec::new();
                 let (mut costs, mut on_beat, mut ms) = (Vec::new(), 0usize, 0.0f64);
                 for take in 0..takes {
-                    let mut doc = odori_tests::Dance::new(bars.clone()).expect("bars");
+                    let mut doc = odori_tests::Dance::new(bars.clone());
                     if let (Some(source), "person") = (moves_source(), name) {
                         doc.set_moves_source(source);
                     }

@@ -33,7 +33,11 @@ fn main() {
     row("wavefile_v2.vmd read (14,160 bone keys)", wave.len(), time(RUNS, || vmd::read("w.vmd", &wave).unwrap()));
     let v = vmd::read("w.vmd", &wave).unwrap();
     row("wavefile_v2.vmd bone_tracks (140 tracks)", wave.len(), time(RUNS, || v.bone_tracks()));
-    let tracks = v.bone_tracks();
+    let tracks: Vec<odori_core::mmd::BoneSampler> = v
+        .bone_tracks()
+        .iter()
+        .map(|t| odori_core::mmd::BoneSampler::new(&t.keys.iter().map(odori_core::mmd::VmdBoneKey::from_vmd_key).collect::<Vec<_>>()))
+        .collect();
     let last = v.last_frame();
     row(
         &format!("wavefile sample 140 tracks x {} frames", last + 1),
@@ -42,7 +46,7 @@ fn main() {
             let mut acc = 0.0f32;
             for f in 0..=last {
                 for t in &tracks {
-                    acc += t.sample(f as f32).0.x;
+                    acc += t.sample(f as f32).1.x;
                 }
             }
             acc

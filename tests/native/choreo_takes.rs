@@ -68,11 +68,11 @@ fn five_takes_differ_in_half_the_bars_at_comparable_cost_on_the_beat() {
         let mut takes: Vec<(Vec<Option<usize>>, f32)> = Vec::new();
         let mut goals0 = [false; 3];
         for take in 0..5 {
-            let mut doc = odori_tests::Dance::new(bars.clone()).expect("bars");
+            let mut doc = odori_tests::Dance::new(bars.clone());
             let report = doc.generate_with(&lib, &GenerateOptions { take, ..GenerateOptions::default() }).unwrap_or_else(|e| panic!("{label} take {take}: {e}"));
             let chosen = doc.segments();
             if take == 0 {
-                let mut plain = odori_tests::Dance::new(bars.clone()).expect("bars");
+                let mut plain = odori_tests::Dance::new(bars.clone());
                 plain.generate(&lib).expect("generate");
                 assert_eq!(plain.segments(), chosen, "{label}: take 0 is Generate's dance");
             }

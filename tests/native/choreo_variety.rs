@@ -80,7 +80,7 @@ fn no_step_arm_pattern_or_move_dominates_a_built_in_dance() {
     for (label, env) in songs() {
         let grid = analyze(&env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{label}: {e}"));
         let dance = |options: &GenerateOptions| {
-            let mut doc = odori_tests::Dance::new(grid.bars.clone()).expect("bars");
+            let mut doc = odori_tests::Dance::new(grid.bars.clone());
             doc.generate_with(&lib, options).unwrap_or_else(|e| panic!("{label}: {e}"));
             doc.segments().into_iter().map(|s| s.expect("every bar filled")).collect::<Vec<usize>>()
         };

@@ -54,7 +54,7 @@ fn dances_in_three(lib: &SegmentLibrary) -> Vec<(String, DanceQuality, f32, f32)
             let clip = odori_core::choreo::render(lib, &bars, choices, &RenderOptions::default());
             dance_quality(&clip, &bars, &beats).unwrap()
         };
-        let mut doc = odori_tests::Dance::new(bars.clone()).unwrap();
+        let mut doc = odori_tests::Dance::new(bars.clone());
         doc.generate(lib).unwrap();
         let chosen = doc.segments();
         assert!(chosen.iter().flatten().all(|&s| lib.segments()[s].counts() == 3), "{rel}: a bar in 3 took a move not in 3");
@@ -145,7 +145,7 @@ fn builtin_moves_in_three_dance_the_three_four_pieces_on_the_beat() {
     for (bpm, end_bpm) in PIECES_IN_THREE {
         let song = demo_song_with(22050.0, &DemoSongOptions { beats_per_bar: 3, bpm, end_bpm }).unwrap();
         let grid = analyze(&envelope(&[&song.samples], 22050.0).unwrap(), &AnalysisOptions::default()).unwrap();
-        let mut doc = odori_tests::Dance::new(grid.bars.clone()).unwrap();
+        let mut doc = odori_tests::Dance::new(grid.bars.clone());
         doc.generate(&lib).unwrap();
         let chosen: Vec<usize> = doc.segments().into_iter().flatten().collect();
         let mut uses = std::collections::BTreeMap::new();

@@ -171,7 +171,7 @@ export class ExportPanel {
     const bodyless = !info.hasMesh && info.humanoid.kind !== "notHumanoid";
     const character = typeof chosen === "number" ? chosen : "builtin";
     const characterName = typeof chosen === "number" ? this.library.clip(chosen)?.source.replace(/^.*[\\/]/, "") || "the character" : "the built-in body";
-    const ctx = { info, bodyless, character, characterName };
+    const ctx = { info, bodyless, character, characterName, library: this.library };
     return { id, info, range, what, label, format, ctx, on: format.on(ctx) };
   }
 
@@ -264,6 +264,21 @@ export const EXPORT_FORMATS = [
     on: (c) => skeletonOf(c.info),
     make: (library, id, range) => library.exportBvh(id, range),
   },
+  {
+    // MikuMikuDance (issue 28): MMD's standard bones, legs also as 足ＩＫ / つま先ＩＫ keys, fit to the
+    // MMD model an imported VMD was posed on, else the first MMD model in the library, else
+    // Odori's standard MMD skeleton.
+    id: "vmd", label: "MikuMikuDance motion (.vmd)", ext: "vmd", mime: "application/octet-stream",
+    on: (c) => `MMD's standard bones (${c.info.format === "vmd" ? "the MMD rig it was imported on" : vmdModel(c.library, c.info) ?? "Odori's standard MMD skeleton"})`,
+    make: (library, id, range) => library.exportVmd(id, { ...range, ...(vmdModel(library, library.clip(id)) ? { model: vmdModel(library, library.clip(id)) } : {}) }),
+  },
   // The dance as a video with its song (www/video/, issue 29).
   VIDEO_FORMAT,
 ];
+
+/** The MMD model a VMD export fits: the clip's own (an imported VMD), else the library's first. */
+function vmdModel(library, info) {
+  if (!library || typeof library.mmdModels !== "function") return null;
+  if (info && info.format === "vmd") return null; // exportVmd's default: the model it was posed on
+  return library.mmdModels()[0]?.name ?? null;
+}

@@ -6,6 +6,11 @@
 // glTF and GLB files state their units (metres) and key times themselves: nothing to ask.
 const ACCEPT = /\.(bvh|glb|gltf)$/i;
 const BVH = /\.bvh$/i;
+// MikuMikuDance: motions (VMD), models (PMX/PMD) and a zip of them; the files beside a model
+// (its textures) come along when a model or zip is in the batch.
+const MMD = /\.(vmd|pmx|pmd|zip)$/i;
+const MMD_MODEL = /\.(pmx|pmd|zip)$/i;
+const MMD_TEXTURE = /\.(bmp|tga|png|jpe?g|spa|sph|dds)$/i;
 
 /** Units a BVH file may be in: metres per file unit ("" = guessed from the skeleton's size). */
 const UNITS = [["", "guess from the rig"], ["0.01", "centimetres"], ["1", "metres"], ["0.001", "millimetres"], ["0.0254", "inches"]];
@@ -65,9 +70,16 @@ export class FileLoader {
 
   async openBatch(files) {
     const read = [];
+    // MMD files go to the library's importFiles as one set (a model needs its textures).
+    const withModel = files.some((f) => MMD_MODEL.test(f.name));
+    const mmd = files.filter((f) => MMD.test(f.name) || (withModel && MMD_TEXTURE.test(f.name)));
+    if (mmd.length) {
+      await this.openMmd(mmd);
+      files = files.filter((f) => !mmd.includes(f));
+    }
     for (const file of files) {
       if (!ACCEPT.test(file.name)) {
-        this.messages.error(`${file.name}: not a motion file Odori reads (BVH, glTF or GLB)`);
+        this.messages.error(`${file.name}: not a motion file Odori reads (BVH, glTF, GLB, or MMD's VMD, PMX, PMD)`);
         continue;
       }
       try {
@@ -132,6 +144,117 @@ export class FileLoader {
           if (inputs[i].units.value) o.unitScale = Number(inputs[i].units.value);
           return o;
         }));
+      }, { once: true });
+      dialog.returnValue = "";
+      dialog.showModal();
+    });
+  }
+
+  /**
+   * Imports a set of MikuMikuDance files with `library.importFiles`. When a VMD could play on
+   * more than one rig (its own model is not given and models are in the library or the set),
+   * or when a dance is opened, a dialog asks which model it plays on and the song offset (the
+   * motion frame that is song time 0). Problems name their file; the rest still imports.
+   */
+  async openMmd(files) {
+    const set = [];
+    for (const file of files) {
+      try {
+        // A dropped folder's files keep their folder path, so textures resolve beside the model.
+        set.push({ name: file.webkitRelativePath || file.name, bytes: await this.read(file) });
+      } catch (e) {
+        this.messages.error(`${file.name}: cannot be read (${e && e.message ? e.message : e})`);
+      }
+    }
+    this.status.textContent = "";
+    if (!set.length || typeof this.library.importFiles !== "function") return null;
+    let options = {};
+    try {
+      const seen = this.library.inspectMmdFiles(set);
+      const models = [...this.library.mmdModels().map((m) => m.name), ...seen.filter((f) => f.kind === "model" && !f.error).map((f) => f.modelName)];
+      const dances = seen.filter((f) => f.kind === "vmd" && !f.error && f.boneKeys > 0);
+      if (dances.length) {
+        const chosen = await this.askMmd(dances, [...new Set(models)]);
+        if (!chosen) {
+          this.messages.info(`Import cancelled: ${set.map((f) => f.name).join(", ")} not added`);
+          return null;
+        }
+        options = chosen;
+      }
+    } catch (e) {
+      this.messages.error(e && e.name === "OdoriError" ? e.message : `MMD files: ${e && e.message ? e.message : e}`);
+      return null;
+    }
+    this.progress(`Importing ${set.length} MMD file${set.length === 1 ? "" : "s"}…`);
+    await new Promise((r) => requestAnimationFrame(() => setTimeout(r, 0)));
+    let report;
+    try {
+      report = this.library.importFiles(set, options);
+    } catch (e) {
+      this.status.textContent = "";
+      this.messages.error(e && e.name === "OdoriError" ? e.message : `MMD files: ${e && e.message ? e.message : e}`);
+      return null;
+    }
+    this.status.textContent = "";
+    for (const p of report.problems) this.messages.error(p.message);
+    for (const n of report.notices) this.messages.info(n);
+    for (const m of report.models) {
+      this.messages.info(`${m.file}: MMD model "${m.name}" added (${m.vertices} vertices, ${m.bones} bones, ${m.textures.length} textures). Drawing MMD models is not in Odori yet: it is kept for motions to play on and for VMD export.`);
+    }
+    for (const m of report.motions) {
+      this.messages.info(`${m.file}: dance added, posed on ${m.rig}${m.songOffsetFrames ? `, starting at motion frame ${m.songOffsetFrames} (song time 0)` : ""}`);
+    }
+    if (report.motions.length || report.models.length) {
+      this.messages.info("MMD files stay on this device: MMD creators' terms usually forbid passing them on, so they are not saved in the project file or put in a share link.");
+    }
+    const clips = report.motions.map((m) => m.clip);
+    if (clips.length) this.onImported({ clips, warnings: [] }, { mmd: true });
+    return report;
+  }
+
+  /** The MMD dialog: the model each dance plays on and its song offset; null when cancelled. */
+  askMmd(dances, models) {
+    let dialog = document.getElementById("mmd-import");
+    if (!dialog) {
+      dialog = document.createElement("dialog");
+      dialog.id = "mmd-import";
+      dialog.setAttribute("aria-labelledby", "mmd-import-title");
+      const form = document.createElement("form");
+      form.method = "dialog";
+      const title = Object.assign(document.createElement("h2"), { id: "mmd-import-title", textContent: "Import MMD dance" });
+      const body = document.createElement("div");
+      body.className = "mmd-rows";
+      const buttons = document.createElement("p");
+      buttons.append(Object.assign(document.createElement("button"), { value: "cancel", textContent: "Cancel" }), Object.assign(document.createElement("button"), { value: "import", textContent: "Import" }));
+      form.append(title, body, buttons);
+      dialog.append(form);
+      document.body.append(dialog);
+    }
+    const body = dialog.querySelector(".mmd-rows");
+    body.replaceChildren();
+    const head = dances.map((d) => d.modelName).filter(Boolean);
+    const model = Object.assign(document.createElement("select"), { className: "mmd-model" });
+    model.setAttribute("aria-label", "Model the dance plays on");
+    // The dance's own model first when it is here, else the standard skeleton.
+    const own = dances.find((d) => d.modelFound);
+    if (own) model.append(new Option(`${own.modelName} (the model it was made for)`, own.modelName));
+    model.append(new Option("Odori's standard MMD skeleton", "standard"));
+    for (const m of models) if (!own || m !== own.modelName) model.append(new Option(m, m));
+    const offset = Object.assign(document.createElement("input"), { type: "number", className: "mmd-offset", min: "0", step: "1", value: "0" });
+    offset.setAttribute("aria-label", "Motion frame that is song time 0");
+    const names = dances.map((d) => `${d.file} (${d.lastFrame + 1} frames${head.length ? `, made for ${d.modelName || "no named model"}` : ""})`).join(", ");
+    const l1 = document.createElement("label");
+    l1.append(`Plays on: `, model);
+    const l2 = document.createElement("label");
+    l2.append(`Song offset: motion frame `, offset, ` is song time 0 (30 frames a second; WAVEFILE's is 160)`);
+    body.append(Object.assign(document.createElement("p"), { textContent: names }), l1, l2);
+    return new Promise((resolve) => {
+      dialog.addEventListener("close", () => {
+        if (dialog.returnValue !== "import") return resolve(null);
+        const o = { model: model.value };
+        const f = Math.round(Number(offset.value));
+        if (f > 0) o.songOffsetFrames = f;
+        resolve(o);
       }, { once: true });
       dialog.returnValue = "";
       dialog.showModal();

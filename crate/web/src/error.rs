@@ -63,6 +63,21 @@ error_kinds! {
     "character-missing-limbs": "character: the rig lacks limbs the motion needs (named in the message)",
     "motion-not-humanoid": "character: the motion to put on the character is not humanoid",
     "camera": "video camera: no frames, joints or bars to plan over, or a bad camera option or pose",
+    "mmd-bad-magic": "MMD: not a VMD, PMD or PMX file (its first bytes say otherwise)",
+    "mmd-bad-version": "MMD: a PMD/PMX version the reader does not take",
+    "mmd-truncated": "MMD: the file ends early (the message names the section and byte)",
+    "mmd-count-too-large": "MMD: a count that cannot fit the bytes left (refused before allocation)",
+    "mmd-bad-value": "MMD: a bad index size, encoding or enum value (with its byte offset)",
+    "mmd-index-out-of-range": "MMD: an index naming a vertex, bone, material … that is not there",
+    "mmd-not-shift-jis": "VMD export: a name Shift-JIS cannot hold",
+    "mmd-too-many": "VMD export: more keys than a VMD counts",
+    "mmd-not-finite": "VMD export: a value that is not a finite number",
+    "mmd-bad-curve": "VMD export: a Bézier control value above 127",
+    "mmd-zip": "MMD import: a .zip that cannot be read",
+    "mmd-no-bone-keys": "MMD import: a VMD with no bone keys to pose",
+    "mmd-no-matching-bones": "MMD import: none of a VMD's bones is a bone of the model it is posed on",
+    "mmd-rig": "MMD import: a model whose bones or IK chains cannot be posed",
+    "mmd-missing-textures": "MMD import: a model naming textures not among the files given (the model is kept)",
 }
 
 /// Builds the `OdoriError` thrown to JS.

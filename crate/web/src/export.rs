@@ -41,6 +41,12 @@ const KNOWN: &[&str] = &["character", "startSecs", "endSecs"];
 /// Options of the exports that write no mesh (VRMA): a range only.
 const KNOWN_RANGE: &[&str] = &["startSecs", "endSecs"];
 
+/// [`ranged`] for an export with options of its own (VMD).
+#[cfg_attr(not(feature = "authoring"), allow(dead_code))]
+pub(crate) fn ranged_clip(clip: &Clip, start_secs: Option<f32>, end_secs: Option<f32>) -> JsResult<Clip> {
+    ranged(clip, &JsExportOptions { character: None, start_secs, end_secs })
+}
+
 fn ranged(clip: &Clip, o: &JsExportOptions) -> JsResult<Clip> {
     if o.start_secs.is_none() && o.end_secs.is_none() {
         return Ok(clip.clone());

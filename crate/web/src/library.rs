@@ -85,6 +85,9 @@ pub struct Library {
     pub(crate) entries: Vec<Entry>,
     next_id: u32,
     next_rev: u64,
+    /// MMD models and camera tracks (issue 28), besides the clips.
+    #[cfg(feature = "authoring")]
+    pub(crate) mmd: crate::mmd::MmdStore,
 }
 
 impl Default for Library {
@@ -170,7 +173,13 @@ impl Library {
     /// An empty library.
     #[wasm_bindgen(constructor)]
     pub fn new() -> Library {
-        Library { entries: Vec::new(), next_id: 1, next_rev: 0 }
+        Library {
+            entries: Vec::new(),
+            next_id: 1,
+            next_rev: 0,
+            #[cfg(feature = "authoring")]
+            mmd: Default::default(),
+        }
     }
 
     /// Adds the engine's own demo clip; returns its `ClipInfo`.
@@ -217,6 +226,8 @@ impl Library {
 
     /// Removes a clip; false when there was none with this id.
     pub fn remove(&mut self, id: u32) -> bool {
+        #[cfg(feature = "authoring")]
+        self.mmd.posed_on.retain(|(i, _)| *i != id);
         let before = self.entries.len();
         self.entries.retain(|e| e.id != id);
         self.entries.len() != before

@@ -6,6 +6,8 @@
 //! byte-wise to their fields as MMD cuts them (see [`mmd_text::encode_sjis_field`]). Reading the
 //! written file gives back every key exactly: names, frames, values and curves.
 //!
+//! The camera, light and self-shadow counts are always written (zero when empty), as MMD does.
+//!
 //! A name the reader got from a field MMD cut through a two-byte character writes back as the
 //! same bytes (see [`mmd_text::CUT_LEAD_BYTE_BASE`]). Refused with a typed [`MmdError`]: a name
 //! Shift-JIS cannot hold (emoji, U+FFFD), a value that is not finite, a curve control value
@@ -81,13 +83,9 @@ pub fn write(file: &str, vmd: &Vmd) -> Result<Vec<u8>, MmdError> {
         floats(&mut out, &[k.weight]);
     }
 
-    // The later sections, written only as far as they hold keys (a reader stops cleanly where
-    // the file ends), so a plain dance stays the size MMD itself writes.
-    let tail = [!vmd.camera_keys.is_empty(), !vmd.light_keys.is_empty(), !vmd.self_shadow_keys.is_empty(), !vmd.property_keys.is_empty()];
-    let Some(last) = tail.iter().rposition(|&t| t) else {
-        return Ok(out);
-    };
-
+    // The camera, light and self-shadow counts are always written, as MMD writes them (three.js's
+    // parser reads the camera count unconditionally and fails on a file that ends before it);
+    // the IK/visibility section only when it has keys.
     count(&mut out, file, "the number of camera keys", vmd.camera_keys.len())?;
     for (i, k) in vmd.camera_keys.iter().enumerate() {
         if !(k.distance.is_finite() && k.target.is_finite() && k.rotation_rad.is_finite()) {
@@ -105,9 +103,6 @@ pub fn write(file: &str, vmd: &Vmd) -> Result<Vec<u8>, MmdError> {
         out.extend_from_slice(&k.fov_deg.to_le_bytes());
         out.push(u8::from(k.perspective_off));
     }
-    if last == 0 {
-        return Ok(out);
-    }
     count(&mut out, file, "the number of light keys", vmd.light_keys.len())?;
     for (i, k) in vmd.light_keys.iter().enumerate() {
         if !(k.colour.is_finite() && k.direction.is_finite()) {
@@ -116,9 +111,6 @@ pub fn write(file: &str, vmd: &Vmd) -> Result<Vec<u8>, MmdError> {
         out.extend_from_slice(&k.frame.to_le_bytes());
         floats(&mut out, &k.colour.to_array());
         floats(&mut out, &k.direction.to_array());
-    }
-    if last == 1 {
-        return Ok(out);
     }
     count(&mut out, file, "the number of self-shadow keys", vmd.self_shadow_keys.len())?;
     for (i, k) in vmd.self_shadow_keys.iter().enumerate() {
@@ -129,7 +121,7 @@ pub fn write(file: &str, vmd: &Vmd) -> Result<Vec<u8>, MmdError> {
         out.push(k.mode);
         floats(&mut out, &[k.distance]);
     }
-    if last == 2 {
+    if vmd.property_keys.is_empty() {
         return Ok(out);
     }
     count(&mut out, file, "the number of IK keys", vmd.property_keys.len())?;
@@ -179,7 +171,10 @@ mod tests {
     fn write_then_read_gives_every_key_back() {
         let v = sample();
         let bytes = write("t.vmd", &v).unwrap();
-        assert_eq!(bytes.len(), 54 + 2 * BONE_KEY_BYTES + 4 + MORPH_KEY_BYTES);
+        // Header, bone keys, morph keys, then the camera, light and self-shadow counts (0), as
+        // MMD writes them (three.js's parser needs the camera count).
+        assert_eq!(bytes.len(), 54 + 2 * BONE_KEY_BYTES + 4 + MORPH_KEY_BYTES + 3 * 4);
+        assert_eq!(&bytes[bytes.len() - 12..], &[0u8; 12]);
         assert_eq!(vmd::read("t.vmd", &bytes).unwrap(), v);
     }
 

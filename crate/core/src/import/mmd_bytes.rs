@@ -41,6 +41,22 @@ pub enum MmdError {
 }
 
 impl MmdError {
+    /// The file the error is about.
+    pub fn file(&self) -> &str {
+        match self {
+            MmdError::BadMagic { file, .. }
+            | MmdError::BadVersion { file, .. }
+            | MmdError::Truncated { file, .. }
+            | MmdError::CountTooLarge { file, .. }
+            | MmdError::BadValue { file, .. }
+            | MmdError::IndexOutOfRange { file, .. }
+            | MmdError::NotShiftJis { file, .. }
+            | MmdError::TooMany { file, .. }
+            | MmdError::NotFinite { file, .. }
+            | MmdError::BadCurve { file, .. } => file,
+        }
+    }
+
     /// A short machine-readable kind, stable for the JS API.
     pub fn kind(&self) -> &'static str {
         match self {
@@ -157,6 +173,27 @@ impl<'a> Reader<'a> {
     pub(crate) fn vec2(&mut self) -> Result<Vec2, MmdError> {
         Ok(Vec2::new(self.f32()?, self.f32()?))
     }
+    /// A joint record's eight-vector tail, the same in PMD and PMX: position, rotation,
+    /// translation min/max, rotation min/max, spring translation/rotation. The head (names,
+    /// kind, the two rigid bodies) differs per format and is read by the caller.
+    pub(crate) fn joint_tail(&mut self, name: String, name_en: String, kind: u8, rigid_a: usize, rigid_b: usize) -> Result<super::mmd_model::MmdJoint, MmdError> {
+        Ok(super::mmd_model::MmdJoint {
+            name,
+            name_en,
+            kind,
+            rigid_a,
+            rigid_b,
+            position: self.vec3()?,
+            rotation_rad: self.vec3()?,
+            translation_min: self.vec3()?,
+            translation_max: self.vec3()?,
+            rotation_min_rad: self.vec3()?,
+            rotation_max_rad: self.vec3()?,
+            spring_translation: self.vec3()?,
+            spring_rotation: self.vec3()?,
+        })
+    }
+
     pub(crate) fn vec3(&mut self) -> Result<Vec3, MmdError> {
         Ok(Vec3::new(self.f32()?, self.f32()?, self.f32()?))
     }

@@ -408,21 +408,7 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<MmdModel, MmdError> {
             let name = r.sjis(20)?.trim().to_string();
             let rigid_a = check_index(file, "joint", e, "rigid body A", i64::from(r.u32()?), n_rigid)?;
             let rigid_b = check_index(file, "joint", e, "rigid body B", i64::from(r.u32()?), n_rigid)?;
-            model.joints.push(MmdJoint {
-                name,
-                name_en: String::new(),
-                kind: 0,
-                rigid_a,
-                rigid_b,
-                position: r.vec3()?,
-                rotation_rad: r.vec3()?,
-                translation_min: r.vec3()?,
-                translation_max: r.vec3()?,
-                rotation_min_rad: r.vec3()?,
-                rotation_max_rad: r.vec3()?,
-                spring_translation: r.vec3()?,
-                spring_rotation: r.vec3()?,
-            });
+            model.joints.push(r.joint_tail(name, String::new(), 0, rigid_a, rigid_b)?);
         }
     }
     validate_geometry(file, &mut model)?;

@@ -479,21 +479,7 @@ pub fn read(file: &str, bytes: &[u8]) -> Result<MmdModel, MmdError> {
         }
         let rigid_a = check_index(file, "joint", j, "rigid body A", r.index(gl.rigid)?, n_rigid)?;
         let rigid_b = check_index(file, "joint", j, "rigid body B", r.index(gl.rigid)?, n_rigid)?;
-        joints.push(MmdJoint {
-            name,
-            name_en,
-            kind,
-            rigid_a,
-            rigid_b,
-            position: r.vec3()?,
-            rotation_rad: r.vec3()?,
-            translation_min: r.vec3()?,
-            translation_max: r.vec3()?,
-            rotation_min_rad: r.vec3()?,
-            rotation_max_rad: r.vec3()?,
-            spring_translation: r.vec3()?,
-            spring_rotation: r.vec3()?,
-        });
+        joints.push(r.joint_tail(name, name_en, kind, rigid_a, rigid_b)?);
     }
 
     // ---- soft bodies (2.1) ----

@@ -7,10 +7,8 @@
 //! left-handed, Y up); nothing is converted here, so what is read writes back bit-for-bit
 //! ([`crate::export::vmd`]). Names are Shift-JIS (see [`super::mmd_text`]).
 //!
-//! [`BoneTrack::sample`] evaluates a bone at any time as MMD does: keys sorted by frame, the
-//! curve stored on the *later* key of a span eases that span, each translation channel on its
-//! own curve (solve x → t on the curve, then read y), the rotation slerped by the eased weight
-//! of the rotation curve.
+//! This reader gives keys only; [`crate::mmd::BoneSampler`] evaluates a bone between its
+//! keys (three.js-compatible Bézier easing), so there is one sampler in the engine.
 
 use glam::{Quat, Vec3};
 
@@ -45,51 +43,12 @@ pub struct Bezier {
 impl Bezier {
     /// MMD's default curve, a straight line: (20, 20) and (107, 107).
     pub const LINEAR: Bezier = Bezier { x1: 20, y1: 20, x2: 107, y2: 107 };
-
-    /// The eased weight at `x` (0–1, the fraction of the span's frames elapsed): finds the
-    /// curve parameter t where the curve's x is `x` (bisection: x(t) is monotonic because the
-    /// control x values lie in 0–1), then returns y(t). Exact for straight lines.
-    pub fn ease(&self, x: f32) -> f32 {
-        let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-        if self.x1 == self.y1 && self.x2 == self.y2 {
-            return x;
-        }
-        let (x1, y1, x2, y2) =
-            (f32::from(self.x1) / 127.0, f32::from(self.y1) / 127.0, f32::from(self.x2) / 127.0, f32::from(self.y2) / 127.0);
-        let t = solve_t(x1, x2, x);
-        cubic(y1, y2, t)
-    }
 }
 
 impl Default for Bezier {
     fn default() -> Self {
         Self::LINEAR
     }
-}
-
-/// A 1-D cubic Bézier from 0 to 1 with inner control values `a`, `b`, at `t`.
-fn cubic(a: f32, b: f32, t: f32) -> f32 {
-    let s = 1.0 - t;
-    3.0 * s * s * t * a + 3.0 * s * t * t * b + t * t * t
-}
-
-/// The t in 0–1 where `cubic(x1, x2, t) == x` (to 1e-7; at most 40 halvings).
-fn solve_t(x1: f32, x2: f32, x: f32) -> f32 {
-    let (mut lo, mut hi) = (0.0f32, 1.0f32);
-    let mut t = x;
-    for _ in 0..40 {
-        let v = cubic(x1, x2, t);
-        if (v - x).abs() < 1e-7 {
-            break;
-        }
-        if v < x {
-            lo = t;
-        } else {
-            hi = t;
-        }
-        t = 0.5 * (lo + hi);
-    }
-    t
 }
 
 /// The four curves of a bone key: translation X, Y, Z and rotation.
@@ -355,46 +314,6 @@ pub struct BoneTrack {
     pub keys: Vec<BoneKey>,
 }
 
-impl BoneTrack {
-    /// The bone's translation and rotation at `frame` (fractional frames allowed; before the
-    /// first key the first key holds, after the last the last). An empty track gives the rest
-    /// pose (zero, identity).
-    pub fn sample(&self, frame: f32) -> (Vec3, Quat) {
-        let keys = &self.keys;
-        let (Some(first), Some(last)) = (keys.first(), keys.last()) else {
-            return (Vec3::ZERO, Quat::IDENTITY);
-        };
-        if frame.is_nan() || frame <= first.frame as f32 {
-            return (first.translation, first.rotation);
-        }
-        if frame >= last.frame as f32 {
-            return (last.translation, last.rotation);
-        }
-        // The first key after `frame`: not the first key and not past the last for keys
-        // sorted by frame as `bone_tracks` makes them (for a hand-made unsorted track, the
-        // nearest end holds rather than a panic).
-        let i = keys.partition_point(|k| k.frame as f32 <= frame);
-        let (Some(a), Some(b)) = (i.checked_sub(1).and_then(|j| keys.get(j)), keys.get(i)) else {
-            return (last.translation, last.rotation);
-        };
-        let span = b.frame as f32 - a.frame as f32;
-        let x = if span > 0.0 { (frame - a.frame as f32) / span } else { 1.0 };
-        let c = &b.curves;
-        let t = Vec3::new(
-            a.translation.x + (b.translation.x - a.translation.x) * c.x.ease(x),
-            a.translation.y + (b.translation.y - a.translation.y) * c.y.ease(x),
-            a.translation.z + (b.translation.z - a.translation.z) * c.z.ease(x),
-        );
-        let q = a.rotation.normalize().slerp(b.rotation.normalize(), c.rotation.ease(x));
-        (t, q)
-    }
-
-    /// The bone's pose at `time_secs` (30 frames per second).
-    pub fn sample_secs(&self, time_secs: f32) -> (Vec3, Quat) {
-        self.sample(time_secs * VMD_FPS)
-    }
-}
-
 impl Vmd {
     /// The bone keys grouped per bone, in order of each bone's first key, each sorted by frame.
     pub fn bone_tracks(&self) -> Vec<BoneTrack> {
@@ -430,7 +349,7 @@ impl Vmd {
     }
 
     /// Every curve control value is within 0–127 (what MMD writes; other tools sometimes write
-    /// more, which [`Bezier::ease`] tolerates).
+    /// more, which the sampler tolerates).
     pub fn curves_in_range(&self) -> bool {
         self.bone_keys.iter().all(|k| k.curves.all().iter().all(|b| b.x1 <= 127 && b.y1 <= 127 && b.x2 <= 127 && b.y2 <= 127))
     }
@@ -439,32 +358,6 @@ impl Vmd {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn linear_curve_is_the_identity() {
-        for i in 0..=20 {
-            let x = i as f32 / 20.0;
-            assert!((Bezier::LINEAR.ease(x) - x).abs() < 1e-6);
-            // Any curve with control points on the diagonal is a straight line too.
-            let c = Bezier { x1: 64, y1: 64, x2: 64, y2: 64 };
-            assert!((c.ease(x) - x).abs() < 1e-6);
-        }
-    }
-
-    #[test]
-    fn ease_in_out_matches_the_hand_solved_curve() {
-        // Control points (127, 0) and (0, 127), i.e. x1 = 1, y1 = 0, x2 = 0, y2 = 1:
-        // x(t) = 3(1-t)²t + t³ and y(t) = 3(1-t)t² + t³, computed here by hand.
-        let c = Bezier { x1: 127, y1: 0, x2: 0, y2: 127 };
-        for &t in &[0.1f32, 0.3, 0.5, 0.8] {
-            let x = 3.0 * (1.0 - t) * (1.0 - t) * t + t * t * t;
-            let y = 3.0 * (1.0 - t) * t * t + t * t * t;
-            assert!((c.ease(x) - y).abs() < 1e-5, "t {t}: ease({x}) = {} not {y}", c.ease(x));
-        }
-        // Symmetric: half way is half way; early on it is slower than linear.
-        assert!((c.ease(0.5) - 0.5).abs() < 1e-5);
-        assert!(c.ease(0.2) < 0.05);
-    }
 
     #[test]
     fn curve_block_round_trips_and_reads_row_zero() {
@@ -483,47 +376,6 @@ mod tests {
 
     fn key(frame: u32, t: Vec3, q: Quat, curves: BoneCurves) -> BoneKey {
         BoneKey { name: "センター".into(), frame, translation: t, rotation: q, curves }
-    }
-
-    #[test]
-    fn track_sampling_lerps_slerps_and_holds_ends() {
-        let q1 = Quat::from_rotation_y(1.0);
-        let tr = BoneTrack {
-            name: "センター".into(),
-            keys: vec![key(10, Vec3::ZERO, Quat::IDENTITY, BoneCurves::default()), key(20, Vec3::new(10.0, -4.0, 2.0), q1, BoneCurves::default())],
-        };
-        let (t, q) = tr.sample(15.0);
-        assert!((t - Vec3::new(5.0, -2.0, 1.0)).length() < 1e-5);
-        assert!(q.angle_between(Quat::from_rotation_y(0.5)) < 1e-5);
-        assert_eq!(tr.sample(0.0).0, Vec3::ZERO);
-        assert_eq!(tr.sample(99.0).0, Vec3::new(10.0, -4.0, 2.0));
-        assert_eq!(tr.sample(f32::NAN).0, Vec3::ZERO);
-        assert_eq!(tr.sample_secs(0.5).0, tr.sample(15.0).0);
-    }
-
-    #[test]
-    fn each_channel_eases_on_its_own_curve() {
-        let ease = Bezier { x1: 127, y1: 0, x2: 0, y2: 127 };
-        let curves = BoneCurves { x: Bezier::LINEAR, y: ease, z: Bezier::LINEAR, rotation: ease };
-        let tr = BoneTrack {
-            name: "x".into(),
-            keys: vec![key(0, Vec3::ZERO, Quat::IDENTITY, BoneCurves::default()), key(10, Vec3::splat(1.0), Quat::from_rotation_x(1.0), curves)],
-        };
-        let (t, q) = tr.sample(2.0);
-        assert!((t.x - 0.2).abs() < 1e-6 && (t.z - 0.2).abs() < 1e-6);
-        assert!((t.y - ease.ease(0.2)).abs() < 1e-6 && t.y < 0.05);
-        assert!((q.angle_between(Quat::IDENTITY) - ease.ease(0.2)).abs() < 1e-4);
-    }
-
-    #[test]
-    fn unsorted_hand_made_tracks_do_not_panic() {
-        let tr = BoneTrack {
-            name: "x".into(),
-            keys: vec![key(20, Vec3::X, Quat::IDENTITY, BoneCurves::default()), key(0, Vec3::Y, Quat::IDENTITY, BoneCurves::default()), key(30, Vec3::Z, Quat::IDENTITY, BoneCurves::default())],
-        };
-        for f in [-1.0, 5.0, 25.0, 40.0] {
-            let _ = tr.sample(f);
-        }
     }
 
     #[test]

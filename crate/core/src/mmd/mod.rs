@@ -7,13 +7,15 @@
 //! positions and x, y of rotations, as three's `MMDParser` does), so a pose can be compared with
 //! three.js's `MMDAnimationHelper` + `CCDIKSolver` point for point. Clips leave in metres.
 
+pub mod export;
+pub mod files;
 mod model;
 mod motion;
 mod names;
 mod standard;
 
 pub use model::{vmd_to_clip, MmdImportError, MmdImportReport};
-pub use motion::{bezier_ratio, BoneKeys, MmdClipOptions, MmdMotion, MotionSampler, VmdBoneKey, METRES_PER_MMD_UNIT};
+pub use motion::{bezier_ratio, BoneKeys, BoneSampler, MmdClipOptions, MmdMotion, MotionSampler, VmdBoneKey, METRES_PER_MMD_UNIT};
 pub use names::english_alias;
 pub use standard::standard_rig;
 
@@ -416,7 +418,10 @@ impl MmdRig {
                 if effector_vec == Vec3::ZERO || target_vec == Vec3::ZERO {
                     continue;
                 }
-                let mut angle = target_vec.dot(effector_vec).clamp(-1.0, 1.0).acos();
+                // three computes acos(dot) in f64; in f32 acos near 1 has a floor of ~3e-4 rad,
+                // so an effector already on its target would turn. atan2(|e × t|, e · t) is
+                // exact near 0 in f32 and equals three's angle everywhere else.
+                let mut angle = effector_vec.cross(target_vec).length().atan2(target_vec.dot(effector_vec));
                 if angle < 1e-5 {
                     continue;
                 }

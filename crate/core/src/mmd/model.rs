@@ -80,8 +80,7 @@ impl MmdMotion {
                 bones.push(BoneKeys { bone: k.name.clone(), keys: Vec::new() });
                 bones.len() - 1
             });
-            let c = [k.curves.x, k.curves.y, k.curves.z, k.curves.rotation].map(|b| [b.x1, b.y1, b.x2, b.y2]);
-            bones[at].keys.push(VmdBoneKey { frame: k.frame, translation: k.translation, rotation: k.rotation, curves: c });
+            bones[at].keys.push(VmdBoneKey::from_vmd_key(k));
         }
         MmdMotion { model_name: vmd.model_name.clone(), bones }
     }

@@ -1,0 +1,319 @@
+//! MikuMikuDance in the library (issue 28; authoring build only): `Library.importFiles` takes a
+//! set of MMD files (VMD motions, PMX/PMD models with their textures, zips) and
+//! `Library.exportVmd` writes any humanoid clip back as a VMD on MMD's standard bones.
+//!
+//! The work is in the core (`odori_core::mmd::files`, `odori_core::mmd::export`); this module
+//! moves bytes across and keeps the imported models and camera tracks with the library.
+
+use js_sys::{Array, Reflect, Uint8Array};
+use odori_core::humanoid::HumanoidMap;
+use odori_core::mmd::export::clip_to_vmd;
+use odori_core::mmd::files::{import_files, CameraTrack, ImportedModel, MmdFilesOptions, STANDARD_RIG};
+use odori_core::mmd::{standard_rig, MmdRig};
+use serde::{Deserialize, Serialize};
+use wasm_bindgen::prelude::*;
+
+use crate::error::{from_js, to_js, JsResult, OdoriError};
+use crate::library::Library;
+
+/// The MMD files a library holds besides its clips.
+#[derive(Default)]
+pub(crate) struct MmdStore {
+    pub models: Vec<ImportedModel>,
+    pub cameras: Vec<CameraTrack>,
+    /// Clip id → the rig (model name, or the standard skeleton) an imported VMD was posed on.
+    pub posed_on: Vec<(u32, String)>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(rename_all = "camelCase", default, deny_unknown_fields)]
+struct JsMmdOptions {
+    model: Option<String>,
+    song_offset_frames: Option<u32>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(rename_all = "camelCase", default, deny_unknown_fields)]
+struct JsVmdExportOptions {
+    model: Option<String>,
+    start_secs: Option<f32>,
+    end_secs: Option<f32>,
+}
+
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct ModelInfo<'a> {
+    name: &'a str,
+    file: &'a str,
+    format: &'static str,
+    vertices: usize,
+    bones: usize,
+    morphs: usize,
+    textures: Vec<&'a str>,
+    missing_textures: &'a [String],
+}
+
+fn model_info(m: &ImportedModel) -> ModelInfo<'_> {
+    ModelInfo {
+        name: &m.model.name,
+        file: &m.file,
+        format: match m.model.format {
+            odori_core::import::mmd_model::ModelFormat::Pmd => "pmd",
+            odori_core::import::mmd_model::ModelFormat::Pmx { .. } => "pmx",
+        },
+        vertices: m.model.vertices.len(),
+        bones: m.model.bones.len(),
+        morphs: m.model.morphs.len(),
+        textures: m.textures.iter().map(|(t, _, _)| t.as_str()).collect(),
+        missing_textures: &m.missing_textures,
+    }
+}
+
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct MotionInfo<'a> {
+    clip: serde_json::Value,
+    file: &'a str,
+    header_model: &'a str,
+    rig: &'a str,
+    matched_bones: usize,
+    unmatched_bones: &'a [String],
+    morph_keys: usize,
+    song_offset_frames: Option<u32>,
+}
+
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct CameraInfo<'a> {
+    name: &'a str,
+    source: &'a str,
+    keys: usize,
+    duration_secs: f32,
+}
+
+fn camera_info(c: &CameraTrack) -> CameraInfo<'_> {
+    CameraInfo { name: &c.name, source: &c.source, keys: c.keys.len(), duration_secs: c.keys.last().map_or(0.0, |k| k.time_secs) }
+}
+
+/// One file of the set, as `Library.inspectMmdFiles` sees it before importing.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct Inspected {
+    file: String,
+    kind: &'static str,
+    /// A VMD's header model name, or a model's own name.
+    model_name: String,
+    bone_keys: usize,
+    morph_keys: usize,
+    camera_keys: usize,
+    last_frame: u32,
+    /// A VMD: whether its header's model is among the set's or the library's models.
+    model_found: bool,
+    error: Option<String>,
+}
+
+/// `{ name, bytes }[]` from JS.
+fn files_from_js(files: &JsValue) -> JsResult<Vec<(String, Vec<u8>)>> {
+    let arr: &Array = files.dyn_ref().ok_or_else(|| OdoriError::new("bad-argument", "importFiles: expected an array of { name, bytes }"))?;
+    let mut out = Vec::with_capacity(arr.length() as usize);
+    for (i, f) in arr.iter().enumerate() {
+        let name = Reflect::get(&f, &"name".into()).ok().and_then(|v| v.as_string());
+        let bytes = Reflect::get(&f, &"bytes".into()).ok().and_then(|v| v.dyn_into::<Uint8Array>().ok());
+        match (name, bytes) {
+            (Some(n), Some(b)) => out.push((n, b.to_vec())),
+            _ => return Err(OdoriError::new("bad-argument", format!("importFiles: file {i} is not {{ name: string, bytes: Uint8Array }}"))),
+        }
+    }
+    Ok(out)
+}
+
+impl Library {
+    fn rig_named(&self, name: &str) -> JsResult<(MmdRig, String)> {
+        if name == STANDARD_RIG || name == "standard" {
+            return Ok((standard_rig(), String::new()));
+        }
+        let m = self.mmd.models.iter().find(|m| m.model.name == name).ok_or_else(|| {
+            let have: Vec<&str> = self.mmd.models.iter().map(|m| m.model.name.as_str()).collect();
+            OdoriError::new("bad-argument", format!("no MMD model named '{name}' in the library (models: {}; or \"standard\")", have.join(", ")))
+        })?;
+        let rig = MmdRig::from_model(&m.model).map_err(|e| OdoriError::new("mmd-rig", format!("{}: {e}", m.file)))?;
+        Ok((rig, m.model.name.clone()))
+    }
+}
+
+#[wasm_bindgen]
+impl Library {
+    /// Reads a set of MikuMikuDance files — `[{ name, bytes }]`: VMD motions, PMX/PMD models with
+    /// their textures (a dropped folder's files with their relative paths, several files, or a
+    /// `.zip`) — without importing anything: per file its kind, the model a VMD names and
+    /// whether that model is in the set or the library, key counts. What the import dialog asks from.
+    #[wasm_bindgen(js_name = inspectMmdFiles)]
+    pub fn inspect_mmd_files(&self, files: JsValue) -> Result<JsValue, OdoriError> {
+        use odori_core::mmd::files::{kind_of, unzip, MmdFileKind};
+        let files = files_from_js(&files)?;
+        let mut all = Vec::new();
+        let mut out = Vec::new();
+        for (n, b) in files {
+            if kind_of(&n) == MmdFileKind::Zip {
+                match unzip(&n, &b) {
+                    Ok(e) => all.extend(e),
+                    Err(e) => out.push(Inspected { file: n, kind: "zip", model_name: String::new(), bone_keys: 0, morph_keys: 0, camera_keys: 0, last_frame: 0, model_found: false, error: Some(e.to_string()) }),
+                }
+            } else {
+                all.push((n, b));
+            }
+        }
+        let mut names: Vec<String> = self.mmd.models.iter().map(|m| m.model.name.clone()).collect();
+        for (n, b) in &all {
+            if kind_of(n) == MmdFileKind::Model {
+                match odori_core::import::mmd_model::read_model(n, b) {
+                    Ok(m) => {
+                        names.push(m.name.clone());
+                        out.push(Inspected { file: n.clone(), kind: "model", model_name: m.name, bone_keys: 0, morph_keys: 0, camera_keys: 0, last_frame: 0, model_found: true, error: None });
+                    }
+                    Err(e) => out.push(Inspected { file: n.clone(), kind: "model", model_name: String::new(), bone_keys: 0, morph_keys: 0, camera_keys: 0, last_frame: 0, model_found: false, error: Some(e.to_string()) }),
+                }
+            }
+        }
+        for (n, b) in &all {
+            if kind_of(n) == MmdFileKind::Vmd {
+                out.push(match odori_core::import::vmd::read(n, b) {
+                    Ok(v) => Inspected {
+                        file: n.clone(),
+                        kind: "vmd",
+                        model_found: names.contains(&v.model_name),
+                        model_name: v.model_name.clone(),
+                        bone_keys: v.bone_keys.len(),
+                        morph_keys: v.morph_keys.len(),
+                        camera_keys: v.camera_keys.len(),
+                        last_frame: v.last_frame(),
+                        error: None,
+                    },
+                    Err(e) => Inspected { file: n.clone(), kind: "vmd", model_name: String::new(), bone_keys: 0, morph_keys: 0, camera_keys: 0, last_frame: 0, model_found: false, error: Some(e.to_string()) },
+                });
+            }
+        }
+        Ok(to_js(&out))
+    }
+
+    /// Imports a set of MikuMikuDance files (see `inspectMmdFiles`). Models are kept in the
+    /// library (`mmdModels()`; not drawn yet); each VMD's bone keys become a clip on the
+    /// canonical humanoid's naming, posed with MMD's IK and grants on the model `options.model`
+    /// names, else the one its header names, else the built-in standard MMD skeleton; camera keys
+    /// become a camera track (`cameraTracks()`); morph keys are kept aside with a notice.
+    /// `options`: `{ model?: string ("standard" for the built-in skeleton), songOffsetFrames?: number }`
+    /// (the motion frame that is song time 0: the clip starts there).
+    /// Returns `{ clips: ClipInfo-bearing motions, models, cameras, notices, problems }`; a bad
+    /// file is a problem `{ file, kind, message }` and the rest of the set still imports.
+    #[wasm_bindgen(js_name = importFiles)]
+    pub fn import_files(&mut self, files: JsValue, #[wasm_bindgen(unchecked_param_type = "MmdImportOptions | undefined")] options: JsValue) -> Result<JsValue, OdoriError> {
+        let o: JsMmdOptions = from_js(options, "MMD import options", &["model", "songOffsetFrames"])?;
+        let files = files_from_js(&files)?;
+        let model = o.model.map(|m| if m == "standard" { STANDARD_RIG.to_string() } else { m });
+        let opts = MmdFilesOptions { model, song_offset_frames: o.song_offset_frames };
+        let lib_models: Vec<&odori_core::import::mmd_model::MmdModel> = self.mmd.models.iter().map(|m| &m.model).collect();
+        let r = import_files(&files, &lib_models, &opts);
+        let mut motions = Vec::new();
+        for m in &r.motions {
+            let map = HumanoidMap::from_skeleton(&m.clip.skeleton);
+            let status = map.status(&m.clip.skeleton, Some(&m.clip));
+            let id = self.push(m.clip.clone(), "vmd", map, status, None);
+            self.mmd.posed_on.push((id, m.rig.clone()));
+            let info = serde_json::to_value(crate::library::info_of(self.entry(id)?)).unwrap_or(serde_json::Value::Null);
+            motions.push(MotionInfo {
+                clip: info,
+                file: &m.file,
+                header_model: &m.header_model,
+                rig: &m.rig,
+                matched_bones: m.matched_bones,
+                unmatched_bones: &m.unmatched_bones,
+                morph_keys: m.morph_keys,
+                song_offset_frames: m.song_offset_frames,
+            });
+        }
+        #[derive(Serialize)]
+        #[serde(rename_all = "camelCase")]
+        struct Report<'a> {
+            motions: Vec<MotionInfo<'a>>,
+            models: Vec<ModelInfo<'a>>,
+            cameras: Vec<CameraInfo<'a>>,
+            notices: &'a [String],
+            problems: &'a [odori_core::mmd::files::FileProblem],
+        }
+        let report = to_js(&Report {
+            motions,
+            models: r.models.iter().map(model_info).collect(),
+            cameras: r.cameras.iter().map(camera_info).collect(),
+            notices: &r.notices,
+            problems: &r.problems,
+        });
+        // Replace a model of the same name (imported again, e.g. with its textures this time).
+        for m in r.models {
+            self.mmd.models.retain(|k| k.model.name != m.model.name);
+            self.mmd.models.push(m);
+        }
+        self.mmd.cameras.extend(r.cameras);
+        Ok(report)
+    }
+
+    /// The MMD models in the library: `{ name, file, format, vertices, bones, morphs, textures, missingTextures }[]`.
+    #[wasm_bindgen(js_name = mmdModels)]
+    pub fn mmd_models(&self) -> JsValue {
+        to_js(&self.mmd.models.iter().map(model_info).collect::<Vec<_>>())
+    }
+
+    /// Camera tracks imported from camera VMDs: `{ name, source, keys, durationSecs }[]`.
+    #[wasm_bindgen(js_name = cameraTracks)]
+    pub fn camera_tracks(&self) -> JsValue {
+        to_js(&self.mmd.cameras.iter().map(camera_info).collect::<Vec<_>>())
+    }
+
+    /// One camera track's keys (time, target in metres, rotation, distance, fov, curves):
+    /// plain data for a camera director.
+    #[wasm_bindgen(js_name = cameraTrack)]
+    pub fn camera_track(&self, index: usize) -> Result<JsValue, OdoriError> {
+        self.mmd.cameras.get(index).map(to_js).ok_or_else(|| OdoriError::new("not-found", format!("no camera track {index} (there are {})", self.mmd.cameras.len())))
+    }
+
+    /// Whether clip `id` came from an MMD file (its creators' terms usually forbid
+    /// redistribution: it must not go in a share link).
+    #[wasm_bindgen(js_name = isMmd)]
+    pub fn is_mmd(&self, id: u32) -> bool {
+        self.mmd.posed_on.iter().any(|(i, _)| *i == id)
+    }
+
+    /// Clip `id` (any humanoid clip: an imported motion, a text animation, a dance) as a VMD on
+    /// MMD's standard bones (センター, 下半身, 上半身, 首, 頭, 肩, 腕, ひじ, 手首, 足, ひざ, 足首; 全ての親,
+    /// グルーブ, 上半身2 where the model has them) with the legs also as 足ＩＫ / つま先ＩＫ keys,
+    /// fit to `options.model` (an MMD model in the library, or "standard"); by default the
+    /// model an imported VMD was posed on, else the standard skeleton. `{ model?, startSecs?, endSecs? }`.
+    #[wasm_bindgen(js_name = exportVmd)]
+    pub fn export_vmd(&self, id: u32, #[wasm_bindgen(unchecked_param_type = "VmdExportOptions | undefined")] options: JsValue) -> Result<Vec<u8>, OdoriError> {
+        let o: JsVmdExportOptions = from_js(options, "VMD export options", &["model", "startSecs", "endSecs"])?;
+        let e = self.entry(id)?;
+        let model = o.model.clone().or_else(|| self.mmd.posed_on.iter().find(|(i, _)| *i == id).map(|(_, r)| r.clone())).unwrap_or_else(|| STANDARD_RIG.to_string());
+        let (rig, header) = self.rig_named(&model)?;
+        let clip = crate::export::ranged_clip(&e.clip, o.start_secs, o.end_secs)?;
+        let vmd = clip_to_vmd(&clip, &rig, &header).map_err(|err| OdoriError::new(err.kind(), err.to_string()))?;
+        let file = format!("{}.vmd", e.clip.name);
+        odori_core::export::vmd::write(&file, &vmd).map_err(|err| OdoriError { kind: err.kind(), message: err.to_string(), file: Some(file) })
+    }
+}
+
+#[wasm_bindgen(typescript_custom_section)]
+const TS_MMD: &'static str = r#"
+/** Options of `importFiles`. */
+export interface MmdImportOptions {
+  /** The model every VMD of the set plays on (a model name in the set or library, or "standard" for the built-in standard MMD skeleton); default: the model the VMD's header names, else the standard skeleton. */
+  model?: string;
+  /** The motion frame that is song time 0 (WAVEFILE's is 160): the clip starts there. */
+  songOffsetFrames?: number;
+}
+/** Options of `exportVmd`. */
+export interface VmdExportOptions {
+  /** The MMD model in the library whose rest pose the keys fit, or "standard"; default: the model an imported VMD was posed on, else the standard skeleton. */
+  model?: string;
+  startSecs?: number;
+  endSecs?: number;
+}
+"#;
