@@ -9,7 +9,7 @@
 use std::time::Instant;
 
 use odori_core::choreo::quality::{dance_quality, DanceQuality};
-use odori_core::choreo::{Choreography, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::choreo::{GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::{mmd_model, vmd};
 use odori_core::mmd::files::{pose_vmd, MmdFilesOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions};
@@ -67,7 +67,7 @@ fn main() {
     }
     let builtin = SegmentLibrary::builtin();
     for (label, lib) in [("generated, built-in moves", &builtin), ("generated, built-in + WAVEFILE segments", &with_wave)] {
-        let mut doc = Choreography::new(bars.clone()).expect("bars");
+        let mut doc = odori_tests::Dance::new(bars.clone());
         let t = Instant::now();
         doc.generate_with(lib, &GenerateOptions::default()).expect("generate");
         let chosen = doc.segments();
