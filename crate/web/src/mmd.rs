@@ -6,7 +6,7 @@
 //! moves bytes across and keeps the imported models and camera tracks with the library.
 
 use js_sys::{Array, Reflect, Uint8Array};
-use odori_core::humanoid::HumanoidMap;
+use odori_core::canon::humanoid::HumanoidMap;
 use odori_core::mmd::export::clip_to_vmd;
 use odori_core::mmd::files::{import_files, CameraTrack, ImportedModel, MmdFilesOptions, STANDARD_RIG};
 use odori_core::mmd::{standard_rig, MmdRig};

@@ -665,17 +665,15 @@ impl Project {
             quality: Option<odori_core::choreo::DanceQuality>,
             notes: Vec<odori_core::choreo::MoveNote>,
         }
-        let ch = self.inner.choreography()?;
-        let bars = ch.bars();
-        let choices = ch.segments();
-        let lib = self.inner.segment_library();
+        let bars = self.inner.song_bars()?;
+        let choices: Vec<Option<usize>> = self.inner.dance_view()?.iter().map(|v| v.state.segment()).collect();
         if choices.iter().all(Option::is_none) {
-            return Ok(to_js(&Notes { quality: None, notes: odori_core::choreo::bar_notes(lib, bars, &choices, &[]) }));
+            return Ok(to_js(&Notes { quality: None, notes: odori_core::choreo::bar_notes(self.inner.segment_library(), &bars, &choices, &[]) }));
         }
         let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect());
-        let clip = ch.render(lib, &RenderOptions::default());
-        let q = odori_core::choreo::dance_quality(&clip, bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
-        let notes = odori_core::choreo::bar_notes(lib, bars, &choices, &q.bars);
+        let clip = self.inner.render_dance(&RenderOptions::default())?;
+        let q = odori_core::choreo::dance_quality(&clip, &bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
+        let notes = odori_core::choreo::bar_notes(self.inner.segment_library(), &bars, &choices, &q.bars);
         Ok(to_js(&Notes { quality: Some(q), notes }))
     }
 
@@ -685,10 +683,10 @@ impl Project {
     pub fn candidate_notes(&mut self, bar: f64, segments: Vec<f64>, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
         let bar = index_arg("bar", bar)?;
         let segments: Vec<usize> = segments.iter().map(|&s| index_arg("segment", s)).collect::<Result<_, _>>()?;
-        let ch = self.inner.choreography()?;
-        let bars = ch.bars();
+        let bars = self.inner.song_bars()?;
+        let choices: Vec<Option<usize>> = self.inner.dance_view()?.iter().map(|v| v.state.segment()).collect();
         let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect());
-        let notes = odori_core::choreo::candidate_notes(self.inner.segment_library(), bars, &ch.segments(), &beats, bar, &segments).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
+        let notes = odori_core::choreo::candidate_notes(self.inner.segment_library(), &bars, &choices, &beats, bar, &segments).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
         Ok(to_js(&notes))
     }
 
