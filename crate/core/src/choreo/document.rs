@@ -348,10 +348,14 @@ mod tests {
 
     #[test]
     fn bars_in_three_with_no_three_count_move_take_any_move() {
-        // The built-in moves are all 4 counts: a waltz still gets a dance (counts spread evenly).
-        let lib = SegmentLibrary::builtin();
+        // A library of moves in 4 only (the built-in moves in 4, which come first): a waltz
+        // still gets a dance (counts spread evenly). The whole built-in library has moves in 3.
+        let mut lib = SegmentLibrary::new();
+        lib.load_builtin(&mut crate::choreo::segment::BuiltinLoader::new(), crate::library::MOVES_IN_FOUR);
+        assert!(lib.segments().iter().all(|s| s.counts() == 4));
         let bars = bars_from_tempo(6.0, 120.0, 3, 0.0, |_, _| 0.5).unwrap();
         assert_eq!(bar_counts(&lib, &bars), vec![0; bars.len()]);
+        assert_eq!(bar_counts(&SegmentLibrary::builtin(), &bars), vec![3; bars.len()]);
         assert!(generated(&lib, &bars).iter().all(|s| s.segment().is_some()));
     }
 
