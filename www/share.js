@@ -247,7 +247,8 @@ export function installShare({ choreo, messages, songReady, song, loadSong }) {
     save.title = "The project file holds your motion files too: whoever opens it sees this dance";
     save.addEventListener("click", () => document.getElementById("project-save")?.click());
     note.append(text, save);
-    button.after(note);
+    // At the end of the Dance controls: shown, it adds a line below them, not one in the middle.
+    button.parentElement.append(note);
     choreo.root.addEventListener("dance-refresh", (e) => {
       const own = (e.detail?.notes ?? []).filter((n) => n.segment != null && !n.builtin);
       note.hidden = own.length === 0;

@@ -136,6 +136,7 @@ test("README behaviours: keyboard shortcuts, song corrections, WAV and Ogg songs
 
     // Shift-click on the strip puts a bar start there; a plain click seeks.
     const strip = await page.$("#song canvas");
+    await strip.scrollIntoViewIfNeeded(); // the song strip may sit below the fold at 1280×800
     const box = await strip.boundingBox();
     const secsAt = (x) => (x / box.width) * g.durationSecs;
     const beat2 = g.beatTimesSecs.find((t) => t > 6 && !g.downbeatTimesSecs.some((d) => Math.abs(d - t) < 1e-3));
