@@ -16,6 +16,9 @@ test("search: query by dragging, results, overlay of two figures, plot", async (
     await importFiles(page, [join(data, "mocap/cmu-salsa/salsa_01.bvh"), join(data, "mocap/cmu-salsa/salsa_02.bvh")], { "salsa_01.bvh": { fps: 60 }, "salsa_02.bvh": { fps: 60 } });
     await page.waitForSelector("#library tbody tr:nth-child(3)", { timeout: 30000 });
     await page.click("#library tbody tr:nth-child(3) td:first-child"); // salsa_02
+    // The import's toasts stand over the left panel (the search timeline below the library)
+    // until they fade: wait for them, as a person would.
+    await page.waitForFunction(() => !document.querySelector("#toasts .toast:not(.error)"), null, { timeout: 30000 });
     // Drag on the timeline: from 30 % to 36 % of the clip (about 2.2 s of salsa_02).
     const box = await (await page.$("#search-timeline")).boundingBox();
     await page.mouse.move(box.x + box.width * 0.30, box.y + box.height / 2);

@@ -178,8 +178,10 @@ fn generated_joins_are_smoother_than_random_choices() {
     let open_repeats = (0..generated.len()).filter(|&i| !pins.iter().any(|p| p.0 == i) && (2..=4).any(|d| i >= d && generated[i] == generated[i - d])).count();
     assert_eq!(open_repeats, 0, "an open bar repeats a segment from 2..4 bars before");
     let mut rng = Rng(2026);
+    // The control: random moves among those a bar in 4 can take (the moves in 4).
+    let in_four: Vec<usize> = lib.segments().iter().filter(|s| s.counts() == 4).map(|s| s.index).collect();
     let random: Vec<Option<usize>> =
-        (0..bars.len()).map(|i| pins.iter().find(|p| p.0 == i).map(|p| p.1).or(Some(rng.below(lib.len())))).collect();
+        (0..bars.len()).map(|i| pins.iter().find(|p| p.0 == i).map(|p| p.1).or(Some(in_four[rng.below(in_four.len())]))).collect();
     println!("Join quality, 32 bars at 120 BPM, built-in library ({} segments), 4 pinned bars; joint-speed jump in m/s:", lib.len());
     let mut results = Vec::new();
     for (name, choices) in [("generated", &generated), ("random", &random)] {

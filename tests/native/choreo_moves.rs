@@ -54,6 +54,8 @@ fn contact_sheet_and_moves_move() {
         let feet = travel(clip, Canon::LeftFoot) + travel(clip, Canon::RightFoot);
         let hands = travel(clip, Canon::LeftHand) + travel(clip, Canon::RightHand);
         assert!(feet > 0.2 || matches!(m.step, Step::BodyRoll | Step::HipSway | Step::Bounce), "{}: feet travel {feet}", clip.name);
-        assert!(hands > 0.5, "{}: hands travel {hands}", clip.name);
+        // The ballroom frame holds the arms by design (they rise and fall with the bar only).
+        let hands_goal = if m.arms == Arms::Frame { 0.2 } else { 0.5 };
+        assert!(hands > hands_goal, "{}: hands travel {hands}", clip.name);
     }
 }
