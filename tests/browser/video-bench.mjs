@@ -2,7 +2,8 @@
 //   node tests/browser/video-bench.mjs [--secs 60] [--backends webgl2,webgpu] [--stream 60,180]
 // For each back end: the demo song's dance, `--secs` seconds (from the lead-in) at 1280×720,
 // 30 fps, MP4 into a Blob: wall time ÷ video time, the longest main-thread task during the
-// export (a PerformanceObserver of long tasks: tasks over 50 ms), and peak memory (the page's
+// export (a PerformanceObserver of long tasks: tasks over 50 ms; the path the frames took is
+// printed with it), and peak memory (the page's
 // JS heap from the DevTools protocol, and the proportional set size of every Chromium process,
 // sampled every 250 ms). With `--stream a,b`: 1920×1080 videos of a and b seconds written
 // through a stream into a file (the Origin Private File System), peak memory of each.
@@ -86,11 +87,11 @@ async function run(backend, server, jobs) {
         await new Promise((r) => setTimeout(r, 100));
         obs.disconnect();
         const size = res.blob ? res.blob.size : (await fh.getFile()).size;
-        return { wall, longest, frames: res.frames, codecs: `${res.codecs.videoName} + ${res.codecs.audioName}`, size };
+        return { wall, longest, frames: res.frames, codecs: `${res.codecs.videoName} + ${res.codecs.audioName}`, size, path: res.path || "main thread, canvas captured in the draw's task" };
       }, job);
       sampling = false;
       await sampler;
-      console.log(`${backend} ${job.w}×${job.h} ${job.secs} s${job.stream ? " (stream)" : " (Blob)"}: ${r.frames} frames in ${r.wall.toFixed(1)} s = ${(r.wall / job.secs).toFixed(2)} × real time; longest main-thread task ${r.longest ? `${r.longest.toFixed(0)} ms` : "< 50 ms"}; peak JS heap ${(peakHeap / 2 ** 20).toFixed(0)} MiB; peak Chromium PSS ${(peakPss / 1024).toFixed(0)} MiB (${(basePss / 1024).toFixed(0)} MiB before); ${r.codecs}; ${(r.size / 2 ** 20).toFixed(1)} MiB`);
+      console.log(`${backend} ${job.w}×${job.h} ${job.secs} s${job.stream ? " (stream)" : " (Blob)"}: ${r.frames} frames in ${r.wall.toFixed(1)} s = ${(r.wall / job.secs).toFixed(2)} × real time; longest main-thread task ${r.longest ? `${r.longest.toFixed(0)} ms` : "< 50 ms"}; peak JS heap ${(peakHeap / 2 ** 20).toFixed(0)} MiB; peak Chromium PSS ${(peakPss / 1024).toFixed(0)} MiB (${(basePss / 1024).toFixed(0)} MiB before); ${r.codecs}; ${(r.size / 2 ** 20).toFixed(1)} MiB; ${r.path}`);
     }
   } finally {
     await browser.close().catch(() => {});
