@@ -9,10 +9,14 @@
 // from `showSaveFilePicker`), straight to disk, so a long video never needs its whole size in
 // memory. Codecs are chosen by what the browser says it can encode (`isConfigSupported`,
 // through Mediabunny's `canEncodeVideo`/`canEncodeAudio`), falling back in order, and the
-// result says which were used. The work runs in slices that yield to the event loop, so the
-// page stays responsive; an AbortSignal cancels it, leaving nothing written.
+// result says which were used. The page stays responsive: each frame is drawn into a texture
+// of the viewer's own and read back asynchronously (`Viewer.setCapture`): the page's thread
+// yields to the event loop while the GPU draws, instead of waiting for it as reading the
+// canvas does (`new VideoFrame(canvas)` held the thread 60–250 ms a frame with software
+// drawing). The work stays on the page's thread (`result.path` says so): a Worker would need
+// its own engine and a copy of the library. An AbortSignal cancels it, leaving nothing written.
 import {
-  Output, Mp4OutputFormat, WebMOutputFormat, BufferTarget, StreamTarget, CanvasSource, AudioBufferSource,
+  Output, Mp4OutputFormat, WebMOutputFormat, BufferTarget, StreamTarget, VideoSampleSource, VideoSample, AudioBufferSource,
   canEncodeVideo, canEncodeAudio,
 } from "./mediabunny.js";
 
@@ -48,8 +52,10 @@ const CODEC_NAMES = { avc: "H.264", vp9: "VP9", av1: "AV1", vp8: "VP8", aac: "AA
 
 /** Seconds of fade in and out at the ends of the trimmed song (no click at a cut mid-note). */
 export const FADE_SECS = 0.02;
-/** A slice of work holds the main thread about this long before yielding to the event loop. */
-const SLICE_MS = 30;
+/** Progress is reported about this often (ms). */
+const PROGRESS_MS = 100;
+/** Where the frames are drawn and read back (`result.path`). */
+export const EXPORT_PATH = "main thread, frames read back asynchronously";
 
 const bitrateFor = (w, h, fps) => Math.round(Math.min(12e6, Math.max(1.5e6, w * h * fps * 0.1)));
 
@@ -131,6 +137,26 @@ function slice(buffer, a, b) {
 const nextTask = () => new Promise((r) => setTimeout(r, 0));
 
 /**
+ * Draws `figures` into the viewer's capture and resolves its pixels once the GPU has drawn
+ * them, yielding to the event loop meanwhile; `last` when the draw repeats the last frame
+ * (the viewer draws nothing then: a clip's end held). Waits out a skinned figure's textures
+ * still being decoded (the viewer holds such frames back, at most a few seconds).
+ */
+async function drawCaptured(viewer, library, figures, last) {
+  let drew = viewer.draw(library, figures);
+  while (!drew && viewer.waitingForTextures) {
+    await nextTask();
+    drew = viewer.draw(library, figures);
+  }
+  if (!drew) {
+    if (last) return last;
+    throw new VideoExportError("video-encode", "the first frame could not be drawn");
+  }
+  while (!viewer.captureReady()) await nextTask();
+  return viewer.takeCapture();
+}
+
+/**
  * The caller's stream behind one of ours: the muxer closes its stream when cancelled too, and
  * closing a FileSystemWritableFileStream keeps what was written; ours aborts the caller's
  * instead once `discard()` was called, so a cancelled export leaves nothing written.
@@ -155,7 +181,9 @@ function guarded(stream) {
  *   dance starting at bar 1 starts a beat early: see `danceRange`).
  * - `bars`: the range's song bars `{ index, startSecs, endSecs, intensity }`, `sections`:
  *   the song's sections (`Project.sections()`), for the director; `camera`: CameraOptions
- *   (`{ mode: "director" }` by default).
+ *   (`{ mode: "director" }` by default), or `{ mode: "vmd", track, offsetSecs? }`: the
+ *   library's MMD camera track `track` (an index of `library.cameraTracks()`) drives the
+ *   camera, sampled at each frame's song time less `offsetSecs` (0 by default).
  * - `cameraTrack` (optional): `(timeSecs) => CameraPose`, a camera from elsewhere (an MMD
  *   camera VMD, once read) used instead of the planned one.
  * - `character`: "builtin" (default), a character clip id, or null (stick figures).
@@ -167,7 +195,8 @@ function guarded(stream) {
  *   FileSystemWritableFileStream): the file is written there and the result is null; else a Blob.
  * - `signal`: an AbortSignal; `backend`: "auto" | "webgpu" | "webgl2".
  * `onProgress({ frame, frames, fraction, elapsedSecs, remainingSecs })` is called as frames are
- * encoded. Resolves `{ blob, codecs, frames, durationSecs, mimeType }`; rejects with a
+ * encoded. Resolves `{ blob, codecs, frames, durationSecs, mimeType, camera, path }` (`path`:
+ * where the frames were made, EXPORT_PATH); rejects with a
  * VideoExportError (`video-cancelled` when `signal` aborts).
  */
 export async function exportVideo(options, onProgress = () => {}) {
@@ -200,16 +229,21 @@ export async function exportVideo(options, onProgress = () => {}) {
   try {
     viewer.setCharacter(library, o.character ?? null);
     if (o.character != null) viewer.warmUp();
+    viewer.setCapture(true);
+    const { mode, track: vmdTrack, offsetSecs, ...cameraRest } = o.camera;
+    if (mode === "vmd" && !(Number.isInteger(vmdTrack) && vmdTrack >= 0)) throw new VideoExportError("video-bad-option", `camera: a camera VMD needs \`track\`, an index of library.cameraTracks(), not ${vmdTrack}`);
     const plan = viewer.planCamera(library, figures.map((f) => ({ timeSecs: 0, ...f })), {
       timesSecs: Array.from(times), bars: o.bars || [], sections: o.sections || undefined,
-      camera: { aspect: o.width / o.height, ...o.camera },
+      camera: { aspect: o.width / o.height, ...cameraRest, ...(mode && mode !== "vmd" ? { mode } : {}) },
+      ...(mode === "vmd" ? { cameraTrack: { index: vmdTrack, offsetSecs: offsetSecs || 0 } } : {}),
     });
     if (signal?.aborted) throw cancelled();
 
     const target = out ? new StreamTarget(out.ws, { chunked: true, chunkSize: 4 << 20 }) : new BufferTarget();
     const format = o.container === "webm" ? new WebMOutputFormat() : new Mp4OutputFormat({ fastStart: o.stream ? false : "in-memory" });
     output = new Output({ format, target });
-    const video = new CanvasSource(canvas, { codec: codecs.video, bitrate: codecs.bitrate, keyFrameInterval: 2, latencyMode: "quality" });
+    const video = new VideoSampleSource({ codec: codecs.video, bitrate: codecs.bitrate, keyFrameInterval: 2, latencyMode: "quality" });
+    const pixelFormat = viewer.captureFormat;
     output.addVideoTrack(video, { frameRate: o.fps });
     let audio = null, track = null;
     if (codecs.audio) {
@@ -221,7 +255,8 @@ export async function exportVideo(options, onProgress = () => {}) {
 
     const t0 = performance.now();
     let fed = 0; // audio samples given to the encoder
-    let sliceStart = performance.now();
+    let reported = performance.now();
+    let pixels = null;
     for (let i = 0; i < frames; i++) {
       if (signal?.aborted) throw cancelled();
       // The sound a second ahead of the picture, a second at a time (the muxer interleaves).
@@ -233,15 +268,19 @@ export async function exportVideo(options, onProgress = () => {}) {
         }
       }
       viewer.setCamera(o.cameraTrack ? o.cameraTrack(times[i]) : plan.poses[i]);
-      viewer.draw(library, figures.map((f) => ({ ...f, timeSecs: times[i] })));
-      // Captured in the same task as the draw (a WebGL canvas keeps its image only until then).
-      await video.add(i / o.fps, 1 / o.fps);
-      if (performance.now() - sliceStart > SLICE_MS || i === frames - 1) {
+      pixels = await drawCaptured(viewer, library, figures.map((f) => ({ ...f, timeSecs: times[i] })), pixels);
+      if (signal?.aborted) throw cancelled();
+      const sample = new VideoSample(pixels, { format: pixelFormat, codedWidth: o.width, codedHeight: o.height, timestamp: i / o.fps, duration: 1 / o.fps });
+      try {
+        await video.add(sample);
+      } finally {
+        sample.close();
+      }
+      if (performance.now() - reported > PROGRESS_MS || i === frames - 1) {
         const elapsed = (performance.now() - t0) / 1000;
         const done = i + 1;
         onProgress({ frame: done, frames, fraction: done / frames, elapsedSecs: elapsed, remainingSecs: (elapsed / done) * (frames - done) });
-        await nextTask();
-        sliceStart = performance.now();
+        reported = performance.now();
       }
     }
     if (track && fed < track.length) await audio.add(slice(track, fed, track.length));
@@ -249,7 +288,7 @@ export async function exportVideo(options, onProgress = () => {}) {
     await output.finalize();
     const mimeType = await output.getMimeType().catch(() => (o.container === "webm" ? "video/webm" : "video/mp4"));
     const blob = o.stream ? null : new Blob([target.buffer], { type: mimeType });
-    return { blob, codecs, frames, durationSecs, mimeType, camera: plan };
+    return { blob, codecs, frames, durationSecs, mimeType, camera: plan, path: EXPORT_PATH };
   } catch (e) {
     if (out) await out.discard();
     if (output && output.state !== "finalized" && output.state !== "canceled") await output.cancel().catch(() => {});

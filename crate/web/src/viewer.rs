@@ -46,6 +46,8 @@ use web_sys::HtmlCanvasElement;
 use crate::error::{from_js, JsResult, OdoriError};
 use crate::library::{Entry, Library};
 
+mod capture;
+
 #[derive(Deserialize, Default)]
 #[serde(rename_all = "camelCase", default, deny_unknown_fields)]
 struct ViewerOptions {
@@ -73,6 +75,19 @@ struct CameraRequest {
     sections: Option<odori_core::music::Sections>,
     #[serde(default)]
     camera: odori_core::camera::CameraOptions,
+    /// An MMD camera VMD of the library (`Library.cameraTracks()`) drives the camera instead.
+    #[serde(default)]
+    camera_track: Option<CameraTrackRequest>,
+}
+
+/// Which camera track, and where its frame 0 falls in song time.
+#[cfg(feature = "authoring")]
+#[derive(Deserialize)]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+struct CameraTrackRequest {
+    index: usize,
+    #[serde(default)]
+    offset_secs: f32,
 }
 
 #[wasm_bindgen(typescript_custom_section)]
@@ -82,7 +97,7 @@ export interface CameraPose { target: [number, number, number]; yaw: number; pit
 /** A video camera's settings (`Viewer.planCamera`); every field may be left out. */
 export interface CameraOptions { mode?: "fixed" | "orbit" | "follow" | "director"; aspect?: number; phraseBars?: number; minShotBars?: number; intensityJump?: number; noveltyCut?: number; orbitBars?: number; followSmoothSecs?: number; }
 /** What `Viewer.planCamera` plans over: the video's frame times (song seconds), the range's bars as the grid gives them, the song's sections (`Project.sections()`). */
-export interface CameraRequest { timesSecs: number[] | Float32Array; bars: { index: number; startSecs: number; endSecs: number; intensity: number; beats?: number }[]; sections?: unknown; camera?: CameraOptions; }
+export interface CameraRequest { timesSecs: number[] | Float32Array; bars: { index: number; startSecs: number; endSecs: number; intensity: number; beats?: number }[]; sections?: unknown; camera?: CameraOptions; cameraTrack?: { index: number; offsetSecs?: number }; }
 /** A planned camera: a pose per frame, and the shots (the first at frame 0; each later one a cut on a bar line at a phrase start). */
 export interface CameraPlan { poses: CameraPose[]; shots: { frame: number; bar: number; shot: "wide" | "medium" | "close" | "lowAngle" }[]; phraseBars: number; }
 "#;
@@ -191,6 +206,8 @@ pub struct Viewer {
     /// Frames presented since the viewer was made (for tests of the drawing budget).
     #[cfg(feature = "authoring")]
     frames_drawn: u32,
+    /// Draws go to a texture read back for the video export (`setCapture`), not the canvas.
+    capture: Option<capture::Capture>,
 }
 
 #[wasm_bindgen(typescript_custom_section)]
@@ -507,6 +524,7 @@ impl Viewer {
             adapter: adapter_info,
             #[cfg(feature = "authoring")]
             frames_drawn: 0,
+            capture: None,
         };
         // WebGL2: the pipelines the first frame draws with, each made and then drawn with once, a
         // task for each step: on WebGL2 the browser's GL (ANGLE) compiles a pipeline's GPU code only
@@ -760,8 +778,11 @@ impl Viewer {
     /// frame), posed as this viewer draws them (on the chosen body). `request`: `{ timesSecs,
     /// bars (the range's song bars, as the grid gives them), sections? (a project's
     /// `sections()`), camera?: { mode: "fixed" | "orbit" | "follow" | "director", aspect,
-    /// phraseBars, minShotBars, intensityJump, noveltyCut, orbitBars, followSmoothSecs } }`.
-    /// Returns `{ poses: CameraPose[], shots: [{ frame, bar, shot }], phraseBars }`.
+    /// phraseBars, minShotBars, intensityJump, noveltyCut, orbitBars, followSmoothSecs },
+    /// cameraTrack?: { index, offsetSecs } }`: with `cameraTrack`, the library's MMD camera
+    /// track `index` (`Library.cameraTracks()`) drives the camera instead (the core's
+    /// `camera::mmd`), sampled at each time less `offsetSecs` (where its frame 0 falls in song
+    /// time), with no shots. Returns `{ poses: CameraPose[], shots: [{ frame, bar, shot }], phraseBars }`.
     #[cfg(feature = "authoring")]
     #[wasm_bindgen(js_name = planCamera, unchecked_return_type = "CameraPlan")]
     pub fn plan_camera(
@@ -771,7 +792,15 @@ impl Viewer {
         #[wasm_bindgen(unchecked_param_type = "CameraRequest")] request: JsValue,
     ) -> Result<JsValue, OdoriError> {
         let specs = parse_figures(figures)?;
-        let req: CameraRequest = from_js(request, "camera request", &["timesSecs", "bars", "sections", "camera"])?;
+        let req: CameraRequest = from_js(request, "camera request", &["timesSecs", "bars", "sections", "camera", "cameraTrack"])?;
+        if let Some(ct) = &req.camera_track {
+            let track = library.mmd.cameras.get(ct.index).ok_or_else(|| {
+                OdoriError::new("not-found", format!("no camera track {} (the library has {})", ct.index, library.mmd.cameras.len()))
+            })?;
+            let poses = odori_core::camera::mmd::poses(track, &req.times_secs, ct.offset_secs)?;
+            let plan = odori_core::camera::CameraPlan { poses, shots: Vec::new(), phrase_bars: 0 };
+            return Ok(crate::error::to_js(&plan));
+        }
         let mut posed: Vec<(Rc<Clip>, Vec3)> = Vec::with_capacity(specs.len());
         for s in &specs {
             let e = library.entry(s.clip)?;
@@ -997,6 +1026,9 @@ impl Viewer {
     /// Renders `figures` and `meshes` to the canvas with the current camera; false when the
     /// canvas had no texture to draw on (it is configured again for the next draw).
     fn present(&mut self, figures: &[Figure], meshes: &[MeshDraw]) -> bool {
+        if self.capture.is_some() {
+            return self.present_captured(figures, meshes);
+        }
         let frame = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {

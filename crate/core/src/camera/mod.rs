@@ -464,5 +464,7 @@ fn director(input: &CameraInput, options: &CameraOptions, phrase: usize) -> Resu
     Ok(CameraPlan { poses, shots: cuts, phrase_bars: phrase })
 }
 
+pub mod mmd;
+
 #[cfg(test)]
 mod tests;
