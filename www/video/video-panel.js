@@ -26,6 +26,12 @@ export const VIDEO_FORMAT = {
 
 let dialog = null;
 
+/** The dialog's camera choice as exportVideo's `camera`: a mode, or `vmd:i`, camera track i. */
+export function cameraChoice(value) {
+  const m = /^vmd:(\d+)$/.exec(value);
+  return m ? { mode: "vmd", track: Number(m[1]) } : { mode: value };
+}
+
 function build({ VIDEO_SIZES, VIDEO_FPS }) {
   const d = document.createElement("dialog");
   d.id = "video-dialog";
@@ -54,6 +60,12 @@ async function openVideoDialog(panel, plan) {
   dialog = dialog || build(await load());
   const $ = (s) => dialog.querySelector(s);
   $("#video-what").textContent = `${plan.label.charAt(0).toUpperCase() + plan.label.slice(1)} on ${plan.on}.`;
+  // The camera VMDs the MMD import kept aside (issue 28) join the planned cameras.
+  const tracks = typeof panel.library.cameraTracks === "function" ? panel.library.cameraTracks() : [];
+  const cam = $("#video-camera");
+  const was = cam.value;
+  cam.replaceChildren(...[...CAMERAS, ...tracks.map((t, i) => [`vmd:${i}`, `Camera VMD: ${t.name}`])].map(([v, t]) => Object.assign(document.createElement("option"), { value: v, textContent: t })));
+  if ([...cam.options].some((o) => o.value === was)) cam.value = was;
   $("#video-status").textContent = "";
   $("#video-progress").hidden = true;
   $("#video-go").disabled = false;
@@ -109,7 +121,7 @@ export async function makeVideo(panel, plan, { withoutSound = false } = {}) {
     const result = await exportVideo({
       engine: ctx.engine, library: panel.library, clip: plan.id, startSecs, endSecs, bars,
       sections: bars.length && ctx.sections ? ctx.sections() : undefined,
-      character: panel.chosen(), width, height, fps, container, camera: { mode: $("#video-camera").value },
+      character: panel.chosen(), width, height, fps, container, camera: cameraChoice($("#video-camera").value),
       song: plan.what === "clip" ? null : ctx.song ? ctx.song() : null, withoutSound, stream, signal: abort.signal,
     }, (p) => {
       bar.value = p.fraction;
