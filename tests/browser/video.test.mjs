@@ -11,10 +11,10 @@
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { execFileSync } from "node:child_process";
-import { writeFileSync } from "node:fs";
+import { readFileSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { createRequire } from "node:module";
-import { startServer, launch, openApp, artifacts, root } from "./harness.mjs";
+import { startServer, launch, openApp, artifacts, root, data, isWarmFigure } from "./harness.mjs";
 
 const require = createRequire(import.meta.url);
 const FFPROBE = require("@ffprobe-installer/ffprobe").path;
@@ -266,6 +266,154 @@ test("video (webgl2): a WebM streamed into a file, a cancelled stream leaves it 
     assert.deepEqual(after.errors, [], "no error shown");
     assert.equal(after.rev, before.rev, "the project's revision");
     assert.equal(after.doc, before.doc, "the project's document");
+    assert.deepEqual(logs.filter((l) => l.startsWith("[pageerror]")), []);
+  } finally {
+    await browser.close();
+  }
+});
+
+// A song whose first bar starts well after its first sample (Sugar Plum Fairy: the demo song's
+// first bar starts at 0 s, where a lead-in has no room): bars 1–2 of its dance from the lead-in
+// count. The frames are round((the bars' duration + the lead-in) × fps) by ffprobe; the sound
+// starts at the lead-in (found by searching the song, not assumed: the decoded sound's best
+// match lies a beat before bar 1, not at bar 1). How far the figure moves in the lead-in is printed.
+const LEAD_SONG = "Kevin_MacLeod_-_P_I_Tchaikovsky_Dance_of_the_Sugar_Plum_Fairy.hq.ogg";
+test("video (webgl2): a dance from bar 1 of a song whose first bar starts later includes its lead-in count", { timeout: 900000 }, async () => {
+  const { browser, page, logs } = await launch("webgl2");
+  try {
+    await openApp(page, server, "webgl2");
+    await page.setInputFiles("#song-input", join(data, "music", LEAD_SONG));
+    await page.waitForFunction((n) => document.body.dataset.song === n, LEAD_SONG, { timeout: 180000 });
+    await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 90000 });
+    await page.click("#dance-generate");
+    await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 90000 });
+    const made = await page.evaluate(async ({ fps }) => {
+      const { exportVideo, danceRange } = await import("/video/export-video.js");
+      const { choreo, library, songPlayer, project, exporter } = window.odori;
+      choreo.renderDance();
+      const id = choreo.danceId;
+      const grid = project.project.grid();
+      const bars = grid.bars.slice(0, 2);
+      const range = danceRange(grid.bars, 0, 1, grid.beatsPerBar);
+      const r = await exportVideo({ engine: exporter.video.engine, library, clip: id, ...range, bars, character: null, width: 1280, height: 720, fps, container: "mp4", song: songPlayer.buffer, backend: "webgl2" });
+      const bytes = new Uint8Array(await r.blob.arrayBuffer());
+      const enc = (a) => { let s = ""; for (let i = 0; i < a.length; i += 0x8000) s += String.fromCharCode.apply(null, a.subarray(i, i + 0x8000)); return btoa(s); };
+      const sr = songPlayer.buffer.sampleRate;
+      const song = songPlayer.buffer.getChannelData(0).slice(0, Math.round((range.endSecs + 0.5) * sr));
+      // How far the figure moves during the lead-in (largest joint displacement from its first
+      // pose, metres, sampled at every frame of it): printed.
+      const a = library.jointPositions(id, range.startSecs);
+      let moved = 0;
+      for (let t = range.startSecs; t <= bars[0].startSecs; t += 1 / fps) {
+        const b = library.jointPositions(id, t);
+        for (let k = 0; k < a.length; k += 3) moved = Math.max(moved, Math.hypot(a[k] - b[k], a[k + 1] - b[k + 1], a[k + 2] - b[k + 2]));
+      }
+      return { mp4: enc(bytes), frames: r.frames, range, bars, beats: bars[0].beats || grid.beatsPerBar, sr, song: enc(new Uint8Array(song.buffer)), moved, path: r.path };
+    }, { fps: FPS });
+    const file = join(artifacts, "video-lead-in.mp4");
+    writeFileSync(file, b64(made.mp4));
+    const [b0, b1] = made.bars;
+    const leadIn = (b0.endSecs - b0.startSecs) / made.beats;
+    assert.ok(b0.startSecs >= leadIn, `${LEAD_SONG}'s first bar starts at ${b0.startSecs} s, less than a beat (${leadIn} s) in: the test needs a song with room for the lead-in`);
+    const expectFrames = Math.round((b1.endSecs - b0.startSecs + leadIn) * FPS);
+    const p = probe(file);
+    console.log(`lead-in: bar 1 at ${b0.startSecs.toFixed(3)} s, lead-in ${leadIn.toFixed(3)} s, video from ${made.range.startSecs.toFixed(3)} s: ${p.video.nb_read_frames} frames decoded (expected ${expectFrames}); the figure moves ${made.moved.toFixed(3)} m in the lead-in; ${made.path}`);
+    assert.equal(Number(p.video.nb_read_frames), expectFrames, "decoded frames = round((bars + lead-in) × fps)");
+    assert.equal(made.frames, expectFrames);
+    // Where in the song the sound starts: the offset whose samples best match the decoded
+    // sound's first quarter second (after the fade in), searched from 1.5 beats before bar 1
+    // to a quarter beat after it (normalised cross-correlation).
+    const sr = made.sr;
+    const sound = decodeSound(file, sr);
+    const songBytes = b64(made.song);
+    const song = new Float32Array(songBytes.buffer, songBytes.byteOffset, songBytes.length / 4);
+    const from = Math.round(0.05 * sr), len = Math.round(0.25 * sr);
+    let best = -Infinity, at = 0;
+    const lo = Math.max(0, Math.round((b0.startSecs - 1.5 * leadIn) * sr)), hi = Math.round((b0.startSecs + 0.25 * leadIn) * sr);
+    for (let o = lo; o <= hi; o++) {
+      let s = 0, e = 0;
+      for (let i = 0; i < len; i++) { const v = song[o + from + i] || 0; s += v * sound[from + i]; e += v * v; }
+      const c = s / Math.sqrt(e + 1e-12);
+      if (c > best) { best = c; at = o; }
+    }
+    const startsAt = at / sr;
+    console.log(`lead-in: the sound starts at song time ${startsAt.toFixed(4)} s (lead-in ${(b0.startSecs - leadIn).toFixed(4)} s, bar 1 ${b0.startSecs.toFixed(4)} s)`);
+    assert.ok(Math.abs(startsAt - (b0.startSecs - leadIn)) <= 0.001, `the sound starts at ${startsAt} s of the song, not at the lead-in ${b0.startSecs - leadIn} s`);
+    assert.deepEqual(logs.filter((l) => l.startsWith("[pageerror]")), []);
+  } finally {
+    await browser.close();
+  }
+});
+
+// An MMD camera VMD drives the camera: 時間のカケラ's dance and its camera VMD imported through the
+// library's MMD import (on the standard skeleton), 4 s of it made into a video with the camera
+// VMD chosen. ffprobe counts round(4 × fps) frames; in 5 decoded frames the figure (the stick
+// figure's orange) is drawn where the camera track puts it: 90 % of its pixels lie in the box
+// of its joints projected with the poses the export used (planned again), a box under 60 % of
+// the frame.
+test("video (webgl2): a camera VMD drives the camera", { timeout: 900000 }, async () => {
+  const { browser, page, logs } = await launch("webgl2");
+  try {
+    await openApp(page, server, "webgl2");
+    const file = (rel) => readFileSync(join(data, rel)).toString("base64");
+    const made = await page.evaluate(async ({ dance, cam, fps }) => {
+      const { exportVideo, frameTimes } = await import("/video/export-video.js");
+      const { library, exporter } = window.odori;
+      const bytes = (s) => Uint8Array.from(atob(s), (c) => c.charCodeAt(0));
+      const report = library.importFiles([{ name: "tokino_kakera.vmd", bytes: bytes(dance) }, { name: "tokino_kakera_cam.vmd", bytes: bytes(cam) }], { model: "standard" });
+      const id = report.motions[0].clip.id;
+      const track = library.cameraTracks().length - 1;
+      const range = { startSecs: 40, endSecs: 44 };
+      const w = 1280, h = 720;
+      const r = await exportVideo({ engine: exporter.video.engine, library, clip: id, ...range, character: null, width: w, height: h, fps, container: "mp4", song: null, camera: { mode: "vmd", track }, backend: "webgl2" });
+      const enc = (a) => { let s = ""; for (let i = 0; i < a.length; i += 0x8000) s += String.fromCharCode.apply(null, a.subarray(i, i + 0x8000)); return btoa(s); };
+      // The joints' projected centre in 5 frames, with the camera planned again.
+      const canvas = Object.assign(document.createElement("canvas"), { width: w, height: h });
+      const viewer = await exporter.video.engine.Viewer.create(canvas, { backend: "webgl2" });
+      const times = frameTimes(range.startSecs, range.endSecs, fps);
+      const plan = viewer.planCamera(library, [{ clip: id, style: "stick", timeSecs: 0 }], { timesSecs: Array.from(times), bars: [], cameraTrack: { index: track } });
+      const picks = [0.1, 0.3, 0.5, 0.7, 0.9].map((f) => Math.round(f * (times.length - 1)));
+      const centres = picks.map((i) => {
+        viewer.setCamera(plan.poses[i]);
+        const fj = viewer.figureJoints(library, id, times[i]);
+        let x0 = w, y0 = h, x1 = 0, y1 = 0;
+        for (let k = 0; k < fj.positions.length; k += 3) {
+          const p = viewer.project(fj.positions[k], fj.positions[k + 1], fj.positions[k + 2]);
+          if (!p) continue;
+          x0 = Math.min(x0, p[0]); x1 = Math.max(x1, p[0]); y0 = Math.min(y0, p[1]); y1 = Math.max(y1, p[1]);
+        }
+        // Room for the bones' and head's thickness, as the first test's box.
+        const pad = 0.15 * Math.max(x1 - x0, y1 - y0) + 8;
+        return { frame: i, x0: x0 - pad, y0: y0 - pad, x1: x1 + pad, y1: y1 + pad };
+      });
+      viewer.release();
+      return { mp4: enc(new Uint8Array(await r.blob.arrayBuffer())), frames: r.frames, shots: r.camera.shots.length, samePlan: JSON.stringify(plan.poses) === JSON.stringify(r.camera.poses), centres, cameras: report.cameras, w, h };
+    }, { dance: file("mmd/motion/tokino_kakera.vmd"), cam: file("mmd/motion/tokino_kakera_cam.vmd"), fps: FPS });
+    const out = join(artifacts, "video-camera-vmd.mp4");
+    writeFileSync(out, b64(made.mp4));
+    const p = probe(out);
+    console.log(`camera VMD: ${JSON.stringify(made.cameras)}; ${p.video.nb_read_frames} frames decoded; ${made.shots} shots`);
+    assert.equal(made.cameras.length, 1, "the camera VMD became a camera track");
+    assert.equal(Number(p.video.nb_read_frames), Math.round(4 * FPS));
+    assert.equal(made.frames, Math.round(4 * FPS));
+    assert.ok(made.samePlan, "the camera track gives the same poses when planned again");
+    assert.equal(made.shots, 0, "a camera track has no planned shots");
+    for (const c of made.centres) {
+      const img = decodeFrame(out, c.frame, p.video);
+      let n = 0, inside = 0;
+      for (let py = 0; py < made.h; py++) for (let px = 0; px < made.w; px++) {
+        const i = (py * made.w + px) * 4;
+        if (isWarmFigure([img[i], img[i + 1], img[i + 2]])) {
+          n++;
+          if (px >= c.x0 && px <= c.x1 && py >= c.y0 && py <= c.y1) inside++;
+        }
+      }
+      const boxShare = ((Math.min(made.w, c.x1) - Math.max(0, c.x0)) * (Math.min(made.h, c.y1) - Math.max(0, c.y0))) / (made.w * made.h);
+      console.log(`camera VMD: frame ${c.frame}: ${n} figure pixels, ${((100 * inside) / n).toFixed(1)} % inside the joints' projected box (${(100 * boxShare).toFixed(0)} % of the frame)`);
+      assert.ok(n > 300, `frame ${c.frame}: only ${n} figure pixels`);
+      assert.ok(inside >= 0.9 * n, `frame ${c.frame}: ${inside} of ${n} figure pixels where the camera track puts the figure`);
+      assert.ok(boxShare < 0.6, `frame ${c.frame}: the box is ${boxShare} of the frame: the check cannot tell`);
+    }
     assert.deepEqual(logs.filter((l) => l.startsWith("[pageerror]")), []);
   } finally {
     await browser.close();
