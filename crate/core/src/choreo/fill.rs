@@ -64,10 +64,12 @@ pub enum MovesSource {
     /// Imported moves first: in a bar the library holds an imported move of the bar's count for,
     /// a built-in move costs [`MOVES_SOURCE_CHARGE`] more (far above any term of the objective:
     /// a preference order, not a weight), so built-in moves fill only bars no imported move
-    /// fits. With no imported move in the library, as `Mixed`.
+    /// fits. With no imported move in the library, as `Mixed` (built-in moves only, there
+    /// being no other): so the default is *my moves* once the person has imported a humanoid
+    /// clip, and the built-in moves before (issue 26).
+    #[default]
     Mine,
     /// Both kinds as the objective weighs them (with [`FillWeights::own_moves_preference`]).
-    #[default]
     Mixed,
     /// Built-in moves only, wherever the library holds one of the bar's count.
     Builtin,
@@ -131,8 +133,8 @@ pub struct FillWeights {
     /// cm/s). (The one-bar trumpet song's 1.50 that no weight moved came from its grid: its bar
     /// held 2 of its 4 beats.) A value above 0 is used as it is, on every song.
     pub beat_rate_weight: f32,
-    /// Which moves fill the open bars ([`MovesSource`]). Default `Mixed` (what Generate did
-    /// before the choice existed); absent in files written before it, which read the default.
+    /// Which moves fill the open bars ([`MovesSource`]). Default `Mine` (issue 26: the
+    /// person's moves first); absent in files written before it, which read the default.
     pub moves_source: MovesSource,
 }
 
@@ -162,7 +164,7 @@ pub fn in_beat_rate_band(kinetic_per_count: f32) -> bool {
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, moves_source: MovesSource::Mixed }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, moves_source: MovesSource::Mine }
     }
 }
 
