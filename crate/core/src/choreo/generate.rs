@@ -240,6 +240,7 @@ pub struct Problem<'a> {
 impl<'a> Problem<'a> {
     /// The problem of filling `layers` (one per bar of `bars`) from `lib` with `weights`.
     pub fn new(lib: &'a SegmentLibrary, bars: &'a [Bar], layers: &'a [Layer], weights: FillWeights, options: &GenerateOptions) -> Self {
+        let weights = super::fill::fill_weights_for(weights, lib.segments().iter().any(|s| s.builtin.is_none() && !s.retired));
         // The joins this song's bars make (its metres, and any change between two bars).
         let bar_counts = bar_counts(lib, bars);
         let table = lib.transition_table_for(weights.repeat_penalty, &TableScope::for_bar_counts(&bar_counts));
