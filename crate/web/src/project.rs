@@ -345,8 +345,9 @@ impl Project {
     }
 
     /// Which moves Generate fills the open bars with: `"mine"` (the person's imported moves
-    /// first: built-in moves only in bars no imported move fits), `"mixed"` (both, as the
-    /// filling weighs them; the default) or `"builtin"`. One undo step.
+    /// first: built-in moves only in bars no imported move fits; the default, which is the
+    /// built-in moves alone until a humanoid clip is imported), `"mixed"` (both, as the filling
+    /// weighs them) or `"builtin"`. One undo step.
     #[wasm_bindgen(js_name = setMovesSource)]
     pub fn set_moves_source(&mut self, #[wasm_bindgen(unchecked_param_type = "\"mine\" | \"mixed\" | \"builtin\"")] source: &str) -> Result<(), OdoriError> {
         let s = match source {

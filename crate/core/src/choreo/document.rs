@@ -311,7 +311,7 @@ mod tests {
         // Count k of each bar's segment plays on the bar's k-th beat: the rendered pose there is
         // the clip's at that count (joints below the root; the root is placed and turned).
         let fps = 60.0;
-        let clip = render_states(&lib, &bars, &states, &RenderOptions { fps, join_frames: 5, hold_feet: false });
+        let clip = render_states(&lib, &bars, &states, &RenderOptions { fps, hold_feet: false, ..RenderOptions::default() });
         let (mut rot, mut trans) = (Vec::new(), Vec::new());
         for (b, &s) in bars.iter().zip(&chosen) {
             let seg = &lib.segments()[s];

@@ -64,10 +64,12 @@ pub enum MovesSource {
     /// Imported moves first: in a bar the library holds an imported move of the bar's count for,
     /// a built-in move costs [`MOVES_SOURCE_CHARGE`] more (far above any term of the objective:
     /// a preference order, not a weight), so built-in moves fill only bars no imported move
-    /// fits. With no imported move in the library, as `Mixed`.
+    /// fits. With no imported move in the library, as `Mixed` (built-in moves only, there
+    /// being no other): so the default is *my moves* once the person has imported a humanoid
+    /// clip, and the built-in moves before (issue 26).
+    #[default]
     Mine,
     /// Both kinds as the objective weighs them (with [`FillWeights::own_moves_preference`]).
-    #[default]
     Mixed,
     /// Built-in moves only, wherever the library holds one of the bar's count.
     Builtin,
@@ -131,9 +133,30 @@ pub struct FillWeights {
     /// cm/s). (The one-bar trumpet song's 1.50 that no weight moved came from its grid: its bar
     /// held 2 of its 4 beats.) A value above 0 is used as it is, on every song.
     pub beat_rate_weight: f32,
-    /// Which moves fill the open bars ([`MovesSource`]). Default `Mixed` (what Generate did
-    /// before the choice existed); absent in files written before it, which read the default.
+    /// Which moves fill the open bars ([`MovesSource`]). Default `Mine` (issue 26: the
+    /// person's moves first); absent in files written before it, which read the default.
     pub moves_source: MovesSource,
+}
+
+/// How many times its set weight the beat term weighs when [`MovesSource::Mine`] puts the
+/// person's imported moves first (a library holding any): with inertialized joins
+/// ([`super::render::JoinBlend::Inertial`]) the viewer sees little of a join's cost, and among
+/// imported moves only, which all fit the bar's count, the beat is what tells a good move from
+/// a weak one. Measured with `tests/native/choreo_my_moves.rs` (every song, the drum take and
+/// five demo pieces, the person library of every dance clip): at ×1 (0.3) the dance scored below
+/// random moves on Let's Go Fishin' (0.615 against 0.686) and the drum take (0.436 against 0.681);
+/// at ×3.3 (1.0) the drum take was still 0.705 against 0.681; at ×10 (3.0) every piece met the
+/// beat goals. A set weight of 0 still turns the term off.
+pub const MINE_BEAT_FACTOR: f32 = 10.0;
+
+/// The weights the fill runs with: `weights`, with the beat term × [`MINE_BEAT_FACTOR`] when
+/// the source is [`MovesSource::Mine`] and the library holds imported moves (`has_imported`).
+pub fn fill_weights_for(weights: FillWeights, has_imported: bool) -> FillWeights {
+    if weights.moves_source == MovesSource::Mine && has_imported {
+        FillWeights { beat_weight: weights.beat_weight * MINE_BEAT_FACTOR, ..weights }
+    } else {
+        weights
+    }
 }
 
 /// Skate weights (per m/s of skate above the source clip's) tried, weakest first, by
@@ -162,7 +185,7 @@ pub fn in_beat_rate_band(kinetic_per_count: f32) -> bool {
 
 impl Default for FillWeights {
     fn default() -> Self {
-        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, moves_source: MovesSource::Mixed }
+        Self { music_weight: 1.0, repeat_penalty: 3.0, repeat_window: 4, beat_weight: 0.3, own_moves_preference: 0.03, stretch_weight: STRETCH_WEIGHT_DEFAULT, skate_weight: SKATE_WEIGHT_DEFAULT, beat_rate_weight: 0.0, moves_source: MovesSource::Mine }
     }
 }
 

@@ -3,9 +3,13 @@
 //! time onto the bar, piecewise-linearly between its counts so count k of its n plays at k/n of
 //! the bar (the bar's beats when n is the bar's metre, spec §E; [`super::segment`]), placed so it starts where (and facing the way) the previous one
 //! ended, and consecutive segments are joined by rewriting the last 5 frames of the earlier and
-//! the first 5 of the later one with a cubic Hermite curve between the untouched poses on
-//! either side (positions and velocities matched), so no time is added and every bar stays on
-//! its beat (spec §G). Frame 0 is song time 0.
+//! joined by inertialization (Bollo 2016): at the switch the outgoing motion's pose, velocity
+//! and acceleration, carried on past its end, differ from the incoming one's by an offset that
+//! is added to the incoming motion and decayed to zero by a quintic within
+//! [`INERTIAL_BLEND_SECS`], so the viewer sees no jump and the incoming segment keeps its own
+//! timing: no time is added and every bar stays on its beat. (The spec's §G join, a cubic
+//! Hermite rewrite of 5 frames either side, is kept as [`JoinBlend::Hermite`], the control.)
+//! Frame 0 is song time 0.
 
 use std::sync::Arc;
 
@@ -25,8 +29,12 @@ use crate::library::neutral_pose;
 pub struct RenderOptions {
     /// Output frame rate.
     pub fps: f32,
-    /// Frames rewritten on each side of a join (spec: 5); 0 turns joins off.
+    /// Joins on (any value above 0) or off (0); with [`JoinBlend::Hermite`], the frames
+    /// rewritten on each side of a join (spec §G: 5).
     pub join_frames: usize,
+    /// How consecutive segments are joined (default [`JoinBlend::Inertial`]; files saved before
+    /// the option read the default).
+    pub join_blend: JoinBlend,
     /// Hold each foot where it lands for as long as its bar's source clip has it planted, read
     /// at the clip's own pace ([`hold_planted_feet`]); default on (and for files saved before
     /// the option: missing reads as the default). Off: the control.
@@ -35,9 +43,29 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { fps: 60.0, join_frames: 5, hold_feet: true }
+        Self { fps: 60.0, join_frames: 5, join_blend: JoinBlend::Inertial, hold_feet: true }
     }
 }
+
+/// How two consecutive segments are joined.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum JoinBlend {
+    /// Inertialization ([`inertialize_at`]): the incoming segment plays on its own timing
+    /// with the outgoing one's pose, velocity and acceleration offset decayed over
+    /// [`INERTIAL_BLEND_SECS`]; the outgoing segment is not touched.
+    #[default]
+    Inertial,
+    /// Spec §G: the last `join_frames` frames of the earlier segment and the first of the later
+    /// one rewritten by a cubic Hermite curve ([`join_at`]). The control.
+    Hermite,
+}
+
+/// How long an inertialized join's offset takes to decay to zero (shorter where the next bar
+/// starts sooner). Long enough that the offset's acceleration stays within what the segments
+/// themselves do, short enough to be gone well inside a count at dance tempi (a count at 180
+/// BPM is 0.33 s).
+pub const INERTIAL_BLEND_SECS: f32 = 0.3;
 
 /// Yaw (about +Y) of a root rotation's forward (+Z) direction.
 fn yaw_of(q: Quat) -> f32 {
@@ -63,7 +91,7 @@ fn sample_segment(lib: &SegmentLibrary, seg: usize, u: f32, rot: &mut Vec<Quat>,
 pub fn segment_clip(lib: &SegmentLibrary, seg: usize, duration_secs: f32, fps: f32) -> Option<Clip> {
     let beats = lib.segment(seg).map_or(4, |s| s.counts() as u32);
     let bar = Bar { index: 0, start_secs: 0.0, end_secs: duration_secs.max(1e-3), intensity: 0.5, beats };
-    let mut clip = render(lib, &[bar], &[Some(seg)], &RenderOptions { fps, join_frames: 0, hold_feet: false });
+    let mut clip = render(lib, &[bar], &[Some(seg)], &RenderOptions { fps, join_frames: 0, hold_feet: false, ..RenderOptions::default() });
     clip.name = lib.segment(seg)?.name.clone();
     Some(clip)
 }
@@ -186,8 +214,15 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
         }
     }
     if options.join_frames > 0 {
-        for &j in &boundaries {
-            join_at(&mut rotations, &mut roots, j, options.join_frames);
+        for (i, &j) in boundaries.iter().enumerate() {
+            match options.join_blend {
+                JoinBlend::Hermite => join_at(&mut rotations, &mut roots, j, options.join_frames),
+                JoinBlend::Inertial => {
+                    let blend = ((INERTIAL_BLEND_SECS * fps).round() as usize).max(2);
+                    let until_next = boundaries.get(i + 1).map_or(usize::MAX, |&n| n.saturating_sub(j));
+                    inertialize_at(&mut rotations, &mut roots, j, blend.min(until_next));
+                }
+            }
         }
     }
     let clip = Clip {
@@ -333,6 +368,76 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     }
     let kept = vec![false; bars.len()];
     (clip, Holds { planted: source, kept })
+}
+
+/// Bollo's quintic offset at `t` of `span` (both in frames): starts at `x0` with velocity `v0`
+/// and acceleration `a0` (per frame), reaches 0 with zero velocity and acceleration at `span`.
+fn quintic_offset(x0: f32, v0: f32, a0: f32, span: f32, t: f32) -> f32 {
+    if t >= span {
+        return 0.0;
+    }
+    let (t2, t3) = (span * span, span * span * span);
+    let a = -(a0 * t2 + 6.0 * v0 * span + 12.0 * x0) / (2.0 * t3 * t2);
+    let b = (3.0 * a0 * t2 + 16.0 * v0 * span + 30.0 * x0) / (2.0 * t2 * t2);
+    let c = -(3.0 * a0 * t2 + 12.0 * v0 * span + 20.0 * x0) / (2.0 * t3);
+    (((a * t + b) * t + c) * t + 0.5 * a0) * t * t + v0 * t + x0
+}
+
+/// [`quintic_offset`] per component.
+fn quintic_offset3(x0: Vec3, v0: Vec3, a0: Vec3, span: f32, t: f32) -> Vec3 {
+    Vec3::new(quintic_offset(x0.x, v0.x, a0.x, span, t), quintic_offset(x0.y, v0.y, a0.y, span, t), quintic_offset(x0.z, v0.z, a0.z, span, t))
+}
+
+/// Inertializes the switch at frame `j` (the incoming segment's first frame) over `span`
+/// frames (Bollo 2016, "Inertialization: High-Performance Animation Transitions in Gears of
+/// War"): the outgoing motion carried on to frame `j` (its last frames' velocity and
+/// acceleration) differs from the incoming motion there by a pose, velocity and acceleration
+/// offset; per joint (as a rotation vector relative to the incoming pose at `j`) and for the
+/// root position, that offset is added to frames `j .. j + span` of the incoming motion,
+/// decayed by [`quintic_offset`]. Frames before `j` are untouched; from `j + span` on the
+/// incoming motion plays as it is.
+fn inertialize_at(rotations: &mut [Quat], roots: &mut [Vec3], j: usize, span: usize) {
+    let frames = roots.len();
+    // The outgoing motion's acceleration needs frames j-3..j-1; the incoming one's j..j+2.
+    if j < 3 || j + 3 > frames || span < 2 {
+        return;
+    }
+    let span_f = span as f32;
+    let end = (j + span).min(frames);
+    // Pose, velocity and acceleration (per frame) of the outgoing motion carried on to `j`,
+    // less those of the incoming motion at `j`, from samples x(f).
+    let offsets = |x: &dyn Fn(usize) -> Vec3| -> (Vec3, Vec3, Vec3) {
+        let v_out = x(j - 1) - x(j - 2);
+        let a_out = x(j - 1) - 2.0 * x(j - 2) + x(j - 3);
+        let v_in = x(j + 1) - x(j);
+        let a_in = x(j + 2) - 2.0 * x(j + 1) + x(j);
+        (x(j - 1) + v_out + 0.5 * a_out - x(j), v_out - v_in, a_out - a_in)
+    };
+    for joint in 0..CANON_COUNT {
+        let at = |f: usize| rotations[f * CANON_COUNT + joint];
+        let inv_in = at(j).inverse();
+        // Rotation vector of frame f's rotation relative to the incoming pose at j.
+        let rel = |f: usize| {
+            let d = (at(f) * inv_in).normalize();
+            let d = if d.w < 0.0 { -d } else { d };
+            d.to_scaled_axis()
+        };
+        let (x0, v0, a0) = offsets(&rel);
+        if !(x0.is_finite() && v0.is_finite() && a0.is_finite()) {
+            continue;
+        }
+        for f in j..end {
+            let o = quintic_offset3(x0, v0, a0, span_f, (f - j) as f32);
+            let k = f * CANON_COUNT + joint;
+            rotations[k] = (Quat::from_scaled_axis(o) * rotations[k]).normalize();
+        }
+    }
+    let (x0, v0, a0) = offsets(&|f: usize| roots[f]);
+    if x0.is_finite() && v0.is_finite() && a0.is_finite() {
+        for (f, r) in roots.iter_mut().enumerate().take(end).skip(j) {
+            *r += quintic_offset3(x0, v0, a0, span_f, (f - j) as f32);
+        }
+    }
 }
 
 /// Rewrites frames `j - n .. j + n` by cubic Hermite interpolation between frame `j - n - 1`
@@ -521,6 +626,63 @@ mod tests {
                 assert!(*hb >= ub - 1e-3 && *hc <= uc + 1e-3, "bar {b} kept its holds: BAS {hb} vs {ub}, rate cost {hc} vs {uc}");
             }
         }
+    }
+
+    /// Joins of one dance rendered unheld with `blend` (or none): the clip and §J's join jump
+    /// at each join.
+    fn joined(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], blend: Option<JoinBlend>) -> (Clip, Vec<f32>) {
+        use crate::choreo::quality::{join_jumps, QualityMotion, QUALITY_FPS};
+        let opts = RenderOptions { hold_feet: false, join_frames: if blend.is_some() { 5 } else { 0 }, join_blend: blend.unwrap_or_default(), ..RenderOptions::default() };
+        let clip = render(lib, bars, choices, &opts);
+        let m = QualityMotion::from_clip(&clip).unwrap();
+        let joins: Vec<usize> = bars.iter().skip(1).map(|b| (b.start_secs * QUALITY_FPS).round() as usize).collect();
+        let jumps = join_jumps(&m, &joins);
+        (clip, jumps)
+    }
+
+    #[test]
+    fn inertial_joins_leave_the_outgoing_bar_and_the_beat_alone_and_are_smoother_than_hermite() {
+        let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+        let max = |v: &[f32]| v.iter().copied().fold(0.0f32, f32::max);
+        let (mut sum_i, mut sum_h, mut sum_n) = (0.0, 0.0, 0.0);
+        for bpm in [96.0, 120.0, 150.0] {
+            let (lib, bars, choices) = dance(bpm, 24.0);
+            let (inertial, ji) = joined(&lib, &bars, &choices, Some(JoinBlend::Inertial));
+            let (_, jh) = joined(&lib, &bars, &choices, Some(JoinBlend::Hermite));
+            let (raw, jn) = joined(&lib, &bars, &choices, None);
+            assert_eq!(inertial.frame_count(), raw.frame_count(), "no time added");
+            // Every frame before a join's first frame, and from the blend's end on, is the
+            // unjoined dance's: the outgoing bar is untouched and the incoming one keeps its timing.
+            let fps = inertial.fps;
+            let span = (INERTIAL_BLEND_SECS * fps).round() as usize;
+            let joins = join_frames(&bars, fps);
+            for f in 0..inertial.frame_count() {
+                let blended = joins.iter().any(|&j| (j..j + span).contains(&f));
+                let same = inertial.frame_rotations(f) == raw.frame_rotations(f);
+                if !blended {
+                    assert!(same, "{bpm}: frame {f} outside every blend was changed");
+                }
+            }
+            println!("{bpm} BPM: join jump mean/max inertial {:.2}/{:.2}, hermite {:.2}/{:.2}, none {:.2}/{:.2}", mean(&ji), max(&ji), mean(&jh), max(&jh), mean(&jn), max(&jn));
+            sum_i += mean(&ji);
+            sum_h += mean(&jh);
+            sum_n += mean(&jn);
+        }
+        assert!(sum_i < sum_n, "inertial joins {sum_i} no smoother than none {sum_n}");
+        assert!(sum_i <= sum_h, "inertial joins {sum_i} rougher than Hermite {sum_h}");
+    }
+
+    #[test]
+    fn the_quintic_offset_starts_at_the_offset_and_ends_at_rest() {
+        let (x0, v0, a0, span) = (0.4, -0.05, 0.01, 18.0);
+        assert!((quintic_offset(x0, v0, a0, span, 0.0) - x0).abs() < 1e-6);
+        let d = 1e-2;
+        let v = (quintic_offset(x0, v0, a0, span, d) - quintic_offset(x0, v0, a0, span, 0.0)) / d;
+        assert!((v - v0).abs() < 1e-2, "start velocity {v}");
+        assert!(quintic_offset(x0, v0, a0, span, span - 1e-3).abs() < 1e-4);
+        let v_end = (quintic_offset(x0, v0, a0, span, span - d) - quintic_offset(x0, v0, a0, span, span - 2.0 * d)) / d;
+        assert!(v_end.abs() < 1e-3, "end velocity {v_end}");
+        assert_eq!(quintic_offset(x0, v0, a0, span, span + 1.0), 0.0);
     }
 
     #[test]
