@@ -279,11 +279,15 @@ pub fn plan(input: &CameraInput, options: &CameraOptions) -> Result<CameraPlan, 
             let base = fitted(corners, centre, 0.0, pitch, fov, aspect, fill);
             let t0 = input.times_secs[0];
             let turn_secs = options.orbit_bars * mean_bar_secs(input);
-            let poses = input
-                .times_secs
-                .iter()
-                .map(|&t| CameraPose { yaw: 0.5 + std::f32::consts::TAU * (t - t0) / turn_secs, ..base })
-                .collect();
+            let yaw_at = |t: f32| 0.5 + std::f32::consts::TAU * (t - t0) / turn_secs;
+            // The box holds at every yaw but is loose for a figure that travels; the yaw of
+            // each frame is known, so the one steady distance is the largest any frame needs
+            // at its own yaw (never more than the box's, and exact: every frame inside).
+            let tight = (0..n)
+                .map(|i| fit_distance(input.joints[i].iter().copied(), centre, yaw_at(input.times_secs[i]), base.pitch, fov, aspect, fill))
+                .fold(MIN_DISTANCE_M, f32::max);
+            let distance = if centre.y + base.pitch.sin() * tight >= MIN_EYE_HEIGHT_M { tight.min(base.distance) } else { base.distance };
+            let poses = input.times_secs.iter().map(|&t| CameraPose { yaw: yaw_at(t), distance, ..base }).collect();
             Ok(CameraPlan { poses, shots: vec![Cut { frame: 0, bar: 0, shot: Shot::Wide }], phrase_bars: phrase })
         }
         CameraMode::Follow => {
