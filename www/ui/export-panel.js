@@ -32,11 +32,11 @@ export class ExportPanel {
     }
   }
 
-  /** Lists the library's skinned humanoid characters (one entry per file). */
+  /** Lists the library's skinned humanoid characters (one entry per file: glTF, MMD models). */
   refreshCharacters() {
     const keep = this.character.value;
     const seen = new Set();
-    const items = this.library.clips().filter((c) => c.hasMesh && c.humanoid.kind !== "notHumanoid" && c.format === "gltf" && !seen.has(c.source) && seen.add(c.source));
+    const items = this.library.clips().filter((c) => c.hasMesh && c.humanoid.kind !== "notHumanoid" && (c.format === "gltf" || c.format === "mmd") && !seen.has(c.source) && seen.add(c.source));
     this.character.replaceChildren(new Option("Built-in body", "builtin"), new Option("Stick figures", ""));
     for (const c of items) this.character.append(new Option(c.source.replace(/^.*[\\/]/, ""), String(c.id)));
     if ([...this.character.options].some((o) => o.value === keep)) this.character.value = keep;

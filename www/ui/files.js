@@ -199,7 +199,7 @@ export class FileLoader {
     for (const p of report.problems) this.messages.error(p.message);
     for (const n of report.notices) this.messages.info(n);
     for (const m of report.models) {
-      this.messages.info(`${m.file}: MMD model "${m.name}" added (${m.vertices} vertices, ${m.bones} bones, ${m.textures.length} textures). Drawing MMD models is not in Odori yet: it is kept for motions to play on and for VMD export.`);
+      this.messages.info(`${m.file}: MMD model "${m.name}" added (${m.vertices} vertices, ${m.bones} bones, ${m.textures.length} textures)${m.characterId != null ? ": choose it in the Character list" : ""}`);
     }
     for (const m of report.motions) {
       this.messages.info(`${m.file}: dance added, posed on ${m.rig}${m.songOffsetFrames ? `, starting at motion frame ${m.songOffsetFrames} (song time 0)` : ""}`);

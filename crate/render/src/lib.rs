@@ -13,6 +13,12 @@
 //! affine, so transforming the vertices' UVs gives the same sample at every pixel as
 //! transforming the interpolated UV in the shader, with nothing added per draw).
 //!
+//! MMD models (feature `toon`, on in the full engine, off in the player): a part with a
+//! [`odori_core::import::ToonLook`] is drawn with MMD's toon shading (its ramp texture looked
+//! up on N·L, alpha blended) and, where its edge width is above 0, an outline by the inverted
+//! hull (the skinned mesh pushed out along its normals by the width times the distance to the
+//! camera, front faces culled, in the edge colour). Without the feature they draw as plain parts.
+//!
 //! Its pipelines can be made one at a time ([`Renderer::new_deferred`], then
 //! [`Renderer::prepare`]): on WebGL2 each one is a shader compile and link that holds the
 //! thread for tens of milliseconds, so a page starting up makes them in separate tasks, and a
@@ -62,6 +68,9 @@ struct MeshVertex {
     weights: [f32; 4],
     color: [f32; 4],
     uv: [f32; 2],
+    /// MMD outline colour (RGBA) and width (metres per metre from the camera; 0: none).
+    edge: [f32; 4],
+    edge_width: f32,
 }
 
 /// One stick figure to draw this frame.
@@ -87,10 +96,24 @@ pub enum PipelineKind {
     Figure,
     /// GPU-skinned meshes (characters).
     Mesh,
+    /// MMD toon shading (feature `toon`): made when a toon part is first drawn.
+    Toon,
+    /// MMD outlines, the inverted hull (feature `toon`).
+    Outline,
 }
 
 impl PipelineKind {
+    /// What a first frame may need (the MMD pipelines are made when an MMD model is drawn).
     pub const ALL: [PipelineKind; 3] = [PipelineKind::Lines, PipelineKind::Figure, PipelineKind::Mesh];
+}
+
+/// How a part is drawn.
+#[derive(Clone, Debug, PartialEq)]
+struct PartDraw {
+    range: std::ops::Range<u32>,
+    texture: Option<usize>,
+    /// MMD toon: its ramp texture, and whether it has an outline.
+    toon: Option<(Option<usize>, bool)>,
 }
 
 /// A skinned mesh uploaded once.
@@ -109,12 +132,17 @@ pub struct MeshDraw<'a> {
 struct GpuMesh {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
-    /// (index range, texture) per part: drawn one call each, so each can bind its texture.
-    parts: Vec<(std::ops::Range<u32>, Option<usize>)>,
+    /// Per part: drawn one call each, so each can bind its texture.
+    parts: Vec<PartDraw>,
     palette_len: usize,
     /// The mesh's textures: their samplers, and bind groups once their images are in.
     samplers: Vec<odori_core::import::Sampler>,
     textures: Vec<Option<wgpu::BindGroup>>,
+    /// The textures' views once their images are in (the toon parts' bind groups take two).
+    views: Vec<Option<wgpu::TextureView>>,
+    /// Per part, its toon bind group (base and ramp), made at the first draw after its
+    /// textures last changed.
+    toon_groups: Vec<Option<wgpu::BindGroup>>,
 }
 
 struct PaletteSlot {
@@ -153,11 +181,18 @@ pub struct Renderer {
     white: wgpu::BindGroup,
     basic_layout: wgpu::PipelineLayout,
     mesh_layout: wgpu::PipelineLayout,
+    /// MMD: base colour and toon ramp textures (group 2 of the toon pipeline).
+    toon_texture_layout: wgpu::BindGroupLayout,
+    toon_layout: wgpu::PipelineLayout,
+    outline_layout: wgpu::PipelineLayout,
+    white_view: wgpu::TextureView,
     format: wgpu::TextureFormat,
     /// Made on demand (`prepare`): `None` until then.
     line_pipeline: Option<wgpu::RenderPipeline>,
     figure_pipeline: Option<wgpu::RenderPipeline>,
     mesh_pipeline: Option<wgpu::RenderPipeline>,
+    toon_pipeline: Option<wgpu::RenderPipeline>,
+    outline_pipeline: Option<wgpu::RenderPipeline>,
     grid: wgpu::Buffer,
     grid_count: u32,
     instances: wgpu::Buffer,
@@ -264,6 +299,27 @@ impl Renderer {
             bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout), Some(&texture_layout)],
             immediate_size: 0,
         });
+        let tex_entry = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Float { filterable: true }, view_dimension: wgpu::TextureViewDimension::D2, multisampled: false },
+            count: None,
+        };
+        let sampler_entry = |binding| wgpu::BindGroupLayoutEntry { binding, visibility: wgpu::ShaderStages::FRAGMENT, ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering), count: None };
+        let toon_texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("toon textures"),
+            entries: &[tex_entry(0), sampler_entry(1), tex_entry(2), sampler_entry(3)],
+        });
+        let toon_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("toon"),
+            bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout), Some(&toon_texture_layout)],
+            immediate_size: 0,
+        });
+        let outline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("outline"),
+            bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout)],
+            immediate_size: 0,
+        });
         let grid_v = grid_lines();
         let grid = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("grid"),
@@ -293,6 +349,7 @@ impl Renderer {
             &[255, 255, 255, 255],
         );
         let white = texture_bind_group(&device, &texture_layout, &white_tex, &odori_core::import::Sampler::default());
+        let white_view = white_tex.create_view(&Default::default());
         Renderer {
             device,
             queue,
@@ -303,10 +360,16 @@ impl Renderer {
             white,
             basic_layout,
             mesh_layout,
+            toon_texture_layout,
+            toon_layout,
+            outline_layout,
+            white_view,
             format,
             line_pipeline: None,
             figure_pipeline: None,
             mesh_pipeline: None,
+            toon_pipeline: None,
+            outline_pipeline: None,
             grid,
             grid_count: grid_v.len() as u32,
             instances,
@@ -323,12 +386,7 @@ impl Renderer {
 
     /// Makes pipeline `kind` if it is not made yet.
     pub fn prepare(&mut self, kind: PipelineKind) {
-        let made = match kind {
-            PipelineKind::Lines => self.line_pipeline.is_some(),
-            PipelineKind::Figure => self.figure_pipeline.is_some(),
-            PipelineKind::Mesh => self.mesh_pipeline.is_some(),
-        };
-        if made {
+        if self.is_prepared(kind) {
             return;
         }
         let p = self.build_pipeline(kind);
@@ -336,6 +394,8 @@ impl Renderer {
             PipelineKind::Lines => self.line_pipeline = Some(p),
             PipelineKind::Figure => self.figure_pipeline = Some(p),
             PipelineKind::Mesh => self.mesh_pipeline = Some(p),
+            PipelineKind::Toon => self.toon_pipeline = Some(p),
+            PipelineKind::Outline => self.outline_pipeline = Some(p),
         }
     }
 
@@ -345,13 +405,28 @@ impl Renderer {
             PipelineKind::Lines => self.line_pipeline.is_some(),
             PipelineKind::Figure => self.figure_pipeline.is_some(),
             PipelineKind::Mesh => self.mesh_pipeline.is_some(),
+            PipelineKind::Toon => self.toon_pipeline.is_some(),
+            PipelineKind::Outline => self.outline_pipeline.is_some(),
         }
     }
 
     fn build_pipeline(&self, kind: PipelineKind) -> wgpu::RenderPipeline {
         let device = &self.device;
         let common = include_str!("shaders/common.wgsl");
+        let mesh_buffer = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<MeshVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x2, 6 => Float32x4, 7 => Float32],
+        };
+        // The MMD shaders are in the full engine only (feature `toon`); without it the player
+        // never asks for these pipelines (its parts carry no toon look that reaches `render`).
+        #[cfg(feature = "toon")]
+        let (toon_src, outline_src) = (include_str!("shaders/toon.wgsl"), include_str!("shaders/outline.wgsl"));
+        #[cfg(not(feature = "toon"))]
+        let (toon_src, outline_src) = (include_str!("shaders/mesh.wgsl"), include_str!("shaders/mesh.wgsl"));
         let (label, src, layout, buffer) = match kind {
+            PipelineKind::Toon => ("toon", toon_src, &self.toon_layout, mesh_buffer.clone()),
+            PipelineKind::Outline => ("outline", outline_src, &self.outline_layout, mesh_buffer.clone()),
             PipelineKind::Lines => (
                 "lines",
                 include_str!("shaders/lines.wgsl"),
@@ -372,17 +447,12 @@ impl Renderer {
                     attributes: &wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4],
                 },
             ),
-            PipelineKind::Mesh => (
-                "mesh",
-                include_str!("shaders/mesh.wgsl"),
-                &self.mesh_layout,
-                wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<MeshVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x2],
-                },
-            ),
+            PipelineKind::Mesh => ("mesh", include_str!("shaders/mesh.wgsl"), &self.mesh_layout, mesh_buffer.clone()),
         };
+        // The outline is the hull's inside: front faces culled (MMD's triangles are turned to
+        // counter-clockwise fronts on import). Toon parts blend by their alpha, as MMD does.
+        let cull_mode = if kind == PipelineKind::Outline { Some(wgpu::Face::Front) } else { None };
+        let blend = if kind == PipelineKind::Toon { Some(wgpu::BlendState::ALPHA_BLENDING) } else { None };
         let topology = if kind == PipelineKind::Lines { wgpu::PrimitiveTopology::LineList } else { wgpu::PrimitiveTopology::TriangleList };
         let sm = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),
@@ -392,7 +462,7 @@ impl Renderer {
             label: Some(label),
             layout: Some(layout),
             vertex: wgpu::VertexState { module: &sm, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers: &[Some(buffer)] },
-            primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
+            primitive: wgpu::PrimitiveState { topology, cull_mode, ..Default::default() },
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: DEPTH,
                 depth_write_enabled: Some(true),
@@ -405,7 +475,7 @@ impl Renderer {
                 module: &sm,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState { format: self.format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+                targets: &[Some(wgpu::ColorTargetState { format: self.format, blend, write_mask: wgpu::ColorWrites::ALL })],
             }),
             multiview_mask: None,
             cache: None,
@@ -431,6 +501,8 @@ impl Renderer {
         for part in &mesh.parts {
             let base = vertices.len() as u32;
             let textured = part.texture.filter(|t| *t < mesh.textures.len() && part.uvs.len() == part.positions.len());
+            let toon = if cfg!(feature = "toon") { part.toon } else { None };
+            let (edge, edge_width) = toon.map_or(([0.0; 4], 0.0), |t| (t.edge_colour, t.edge_width.max(0.0)));
             for k in 0..part.positions.len() {
                 let j = part.joints[k];
                 vertices.push(MeshVertex {
@@ -444,11 +516,14 @@ impl Renderer {
                         (Some(_), None) => part.uvs[k],
                         (Some(_), Some(t)) => t.apply(part.uvs[k]),
                     },
+                    edge,
+                    edge_width,
                 });
             }
             let start = indices.len() as u32;
             indices.extend(part.indices.iter().map(|i| i + base));
-            parts.push((start..indices.len() as u32, textured));
+            let toon = toon.map(|t| (t.ramp.filter(|r| *r < mesh.textures.len()), t.edge_width > 0.0));
+            parts.push(PartDraw { range: start..indices.len() as u32, texture: textured, toon });
         }
         if indices.is_empty() {
             return Err(RenderError::EmptyMesh);
@@ -470,6 +545,8 @@ impl Renderer {
             palette_len: mesh.palette.len(),
             samplers: mesh.textures.iter().map(|t| t.sampler).collect(),
             textures: vec![None; mesh.textures.len()],
+            views: vec![None; mesh.textures.len()],
+            toon_groups: vec![None; mesh.parts.len()],
         });
         Ok(MeshHandle(self.meshes.len() - 1))
     }
@@ -497,7 +574,12 @@ impl Renderer {
             view_formats: &[],
         });
         let bg = texture_bind_group(&self.device, &self.texture_layout, &tex, &sampler);
-        self.meshes[mesh.0].textures[texture] = Some(bg);
+        let g = &mut self.meshes[mesh.0];
+        g.textures[texture] = Some(bg);
+        g.views[texture] = Some(tex.create_view(&Default::default()));
+        for t in &mut g.toon_groups {
+            *t = None;
+        }
         if levels > 1 {
             self.pending_mips.push(tex.clone());
         }
@@ -604,6 +686,15 @@ impl Renderer {
         if !drawable.is_empty() {
             self.prepare(PipelineKind::Mesh);
         }
+        let handles: Vec<usize> = drawable.iter().map(|m| m.mesh.0).collect();
+        let any_toon = handles.iter().any(|&h| self.meshes[h].parts.iter().any(|p| p.toon.is_some()));
+        if any_toon {
+            self.prepare(PipelineKind::Toon);
+            self.prepare(PipelineKind::Outline);
+            for &h in &handles {
+                self.make_toon_groups(h);
+            }
+        }
         if !self.scratch.is_empty() {
             self.prepare(PipelineKind::Figure);
         }
@@ -646,10 +737,32 @@ impl Renderer {
                     pass.set_bind_group(1, &self.palettes[slot].bind_group, &[]);
                     pass.set_vertex_buffer(0, g.vertices.slice(..));
                     pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
-                    for (range, tex) in &g.parts {
-                        let bg = tex.and_then(|t| g.textures.get(t)).and_then(Option::as_ref).unwrap_or(&self.white);
-                        pass.set_bind_group(2, bg, &[]);
-                        pass.draw_indexed(range.clone(), 0, 0..1);
+                    for (k, part) in g.parts.iter().enumerate() {
+                        if let (Some(_), Some(toon), Some(bg)) = (part.toon, &self.toon_pipeline, g.toon_groups[k].as_ref()) {
+                            pass.set_pipeline(toon);
+                            pass.set_bind_group(2, bg, &[]);
+                        } else {
+                            let bg = part.texture.and_then(|t| g.textures.get(t)).and_then(Option::as_ref).unwrap_or(&self.white);
+                            pass.set_pipeline(mesh);
+                            pass.set_bind_group(2, bg, &[]);
+                        }
+                        pass.draw_indexed(part.range.clone(), 0, 0..1);
+                    }
+                }
+                // MMD outlines after the model's own surfaces (depth-tested against them).
+                if let Some(outline) = &self.outline_pipeline {
+                    for (slot, m) in drawable.iter().enumerate() {
+                        let g = &self.meshes[m.mesh.0];
+                        if !g.parts.iter().any(|p| matches!(p.toon, Some((_, true)))) {
+                            continue;
+                        }
+                        pass.set_pipeline(outline);
+                        pass.set_bind_group(1, &self.palettes[slot].bind_group, &[]);
+                        pass.set_vertex_buffer(0, g.vertices.slice(..));
+                        pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
+                        for part in g.parts.iter().filter(|p| matches!(p.toon, Some((_, true)))) {
+                            pass.draw_indexed(part.range.clone(), 0, 0..1);
+                        }
                     }
                 }
             }
@@ -663,12 +776,54 @@ impl Renderer {
     }
 }
 
+impl Renderer {
+    /// Makes the toon bind groups (base colour and ramp) of mesh `h`'s toon parts that have
+    /// none: a texture not in yet is the white one (a ramp of white is no shading).
+    fn make_toon_groups(&mut self, h: usize) {
+        let Some(g) = self.meshes.get_mut(h) else { return };
+        for k in 0..g.parts.len() {
+            let Some((ramp, _)) = g.parts[k].toon else { continue };
+            if g.toon_groups[k].is_some() {
+                continue;
+            }
+            let pick = |t: Option<usize>| t.and_then(|t| g.views.get(t).and_then(Option::as_ref).map(|v| (v, g.samplers[t])));
+            let white_sampler = odori_core::import::Sampler::default();
+            let (base_view, base_s) = pick(g.parts[k].texture).unwrap_or((&self.white_view, white_sampler));
+            // The ramp is looked up at one column, top (lit) to bottom: clamped, never wrapped.
+            let (ramp_view, _) = pick(ramp).unwrap_or((&self.white_view, white_sampler));
+            let clamp = odori_core::import::Sampler { wrap_s: 33071, wrap_t: 33071, mag_filter: Some(9729), min_filter: Some(9729) };
+            let base_sampler = make_sampler(&self.device, &base_s);
+            let ramp_sampler = make_sampler(&self.device, &clamp);
+            g.toon_groups[k] = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("toon textures"),
+                layout: &self.toon_texture_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(base_view) },
+                    wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&base_sampler) },
+                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(ramp_view) },
+                    wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::Sampler(&ramp_sampler) },
+                ],
+            }));
+        }
+    }
+}
+
 /// Base-colour textures are sRGB-encoded (glTF): sampled as linear colour.
 const TEXTURE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
 /// glTF sampler codes → wgpu: the minification filter's own filter within a level and its
 /// filter between levels (a texture without levels ignores the latter).
 fn texture_bind_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, tex: &wgpu::Texture, s: &odori_core::import::Sampler) -> wgpu::BindGroup {
+    let sampler = make_sampler(device, s);
+    let view = tex.create_view(&Default::default());
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("base colour"),
+        layout,
+        entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) }, wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&sampler) }],
+    })
+}
+
+fn make_sampler(device: &wgpu::Device, s: &odori_core::import::Sampler) -> wgpu::Sampler {
     let filter = |code: Option<u32>| match code {
         Some(9728) | Some(9984) | Some(9986) => wgpu::FilterMode::Nearest,
         _ => wgpu::FilterMode::Linear,
@@ -678,7 +833,7 @@ fn texture_bind_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, tex
         33648 => wgpu::AddressMode::MirrorRepeat,
         _ => wgpu::AddressMode::Repeat,
     };
-    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+    device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some("base colour"),
         address_mode_u: wrap(s.wrap_s),
         address_mode_v: wrap(s.wrap_t),
@@ -690,12 +845,6 @@ fn texture_bind_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, tex
             _ => wgpu::MipmapFilterMode::Linear,
         },
         ..Default::default()
-    });
-    let view = tex.create_view(&Default::default());
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("base colour"),
-        layout,
-        entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) }, wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&sampler) }],
     })
 }
 

@@ -88,7 +88,7 @@ export interface ClipInfo {
   name: string;
   /** The file the clip came from, or "built-in". */
   source: string;
-  format: "bvh" | "gltf" | "builtin" | "text" | "dance" | "character";
+  format: "bvh" | "gltf" | "builtin" | "text" | "dance" | "character" | "vmd" | "mmd";
   fps: number;
   frames: number;
   /** From the first frame to the last: (frames - 1) / fps. */
@@ -98,7 +98,7 @@ export interface ClipInfo {
   /** Points `jointPositions` returns: the joints plus end sites / tip nodes. */
   points: number;
   humanoid: HumanoidStatus;
-  /** True when the clip drives a skinned character (glTF). */
+  /** True when the clip drives a skinned character (glTF; an MMD model, and a VMD posed on one). */
   hasMesh: boolean;
 }
 export interface GenerateOptions {

@@ -119,6 +119,12 @@ impl Library {
         self.push(clip, "character", map, status, mesh)
     }
 
+    /// The id the next added clip gets (a mesh shared by clips is keyed by its first clip's id).
+    #[cfg_attr(not(feature = "authoring"), allow(dead_code))]
+    pub(crate) fn next_id(&self) -> u32 {
+        self.next_id
+    }
+
     fn bump_rev(&mut self) -> u64 {
         self.next_rev += 1;
         self.next_rev
@@ -227,7 +233,10 @@ impl Library {
     /// Removes a clip; false when there was none with this id.
     pub fn remove(&mut self, id: u32) -> bool {
         #[cfg(feature = "authoring")]
-        self.mmd.posed_on.retain(|(i, _)| *i != id);
+        {
+            self.mmd.posed_on.retain(|(i, _)| *i != id);
+            self.mmd.characters.retain(|(_, i)| *i != id);
+        }
         let before = self.entries.len();
         self.entries.retain(|e| e.id != id);
         self.entries.len() != before

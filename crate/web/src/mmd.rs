@@ -9,7 +9,10 @@ use js_sys::{Array, Reflect, Uint8Array};
 use odori_core::canon::humanoid::HumanoidMap;
 use odori_core::mmd::export::clip_to_vmd;
 use odori_core::mmd::files::{import_files, CameraTrack, ImportedModel, MmdFilesOptions, STANDARD_RIG};
-use odori_core::mmd::{standard_rig, MmdRig};
+use odori_core::import::SkinnedMesh;
+use odori_core::mmd::mesh::model_character;
+use odori_core::mmd::{standard_rig, MmdClipOptions, MmdMotion, MmdRig};
+use std::rc::Rc;
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 
@@ -23,6 +26,9 @@ pub(crate) struct MmdStore {
     pub cameras: Vec<CameraTrack>,
     /// Clip id → the rig (model name, or the standard skeleton) an imported VMD was posed on.
     pub posed_on: Vec<(u32, String)>,
+    /// Model name → the library clip (its rest pose, with its mesh) that is the model as a
+    /// character (`setCharacter`, the *Character* list).
+    pub characters: Vec<(String, u32)>,
 }
 
 #[derive(Deserialize, Default)]
@@ -51,9 +57,11 @@ struct ModelInfo<'a> {
     morphs: usize,
     textures: Vec<&'a str>,
     missing_textures: &'a [String],
+    /// The library clip that is the model as a character (null when it cannot be one).
+    character_id: Option<u32>,
 }
 
-fn model_info(m: &ImportedModel) -> ModelInfo<'_> {
+fn model_info<'a>(m: &'a ImportedModel, store: &MmdStore) -> ModelInfo<'a> {
     ModelInfo {
         name: &m.model.name,
         file: &m.file,
@@ -66,6 +74,7 @@ fn model_info(m: &ImportedModel) -> ModelInfo<'_> {
         morphs: m.model.morphs.len(),
         textures: m.textures.iter().map(|(t, _, _)| t.as_str()).collect(),
         missing_textures: &m.missing_textures,
+        character_id: store.characters.iter().find(|(n, _)| *n == m.model.name).map(|(_, id)| *id),
     }
 }
 
@@ -196,8 +205,10 @@ impl Library {
         Ok(to_js(&out))
     }
 
-    /// Imports a set of MikuMikuDance files (see `inspectMmdFiles`). Models are kept in the
-    /// library (`mmdModels()`; not drawn yet); each VMD's bone keys become a clip on the
+    /// Imports a set of MikuMikuDance files (see `inspectMmdFiles`). Each model is kept in the
+    /// library (`mmdModels()`) and added as a character: a one-frame clip (format "mmd") of its
+    /// rest pose carrying its skinned, textured mesh (`characterId`, for `setCharacter`); a
+    /// missing or undecodable texture is a notice naming it. Each VMD's bone keys become a clip on the
     /// canonical humanoid's naming, posed with MMD's IK and grants on the model `options.model`
     /// names, else the one its header names, else the built-in standard MMD skeleton; camera keys
     /// become a camera track (`cameraTracks()`); morph keys are kept aside with a notice.
@@ -213,11 +224,39 @@ impl Library {
         let opts = MmdFilesOptions { model, song_offset_frames: o.song_offset_frames };
         let lib_models: Vec<&odori_core::import::mmd_model::MmdModel> = self.mmd.models.iter().map(|m| &m.model).collect();
         let r = import_files(&files, &lib_models, &opts);
+        let mut notices = r.notices.clone();
+        // Each model as a character first (replacing one of the same name imported before), so
+        // the motions posed on it carry its mesh and play on it with every bone the VMD keys.
+        let mut meshes: Vec<(String, (u32, Rc<SkinnedMesh>))> = Vec::new();
+        for m in &r.models {
+            if let Some(at) = self.mmd.characters.iter().position(|(n, _)| *n == m.model.name) {
+                let (_, old) = self.mmd.characters.remove(at);
+                self.remove(old);
+            }
+            match model_character(&m.file, &m.model, &m.textures, &m.missing_textures, &files) {
+                Ok(c) => {
+                    notices.extend(c.notices.iter().cloned());
+                    let still = MmdMotion { model_name: m.model.name.clone(), bones: Vec::new() };
+                    let opts = MmdClipOptions { name: m.model.name.clone(), source: m.file.clone(), ..Default::default() };
+                    match c.rig.motion_to_clip(&still, &opts) {
+                        Ok(clip) => {
+                            let mesh = (self.next_id(), Rc::new(c.character.mesh));
+                            let id = self.push(clip, "mmd", c.character.map.clone(), c.character.map.status(&c.character.skeleton, None), Some(mesh.clone()));
+                            self.mmd.characters.push((m.model.name.clone(), id));
+                            meshes.push((m.model.name.clone(), mesh));
+                        }
+                        Err(e) => notices.push(format!("{}: cannot be drawn: {e}", m.file)),
+                    }
+                }
+                Err(e) => notices.push(format!("{e} (the model is kept for motions to play on and for VMD export, not drawn)")),
+            }
+        }
         let mut motions = Vec::new();
         for m in &r.motions {
             let map = HumanoidMap::from_skeleton(&m.clip.skeleton);
             let status = map.status(&m.clip.skeleton, Some(&m.clip));
-            let id = self.push(m.clip.clone(), "vmd", map, status, None);
+            let mesh = meshes.iter().find(|(n, _)| *n == m.rig).map(|(_, mesh)| mesh.clone());
+            let id = self.push(m.clip.clone(), "vmd", map, status, mesh);
             self.mmd.posed_on.push((id, m.rig.clone()));
             let info = serde_json::to_value(crate::library::info_of(self.entry(id)?)).unwrap_or(serde_json::Value::Null);
             motions.push(MotionInfo {
@@ -242,9 +281,9 @@ impl Library {
         }
         let report = to_js(&Report {
             motions,
-            models: r.models.iter().map(model_info).collect(),
+            models: r.models.iter().map(|m| model_info(m, &self.mmd)).collect(),
             cameras: r.cameras.iter().map(camera_info).collect(),
-            notices: &r.notices,
+            notices: &notices,
             problems: &r.problems,
         });
         // Replace a model of the same name (imported again, e.g. with its textures this time).
@@ -256,10 +295,10 @@ impl Library {
         Ok(report)
     }
 
-    /// The MMD models in the library: `{ name, file, format, vertices, bones, morphs, textures, missingTextures }[]`.
+    /// The MMD models in the library: `{ name, file, format, vertices, bones, morphs, textures, missingTextures, characterId }[]`.
     #[wasm_bindgen(js_name = mmdModels)]
     pub fn mmd_models(&self) -> JsValue {
-        to_js(&self.mmd.models.iter().map(model_info).collect::<Vec<_>>())
+        to_js(&self.mmd.models.iter().map(|m| model_info(m, &self.mmd)).collect::<Vec<_>>())
     }
 
     /// Camera tracks imported from camera VMDs: `{ name, source, keys, durationSecs }[]`.
@@ -279,7 +318,7 @@ impl Library {
     /// redistribution: it must not go in a share link).
     #[wasm_bindgen(js_name = isMmd)]
     pub fn is_mmd(&self, id: u32) -> bool {
-        self.mmd.posed_on.iter().any(|(i, _)| *i == id)
+        self.mmd.posed_on.iter().any(|(i, _)| *i == id) || self.mmd.characters.iter().any(|(_, i)| *i == id)
     }
 
     /// Clip `id` (any humanoid clip: an imported motion, a text animation, a dance) as a VMD on

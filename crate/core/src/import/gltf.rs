@@ -38,6 +38,23 @@ pub struct MeshPart {
     /// when sampling (the drawing side's, and written back on export). `None`: the UVs as they are.
     #[serde(default)]
     pub uv_transform: Option<UvTransform>,
+    /// MMD-style drawing (PMX/PMD models, `mmd::mesh`): a toon ramp and an outline. `None` for
+    /// glTF parts (and ignored by GLB export).
+    #[serde(default)]
+    pub toon: Option<ToonLook>,
+}
+
+/// How an MMD material is drawn besides its colour and texture: its toon ramp looked up on
+/// N·L (v = ½(1 − N·L), top lit), and an inverted-hull outline.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ToonLook {
+    /// The ramp texture, an index into [`SkinnedMesh::textures`]; `None`: no ramp (white).
+    pub ramp: Option<usize>,
+    /// Outline colour, RGBA.
+    pub edge_colour: [f32; 4],
+    /// Outline width, metres per metre of distance from the camera (so it keeps its width on
+    /// screen); 0: no outline.
+    pub edge_width: f32,
 }
 
 /// A `KHR_texture_transform`: the UVs are scaled, then rotated, then offset

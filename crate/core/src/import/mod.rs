@@ -29,7 +29,7 @@ use crate::clip::Clip;
 use crate::canon::humanoid::{HumanoidMap, HumanoidStatus};
 use crate::skeleton::Skeleton;
 
-pub use self::gltf::{MeshPart, MeshTexture, Sampler, SkinnedMesh, UvTransform};
+pub use self::gltf::{MeshPart, MeshTexture, Sampler, SkinnedMesh, ToonLook, UvTransform};
 
 /// What the person (or the caller) can say about a file before it is read.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

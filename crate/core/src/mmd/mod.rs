@@ -9,10 +9,13 @@
 
 pub mod export;
 pub mod files;
+pub mod mesh;
 mod model;
 mod motion;
 mod names;
+pub mod spring;
 mod standard;
+pub mod texture;
 
 pub use model::{vmd_to_clip, MmdImportError, MmdImportReport};
 pub use motion::{bezier_ratio, BoneKeys, BoneSampler, MmdClipOptions, MmdMotion, MotionSampler, VmdBoneKey, METRES_PER_MMD_UNIT};

@@ -1,0 +1,53 @@
+// MMD models' toon shading: skinned as mesh.wgsl; the colour is the material's diffuse times
+// its texture, times its toon ramp looked up on N·L (MMD's toon textures run from the lit
+// colour at the top to the shadow colour at the bottom: v = ½(1 − N·L)), alpha blended.
+const MAX_PALETTE: u32 = 256u;
+struct Palette {
+    m: array<mat4x4<f32>, 256>,
+};
+@group(1) @binding(0) var<uniform> palette: Palette;
+@group(1) @binding(1) var<uniform> tint: vec4<f32>;
+@group(2) @binding(0) var base_tex: texture_2d<f32>;
+@group(2) @binding(1) var base_sampler: sampler;
+@group(2) @binding(2) var toon_tex: texture_2d<f32>;
+@group(2) @binding(3) var toon_sampler: sampler;
+
+struct VOut {
+    @builtin(position) pos: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) color: vec4<f32>,
+    @location(2) uv: vec2<f32>,
+};
+
+@vertex
+fn vs_main(
+    @location(0) p: vec3<f32>,
+    @location(1) n: vec3<f32>,
+    @location(2) joints: vec4<u32>,
+    @location(3) weights: vec4<f32>,
+    @location(4) color: vec4<f32>,
+    @location(5) uv: vec2<f32>,
+) -> VOut {
+    let skin = palette.m[min(joints.x, MAX_PALETTE - 1u)] * weights.x
+             + palette.m[min(joints.y, MAX_PALETTE - 1u)] * weights.y
+             + palette.m[min(joints.z, MAX_PALETTE - 1u)] * weights.z
+             + palette.m[min(joints.w, MAX_PALETTE - 1u)] * weights.w;
+    var o: VOut;
+    o.pos = cam.view_proj * (skin * vec4<f32>(p, 1.0));
+    o.normal = normalize((skin * vec4<f32>(n, 0.0)).xyz);
+    o.color = color;
+    o.uv = uv;
+    return o;
+}
+
+@fragment
+fn fs_main(i: VOut) -> @location(0) vec4<f32> {
+    let tex = textureSample(base_tex, base_sampler, i.uv);
+    let ndl = dot(normalize(i.normal), normalize(cam.light.xyz));
+    let ramp = textureSample(toon_tex, toon_sampler, vec2<f32>(0.5, clamp(0.5 * (1.0 - ndl), 0.02, 0.98))).rgb;
+    let alpha = i.color.a * tex.a;
+    if (alpha < 0.004) {
+        discard;
+    }
+    return vec4<f32>(i.color.rgb * tex.rgb * tint.rgb * ramp, alpha);
+}
