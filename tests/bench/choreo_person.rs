@@ -93,25 +93,9 @@ fn quality(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], choices: &[Option<
     dance_quality(&clip, bars, beats).expect("dance quality")
 }
 
-/// BAS-music of random dances on the same bars (segments of each bar's count; a fixed LCG).
+/// BAS-music of random dances on the same bars (odori_tests::random_moves).
 fn random_bas(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32]) -> f32 {
-    let live: Vec<Vec<usize>> = odori_core::choreo::bar_counts(lib, bars)
-        .iter()
-        .map(|&n| lib.segments().iter().filter(|s| !s.retired && (n == 0 || s.counts() == n)).map(|s| s.index).collect())
-        .collect();
-    let draws = 5usize.max(100usize.div_ceil(bars.len().max(1)));
-    let mut x = 0x9E37_79B9_7F4A_7C15u64;
-    let mut sum = 0.0;
-    for _ in 0..draws {
-        let ch: Vec<Option<usize>> = (0..bars.len())
-            .map(|b| {
-                x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                Some(live[b][(x >> 33) as usize % live[b].len()])
-            })
-            .collect();
-        sum += quality(lib, bars, beats, &ch).beats.bas_music;
-    }
-    sum / draws as f32
+    odori_tests::random_moves_bas(lib, bars, beats, odori_tests::RANDOM_MOVES_SEED_TAKES)
 }
 
 /// Foot skate the dance should not exceed (spec §N): each bar's own source clip played at the

@@ -15,46 +15,13 @@
 #[path = "music_audio.rs"]
 mod music_audio;
 
-use odori_core::bars::Bar;
-use odori_core::choreo::quality::{dance_quality, DanceQuality};
-use odori_core::choreo::{bar_counts, GenerateOptions, RenderOptions, SegmentLibrary};
-use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
-use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
+use odori_core::choreo::{GenerateOptions, SegmentLibrary};
+use odori_core::music::{analyze, AnalysisOptions};
+use odori_tests::{dance_quality_of as quality, random_moves_bas, RANDOM_MOVES_SEED_TAKES};
 
-fn songs() -> Vec<(String, RmsEnvelope)> {
-    let mut out: Vec<(String, RmsEnvelope)> = music_audio::FULL_TRACKS
-        .iter()
-        .chain([&music_audio::TRUMPET, &music_audio::DRUMS])
-        .map(|rel| (rel.to_string(), music_audio::decode_data(rel).envelope().unwrap_or_else(|e| panic!("{rel}: {e}"))))
-        .collect();
-    for (bpb, bpm) in [(4u32, 100.0f32), (3, 126.0)] {
-        let song = demo_song_with(22050.0, &DemoSongOptions { beats_per_bar: bpb, bpm, end_bpm: bpm }).expect("demo song");
-        out.push((format!("demo in {bpb}, {bpm} BPM"), envelope(&[&song.samples], 22050.0).expect("envelope")));
-    }
-    out
-}
-
-fn quality(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], choices: &[Option<usize>]) -> DanceQuality {
-    let clip = odori_core::choreo::render(lib, bars, choices, &RenderOptions::default());
-    dance_quality(&clip, bars, beats).expect("dance quality")
-}
-
-/// BAS-music of random dances on the same bars (each bar's own count; a fixed generator).
-fn random_bas(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32]) -> f32 {
-    let live: Vec<Vec<usize>> = bar_counts(lib, bars).iter().map(|&n| lib.segments().iter().filter(|s| !s.retired && (n == 0 || s.counts() == n)).map(|s| s.index).collect()).collect();
-    let draws = 5usize.max(100usize.div_ceil(bars.len().max(1)));
-    let mut x = 0x9E37_79B9_7F4A_7C15u64;
-    let mut sum = 0.0;
-    for _ in 0..draws {
-        let ch: Vec<Option<usize>> = (0..bars.len())
-            .map(|b| {
-                x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                Some(live[b][(x >> 33) as usize % live[b].len()])
-            })
-            .collect();
-        sum += quality(lib, bars, beats, &ch).beats.bas_music;
-    }
-    sum / draws as f32
+/// The songs: every song in ../shared/data/music, the drum take, two demo pieces.
+fn songs() -> Vec<(String, odori_core::music::RmsEnvelope)> {
+    odori_tests::acceptance_songs(&music_audio::ACCEPTANCE_TRACKS, music_audio::decode_envelope, &[(4, 100.0, 100.0), (3, 126.0, 126.0)])
 }
 
 #[test]
@@ -64,7 +31,7 @@ fn five_takes_differ_in_half_the_bars_at_comparable_cost_on_the_beat() {
     for (label, env) in songs() {
         let grid = analyze(&env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{label}: {e}"));
         let (bars, beats) = (grid.bars.clone(), grid.beat_times_secs.clone());
-        let random = random_bas(&lib, &bars, &beats);
+        let random = random_moves_bas(&lib, &bars, &beats, RANDOM_MOVES_SEED_TAKES);
         let mut takes: Vec<(Vec<Option<usize>>, f32)> = Vec::new();
         let mut goals0 = [false; 3];
         for take in 0..5 {

@@ -15,22 +15,13 @@
 mod music_audio;
 
 use std::collections::BTreeMap;
-
 use odori_core::choreo::{GenerateOptions, SegmentLibrary};
-use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
-use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
+use odori_core::music::{analyze, AnalysisOptions};
 
-fn songs() -> Vec<(String, RmsEnvelope)> {
-    let mut out: Vec<(String, RmsEnvelope)> = music_audio::FULL_TRACKS
-        .iter()
-        .chain([&music_audio::TRUMPET, &music_audio::DRUMS])
-        .map(|rel| (rel.to_string(), music_audio::decode_data(rel).envelope().unwrap_or_else(|e| panic!("{rel}: {e}"))))
-        .collect();
-    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 140.0, 140.0), (4, 90.0, 130.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (3, 84.0, 84.0)] {
-        let song = demo_song_with(22050.0, &DemoSongOptions { beats_per_bar: bpb, bpm, end_bpm: end }).expect("demo song");
-        out.push((format!("demo in {bpb}, {bpm}→{end} BPM"), envelope(&[&song.samples], 22050.0).expect("envelope")));
-    }
-    out
+/// The songs: every song in ../shared/data/music, the drum take, six demo pieces.
+fn songs() -> Vec<(String, odori_core::music::RmsEnvelope)> {
+    let demos = [(4u32, 100.0f32, 100.0f32), (4, 140.0, 140.0), (4, 90.0, 130.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (3, 84.0, 84.0)];
+    odori_tests::acceptance_songs(&music_audio::ACCEPTANCE_TRACKS, music_audio::decode_envelope, &demos)
 }
 
 /// The largest number of bars one key holds.
