@@ -24,7 +24,8 @@
 //! or `cargo test -p odori-tests --bench choreo_person` for a quicker build.
 //! `ODORI_SONGS=substring` keeps the songs whose label contains it. `ODORI_MOVES=mine|mixed|builtin`
 //! sets the person library's moves source (`FillWeights::moves_source`; default: the product's).
-//! `ODORI_VARIETY=1` turns on the (unfinished) variety stage for the built-in dances.
+//! `ODORI_VARIETY_WEIGHT=x` sets the variety term's weight for the built-in dances
+//! (`GenerateOptions::variety_weight`; default: the product's; 0: off).
 
 #[path = "../native/music_audio.rs"]
 mod music_audio;
@@ -206,8 +207,8 @@ fn main() {
     let mut variety_met = 0usize;
     for (label, bars, _, bpb, _) in &grids {
         let mut doc = odori_tests::Dance::new(bars.clone());
-        let follow_variety = std::env::var("ODORI_VARIETY").is_ok_and(|v| v == "1");
-        doc.generate_with(&builtin, &GenerateOptions { follow_variety, ..GenerateOptions::default() }).expect("generate");
+        let variety_weight = std::env::var("ODORI_VARIETY_WEIGHT").ok().and_then(|v| v.parse().ok()).unwrap_or(GenerateOptions::default().variety_weight);
+        doc.generate_with(&builtin, &GenerateOptions { variety_weight, ..GenerateOptions::default() }).expect("generate");
         let chosen: Vec<usize> = doc.segments().into_iter().flatten().collect();
         let n = bars.len();
         let info = |s: usize| builtin.segments()[s].builtin;
