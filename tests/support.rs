@@ -91,6 +91,21 @@ pub fn bench_layers(segments: usize) -> Vec<odori_core::choreo::Layer> {
         .collect()
 }
 
+/// The song of the Generate bench (issue 26: Generate for 90 bars with ≥ 2,000 segments, timed
+/// natively by tests/bench/choreo.rs and in wasm by tests/wasm_bench): 90 bars of 4/4 at
+/// 120 BPM whose intensity swells and falls as [`bench_layers`]' does.
+pub fn bench_bars() -> Vec<odori_core::bars::Bar> {
+    let bar_secs = 2.0f32;
+    odori_core::choreo::bars_from_tempo(90.0 * bar_secs + 0.01, 120.0, 4, 0.0, |start, _| 0.5 + 0.45 * ((start / bar_secs).round() / 7.0).sin()).expect("90 bars at 120 BPM")
+}
+
+/// Generate (the whole pipeline, [`odori_core::choreo::generate_states`], default settings) on
+/// `bars` from `lib`, every bar open: the dance and its objective.
+pub fn generate_all(lib: &odori_core::choreo::SegmentLibrary, bars: &[odori_core::bars::Bar]) -> (Vec<Option<usize>>, f32) {
+    let (states, report) = odori_core::choreo::generate_states(lib, bars, &[], odori_core::choreo::FillWeights::default(), &odori_core::choreo::GenerateOptions::default()).expect("generate");
+    (states.iter().map(odori_core::choreo::BarState::segment).collect(), report.cost)
+}
+
 /// Foot drift of a whole clip on the canonical skeleton (issue #14's join measure, after spec
 /// §J's foot skate): a foot joint — either ankle or toe — is on the floor while within 5 cm of
 /// its floor (the 1st percentile of its height over the clip); its drift is the largest
@@ -257,4 +272,63 @@ impl Dance {
     pub fn segments(&self) -> Vec<Option<usize>> {
         (0..self.bars.len()).map(|i| self.states.get(i).and_then(odori_core::choreo::BarState::segment)).collect()
     }
+}
+
+/// The seed of the random-moves control in the beat tests (`choreo_beats`, `choreo_waltz`).
+pub const RANDOM_MOVES_SEED: u64 = 0x2545_F491_4F6C_DD1D;
+/// The seed of the random-moves control in the takes test and the `choreo_person` bench.
+pub const RANDOM_MOVES_SEED_TAKES: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// Random moves on `bars` (spec §J's control for beat alignment): per bar, a live segment of
+/// the counts that bar takes ([`odori_core::choreo::bar_counts`]; any when the library holds
+/// none), drawn by a 64-bit LCG from `seed`, for `max(5, ⌈100 / bars⌉)` dances (at least 100
+/// random bars: one draw of a one-bar song is one segment). Returns the dances.
+pub fn random_moves(lib: &odori_core::choreo::SegmentLibrary, bars: &[odori_core::bars::Bar], seed: u64) -> Vec<Vec<Option<usize>>> {
+    let live: Vec<Vec<usize>> = odori_core::choreo::bar_counts(lib, bars)
+        .iter()
+        .map(|&n| lib.segments().iter().filter(|s| !s.retired && (n == 0 || s.counts() == n)).map(|s| s.index).collect())
+        .collect();
+    let draws = 5usize.max(100usize.div_ceil(bars.len().max(1)));
+    let mut x = seed;
+    (0..draws)
+        .map(|_| {
+            (0..bars.len())
+                .map(|b| {
+                    x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    live[b].get((x >> 33) as usize % live[b].len().max(1)).copied()
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// BAS-music (spec §J) of the dance `choices` fills `bars` with, rendered as the product plays it
+/// (default render options), scored on the song's `beats`.
+pub fn dance_quality_of(lib: &odori_core::choreo::SegmentLibrary, bars: &[odori_core::bars::Bar], beats: &[f32], choices: &[Option<usize>]) -> odori_core::choreo::quality::DanceQuality {
+    let clip = odori_core::choreo::render(lib, bars, choices, &odori_core::choreo::RenderOptions::default());
+    odori_core::choreo::quality::dance_quality(&clip, bars, beats).expect("dance quality")
+}
+
+/// The random-moves control's BAS-music: the mean over the dances of [`random_moves`].
+pub fn random_moves_bas(lib: &odori_core::choreo::SegmentLibrary, bars: &[odori_core::bars::Bar], beats: &[f32], seed: u64) -> f32 {
+    let dances = random_moves(lib, bars, seed);
+    dances.iter().map(|ch| dance_quality_of(lib, bars, beats, ch).beats.bas_music).sum::<f32>() / dances.len().max(1) as f32
+}
+
+/// The built-in library, and the songs the issue-26 acceptance tests read: every song in
+/// ../shared/data/music (`full_tracks`), the trumpet loop and the drum take, decoded by the
+/// caller (`decode`: path → envelope), then demo pieces `(beats per bar, start BPM, end BPM)`
+/// from the demo-song generator (none tuned on). Labels: the data path, or "demo in B, S→E BPM".
+pub fn acceptance_songs(
+    data_songs: &[&str],
+    decode: impl Fn(&str) -> odori_core::music::RmsEnvelope,
+    demos: &[(u32, f32, f32)],
+) -> Vec<(String, odori_core::music::RmsEnvelope)> {
+    use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
+    let mut out: Vec<(String, odori_core::music::RmsEnvelope)> = data_songs.iter().map(|rel| (rel.to_string(), decode(rel))).collect();
+    for &(beats_per_bar, bpm, end_bpm) in demos {
+        let song = demo_song_with(22050.0, &DemoSongOptions { beats_per_bar, bpm, end_bpm }).expect("demo song");
+        out.push((format!("demo in {beats_per_bar}, {bpm}→{end_bpm} BPM"), odori_core::music::envelope(&[&song.samples], 22050.0).expect("envelope")));
+    }
+    out
 }

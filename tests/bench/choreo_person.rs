@@ -24,7 +24,8 @@
 //! or `cargo test -p odori-tests --bench choreo_person` for a quicker build.
 //! `ODORI_SONGS=substring` keeps the songs whose label contains it. `ODORI_MOVES=mine|mixed|builtin`
 //! sets the person library's moves source (`FillWeights::moves_source`; default: the product's).
-//! `ODORI_VARIETY=1` turns on the (unfinished) variety stage for the built-in dances.
+//! `ODORI_VARIETY_WEIGHT=x` sets the variety term's weight for the built-in dances
+//! (`GenerateOptions::variety_weight`; default: the product's; 0: off).
 
 #[path = "../native/music_audio.rs"]
 mod music_audio;
@@ -93,25 +94,9 @@ fn quality(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], choices: &[Option<
     dance_quality(&clip, bars, beats).expect("dance quality")
 }
 
-/// BAS-music of random dances on the same bars (segments of each bar's count; a fixed LCG).
+/// BAS-music of random dances on the same bars (odori_tests::random_moves).
 fn random_bas(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32]) -> f32 {
-    let live: Vec<Vec<usize>> = odori_core::choreo::bar_counts(lib, bars)
-        .iter()
-        .map(|&n| lib.segments().iter().filter(|s| !s.retired && (n == 0 || s.counts() == n)).map(|s| s.index).collect())
-        .collect();
-    let draws = 5usize.max(100usize.div_ceil(bars.len().max(1)));
-    let mut x = 0x9E37_79B9_7F4A_7C15u64;
-    let mut sum = 0.0;
-    for _ in 0..draws {
-        let ch: Vec<Option<usize>> = (0..bars.len())
-            .map(|b| {
-                x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                Some(live[b][(x >> 33) as usize % live[b].len()])
-            })
-            .collect();
-        sum += quality(lib, bars, beats, &ch).beats.bas_music;
-    }
-    sum / draws as f32
+    odori_tests::random_moves_bas(lib, bars, beats, odori_tests::RANDOM_MOVES_SEED_TAKES)
 }
 
 /// Foot skate the dance should not exceed (spec §N): each bar's own source clip played at the
@@ -222,8 +207,8 @@ fn main() {
     let mut variety_met = 0usize;
     for (label, bars, _, bpb, _) in &grids {
         let mut doc = odori_tests::Dance::new(bars.clone());
-        let follow_variety = std::env::var("ODORI_VARIETY").is_ok_and(|v| v == "1");
-        doc.generate_with(&builtin, &GenerateOptions { follow_variety, ..GenerateOptions::default() }).expect("generate");
+        let variety_weight = std::env::var("ODORI_VARIETY_WEIGHT").ok().and_then(|v| v.parse().ok()).unwrap_or(GenerateOptions::default().variety_weight);
+        doc.generate_with(&builtin, &GenerateOptions { variety_weight, ..GenerateOptions::default() }).expect("generate");
         let chosen: Vec<usize> = doc.segments().into_iter().flatten().collect();
         let n = bars.len();
         let info = |s: usize| builtin.segments()[s].builtin;

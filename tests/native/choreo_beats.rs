@@ -25,12 +25,12 @@
 mod music_audio;
 
 use odori_core::choreo::quality::{dance_quality, motion_quality, DanceQuality, QualityMotion};
-use odori_core::choreo::{bar_counts, generate_states, BarState, FillWeights, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::choreo::{generate_states, BarState, FillWeights, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
 use odori_core::ImportOptions;
-use odori_tests::{all_bvh, fps_override_for, read};
+use odori_tests::{all_bvh, fps_override_for, random_moves_bas, read, RANDOM_MOVES_SEED};
 
 fn library() -> SegmentLibrary {
     let mut lib = SegmentLibrary::builtin();
@@ -89,31 +89,12 @@ fn generated_dances_follow_the_beat_on_every_real_song() {
         };
         let chosen = generate(&GenerateOptions::default());
         let gen = q(&chosen);
-        let mut x = 0x2545_F491_4F6C_DD1Du64;
-        // Per bar, the live segments it can take (its count; any when the library has none).
-        let counts = bar_counts(&lib, &bars);
-        let live: Vec<Vec<usize>> = counts
-            .iter()
-            .map(|&n| lib.segments().iter().filter(|s| !s.retired && (n == 0 || s.counts() == n)).map(|s| s.index).collect())
-            .collect();
         if grid.beats_per_bar == 3 {
             assert!(chosen.iter().flatten().all(|&s| lib.segments()[s].counts() == 3), "{rel}: a bar in 3 took a move not in 3");
         }
-        // The control's draws: 5, or enough for 100 random bars on a short song (one draw of a
-        // one-bar song is one segment: 5 of them are too few to estimate a random dance's score).
-        let draws = 5usize.max(100usize.div_ceil(bars.len()));
-        let random_bas: f32 = (0..draws)
-            .map(|_| {
-                let ch: Vec<Option<usize>> = (0..bars.len())
-                    .map(|b| {
-                        x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                        Some(live[b][(x >> 33) as usize % live[b].len()])
-                    })
-                    .collect();
-                q(&ch).beats.bas_music
-            })
-            .sum::<f32>()
-            / draws as f32;
+        // The control (odori_tests::random_moves): per bar a live segment of its count, mean of 5
+        // draws, or of enough for 100 random bars on a short song.
+        let random_bas = random_moves_bas(&lib, &bars, &beats, RANDOM_MOVES_SEED);
         let imported = chosen.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
         if rel.starts_with("music/") || rel.starts_with("beats/") {
             imported_total += imported;

@@ -14,12 +14,12 @@
 //! between the half and the whole of the song's (126 BPM: 0.74).
 
 use odori_core::choreo::quality::{dance_quality, DanceQuality};
-use odori_core::choreo::{bar_counts, RenderOptions, SegmentLibrary, SegmentOptions};
+use odori_core::choreo::{RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions};
 use odori_core::ImportOptions;
-use odori_tests::{all_bvh, fps_override_for, read};
+use odori_tests::{all_bvh, fps_override_for, random_moves_bas, read, RANDOM_MOVES_SEED};
 
 /// The demo pieces in 3/4: (start BPM, end BPM).
 const PIECES_IN_THREE: [(f32, f32); 6] = [(150.0, 150.0), (108.0, 108.0), (126.0, 126.0), (96.0, 120.0), (138.0, 138.0), (84.0, 84.0)];
@@ -59,24 +59,7 @@ fn dances_in_three(lib: &SegmentLibrary) -> Vec<(String, DanceQuality, f32, f32)
         let chosen = doc.segments();
         assert!(chosen.iter().flatten().all(|&s| lib.segments()[s].counts() == 3), "{rel}: a bar in 3 took a move not in 3");
         let gen = q(&chosen);
-        let live: Vec<Vec<usize>> = bar_counts(lib, &bars)
-            .iter()
-            .map(|&n| lib.segments().iter().filter(|s| !s.retired && (n == 0 || s.counts() == n)).map(|s| s.index).collect())
-            .collect();
-        let mut x = 0x2545_F491_4F6C_DD1Du64;
-        let draws = 5usize.max(100usize.div_ceil(bars.len()));
-        let random_bas: f32 = (0..draws)
-            .map(|_| {
-                let ch: Vec<Option<usize>> = (0..bars.len())
-                    .map(|b| {
-                        x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                        Some(live[b][(x >> 33) as usize % live[b].len()])
-                    })
-                    .collect();
-                q(&ch).beats.bas_music
-            })
-            .sum::<f32>()
-            / draws as f32;
+        let random_bas = random_moves_bas(lib, &bars, &beats, RANDOM_MOVES_SEED);
         let ratio = gen.beats.kinetic_beats_per_sec / gen.beats.music_beats_per_sec;
         println!(
             "{rel}: {} bars, BAS-music generated {:.3}, random {random_bas:.3}, half-shifted {:.3}; kinetic/song beat rate {ratio:.2}; join jump max {:.2}",

@@ -98,6 +98,14 @@ pub const FULL_TRACKS: [&str; 3] = [
     "music/Kevin_MacLeod_-_P_I_Tchaikovsky_Dance_of_the_Sugar_Plum_Fairy.hq.ogg",
 ];
 
+/// The songs the issue-26 acceptance reads: every song in ../shared/data/music and the drum take.
+pub const ACCEPTANCE_TRACKS: [&str; 5] = [FULL_TRACKS[0], FULL_TRACKS[1], FULL_TRACKS[2], TRUMPET, DRUMS];
+
+/// The envelope of a file under ../shared/data (panics naming the file).
+pub fn decode_envelope(rel: &str) -> RmsEnvelope {
+    decode_data(rel).envelope().unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
 /// Ground truth from a `.beats` file: (beat times, downbeat times), seconds.
 pub fn read_beats(rel: &str) -> (Vec<f32>, Vec<f32>) {
     let text = String::from_utf8(odori_tests::read(rel)).expect("utf-8 .beats");

@@ -45,3 +45,12 @@ let [fillMs, cost] = best(() => x.fill90(), 5);
 say(`fill 90 open bars from ${m} segments (exact, repeat window 1) in ${fillMs.toFixed(1)} ms (best of 5), cost ${cost.toFixed(3)}`);
 [fillMs, cost] = best(() => x.fill90_default(), 3);
 say(`fill 90 open bars, default repeat window 4: ${fillMs.toFixed(1)} ms (best of 3), cost ${cost.toFixed(3)}`);
+// Generate on 90 bars (issue 26's goal: under 300 ms in wasm with ≥ 2,000 segments). The first
+// call also builds the library's cached transition table for the song's metre.
+const [firstGenMs] = time(() => x.generate90());
+let genMs;
+[genMs, cost] = best(() => x.generate90(), 3);
+say(`Generate 90 bars from ${m} segments (every stage, default settings): ${genMs.toFixed(0)} ms (best of 3; first call with the table ${firstGenMs.toFixed(0)} ms), objective ${cost.toFixed(3)}`);
+const [firstBuiltinMs] = time(() => x.generate90_builtin());
+[genMs, cost] = best(() => x.generate90_builtin(), 3);
+say(`Generate 90 bars from the built-in library alone (variety term on): ${genMs.toFixed(0)} ms (best of 3; first call with the library and table ${firstBuiltinMs.toFixed(0)} ms), objective ${cost.toFixed(3)}`);

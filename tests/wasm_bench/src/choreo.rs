@@ -1,7 +1,7 @@
 //! The choreography core in wasm (issue 5's benchmark): the built-in library, the ≥ 2,000
 //! segment library of `odori_tests::builtin_medley_library` (no file access in wasm), the
-//! transition table in one go and in slices through its builder (as the app builds it), and
-//! filling 90 open bars.
+//! transition table in one go and in slices through its builder (as the app builds it),
+//! filling 90 open bars, and Generate on 90 bars (issue 26: the whole pipeline, every stage).
 
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -91,5 +91,33 @@ fn fill90_with(w: FillWeights) -> f32 {
         let inten: Vec<f32> = lib.segments().iter().map(|s| s.intensity01).collect();
         let layers = odori_tests::bench_layers(m);
         fill(&t, &layers, &inten, &w).map_or(-1.0, |r| r.1)
+    })
+}
+
+/// Generate (every stage, default settings) on the 90 bars of `odori_tests::bench_bars` from the
+/// ≥ 2,000-segment library (its transition table cached in the library after the first call, as
+/// in the app); returns the dance's objective (-1 without a library).
+#[no_mangle]
+pub extern "C" fn generate90() -> f32 {
+    LIB.with(|l| {
+        let lib = l.borrow();
+        let Some(lib) = lib.as_ref() else { return -1.0 };
+        odori_tests::generate_all(lib, &odori_tests::bench_bars()).1
+    })
+}
+
+thread_local! {
+    static BUILTIN: RefCell<Option<SegmentLibrary>> = const { RefCell::new(None) };
+}
+
+/// Generate on the same 90 bars from the built-in library alone (510 segments), where the
+/// variety term is on (it is off while a library holds imported moves, as the medley is); the
+/// library is built on the first call. Returns the objective.
+#[no_mangle]
+pub extern "C" fn generate90_builtin() -> f32 {
+    BUILTIN.with(|b| {
+        let mut b = b.borrow_mut();
+        let lib = b.get_or_insert_with(SegmentLibrary::builtin);
+        odori_tests::generate_all(lib, &odori_tests::bench_bars()).1
     })
 }

@@ -221,6 +221,14 @@ pub fn next_round(lib: &SegmentLibrary, bar: &Bar, session: &mut FeedbackSession
 /// bar pinned the states come back as they were. Refused when an option is out of range, the
 /// library is empty or a pinned segment is not in it.
 pub fn generate_states(lib: &SegmentLibrary, bars: &[Bar], states: &[BarState], weights: FillWeights, options: &GenerateOptions) -> Result<(Vec<BarState>, GenerateReport), ChoreoError> {
+    generate_states_with_repeats(lib, bars, states, weights, options, &[]).map(|(s, r, _)| (s, r))
+}
+
+/// [`generate_states`] where the song's sections repeat (issue 26): `repeat_of[i]` is the earlier
+/// bar bar `i` repeats (`music::Sections::repeat_of_bars`; empty: none). An open bar repeating
+/// an open bar takes the same move ([`super::generate::generate_with_repeats`]). Also returns, per
+/// bar, the bar whose move it repeats (what the bar's note says, [`super::notes::mark_repeats`]).
+pub fn generate_states_with_repeats(lib: &SegmentLibrary, bars: &[Bar], states: &[BarState], weights: FillWeights, options: &GenerateOptions, repeat_of: &[Option<usize>]) -> Result<(Vec<BarState>, GenerateReport, Vec<Option<usize>>), ChoreoError> {
     options.validate()?;
     check_bars(bars)?;
     if lib.is_empty() {
@@ -237,7 +245,7 @@ pub fn generate_states(lib: &SegmentLibrary, bars: &[Bar], states: &[BarState], 
     let current: Vec<BarState> = (0..bars.len()).map(state).collect();
     let pinned = current.iter().filter(|s| matches!(s, BarState::Pinned { .. })).count();
     if pinned == bars.len() {
-        return Ok((current, GenerateReport { filled: 0, pinned, cost: 0.0 }));
+        return Ok((current, GenerateReport { filled: 0, pinned, cost: 0.0 }, vec![None; bars.len()]));
     }
     let layers: Vec<Layer> = bars
         .iter()
@@ -247,9 +255,9 @@ pub fn generate_states(lib: &SegmentLibrary, bars: &[Bar], states: &[BarState], 
             _ => Layer::Open { intensity: b.intensity },
         })
         .collect();
-    let (path, cost) = generate::generate(lib, bars, &layers, weights, options)?;
+    let (path, cost, repeats) = generate::generate_with_repeats(lib, bars, &layers, weights, options, repeat_of)?;
     let out = current.iter().zip(path).map(|(s, seg)| if matches!(s, BarState::Pinned { .. }) { *s } else { BarState::Generated { segment: seg } }).collect();
-    Ok((out, GenerateReport { filled: bars.len() - pinned, pinned, cost }))
+    Ok((out, GenerateReport { filled: bars.len() - pinned, pinned, cost }, repeats))
 }
 
 /// The dance of `states` over `bars` as one canonical clip; frame 0 is song time 0. A bar that

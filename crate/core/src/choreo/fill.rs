@@ -20,7 +20,8 @@
 //! node pays `repeat_penalty` (the usual path-dependent extension of Viterbi; it steers away
 //! from repeats at no extra cost but is not guaranteed optimal for that term). The reported
 //! cost is the full objective, window included. With `repeat_window` ≤ 1 the result is exactly
-//! optimal.
+//! optimal. The variety term ([`Tempi::variety`], [`super::variety`]: nearby bars sharing a step,
+//! arm pattern or source clip) is path-dependent too and charged the same way.
 //!
 //! The bar's metre ([`Tempi::bar_counts`]): an open bar of n beats takes only segments of n
 //! counts (a segment of another count costs ∞ there), so a waltz bar is danced by 3-count moves
@@ -531,6 +532,9 @@ pub struct Tempi<'a> {
     pub bar_counts: &'a [usize],
     /// Per segment, its counts ([`super::Segment::counts`]).
     pub segment_counts: &'a [usize],
+    /// The variety term ([`super::variety`]): nearby bars sharing a step, arm pattern or source
+    /// clip are charged, along the path. None: no such term.
+    pub variety: Option<&'a super::variety::Variety>,
 }
 
 impl Tempi<'_> {
@@ -644,6 +648,9 @@ pub fn fill_with_tempi(
                         stats.window_charges += 1;
                     }
                 }
+                if let Some(variety) = tempi.variety {
+                    variety.charge_after_pinned(&back, t, *a, &mut next);
+                }
                 back.push(vec![*a as u32; m]);
                 cur = Nodes::All(next);
             }
@@ -652,6 +659,9 @@ pub fn fill_with_tempi(
                 let mut next = vec![f32::INFINITY; m];
                 let mut arg = vec![0u32; m];
                 relax_open(table, prev, &node, &mut next, &mut arg, &mut low, &mut stats);
+                if let Some(variety) = tempi.variety {
+                    variety.relax(table, &back, t, prev, &node, &mut next, &mut arg);
+                }
                 for (b, v) in next.iter_mut().enumerate() {
                     if repeats_on_path(&back, t, arg[b] as usize, b, window) {
                         *v += weights.repeat_penalty;
@@ -796,6 +806,9 @@ pub fn path_cost_with_tempi(table: &TransitionTable, layers: &[Layer], segment_i
         }
         if weights.repeat_window > 1 && matches!(l, Layer::Open { .. }) && repeats_too_soon(path, t, weights.repeat_window) {
             c += weights.repeat_penalty;
+        }
+        if let (Some(variety), Layer::Open { .. }) = (tempi.variety, l) {
+            c += variety.charge_in_path(path, t);
         }
     }
     c

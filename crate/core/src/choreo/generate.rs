@@ -2,10 +2,9 @@
 //! run in order, each a function of its inputs with the figure it checks.
 //!
 //! 1. [`fill_stage`]: the minimum-cost path of §G ([`super::fill`]) over the objective's terms.
-//! 1b. [`variety_stage`] (off by default, unfinished: [`GenerateOptions::follow_variety`]): no step, arm pattern or move holds more than [`VARIETY_SHARE`] of
-//!    the open bars and distinct moves are at least [`VARIETY_DISTINCT`] of them; if not,
-//!    refills charging what dominates, more at each try, within [`VARIETY_SLACK`] of the
-//!    objective, and keeps that charge for the stages after it.
+//!    Its objective includes the variety term ([`super::variety`],
+//!    [`GenerateOptions::variety_weight`]): nearby bars sharing a step, arm pattern or source
+//!    clip cost more, so no kind of move dominates the dance.
 //! 2. [`beat_rate_stage`]: the dance's kinetic beats per count, measured on the rendered dance,
 //!    in [`super::BEAT_RATE_BAND`]; if not, refills with the beat-rate term at each weight of
 //!    [`beat_rate_ladder`] and keeps the first dance inside it.
@@ -27,7 +26,7 @@
 //! a path's figures are measured once and kept ([`Measured`]). Deterministic: the same library,
 //! bars and options give the same dance.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeSet;
 use std::sync::Arc;
 
 use super::fill::{
@@ -41,20 +40,8 @@ use crate::bars::Bar;
 
 /// Refills the join repair tries at most by default ([`GenerateOptions::join_repairs`]).
 pub const JOIN_REPAIRS: usize = 16;
-/// The largest share of the open bars one step, one arm pattern or one move may hold
-/// ([`variety_stage`]).
-pub const VARIETY_SHARE: f32 = 1.0 / 3.0;
-/// The least share of the open bars distinct moves should be ([`variety_stage`]).
-pub const VARIETY_DISTINCT: f32 = 0.7;
-/// How far above stage 1's objective (a fraction of it) [`variety_stage`] may go: varying the
-/// arms of built-in moves that all join best with the same arms can double the table's join
-/// costs, while the measured joins stay within their goal (stage 5 keeps them there).
-pub const VARIETY_SLACK: f32 = 1.0;
-/// Refills [`variety_stage`] tries at most.
-pub const VARIETY_TRIES: usize = 12;
-/// What [`variety_stage`] adds per try to the cost of a dominating kind, as a multiple of stage
-/// 1's mean cost per open bar.
-pub const VARIETY_STEP: f32 = 0.25;
+/// Default [`GenerateOptions::variety_weight`]: see there.
+pub const VARIETY_WEIGHT_DEFAULT: f32 = 0.25;
 
 /// The largest take [`GenerateOptions::take`] accepts: take k makes the k takes before it
 /// first (the whole pipeline each), so its time grows with k.
@@ -94,15 +81,11 @@ pub struct GenerateOptions {
     pub join_jump_goal: f32,
     /// Refills stage 5 tries at most. Default [`JOIN_REPAIRS`] (16); range 0..=64.
     pub join_repairs: usize,
-    /// Stage 1b, [`variety_stage`]: no step, arm pattern or move dominates the dance. Default
-    /// false: unfinished (issue 26 item 2). Measured by `tests/native/choreo_variety.rs` (ignored
-    /// until it passes), a charge on every bar alike switches a built-in dance wholesale from
-    /// one arm pattern to another rather than mixing them (Let's Go Fishin': one arm pattern in
-    /// 46 of 48 bars without the stage, 48 of 48 with it at a step of 0.25 and a slack of 1;
-    /// Sugar Plum Fairy 53/53 → 47/53, Vibe Ace 32/33 → 16/33), because the moves that join a
-    /// move best share its arms: the next try is a term on the edges (two bars in a row sharing
-    /// a step or arm pattern) or along the path, as the repeat window is.
-    pub follow_variety: bool,
+    /// Weight of the variety term ([`super::variety`], issue 26): the cost of a bar sharing a
+    /// step, an arm pattern or a source clip with the bar before (less further back, up to
+    /// [`super::variety::VARIETY_WINDOW`] bars). Default [`VARIETY_WEIGHT_DEFAULT`]; range 0..=10
+    /// (0: off, the plain objective).
+    pub variety_weight: f32,
     /// Which take (issue 26, "another take"): 0 is the dance of least cost; take k > 0 is a
     /// different dance of comparable cost ([`takes`]). Deterministic: the same take of
     /// the same problem is the same dance. Default 0; range 0..=[`MAX_TAKE`].
@@ -118,7 +101,7 @@ impl Default for GenerateOptions {
             follow_joins: true,
             join_jump_goal: JOIN_JUMP_GOAL,
             join_repairs: JOIN_REPAIRS,
-            follow_variety: false,
+            variety_weight: VARIETY_WEIGHT_DEFAULT,
             take: 0,
         }
     }
@@ -136,6 +119,9 @@ impl GenerateOptions {
         }
         if self.join_repairs > 64 {
             return bad("joinRepairs", "0..=64", self.join_repairs as f32);
+        }
+        if !(0.0..=10.0).contains(&self.variety_weight) {
+            return bad("varietyWeight", "0..=10", self.variety_weight);
         }
         if self.take > MAX_TAKE {
             return bad("take", "0..=15", self.take as f32);
@@ -232,6 +218,8 @@ pub struct Problem<'a> {
     follow_beat_rate: bool,
     /// Stage 3's slack ([`GenerateOptions::free_skate_slack`]).
     free_skate_slack: f32,
+    /// The variety term ([`GenerateOptions::variety_weight`]); None when off.
+    variety: Option<super::variety::Variety>,
     /// Per layer, per segment: a cost every fill of this problem adds (a take's penalty on the
     /// earlier takes' moves, [`takes`]). Empty: none.
     base: Vec<Vec<f32>>,
@@ -264,7 +252,8 @@ impl<'a> Problem<'a> {
         };
         let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
         let follow_beat_rate = follow && !kinetic.is_empty();
-        let mut p = Problem { lib, bars, layers, weights, table, intensity, node_cost, bar_counts, segment_counts, bar_bpm, segment_bpm, beat_rate, follow_beat_rate, free_skate_slack: options.free_skate_slack, base: Vec::new() };
+        let variety = Some(super::variety::Variety::new(lib, options.variety_weight)).filter(super::variety::Variety::is_on);
+        let mut p = Problem { lib, bars, layers, weights, table, intensity, node_cost, bar_counts, segment_counts, bar_bpm, segment_bpm, beat_rate, follow_beat_rate, free_skate_slack: options.free_skate_slack, variety, base: Vec::new() };
         p.base = p.moves_source_charge();
         p
     }
@@ -309,7 +298,7 @@ impl<'a> Problem<'a> {
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
     fn tempi<'b>(&'b self, extra: &'b [Vec<f32>]) -> Tempi<'b> {
-        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts }
+        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref() }
     }
 
     /// The minimum-cost path with `weights` and `extra` costs.
@@ -356,76 +345,6 @@ impl Measured {
 /// Stage 1: the minimum-cost path of spec §G over the objective's terms ([`super::fill`]).
 pub fn fill_stage(p: &Problem) -> Result<Vec<usize>, FillError> {
     p.fill(&p.weights, &[])
-}
-
-/// What a segment is made of, for [`variety_stage`]: a built-in move's step and arm pattern
-/// (an imported segment: none; its source clip may be the person's only one).
-fn kinds(lib: &SegmentLibrary, s: usize) -> [Option<(u8, &'static str)>; 2] {
-    match lib.segments().get(s).and_then(|seg| seg.builtin) {
-        Some(m) => [Some((0, m.step.name())), Some((1, m.arms.name()))],
-        None => [None, None],
-    }
-}
-
-/// What breaks [`variety_stage`]'s goals on `path`: the kinds (step, arm pattern) and the moves
-/// holding more than [`VARIETY_SHARE`] of the `open` bars, and, when distinct moves are fewer than
-/// [`VARIETY_DISTINCT`] of them, every move used more than once.
-fn variety_faults(lib: &SegmentLibrary, path: &[usize], open: &[usize]) -> (Vec<(u8, &'static str)>, Vec<usize>) {
-    let mut by_kind: BTreeMap<(u8, &'static str), usize> = BTreeMap::new();
-    let mut by_move: BTreeMap<usize, usize> = BTreeMap::new();
-    for &t in open {
-        let Some(&s) = path.get(t) else { continue };
-        *by_move.entry(s).or_default() += 1;
-        for k in kinds(lib, s).into_iter().flatten() {
-            *by_kind.entry(k).or_default() += 1;
-        }
-    }
-    let most = VARIETY_SHARE * open.len() as f32;
-    let kinds: Vec<(u8, &'static str)> = by_kind.into_iter().filter(|&(_, n)| n as f32 > most + 1e-4).map(|(k, _)| k).collect();
-    let few = (by_move.len() as f32) < VARIETY_DISTINCT * open.len() as f32 - 1e-4;
-    let moves: Vec<usize> = by_move.into_iter().filter(|&(_, n)| n as f32 > most + 1e-4 || (few && n > 1)).map(|(s, _)| s).collect();
-    (kinds, moves)
-}
-
-/// Stage 1b: variety (issue 26). Figure: on the open bars, no step or arm pattern of the
-/// built-in moves and no move in more than [`VARIETY_SHARE`] of them, distinct moves at least
-/// [`VARIETY_DISTINCT`] of them (a song of fewer than 3 open bars has no goal). While `path`
-/// breaks it, adds [`VARIETY_STEP`] times stage 1's mean cost per open bar to every segment of
-/// each dominating kind and to each move at fault, in every open bar, and refills, up to
-/// [`VARIETY_TRIES`] times; a refill whose objective is more than [`VARIETY_SLACK`] above
-/// `path`'s ends the tries. Returns the last refill within the slack (or `path`) and the charge
-/// that made it (empty: none), which the stages after it keep.
-pub fn variety_stage(p: &Problem, path: Vec<usize>) -> Result<(Vec<usize>, Vec<Vec<f32>>), FillError> {
-    let open: Vec<usize> = p.layers.iter().enumerate().filter(|(_, l)| matches!(l, Layer::Open { .. })).map(|(t, _)| t).collect();
-    if open.len() < 3 {
-        return Ok((path, Vec::new()));
-    }
-    let start = p.objective(&path);
-    let per_bar = if start.is_finite() && start > 0.0 { start / open.len() as f32 } else { 1.0 };
-    let kind_of: Vec<[Option<(u8, &'static str)>; 2]> = (0..p.lib.len()).map(|s| kinds(p.lib, s)).collect();
-    let mut kind_cost: BTreeMap<(u8, &'static str), f32> = BTreeMap::new();
-    let mut move_cost = vec![0.0f32; p.lib.len()];
-    let (mut best, mut charge) = (path, Vec::new());
-    for _ in 0..VARIETY_TRIES {
-        let (kinds, moves) = variety_faults(p.lib, &best, &open);
-        if kinds.is_empty() && moves.is_empty() {
-            break;
-        }
-        for k in kinds {
-            *kind_cost.entry(k).or_default() += VARIETY_STEP * per_bar;
-        }
-        for s in moves {
-            move_cost[s] += VARIETY_STEP * per_bar;
-        }
-        let row: Vec<f32> = (0..p.lib.len()).map(|s| move_cost[s] + kind_of[s].iter().flatten().map(|k| kind_cost.get(k).copied().unwrap_or(0.0)).sum::<f32>()).collect();
-        let extra: Vec<Vec<f32>> = p.layers.iter().map(|l| if matches!(l, Layer::Open { .. }) { row.clone() } else { vec![0.0; row.len()] }).collect();
-        let q = p.fill(&p.weights, &extra)?;
-        if p.objective(&q) > start * (1.0 + VARIETY_SLACK) + 1e-6 {
-            break;
-        }
-        (best, charge) = (q, extra);
-    }
-    Ok((best, charge))
 }
 
 /// Stage 2: the dance's kinetic beat rate near the song's ([`GenerateOptions::follow_beat_rate`]),
@@ -565,22 +484,10 @@ fn take_penalty(p: &Problem, earlier: &[Vec<usize>], open: &[usize], penalty: f3
     m
 }
 
-/// Stage 1 and 1b on `p` (its base charge as it is): the shortest path, then the variety stage
-/// when on; returns the path and `p`'s base with the variety charge added.
-fn fill_and_vary(p: &Problem, options: &GenerateOptions) -> Result<(Vec<usize>, Vec<Vec<f32>>), FillError> {
-    let path = fill_stage(p)?;
-    if !options.follow_variety {
-        return Ok((path, p.base.clone()));
-    }
-    let (path, charge) = variety_stage(p, path)?;
-    Ok((path, if charge.is_empty() { p.base.clone() } else { p.with_base(&charge).into_owned() }))
-}
-
 /// One take's dance on `p` whose base is `base` (stages 1 to 5).
 fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -> Result<Vec<usize>, FillError> {
     p.base = base;
-    let (path, charged) = fill_and_vary(p, options)?;
-    p.base = charged;
+    let path = fill_stage(p)?;
     Ok(stages(p, options, path)?.0)
 }
 
@@ -590,7 +497,8 @@ fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -
 /// per open bar), weakest first, the first whose shortest path differs from every earlier take
 /// in at least [`TAKE_DIFFER`] of the open bars and whose dance, after every stage, does too,
 /// with objectives within [`TAKE_SLACK`] of take 0's shortest path's, and whose kinetic beats per
-/// count stay in [`super::BEAT_RATE_BAND`] when take 0's are; when none does, the last
+/// count stay in [`super::BEAT_RATE_BAND`] when take 0's are (and its joins within
+/// [`GenerateOptions::join_jump_goal`] when take 0's are); when none does, the last
 /// dance made within the slack (in the band, if any was) (the weakest penalty's when none is). Pinned bars never change,
 /// so they never differ. Take k runs the pipeline at least k + 1 times.
 pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Vec<usize>, FillError> {
@@ -602,8 +510,14 @@ pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Ve
     let mut earlier: Vec<Vec<usize>> = vec![take_dance(p, options, base.clone())?];
     // A take keeps take 0's beat rate in its band (when take 0's is): measured on the dance.
     let (lib, bars) = (p.lib, p.bars);
-    let in_band = |d: &[usize]| dance_figures(lib, bars, d).is_none_or(|f| in_beat_rate_band(f.kinetic_per_count));
-    let keep_band = take > 0 && in_band(&earlier[0]);
+    // And its joins within the goal (when take 0's are): a take of the demo piece in 3 at 126 BPM
+    // joined at 2.93 before this (take 0: 0.84).
+    let goal = options.join_jump_goal;
+    let figures0 = if take > 0 { dance_figures(lib, bars, &earlier[0]) } else { None };
+    let keep_joins = figures0.is_some_and(|f| f.join_jump_max <= goal);
+    let band0 = figures0.is_none_or(|f| in_beat_rate_band(f.kinetic_per_count));
+    let in_band = |d: &[usize]| dance_figures(lib, bars, d).is_none_or(|f| (!band0 || in_beat_rate_band(f.kinetic_per_count)) && (!keep_joins || f.join_jump_max <= goal));
+    let keep_band = take > 0 && (band0 || keep_joins);
     for _ in 0..take {
         let least = |q: &[usize], earlier: &[Vec<usize>]| earlier.iter().map(|e| differ(q, e, &open)).fold(1.0f32, f32::min);
         let mut chosen: Option<(bool, Vec<usize>)> = None;
@@ -656,7 +570,34 @@ pub fn generate(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: F
     Ok((path, cost))
 }
 
-/// Stages 2 to 5 in order on `p`, from stage 1's (and 1b's) `path`.
+/// Generate where the song's sections repeat (issue 26 item 2: a repeated section may take the
+/// same moves, as real choreography does). `repeat_of[t]` is the earlier bar bar t repeats
+/// (`music::Sections::repeat_of_bars`; empty or all `None`: [`generate`] as it is). The pipeline
+/// runs once; then every open bar that repeats an open bar, and the bar it repeats, are pinned
+/// to the move that bar took, and the pipeline runs again for the other bars, so the bars
+/// around a repeated section join it. Returns the dance, its objective on `layers` (the repeat
+/// is charged nothing beyond what the moves cost: a repeated section pays its repeat window and
+/// variety as any other bars) and, per bar, the bar whose move it repeats.
+pub fn generate_with_repeats(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: FillWeights, options: &GenerateOptions, repeat_of: &[Option<usize>]) -> Result<(Vec<usize>, f32, Vec<Option<usize>>), FillError> {
+    let (first, cost) = generate(lib, bars, layers, weights, options)?;
+    let open = |t: usize| matches!(layers.get(t), Some(Layer::Open { .. }));
+    let repeats: Vec<Option<usize>> = (0..layers.len()).map(|t| repeat_of.get(t).copied().flatten().filter(|&r| r < t && open(t) && open(r))).collect();
+    if repeats.iter().all(Option::is_none) {
+        return Ok((first, cost, repeats));
+    }
+    let mut pinned = layers.to_vec();
+    for (t, &r) in repeats.iter().enumerate() {
+        let Some(r) = r else { continue };
+        let Some(&segment) = first.get(r) else { continue };
+        pinned[t] = Layer::Fixed { segment };
+        pinned[r] = Layer::Fixed { segment };
+    }
+    let (path, _) = generate(lib, bars, &pinned, weights, options)?;
+    let cost = Problem::new(lib, bars, layers, weights, options).objective(&path);
+    Ok((path, cost, repeats))
+}
+
+/// Stages 2 to 5 in order on `p`, from stage 1's `path`.
 fn stages(p: &Problem, options: &GenerateOptions, path: Vec<usize>) -> Result<(Vec<usize>, f32), FillError> {
     let mut measured = Measured::default();
     let (path, weights) = beat_rate_stage(p, path, &mut measured)?;
@@ -835,8 +776,7 @@ mod tests {
         let mut layers = open_layers(&bars);
         let opts = GenerateOptions::default();
         let (zero, zero_cost) = generate(lib, &bars, &layers, FillWeights::default(), &opts).unwrap();
-        // Take 0 is the pipeline without a take's charge, its stages in order (the variety
-        // stage is off by default).
+        // Take 0 is the pipeline without a take's charge, its stages in order.
         let p = Problem::new(lib, &bars, &layers, FillWeights::default(), &opts);
         let (staged, _) = stages(&p, &opts, fill_stage(&p).unwrap()).unwrap();
         assert_eq!((zero.clone(), zero_cost), (staged.clone(), p.objective(&staged)));
@@ -894,7 +834,6 @@ mod tests {
         let layers = open_layers(&bars);
         let opts = GenerateOptions::default();
         let (whole, cost) = generate(&lib, &bars, &layers, FillWeights::default(), &opts).unwrap();
-        // (The variety stage, off by default, is not among them.)
         let p = Problem::new(&lib, &bars, &layers, FillWeights::default(), &opts);
         let mut m = Measured::default();
         let path = fill_stage(&p).unwrap();

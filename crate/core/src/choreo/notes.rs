@@ -67,12 +67,29 @@ pub struct MoveNote {
     pub source: String,
     pub builtin: bool,
     pub flags: Vec<Flag>,
+    /// The bar (0-based) whose move this bar repeats because its section repeats that bar's
+    /// (issue 26; [`mark_repeats`]); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeats_bar: Option<usize>,
 }
 
 impl MoveNote {
-    /// The flags as one line ("" when clean).
+    /// The flags as one line ("" when clean), after "repeats bar N" (N counted from 1, as the
+    /// strip numbers bars) when the bar repeats another's move.
     pub fn words(&self) -> String {
-        self.flags.iter().map(|f| f.words.as_str()).collect::<Vec<_>>().join("; ")
+        let repeat = self.repeats_bar.map(|r| format!("repeats bar {} (its section repeats)", r + 1));
+        repeat.iter().map(String::as_str).chain(self.flags.iter().map(|f| f.words.as_str())).collect::<Vec<_>>().join("; ")
+    }
+}
+
+/// Marks the notes of bars that repeat another bar's move because their section repeats
+/// (`repeats[i]`: the bar bar `i` repeats, from Generate,
+/// [`super::document::generate_states_with_repeats`]): only where the bar still holds the same
+/// move as the bar it repeats (a bar the person changed since no longer repeats it).
+pub fn mark_repeats(notes: &mut [MoveNote], repeats: &[Option<usize>]) {
+    let segments: Vec<Option<usize>> = notes.iter().map(|n| n.segment).collect();
+    for (i, note) in notes.iter_mut().enumerate() {
+        note.repeats_bar = repeats.get(i).copied().flatten().filter(|&r| r < i && segments.get(r).copied().flatten().is_some_and(|s| note.segment == Some(s)));
     }
 }
 
@@ -106,7 +123,7 @@ fn note_of(lib: &SegmentLibrary, bars: &[Bar], bar: usize, segment: Option<usize
             flags.push(Flag { kind: FlagKind::FootSkate, words: format!("foot skate {skate:.0} cm/s (its source {paced:.0} cm/s)"), value: skate, goal: paced });
         }
     }
-    MoveNote { bar, segment, name, source, builtin, flags }
+    MoveNote { bar, segment, name, source, builtin, flags, repeats_bar: None }
 }
 
 /// Every bar's note, from the dance's readout `quality` (`dance_quality` of the rendered dance

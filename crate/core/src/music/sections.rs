@@ -157,6 +157,28 @@ impl Sections {
     pub fn letters(&self) -> String {
         self.sections.iter().map(Section::letter).collect()
     }
+
+    /// Per bar of the song (`bars` of them), the earlier bar it repeats: a bar of a section that
+    /// repeats an earlier one ([`Section::repeat_of`]) repeats the bar at the same place in that
+    /// section's first occurrence (followed back to it: a third chorus repeats the first), when
+    /// that section is that long. What the dance fill reads (issue 26: a repeated section may
+    /// take the same moves, `choreo::generate::generate_with_repeats`). `None` elsewhere.
+    pub fn repeat_of_bars(&self, bars: usize) -> Vec<Option<usize>> {
+        let mut out = vec![None; bars];
+        for (k, sec) in self.sections.iter().enumerate() {
+            // The first occurrence of its label (a third chorus repeats the first).
+            if sec.repeat_of.is_none() {
+                continue;
+            }
+            let Some(src) = self.sections[..k].iter().find(|s| s.label == sec.label) else { continue };
+            for i in 0..sec.bars.min(src.bars) {
+                if let Some(slot) = out.get_mut(sec.first_bar + i) {
+                    *slot = Some(src.first_bar + i);
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Feature vectors of the grid's bars: per band its mean level and spread (dB), then per band
@@ -452,6 +474,23 @@ mod tests {
         let s = sections(&grid, &env, &SectionOptions::default()).unwrap();
         assert_eq!(s.sections.len(), 1);
         assert_eq!(s.sections[0].bars, 3);
+    }
+
+    #[test]
+    fn a_repeated_sections_bars_repeat_its_first_occurrence_bar_for_bar() {
+        let sec = |first_bar: usize, bars: usize, label: u8, repeat_of: Option<usize>| Section { first_bar, bars, label, intensity: 0.5, repeat_of, similarity: 0.8 };
+        // A (4) B (8) A (4) B (6, shorter) B (10, longer: its last 2 bars repeat nothing).
+        let s = Sections { sections: vec![sec(0, 4, 0, None), sec(4, 8, 1, None), sec(12, 4, 0, Some(0)), sec(16, 6, 1, Some(1)), sec(22, 10, 1, Some(3))], novelty: vec![0.0; 32] };
+        let r = s.repeat_of_bars(32);
+        assert_eq!(r.len(), 32);
+        assert!(r[..12].iter().all(Option::is_none));
+        assert_eq!(r[12..16], [Some(0), Some(1), Some(2), Some(3)]);
+        assert_eq!(r[16..22], [Some(4), Some(5), Some(6), Some(7), Some(8), Some(9)]);
+        // The third B repeats the first, not the second.
+        assert_eq!(r[22..30], [Some(4), Some(5), Some(6), Some(7), Some(8), Some(9), Some(10), Some(11)]);
+        assert_eq!(r[30..], [None, None]);
+        // Fewer bars than the sections cover: no index past the end.
+        assert_eq!(s.repeat_of_bars(14).len(), 14);
     }
 
     #[test]

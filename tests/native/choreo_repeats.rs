@@ -1,0 +1,126 @@
+//! Repeated sections take the same moves (issue 26 item 2; `music::Sections::repeat_of_bars`,
+//! `choreo::generate_states_with_repeats`, `choreo::mark_repeats`). On the demo song, whose
+//! structure is known by construction (intro, verse, chorus, break, chorus, outro) and whose two
+//! choruses `music::sections` labels alike (tests/native/music_sections.rs), and on a 3/4
+//! variant, with the built-in library: every bar of the repeated chorus holds the move of its
+//! bar in the first chorus, the bar's note says "repeats bar N", and the dance still meets the
+//! beat goals of spec §J (BAS-music ≥ random moves' + 0.05 and ≥ half-shifted + 0.10, join jump
+//! ≤ 1.5) and the variety goals with the repeated bars counted apart (no step and no move in
+//! more than a third of the other bars in 4/4, no move in 3/4; the arm patterns are printed: see
+//! tests/native/choreo_variety.rs). The control, Generate without the sections, does not repeat
+//! the 4/4 chorus bar for bar (so the test can fail; the 3/4 demo's plain dance already repeats
+//! it). On the real songs in ../shared/data/music the repeated bars found are printed (none of the
+//! three has a section the analysis labels a repeat, 2026-11-29), and wherever there are some the
+//! same holds for them.
+
+#[path = "music_audio.rs"]
+mod music_audio;
+
+use std::collections::BTreeMap;
+
+use odori_core::choreo::{bar_notes, generate_states_with_repeats, mark_repeats, BarState, FillWeights, GenerateOptions, SegmentLibrary};
+use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
+use odori_core::music::{analyze, envelope, sections, AnalysisOptions, RmsEnvelope, SectionOptions};
+use odori_tests::{dance_quality_of, random_moves_bas, RANDOM_MOVES_SEED};
+
+/// The largest share of `keys` one key holds.
+fn top_share<K: Ord>(keys: impl Iterator<Item = K>) -> (usize, usize) {
+    let mut m: BTreeMap<K, usize> = BTreeMap::new();
+    let mut n = 0;
+    for k in keys {
+        *m.entry(k).or_default() += 1;
+        n += 1;
+    }
+    (m.into_values().max().unwrap_or(0), n)
+}
+
+/// Generates `env`'s dance with and without its sections; returns what failed, and how many bars
+/// repeat.
+fn check(label: &str, env: &RmsEnvelope, lib: &SegmentLibrary, must_repeat: bool) -> (Vec<String>, usize, usize) {
+    let grid = analyze(env, &AnalysisOptions::default()).unwrap_or_else(|e| panic!("{label}: {e}"));
+    let (bars, beats) = (grid.bars.clone(), grid.beat_times_secs.clone());
+    let s = sections(&grid, env, &SectionOptions::default()).unwrap_or_else(|e| panic!("{label}: {e}"));
+    let repeat_of = s.repeat_of_bars(bars.len());
+    let (states, _, repeats) = generate_states_with_repeats(lib, &bars, &[], FillWeights::default(), &GenerateOptions::default(), &repeat_of).unwrap_or_else(|e| panic!("{label}: {e}"));
+    let chosen: Vec<Option<usize>> = states.iter().map(BarState::segment).collect();
+    let (plain, _, none) = generate_states_with_repeats(lib, &bars, &[], FillWeights::default(), &GenerateOptions::default(), &[]).unwrap_or_else(|e| panic!("{label}: {e}"));
+    assert!(none.iter().all(Option::is_none));
+    let plain: Vec<Option<usize>> = plain.iter().map(BarState::segment).collect();
+    let repeated: Vec<(usize, usize)> = repeats.iter().enumerate().filter_map(|(t, r)| r.map(|r| (t, r))).collect();
+    let mut failures = Vec::new();
+    let same = |c: &[Option<usize>]| repeated.iter().filter(|&&(t, r)| c[t] == c[r]).count();
+    println!(
+        "{label}: {} bars in {}, sections {}, {} bars repeat an earlier bar; same move there: with the sections {}, without {}",
+        bars.len(),
+        grid.beats_per_bar,
+        s.letters(),
+        repeated.len(),
+        same(&chosen),
+        same(&plain)
+    );
+    if must_repeat && repeated.is_empty() {
+        failures.push(format!("{label}: no bar repeats (sections {})", s.letters()));
+    }
+    if same(&chosen) != repeated.len() {
+        failures.push(format!("{label}: {} of {} repeated bars hold their first occurrence's move", same(&chosen), repeated.len()));
+    }
+
+    // The notes say so.
+    let q = dance_quality_of(lib, &bars, &beats, &chosen);
+    let mut notes = bar_notes(lib, &bars, &chosen, &q.bars);
+    mark_repeats(&mut notes, &repeats);
+    for &(t, r) in &repeated {
+        let want = format!("repeats bar {}", r + 1);
+        if !notes[t].words().contains(&want) {
+            failures.push(format!("{label}: bar {t}'s note {:?} does not say {want:?}", notes[t].words()));
+        }
+    }
+    if let Some(t) = (0..bars.len()).find(|t| repeats[*t].is_none()) {
+        assert!(!notes[t].words().contains("repeats bar"), "{label}: bar {t} does not repeat: {:?}", notes[t].words());
+    }
+    // Beat goals (spec §J).
+    let random = random_moves_bas(lib, &bars, &beats, RANDOM_MOVES_SEED);
+    println!("  BAS-music {:.3} (random {random:.3}, shifted {:.3}), join max {:.2}", q.beats.bas_music, q.beats.bas_music_shifted, q.join_jump_max);
+    if q.beats.bas_music < random + 0.05 || q.beats.bas_music < q.beats.bas_music_shifted + 0.10 || q.join_jump_max > 1.5 {
+        failures.push(format!("{label}: beat goals missed: BAS-music {:.3}, random {random:.3}, shifted {:.3}, join max {:.2}", q.beats.bas_music, q.beats.bas_music_shifted, q.join_jump_max));
+    }
+    // Variety of the bars that repeat nothing (issue 26: repeats counted apart).
+    let own: Vec<usize> = (0..bars.len()).filter(|&t| repeats[t].is_none()).filter_map(|t| chosen[t]).collect();
+    if own.len() >= 3 {
+        let info = |s: usize| lib.segments()[s].builtin.expect("built-in");
+        let (step, n) = top_share(own.iter().map(|&s| info(s).step.name()));
+        let (arms, _) = top_share(own.iter().map(|&s| info(s).arms.name()));
+        let (mv, _) = top_share(own.iter().copied());
+        println!("  bars of their own {n}: top step {step}, top arm pattern {arms}, top move {mv}");
+        let third = n as f32 / 3.0 + 1e-4;
+        let limited = if grid.beats_per_bar == 3 { mv as f32 > third } else { step as f32 > third || mv as f32 > third };
+        if limited {
+            failures.push(format!("{label}: among the {n} bars of their own, top step {step}, move {mv}"));
+        }
+    }
+    (failures, repeated.len(), repeated.len() - same(&plain))
+}
+
+#[test]
+fn a_repeated_section_takes_the_moves_of_its_first_occurrence_on_the_beat() {
+    let lib = SegmentLibrary::builtin();
+    let mut failures = Vec::new();
+    let mut control_differs = 0;
+    for options in [DemoSongOptions::default(), DemoSongOptions { beats_per_bar: 3, bpm: 126.0, end_bpm: 126.0 }] {
+        let song = demo_song_with(22050.0, &options).expect("demo song");
+        let env = envelope(&[&song.samples], 22050.0).expect("envelope");
+        let (f, _, differs) = check(&format!("demo song in {}, {} BPM", options.beats_per_bar, options.bpm), &env, &lib, true);
+        failures.extend(f);
+        control_differs += differs;
+    }
+    let mut real_repeats = 0;
+    for rel in music_audio::FULL_TRACKS {
+        let (f, n, _) = check(rel, &music_audio::decode_envelope(rel), &lib, false);
+        failures.extend(f);
+        real_repeats += n;
+    }
+    println!("repeated bars on the real songs: {real_repeats}");
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    // Without the sections the repeated bars do not all repeat (so the test can fail).
+    assert!(control_differs > 0, "the control repeats every repeated bar too: the test shows nothing");
+}
