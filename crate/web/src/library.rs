@@ -147,6 +147,7 @@ impl Library {
         let format = match im.format {
             Format::Bvh => "bvh",
             Format::Gltf => "gltf",
+            Format::Vmd => "vmd",
         };
         let mesh = im.mesh.clone().map(|m| (self.next_id, Rc::new(m)));
         let first = self.entries.len();
