@@ -229,6 +229,10 @@ impl Library {
     pub fn remove(&mut self, id: u32) -> bool {
         #[cfg(feature = "authoring")]
         self.mmd.posed_on.retain(|(i, _)| *i != id);
+        #[cfg(feature = "authoring")]
+        self.mmd.morphs.retain(|(i, _, _)| *i != id);
+        #[cfg(feature = "authoring")]
+        self.mmd.own_keys.retain(|(i, _)| *i != id);
         let before = self.entries.len();
         self.entries.retain(|e| e.id != id);
         self.entries.len() != before
