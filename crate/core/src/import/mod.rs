@@ -141,7 +141,7 @@ pub enum ImportError {
     /// A VMD that cannot be read or posed: `kind` is [`crate::mmd::files::MmdFilesError::kind`]
     /// ("mmd-truncated", "mmd-no-matching-bones" …), `message` names the file.
     #[error("{message}")]
-    Mmd { kind: &'static str, message: String },
+    Mmd { file: String, kind: &'static str, message: String },
 }
 
 impl ImportError {

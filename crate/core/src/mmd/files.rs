@@ -363,7 +363,7 @@ pub fn pose_vmd(file: &str, vmd: Vmd, models: &[&MmdModel], options: &MmdFilesOp
 /// a file that cannot be read or posed is an [`ImportError::Mmd`] with its [`MmdFilesError::kind`].
 pub fn import_vmd_source(file: &str, bytes: &[u8], song_offset_frames: Option<u32>) -> Result<crate::import::Imported, crate::import::ImportError> {
     use crate::import::{finish, Format, ImportError};
-    let err = |e: MmdFilesError| ImportError::Mmd { kind: e.kind(), message: e.to_string() };
+    let err = |e: MmdFilesError| ImportError::Mmd { file: e.file().to_string(), kind: e.kind(), message: e.to_string() };
     let vmd = vmd::read(file, bytes).map_err(|e| err(e.into()))?;
     let options = MmdFilesOptions { model: Some(STANDARD_RIG.to_string()), song_offset_frames };
     let m = pose_vmd(file, vmd, &[], &options).map_err(err)?;
