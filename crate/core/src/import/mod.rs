@@ -193,7 +193,10 @@ pub fn import_bytes(file: &str, bytes: &[u8], options: &ImportOptions) -> Result
     match sniff(bytes) {
         Some(Format::Bvh) => bvh::import(file, bytes, options),
         Some(Format::Gltf) => gltf::import(file, bytes, options),
+        #[cfg(feature = "vmd-source")]
         Some(Format::Vmd) => crate::mmd::files::import_vmd_source(file, bytes, options.song_offset_frames),
+        #[cfg(not(feature = "vmd-source"))]
+        Some(Format::Vmd) => Err(ImportError::Unsupported { file: file.to_string(), message: "a VMD dance needs the full engine (odori), not the player".into() }),
         None => {
             let start: String = bytes
                 .iter()
