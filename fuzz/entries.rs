@@ -111,3 +111,19 @@ pub fn import_pmx(data: &[u8]) {
     assert!(m.joints.iter().all(|j| j.rigid_a < nr && j.rigid_b < nr));
     let _ = nm;
 }
+
+/// `mmd::files::import_files` on the bytes as a `.zip` (the set the MMD dialog gives: opened,
+/// each VMD/PMX/PMD entry read, textures looked up, each VMD posed on the model it names or the
+/// standard skeleton) and as a lone `.vmd` (posed on the standard skeleton, the project-source
+/// path). Whatever the bytes, every problem names a file and a kind, and every motion is a
+/// valid clip.
+pub fn import_files(data: &[u8]) {
+    use odori_core::mmd::files::{import_files, MmdFilesOptions};
+    for name in ["fuzz.zip", "fuzz.vmd"] {
+        let r = import_files(&[(name.to_string(), data.to_vec())], &[], &MmdFilesOptions::default());
+        assert!(r.problems.iter().all(|p| !p.file.is_empty() && !p.kind.is_empty() && !p.message.is_empty()), "{:?}", r.problems);
+        for m in &r.motions {
+            assert!(m.clip.validate().is_ok(), "{}: posed clip is invalid", m.file);
+        }
+    }
+}

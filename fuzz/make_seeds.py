@@ -221,3 +221,18 @@ def pmd():
 
 put("import_pmx", "pmd10.pmd", pmd())
 put("import_pmx", "pmd_no_extensions.pmd", pmd()[:pmd().index(bytes([1]) + sjis("test", 20))])
+
+# --- MMD file sets (import_files): zips of the seeds above, as the MMD dialog gives them --------
+import io, zipfile
+
+def zipped(entries):
+    b = io.BytesIO()
+    with zipfile.ZipFile(b, "w", zipfile.ZIP_DEFLATED) as f:
+        for name, data in entries:
+            f.writestr(zipfile.ZipInfo(name, date_time=(2026, 1, 1, 0, 0, 0)), data, zipfile.ZIP_DEFLATED)
+    return b.getvalue()
+
+put("import_files", "model_and_dance.zip", zipped([("m/model.pmd", pmd()), ("m/dance.vmd", vmd(dance, []))]))
+put("import_files", "pmx_backslash.zip", zipped([("M\\Model.PMX", pmx()), ("m\\tex.png", b"\x89PNG")]))
+put("import_files", "truncated_vmd.zip", zipped([("cut.vmd", vmd(dance, [])[:200])]))
+put("import_files", "lone.vmd", vmd(dance, [("まばたき", 0, 0.0), ("まばたき", 10, 1.0)]))

@@ -14,7 +14,7 @@ export PATH="$HOME/.cargo/bin:$PATH"
 secs=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(import_bvh import_gltf music_envelope text_parse project_open import_vmd import_pmx)
+[ ${#targets[@]} -gt 0 ] || targets=(import_bvh import_gltf music_envelope text_parse project_open import_vmd import_pmx import_files)
 
 if [ "$secs" = 0 ]; then
   echo "fuzz: skipped (0 s asked); the corpus is replayed by 'cargo test --test fuzz_corpus'."

@@ -90,8 +90,8 @@ async function main() {
   const imported = (report, how) => {
     for (const c of report.clips) {
       if (searchClient) searchClient.add(c.id); else waitingForSearch.push(c.id);
-      // MMD files stay out of the project (their creators' terms): not in its dance library yet.
-      if (how && how.mmd) continue;
+      // MMD dances inside a zip stay in the library only; a VMD given as a file is a project source.
+      if (how && how.mmd === true) continue;
       if (choreo) choreo.addClip(c); else waitingForDance.push(c);
     }
     panel.refresh();

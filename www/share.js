@@ -11,7 +11,9 @@
 //   (`MoveKey`, the project's key type, spec §K) written `<step>~<arms>~<energy>~<L|R>`. Keys
 //   name what a move is, not where it sits in a list, so a link survives a library that grows
 //   or is ordered differently. A move cut from a person's own motion file would not exist on
-//   another machine: such a dance cannot be linked (the message says which bar).
+//   another machine: such a dance cannot be linked (the message says which bar). A move from an
+//   MMD file (VMD) is left out instead (an empty bar), and the page says so: MMD creators' terms
+//   usually forbid passing their files on, so what comes from them never goes in a link.
 // Opening: pinned bars are set, then Generate runs (deterministic: the same moves come back);
 // any bar that still differs (another engine version) is set explicitly and reported.
 // Version 1 links (`#dance=1.demo.…`, segment indices) are still read.
@@ -43,9 +45,10 @@ export async function sha256Hex(bytes) {
 
 /**
  * The link of the current dance. `song` is `{ demo: true }` or `{ name, durationSecs, sha256 }`
- * of the song file. Throws an Error naming the problem when the dance cannot be linked.
+ * of the song file. Throws an Error naming the problem when the dance cannot be linked. Bars
+ * dancing a move from an MMD file go in as empty bars, each pushed to `leftOut` as `{ bar, file }`.
  */
-export function danceLink(choreographer, song, base = location.href) {
+export function danceLink(choreographer, song, base = location.href, leftOut = []) {
   let songPart;
   if (song?.demo) songPart = DEMO;
   else if (song && song.name && song.durationSecs > 0 && /^[0-9a-f]{64}$/.test(song.sha256 || "")) {
@@ -58,6 +61,11 @@ export function danceLink(choreographer, song, base = location.href) {
   const items = view.map((v, i) => {
     if (v.state.kind === "empty") return "-";
     const seg = choreographer.segment(v.state.segment);
+    // A move from an MMD file is left out (an empty bar), never carried: see `isMmdFile`.
+    if (seg && !seg.builtin && isMmdFile(seg.source)) {
+      leftOut.push({ bar: i, file: seg.source });
+      return "-";
+    }
     if (!seg || !seg.builtin) {
       throw new Error(`bar ${i + 1} holds "${seg ? seg.name : v.state.segment}", a move cut from your own file: links carry built-in moves only`);
     }
@@ -66,6 +74,21 @@ export function danceLink(choreographer, song, base = location.href) {
   const url = new URL(base);
   url.hash = `dance=${[VERSION, songPart, view.length, ...items].join(".")}`;
   return url.href;
+}
+
+/**
+ * Whether a source file is MikuMikuDance's (VMD, PMX, PMD): its creators' terms usually forbid
+ * passing it on, so its moves stay with the person and a link leaves them out, saying so.
+ */
+export function isMmdFile(name) {
+  return /\.(vmd|pmx|pmd)$/i.test(name || "");
+}
+
+/** What a link left out (the bars `danceLink` put in its `leftOut`), as one sentence. */
+export function leftOutNote(leftOut) {
+  const files = [...new Set(leftOut.map((l) => l.file))];
+  const bars = leftOut.map((l) => l.bar + 1);
+  return `The link leaves out bar${bars.length === 1 ? "" : "s"} ${bars.join(", ")}: ${bars.length === 1 ? "its move comes" : "their moves come"} from your MMD file${files.length === 1 ? "" : "s"} (${files.join(", ")}), and MMD files stay with you (their creators' terms usually forbid passing them on).`;
 }
 
 /**
@@ -224,8 +247,10 @@ export function installShare({ choreo, messages, songReady, song, loadSong }) {
     }
     button.addEventListener("click", async () => {
       try {
-        const url = share.link();
+        const leftOut = [];
+        const url = danceLink(choreo.choreographer, song(), location.href, leftOut);
         history.replaceState(null, "", url);
+        if (leftOut.length) messages.info(`Share link: ${leftOutNote(leftOut)}`);
         try { await navigator.clipboard.writeText(url); messages.info("Link to this dance copied (it is also in the address bar)."); }
         catch { messages.info(`Link to this dance (also in the address bar): ${url}`); }
       } catch (e) {
@@ -250,10 +275,18 @@ export function installShare({ choreo, messages, songReady, song, loadSong }) {
     // At the end of the Dance controls: shown, it adds a line below them, not one in the middle.
     button.parentElement.append(note);
     choreo.root.addEventListener("dance-refresh", (e) => {
-      const own = (e.detail?.notes ?? []).filter((n) => n.segment != null && !n.builtin);
-      note.hidden = own.length === 0;
+      const notes = (e.detail?.notes ?? []).filter((n) => n.segment != null && !n.builtin);
+      const fileOf = (n) => choreo.choreographer.segment(n.segment)?.source ?? n.source;
+      // Moves from MMD files are left out of the link (saying so); other own files block it.
+      const mmd = notes.filter((n) => isMmdFile(fileOf(n)));
+      const own = notes.filter((n) => !mmd.includes(n));
+      note.hidden = notes.length === 0;
       button.disabled = own.length > 0;
-      if (own.length) {
+      save.hidden = own.length === 0;
+      if (!own.length && mmd.length) {
+        text.textContent = `${leftOutNote(mmd.map((n) => ({ bar: n.bar, file: fileOf(n) })))} `;
+        button.title = "A link that opens this dance without the bars from your MMD files";
+      } else if (own.length) {
         const files = [...new Set(own.map((n) => n.source))];
         text.textContent = `A link cannot share this dance: ${own.length} bar${own.length === 1 ? "" : "s"} use${own.length === 1 ? "s" : ""} moves from your own file${files.length === 1 ? "" : "s"} (${files.join(", ")}), which a link cannot carry. Share the project file instead. `;
         button.title = "Links carry built-in moves only: this dance uses moves from your own files";

@@ -16,3 +16,5 @@ node tests/bench/search-index-10h.mjs
 # Embedding (issue 12): player and full bundle sizes and time to the first pose, beside
 # <model-viewer> in the same run.
 node tests/bench/embed.mjs 3
+# MMD import in wasm (issue 28): WAVEFILE with miku_v2 and alone, Gene; beside `--bench mmd_import`.
+node tests/bench/mmd-wasm.mjs

@@ -71,3 +71,8 @@ fn import_vmd_corpus() {
 fn import_pmx_corpus() {
     replay("import_pmx", entries::import_pmx);
 }
+
+#[test]
+fn import_files_corpus() {
+    replay("import_files", entries::import_files);
+}

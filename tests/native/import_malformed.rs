@@ -34,7 +34,7 @@ fn random_bytes() {
         .collect();
     let e = import("noise.glb", &bytes).unwrap_err();
     assert!(matches!(e, ImportError::UnknownFormat { .. }), "{e:?}");
-    assert!(e.to_string().starts_with("noise.glb: not a BVH, glTF or GLB file"), "{e}");
+    assert!(e.to_string().starts_with("noise.glb: not a BVH, glTF, GLB or VMD file"), "{e}");
 }
 
 #[test]

@@ -291,14 +291,25 @@ fn agrees_with_three(golden: &str, rig: &MmdRig, dance: &MmdMotion, label: &str)
     (mean, worst.0)
 }
 
+/// The early-exit CCD (the rig as imports use it) against three.js, beside the control that runs
+/// every iteration as three.js does: both within tolerance, and the early exit no further off
+/// than the control by more than 0.5 mm at 8 cm per unit (0.00625 units), mean and worst.
+fn agrees_with_and_without_early_exit(golden: &str, rig: MmdRig, dance: &MmdMotion, label: &str) {
+    let (mean, worst) = agrees_with_three(golden, &rig, dance, &format!("{label} (CCD with early exit)"));
+    let (mean_full, worst_full) = agrees_with_three(golden, &rig.with_full_ccd(), dance, &format!("{label} (CCD, every iteration: the control)"));
+    let mm = METRES_PER_MMD_UNIT * 1e3;
+    eprintln!("{label}: early exit mean {:.3} mm / worst {:.3} mm; every iteration mean {:.3} mm / worst {:.3} mm", mean * mm, worst * mm, mean_full * mm, worst_full * mm);
+    assert!(mean <= mean_full + 0.00625 && worst <= worst_full + 0.00625, "{label}: early exit mean {mean} worst {worst} vs every iteration mean {mean_full} worst {worst_full} (units)");
+}
+
 #[test]
 fn wavefile_on_miku_agrees_with_three_js() {
     let (rig, _) = miku();
-    agrees_with_three(include_str!("../golden/mmd/three_wavefile_miku.json"), &rig, &motion("mmd/motion/wavefile_v2.vmd"), "WAVEFILE on miku_v2");
+    agrees_with_and_without_early_exit(include_str!("../golden/mmd/three_wavefile_miku.json"), rig, &motion("mmd/motion/wavefile_v2.vmd"), "WAVEFILE on miku_v2");
 }
 
 #[test]
 fn tokino_kakera_on_gene_agrees_with_three_js() {
     let rig = MmdRig::from_model(&model("mmd/gene/Gene_light.pmx")).unwrap();
-    agrees_with_three(include_str!("../golden/mmd/three_tokino_gene.json"), &rig, &motion("mmd/motion/tokino_kakera.vmd"), "時間のカケラ on Gene");
+    agrees_with_and_without_early_exit(include_str!("../golden/mmd/three_tokino_gene.json"), rig, &motion("mmd/motion/tokino_kakera.vmd"), "時間のカケラ on Gene");
 }

@@ -108,3 +108,36 @@ test("damaged links are refused with what is wrong", () => {
   assert.throws(() => applyDance(ch, parseDanceHash(`#dance=2.demo.${n}.` + Array(n).fill("pmoonwalk~swing~low~R").join("."))), /bar 1: the move "moonwalk~swing~low~R" is not among this engine's built-in moves/);
   assert.throws(() => applyDance(ch, parseDanceHash("#dance=2.demo.2.-.-")), /made for 2 bars/);
 });
+
+test("MMD moves stay out of a link: their bars go in empty and are named, other own-file moves still refuse", () => {
+  const wave = join(data, "mmd/motion/wavefile_v2.vmd");
+  const a = choreographer();
+  const src = a.project.addSource("wavefile_v2.vmd", new Uint8Array(readFileSync(wave)), { songOffsetFrames: 160 });
+  while (a.project.prepareTable(512) < 1) { /* the library grew: the join table again */ }
+  const mmd = [];
+  for (let i = 0; i < a.segmentCount; i++) { const s = a.segment(i); if (!s.builtin && !s.retired && s.source === "wavefile_v2.vmd") mmd.push(i); }
+  assert.ok(mmd.length > 10 && src.clips.length === 1, `WAVEFILE segments: ${mmd.length}`);
+  a.set(2, a.candidates(2)[0]);
+  a.set(4, mmd[0]);
+  a.set(5, mmd[1]);
+  const leftOut = [];
+  const link = danceLink(a, { demo: true }, BASE, leftOut);
+  assert.deepEqual(leftOut, [{ bar: 4, file: "wavefile_v2.vmd" }, { bar: 5, file: "wavefile_v2.vmd" }]);
+  const parsed = parseDanceHash(new URL(link).hash);
+  assert.deepEqual([parsed.items[4].kind, parsed.items[5].kind], ["empty", "empty"]);
+  assert.equal(parsed.items[2].kind, "pinned");
+  // The link carries nothing of the file: its name is not in it.
+  assert.ok(!/wavefile/i.test(decodeURIComponent(link)), link);
+  const b = choreographer();
+  applyDance(b, parsed);
+  const want = dance(a).map((d, i) => (i === 4 || i === 5 ? { kind: "empty", segment: null } : d));
+  assert.deepEqual(dance(b), want);
+  // A BVH move (not MMD) still cannot be linked.
+  const bvh = a.project.addSource("salsa_01.bvh", new Uint8Array(readFileSync(join(data, "mocap/cmu-salsa/salsa_01.bvh"))), { fpsOverride: 60 });
+  assert.equal(bvh.clips.length, 1);
+  let salsa = -1;
+  for (let i = 0; i < a.segmentCount; i++) { const s = a.segment(i); if (!s.builtin && !s.retired && s.source === "salsa_01.bvh") { salsa = i; break; } }
+  assert.ok(salsa >= 0);
+  a.set(7, salsa);
+  assert.throws(() => danceLink(a, { demo: true }, BASE), /bar 8 .*your own file/);
+});

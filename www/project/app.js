@@ -124,6 +124,8 @@ export class ProjectSession {
     const o = {};
     if (options && options.fpsOverride) o.fpsOverride = options.fpsOverride;
     if (options && options.unitScale) o.unitScale = options.unitScale;
+    // A VMD's song offset (the motion frame that is song time 0) is kept the same way.
+    if (options && options.songOffsetFrames) o.songOffsetFrames = options.songOffsetFrames;
     const report = this.project.importInto(this.library, fileName, bytes, o);
     this.mapClips(report.source, report);
     this.edited();
@@ -366,6 +368,9 @@ export class ProjectSession {
       const bytes = this.project.save();
       const r = await saveBytes(bytes, fileNameFor(this.project.doc().name));
       if (r) this.messages.info(`Saved ${r.name} (${(bytes.length / 1024).toFixed(0)} KiB)`);
+      // MMD files go into the person's own .odori file, never further: say so when it holds some.
+      const mmd = this.project.doc().sources.map((s) => s.fileName).filter((n) => /\.(vmd|pmx|pmd)$/i.test(n));
+      if (r && mmd.length) this.messages.info(`${r.name} holds your MMD file${mmd.length === 1 ? "" : "s"} (${mmd.join(", ")}) for you: MMD creators' terms usually forbid passing them on, so keep this file to yourself (a share link leaves them out).`);
       // Named where it was saved ("my dance.odori" → "my dance"): how Recent projects lists it.
       const named = r && r.name.replace(/\.odori$/i, "").trim();
       if (named && named !== this.project.doc().name && this.store) {

@@ -151,10 +151,13 @@ export class FileLoader {
   }
 
   /**
-   * Imports a set of MikuMikuDance files with `library.importFiles`. When a VMD could play on
-   * more than one rig (its own model is not given and models are in the library or the set),
-   * or when a dance is opened, a dialog asks which model it plays on and the song offset (the
-   * motion frame that is song time 0). Problems name their file; the rest still imports.
+   * Imports a set of MikuMikuDance files. A VMD dance given as a file of its own becomes a
+   * source of the project like a BVH (`importer`: kept with the project on this device, cut into
+   * segments Generate and search use, posed on Odori's standard MMD skeleton, starting at its
+   * song offset); models, textures, camera VMDs and zips go to `library.importFiles` as one set
+   * (a model needs its textures). When a dance is opened a dialog asks its song offset (the
+   * motion frame that is song time 0) and, for a dance inside a zip, the model it plays on.
+   * Problems name their file; the rest still imports.
    */
   async openMmd(files) {
     const set = [];
@@ -169,12 +172,15 @@ export class FileLoader {
     this.status.textContent = "";
     if (!set.length || typeof this.library.importFiles !== "function") return null;
     let options = {};
+    let toProject = [];
     try {
       const seen = this.library.inspectMmdFiles(set);
       const models = [...this.library.mmdModels().map((m) => m.name), ...seen.filter((f) => f.kind === "model" && !f.error).map((f) => f.modelName)];
       const dances = seen.filter((f) => f.kind === "vmd" && !f.error && f.boneKeys > 0);
+      // A dance given as its own file goes into the project (a zip's stays in the library).
+      if (this.importer) toProject = dances.filter((d) => set.some((f) => f.name === d.file));
       if (dances.length) {
-        const chosen = await this.askMmd(dances, [...new Set(models)]);
+        const chosen = await this.askMmd(dances, [...new Set(models)], toProject.length < dances.length);
         if (!chosen) {
           this.messages.info(`Import cancelled: ${set.map((f) => f.name).join(", ")} not added`);
           return null;
@@ -187,9 +193,10 @@ export class FileLoader {
     }
     this.progress(`Importing ${set.length} MMD file${set.length === 1 ? "" : "s"}…`);
     await new Promise((r) => requestAnimationFrame(() => setTimeout(r, 0)));
-    let report;
+    const rest = set.filter((f) => !toProject.some((d) => d.file === f.name));
+    let report = { motions: [], models: [], cameras: [], notices: [], problems: [] };
     try {
-      report = this.library.importFiles(set, options);
+      if (rest.length) report = this.library.importFiles(rest, options);
     } catch (e) {
       this.status.textContent = "";
       this.messages.error(e && e.name === "OdoriError" ? e.message : `MMD files: ${e && e.message ? e.message : e}`);
@@ -204,16 +211,33 @@ export class FileLoader {
     for (const m of report.motions) {
       this.messages.info(`${m.file}: dance added, posed on ${m.rig}${m.songOffsetFrames ? `, starting at motion frame ${m.songOffsetFrames} (song time 0)` : ""}`);
     }
-    if (report.motions.length || report.models.length) {
-      this.messages.info("MMD files stay on this device: MMD creators' terms usually forbid passing them on, so they are not saved in the project file or put in a share link.");
-    }
     const clips = report.motions.map((m) => m.clip);
     if (clips.length) this.onImported({ clips, warnings: [] }, { mmd: true });
+    let added = 0;
+    for (const d of toProject) {
+      const f = set.find((x) => x.name === d.file);
+      const o = options.songOffsetFrames ? { songOffsetFrames: options.songOffsetFrames } : {};
+      try {
+        const r = this.importer(f.name, f.bytes, o);
+        for (const w of r.warnings) this.messages.info(w.startsWith(f.name) ? w : `${f.name}: ${w}`);
+        this.messages.info(`${f.name}: dance added to the project, posed on Odori's standard MMD skeleton${o.songOffsetFrames ? `, starting at motion frame ${o.songOffsetFrames} (song time 0)` : ""}`);
+        this.onImported(r, { fileName: f.name, mmd: "project" });
+        added++;
+      } catch (e) {
+        this.messages.error(e && e.name === "OdoriError" ? e.message : `${f.name}: ${e && e.message ? e.message : e}`);
+      }
+    }
+    if (added || report.motions.length || report.models.length) {
+      this.messages.info("MMD files stay with you: MMD creators' terms usually forbid passing them on, so the project keeps them on this device (and in the .odori file you save for yourself) and a share link leaves them out.");
+    }
     return report;
   }
 
-  /** The MMD dialog: the model each dance plays on and its song offset; null when cancelled. */
-  askMmd(dances, models) {
+  /**
+   * The MMD dialog: the song offset and, when a dance plays from the library (`pickModel`: a
+   * dance inside a zip), the model it plays on; null when cancelled.
+   */
+  askMmd(dances, models, pickModel = true) {
     let dialog = document.getElementById("mmd-import");
     if (!dialog) {
       dialog = document.createElement("dialog");
@@ -243,15 +267,16 @@ export class FileLoader {
     const offset = Object.assign(document.createElement("input"), { type: "number", className: "mmd-offset", min: "0", step: "1", value: "0" });
     offset.setAttribute("aria-label", "Motion frame that is song time 0");
     const names = dances.map((d) => `${d.file} (${d.lastFrame + 1} frames${head.length ? `, made for ${d.modelName || "no named model"}` : ""})`).join(", ");
-    const l1 = document.createElement("label");
-    l1.append(`Plays on: `, model);
+    const l1 = document.createElement(pickModel ? "label" : "p");
+    if (pickModel) l1.append(`Plays on: `, model);
+    else l1.textContent = "The dance goes into the project's dance library, posed on Odori's standard MMD skeleton.";
     const l2 = document.createElement("label");
     l2.append(`Song offset: motion frame `, offset, ` is song time 0 (30 frames a second; WAVEFILE's is 160)`);
     body.append(Object.assign(document.createElement("p"), { textContent: names }), l1, l2);
     return new Promise((resolve) => {
       dialog.addEventListener("close", () => {
         if (dialog.returnValue !== "import") return resolve(null);
-        const o = { model: model.value };
+        const o = pickModel ? { model: model.value } : {};
         const f = Math.round(Number(offset.value));
         if (f > 0) o.songOffsetFrames = f;
         resolve(o);

@@ -109,7 +109,8 @@ impl From<ImportError> for OdoriError {
             | ImportError::Unsupported { file, .. }
             | ImportError::Invalid { file, .. }
             | ImportError::BadOption { file, .. }
-            | ImportError::TooLarge { file, .. } => file.clone(),
+            | ImportError::TooLarge { file, .. }
+            | ImportError::Mmd { file, .. } => file.clone(),
         };
         OdoriError { kind: e.kind(), message: e.to_string(), file: Some(file) }
     }

@@ -112,6 +112,8 @@ export interface ImportOptions {
   unitScale?: number;
   /** Resampling rate for glTF animations (default 30). */
   gltfFps?: number;
+  /** VMD (project sources): the motion frame that is song time 0 (WAVEFILE's is 160); the clip starts there. */
+  songOffsetFrames?: number;
 }
 export interface ImportReport {
   file: string;

@@ -153,6 +153,7 @@ impl Library {
         let format = match im.format {
             Format::Bvh => "bvh",
             Format::Gltf => "gltf",
+            Format::Vmd => "vmd",
         };
         let mesh = im.mesh.clone().map(|m| (self.next_id, Rc::new(m)));
         let first = self.entries.len();
@@ -233,10 +234,13 @@ impl Library {
     /// Removes a clip; false when there was none with this id.
     pub fn remove(&mut self, id: u32) -> bool {
         #[cfg(feature = "authoring")]
-        {
-            self.mmd.posed_on.retain(|(i, _)| *i != id);
-            self.mmd.characters.retain(|(_, i)| *i != id);
-        }
+        self.mmd.posed_on.retain(|(i, _)| *i != id);
+        #[cfg(feature = "authoring")]
+        self.mmd.characters.retain(|(_, i)| *i != id);
+        #[cfg(feature = "authoring")]
+        self.mmd.morphs.retain(|(i, _, _)| *i != id);
+        #[cfg(feature = "authoring")]
+        self.mmd.own_keys.retain(|(i, _)| *i != id);
         let before = self.entries.len();
         self.entries.retain(|e| e.id != id);
         self.entries.len() != before

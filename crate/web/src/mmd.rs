@@ -7,7 +7,7 @@
 
 use js_sys::{Array, Reflect, Uint8Array};
 use odori_core::canon::humanoid::HumanoidMap;
-use odori_core::mmd::export::clip_to_vmd;
+use odori_core::mmd::export::clip_to_vmd_keeping;
 use odori_core::mmd::files::{import_files, CameraTrack, ImportedModel, MmdFilesOptions, STANDARD_RIG};
 use odori_core::import::SkinnedMesh;
 use odori_core::mmd::mesh::model_character;
@@ -29,6 +29,12 @@ pub(crate) struct MmdStore {
     /// Model name → the library clip (its rest pose, with its mesh) that is the model as a
     /// character (`setCharacter`, the *Character* list).
     pub characters: Vec<(String, u32)>,
+    /// Clip id → an imported VMD's face (morph) keys and the song offset its clip starts at:
+    /// `exportVmd` writes them back (the engine does not play them).
+    pub morphs: Vec<(u32, Vec<odori_core::import::vmd::MorphKey>, u32)>,
+    /// Clip id → an imported VMD's own bone keys (bone, frame on the clip's timeline): the
+    /// export's key reduction keeps them.
+    pub own_keys: Vec<(u32, std::collections::HashMap<String, std::collections::HashSet<u32>>)>,
 }
 
 #[derive(Deserialize, Default)]
@@ -258,6 +264,15 @@ impl Library {
             let mesh = meshes.iter().find(|(n, _)| *n == m.rig).map(|(_, mesh)| mesh.clone());
             let id = self.push(m.clip.clone(), "vmd", map, status, mesh);
             self.mmd.posed_on.push((id, m.rig.clone()));
+            let offset = m.song_offset_frames.unwrap_or(0);
+            let mut own: std::collections::HashMap<String, std::collections::HashSet<u32>> = std::collections::HashMap::new();
+            for k in m.vmd.bone_keys.iter().filter(|k| k.frame >= offset) {
+                own.entry(k.name.clone()).or_default().insert(k.frame - offset);
+            }
+            self.mmd.own_keys.push((id, own));
+            if !m.vmd.morph_keys.is_empty() {
+                self.mmd.morphs.push((id, m.vmd.morph_keys.clone(), m.song_offset_frames.unwrap_or(0)));
+            }
             let info = serde_json::to_value(crate::library::info_of(self.entry(id)?)).unwrap_or(serde_json::Value::Null);
             motions.push(MotionInfo {
                 clip: info,
@@ -318,7 +333,8 @@ impl Library {
     /// redistribution: it must not go in a share link).
     #[wasm_bindgen(js_name = isMmd)]
     pub fn is_mmd(&self, id: u32) -> bool {
-        self.mmd.posed_on.iter().any(|(i, _)| *i == id) || self.mmd.characters.iter().any(|(_, i)| *i == id)
+        // An imported VMD (a project source is posed on the standard skeleton, format "vmd"), or a model as a character.
+        self.mmd.posed_on.iter().any(|(i, _)| *i == id) || self.mmd.characters.iter().any(|(_, i)| *i == id) || self.entry(id).is_ok_and(|e| e.format == "vmd")
     }
 
     /// Clip `id` (any humanoid clip: an imported motion, a text animation, a dance) as a VMD on
@@ -333,7 +349,14 @@ impl Library {
         let model = o.model.clone().or_else(|| self.mmd.posed_on.iter().find(|(i, _)| *i == id).map(|(_, r)| r.clone())).unwrap_or_else(|| STANDARD_RIG.to_string());
         let (rig, header) = self.rig_named(&model)?;
         let clip = crate::export::ranged_clip(&e.clip, o.start_secs, o.end_secs)?;
-        let vmd = clip_to_vmd(&clip, &rig, &header).map_err(|err| OdoriError::new(err.kind(), err.to_string()))?;
+        // An imported VMD keeps its own keys (on the exported range's timeline) and its face keys.
+        let start = (o.start_secs.unwrap_or(0.0).max(0.0) * 30.0).round() as u32;
+        let own = self.mmd.own_keys.iter().find(|(i, _)| *i == id).map(|(_, k)| k);
+        let keep = |bone: &str, frame: u32| own.and_then(|k| k.get(bone)).is_some_and(|f| f.contains(&(frame + start)));
+        let mut vmd = clip_to_vmd_keeping(&clip, &rig, &header, &keep).map_err(|err| OdoriError::new(err.kind(), err.to_string()))?;
+        if let Some((_, morphs, offset)) = self.mmd.morphs.iter().find(|(i, _, _)| *i == id) {
+            odori_core::mmd::export::put_morph_keys(&mut vmd, morphs, offset.saturating_add(start));
+        }
         let file = format!("{}.vmd", e.clip.name);
         odori_core::export::vmd::write(&file, &vmd).map_err(|err| OdoriError { kind: err.kind(), message: err.to_string(), file: Some(file) })
     }

@@ -38,6 +38,7 @@ struct JsImportOptions {
     fps_override: Option<f32>,
     unit_scale: Option<f32>,
     gltf_fps: Option<f32>,
+    song_offset_frames: Option<u32>,
 }
 
 /// A project: what a person made, its history, and how to save it.
@@ -192,8 +193,8 @@ impl Project {
     /// `{ id, clips, warnings }`.
     #[wasm_bindgen(js_name = addSource)]
     pub fn add_source(&mut self, file_name: &str, bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "ImportOptions | undefined")] options: JsValue) -> Result<JsValue, OdoriError> {
-        let o: JsImportOptions = from_js(options, "import options", &["fpsOverride", "unitScale", "gltfFps"])?;
-        let options = ImportOptions { fps_override: o.fps_override, unit_scale: o.unit_scale, gltf_fps: o.gltf_fps.unwrap_or(ImportOptions::default().gltf_fps) };
+        let o: JsImportOptions = from_js(options, "import options", &["fpsOverride", "unitScale", "gltfFps", "songOffsetFrames"])?;
+        let options = ImportOptions { fps_override: o.fps_override, unit_scale: o.unit_scale, gltf_fps: o.gltf_fps.unwrap_or(ImportOptions::default().gltf_fps), song_offset_frames: o.song_offset_frames };
         let r = self.inner.add_source(file_name, bytes, options)?;
         Ok(self.changed(to_js(&r)))
     }
@@ -497,8 +498,8 @@ impl Project {
     /// cuts. Returns the library's `ImportReport` with `source` (the project's source id).
     #[wasm_bindgen(js_name = importInto)]
     pub fn import_into(&mut self, library: &mut Library, file_name: &str, bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "ImportOptions | undefined")] options: JsValue) -> Result<JsValue, OdoriError> {
-        let o: JsImportOptions = from_js(options, "import options", &["fpsOverride", "unitScale", "gltfFps"])?;
-        let options = ImportOptions { fps_override: o.fps_override, unit_scale: o.unit_scale, gltf_fps: o.gltf_fps.unwrap_or(ImportOptions::default().gltf_fps) };
+        let o: JsImportOptions = from_js(options, "import options", &["fpsOverride", "unitScale", "gltfFps", "songOffsetFrames"])?;
+        let options = ImportOptions { fps_override: o.fps_override, unit_scale: o.unit_scale, gltf_fps: o.gltf_fps.unwrap_or(ImportOptions::default().gltf_fps), song_offset_frames: o.song_offset_frames };
         let r = self.inner.add_source(file_name, bytes, options)?;
         self.changed(());
         self.clips_into(library, r.id.0)

@@ -43,11 +43,15 @@ pub struct ImportOptions {
     pub unit_scale: Option<f32>,
     /// Rate glTF animations are resampled to, frames per second. Default 30.
     pub gltf_fps: f32,
+    /// VMD only: the motion frame that is song time 0 (WAVEFILE's is 160): the clip starts
+    /// there. Left out of a saved project when `None`, so older projects save unchanged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub song_offset_frames: Option<u32>,
 }
 
 impl Default for ImportOptions {
     fn default() -> Self {
-        Self { fps_override: None, unit_scale: None, gltf_fps: 30.0 }
+        Self { fps_override: None, unit_scale: None, gltf_fps: 30.0, song_offset_frames: None }
     }
 }
 
@@ -96,6 +100,8 @@ pub(crate) fn readable(v: f32) -> String {
 pub enum Format {
     Bvh,
     Gltf,
+    /// MikuMikuDance's VMD motion, posed on the standard MMD skeleton ([`crate::mmd::files::import_vmd_source`]).
+    Vmd,
 }
 
 /// Everything one file gave.
@@ -118,7 +124,7 @@ pub struct Imported {
 pub enum ImportError {
     #[error("{file}: the file is empty")]
     Empty { file: String },
-    #[error("{file}: not a BVH, glTF or GLB file (it starts with {start:?})")]
+    #[error("{file}: not a BVH, glTF, GLB or VMD file (it starts with {start:?})")]
     UnknownFormat { file: String, start: String },
     #[error("{file}:{line}:{column}: {message}")]
     Bvh { file: String, line: usize, column: usize, message: String },
@@ -132,6 +138,10 @@ pub enum ImportError {
     BadOption { file: String, option: &'static str, value: f32, expected: String },
     #[error("{file}: {what} is more than this tab can hold (limit {limit}); the file was not read")]
     TooLarge { file: String, what: String, limit: String },
+    /// A VMD that cannot be read or posed: `kind` is [`crate::mmd::files::MmdFilesError::kind`]
+    /// ("mmd-truncated", "mmd-no-matching-bones" …), `message` names the file.
+    #[error("{message}")]
+    Mmd { file: String, kind: &'static str, message: String },
 }
 
 impl ImportError {
@@ -146,6 +156,7 @@ impl ImportError {
             ImportError::Invalid { .. } => "invalid",
             ImportError::BadOption { .. } => "bad-argument",
             ImportError::TooLarge { .. } => "too-large",
+            ImportError::Mmd { kind, .. } => kind,
         }
     }
 }
@@ -154,6 +165,9 @@ impl ImportError {
 pub fn sniff(bytes: &[u8]) -> Option<Format> {
     if bytes.starts_with(b"glTF") {
         return Some(Format::Gltf);
+    }
+    if bytes.starts_with(vmd::MAGIC_V1) || bytes.starts_with(vmd::MAGIC_V2) {
+        return Some(Format::Vmd);
     }
     let text_start: Vec<u8> = bytes
         .iter()
@@ -179,6 +193,10 @@ pub fn import_bytes(file: &str, bytes: &[u8], options: &ImportOptions) -> Result
     match sniff(bytes) {
         Some(Format::Bvh) => bvh::import(file, bytes, options),
         Some(Format::Gltf) => gltf::import(file, bytes, options),
+        #[cfg(feature = "vmd-source")]
+        Some(Format::Vmd) => crate::mmd::files::import_vmd_source(file, bytes, options.song_offset_frames),
+        #[cfg(not(feature = "vmd-source"))]
+        Some(Format::Vmd) => Err(ImportError::Unsupported { file: file.to_string(), message: "a VMD dance needs the full engine (odori), not the player".into() }),
         None => {
             let start: String = bytes
                 .iter()

@@ -20,7 +20,7 @@ use crate::canon::character::{Character, CharacterError};
 use crate::canon::humanoid::HumanoidMap;
 use crate::clip::Clip;
 use crate::import::gltf::SkinnedMesh;
-use crate::import::vmd::{BoneCurves, BoneKey, Vmd, VmdVersion};
+use crate::import::vmd::{BoneCurves, BoneKey, MorphKey, Vmd, VmdVersion};
 
 /// The bones a VMD export keys, where the rig has them (item 3 of issue 28).
 pub const EXPORT_BONES: &[&str] = &[
@@ -77,10 +77,109 @@ pub fn clip_on_rig(clip: &Clip, rig: &MmdRig) -> Result<Clip, VmdExportError> {
     Ok(if (on.fps - 30.0).abs() > 1e-3 { on.resampled(30.0) } else { on })
 }
 
-/// The VMD bone keys of `clip` on `rig` (values in the file's left-handed frame and units),
-/// one key per bone per frame at 30 fps, linear curves. `model_name` goes in the header (MMD
+/// Key reduction: a key is dropped when linear interpolation between the keys kept around it
+/// reproduces it within these: the largest quaternion component difference (about half the
+/// angle in radians: 5e-5 ≈ 0.006°) and the translation, model units (5e-5 ≈ 4 µm). Tight enough
+/// that a VMD imported and exported again reads back within 1e-4 at every frame.
+pub const KEY_TOLERANCE_QUAT: f32 = 5e-5;
+pub const KEY_TOLERANCE_UNITS: f32 = 5e-5;
+/// Longest span between two kept keys, frames: bounds the reduction's cost (it checks every key
+/// of a span each time the span grows) at a few kept keys per still second.
+pub const MAX_KEY_SPAN_FRAMES: usize = 60;
+
+/// Whether linear interpolation from key `a` to key `e` (one bone's keys, by frame) reproduces
+/// every key between them within the tolerances.
+fn span_reproduces(keys: &[&BoneKey], a: usize, e: usize) -> bool {
+    let (ka, ke) = (keys[a], keys[e]);
+    let len = ke.frame.saturating_sub(ka.frame) as f32;
+    if len <= 0.0 {
+        return false;
+    }
+    keys[a + 1..e].iter().all(|k| {
+        let x = k.frame.saturating_sub(ka.frame) as f32 / len;
+        let t = ka.translation.lerp(ke.translation, x);
+        let q = ka.rotation.slerp(ke.rotation, x).normalize();
+        let r = if q.dot(k.rotation) < 0.0 { -k.rotation } else { k.rotation };
+        (t - k.translation).abs().max_element() <= KEY_TOLERANCE_UNITS && (glam::Vec4::from(q) - glam::Vec4::from(r)).abs().max_element() <= KEY_TOLERANCE_QUAT
+    })
+}
+
+/// Which of one bone's keys (sorted by frame) to keep: the first and last, and greedily the
+/// farthest key each span can reach with every key between reproduced (see [`span_reproduces`]).
+fn keys_to_keep(keys: &[&BoneKey]) -> Vec<bool> {
+    let n = keys.len();
+    let mut keep = vec![false; n];
+    if n == 0 {
+        return keep;
+    }
+    keep[0] = true;
+    keep[n - 1] = true;
+    let mut a = 0;
+    while a + 1 < n {
+        let mut e = a + 1;
+        while e + 1 < n && e + 1 - a <= MAX_KEY_SPAN_FRAMES && span_reproduces(keys, a, e + 1) {
+            e += 1;
+        }
+        keep[e] = true;
+        a = e;
+    }
+    keep
+}
+
+/// Drops the bone keys that linear interpolation between the kept ones reproduces (per bone,
+/// within [`KEY_TOLERANCE_QUAT`] and [`KEY_TOLERANCE_UNITS`]), except those `must_keep(bone,
+/// frame)` names; keeps the rest in order.
+pub fn reduce_bone_keys(keys: Vec<BoneKey>, must_keep: &dyn Fn(&str, u32) -> bool) -> Vec<BoneKey> {
+    let mut by_bone: std::collections::HashMap<&str, Vec<usize>> = std::collections::HashMap::new();
+    for (i, k) in keys.iter().enumerate() {
+        by_bone.entry(k.name.as_str()).or_default().push(i);
+    }
+    let mut keep = vec![false; keys.len()];
+    for idx in by_bone.values_mut() {
+        idx.sort_by_key(|&i| keys[i].frame);
+        // Split at the keys that must stay: each piece is reduced on its own, its ends kept.
+        let mut start = 0;
+        for end in 1..=idx.len() {
+            if end < idx.len() && !must_keep(&keys[idx[end]].name, keys[idx[end]].frame) {
+                continue;
+            }
+            let piece = &idx[start..end.min(idx.len() - 1) + 1];
+            let track: Vec<&BoneKey> = piece.iter().map(|&i| &keys[i]).collect();
+            for (k, kept) in keys_to_keep(&track).into_iter().enumerate() {
+                keep[piece[k]] |= kept;
+            }
+            start = end;
+        }
+    }
+    keys.into_iter().zip(keep).filter_map(|(k, kept)| kept.then_some(k)).collect()
+}
+
+/// The VMD bone keys of `clip` on `rig` (values in the file's left-handed frame and units) at
+/// 30 fps with linear curves: a key per bone per frame, then per bone only those linear
+/// interpolation does not reproduce ([`reduce_bone_keys`]). `model_name` goes in the header (MMD
 /// shows it; readers pick the model by it).
 pub fn clip_to_vmd(clip: &Clip, rig: &MmdRig, model_name: &str) -> Result<Vmd, VmdExportError> {
+    clip_to_vmd_keeping(clip, rig, model_name, &|_, _| false)
+}
+
+/// [`clip_to_vmd`], never dropping the keys `must_keep(bone, frame)` names: an imported VMD
+/// exported again keeps its own keys (frames on the clip's timeline, the song offset taken off).
+pub fn clip_to_vmd_keeping(clip: &Clip, rig: &MmdRig, model_name: &str, must_keep: &dyn Fn(&str, u32) -> bool) -> Result<Vmd, VmdExportError> {
+    let mut vmd = clip_to_vmd_every_frame(clip, rig, model_name)?;
+    vmd.bone_keys = reduce_bone_keys(std::mem::take(&mut vmd.bone_keys), must_keep);
+    Ok(vmd)
+}
+
+/// Face (morph) keys an import set aside ([`super::files::ImportedMotion::vmd`]), written back
+/// into an exported VMD on the export's timeline: `first_frame` (the import's song offset, plus
+/// the start of an exported range) taken off, keys before it dropped, file order kept. The
+/// engine does not play morphs; this is how they survive a round trip through it.
+pub fn put_morph_keys(vmd: &mut Vmd, morphs: &[MorphKey], first_frame: u32) {
+    vmd.morph_keys = morphs.iter().filter(|k| k.frame >= first_frame).map(|k| MorphKey { name: k.name.clone(), frame: k.frame - first_frame, weight: k.weight }).collect();
+}
+
+/// [`clip_to_vmd`] without the key reduction: a key per bone per frame.
+pub fn clip_to_vmd_every_frame(clip: &Clip, rig: &MmdRig, model_name: &str) -> Result<Vmd, VmdExportError> {
     if clip.frame_count() == 0 {
         return Err(VmdExportError::NoFrames { clip: clip.name.clone() });
     }

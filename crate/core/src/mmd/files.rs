@@ -356,6 +356,31 @@ pub fn pose_vmd(file: &str, vmd: Vmd, models: &[&MmdModel], options: &MmdFilesOp
     })
 }
 
+/// A VMD dance as a project source, like a BVH or GLB ([`crate::import::import_bytes`] sends VMD
+/// bytes here): posed on the built-in standard MMD skeleton (a project keeps the dance, not the
+/// character model, so a reopened project poses it the same way on any machine), starting at
+/// `song_offset_frames` when given. Morph keys and keyed bones the skeleton lacks are warnings;
+/// a file that cannot be read or posed is an [`ImportError::Mmd`] with its [`MmdFilesError::kind`].
+pub fn import_vmd_source(file: &str, bytes: &[u8], song_offset_frames: Option<u32>) -> Result<crate::import::Imported, crate::import::ImportError> {
+    use crate::import::{finish, Format, ImportError};
+    let err = |e: MmdFilesError| ImportError::Mmd { file: e.file().to_string(), kind: e.kind(), message: e.to_string() };
+    let vmd = vmd::read(file, bytes).map_err(|e| err(e.into()))?;
+    let options = MmdFilesOptions { model: Some(STANDARD_RIG.to_string()), song_offset_frames };
+    let m = pose_vmd(file, vmd, &[], &options).map_err(err)?;
+    let mut warnings = Vec::new();
+    if m.morph_keys > 0 {
+        warnings.push(format!("{file}: {} morph (face) keys kept aside (not played)", m.morph_keys));
+    }
+    if m.camera_keys > 0 {
+        warnings.push(format!("{file}: {} camera keys not used by the dance", m.camera_keys));
+    }
+    if !m.unmatched_bones.is_empty() {
+        warnings.push(format!("{file}: {} keyed bones are not in the {STANDARD_RIG} and were ignored", m.unmatched_bones.len()));
+    }
+    let skeleton = m.clip.skeleton.clone();
+    finish(Format::Vmd, file, skeleton, vec![m.clip], None, warnings)
+}
+
 /// Imports a set of files: zips are opened; models are read with their textures; each VMD is
 /// posed (see [`pose_vmd`]) on a model of the set or of `library_models`; a VMD with camera keys
 /// gives a [`CameraTrack`]. Files that are neither (textures, readmes) are used as textures or

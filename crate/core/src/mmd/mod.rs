@@ -142,6 +142,8 @@ pub struct MmdRig {
     /// Per IK bone: the bones whose world transforms its solve reads (the IK bone's and the
     /// effector's ancestors, themselves included), parents first.
     ik_inputs: Vec<Option<Vec<usize>>>,
+    /// Run every CCD iteration (three.js's rule) instead of stopping early: see [`MmdRig::with_full_ccd`].
+    full_ccd: bool,
 }
 
 /// A posed rig: final local motion (grants and IK applied) and world transforms.
@@ -295,7 +297,14 @@ impl MmdRig {
                 }
             }
         }
-        Ok(MmdRig { name: name.into(), bones, offsets, fk_order, process_order, ik_paths, ik_inputs })
+        Ok(MmdRig { name: name.into(), bones, offsets, fk_order, process_order, ik_paths, ik_inputs, full_ccd: false })
+    }
+
+    /// The same rig solving IK exactly as three.js does, every CCD iteration run (no early
+    /// exit): the control the speed bench and `tests/native/mmd_rig.rs` compare against.
+    pub fn with_full_ccd(mut self) -> MmdRig {
+        self.full_ccd = true;
+        self
     }
 
     pub fn len(&self) -> usize {
@@ -407,10 +416,22 @@ impl MmdRig {
         }
     }
 
-    /// three.js r171's `CCDIKSolver.updateOne`, step for step.
+    /// three.js r171's `CCDIKSolver.updateOne`, step for step, except that it stops early once
+    /// more iterations cannot move the effector by a visible amount: when the effector is within
+    /// [`CCD_REACHED_UNITS`] of its target, or (chains without PMX Euler limits) an iteration
+    /// moved it less than [`CCD_STALLED_UNITS`] (a near-straight leg whose target is out of
+    /// reach, where three runs all its iterations to no effect). `tests/native/mmd_rig.rs` checks the poses still agree
+    /// with three.js's.
     fn solve_ccd(&self, ik_bone: usize, ik: &IkChain, path: &[usize], p: &mut MmdPose) {
         let target = p.world_positions[ik_bone];
+        // Per-step Euler clamping (PMX limits) can idle for an iteration and move again later:
+        // those chains stop early only on reaching the target.
+        let may_stall = !self.full_ccd && !ik.links.iter().any(|l| matches!(l.limit, Some(AngleLimit::Euler { .. })));
         for _ in 0..ik.loop_count {
+            let start = p.world_positions[ik.effector];
+            if !self.full_ccd && start.distance_squared(target) < CCD_REACHED_UNITS * CCD_REACHED_UNITS {
+                break;
+            }
             let mut rotated = false;
             for link in &ik.links {
                 let l = link.bone;
@@ -454,12 +475,18 @@ impl MmdRig {
                 }
                 rotated = true;
             }
-            if !rotated {
+            if !rotated || (may_stall && p.world_positions[ik.effector].distance_squared(start) < CCD_STALLED_UNITS * CCD_STALLED_UNITS) {
                 break;
             }
         }
     }
 }
+
+/// CCD stops when the effector is this close to its target, model units (1e-4: 8 µm at
+/// [`METRES_PER_MMD_UNIT`]).
+pub const CCD_REACHED_UNITS: f32 = 1e-4;
+/// CCD stops when one iteration moved the effector less than this, model units.
+pub const CCD_STALLED_UNITS: f32 = 1e-4;
 
 /// XYZ Euler angles of a rotation as three.js's `Euler.setFromQuaternion(q, 'XYZ')` reads them.
 pub fn euler_xyz_from_quat(q: Quat) -> Vec3 {
