@@ -257,8 +257,8 @@ pub const LINKS: [(usize, usize); LINK_COUNT] = {
     out
 };
 
-/// World positions of every frame of a clip on the canonical skeleton (frame-major), by an
-/// allocation-free forward kinematics.
+/// World positions of every frame of a clip on the canonical skeleton (frame-major), by
+/// the motion kernel's [`crate::motion::WorldPose`], reused from frame to frame.
 pub(crate) fn canonical_world_positions(clip: &Clip) -> Vec<Vec3> {
     let frames = clip.frame_count();
     let sk = &clip.skeleton;
@@ -267,13 +267,11 @@ pub(crate) fn canonical_world_positions(clip: &Clip) -> Vec<Vec3> {
     }
     let root = clip.translations.iter().find(|t| t.joint == 0).map(|t| t.values.as_slice());
     let mut out = Vec::with_capacity(frames * CANON_COUNT);
-    let mut rot = [glam::Quat::IDENTITY; CANON_COUNT];
-    let mut pos = [Vec3::ZERO; CANON_COUNT];
+    let mut pose = crate::motion::WorldPose::new();
     let rest_root = sk.joints.first().map_or(Vec3::ZERO, |j| j.rest_offset);
     for f in 0..frames {
         let at = root.and_then(|r| r.get(f).copied()).unwrap_or(rest_root);
-        sk.pose_into(clip.frame_rotations(f), at, &mut rot, &mut pos);
-        out.extend_from_slice(&pos);
+        out.extend_from_slice(&pose.of_rotations(sk, clip.frame_rotations(f), at).positions);
     }
     out
 }
