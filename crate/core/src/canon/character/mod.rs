@@ -56,7 +56,7 @@ use crate::skeleton::Skeleton;
 mod hold;
 
 use hold::*;
-pub(crate) use hold::{hold_feet_in_dance, planted_frames, DANCE_CATCH_UP_M_S};
+pub(crate) use hold::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
 
 /// Why a character cannot play humanoid motion, naming what is missing.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -458,6 +458,7 @@ impl Character {
                 // The source's ankle height maps onto the character's: its rest ankle stands
                 // where the canonical rest ankle does, scaled.
                 y_offset: char_rest_pos[leg.foot].y - canon_rest[leg.canon_foot.index()].y * scale,
+                scale,
             })
             .collect();
         // The same for the toe: the source's toe height onto the character's ground.
@@ -842,7 +843,7 @@ mod tests {
     }
 
     fn tracks(src_ankle: Vec<Vec3>, src_toe: Vec<Vec3>, free_ankle: Vec<Vec3>, free_toe: Vec<Vec3>) -> FootTracks {
-        FootTracks { src_ankle, src_toe, free_ankle, free_toe, y_offset: 0.02 }
+        FootTracks { src_ankle, src_toe, free_ankle, free_toe, y_offset: 0.02, scale: 1.0 }
     }
 
     #[test]

@@ -46,7 +46,7 @@ impl LibraryClip {
     }
 
     /// Per frame of the clip as recorded, whether its left ankle, left toe, right ankle and
-    /// right toe are planted (the retargeting's rule, [`crate::canon::character::planted_frames`]):
+    /// right toe are planted (the engine's one contact rule, [`crate::canon::contact::planted_frames`]):
     /// found once per clip, not on every render of a dance that plays it.
     pub(crate) fn planted_feet(&self) -> &[Vec<bool>; 4] {
         self.planted.get_or_init(|| {
@@ -54,7 +54,7 @@ impl LibraryClip {
             let pos = canonical_positions(c, &HumanoidMap::from_skeleton(&c.skeleton));
             let n = pos.len() / CANON_COUNT;
             let joints = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
-            Arc::new(joints.map(|j| crate::canon::character::planted_frames(&(0..n).map(|k| pos[k * CANON_COUNT + j.index()]).collect::<Vec<_>>(), c.fps)))
+            Arc::new(joints.map(|j| crate::canon::contact::planted_frames(&(0..n).map(|k| pos[k * CANON_COUNT + j.index()]).collect::<Vec<_>>(), c.fps)))
         })
     }
 }
