@@ -156,10 +156,10 @@ pub fn switch_times(lib: &ActionLibrary) -> Vec<(&'static str, CompositionReport
 pub fn whole_skate_cm(clip: &Clip) -> (f32, f32) {
     let c = odori_core::actions::detect_contacts(clip);
     let mut runs = Vec::new();
-    let mut pos = Vec::new();
+    let mut pose = odori_core::motion::WorldPose::new();
     let mut anchor: [Option<(Vec3, f32)>; 2] = [None, None];
     for f in 0..clip.frame_count() {
-        clip.world_positions_into(f, &mut pos);
+        let pos = &pose.of_frame(clip, f).positions;
         for (s, foot) in [Canon::LeftFoot, Canon::RightFoot].into_iter().enumerate() {
             let p = pos[foot.index()];
             if c.frames[f][s] {

@@ -229,10 +229,9 @@ async function main() {
     animate: (text) => { $("#text-input").value = text; textPanel.run(); },
     addWorn: (info) => { if (searchClient) searchClient.add(info.id); else waitingForSearch.push(info.id); panel.refresh(); },
     character: (id) => exporter.showCharacter(id),
-    dance: (doc) => {
-      const st = doc.dance.settings;
-      $("#dance-rho").value = String(st.rho);
-      $("#dance-music").value = String(st.fill.musicWeight);
+    dance: (summary) => {
+      $("#dance-rho").value = String(summary.rho);
+      $("#dance-music").value = String(summary.musicWeight);
       choreo.refreshClips();
       choreo.refresh();
     },
@@ -251,7 +250,7 @@ async function main() {
     }
     // The library as it was left (order, selected clip); from here on it is kept.
     panel.restore();
-    if (!session.project.doc().song) await loadDemoSong(songPanel, messages, session);
+    if (!session.project.summary().song) await loadDemoSong(songPanel, messages, session);
     performance.mark("odori:project-ready");
     document.body.dataset.project = "ready";
   });
@@ -261,7 +260,7 @@ async function main() {
   const share = installShare({
     choreo, messages, songReady: demoSong,
     song: () => (document.body.dataset.song === "demo" ? { demo: true }
-      : { name: songPanel.name, durationSecs: songPlayer.duration, sha256: session.project?.doc().song?.audio }),
+      : { name: songPanel.name, durationSecs: songPlayer.duration, sha256: session.project?.summary().song?.audio ?? undefined }),
     loadSong: (fileName, bytes) => loadSongBytes(fileName, bytes, songPanel, messages, session),
   });
   Object.assign(odori, { song: songPanel, search: searchPanel, searchClient, text: textPanel, choreo, share, project: session });

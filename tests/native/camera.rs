@@ -30,10 +30,7 @@ struct Case {
 }
 
 fn pose_at(clip: &Clip, t: f32) -> Vec<Vec3> {
-    let (mut r, mut tr, mut p) = (Vec::new(), Vec::new(), Vec::new());
-    clip.sample_into(t, &mut r, &mut tr);
-    clip.skeleton.forward_kinematics(&r, &tr, &mut p, None);
-    p
+    std::mem::take(&mut odori_core::motion::WorldPose::new().of_time(clip, t).positions)
 }
 
 /// The song danced and the camera's input over its first 32 bars (from a beat before the

@@ -124,7 +124,7 @@ fn robot_expressive_gives_its_14_clips_with_names_and_durations() {
     // in the rest clip frame 0 with the joints' box.
     let clip = im.clips.iter().find(|c| c.name == "Idle").unwrap();
     let mut mats = Vec::new();
-    clip.world_matrices_into(0, &mut mats);
+    odori_core::motion::WorldPose::new().of_frame(clip, 0).matrices_into(&mut mats);
     let joints = clip.world_positions(0);
     let (mut lo, mut hi) = (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN));
     for part in &mesh.parts {

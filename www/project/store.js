@@ -107,9 +107,9 @@ export class ProjectStore {
     if (!rec) throw new Error(`no stored project ${id}`);
     const m = await this.db.get("manifests", rec.manifestKey);
     if (!m) throw new Error(`project ${rec.name || id}: its last saved state is missing from storage`);
-    // The manifest names its blobs: fetch them all before the (synchronous) rebuild.
-    const doc = JSON.parse(new TextDecoder().decode(m.bytes));
-    const hashes = Object.keys(doc.blobs || {});
+    // The manifest names its blobs (the engine reads them out): fetch them all before the
+    // (synchronous) rebuild.
+    const hashes = ProjectClass.manifestBlobHashes(m.bytes);
     const tx = this.db.transaction("blobs");
     const blobs = new Map();
     await Promise.all(hashes.map(async (h) => { const b = await tx.store.get(h); if (b) blobs.set(h, b); }));
@@ -185,7 +185,7 @@ export class ProjectStore {
     const t0 = performance.now();
     // The synchronous part on the main thread: the manifest and the blobs not yet stored.
     const manifest = this.project.manifest();
-    const name = this.project.doc().name || "Untitled";
+    const name = this.project.summary().name || "Untitled";
     const hashes = this.project.blobHashes();
     const fresh = hashes.filter((h) => !this.storedBlobs.has(h));
     const blobs = fresh.map((h) => [h, this.project.blob(h)]);
@@ -217,7 +217,7 @@ export class ProjectStore {
       const now = new Set(hashes);
       const dropped = [...this.lastHashes].filter((h) => !now.has(h));
       this.lastHashes = now;
-      if (dropped.length) await this.collect(dropped);
+      if (dropped.length) await this.collect(dropped, project.constructor);
       for (const [h, bytes] of blobs) { this.storedBlobs.add(h); this.stats.blobsWritten += 1; this.stats.blobBytesWritten += bytes.length; }
       this.stats.writes += 1;
       this.stats.lastManifestBytes = manifest.length;
@@ -236,17 +236,17 @@ export class ProjectStore {
 
   /**
    * Deletes the blobs of `candidates` that no stored project's current manifest refers to
-   * (blobs are shared by hash between projects). Returns how many went.
+   * (blobs are shared by hash between projects; `ProjectClass`, the wasm `Project`, reads each
+   * manifest's list). Returns how many went.
    */
-  async collect(candidates) {
+  async collect(candidates, ProjectClass) {
     try {
       const tx = this.db.transaction(["projects", "manifests", "blobs"], "readwrite");
       const inUse = new Set();
       for (const rec of await tx.objectStore("projects").getAll()) {
         const m = await tx.objectStore("manifests").get(rec.manifestKey);
         if (!m) continue;
-        const doc = JSON.parse(new TextDecoder().decode(m.bytes));
-        for (const h of Object.keys(doc.blobs || {})) inUse.add(h);
+        for (const h of ProjectClass.manifestBlobHashes(m.bytes)) inUse.add(h);
       }
       const gone = candidates.filter((h) => !inUse.has(h));
       for (const h of gone) { tx.objectStore("blobs").delete(h); this.storedBlobs.delete(h); }
@@ -277,18 +277,18 @@ export class ProjectStore {
     for (let n = 2; ; n++) if (!taken.has(`${name} ${n}`)) return `${name} ${n}`;
   }
 
-  /** Forgets a stored project; its blobs go unless another project uses them. */
-  async remove(id) {
+  /** Forgets a stored project; its blobs go unless another project uses them (`ProjectClass`: the wasm `Project`). */
+  async remove(id, ProjectClass) {
     const tx = this.db.transaction(["projects", "manifests"], "readwrite");
     const rec = await tx.objectStore("projects").get(id);
     let hashes = [];
     if (rec) {
       const m = await tx.objectStore("manifests").get(rec.manifestKey);
-      if (m) hashes = Object.keys(JSON.parse(new TextDecoder().decode(m.bytes)).blobs || {});
+      if (m) hashes = ProjectClass.manifestBlobHashes(m.bytes);
       await tx.objectStore("manifests").delete(rec.manifestKey);
       await tx.objectStore("projects").delete(id);
     }
     await tx.done;
-    if (hashes.length) await this.collect(hashes);
+    if (hashes.length) await this.collect(hashes, ProjectClass);
   }
 }

@@ -1,9 +1,9 @@
-//! Motion clips: per-frame local joint rotations and translations at a fixed frame rate, and
-//! forward kinematics to world space.
+//! Motion clips: per-frame local joint rotations and translations at a fixed frame rate
+//! (posed in world space by the motion kernel's [`crate::motion::WorldPose`]).
 
 use std::sync::Arc;
 
-use glam::{Mat4, Quat, Vec3};
+use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -125,41 +125,18 @@ impl Clip {
         }
     }
 
-    /// World position of every joint at `frame`, into `out` (resized); the motion kernel's
-    /// forward kinematics.
-    pub fn world_positions_into(&self, frame: usize, out: &mut Vec<Vec3>) {
-        let n = self.skeleton.len();
-        let mut trans = Vec::with_capacity(n);
-        self.local_translations_into(frame, &mut trans);
-        let mut rots = vec![Quat::IDENTITY; n];
-        out.clear();
-        out.resize(n, Vec3::ZERO);
-        motion::local_to_world(&self.skeleton, self.frame_rotations(frame), &trans, &mut rots, out);
-    }
-
+    /// World position of every joint at `frame` ([`motion::WorldPose::of_frame`]; a loop over
+    /// frames keeps one `WorldPose` instead).
     pub fn world_positions(&self, frame: usize) -> Vec<Vec3> {
-        let mut v = Vec::new();
-        self.world_positions_into(frame, &mut v);
-        v
-    }
-
-    /// World matrices of every joint at `frame` (for skinning): the motion kernel's forward
-    /// kinematics, each joint's world rotation and position made one rigid matrix.
-    pub fn world_matrices_into(&self, frame: usize, out: &mut Vec<Mat4>) {
-        let mut trans = Vec::with_capacity(self.skeleton.len());
-        self.local_translations_into(frame, &mut trans);
-        let mut pos = Vec::with_capacity(self.skeleton.len());
-        self.skeleton.forward_kinematics(self.frame_rotations(frame), &trans, &mut pos, Some(out));
+        std::mem::take(&mut motion::WorldPose::new().of_frame(self, frame).positions)
     }
 
     /// World positions of every frame, frame-major (`frame_count * joints`).
     pub fn all_world_positions(&self) -> Vec<Vec3> {
-        let n = self.skeleton.len();
-        let mut all = Vec::with_capacity(n * self.frame_count());
-        let mut tmp = Vec::with_capacity(n);
+        let mut all = Vec::with_capacity(self.skeleton.len() * self.frame_count());
+        let mut pose = motion::WorldPose::new();
         for f in 0..self.frame_count() {
-            self.world_positions_into(f, &mut tmp);
-            all.extend_from_slice(&tmp);
+            all.extend_from_slice(&pose.of_frame(self, f).positions);
         }
         all
     }

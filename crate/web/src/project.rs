@@ -139,9 +139,25 @@ impl Project {
     }
 
     /// The document (JSON-compatible object): sources, song, dance by keys, tags, texts,
-    /// character, camera.
+    /// character, camera. Its shape is the file's schema: the page reads no field of it (it
+    /// asks `summary()`); tests and tools may.
     pub fn doc(&self) -> JsValue {
         to_js(self.inner.doc())
+    }
+
+    /// What the page shows of the project (`ProjectSummary`): name, sources, song (with a key
+    /// that changes only when the song does), tags, put-on clips (each with a key), the body,
+    /// texts, ρ and the music weight.
+    #[wasm_bindgen(unchecked_return_type = "ProjectSummary")]
+    pub fn summary(&self) -> JsValue {
+        to_js(&self.inner.summary())
+    }
+
+    /// The blob hashes a stored manifest (`manifest()`'s bytes) lists, without opening it:
+    /// what the browser store's collection keeps.
+    #[wasm_bindgen(js_name = manifestBlobHashes)]
+    pub fn manifest_blob_hashes(manifest: &[u8]) -> Result<Vec<String>, OdoriError> {
+        Ok(project::manifest_blob_hashes(manifest)?.into_iter().map(|h| h.to_string()).collect())
     }
 
     /// Every clip of every source: `{ clip: { source, clip }, name, fileName, fps, frames,
@@ -792,6 +808,22 @@ export interface BarView { bar: Bar; state: { kind: "empty" | "pinned" | "genera
 /** What `playInto` gives a player. */
 export interface PlayableDance { clip: ClipInfo; name: string; songName: string; demoSong: boolean; audio?: Uint8Array; characterClip: number | null; characterName: string | null; stickFigures: boolean; }
 export interface ClipRef { source: number; clip: number; }
+/** What the page shows of a project (`Project.summary()`): the page reads this, never `doc()`. */
+export interface ProjectSummary {
+  name: string;
+  /** Every source of the project, by id. */
+  sources: number[];
+  /** `key` changes only when the song does (not its grid corrections); `audio` is its blob hash, null for the demo song. */
+  song: { fileName: string; audio: string | null; key: string; corrections: GridCorrection[] } | null;
+  tags: { clip: ClipRef; tags: string[] }[];
+  /** Clips put on a character, in order; `key` changes only when the recipe does. */
+  worn: { key: string; character: ClipRef }[];
+  character: ClipRef | null;
+  stickFigures: boolean;
+  texts: string[];
+  rho: number;
+  musicWeight: number;
+}
 export type MoveKey =
   | { kind: "builtin"; move: { step: string; arms: string; energy: string; mirrored: boolean } }
   | { kind: "cut"; clip: ClipRef; cutTempoBpm: number | null; firstCount: number };

@@ -30,13 +30,14 @@ use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
 use std::rc::Rc;
 
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat4, Vec3};
 use odori_core::camera::CameraPose;
 use odori_core::canon::builtin::canonical_skeleton;
 use odori_core::canon::character::Character;
 use odori_core::import::{MeshTexture, SkinnedMesh};
 use odori_core::library::body::builtin_body;
 use odori_core::canon::retarget::{is_canonical, to_canonical};
+use odori_core::motion::WorldPose;
 use odori_core::Clip;
 use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, PipelineKind, Renderer, FIGURE_COLORS};
 use serde::{Deserialize, Serialize};
@@ -152,12 +153,10 @@ struct FigureJoints {
     body: &'static str,
 }
 
-/// Local pose of a clip at a time (interpolated), then world positions.
+/// World positions of a clip at a time (its nearest frames blended), by the motion kernel's
+/// one entry point.
 pub(crate) fn pose_at(clip: &Clip, time_secs: f32) -> Vec<Vec3> {
-    let (mut r, mut t, mut p) = (Vec::new(), Vec::new(), Vec::new());
-    clip.sample_into(time_secs, &mut r, &mut t);
-    clip.skeleton.forward_kinematics(&r, &t, &mut p, None);
-    p
+    std::mem::take(&mut WorldPose::new().of_time(clip, time_secs).positions)
 }
 
 /// The 3D view of a page.
@@ -172,8 +171,7 @@ pub struct Viewer {
     /// Uploaded meshes by the library's mesh id; `None` when the mesh cannot be skinned on
     /// the GPU (too many joints) and is drawn as a stick figure instead.
     meshes: HashMap<u32, Option<MeshHandle>>,
-    rot: Vec<Quat>,
-    trans: Vec<Vec3>,
+    pose: WorldPose,
     mats: Vec<Mat4>,
     /// Following travelling figures: the camera's height above the ground while its target
     /// tracks the figures' centre on the ground plane each frame (see `frameFigures`).
@@ -505,8 +503,7 @@ impl Viewer {
             camera: OrbitCamera::default(),
             backend,
             meshes: HashMap::new(),
-            rot: Vec::new(),
-            trans: Vec::new(),
+            pose: WorldPose::new(),
             mats: Vec::new(),
             follow_y: None,
             decoded: Rc::new(RefCell::new(Vec::new())),
@@ -808,16 +805,14 @@ impl Viewer {
             let clip = on.map(|o| o.0).unwrap_or_else(|| Rc::new(e.clip.clone()));
             posed.push((clip, Vec3::from(s.offset.unwrap_or([0.0; 3]))));
         }
-        let (mut r, mut t, mut p) = (Vec::new(), Vec::new(), Vec::new());
+        let mut pose = WorldPose::new();
         let joints: Vec<Vec<Vec3>> = req
             .times_secs
             .iter()
             .map(|&time| {
                 let mut all = Vec::new();
                 for (clip, off) in &posed {
-                    clip.sample_into(time, &mut r, &mut t);
-                    clip.skeleton.forward_kinematics(&r, &t, &mut p, None);
-                    all.extend(p.iter().map(|q| *q + *off));
+                    all.extend(pose.of_time(clip, time).positions.iter().map(|q| *q + *off));
                 }
                 all
             })
@@ -932,9 +927,8 @@ impl Viewer {
                 Some((_, _, Some(c), _)) => c.as_ref(),
                 _ => &e.clip,
             };
-            posed.sample_into(s.time_secs, &mut self.rot, &mut self.trans);
-            let mut pos = Vec::new();
-            posed.skeleton.forward_kinematics(&self.rot, &self.trans, &mut pos, Some(&mut self.mats));
+            self.pose.of_time(posed, s.time_secs).matrices_into(&mut self.mats);
+            let mut pos = self.pose.positions.clone();
             for p in &pos {
                 now_lo = now_lo.min(*p + off);
                 now_hi = now_hi.max(*p + off);

@@ -88,9 +88,9 @@ pub struct CompositionReport {
 fn effector_track(clip: &Clip, part: BodyPart) -> (Vec<Vec3>, Vec<Vec3>) {
     let n = clip.frame_count();
     let mut pos = Vec::with_capacity(n);
-    let mut world = Vec::new();
+    let mut pose = crate::motion::WorldPose::new();
     for f in 0..n {
-        clip.world_positions_into(f, &mut world);
+        let world = &pose.of_frame(clip, f).positions;
         let hips = world[Canon::Hips.index()];
         let fwd = clip.frame_rotations(f)[0] * Vec3::Z;
         let unyaw = Quat::from_rotation_y(-fwd.x.atan2(fwd.z));

@@ -1,20 +1,18 @@
-//! Foot-ground contacts (spec §I): a foot touches the floor when its sole is near the floor
-//! and its ankle barely moves horizontally.
-//!
-//! The floor is the clip's own: a low percentile of the sole heights over the clip, so clips
-//! recorded with an offset floor still read right. Contact onsets and ends are the "foot down"
-//! and "foot up" keyframes that Transition aligns cyclic motions on.
+//! Foot-ground contacts (spec §I): a foot touches the floor when its ankle is planted by the
+//! engine's one foot-contact rule ([`crate::canon::contact`]: near its own floor and barely
+//! moving, at the canonical size these clips are on), so the text actions' joins and the
+//! retargeting's held feet agree on which frames a foot is down. The ankle, not the toe: a
+//! join locks the ankle, and a foot turning on its ball moves its ankle (the retargeting holds
+//! such a foot by its toe instead). Contact onsets and ends
+//! are the "foot down" and "foot up" keyframes that Transition aligns cyclic motions on.
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::clip::Clip;
+use crate::canon::contact::planted_frames;
 use crate::canon::humanoid::{Canon, CANON_COUNT};
+use crate::clip::Clip;
 
-/// A sole within this height of the floor may be in contact, metres.
-pub const CONTACT_HEIGHT: f32 = 0.035;
-/// A foot whose ankle moves faster than this horizontally is not planted, metres per second.
-pub const CONTACT_SPEED: f32 = 0.25;
 /// Contact or lift-off shorter than this many frames is noise.
 pub const MIN_RUN: usize = 3;
 
@@ -118,8 +116,9 @@ pub fn sole_height(frame: &[Vec3], foot: Foot) -> f32 {
     (frame[foot.ankle().index()].y - 0.06).min(frame[foot.toe().index()].y - 0.02)
 }
 
-/// Contacts of a clip on the canonical skeleton, from foot height and speed. Flickers
-/// shorter than [`MIN_RUN`] frames are removed.
+/// Contacts of a clip on the canonical skeleton: a foot is down where its ankle is planted
+/// ([`crate::canon::contact::planted_frames`]). Flickers shorter than [`MIN_RUN`]
+/// frames are removed.
 pub fn detect_contacts(clip: &Clip) -> Contacts {
     let all = clip.all_world_positions();
     contacts_from_positions(&all, clip.joint_count(), clip.fps)
@@ -131,21 +130,9 @@ pub fn contacts_from_positions(all: &[Vec3], joints: usize, fps: f32) -> Contact
         return Contacts::default();
     }
     let frames = all.len() / joints;
-    let frame = |f: usize| &all[f * joints..(f + 1) * joints];
-    let mut soles: Vec<f32> = (0..frames).flat_map(|f| Foot::BOTH.map(|ft| sole_height(frame(f), ft))).collect();
-    soles.sort_by(f32::total_cmp);
-    let floor = soles.get(soles.len() / 50).copied().unwrap_or(0.0);
-    let mut out: Vec<[bool; 2]> = (0..frames)
-        .map(|f| {
-            Foot::BOTH.map(|ft| {
-                let a = ft.ankle().index();
-                let (f0, f1) = (f.saturating_sub(1), (f + 1).min(frames - 1));
-                let d = frame(f1)[a] - frame(f0)[a];
-                let speed = Vec3::new(d.x, 0.0, d.z).length() * fps / ((f1 - f0).max(1) as f32);
-                sole_height(frame(f), ft) - floor < CONTACT_HEIGHT && speed < CONTACT_SPEED
-            })
-        })
-        .collect();
+    let track = |c: Canon| planted_frames(&(0..frames).map(|f| all[f * joints + c.index()]).collect::<Vec<_>>(), fps);
+    let planted = Foot::BOTH.map(|ft| track(ft.ankle()));
+    let mut out: Vec<[bool; 2]> = (0..frames).map(|f| Foot::BOTH.map(|ft| planted[ft.index()][f])).collect();
     // Runs shorter than MIN_RUN frames (a flicker of contact or of lift) take their
     // neighbours' state.
     for s in 0..2 {

@@ -14,13 +14,11 @@ use crate::motion::two_bone_rotations;
 use crate::skeleton::Skeleton;
 
 /// World rotations and positions of one pose of `skeleton` (root translation given, other
-/// joints at their rest offsets), by [`crate::motion::local_to_world_at`].
+/// joints at their rest offsets), by [`crate::motion::WorldPose::of_rotations`].
 pub fn forward(skeleton: &Skeleton, local: &[Quat], root: Vec3) -> (Vec<Quat>, Vec<Vec3>) {
-    let n = skeleton.len().min(local.len());
-    let mut rot = vec![Quat::IDENTITY; n];
-    let mut pos = vec![Vec3::ZERO; n];
-    crate::motion::local_to_world_at(skeleton, local, root, &mut rot, &mut pos);
-    (rot, pos)
+    let mut pose = crate::motion::WorldPose::new();
+    pose.of_rotations(skeleton, local, root);
+    (pose.rotations, pose.positions)
 }
 
 /// Moves the ankle of `foot` to `target` by changing the hip and knee rotations of `local`

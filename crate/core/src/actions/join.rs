@@ -486,10 +486,10 @@ pub fn join_serial(a: &Clip, b: &Clip, kind: JoinKind, opts: &JoinOptions) -> Re
 pub fn planted_drift_cm(clip: &Clip, contacts: &[[bool; 2]], start: usize, end: usize) -> f32 {
     let end = end.min(clip.frame_count()).min(contacts.len());
     let mut worst = 0.0f32;
-    let mut pos = Vec::new();
+    let mut pose = crate::motion::WorldPose::new();
     let mut anchor: [Option<Vec3>; 2] = [None, None];
     for f in start..end {
-        clip.world_positions_into(f, &mut pos);
+        let pos = &pose.of_frame(clip, f).positions;
         for foot in Foot::BOTH {
             let s = foot.index();
             if !contacts[f][s] {

@@ -389,7 +389,7 @@ pub fn build_clip(name: &str, frames: usize, cyclic: bool, pose_at: &dyn Fn(f32)
 
 /// Joint positions of a pose with the root at the origin.
 fn relative_positions(skeleton: &Skeleton, local: &[Quat]) -> Vec<Vec3> {
-    skeleton.posed_at_origin(local)
+    std::mem::take(&mut crate::motion::WorldPose::new().of_rotations(skeleton, local, Vec3::ZERO).positions)
 }
 
 fn frames_for(duration_secs: f32) -> usize {

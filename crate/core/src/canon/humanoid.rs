@@ -570,9 +570,9 @@ fn common_ancestor(sk: &Skeleton, a: usize, b: usize) -> Option<usize> {
 pub fn canonical_positions(clip: &Clip, map: &HumanoidMap) -> Vec<Vec3> {
     let frames = clip.frame_count();
     let mut out = Vec::with_capacity(frames * CANON_COUNT);
-    let mut world = Vec::new();
+    let mut pose = crate::motion::WorldPose::new();
     for f in 0..frames {
-        clip.world_positions_into(f, &mut world);
+        let world = &pose.of_frame(clip, f).positions;
         let base = out.len();
         for c in Canon::ALL {
             out.push(map.get(c).map(|j| world[j]).unwrap_or(Vec3::NAN));

@@ -112,7 +112,7 @@ pub struct MeshTexture {
 /// A character's drawable parts, skinned to the clip skeleton.
 ///
 /// A vertex ends at `Σ weight · world(joint) · bind` over its palette entries, where
-/// `world(joint)` is [`Clip::world_matrices_into`]. Rigidly parented meshes are palette
+/// `world(joint)` is [`crate::motion::WorldPose::matrices_into`]. Rigidly parented meshes are palette
 /// entries with one joint and weight 1.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SkinnedMesh {

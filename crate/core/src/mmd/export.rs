@@ -230,13 +230,14 @@ pub fn clip_to_vmd_every_frame(clip: &Clip, rig: &MmdRig, model_name: &str) -> R
         property_keys: vec![],
     };
     let mut mats = Vec::new();
+    let mut pose = crate::motion::WorldPose::new();
     let mut world_rot = vec![Quat::IDENTITY; n];
     let mut world_pos = vec![Vec3::ZERO; n];
     let mut local_rot = vec![Quat::IDENTITY; n];
     let mut local_t = vec![Vec3::ZERO; n];
     let m = METRES_PER_MMD_UNIT;
     for f in 0..on.frame_count() {
-        on.world_matrices_into(f, &mut mats);
+        pose.of_frame(&on, f).matrices_into(&mut mats);
         // The clip's world rotation and position of each kept bone (rig units).
         let clip_world = |i: usize| -> Option<(Quat, Vec3)> {
             let j = joint_of[i]?;

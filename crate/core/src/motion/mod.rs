@@ -1,28 +1,116 @@
 //! The motion kernel: the one forward kinematics of the engine (local rotations and
-//! translations to world rotations and positions, into buffers the caller owns; or rotations
-//! only, every joint at its rest offset), rest-pose transforms, the lowest point of a pose,
-//! the one cubic Hermite curve and the one smoothstep, two-bone IK (positions, and the
-//! rotations of the chain: the joins' leg IK and the retargeting's held feet both use
-//! [`two_bone_rotations`]), floor and foot-skate measures, and the quaternion hygiene every
-//! writer of keyframes needs (unit length, sign continuity).
-//! `Skeleton::forward_kinematics` / `pose_into` / `posed_at_origin`, `Clip::world_positions_into`
-//! / `world_matrices_into`, `actions::ik::forward`, the lowest points of `builtin.rs` and
-//! `library/pose.rs`, the choreography's joins, the text actions' sway and the glTF
-//! importer's CUBICSPLINE sampler all call it (`tests/native/motion_kernel.rs` checks each
-//! against the copy it replaced: the same bits, or within 1e-5 for the world matrices).
+//! translations to world rotations and positions) behind one entry point, [`WorldPose`]: a
+//! pose's world rotations and positions in buffers it keeps, filled from a clip's frame, a clip
+//! at a time, local rotations and translations, or rotations only (every joint at its rest
+//! offset); and rest-pose transforms, the lowest point of a pose, the one cubic Hermite curve
+//! and the one smoothstep, two-bone IK (positions, and the rotations of the chain: the joins'
+//! leg IK and the retargeting's held feet both use [`two_bone_rotations`]), floor and
+//! foot-skate measures, and the quaternion hygiene every writer of keyframes needs (unit
+//! length, sign continuity).
+//! Clips, characters (retargeting and its report), the viewer, `actions::ik::forward`, the
+//! segment signatures, the lowest points of `builtin.rs` and `library/pose.rs`, the
+//! choreography's joins, the text actions' sway and the glTF importer's CUBICSPLINE sampler all
+//! call it (`tests/native/motion_kernel.rs` checks each against the copy it replaced: the same
+//! bits, or within 1e-5 for the world matrices).
 
 use glam::{Mat4, Quat, Vec3};
 
+use crate::clip::Clip;
 use crate::skeleton::Skeleton;
 
-/// Forward kinematics of one pose, parents before children, without allocating.
+/// One pose in world space, and the one entry point of forward kinematics: each `of_*` method
+/// poses a skeleton into the buffers this keeps (reused from call to call, so a loop over
+/// frames allocates once) and returns them. Every joint's world rotation and position, in
+/// skeleton order; a joint whose parent is not before it is posed as a root.
+#[derive(Clone, Debug, Default)]
+pub struct WorldPose {
+    /// World rotation of each joint.
+    pub rotations: Vec<Quat>,
+    /// World position of each joint, metres.
+    pub positions: Vec<Vec3>,
+    /// Scratch: the local pose sampled from a clip.
+    local_rotations: Vec<Quat>,
+    local_translations: Vec<Vec3>,
+}
+
+impl WorldPose {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn resize(&mut self, n: usize) {
+        self.rotations.clear();
+        self.rotations.resize(n, Quat::IDENTITY);
+        self.positions.clear();
+        self.positions.resize(n, Vec3::ZERO);
+    }
+
+    /// Poses `skeleton` from local rotations and translations (joint `i`'s in its parent's
+    /// frame; a root's in world space), for the first `min` of their lengths and the joint count.
+    pub fn of_locals(&mut self, skeleton: &Skeleton, local_rotations: &[Quat], local_translations: &[Vec3]) -> &mut Self {
+        self.resize(skeleton.len().min(local_rotations.len()).min(local_translations.len()));
+        local_to_world(skeleton, local_rotations, local_translations, &mut self.rotations, &mut self.positions);
+        self
+    }
+
+    /// Poses `skeleton` from local rotations only: every joint at its rest offset, the roots
+    /// (joints without a parent before them) at `root`.
+    pub fn of_rotations(&mut self, skeleton: &Skeleton, local_rotations: &[Quat], root: Vec3) -> &mut Self {
+        self.resize(skeleton.len().min(local_rotations.len()));
+        local_to_world_at(skeleton, local_rotations, root, &mut self.rotations, &mut self.positions);
+        self
+    }
+
+    /// Poses frame `frame` of `clip` (translation tracks where present, rest offsets elsewhere).
+    /// A frame past the end poses nothing (empty buffers).
+    pub fn of_frame(&mut self, clip: &Clip, frame: usize) -> &mut Self {
+        if frame >= clip.frame_count() {
+            self.resize(0);
+            return self;
+        }
+        let mut trans = std::mem::take(&mut self.local_translations);
+        clip.local_translations_into(frame, &mut trans);
+        self.of_locals(&clip.skeleton, clip.frame_rotations(frame), &trans);
+        self.local_translations = trans;
+        self
+    }
+
+    /// Poses `clip` at `time_secs`: its nearest frames blended ([`Clip::sample_into`], clamped
+    /// to the clip). An empty clip poses nothing.
+    pub fn of_time(&mut self, clip: &Clip, time_secs: f32) -> &mut Self {
+        if clip.frame_count() == 0 {
+            self.resize(0);
+            return self;
+        }
+        let (mut rot, mut trans) = (std::mem::take(&mut self.local_rotations), std::mem::take(&mut self.local_translations));
+        clip.sample_into(time_secs, &mut rot, &mut trans);
+        self.of_locals(&clip.skeleton, &rot, &trans);
+        (self.local_rotations, self.local_translations) = (rot, trans);
+        self
+    }
+
+    /// Each posed joint's world rotation and position as one rigid matrix (for skinning), into
+    /// `out` (resized).
+    pub fn matrices_into(&self, out: &mut Vec<Mat4>) {
+        out.clear();
+        out.extend(self.rotations.iter().zip(&self.positions).map(|(r, p)| Mat4::from_rotation_translation(*r, *p)));
+    }
+
+    /// Height of the lowest posed joint; `f32::MAX` for none.
+    pub fn lowest_y(&self) -> f32 {
+        self.positions.iter().map(|p| p.y).fold(f32::MAX, f32::min)
+    }
+}
+
+/// Forward kinematics of one pose into the caller's slices, parents before children (the
+/// kernel under [`WorldPose::of_locals`]).
 ///
 /// `local_rotations[i]` and `local_translations[i]` are joint `i`'s rotation and translation
 /// in its parent's frame; a root's are in world space. Writes `world_rotations` and
 /// `world_positions` for the first `min` of all lengths and the skeleton's joint count, and
 /// returns that count. A joint whose parent is not before it is treated as a root (the
 /// skeleton's own invariant says this never happens; the guard keeps a bad one from panicking).
-pub fn local_to_world(
+fn local_to_world(
     skeleton: &Skeleton,
     local_rotations: &[Quat],
     local_translations: &[Vec3],
@@ -36,8 +124,9 @@ pub fn local_to_world(
 
 /// [`local_to_world`] of a pose whose joints all keep their rest offsets, the root (any joint
 /// without a parent before it) standing at `root`: the common case of a pose given by
-/// rotations only. Returns the number of joints written.
-pub fn local_to_world_at(skeleton: &Skeleton, local_rotations: &[Quat], root: Vec3, world_rotations: &mut [Quat], world_positions: &mut [Vec3]) -> usize {
+/// rotations only (the kernel under [`WorldPose::of_rotations`], and allocation-free for
+/// [`lowest_height`]'s hot loops). Returns the number of joints written.
+fn local_to_world_at(skeleton: &Skeleton, local_rotations: &[Quat], root: Vec3, world_rotations: &mut [Quat], world_positions: &mut [Vec3]) -> usize {
     let n = skeleton.len().min(local_rotations.len()).min(world_rotations.len()).min(world_positions.len());
     let joints = &skeleton.joints;
     fk(skeleton, n, local_rotations, |i| if joints[i].parent.is_some_and(|p| p < i) { joints[i].rest_offset } else { root }, world_rotations, world_positions);
@@ -66,10 +155,9 @@ fn fk(skeleton: &Skeleton, n: usize, local_rotations: &[Quat], translation: impl
 pub fn rest_world(skeleton: &Skeleton) -> (Vec<Quat>, Vec<Vec3>) {
     let local_r: Vec<Quat> = skeleton.joints.iter().map(|j| j.rest_rotation).collect();
     let local_t: Vec<Vec3> = skeleton.joints.iter().map(|j| j.rest_offset).collect();
-    let mut rot = vec![Quat::IDENTITY; skeleton.len()];
-    let mut pos = vec![Vec3::ZERO; skeleton.len()];
-    local_to_world(skeleton, &local_r, &local_t, &mut rot, &mut pos);
-    (rot, pos)
+    let mut pose = WorldPose::new();
+    pose.of_locals(skeleton, &local_r, &local_t);
+    (pose.rotations, pose.positions)
 }
 
 /// Height of the lowest joint of a pose given by rotations (rest offsets, the root at

@@ -19,6 +19,7 @@
 pub mod blob;
 pub mod derive;
 pub mod file;
+pub mod summary;
 
 use crate::history::History;
 use std::collections::BTreeSet;
@@ -36,6 +37,7 @@ use crate::music::{AnalysisOptions, GridCorrection, MusicError, RmsEnvelope};
 pub use blob::{BlobHash, BlobStore};
 pub use derive::{ClipInfo, Derived};
 pub use file::{open, save, FileError, MissingBlob, Opened, CURRENT_SCHEMA_VERSION, ODORI_MIME};
+pub use summary::{manifest_blob_hashes, ProjectSummary};
 
 /// Most undo steps a project keeps (and saves): enough for a session's work, small enough that
 /// the manifest written on every autosave stays a few hundred kilobytes.

@@ -10,6 +10,7 @@ use glam::{Quat, Vec3};
 
 use super::{Character, Leg, RetargetOptions, Transfer};
 use crate::canon::builtin::canonical_skeleton;
+use crate::canon::contact::{planted_frames, CONTACT_HEIGHT_M, CONTACT_SPEED_M_S};
 use crate::clip::Clip;
 use crate::canon::humanoid::HumanoidMap;
 use crate::import::SkinnedMesh;
@@ -68,40 +69,29 @@ pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>);
     Some(out)
 }
 
-/// A source ankle counts as planted within this height of its floor (spec §J's foot-contact
-/// band) ...
-pub(super) const PLANT_HEIGHT_M: f32 = 0.05;
-/// ... and below this horizontal speed (at the character's size), cm/s.
-pub(super) const PLANT_SPEED_CM_S: f32 = 30.0;
 /// Time over which a released foot is eased from where it was held back to its free path, s.
 pub(super) const RELEASE_S: f32 = 0.15;
 
-/// The source joint's planted frames: within [`PLANT_HEIGHT_M`] of its floor and slower than
-/// [`PLANT_SPEED_CM_S`] (`src` at the character's size).
-pub(crate) fn planted_frames(src: &[Vec3], fps: f32) -> Vec<bool> {
-    let frames = src.len();
-    let heights: Vec<f32> = src.iter().map(|p| p.y).collect();
-    let Some(floor) = motion::floor_height(&heights) else { return vec![false; frames] };
-    (0..frames)
-        .map(|f| {
-            let (a, b) = (f.saturating_sub(1), (f + 1).min(frames - 1));
-            let span = (b - a).max(1) as f32;
-            let speed_cm_s = Vec3::new(src[b].x - src[a].x, 0.0, src[b].z - src[a].z).length() * fps * 100.0 / span;
-            src[f].y - floor < PLANT_HEIGHT_M && speed_cm_s < PLANT_SPEED_CM_S
-        })
-        .collect()
+/// The source joint's planted frames by the engine's one foot-contact rule
+/// ([`planted_frames`]), measured at the canonical size: `src` is at the character's, `scale`
+/// times it, so every rig holds the same frames of the same source.
+fn planted_at_canonical_size(src: &[Vec3], scale: f32, fps: f32) -> Vec<bool> {
+    let s = if scale.is_finite() && scale > 0.0 { scale } else { 1.0 };
+    planted_frames(&src.iter().map(|p| *p / s).collect::<Vec<_>>(), fps)
 }
 
 /// One leg's tracks for [`hold_plan`]: the source's ankle and toe (at the character's size) and
 /// the character's free ankle and toe (pass 0: the transfer alone), per frame; the toe tracks
 /// are empty for a rig without toes. `y_offset` takes the source's ankle height onto the
-/// character's ground.
+/// character's ground; `scale` is the character's size over the canonical skeleton's (the
+/// source tracks are scaled by it).
 pub(super) struct FootTracks {
     pub(super) src_ankle: Vec<Vec3>,
     pub(super) src_toe: Vec<Vec3>,
     pub(super) free_ankle: Vec<Vec3>,
     pub(super) free_toe: Vec<Vec3>,
     pub(super) y_offset: f32,
+    pub(super) scale: f32,
 }
 
 /// The point a planted foot stands on: the ankle (a flat foot, or one turning on its heel) or
@@ -151,7 +141,8 @@ pub(super) enum Release {
 }
 
 /// [`hold_plan`] with the planted frames given (`contacts`: per leg and frame, the point a
-/// planted foot stands on; `None`: read from the source tracks by [`planted_frames`]) and a
+/// planted foot stands on; `None`: read from the source tracks by the one contact rule,
+/// [`planted_frames`]) and a
 /// choice of [`Release`].
 pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[Vec<Option<Contact>>]>, release: Release) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3>) {
     let legs = feet.len();
@@ -162,9 +153,9 @@ pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[V
         None => feet
             .iter()
             .map(|t| {
-                let ankle = planted_frames(&t.src_ankle[..frames], fps);
+                let ankle = planted_at_canonical_size(&t.src_ankle[..frames], t.scale, fps);
                 let has_toe = t.src_toe.len() >= frames && t.free_toe.len() >= frames;
-                let toe = if has_toe { planted_frames(&t.src_toe[..frames], fps) } else { vec![false; frames] };
+                let toe = if has_toe { planted_at_canonical_size(&t.src_toe[..frames], t.scale, fps) } else { vec![false; frames] };
                 (0..frames).map(|f| if ankle[f] { Some(Contact::Ankle) } else if toe[f] { Some(Contact::Toe) } else { None }).collect()
             })
             .collect(),
@@ -298,7 +289,8 @@ pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[V
 pub(super) const TOE_PITCH_MAX_RAD: f32 = std::f32::consts::FRAC_PI_2;
 
 /// Keeps the character's toe off the floor where the source's is: wherever the source's toe
-/// is on its floor (within spec §J's contact band, [`PLANT_HEIGHT_M`]) and the character's toe
+/// is on its floor (within the contact rule's band, [`CONTACT_HEIGHT_M`], taken at the
+/// character's size: the clearance was measured so) and the character's toe
 /// would go lower than it (at the character's size, on the character's ground:
 /// `toe_y_offset`), the foot is pitched up about its ankle hinge (`hinge`: the horizontal
 /// axis across the foot at rest, as the transfer turns the foot on each frame) just enough to
@@ -319,7 +311,8 @@ pub(super) const TOE_PITCH_MAX_RAD: f32 = std::f32::consts::FRAC_PI_2;
 ///   than [`TOE_PITCH_MAX_RAD`]).
 /// - Every such frame counts, held or not (a heel rising on a held ankle, a foot held on its
 ///   ball, a release ease), but one where the transfer sweeps the toe faster than the source's
-///   by more than a planted foot moves ([`PLANT_SPEED_CM_S`]): its path there is the rig's own
+///   by more than a planted foot moves ([`CONTACT_SPEED_M_S`], at the character's size): its
+///   path there is the rig's own
 ///   (a body with wider hips turning round a held foot, as in pivot turns), not the source's
 ///   contact, and putting it on the floor would draw a slide the source does not make. A foot
 ///   in the air keeps the transfer's pose (a pointed foot lifted in a kick is not turned).
@@ -348,7 +341,7 @@ pub(super) fn toe_clearance(feet: &[FootTracks], hinge: &[Vec<Vec3>], toe_y_offs
         };
         let mut pitch = vec![0.0f32; frames];
         for f in 0..frames {
-            if t.src_toe[f].y - floor >= PLANT_HEIGHT_M || speed_cm_s(&t.free_toe, f, true) > speed_cm_s(&t.src_toe, f, false) + PLANT_SPEED_CM_S {
+            if t.src_toe[f].y - floor >= CONTACT_HEIGHT_M || speed_cm_s(&t.free_toe, f, true) > speed_cm_s(&t.src_toe, f, false) + CONTACT_SPEED_M_S * 100.0 {
                 continue;
             }
             // The foot, ankle to toe, as the transfer turns it (the IK leaves the foot its

@@ -56,7 +56,7 @@ use crate::skeleton::Skeleton;
 mod hold;
 
 use hold::*;
-pub(crate) use hold::{hold_feet_in_dance, planted_frames, DANCE_CATCH_UP_M_S};
+pub(crate) use hold::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
 
 /// Why a character cannot play humanoid motion, naming what is missing.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -458,6 +458,7 @@ impl Character {
                 // The source's ankle height maps onto the character's: its rest ankle stands
                 // where the canonical rest ankle does, scaled.
                 y_offset: char_rest_pos[leg.foot].y - canon_rest[leg.canon_foot.index()].y * scale,
+                scale,
             })
             .collect();
         // The same for the toe: the source's toe height onto the character's ground.
@@ -497,8 +498,7 @@ impl Character {
             }
         };
         let mut rotations = Vec::with_capacity(frames * n);
-        let (mut src_rot, mut src_pos) = (vec![Quat::IDENTITY; CANON_COUNT], vec![Vec3::ZERO; CANON_COUNT]);
-        let mut src_t = Vec::with_capacity(CANON_COUNT);
+        let mut src_pose = motion::WorldPose::new();
         let mut g = vec![Quat::IDENTITY; n];
         let mut p = vec![Vec3::ZERO; n];
         let mut local = vec![Quat::IDENTITY; n];
@@ -542,8 +542,8 @@ impl Character {
                 t.values.clear();
             }
             for f in 0..frames {
-                src.local_translations_into(f, &mut src_t);
-                motion::local_to_world(canon, src.frame_rotations(f), &src_t, &mut src_rot, &mut src_pos);
+                let src_now = src_pose.of_frame(&src, f);
+                let (src_rot, src_pos) = (&src_now.rotations, &src_now.positions);
                 // Hips target: the character's rest hips moved as the source's hips move from
                 // theirs, scaled by the ratio of leg lengths, lowered where a held foot would
                 // otherwise be out of reach and shifted to keep held feet put.
@@ -712,10 +712,7 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
     let frames = src.frame_count().min(out.frame_count());
     let canon = canonical_skeleton();
     let canon_rest = canon.rest_positions();
-    let n = out.skeleton.len();
-    let (mut sr, mut sp) = (vec![Quat::IDENTITY; CANON_COUNT], vec![Vec3::ZERO; CANON_COUNT]);
-    let (mut cr, mut cp) = (vec![Quat::IDENTITY; n], vec![Vec3::ZERO; n]);
-    let (mut st, mut ct) = (Vec::new(), Vec::new());
+    let (mut src_pose, mut out_pose) = (motion::WorldPose::new(), motion::WorldPose::new());
     // Foot bones keep each rig's own rest slope (see `Character::build`): not compared.
     let bones: std::collections::BTreeSet<(Canon, Canon)> =
         Canon::ALL.into_iter().map(direction_bone).filter(|(a, _)| !matches!(a, Canon::LeftFoot | Canon::RightFoot)).collect();
@@ -726,10 +723,8 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
     let mut out_tracks: Vec<Vec<Vec3>> = (0..4).map(|_| Vec::with_capacity(frames)).collect();
     let scale = character.scale_from_canonical();
     for f in 0..frames {
-        src.local_translations_into(f, &mut st);
-        motion::local_to_world(&src.skeleton, src.frame_rotations(f), &st, &mut sr, &mut sp);
-        out.local_translations_into(f, &mut ct);
-        motion::local_to_world(&out.skeleton, out.frame_rotations(f), &ct, &mut cr, &mut cp);
+        let (src_now, out_now) = (src_pose.of_frame(&src, f), out_pose.of_frame(out, f));
+        let (sr, sp, cr, cp) = (&src_now.rotations, &src_now.positions, &out_now.rotations, &out_now.positions);
         // Each canonical joint's own bone (the one it turns); branch links such as hips→thigh
         // or chest→shoulder are the rig's proportions, not motion, and are not compared.
         for &(s, c) in &bones {
@@ -848,7 +843,7 @@ mod tests {
     }
 
     fn tracks(src_ankle: Vec<Vec3>, src_toe: Vec<Vec3>, free_ankle: Vec<Vec3>, free_toe: Vec<Vec3>) -> FootTracks {
-        FootTracks { src_ankle, src_toe, free_ankle, free_toe, y_offset: 0.02 }
+        FootTracks { src_ankle, src_toe, free_ankle, free_toe, y_offset: 0.02, scale: 1.0 }
     }
 
     #[test]

@@ -46,7 +46,7 @@ impl LibraryClip {
     }
 
     /// Per frame of the clip as recorded, whether its left ankle, left toe, right ankle and
-    /// right toe are planted (the retargeting's rule, [`crate::canon::character::planted_frames`]):
+    /// right toe are planted (the engine's one contact rule, [`crate::canon::contact::planted_frames`]):
     /// found once per clip, not on every render of a dance that plays it.
     pub(crate) fn planted_feet(&self) -> &[Vec<bool>; 4] {
         self.planted.get_or_init(|| {
@@ -54,7 +54,7 @@ impl LibraryClip {
             let pos = canonical_positions(c, &HumanoidMap::from_skeleton(&c.skeleton));
             let n = pos.len() / CANON_COUNT;
             let joints = [Canon::LeftFoot, Canon::LeftToe, Canon::RightFoot, Canon::RightToe];
-            Arc::new(joints.map(|j| crate::canon::character::planted_frames(&(0..n).map(|k| pos[k * CANON_COUNT + j.index()]).collect::<Vec<_>>(), c.fps)))
+            Arc::new(joints.map(|j| crate::canon::contact::planted_frames(&(0..n).map(|k| pos[k * CANON_COUNT + j.index()]).collect::<Vec<_>>(), c.fps)))
         })
     }
 }
@@ -257,8 +257,8 @@ pub const LINKS: [(usize, usize); LINK_COUNT] = {
     out
 };
 
-/// World positions of every frame of a clip on the canonical skeleton (frame-major), by an
-/// allocation-free forward kinematics.
+/// World positions of every frame of a clip on the canonical skeleton (frame-major), by
+/// the motion kernel's [`crate::motion::WorldPose`], reused from frame to frame.
 pub(crate) fn canonical_world_positions(clip: &Clip) -> Vec<Vec3> {
     let frames = clip.frame_count();
     let sk = &clip.skeleton;
@@ -267,13 +267,11 @@ pub(crate) fn canonical_world_positions(clip: &Clip) -> Vec<Vec3> {
     }
     let root = clip.translations.iter().find(|t| t.joint == 0).map(|t| t.values.as_slice());
     let mut out = Vec::with_capacity(frames * CANON_COUNT);
-    let mut rot = [glam::Quat::IDENTITY; CANON_COUNT];
-    let mut pos = [Vec3::ZERO; CANON_COUNT];
+    let mut pose = crate::motion::WorldPose::new();
     let rest_root = sk.joints.first().map_or(Vec3::ZERO, |j| j.rest_offset);
     for f in 0..frames {
         let at = root.and_then(|r| r.get(f).copied()).unwrap_or(rest_root);
-        sk.pose_into(clip.frame_rotations(f), at, &mut rot, &mut pos);
-        out.extend_from_slice(&pos);
+        out.extend_from_slice(&pose.of_rotations(sk, clip.frame_rotations(f), at).positions);
     }
     out
 }

@@ -1,0 +1,121 @@
+//! What the page shows of a project, as the engine states it: [`ProjectSummary`] names each fact
+//! the page needs (the name, the sources, the song, tags, put-on clips, the body, texts, ρ and
+//! the music weight) and gives a key for each thing whose change the page must notice, so the
+//! page never reads the document's schema ([`super::ProjectDoc`]). The whole document crosses to
+//! the page only to be stored and given back unchanged (autosave and restore);
+//! [`manifest_blob_hashes`] reads a stored manifest's blob list for the store's collection.
+
+use serde::{Deserialize, Serialize};
+
+use super::{BlobHash, ClipRef, FileError, Project, SourceId};
+use crate::music::GridCorrection;
+
+/// The project as the page shows it. See the module doc.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct ProjectSummary {
+    pub name: String,
+    /// Every source in the document, by id.
+    pub sources: Vec<SourceId>,
+    pub song: Option<SongSummary>,
+    /// Each tagged clip and its tags.
+    pub tags: Vec<TagSummary>,
+    /// The clips put on a character, in order.
+    pub worn: Vec<WornSummary>,
+    /// The imported character chosen, if any.
+    pub character: Option<ClipRef>,
+    /// Stick figures chosen (no character: the built-in body unless this is set).
+    pub stick_figures: bool,
+    pub texts: Vec<String>,
+    /// The dance's ρ (0..=1).
+    pub rho: f32,
+    /// The dance's music weight.
+    pub music_weight: f32,
+}
+
+/// The song as the page shows it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct SongSummary {
+    pub file_name: String,
+    /// Its audio's hash (a blob of the project); none for the built-in demo song.
+    pub audio: Option<BlobHash>,
+    /// Equal for the same song analysed the same way (file, audio, envelope, options), whatever
+    /// its grid corrections: the page loads a song again only when this changes.
+    pub key: String,
+    /// Every grid correction, in order (each one a `Song.correct` argument).
+    pub corrections: Vec<GridCorrection>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct TagSummary {
+    pub clip: ClipRef,
+    pub tags: Vec<String>,
+}
+
+/// A clip put on a character.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct WornSummary {
+    /// Equal for the same recipe (character and motion): the page rebuilds the clip only when it changes.
+    pub key: String,
+    pub character: ClipRef,
+}
+
+impl Project {
+    /// What the page shows of the project ([`ProjectSummary`]).
+    pub fn summary(&self) -> ProjectSummary {
+        let d = self.doc();
+        let key = |v: serde_json::Result<String>| v.unwrap_or_default();
+        ProjectSummary {
+            name: d.name.clone(),
+            sources: d.sources.iter().map(|s| s.id).collect(),
+            song: d.song.as_ref().map(|s| SongSummary {
+                file_name: s.file_name.clone(),
+                audio: s.audio.clone(),
+                key: key(serde_json::to_string(&(&s.file_name, &s.audio, &s.envelope, &s.options))),
+                corrections: s.corrections.clone(),
+            }),
+            tags: d.tags.iter().map(|t| TagSummary { clip: t.clip, tags: t.tags.clone() }).collect(),
+            worn: d.worn.iter().map(|w| WornSummary { key: key(serde_json::to_string(w)), character: w.character }).collect(),
+            character: d.character,
+            stick_figures: d.stick_figures,
+            texts: d.texts.clone(),
+            rho: d.dance.settings.rho,
+            music_weight: d.dance.settings.fill.music_weight,
+        }
+    }
+}
+
+/// The blobs a stored manifest (as [`super::file::manifest_json`] writes it) lists, without
+/// reading the project it holds.
+pub fn manifest_blob_hashes(manifest: &[u8]) -> Result<Vec<BlobHash>, FileError> {
+    #[derive(Deserialize)]
+    struct Blobs {
+        #[serde(default)]
+        blobs: std::collections::BTreeMap<BlobHash, serde::de::IgnoredAny>,
+    }
+    let b: Blobs = serde_json::from_slice(manifest).map_err(|e| FileError::BadManifest { line: e.line(), column: e.column(), message: e.to_string() })?;
+    Ok(b.blobs.into_keys().collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn summary_states_the_document_and_its_keys() {
+        let mut p = Project::new();
+        p.set_name("a dance");
+        p.set_texts(vec!["wave".into()]);
+        let s = p.summary();
+        assert_eq!(s.name, "a dance");
+        assert_eq!(s.texts, vec!["wave".to_string()]);
+        assert!(s.song.is_none() && s.sources.is_empty() && s.worn.is_empty());
+        assert_eq!(s.rho, p.doc().dance.settings.rho);
+        let hashes = manifest_blob_hashes(&super::super::file::manifest_json(&p)).unwrap();
+        assert_eq!(hashes, p.referenced_blobs().into_iter().collect::<Vec<_>>());
+        assert!(matches!(manifest_blob_hashes(b"{not json"), Err(FileError::BadManifest { .. })));
+    }
+}
