@@ -86,7 +86,7 @@ fn skin_error(m: &MmdModel, c: &ModelCharacter, motion: &MmdMotion, frame: usize
     let clip = c.rig.motion_to_clip(motion, &MmdClipOptions::default()).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(clip.skeleton.len(), c.character.skeleton.len(), "the VMD's clip is on the character's own skeleton");
     let mut world = Vec::new();
-    clip.world_matrices_into(frame.min(clip.frame_count() - 1), &mut world);
+    odori_core::motion::WorldPose::new().of_frame(&clip, frame.min(clip.frame_count() - 1)).matrices_into(&mut world);
     let mesh = &c.character.mesh;
     let skin: Vec<Mat4> = mesh.palette.iter().map(|(j, bind)| world[*j] * *bind).collect();
     let engine: Vec<Vec3> = mesh
@@ -161,7 +161,7 @@ fn miku_v2_plays_wavefile_with_her_skin_where_the_rig_puts_it() {
     // A control: the rest pose's skin against the dance's pose moves vertices by far more.
     let clip = c.rig.motion_to_clip(&dance, &MmdClipOptions::default()).unwrap();
     let mut world = Vec::new();
-    clip.world_matrices_into(1500, &mut world);
+    odori_core::motion::WorldPose::new().of_frame(&clip, 1500).matrices_into(&mut world);
     let moved = c.character.mesh.palette.iter().map(|(j, bind)| (world[*j] * *bind).transform_point3(Vec3::ZERO).length()).fold(0.0f32, f32::max);
     assert!(moved > 0.05, "the dance moves the skin ({moved} m)");
     assert!(skin_error(&m.model, &c, &rest_motion, 0) < 1e-5);
@@ -279,7 +279,7 @@ fn gene_hair_lags_a_head_turn_and_settles_within_a_second() {
     clip.validate().unwrap();
     let tip_rot = |c: &Clip, f: usize| {
         let mut w = Vec::new();
-        c.world_matrices_into(f, &mut w);
+        odori_core::motion::WorldPose::new().of_frame(&c, f).matrices_into(&mut w);
         w[tip].to_scale_rotation_translation().1
     };
     let lag = |c: &Clip, secs: f32| tip_rot(c, (secs * c.fps).round() as usize).angle_between(tip_rot(&clip, (secs * fps).round() as usize)).to_degrees();
