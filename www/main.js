@@ -351,12 +351,21 @@ function renderDemoSong(sampleRateHz) {
   });
 }
 
+/**
+ * Song loads are numbered: the song chosen last wins. A load that finishes after a later one
+ * started (the new project's demo song still being made when the person picks a file) is
+ * dropped instead of replacing the person's song.
+ */
+let songLoads = 0;
+
 /** Loads the built-in demo song; with `session`, it becomes the project's song. True when loaded. */
 async function loadDemoSong(songPanel, messages, session) {
+  const load = ++songLoads;
   try {
     const demo = await renderDemoSong(44100);
     const buffer = bufferFromSamples(demo.samples, demo.sampleRateHz);
     const { song, env } = await analyse(buffer);
+    if (load !== songLoads) return false;
     // The project first: the dance panel reads its bars from the project's grid.
     if (session) session.setSong(DEMO_SONG_NAME, undefined, env);
     songPanel.load(song, DEMO_SONG_NAME, buffer);
@@ -373,11 +382,13 @@ const DEMO_SONG_NAME = "Demo song (built-in)";
 /** Decodes and analyses a song file's bytes; with `session`, it becomes the project's song. */
 async function loadSongBytes(fileName, bytes, songPanel, messages, session) {
   const status = document.querySelector("#status");
+  const load = ++songLoads;
   try {
     status.textContent = `Decoding ${fileName}…`;
     const buffer = await decodeSong(bytes, fileName);
     status.textContent = `Analysing ${fileName}…`;
     const { song, env } = await analyse(buffer);
+    if (load !== songLoads) return false;
     if (session) session.setSong(fileName, bytes, env);
     songPanel.load(song, fileName, buffer);
     messages.info(`${fileName}: ${song.grid().bars.length} bars at ${song.grid().bpm.toFixed(1)} BPM`);

@@ -284,6 +284,11 @@ test("video (webgl2): a dance from bar 1 of a song whose first bar starts later 
     await openApp(page, server, "webgl2");
     await page.setInputFiles("#song-input", join(data, "music", LEAD_SONG));
     await page.waitForFunction((n) => document.body.dataset.song === n, LEAD_SONG, { timeout: 180000 });
+    // The file is picked as soon as the page is ready, while the new project's demo song may
+    // still be in the making: the song picked last must stay the project's song.
+    await page.waitForFunction(() => document.body.dataset.project === "ready", null, { timeout: 180000 });
+    assert.equal(await page.evaluate(() => document.body.dataset.song), LEAD_SONG, "the demo song, made later, replaced the picked song");
+    assert.equal(await page.evaluate(() => window.odori.project.project.summary().song?.fileName), LEAD_SONG, "the project's song");
     await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 90000 });
     await page.click("#dance-generate");
     await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 90000 });
