@@ -13,8 +13,14 @@
 // of the viewer's own and read back asynchronously (`Viewer.setCapture`): the page's thread
 // yields to the event loop while the GPU draws, instead of waiting for it as reading the
 // canvas does (`new VideoFrame(canvas)` held the thread 60–250 ms a frame with software
-// drawing). The work stays on the page's thread (`result.path` says so): a Worker would need
-// its own engine and a copy of the library. An AbortSignal cancels it, leaving nothing written.
+// drawing). Each frame's steps run in tasks of their own (draw; read back into one reused
+// array and a VideoFrame; the encoder's intake), so no task holds more than one step, and the
+// pixels are copied twice a frame (read back → array → VideoFrame), not four times with a new
+// 3.6 MB array each. The work stays on the page's thread (`result.path` says so): a Worker would
+// need its own engine and a copy of the library. A page that draws a view of its own should
+// pause it meanwhile (the app pauses its playback): its frames wait behind the export's on the
+// same GPU, holding the page's thread in each frame's commit (docs/benchmarks.md, the video
+// section). An AbortSignal cancels it, leaving nothing written.
 import {
   Output, Mp4OutputFormat, WebMOutputFormat, BufferTarget, StreamTarget, VideoSampleSource, VideoSample, AudioBufferSource,
   canEncodeVideo, canEncodeAudio,
@@ -134,26 +140,39 @@ function slice(buffer, a, b) {
   return out;
 }
 
+/** Waits a little (a timer): while the GPU draws, polling without a pause would spin the thread. */
 const nextTask = () => new Promise((r) => setTimeout(r, 0));
 
 /**
- * Draws `figures` into the viewer's capture and resolves its pixels once the GPU has drawn
- * them, yielding to the event loop meanwhile; `last` when the draw repeats the last frame
- * (the viewer draws nothing then: a clip's end held). Waits out a skinned figure's textures
- * still being decoded (the viewer holds such frames back, at most a few seconds).
+ * Ends the current task and goes on in a new one at once (a MessageChannel message, not a
+ * timer: nested timers are held to 4 ms): input and rendering that came meanwhile run first.
  */
-async function drawCaptured(viewer, library, figures, last) {
+const channel = typeof MessageChannel === "function" ? new MessageChannel() : null;
+const waiting = [];
+if (channel) channel.port1.onmessage = () => waiting.shift()?.();
+const yieldTask = () => (channel ? new Promise((r) => { waiting.push(r); channel.port2.postMessage(0); }) : nextTask());
+
+/**
+ * Draws `figures` into the viewer's capture and, once the GPU has drawn them, copies the
+ * pixels into `pixels` (width × height × 4, reused every frame), yielding to the event loop
+ * meanwhile. Leaves `pixels` as they are when the draw repeats the last frame (the viewer draws
+ * nothing then: a clip's end held), `first` saying whether there is a last frame. Waits out
+ * a skinned figure's textures still being decoded (the viewer holds such frames back, at
+ * most a few seconds).
+ */
+async function drawCaptured(viewer, library, figures, pixels, first) {
   let drew = viewer.draw(library, figures);
   while (!drew && viewer.waitingForTextures) {
     await nextTask();
     drew = viewer.draw(library, figures);
   }
   if (!drew) {
-    if (last) return last;
-    throw new VideoExportError("video-encode", "the first frame could not be drawn");
+    if (first) throw new VideoExportError("video-encode", "the first frame could not be drawn");
+    return;
   }
+  await nextTask();
   while (!viewer.captureReady()) await nextTask();
-  return viewer.takeCapture();
+  viewer.takeCaptureInto(pixels);
 }
 
 /**
@@ -256,7 +275,9 @@ export async function exportVideo(options, onProgress = () => {}) {
     const t0 = performance.now();
     let fed = 0; // audio samples given to the encoder
     let reported = performance.now();
-    let pixels = null;
+    const pixels = new Uint8Array(o.width * o.height * 4);
+    // The colours as they are (sRGB, full range): what Mediabunny assumes for RGBA samples.
+    const colorSpace = { primaries: "bt709", transfer: "iec61966-2-1", matrix: "rgb", fullRange: true };
     for (let i = 0; i < frames; i++) {
       if (signal?.aborted) throw cancelled();
       // The sound a second ahead of the picture, a second at a time (the muxer interleaves).
@@ -268,14 +289,19 @@ export async function exportVideo(options, onProgress = () => {}) {
         }
       }
       viewer.setCamera(o.cameraTrack ? o.cameraTrack(times[i]) : plan.poses[i]);
-      pixels = await drawCaptured(viewer, library, figures.map((f) => ({ ...f, timeSecs: times[i] })), pixels);
+      await drawCaptured(viewer, library, figures.map((f) => ({ ...f, timeSecs: times[i] })), pixels, i === 0);
       if (signal?.aborted) throw cancelled();
-      const sample = new VideoSample(pixels, { format: pixelFormat, codedWidth: o.width, codedHeight: o.height, timestamp: i / o.fps, duration: 1 / o.fps });
+      // The VideoFrame copies the pixels (the array is reused); the sample wraps the frame.
+      const frame = new VideoFrame(pixels, { format: pixelFormat, codedWidth: o.width, codedHeight: o.height, timestamp: Math.trunc((i / o.fps) * 1e6), duration: Math.trunc(1e6 / o.fps), colorSpace });
+      const sample = new VideoSample(frame, { timestamp: i / o.fps, duration: 1 / o.fps });
+      await yieldTask();
       try {
         await video.add(sample);
       } finally {
         sample.close();
+        frame.close();
       }
+      await yieldTask();
       if (performance.now() - reported > PROGRESS_MS || i === frames - 1) {
         const elapsed = (performance.now() - t0) / 1000;
         const done = i + 1;

@@ -117,6 +117,12 @@ export async function makeVideo(panel, plan, { withoutSound = false } = {}) {
   bar.value = 0;
   cancel.onclick = () => abort.abort();
   status.textContent = "Starting…";
+  // The page's own view pauses while the video is made, and plays on after if it played: its
+  // frames would wait behind the export's on the same GPU, each holding the page's thread for
+  // 100–330 ms in its commit with software drawing (docs/benchmarks.md, the video section).
+  const player = panel.player;
+  const wasPlaying = !!player?.playing;
+  if (wasPlaying) player.pause();
   try {
     const result = await exportVideo({
       engine: ctx.engine, library: panel.library, clip: plan.id, startSecs, endSecs, bars,
@@ -162,5 +168,6 @@ export async function makeVideo(panel, plan, { withoutSound = false } = {}) {
   } finally {
     go.disabled = false;
     cancel.hidden = true;
+    if (wasPlaying && !player.playing) player.play();
   }
 }
