@@ -58,8 +58,11 @@ const CODEC_NAMES = { avc: "H.264", vp9: "VP9", av1: "AV1", vp8: "VP8", aac: "AA
 
 /** Seconds of fade in and out at the ends of the trimmed song (no click at a cut mid-note). */
 export const FADE_SECS = 0.02;
-/** Progress is reported about this often (ms). */
-const PROGRESS_MS = 100;
+/**
+ * Progress is reported about this often (ms): each report moves the page's progress bar, and
+ * each frame the page then paints can wait behind the export's GPU work (docs/benchmarks.md).
+ */
+const PROGRESS_MS = 250;
 /** Where the frames are drawn and read back (`result.path`). */
 export const EXPORT_PATH = "main thread, frames read back asynchronously";
 
