@@ -7,7 +7,8 @@
 // sound lines up with the song's own samples (cross-correlation peak at lag 0 ± 1 ms). Then a
 // WebM streamed into a file (the Origin Private File System's writable, the same kind of
 // stream `showSaveFilePicker` gives), a cancelled stream (the file stays empty), and Cancel
-// at 50 % in the app's dialog: no file, no error, the project unchanged.
+// at 50 % in the app's dialog: no file, no error, the project unchanged, the page's playback
+// paused during the export and playing after.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { execFileSync } from "node:child_process";
@@ -245,7 +246,7 @@ test("video (webgl2): a WebM streamed into a file, a cancelled stream leaves it 
     // Cancel at 50 % in the app's dialog: no download, no error, the project unchanged.
     const downloads = [];
     page.on("download", (d) => downloads.push(d.suggestedFilename()));
-    const before = await page.evaluate(() => { delete window.showSaveFilePicker; return { rev: window.odori.project.project.revision, doc: JSON.stringify(window.odori.project.project.doc()) }; });
+    const before = await page.evaluate(() => { delete window.showSaveFilePicker; window.odori.player.play(); return { rev: window.odori.project.project.revision, doc: JSON.stringify(window.odori.project.project.doc()) }; });
     await page.click("#export");
     await page.selectOption("#export-format", "video");
     await page.click("#export-go");
@@ -253,6 +254,9 @@ test("video (webgl2): a WebM streamed into a file, a cancelled stream leaves it 
     await page.selectOption("#video-size", "1280x720");
     await page.click("#video-go");
     await page.waitForFunction(() => Number(document.querySelector("#video-progress").value) >= 0.5, null, { timeout: 600000 });
+    // The page's playback pauses while the video is made (its frames would wait behind the
+    // export's on the GPU, holding the page's thread) and plays on after.
+    assert.equal(await page.evaluate(() => window.odori.player.playing), false, "the playback is paused during the export");
     await page.click("#video-cancel");
     await page.waitForFunction(() => /Cancelled/.test(document.querySelector("#video-status").textContent), null, { timeout: 60000 });
     await new Promise((r) => setTimeout(r, 500));
@@ -260,12 +264,14 @@ test("video (webgl2): a WebM streamed into a file, a cancelled stream leaves it 
       rev: window.odori.project.project.revision, doc: JSON.stringify(window.odori.project.project.doc()),
       errors: [...document.querySelectorAll("#messages li.error")].map((li) => li.textContent),
       status: document.querySelector("#video-status").textContent,
+      playing: window.odori.player.playing,
     }));
     console.log(`app: ${after.status}`);
     assert.deepEqual(downloads, [], "no file was downloaded");
     assert.deepEqual(after.errors, [], "no error shown");
     assert.equal(after.rev, before.rev, "the project's revision");
     assert.equal(after.doc, before.doc, "the project's document");
+    assert.equal(after.playing, true, "the playback plays on after the export");
     assert.deepEqual(logs.filter((l) => l.startsWith("[pageerror]")), []);
   } finally {
     await browser.close();
