@@ -42,11 +42,6 @@ use crate::bars::Bar;
 pub const JOIN_REPAIRS: usize = 16;
 /// Default [`GenerateOptions::variety_weight`]: see there.
 pub const VARIETY_WEIGHT_DEFAULT: f32 = 0.25;
-/// The beat term's factor while the variety term is on: the variety term trades beat fit for
-/// spread, and with joins blended (random moves keep their counts at the bar lines too) the
-/// trade at the plain beat weight fell below random moves on Let's Go Fishin' (0.705 against
-/// 0.710); this keeps the beat goals with the spread (`choreo_variety`).
-pub const VARIETY_BEAT_FACTOR: f32 = 2.0;
 
 /// The largest take [`GenerateOptions::take`] accepts: take k makes the k takes before it
 /// first (the whole pipeline each), so its time grows with k.
@@ -233,9 +228,9 @@ pub struct Problem<'a> {
 impl<'a> Problem<'a> {
     /// The problem of filling `layers` (one per bar of `bars`) from `lib` with `weights`.
     pub fn new(lib: &'a SegmentLibrary, bars: &'a [Bar], layers: &'a [Layer], weights: FillWeights, options: &GenerateOptions) -> Self {
-        let weights = super::fill::fill_weights_for(weights, lib.segments().iter().any(|s| s.builtin.is_none() && !s.retired));
         let variety = Some(super::variety::Variety::new(lib, options.variety_weight)).filter(super::variety::Variety::is_on);
-        let weights = if variety.is_some() { FillWeights { beat_weight: weights.beat_weight * VARIETY_BEAT_FACTOR, ..weights } } else { weights };
+        let has_imported = lib.segments().iter().any(|s| s.builtin.is_none() && !s.retired);
+        let weights = super::fill::fill_weights_for(weights, has_imported, variety.is_some());
         // The joins this song's bars make (its metres, and any change between two bars).
         let bar_counts = bar_counts(lib, bars);
         let table = lib.transition_table_for(weights.repeat_penalty, &TableScope::for_bar_counts(&bar_counts));
