@@ -30,11 +30,14 @@ use odori_tests::{all_bvh, fps_override_for, read};
 /// Measured 2026-11-29 after the session's merge (inertialized joins, *my moves* with the beat
 /// term ×10, the one foot-contact rule, the cut on steps off by default): the full library
 /// meets every goal on 8 of 10 pieces, half 0 on 9 of 10, half 1 (346 imported segments) on 4 of
-/// 10 — its dances beat random moves by less than 0.05 on four pieces.
+/// 10 — its dances beat random moves by less than 0.05 on four pieces. Then (s13) the join
+/// repair opens the bar of an imported move that misses the join goal to built-in moves (the
+/// preference order): half 0's Let's Go Fishin' joins at 1.50 (was 1.56; 43 of 48 bars
+/// imported). The 150 BPM piece in 3 still joins at 1.92 as rendered with feet held (the repair
+/// measures the dance unheld).
 const KNOWN_MISSES: &[(&str, &str, &str, &str)] = &[
     ("all", "solo-trumpet-06", "skate", "one bar: skate 53.4 against its sources' 37.7 cm/s (as before the change)"),
-    ("all", "demo in 3, 150", "join", "join 1.92"),
-    ("half 0", "Lets_Go_Fishin", "join", "join 1.56"),
+    ("all", "demo in 3, 150", "join", "join 1.92 (held feet; the repair measures unheld)"),
     ("half 1", "Vibe_Ace", "random", "BAS-music 0.720 against random 0.688"),
     ("half 1", "Lets_Go_Fishin", "rate", "1.24 kinetic beats a count"),
     ("half 1", "Sugar_Plum", "random", "BAS-music 0.709 against random 0.671"),

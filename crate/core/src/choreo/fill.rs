@@ -65,7 +65,8 @@ pub enum MovesSource {
     /// Imported moves first: in a bar the library holds an imported move of the bar's count for,
     /// a built-in move costs [`MOVES_SOURCE_CHARGE`] more (far above any term of the objective:
     /// a preference order, not a weight), so built-in moves fill only bars no imported move
-    /// fits. With no imported move in the library, as `Mixed` (built-in moves only, there
+    /// fits, and bars whose imported move makes a join over the goal that the join repair
+    /// lifts the charge in ([`super::generate::join_repair_stage`]). With no imported move in the library, as `Mixed` (built-in moves only, there
     /// being no other): so the default is *my moves* once the person has imported a humanoid
     /// clip, and the built-in moves before (issue 26).
     #[default]
@@ -139,25 +140,43 @@ pub struct FillWeights {
     pub moves_source: MovesSource,
 }
 
-/// How many times its set weight the beat term weighs when [`MovesSource::Mine`] puts the
-/// person's imported moves first (a library holding any): with inertialized joins
-/// ([`super::render::JoinBlend::Inertial`]) the viewer sees little of a join's cost, and among
-/// imported moves only, which all fit the bar's count, the beat is what tells a good move from
-/// a weak one. Measured with `tests/native/choreo_my_moves.rs` (every song, the drum take and
-/// five demo pieces, the person library of every dance clip): at ×1 (0.3) the dance scored below
-/// random moves on Let's Go Fishin' (0.615 against 0.686) and the drum take (0.436 against 0.681);
-/// at ×3.3 (1.0) the drum take was still 0.705 against 0.681; at ×10 (3.0) every piece met the
-/// beat goals. A set weight of 0 still turns the term off.
+/// The beat term's factor when [`MovesSource::Mine`] puts the person's imported moves first (a
+/// library holding any); see [`fill_weights_for`]. Measured with `tests/native/choreo_my_moves.rs`
+/// (every song, the drum take and five demo pieces, the person library of every dance clip): at
+/// ×1 (0.3) the dance scored below random moves on Let's Go Fishin' (0.615 against 0.686) and the
+/// drum take (0.436 against 0.681); at ×3.3 (1.0) the drum take was still 0.705 against 0.681; at
+/// ×10 (3.0) every piece met the beat goals.
 pub const MINE_BEAT_FACTOR: f32 = 10.0;
 
-/// The weights the fill runs with: `weights`, with the beat term × [`MINE_BEAT_FACTOR`] when
-/// the source is [`MovesSource::Mine`] and the library holds imported moves (`has_imported`).
-pub fn fill_weights_for(weights: FillWeights, has_imported: bool) -> FillWeights {
+/// The beat term's factor while the variety term ([`super::variety`]) is on; see
+/// [`fill_weights_for`]. Measured with `tests/native/choreo_variety.rs`: at ×1 the dance fell
+/// below random moves on Let's Go Fishin' (0.705 against 0.710); at ×2 every piece keeps the beat
+/// goals with the spread.
+pub const VARIETY_BEAT_FACTOR: f32 = 2.0;
+
+/// The weights the fill runs with, given the set `weights` (its moves source among them),
+/// whether the library holds live imported moves (`has_imported`) and whether the variety term
+/// is on (`variety_on`): the set weights with the beat term multiplied by
+/// [`MINE_BEAT_FACTOR`] when *my moves* applies (source [`MovesSource::Mine`], imported moves
+/// present) and by [`VARIETY_BEAT_FACTOR`] when the variety term is on (both: the product).
+///
+/// Why, once for both: the beat term is the objective's only term that tells a move on the beat
+/// from one between beats, and with the joins blended
+/// ([`super::render::JoinBlend::Inertial`]) random moves keep their counts at the bar lines too,
+/// so the floor the dance must clear (random moves + 0.05, spec §J) is high. Any other term
+/// that narrows or reorders the choice — *my moves* keeping the fill to imported moves, which
+/// all fit the bar's count and whose joins the viewer barely sees, or the variety term trading
+/// beat fit for spread — leaves the beat a smaller share of the objective unless it weighs more
+/// by as much. A set weight of 0 still turns the term off.
+pub fn fill_weights_for(weights: FillWeights, has_imported: bool, variety_on: bool) -> FillWeights {
+    let mut factor = 1.0;
     if weights.moves_source == MovesSource::Mine && has_imported {
-        FillWeights { beat_weight: weights.beat_weight * MINE_BEAT_FACTOR, ..weights }
-    } else {
-        weights
+        factor *= MINE_BEAT_FACTOR;
     }
+    if variety_on {
+        factor *= VARIETY_BEAT_FACTOR;
+    }
+    FillWeights { beat_weight: weights.beat_weight * factor, ..weights }
 }
 
 /// Skate weights (per m/s of skate above the source clip's) tried, weakest first, by
@@ -896,6 +915,20 @@ mod tests {
         assert!((c3 - 2.02).abs() < 1e-5, "{c3}");
         // With no excess anywhere the path is kept.
         assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, FREE_SKATE_SLACK_DEFAULT, &|_, _| 0.0, &path).0, vec![0]);
+    }
+
+    #[test]
+    fn one_beat_weight_rule_for_moves_source_and_variety() {
+        let w = FillWeights::default();
+        let beat = |source: MovesSource, imported: bool, variety: bool| fill_weights_for(FillWeights { moves_source: source, ..w }, imported, variety).beat_weight;
+        assert_eq!(beat(MovesSource::Mixed, true, false), w.beat_weight);
+        assert_eq!(beat(MovesSource::Mine, false, false), w.beat_weight);
+        assert_eq!(beat(MovesSource::Mine, true, false), w.beat_weight * MINE_BEAT_FACTOR);
+        assert_eq!(beat(MovesSource::Builtin, true, true), w.beat_weight * VARIETY_BEAT_FACTOR);
+        assert_eq!(beat(MovesSource::Mine, true, true), w.beat_weight * MINE_BEAT_FACTOR * VARIETY_BEAT_FACTOR);
+        // Only the beat term changes; a set weight of 0 stays off.
+        let off = fill_weights_for(FillWeights { beat_weight: 0.0, ..w }, true, true);
+        assert_eq!(off, FillWeights { beat_weight: 0.0, ..w });
     }
 
     #[test]

@@ -42,11 +42,6 @@ use crate::bars::Bar;
 pub const JOIN_REPAIRS: usize = 16;
 /// Default [`GenerateOptions::variety_weight`]: see there.
 pub const VARIETY_WEIGHT_DEFAULT: f32 = 0.25;
-/// The beat term's factor while the variety term is on: the variety term trades beat fit for
-/// spread, and with joins blended (random moves keep their counts at the bar lines too) the
-/// trade at the plain beat weight fell below random moves on Let's Go Fishin' (0.705 against
-/// 0.710); this keeps the beat goals with the spread (`choreo_variety`).
-pub const VARIETY_BEAT_FACTOR: f32 = 2.0;
 
 /// The largest take [`GenerateOptions::take`] accepts: take k makes the k takes before it
 /// first (the whole pipeline each), so its time grows with k.
@@ -233,9 +228,9 @@ pub struct Problem<'a> {
 impl<'a> Problem<'a> {
     /// The problem of filling `layers` (one per bar of `bars`) from `lib` with `weights`.
     pub fn new(lib: &'a SegmentLibrary, bars: &'a [Bar], layers: &'a [Layer], weights: FillWeights, options: &GenerateOptions) -> Self {
-        let weights = super::fill::fill_weights_for(weights, lib.segments().iter().any(|s| s.builtin.is_none() && !s.retired));
         let variety = Some(super::variety::Variety::new(lib, options.variety_weight)).filter(super::variety::Variety::is_on);
-        let weights = if variety.is_some() { FillWeights { beat_weight: weights.beat_weight * VARIETY_BEAT_FACTOR, ..weights } } else { weights };
+        let has_imported = lib.segments().iter().any(|s| s.builtin.is_none() && !s.retired);
+        let weights = super::fill::fill_weights_for(weights, has_imported, variety.is_some());
         // The joins this song's bars make (its metres, and any change between two bars).
         let bar_counts = bar_counts(lib, bars);
         let table = lib.transition_table_for(weights.repeat_penalty, &TableScope::for_bar_counts(&bar_counts));
@@ -300,6 +295,20 @@ impl<'a> Problem<'a> {
                 builtin.iter().map(|&b| if charged && b == second_is_builtin { MOVES_SOURCE_CHARGE } else { 0.0 }).collect()
             })
             .collect()
+    }
+
+    /// Lifts the moves source's charge ([`Problem::moves_source_charge`]) in bar `t` by
+    /// adding its negative to `extra` (a full matrix, one row per layer): with it, the
+    /// moves the source puts second compete in that bar on their own merits. Used under
+    /// [`MovesSource::Mine`] for a bar whose imported move misses the join goal
+    /// ([`join_repair_stage`]): the preference order of issue 26, built-in moves only where no
+    /// imported move meets the goals.
+    fn lift_charge(&self, extra: &mut [Vec<f32>], t: usize) {
+        if let (Some(base), Some(row)) = (self.base.get(t), extra.get_mut(t)) {
+            for (e, b) in row.iter_mut().zip(base) {
+                *e -= b;
+            }
+        }
     }
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
@@ -413,7 +422,10 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 ///
 /// Each refill bars, from every bar, the move after the worst join of the last refill (the same
 /// move makes the same abrupt join wherever the filling puts it after a like move), so the bars
-/// add up over the tries. A refill whose feet slide past the goal the dance met makes the next
+/// add up over the tries. Under [`MovesSource::Mine`], the bar of a barred imported move is
+/// also opened to built-in moves (the source's charge lifted there, [`Problem::lift_charge`]):
+/// the preference order of issue 26 — built-in moves fill only bars where no imported move
+/// meets the goals — where the charge alone kept them out of every bar an imported move fits. A refill whose feet slide past the goal the dance met makes the next
 /// one charge skate too, at the next weight of [`skate_ladder`]. The best dance that keeps what
 /// the first one met (beat-rate band, skate goal) with a better worst join is returned; else
 /// `path` and `cost`.
@@ -428,6 +440,8 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
     let skate_met = current.is_some_and(|f| f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &path));
     let on_beat = current.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
     let mut ban: Vec<Vec<f32>> = Vec::new();
+    // Bars whose imported move missed the join goal, opened to built-in moves (*my moves*).
+    let mut opened = vec![false; p.layers.len()];
     let mut skate_weights = skate_ladder();
     let mut skate_weight = 0.0f32;
     for _ in 0..options.join_repairs {
@@ -449,12 +463,18 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
             for v in ban.iter_mut() {
                 v[s] += JOIN_BAN;
             }
+            if p.weights.moves_source == MovesSource::Mine && p.lib.segments().get(s).is_some_and(|seg| seg.builtin.is_none()) {
+                opened[t] = true;
+            }
         }
         if !skate_ok {
             let Some(w) = skate_weights.next() else { break };
             skate_weight = w;
         }
-        let extra: Vec<Vec<f32>> = ban.iter().enumerate().map(|(t, v)| v.iter().enumerate().map(|(s, b)| b + skate_weight * p.skate_excess(t, s).max(0.0) / 100.0).collect()).collect();
+        let mut extra: Vec<Vec<f32>> = ban.iter().enumerate().map(|(t, v)| v.iter().enumerate().map(|(s, b)| b + skate_weight * p.skate_excess(t, s).max(0.0) / 100.0).collect()).collect();
+        for t in (0..opened.len()).filter(|&t| opened[t]) {
+            p.lift_charge(&mut extra, t);
+        }
         let q = p.fill(weights, &extra)?;
         let (q, c) = p.free_skate(weights, &extra, &q);
         let after = measured.of(p, &q);

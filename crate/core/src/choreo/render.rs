@@ -383,6 +383,19 @@ fn quintic_offset(x0: f32, v0: f32, a0: f32, span: f32, t: f32) -> f32 {
     (((a * t + b) * t + c) * t + 0.5 * a0) * t * t + v0 * t + x0
 }
 
+/// The second derivative (per frame²) of [`quintic_offset`] at `t`: the acceleration the
+/// decaying offset adds to the incoming motion ([`super::table::blended_join_jump`]).
+pub(crate) fn quintic_offset_accel(x0: Vec3, v0: Vec3, a0: Vec3, span: f32, t: f32) -> Vec3 {
+    if t >= span {
+        return Vec3::ZERO;
+    }
+    let (t2, t3) = (span * span, span * span * span);
+    let a = -(a0 * t2 + 6.0 * v0 * span + 12.0 * x0) / (2.0 * t3 * t2);
+    let b = (3.0 * a0 * t2 + 16.0 * v0 * span + 30.0 * x0) / (2.0 * t2 * t2);
+    let c = -(3.0 * a0 * t2 + 12.0 * v0 * span + 20.0 * x0) / (2.0 * t3);
+    ((20.0 * a * t + 12.0 * b) * t + 6.0 * c) * t + a0
+}
+
 /// [`quintic_offset`] per component.
 fn quintic_offset3(x0: Vec3, v0: Vec3, a0: Vec3, span: f32, t: f32) -> Vec3 {
     Vec3::new(quintic_offset(x0.x, v0.x, a0.x, span, t), quintic_offset(x0.y, v0.y, a0.y, span, t), quintic_offset(x0.z, v0.z, a0.z, span, t))
@@ -673,6 +686,19 @@ mod tests {
         }
         assert!(sum_i < sum_n, "inertial joins {sum_i} no smoother than none {sum_n}");
         assert!(sum_i <= sum_h, "inertial joins {sum_i} rougher than Hermite {sum_h}");
+    }
+
+    #[test]
+    fn the_quintic_offsets_acceleration_is_its_second_difference() {
+        let (x0, v0, a0) = (Vec3::new(0.3, -0.1, 0.05), Vec3::new(0.02, 0.04, -0.01), Vec3::new(0.001, 0.0, -0.002));
+        let x = |t: f32| quintic_offset3(x0, v0, a0, 9.0, t);
+        for t in [0.5f32, 2.0, 4.5, 7.0] {
+            let h = 1e-2;
+            let fd = (x(t + h) - 2.0 * x(t) + x(t - h)) / (h * h);
+            assert!((fd - quintic_offset_accel(x0, v0, a0, 9.0, t)).length() < 1e-3, "t {t}: {fd} against {}", quintic_offset_accel(x0, v0, a0, 9.0, t));
+        }
+        assert!((quintic_offset_accel(x0, v0, a0, 9.0, 0.0) - a0).length() < 1e-6);
+        assert_eq!(quintic_offset_accel(x0, v0, a0, 9.0, 9.0), Vec3::ZERO);
     }
 
     #[test]

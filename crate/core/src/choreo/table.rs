@@ -77,6 +77,63 @@ pub fn link_weights() -> [f32; LINK_COUNT] {
     w.map(|x| x / sum)
 }
 
+/// Frames (at [`super::LIBRARY_FPS`], the segments' own rate) an inertialized join's offset
+/// decays over: [`super::render::INERTIAL_BLEND_SECS`].
+fn blend_span_frames() -> f32 {
+    super::render::INERTIAL_BLEND_SECS * super::LIBRARY_FPS
+}
+
+/// Spec §J's join jump predicted for segment `a` followed by `b` under the inertialized join
+/// ([`super::JoinBlend::Inertial`]), each played at its own tempo, from the two ends alone:
+/// what the viewer sees after the blend, where the table's C (§G: link directions, end gaps)
+/// measures the join before it. [`blended_join_jump_at`] at `None`.
+pub fn blended_join_jump(lib: &SegmentLibrary, a: usize, b: usize) -> Option<f32> {
+    blended_join_jump_at(lib, a, b, None)
+}
+
+/// [`blended_join_jump`] with both segments played at `count_rate_bpm` counts a minute
+/// (`None`: each at its own tempo).
+///
+/// The render places `b` where `a` ends, facing the same way; the blend carries the outgoing
+/// motion on into the switch and adds the offset — pose x₀ = (x_A + v_A + ½a_A) − x_B, velocity
+/// v₀ = v_A − v_B, acceleration a₀ = a_A − a_B, per joint (from the hips' ground point, facing
+/// removed, body heights, per frame) — to the incoming motion, decayed by the quintic of
+/// [`super::render`] over [`super::render::INERTIAL_BLEND_SECS`]. The jump the viewer sees is
+/// the largest joint acceleration near the join: the outgoing move's at its end, or the
+/// incoming move's at its start plus the offset's (sampled at ten points of the decay). §J
+/// divides it by the 95th percentile of the moves' own; here by the mean of the two segments'
+/// own sharpness (the mean ranked joins better than the larger or the geometric mean: ρ 0.62
+/// and 0.59 on the two halves of `tests/native/choreo_join_cost.rs` against 0.58/0.57 and
+/// 0.61/0.57). Played at r times its tempo, a segment's velocities scale by r and its
+/// accelerations by r². `None` when either index is out of range.
+pub fn blended_join_jump_at(lib: &SegmentLibrary, a: usize, b: usize, count_rate_bpm: Option<f32>) -> Option<f32> {
+    let (ea, eb) = (lib.ends.get(a)?, lib.ends.get(b)?);
+    let rate = |s: usize| -> f32 {
+        let tempo = lib.segments().get(s).map_or(0.0, |s| s.tempo_bpm);
+        match count_rate_bpm {
+            Some(r) if r > 0.0 && tempo > 0.0 => r / tempo,
+            _ => 1.0,
+        }
+    };
+    let (ra, rb) = (rate(a), rate(b));
+    let span = blend_span_frames();
+    let mut peak = 0.0f32;
+    for (&[xa, va, aa], &[xb, vb, ab]) in ea.end_joint.iter().zip(&eb.start_joint) {
+        let (va, aa, vb, ab) = (va * ra, aa * ra * ra, vb * rb, ab * rb * rb);
+        let (x0, v0, a0) = (xa + va + 0.5 * aa - xb, va - vb, aa - ab);
+        peak = peak.max(aa.length());
+        for k in 0..BLEND_SAMPLES {
+            let t = span * k as f32 / BLEND_SAMPLES as f32;
+            peak = peak.max((ab + super::render::quintic_offset_accel(x0, v0, a0, span, t)).length());
+        }
+    }
+    let own = 0.5 * (ea.sharpness * ra * ra + eb.sharpness * rb * rb);
+    Some(peak / own.max(1e-6))
+}
+
+/// Points of the decay [`blended_join_jump_at`] samples the offset's acceleration at.
+const BLEND_SAMPLES: usize = 10;
+
 /// Which ordered pairs of segments a [`TransitionTable`] holds, as blocks by metre: the
 /// (p, n) block holds C(a, b) for every segment a of p counts and b of n counts
 /// ([`super::Segment::counts`]). A dance joins bar t − 1 to bar t, and a bar of n beats takes

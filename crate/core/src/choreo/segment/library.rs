@@ -197,7 +197,7 @@ impl SegmentLibrary {
                 let index = self.segments.len();
                 let intensity = w[si..ei].iter().sum::<f32>() / (ei - si) as f32;
                 self.signatures.push(signature_of(&normed, si, ei));
-                self.ends.push(join_ends(&normed, si, ei));
+                self.ends.push(join_ends(&normed, &positions, h, si, ei));
                 let name = match &lc.builtin {
                     Some(info) => info.name(),
                     None if n == SEGMENT_COUNTS => format!("{} · counts {}–{}", lc.clip.name, k + 1, k + n),

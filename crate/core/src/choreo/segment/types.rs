@@ -212,6 +212,18 @@ pub(crate) struct JoinEnds {
     pub end: [Vec3; LINK_COUNT],
     pub start_velocity: [Vec3; LINK_COUNT],
     pub end_velocity: [Vec3; LINK_COUNT],
+    /// Joint positions (from the hips' ground point, facing removed, body heights),
+    /// velocities and accelerations (per frame, per frame², in that frame) at the segment's
+    /// last frame and its first: what
+    /// an inertialized join's offset is made of ([`super::super::table::blended_join_jump`]).
+    pub end_joint: [[Vec3; 3]; CANON_COUNT],
+    pub start_joint: [[Vec3; 3]; CANON_COUNT],
+    /// The 95th percentile over the segment's frames of the largest joint acceleration in the
+    /// normalised body (hips origin, facing removed, body heights per frame²): how sharp the
+    /// move itself is, what spec §J's join jump divides by. (Measured on world positions, with
+    /// the hips' own sway, it ranked joins far worse: Spearman ρ 0.19–0.23 against 0.59–0.62,
+    /// `tests/native/choreo_join_cost.rs`.)
+    pub sharpness: f32,
 }
 
 /// What adding a clip gave.
@@ -276,8 +288,10 @@ pub(crate) fn canonical_world_positions(clip: &Clip) -> Vec<Vec3> {
     out
 }
 
-/// Unit link vectors, raw link vectors and velocities at a segment's first and last frames.
-pub(super) fn join_ends(normed: &[Vec3], start: usize, end: usize) -> JoinEnds {
+/// Link vectors and velocities at a segment's first and last frames and the segment's
+/// sharpness (from `normed`), and the joints' motion at those frames (from `world`, over
+/// `height`).
+pub(super) fn join_ends(normed: &[Vec3], world: &[Vec3], height: f32, start: usize, end: usize) -> JoinEnds {
     let link = |f: usize, l: usize| -> Vec3 {
         let (p, c) = LINKS[l];
         normed[f * CANON_COUNT + c] - normed[f * CANON_COUNT + p]
@@ -289,6 +303,31 @@ pub(super) fn join_ends(normed: &[Vec3], start: usize, end: usize) -> JoinEnds {
         e.end[l] = link(last, l);
         e.start_velocity[l] = link((start + 1).min(last), l) - link(start, l);
         e.end_velocity[l] = link(last, l) - link(last.saturating_sub(1).max(start), l);
+    }
+    // Frames clamped into the segment, so a short one repeats its edge frames (zero velocity).
+    let (s0, l0) = (start as isize, last as isize);
+    let normed_at = |f: isize, j: usize| -> Vec3 { normed[(f.clamp(s0, l0) as usize) * CANON_COUNT + j] };
+    let mut acc: Vec<f32> = (s0 + 1..l0)
+        .map(|f| (0..CANON_COUNT).map(|j| (normed_at(f + 1, j) - 2.0 * normed_at(f, j) + normed_at(f - 1, j)).length()).fold(0.0, f32::max))
+        .collect();
+    acc.sort_by(f32::total_cmp);
+    e.sharpness = acc.get(((acc.len() as f32 * 0.95) as usize).min(acc.len().saturating_sub(1))).copied().unwrap_or(0.0);
+    // World positions over the body height, seen from the hips' ground point and facing at
+    // the end (the start): as the render places the next segment, its start where this one
+    // ends and facing the same way, so the offset is the pose the blend must carry.
+    let inv_h = if height > 1e-6 { 1.0 / height } else { 1.0 };
+    let at = |f: isize, j: usize| -> Vec3 { world[(f.clamp(s0, l0) as usize) * CANON_COUNT + j] * inv_h };
+    let frame_of = |f: isize| {
+        let (r, l) = (at(f, Canon::RightUpperLeg.index()), at(f, Canon::LeftUpperLeg.index()));
+        let hips = at(f, Canon::Hips.index());
+        (crate::canon::normalize::facing_rotation(r, l), Vec3::new(hips.x, 0.0, hips.z))
+    };
+    let ((re, oe), (rs, os)) = (frame_of(l0), frame_of(s0));
+    for j in 0..CANON_COUNT {
+        let (x, x1, x2) = (at(l0, j), at(l0 - 1, j), at(l0 - 2, j));
+        e.end_joint[j] = [re * (x - oe), re * (x - x1), re * (x - 2.0 * x1 + x2)];
+        let (y, y1, y2) = (at(s0, j), at(s0 + 1, j), at(s0 + 2, j));
+        e.start_joint[j] = [rs * (y - os), rs * (y1 - y), rs * (y2 - 2.0 * y1 + y)];
     }
     e
 }
