@@ -23,6 +23,41 @@ pub fn read(rel: &str) -> Vec<u8> {
     std::fs::read(&p).unwrap_or_else(|e| panic!("cannot read {}: {e}", p.display()))
 }
 
+/// Every file under a folder of the data directory (`rel`) whose name passes `keep`, as a
+/// dropped folder gives them: (its name relative to the folder, `/`-separated; its bytes),
+/// sorted by name. Panics naming the folder when it is missing.
+pub fn data_folder(rel: &str, keep: impl Fn(&str) -> bool) -> Vec<(String, Vec<u8>)> {
+    let dir = data_dir().join(rel);
+    let mut out = Vec::new();
+    let mut stack = vec![dir.clone()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e} (the test data is missing)", d.display())).flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let name = p.strip_prefix(&dir).map(|r| r.to_string_lossy().replace('\\', "/")).unwrap_or_default();
+                if keep(&name) {
+                    out.push((name, std::fs::read(&p).unwrap_or_else(|e| panic!("cannot read {}: {e}", p.display()))));
+                }
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// The shortest of `runs` timings of `f`, milliseconds: what the benchmarks print.
+pub fn best_ms(runs: usize, mut f: impl FnMut()) -> f64 {
+    (0..runs)
+        .map(|_| {
+            let t = std::time::Instant::now();
+            f();
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// Every BVH file under `mocap/`, sorted, as paths relative to the data directory.
 pub fn all_bvh() -> Vec<String> {
     let base = data_dir();

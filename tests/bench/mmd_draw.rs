@@ -5,44 +5,18 @@
 //! Prints figures (best of 5, native); the goal for Gene in wasm is < 300 ms (wasm runs this kind
 //! of code about 1.5–2× slower than native here: see the README's wasm figures).
 
-use std::time::Instant;
-
 use odori_core::mmd::files::{import_files, MmdFilesOptions};
 use odori_core::mmd::mesh::model_character;
-use odori_tests::data_dir;
+use odori_tests::data_folder;
 
-fn best_ms(mut f: impl FnMut()) -> f64 {
-    (0..5)
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed().as_secs_f64() * 1e3
-        })
-        .fold(f64::INFINITY, f64::min)
-}
-
-fn files_under(rel: &str, keep: impl Fn(&str) -> bool) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![data_dir().join(rel)];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display())).flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let name = p.strip_prefix(data_dir().join(rel)).map(|r| r.to_string_lossy().replace('\\', "/")).unwrap_or_default();
-                if keep(&name) {
-                    out.push((name, std::fs::read(&p).expect("read")));
-                }
-            }
-        }
-    }
-    out
+/// Best of 5, ms.
+fn best_ms(f: impl FnMut()) -> f64 {
+    odori_tests::best_ms(5, f)
 }
 
 fn main() {
     for (label, dir, model) in [("Gene_light.pmx", "mmd/gene", "Gene_light.pmx"), ("miku_v2.pmd", "mmd/miku_v2", "miku_v2.pmd"), ("low_poly/miku.pmd", "mmd/low_poly", "miku.pmd")] {
-        let files = files_under(dir, |n| !n.starts_with("motion/") && (!(n.ends_with(".pmd") || n.ends_with(".pmx")) || n == model));
+        let files = data_folder(dir, |n| !n.starts_with("motion/") && (!(n.ends_with(".pmd") || n.ends_with(".pmx")) || n == model));
         let mut info = String::new();
         let import = best_ms(|| {
             let r = import_files(&files, &[], &MmdFilesOptions::default());

@@ -6,43 +6,20 @@
 //! Prints figures (best of 5); the wasm goals are WAVEFILE < 150 ms, Gene < 300 ms
 //! (`tests/bench/mmd-wasm.mjs` times the same in wasm).
 
-use std::time::Instant;
-
 use odori_core::import::{mmd_model, vmd};
 use odori_core::mmd::files::{import_files, MmdFilesOptions, STANDARD_RIG};
 use odori_core::mmd::{MmdClipOptions, MmdMotion, MmdRig};
-use odori_tests::{data_dir, read};
+use odori_tests::{data_folder, read};
 
-fn best_ms(mut f: impl FnMut()) -> f64 {
-    (0..5)
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed().as_secs_f64() * 1e3
-        })
-        .fold(f64::INFINITY, f64::min)
+/// Best of 5, ms.
+fn best_ms(f: impl FnMut()) -> f64 {
+    odori_tests::best_ms(5, f)
 }
 
-/// A data folder's files as a dropped folder gives them.
+/// A data folder's files as a dropped folder gives them: named under the folder's own name.
 fn folder(rel: &str, keep: impl Fn(&str) -> bool) -> Vec<(String, Vec<u8>)> {
-    let dir = data_dir().join(rel);
-    let mut out = Vec::new();
-    let mut stack = vec![dir.clone()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e} (the MMD test data is missing)", d.display())).flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let name = p.strip_prefix(&dir).map(|r| r.to_string_lossy().replace('\\', "/")).unwrap_or_default();
-                if keep(&name) {
-                    out.push((format!("{}/{name}", rel.rsplit('/').next().unwrap_or(rel)), std::fs::read(&p).expect("read")));
-                }
-            }
-        }
-    }
-    out.sort();
-    out
+    let top = rel.rsplit('/').next().unwrap_or(rel);
+    data_folder(rel, keep).into_iter().map(|(name, bytes)| (format!("{top}/{name}"), bytes)).collect()
 }
 
 fn main() {

@@ -6,8 +6,7 @@
 // and a dance of built-in moves alone does not.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
-import { join } from "node:path";
-import { startServer, launch, openApp, data, importFiles, BACKENDS } from "./harness.mjs";
+import { startServer, launch, openApp, importSalsaForDance, generateDance, candidateChips, BACKENDS } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -29,13 +28,10 @@ for (const backend of Object.keys(BACKENDS)) {
       await openApp(page, server, backend);
       await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 60000 });
       const stripHeight = await page.evaluate(() => document.querySelector("#dance-bars").getBoundingClientRect().height);
-      await importFiles(page, join(data, "mocap/cmu-salsa/salsa_02.bvh"), { "salsa_02.bvh": { fps: 60 } });
-      await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /dance segments/.test(li.textContent)), null, { timeout: 30000 });
-      await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready" && window.odori.choreo.lastPrepare?.segments > 510, null, { timeout: 60000 });
+      await importSalsaForDance(page);
 
       // Generate: every bar names its move and its source.
-      await page.click("#dance-generate");
-      await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 60000 });
+      await generateDance(page);
       let bars = await strip(page);
       assert.ok(bars.length > 8);
       for (const [i, b] of bars.entries()) {
@@ -77,12 +73,7 @@ for (const backend of Object.keys(BACKENDS)) {
       let sawFlag = 0;
       let sawClean = 0;
       for (const bar of [1, 4, 6, 8, 3, 5]) {
-        await page.click(`#dance-bars [data-bar="${bar}"]`);
-        await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.candidates) > 0);
-        const chips = await page.evaluate(() => {
-          const ch = window.odori.choreo;
-          return [...document.querySelectorAll("#dance-candidates .chip")].map((c, k) => ({ text: c.textContent, flags: ch.candidateNotes.get(ch.candidates[k])?.flags ?? null }));
-        });
+        const chips = await candidateChips(page, bar);
         assert.ok(chips.every((c) => c.flags !== null), "a candidate has no note from the engine");
         for (const c of chips) {
           if (c.flags.length) { sawFlag++; for (const f of c.flags) assert.ok(c.text.includes(f.words), `flagged candidate "${c.text}" does not say "${f.words}"`); }
@@ -97,8 +88,7 @@ for (const backend of Object.keys(BACKENDS)) {
 
       // Built-in moves only again: the note goes and Share link is offered.
       await page.evaluate(() => { const ch = window.odori.choreo; const c = ch.choreographer; for (let i = 0; i < ch.view.length; i++) c.clear(i); ch.refresh(); });
-      await page.click("#dance-generate");
-      await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 60000 });
+      await generateDance(page);
       const builtinOnly = await page.evaluate(() => window.odori.choreo.notes.every((n) => n.builtin));
       const note = await page.evaluate(() => ({ hidden: document.querySelector("#dance-share-note").hidden, linkOff: document.querySelector("#dance-share").disabled }));
       if (builtinOnly) assert.ok(note.hidden && !note.linkOff, JSON.stringify(note));

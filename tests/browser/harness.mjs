@@ -37,9 +37,27 @@ export function startServer() {
   });
 }
 
+/**
+ * What a test's code in the page may call, on every page `launch` opens (before the app's
+ * scripts; not a <script>, so the page's Content-Security-Policy does not apply):
+ * `window.__test.base64(bytes)`, bytes to base64 in slices (a long string of them to Node is far
+ * cheaper than a JSON array of numbers), and `window.__test.bytes(base64)`, the way back.
+ */
+function pageHelpers() {
+  window.__test = {
+    base64(a) {
+      let s = "";
+      for (let i = 0; i < a.length; i += 0x8000) s += String.fromCharCode.apply(null, a.subarray(i, i + 0x8000));
+      return btoa(s);
+    },
+    bytes: (b64) => Uint8Array.from(atob(b64), (ch) => ch.charCodeAt(0)),
+  };
+}
+
 export async function launch(backend) {
   const browser = await chromium.launch({ executablePath: "/usr/bin/chromium", args: [...BASE_FLAGS, ...BACKENDS[backend].flags], headless: true });
   const page = await browser.newPage({ viewport: { width: 1280, height: 800 } });
+  await page.addInitScript(pageHelpers);
   const logs = [];
   page.on("console", (m) => logs.push(`[${m.type()}] ${m.text()}`));
   page.on("pageerror", (e) => logs.push(`[pageerror] ${e.message}`));
@@ -78,16 +96,60 @@ export async function importFiles(page, files, options = {}) {
 }
 
 /**
+ * The Dance strip's steps the dance tests share. `importSalsaForDance`: opens the CMU salsa_02
+ * BVH (at 60 fps) through the picker and waits until the dance library holds its segments and
+ * the join costs are built again.
+ */
+export async function importSalsaForDance(page) {
+  await importFiles(page, join(data, "mocap/cmu-salsa/salsa_02.bvh"), { "salsa_02.bvh": { fps: 60 } });
+  await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /dance segments/.test(li.textContent)), null, { timeout: 30000 });
+  await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready" && window.odori.choreo.lastPrepare?.segments > 510, null, { timeout: 60000 });
+}
+
+/** Waits until the dance is not busy and every bar holds a move (after Generate, Another take…). */
+export function danceSettled(page, timeout = 60000) {
+  return page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout });
+}
+
+/** Clicks Generate and waits for the dance to settle. */
+export async function generateDance(page, timeout = 60000) {
+  await page.click("#dance-generate");
+  await danceSettled(page, timeout);
+}
+
+/**
+ * Selects bar `bar` (0-based, as `data-bar`) and returns its candidate chips, left to right, each
+ * with the flags the engine's note gives it: [{ text, flags }] (flags null: no note).
+ */
+export async function candidateChips(page, bar) {
+  await page.click(`#dance-bars [data-bar="${bar}"]`);
+  await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.candidates) > 0);
+  return page.evaluate(() => {
+    const ch = window.odori.choreo;
+    return [...document.querySelectorAll("#dance-candidates .chip")].map((c, k) => ({ text: c.textContent, flags: ch.candidateNotes.get(ch.candidates[k])?.flags ?? null }));
+  });
+}
+
+/**
  * Screenshot of the canvas, decoded in the page: { width, height, rgba, save(name) }.
  * Pixels are CSS pixels of the canvas element (device scale 1).
  */
 export async function canvasPixels(page, name) {
   const el = await page.$("#view");
   const png = await el.screenshot(name ? { path: join(artifacts, name) } : {});
-  const { width, height, data } = await page.evaluate(async (b64) => {
+  return decodeImageInPage(page, png);
+}
+
+/**
+ * An image file's bytes (PNG, BMP, JPEG: a Buffer) decoded by the browser's own decoders in
+ * `page`: { width, height, rgba }. `options` are createImageBitmap's (a texture's exact values:
+ * { premultiplyAlpha: "none", colorSpaceConversion: "none" }; none given: the browser's defaults).
+ */
+export async function decodeImageInPage(page, buf, options = {}) {
+  const { width, height, data } = await page.evaluate(async ({ b64, options }) => {
     // Decoded without fetch(): the page's Content-Security-Policy allows no data: connections.
-    const blob = new Blob([Uint8Array.from(atob(b64), (ch) => ch.charCodeAt(0))], { type: "image/png" });
-    const bmp = await createImageBitmap(blob);
+    const bytes = Uint8Array.from(atob(b64), (ch) => ch.charCodeAt(0));
+    const bmp = await createImageBitmap(new Blob([bytes]), options);
     const c = new OffscreenCanvas(bmp.width, bmp.height);
     const g = c.getContext("2d");
     g.drawImage(bmp, 0, 0);
@@ -96,8 +158,14 @@ export async function canvasPixels(page, name) {
     let bin = "";
     for (let i = 0; i < img.data.length; i += 0x8000) bin += String.fromCharCode.apply(null, img.data.subarray(i, i + 0x8000));
     return { width: img.width, height: img.height, data: btoa(bin) };
-  }, png.toString("base64"));
+  }, { b64: buf.toString("base64"), options });
   return { width, height, rgba: new Uint8Array(Buffer.from(data, "base64")) };
+}
+
+/** 32-bit floats sent from the page as base64 (`window.__test.base64` of their bytes). */
+export function floatsFromBase64(b64) {
+  const b = Buffer.from(b64, "base64");
+  return new Float32Array(b.buffer, b.byteOffset, b.length / 4);
 }
 
 export function pixel(img, x, y) {

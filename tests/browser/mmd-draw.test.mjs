@@ -14,7 +14,7 @@ import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { readFileSync, readdirSync, statSync, existsSync } from "node:fs";
 import { join, relative } from "node:path";
-import { root, data, startServer, launch, openApp, canvasPixels, pixel, waitUntil } from "./harness.mjs";
+import { root, data, startServer, launch, openApp, canvasPixels, decodeImageInPage, pixel, waitUntil } from "./harness.mjs";
 
 const parserPath = join(root, "node_modules", "three-mmd", "examples", "jsm", "libs", "mmdparser.module.js");
 if (!existsSync(parserPath)) throw new Error("node_modules/three-mmd (three@0.171.0) is missing: run npm ci");
@@ -52,20 +52,8 @@ function decodeTga(buf) {
   return { width: w, height: h, rgba };
 }
 
-/** Decodes PNG/BMP/JPEG in the page (the browser's decoders): { width, height, rgba }. */
-async function decodeInPage(page, buf) {
-  const r = await page.evaluate(async (b64) => {
-    const bmp = await createImageBitmap(new Blob([Uint8Array.from(atob(b64), (c) => c.charCodeAt(0))]), { premultiplyAlpha: "none", colorSpaceConversion: "none" });
-    const c = new OffscreenCanvas(bmp.width, bmp.height);
-    const g = c.getContext("2d");
-    g.drawImage(bmp, 0, 0);
-    const img = g.getImageData(0, 0, bmp.width, bmp.height);
-    let bin = "";
-    for (let i = 0; i < img.data.length; i += 0x8000) bin += String.fromCharCode.apply(null, img.data.subarray(i, i + 0x8000));
-    return { width: img.width, height: img.height, data: btoa(bin) };
-  }, buf.toString("base64"));
-  return { width: r.width, height: r.height, rgba: new Uint8Array(Buffer.from(r.data, "base64")) };
-}
+/** Decodes PNG/BMP/JPEG in the page (the browser's decoders), the file's own values: { width, height, rgba }. */
+const decodeInPage = (page, buf) => decodeImageInPage(page, buf, { premultiplyAlpha: "none", colorSpaceConversion: "none" });
 
 /** The mean colour of a (2k+1)² texel window around `uv` (repeating), RGBA 0–255. */
 function sample(img, [u, v], k = 2) {

@@ -5,8 +5,7 @@
 // a candidate the engine flags says so in words on its chip.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
-import { join } from "node:path";
-import { startServer, launch, openApp, data, importFiles, BACKENDS } from "./harness.mjs";
+import { startServer, launch, openApp, importSalsaForDance, danceSettled, generateDance, candidateChips, BACKENDS } from "./harness.mjs";
 
 let server;
 before(async () => { server = await startServer(); });
@@ -16,7 +15,6 @@ const strip = (page) => page.evaluate(() => [...document.querySelectorAll("#danc
   move: b.querySelector(".bar-move")?.textContent ?? "",
   src: b.querySelector(".bar-src")?.textContent ?? "",
 })));
-const settled = (page) => page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 60000 });
 
 for (const backend of Object.keys(BACKENDS)) {
   test(`my moves (${backend}): the default, a salsa on half the bars, another take, undo, flags in words`, async () => {
@@ -28,13 +26,10 @@ for (const backend of Object.keys(BACKENDS)) {
       const source = await page.evaluate(() => ({ control: document.querySelector("#dance-moves-source").value, engine: window.odori.choreo.choreographer.movesSource }));
       assert.deepEqual(source, { control: "mine", engine: "mine" });
 
-      await importFiles(page, join(data, "mocap/cmu-salsa/salsa_02.bvh"), { "salsa_02.bvh": { fps: 60 } });
-      await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /dance segments/.test(li.textContent)), null, { timeout: 30000 });
-      await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready" && window.odori.choreo.lastPrepare?.segments > 510, null, { timeout: 60000 });
+      await importSalsaForDance(page);
 
       // Generate at the default: the salsa on at least half of the bars, named on the strip.
-      await page.click("#dance-generate");
-      await settled(page);
+      await generateDance(page);
       const first = await strip(page);
       const salsa = first.filter((b) => b.src === "salsa_02").length;
       console.log(`${backend}: Generate took the salsa for ${salsa} of ${first.length} bars`);
@@ -44,7 +39,7 @@ for (const backend of Object.keys(BACKENDS)) {
       // Another take: a different dance.
       await page.click("#dance-another-take");
       await page.waitForFunction(() => document.querySelector("#dance").dataset.take === "1", null, { timeout: 60000 });
-      await settled(page);
+      await danceSettled(page);
       const second = await strip(page);
       const differ = second.filter((b, i) => b.move !== first[i].move).length;
       console.log(`${backend}: another take changed ${differ} of ${first.length} bars`);
@@ -58,12 +53,7 @@ for (const backend of Object.keys(BACKENDS)) {
       // A candidate with a flag says so in words (and clean ones come first).
       let flagged = 0;
       for (const bar of [1, 3, 4, 6, 8, 5, 2, 7]) {
-        await page.click(`#dance-bars [data-bar="${bar}"]`);
-        await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.candidates) > 0);
-        const chips = await page.evaluate(() => {
-          const ch = window.odori.choreo;
-          return [...document.querySelectorAll("#dance-candidates .chip")].map((c, k) => ({ text: c.textContent, flags: ch.candidateNotes.get(ch.candidates[k])?.flags ?? null }));
-        });
+        const chips = await candidateChips(page, bar);
         assert.ok(chips.every((c) => c.flags !== null), "a candidate has no note from the engine");
         for (const c of chips.filter((c) => c.flags.length)) {
           flagged++;

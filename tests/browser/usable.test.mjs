@@ -54,6 +54,11 @@ const state = (page) => page.evaluate(() => ({
   songButton: document.querySelector("#song-play").textContent,
 }));
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+/** The song waveform's box against the viewport: { top, bottom, height }. */
+const songWave = (page) => page.evaluate(() => {
+  const r = document.querySelector("#song-view").getBoundingClientRect();
+  return { top: r.top, bottom: r.bottom, height: innerHeight };
+});
 const messagesCount = (page, re) => page.evaluate((src) => [...document.querySelectorAll("#messages li")].filter((li) => new RegExp(src).test(li.textContent)).length, re.source);
 
 for (const backend of Object.keys(BACKENDS)) {
@@ -62,6 +67,14 @@ for (const backend of Object.keys(BACKENDS)) {
     try {
       await openApp(page, server, backend);
       await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8 && document.body.dataset.song === "demo", null, { timeout: 60000 });
+
+      await t.test("at 1280×800 the whole song waveform shows under the view and the dance strip", async () => {
+        // As a person first meets the page (no clip of theirs yet, whose tempo row would add
+        // a line to the dance strip).
+        const wave = await songWave(page);
+        assert.ok(wave.top >= 0 && wave.bottom <= wave.height, `the song waveform is at ${wave.top.toFixed(0)}–${wave.bottom.toFixed(0)} px, the viewport ${wave.height} px tall`);
+        assert.equal(await page.evaluate(() => document.querySelector(".stage").scrollTop), 0, "the stage was scrolled");
+      });
 
       await t.test("Pause during Play dance pauses the music and the figure; space resumes both", async () => {
         await page.click("#dance-play");
@@ -329,6 +342,33 @@ for (const [name, size, mobile] of [["phone", { width: 390, height: 844 }, true]
       });
       assert.ok(fig.scroll <= fig.width, `horizontal overflow: ${fig.scroll} > ${fig.width}`);
       assert.ok(fig.view >= 0.4, `the 3D view is ${(fig.view * 100).toFixed(0)} % of the viewport`);
+      if (!mobile) {
+        // On a laptop screen the song waveform starts within the screen without scrolling, under
+        // the view and the dance strip (with a bar's candidates shown, as now), even with the
+        // taller touch controls (with a mouse all of it shows: the transport test checks that).
+        const wave = await songWave(page);
+        assert.ok(wave.top >= 0 && wave.top + 16 <= wave.height, `the song waveform is at ${wave.top.toFixed(0)}–${wave.bottom.toFixed(0)} px, the viewport ${wave.height} px tall`);
+        // Toasts, as many as are ever shown (errors stay), with long texts, cover none of the
+        // side panels' search timeline: each toast's box is clear of the timeline's.
+        await page.evaluate(() => {
+          const m = window.odori.messages;
+          for (let i = 0; i < 3; i++) m.error(`broken-${i}.bvh:5:23: expected a channel name (Xposition, Yposition, Zposition, Xrotation, Yrotation or Zrotation), found the end of the file`);
+          m.info("Generate filled 34 bars in 0.4 s (join jump worst 1.2× the moves' own, goal 1.5×)");
+        });
+        const boxes = await page.evaluate(() => {
+          const box = (el) => { const r = el.getBoundingClientRect(); return { x: r.x, y: r.y, w: r.width, h: r.height }; };
+          return { timeline: box(document.querySelector("#search-timeline")), view: box(document.querySelector("#view")), toasts: [...document.querySelectorAll(".toast")].map(box) };
+        });
+        assert.equal(boxes.toasts.length, 4);
+        const overlaps = (a, b) => a.x < b.x + b.w && b.x < a.x + a.w && a.y < b.y + b.h && b.y < a.y + a.h;
+        assert.ok(boxes.timeline.w > 0 && boxes.timeline.h > 0, "the search timeline is not shown beside the view");
+        assert.deepEqual(boxes.toasts.filter((t) => overlaps(t, boxes.timeline)), [], `toasts over the search timeline ${JSON.stringify(boxes.timeline)}`);
+        // Where they are instead: over the view (not the strips under it nor the top bar).
+        const inside = (a, b) => a.x >= b.x && a.y >= b.y && a.x + a.w <= b.x + b.w && a.y + a.h <= b.y + b.h;
+        assert.deepEqual(boxes.toasts.filter((t) => !inside(t, boxes.view)), [], `toasts outside the view ${JSON.stringify(boxes.view)}`);
+        await page.screenshot({ path: join(artifacts, `usable-${name}-toasts.png`) });
+        await page.evaluate(() => { for (const b of document.querySelectorAll('.toast button[aria-label="Dismiss"]')) b.click(); });
+      }
       await page.screenshot({ path: join(artifacts, `usable-${name}.png`) });
 
       // Every control in every panel (tabs on a phone) is reachable and at least 32 px tall.

@@ -15,7 +15,7 @@ import { execFileSync } from "node:child_process";
 import { readFileSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
 import { createRequire } from "node:module";
-import { startServer, launch, openApp, artifacts, root, data, isWarmFigure } from "./harness.mjs";
+import { startServer, launch, openApp, artifacts, root, data, isWarmFigure, floatsFromBase64, generateDance } from "./harness.mjs";
 
 const require = createRequire(import.meta.url);
 const FFPROBE = require("@ffprobe-installer/ffprobe").path;
@@ -34,8 +34,7 @@ async function danceReady(backend) {
   const l = await launch(backend);
   await openApp(l.page, server, backend);
   await l.page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 90000 });
-  await l.page.click("#dance-generate");
-  await l.page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 90000 });
+  await generateDance(l.page, 90000);
   return l;
 }
 
@@ -97,9 +96,7 @@ for (const backend of ["webgl2", "webgpu"]) {
         const t0 = performance.now();
         const r = await exportVideo({ engine: exporter.video.engine, library, clip: id, ...range, bars, sections, character: "builtin", width: w, height: h, fps, container: "mp4", song: songPlayer.buffer, backend }, () => {});
         const wallMs = performance.now() - t0;
-        const bytes = new Uint8Array(await r.blob.arrayBuffer());
-        let bin = "";
-        for (let i = 0; i < bytes.length; i += 0x8000) bin += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+        const mp4 = window.__test.base64(new Uint8Array(await r.blob.arrayBuffer()));
         // The engine's own renderings: a viewer of its own, the same camera plan (deterministic).
         const canvas = Object.assign(document.createElement("canvas"), { width: w, height: h });
         const viewer = await exporter.video.engine.Viewer.create(canvas, { backend });
@@ -116,7 +113,7 @@ for (const backend of ["webgl2", "webgpu"]) {
           g.drawImage(canvas, 0, 0);
           return g.getImageData(0, 0, w, h).data;
         };
-        const enc = (a) => { let s = ""; for (let i = 0; i < a.length; i += 0x8000) s += String.fromCharCode.apply(null, a.subarray(i, i + 0x8000)); return btoa(s); };
+        const enc = window.__test.base64;
         const renders = [];
         for (const i of picks) {
           viewer.setCamera(plan.poses[i]);
@@ -144,7 +141,7 @@ for (const backend of ["webgl2", "webgpu"]) {
         const a = Math.round(range.startSecs * sr), len = Math.round(r.durationSecs * sr);
         const song = songPlayer.buffer.getChannelData(0).slice(a, a + len);
         return {
-          mp4: btoa(bin), codecs: r.codecs, frames: r.frames, durationSecs: r.durationSecs, range, wallMs, sr, renders,
+          mp4, codecs: r.codecs, frames: r.frames, durationSecs: r.durationSecs, range, wallMs, sr, renders,
           song: enc(new Uint8Array(song.buffer)), shots: r.camera.shots, samePlan: JSON.stringify(plan.poses) === JSON.stringify(r.camera.poses),
           aacSupported: (await AudioEncoder.isConfigSupported({ codec: "mp4a.40.2", sampleRate: sr, numberOfChannels: 2, bitrate: 128000 })).supported,
           h264Supported: (await VideoEncoder.isConfigSupported({ codec: "avc1.640028", width: w, height: h, bitrate: 2e6 })).supported,
@@ -181,8 +178,7 @@ for (const backend of ["webgl2", "webgpu"]) {
       const rangeSecs = made.range.endSecs - made.range.startSecs;
       console.log(`${backend}: sound decoded ${soundSecs.toFixed(4)} s (ffprobe ${p.audio.duration} s) for ${rangeSecs.toFixed(4)} s of bars`);
       assert.ok(Math.abs(soundSecs - rangeSecs) <= 1 / FPS, `the sound lasts ${soundSecs} s, the bars ${rangeSecs} s`);
-      const songBytes = b64(made.song);
-      const ref = new Float32Array(songBytes.buffer, songBytes.byteOffset, songBytes.length / 4);
+      const ref = floatsFromBase64(made.song);
       const maxLag = Math.round(0.02 * made.sr);
       const lags = [0.25, 0.5, 0.75].map((f) => xcorrPeak(ref, sound, Math.round(ref.length * f) - made.sr / 4, Math.round(made.sr / 2), maxLag));
       console.log(`${backend}: cross-correlation peaks at lags ${lags.map((l) => `${((l / made.sr) * 1000).toFixed(2)} ms`).join(", ")}`);
@@ -216,9 +212,7 @@ test("video (webgl2): a WebM streamed into a file, a cancelled stream leaves it 
       const common = { engine: exporter.video.engine, library, clip: choreo.danceId, ...range, bars: grid.bars.slice(0, 2), character: null, width: 1080, height: 1080, fps: 30, container: "webm", song: songPlayer.buffer, backend: "webgl2" };
       const fh = await opfs.getFileHandle("whole.webm", { create: true });
       const r = await exportVideo({ ...common, stream: await fh.createWritable() });
-      const bytes = new Uint8Array(await (await fh.getFile()).arrayBuffer());
-      let bin = "";
-      for (let i = 0; i < bytes.length; i += 0x8000) bin += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+      const webm = window.__test.base64(new Uint8Array(await (await fh.getFile()).arrayBuffer()));
       // Cancelled half-way: the stream is aborted, so the file keeps nothing.
       const ch = await opfs.getFileHandle("cancelled.webm", { create: true });
       const abort = new AbortController();
@@ -227,7 +221,7 @@ test("video (webgl2): a WebM streamed into a file, a cancelled stream leaves it 
         await exportVideo({ ...common, stream: await ch.createWritable(), signal: abort.signal }, (p) => { if (p.fraction >= 0.5 && !abort.signal.aborted) { atCancel = p.fraction; abort.abort(); } });
       } catch (e) { kind = e.kind; }
       const left = (await ch.getFile()).size;
-      return { webm: btoa(bin), blob: r.blob, codecs: r.codecs, frames: r.frames, range, kind, left, atCancel };
+      return { webm, blob: r.blob, codecs: r.codecs, frames: r.frames, range, kind, left, atCancel };
     });
     const file = join(artifacts, "video-stream.webm");
     writeFileSync(file, b64(out.webm));
@@ -308,7 +302,7 @@ test("video (webgl2): a dance from bar 1 of a song whose first bar starts later 
       const range = danceRange(grid.bars, 0, 1, grid.beatsPerBar);
       const r = await exportVideo({ engine: exporter.video.engine, library, clip: id, ...range, bars, character: null, width: 1280, height: 720, fps, container: "mp4", song: songPlayer.buffer, backend: "webgl2" });
       const bytes = new Uint8Array(await r.blob.arrayBuffer());
-      const enc = (a) => { let s = ""; for (let i = 0; i < a.length; i += 0x8000) s += String.fromCharCode.apply(null, a.subarray(i, i + 0x8000)); return btoa(s); };
+      const enc = window.__test.base64;
       const sr = songPlayer.buffer.sampleRate;
       const song = songPlayer.buffer.getChannelData(0).slice(0, Math.round((range.endSecs + 0.5) * sr));
       // How far the figure moves during the lead-in (largest joint displacement from its first
@@ -336,8 +330,7 @@ test("video (webgl2): a dance from bar 1 of a song whose first bar starts later 
     // to a quarter beat after it (normalised cross-correlation).
     const sr = made.sr;
     const sound = decodeSound(file, sr);
-    const songBytes = b64(made.song);
-    const song = new Float32Array(songBytes.buffer, songBytes.byteOffset, songBytes.length / 4);
+    const song = floatsFromBase64(made.song);
     const from = Math.round(0.05 * sr), len = Math.round(0.25 * sr);
     let best = -Infinity, at = 0;
     const lo = Math.max(0, Math.round((b0.startSecs - 1.5 * leadIn) * sr)), hi = Math.round((b0.startSecs + 0.25 * leadIn) * sr);
@@ -370,14 +363,14 @@ test("video (webgl2): a camera VMD drives the camera", { timeout: 900000 }, asyn
     const made = await page.evaluate(async ({ dance, cam, fps }) => {
       const { exportVideo, frameTimes } = await import("/video/export-video.js");
       const { library, exporter } = window.odori;
-      const bytes = (s) => Uint8Array.from(atob(s), (c) => c.charCodeAt(0));
+      const bytes = window.__test.bytes;
       const report = library.importFiles([{ name: "tokino_kakera.vmd", bytes: bytes(dance) }, { name: "tokino_kakera_cam.vmd", bytes: bytes(cam) }], { model: "standard" });
       const id = report.motions[0].clip.id;
       const track = library.cameraTracks().length - 1;
       const range = { startSecs: 40, endSecs: 44 };
       const w = 1280, h = 720;
       const r = await exportVideo({ engine: exporter.video.engine, library, clip: id, ...range, character: null, width: w, height: h, fps, container: "mp4", song: null, camera: { mode: "vmd", track }, backend: "webgl2" });
-      const enc = (a) => { let s = ""; for (let i = 0; i < a.length; i += 0x8000) s += String.fromCharCode.apply(null, a.subarray(i, i + 0x8000)); return btoa(s); };
+      const enc = window.__test.base64;
       // The joints' projected centre in 5 frames, with the camera planned again.
       const canvas = Object.assign(document.createElement("canvas"), { width: w, height: h });
       const viewer = await exporter.video.engine.Viewer.create(canvas, { backend: "webgl2" });

@@ -8,7 +8,7 @@ use wasm_bindgen::prelude::*;
 /// Declares the list of error kinds once: the Rust constant [`ERROR_KINDS`] and the TypeScript
 /// union `OdoriErrorKind` come from the same literals, so they cannot drift apart.
 macro_rules! error_kinds {
-    ($($kind:literal: $doc:literal,)*) => {
+    ($($kind:literal: $doc:expr,)*) => {
         /// Every `kind` an `OdoriError` thrown to JS can carry.
         pub const ERROR_KINDS: &[&str] = &[$($kind),*];
         #[wasm_bindgen(typescript_custom_section)]
@@ -22,7 +22,7 @@ macro_rules! error_kinds {
 
 error_kinds! {
     "empty": "import: the file is empty",
-    "unknown-format": "import: not a BVH, glTF or GLB file",
+    "unknown-format": concat!("import: not a ", odori_core::import_format_names!(), " file (MMD models, PMX/PMD, and zips of MMD files: importFiles)"),
     "bvh": "import: a BVH syntax or structure error (message has line:column)",
     "gltf": "import: an invalid glTF/GLB file",
     "unsupported": "import: a valid file using something the importer does not handle",

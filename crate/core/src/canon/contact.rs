@@ -29,20 +29,35 @@ pub const CONTACT_HEIGHT_M: f32 = 0.05;
 /// canonical size).
 pub const CONTACT_SPEED_M_S: f32 = 0.25;
 
+/// Per frame, whether a foot point is within the contact band: at most [`CONTACT_HEIGHT_M`]
+/// (exclusive) over its floor, the 1st percentile of its heights (`heights_m`, at the canonical
+/// size). The height half of the rule, which spec §J's foot skate measures its speeds on
+/// (`motion::skate_speeds_cm_s`; `choreo::quality` takes [`within_band`] over its own floor): a
+/// speed bound there would hide the skate it measures. No finite height: never in the band.
+pub fn in_contact_band(heights_m: &[f32]) -> Vec<bool> {
+    let Some(floor) = motion::floor_height(heights_m) else { return vec![false; heights_m.len()] };
+    heights_m.iter().map(|&y| within_band(y - floor)).collect()
+}
+
+/// The band's one comparison: a foot point `over_floor_m` above its floor (at the canonical
+/// size) is in the contact band.
+pub fn within_band(over_floor_m: f32) -> bool {
+    over_floor_m < CONTACT_HEIGHT_M
+}
+
 /// Per frame, whether a foot point is planted: `track_m` is its world position per frame at the
 /// canonical skeleton's size (a track at another size is divided by that size first), `fps` the
-/// frame rate. Its floor is the 1st percentile of its heights; the speed is over frames
-/// f−1..f+1. No finite height: never planted.
+/// frame rate. In the contact band ([`in_contact_band`]) and slower than [`CONTACT_SPEED_M_S`],
+/// the speed over frames f−1..f+1. No finite height: never planted.
 pub fn planted_frames(track_m: &[Vec3], fps: f32) -> Vec<bool> {
     let frames = track_m.len();
-    let heights: Vec<f32> = track_m.iter().map(|p| p.y).collect();
-    let Some(floor) = motion::floor_height(&heights) else { return vec![false; frames] };
+    let band = in_contact_band(&track_m.iter().map(|p| p.y).collect::<Vec<_>>());
     (0..frames)
         .map(|f| {
             let (a, b) = (f.saturating_sub(1), (f + 1).min(frames - 1));
             let span = (b - a).max(1) as f32;
             let speed_m_s = Vec3::new(track_m[b].x - track_m[a].x, 0.0, track_m[b].z - track_m[a].z).length() * fps / span;
-            track_m[f].y - floor < CONTACT_HEIGHT_M && speed_m_s < CONTACT_SPEED_M_S
+            band[f] && speed_m_s < CONTACT_SPEED_M_S
         })
         .collect()
 }
@@ -67,5 +82,9 @@ mod tests {
         assert_eq!(planted_frames(&big.iter().map(|v| *v / 1.7).collect::<Vec<_>>(), 30.0), p);
         assert!(planted_frames(&[], 30.0).is_empty());
         assert_eq!(planted_frames(&[Vec3::NAN; 3], 30.0), vec![false; 3]);
+        // The band alone (what foot skate reads): the sliding frames are in it, the lifted not.
+        let band = in_contact_band(&t.iter().map(|p| p.y).collect::<Vec<_>>());
+        assert!(band[..20].iter().all(|&x| x) && band[20..].iter().all(|&x| !x), "{band:?}");
+        assert_eq!(in_contact_band(&[f32::NAN; 2]), vec![false; 2]);
     }
 }

@@ -28,8 +28,6 @@ pub const QUALITY_FPS: f32 = 30.0;
 pub const SPEED_SIGMA_FRAMES: f32 = 2.0;
 /// σ of the Beat Alignment Score, seconds (3 frames at 30 fps).
 pub const BAS_SIGMA_SECS: f32 = 0.1;
-/// A foot joint within this height of its floor counts as on the floor, metres.
-pub const CONTACT_HEIGHT_M: f32 = 0.05;
 /// Frames around a join (each side) searched for its jump: 0.1 s, covering the 5-frame
 /// Hermite rewrite at 60 fps that the renderer does.
 pub const JOIN_REACH_FRAMES: usize = 3;
@@ -269,8 +267,14 @@ pub struct FootSkate {
 }
 
 /// Per frame (index = frame) and foot joint, the horizontal speed in cm/s of each ankle/toe
-/// that is within [`CONTACT_HEIGHT_M`] of its floor (the 1st percentile of that joint's height
-/// over the whole motion); `None` when it is off the floor. Frame 0 has no speed.
+/// that is on the floor by the engine's one contact rule's height band
+/// ([`crate::canon::contact::within_band`]: within 5 cm of its floor; the motion is at the
+/// canonical size, as the rule wants); `None` when it is off the floor. Frame 0 has no speed.
+/// The floor is the 1st percentile of that joint's height over the whole motion, its index
+/// rounded where `motion::floor_height` (the rule's other readers) truncates it: the same
+/// joint-frames to within one sample's height. Kept so: taking the other index moves the skate
+/// figures by that sample and, through Generate's skate terms, the generated dances
+/// (`dance_fixture`: bar 1 of the Sugar Plum piece takes another cut).
 pub fn foot_skate_samples(m: &QualityMotion) -> Vec<[Option<f32>; 4]> {
     let frames = m.frames();
     let mut out = vec![[None; 4]; frames];
@@ -280,7 +284,7 @@ pub fn foot_skate_samples(m: &QualityMotion) -> Vec<[Option<f32>; 4]> {
         let floor = heights[((frames - 1) as f32 * 0.01).round() as usize];
         for f in 1..frames {
             let p = m.at(f, c);
-            if p.y - floor <= CONTACT_HEIGHT_M {
+            if crate::canon::contact::within_band(p.y - floor) {
                 let d = p - m.at(f - 1, c);
                 out[f][k] = Some((d.x * d.x + d.z * d.z).sqrt() * QUALITY_FPS * 100.0);
             }

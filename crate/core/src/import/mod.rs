@@ -104,6 +104,44 @@ pub enum Format {
     Vmd,
 }
 
+impl Format {
+    /// Every format [`import_bytes`] reads, each told from the others by its first bytes: the
+    /// one list [`sniff`] tries and the "not a … file" error names ([`import_format_names!`]
+    /// spells it out for compile-time text, a test holds the two equal).
+    pub const ALL: [Format; 3] = [Format::Bvh, Format::Gltf, Format::Vmd];
+
+    /// The names a person knows the format's files by.
+    pub fn names(self) -> &'static [&'static str] {
+        match self {
+            Format::Bvh => &["BVH"],
+            Format::Gltf => &["glTF", "GLB"],
+            Format::Vmd => &["VMD"],
+        }
+    }
+
+    /// Whether `bytes` start as this format's files do.
+    fn starts(self, bytes: &[u8]) -> bool {
+        // Text formats may open with a byte-order mark or blank lines.
+        let text_start = || -> Vec<u8> {
+            bytes.iter().copied().skip_while(|b| b.is_ascii_whitespace() || *b == 0xEF || *b == 0xBB || *b == 0xBF).take(16).collect()
+        };
+        match self {
+            Format::Gltf => bytes.starts_with(b"glTF") || text_start().starts_with(b"{"),
+            Format::Vmd => bytes.starts_with(vmd::MAGIC_V1) || bytes.starts_with(vmd::MAGIC_V2),
+            Format::Bvh => text_start().starts_with(b"HIERARCHY"),
+        }
+    }
+}
+
+/// The names of [`Format::ALL`] as one literal ("BVH, glTF, GLB or VMD"), for text that must be
+/// known at compile time: the `unknown-format` error and the JS error kinds' documentation.
+#[macro_export]
+macro_rules! import_format_names {
+    () => {
+        "BVH, glTF, GLB or VMD"
+    };
+}
+
 /// Everything one file gave.
 #[derive(Clone, Debug)]
 pub struct Imported {
@@ -124,7 +162,7 @@ pub struct Imported {
 pub enum ImportError {
     #[error("{file}: the file is empty")]
     Empty { file: String },
-    #[error("{file}: not a BVH, glTF, GLB or VMD file (it starts with {start:?})")]
+    #[error("{file}: not a {} file (it starts with {start:?})", crate::import_format_names!())]
     UnknownFormat { file: String, start: String },
     #[error("{file}:{line}:{column}: {message}")]
     Bvh { file: String, line: usize, column: usize, message: String },
@@ -163,25 +201,7 @@ impl ImportError {
 
 /// Which format the bytes are, from their first bytes (not the file name, which may lie).
 pub fn sniff(bytes: &[u8]) -> Option<Format> {
-    if bytes.starts_with(b"glTF") {
-        return Some(Format::Gltf);
-    }
-    if bytes.starts_with(vmd::MAGIC_V1) || bytes.starts_with(vmd::MAGIC_V2) {
-        return Some(Format::Vmd);
-    }
-    let text_start: Vec<u8> = bytes
-        .iter()
-        .copied()
-        .skip_while(|b| b.is_ascii_whitespace() || *b == 0xEF || *b == 0xBB || *b == 0xBF)
-        .take(16)
-        .collect();
-    if text_start.starts_with(b"HIERARCHY") {
-        return Some(Format::Bvh);
-    }
-    if text_start.starts_with(b"{") {
-        return Some(Format::Gltf);
-    }
-    None
+    Format::ALL.into_iter().find(|f| f.starts(bytes))
 }
 
 /// Reads a motion file of any supported format.
@@ -231,5 +251,33 @@ pub fn stem(file: &str) -> &str {
     match base.rfind('.') {
         Some(i) if i > 0 => &base[..i],
         _ => base,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The literal the error and the JS kinds' docs print names exactly the formats sniffing
+    /// tells apart, so neither can drift from what the importer reads.
+    #[test]
+    fn the_unknown_format_text_names_every_format_sniff_reads() {
+        let names: Vec<&str> = Format::ALL.iter().flat_map(|f| f.names().iter().copied()).collect();
+        let (last, rest) = names.split_last().expect("formats");
+        assert_eq!(crate::import_format_names!(), format!("{} or {last}", rest.join(", ")));
+        // Each format's own first bytes are sniffed as it, and only as it.
+        let starts: [(&[u8], Format); 5] = [
+            (b"HIERARCHY\nROOT hip", Format::Bvh),
+            (b"\xEF\xBB\xBF\n HIERARCHY", Format::Bvh),
+            (b"glTF\x02\0\0\0", Format::Gltf),
+            (b"  {\"asset\":{}}", Format::Gltf),
+            (vmd::MAGIC_V2, Format::Vmd),
+        ];
+        for (bytes, format) in starts {
+            assert_eq!(sniff(bytes), Some(format), "{bytes:?}");
+            assert_eq!(Format::ALL.iter().filter(|f| f.starts(bytes)).count(), 1, "{bytes:?}");
+        }
+        let e = import_bytes("noise.bin", &[1, 2, 3, 4], &ImportOptions::default()).unwrap_err();
+        assert_eq!(e.to_string(), "noise.bin: not a BVH, glTF, GLB or VMD file (it starts with \"....\")");
     }
 }

@@ -271,15 +271,16 @@ pub fn floor_height(heights_m: &[f32]) -> Option<f32> {
 }
 
 /// Foot skate (spec §J): horizontal speed of a joint, cm/s, on the frames where it is within
-/// 5 cm of its floor. `track` is the joint's world position per frame. Returns every such
-/// speed (between frame f−1 and f, counted when frame f is near the floor).
+/// the one contact rule's band over its floor ([`crate::canon::contact::in_contact_band`]: 5 cm
+/// over its 1st-percentile height). `track` is the joint's world position per frame. Returns
+/// every such speed (between frame f−1 and f, counted when frame f is near the floor).
 pub fn skate_speeds_cm_s(track: &[Vec3], fps: f32) -> Vec<f32> {
-    let heights: Vec<f32> = track.iter().map(|p| p.y).collect();
-    let Some(floor) = floor_height(&heights) else { return Vec::new() };
+    let band = crate::canon::contact::in_contact_band(&track.iter().map(|p| p.y).collect::<Vec<_>>());
     track
         .windows(2)
-        .filter(|w| w[1].y - floor < 0.05)
-        .map(|w| Vec3::new(w[1].x - w[0].x, 0.0, w[1].z - w[0].z).length() * fps * 100.0)
+        .zip(&band[band.len().min(1)..])
+        .filter(|(_, on)| **on)
+        .map(|(w, _)| Vec3::new(w[1].x - w[0].x, 0.0, w[1].z - w[0].z).length() * fps * 100.0)
         .collect()
 }
 

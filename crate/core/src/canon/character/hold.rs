@@ -255,11 +255,15 @@ pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[V
                         // source's height over the frames before, on its (shifted) free path,
                         // not in one.
                         // Only frames left free (not a release ease's, which keep theirs).
+                        // The step is how much higher the free path is than the hold at the
+                        // landing frame itself: measured against the frame before, it also held
+                        // the foot's own last frame of descent, and a figure whose free path is
+                        // its source (a rendered dance) landed a frame early (6.3 mm high).
                         let mut start = f;
                         while start > f.saturating_sub(w + 1) && targets[k][start - 1].is_none() {
                             start -= 1;
                         }
-                        let step = target.y - t.free_ankle[f - 1].y;
+                        let step = target.y - t.free_ankle[f].y;
                         for g in start..f {
                             let at = body.as_ref().map_or(shift[g], |b| b[g]);
                             let s = (g + 1 - start) as f32 / (f - start + 1) as f32;
