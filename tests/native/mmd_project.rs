@@ -87,3 +87,61 @@ fn a_bad_vmd_is_a_typed_error_and_the_project_is_unchanged() {
     assert!(e.to_string().contains("5000"), "{e}");
     assert_eq!(p.doc(), &before);
 }
+
+const CAMERA: &str = "mmd/motion/tokino_kakera_cam.vmd";
+
+/// The camera keys' frames as the file lays them out (read here byte by byte, not through the
+/// engine's reader): a V2 header, no bone or morph keys, then the camera count and 61-byte keys.
+fn camera_frames_in_file(bytes: &[u8]) -> Vec<u32> {
+    let word = |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    assert_eq!((&bytes[..25], word(50), word(54)), (&b"Vocaloid Motion Data 0002"[..], 0, 0), "{CAMERA} is a camera-only V2 VMD");
+    (0..word(58) as usize).map(|k| word(62 + 61 * k)).collect()
+}
+
+#[test]
+fn a_camera_vmd_is_kept_in_the_project_and_survives_save_and_open() {
+    let cam = read(CAMERA);
+    let frames = camera_frames_in_file(&cam);
+    let mut p = Project::new();
+    let track = p.add_camera("tokino_kakera_cam.vmd", &cam, None).expect("a camera VMD is a project item");
+    let mut times: Vec<f32> = frames.iter().map(|&f| f as f32 / 30.0).collect();
+    times.sort_by(f32::total_cmp);
+    assert_eq!(track.keys.iter().map(|k| k.time_secs).collect::<Vec<_>>(), times, "one key per camera key of the file, at frame / 30 s");
+    println!("{CAMERA}: {} camera keys over {:.1} s kept in the project", track.keys.len(), times.last().copied().unwrap_or(0.0));
+    let doc = p.doc().clone();
+    assert_eq!(doc.cameras.len(), 1);
+    assert!(p.blobs().get(&doc.cameras[0].blob).is_some_and(|b| **b == cam[..]), "its bytes are kept as given");
+    // Undo takes the import back (and its blob out of what a save writes); redo restores it.
+    assert!(p.undo());
+    assert!(p.doc().cameras.is_empty() && p.referenced_blobs().contains(&doc.cameras[0].blob), "the history still refers to the blob");
+    assert!(p.redo());
+    assert_eq!(p.doc(), &doc);
+    // Saved and opened again (what the .odori file and the browser's store both go through).
+    let bytes = project::save(&p).expect("save");
+    let q = project::open(&bytes).expect("open").project;
+    assert_eq!(q.doc().cameras, doc.cameras);
+    assert_eq!(q.camera_track(0).expect("the reopened camera"), track);
+    // With its bytes missing (a store that lost the blob) the rest opens and the camera says what is gone.
+    let manifest = project::file::manifest_json(&p);
+    let opened = project::file::from_manifest(&manifest, |h| p.blobs().get(h).cloned().filter(|_| *h != doc.cameras[0].blob)).expect("opens");
+    assert_eq!(opened.missing.iter().map(|m| m.what.as_str()).collect::<Vec<_>>(), vec!["camera motion tokino_kakera_cam.vmd"]);
+    let e = opened.project.camera_track(0).expect_err("no bytes, no track");
+    assert_eq!(e.kind(), "missing-blob", "{e}");
+}
+
+#[test]
+fn a_file_that_is_not_a_camera_vmd_is_refused_and_the_project_is_unchanged() {
+    let mut p = Project::new();
+    let before = p.doc().clone();
+    let e = p.add_camera("wavefile_v2.vmd", &read(WAVEFILE), None).expect_err("a dance VMD is no camera");
+    assert_eq!(e.kind(), "mmd-no-camera-keys", "{e}");
+    assert!(e.to_string().contains("wavefile_v2.vmd"), "{e}");
+    let cam = read(CAMERA);
+    let e = p.add_camera("cut_cam.vmd", &cam[..cam.len() - 30], None).expect_err("a truncated camera VMD");
+    assert_eq!(e.kind(), "mmd-count-too-large", "{e}");
+    let e = p.add_camera("x.vmd", b"not a vmd at all, just text", None).expect_err("not a VMD");
+    assert_eq!(e.kind(), "mmd-bad-magic", "{e}");
+    assert_eq!(p.doc(), &before);
+    assert!(p.undo_history().is_empty());
+    assert!(matches!(p.remove_camera(0), Err(e) if e.kind() == "not-found"));
+}
