@@ -552,6 +552,11 @@ fn read_manifest(manifest: &[u8], blob: impl Fn(&BlobHash) -> Option<Arc<[u8]>>,
 /// Every blob of a document with what it is, for messages.
 fn named_blobs(d: &ProjectDoc) -> Vec<(BlobHash, String)> {
     let mut out: Vec<(BlobHash, String)> = d.sources.iter().map(|s| (s.blob.clone(), format!("motion file {}", s.file_name))).collect();
+    for s in &d.sources {
+        if let Some(m) = &s.model {
+            out.push((m.blob.clone(), format!("MMD model {} of {}", m.file_name, s.file_name)));
+        }
+    }
     if let Some(song) = &d.song {
         if let Some(a) = &song.audio {
             out.push((a.clone(), format!("song audio {}", song.file_name)));

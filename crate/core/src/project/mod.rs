@@ -71,6 +71,19 @@ pub struct Source {
     /// listed is cut at the tempo detected from its motion.
     #[serde(default)]
     pub cut_tempos_bpm: Vec<(u32, f32)>,
+    /// A VMD dance only: the MMD model file it is posed on (its bones and IK), kept with it so
+    /// a reopened project poses it on that model again; `None`: the standard MMD skeleton
+    /// (schema 4; absent when none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<ModelFile>,
+}
+
+/// A PMX/PMD model file a VMD dance is posed on, as given.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct ModelFile {
+    pub file_name: String,
+    pub blob: BlobHash,
 }
 
 impl Source {
@@ -265,7 +278,7 @@ impl ProjectDoc {
     pub fn blobs(&self) -> impl Iterator<Item = &BlobHash> {
         self.sources
             .iter()
-            .map(|s| &s.blob)
+            .flat_map(|s| std::iter::once(&s.blob).chain(s.model.iter().map(|m| &m.blob)))
             .chain(self.song.iter().flat_map(|s| s.audio.iter().chain(std::iter::once(&s.envelope))))
             .chain(self.worn.iter().filter_map(|w| match &w.motion {
                 WornMotion::Motion { bvh, .. } => Some(bvh),
@@ -641,14 +654,31 @@ impl Project {
     /// detected tempo; the report gives each clip's cut (or why it is not in the library).
     /// Undoable.
     pub fn add_source(&mut self, file_name: &str, bytes: &[u8], options: ImportOptions) -> Result<SourceReport, ProjectError> {
-        let imported = self.derived.import(&BlobHash::of(bytes), file_name, bytes, &options)?;
+        self.add_source_on(file_name, bytes, options, None)
+    }
+
+    /// [`Project::add_source`] of a VMD dance posed on an MMD model file (`model`: its name and
+    /// bytes, kept in the project with the dance; `None`: the standard MMD skeleton). A model
+    /// with any other file, or one that cannot be read, is a typed error and nothing changes.
+    pub fn add_source_on(&mut self, file_name: &str, bytes: &[u8], options: ImportOptions, model: Option<(&str, &[u8])>) -> Result<SourceReport, ProjectError> {
+        let hash = BlobHash::of(bytes);
+        let imported = match model {
+            None => self.derived.import(&hash, file_name, bytes, &options)?,
+            Some((model_file, model_bytes)) => {
+                if !(bytes.starts_with(crate::import::vmd::MAGIC_V1) || bytes.starts_with(crate::import::vmd::MAGIC_V2)) {
+                    return Err(ImportError::Invalid { file: file_name.to_string(), message: format!("a model ({model_file}) goes only with a VMD dance") }.into());
+                }
+                self.derived.import_on(&hash, file_name, bytes, &options, Some((model_file, &BlobHash::of(model_bytes), Some(model_bytes))))?
+            }
+        };
         let id = SourceId(self.doc.next_source);
         let clips = derive::clip_infos(id, &imported);
         let warnings = imported.warnings.clone();
         let blob = self.blobs.put(bytes);
+        let model = model.map(|(f, b)| ModelFile { file_name: f.to_string(), blob: self.blobs.put(b) });
         let mut doc = self.doc.clone();
         doc.next_source += 1;
-        doc.sources.push(Source { id, file_name: file_name.to_string(), blob, options, cut_tempos_bpm: Vec::new() });
+        doc.sources.push(Source { id, file_name: file_name.to_string(), blob, options, cut_tempos_bpm: Vec::new(), model });
         self.commit(doc);
         // Report each clip as the dance library has it now (its cut, or why it is refused).
         let d = self.derived();
