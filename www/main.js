@@ -109,7 +109,8 @@ async function main() {
     status: $("#status"),
     optionsDialog: $("#import-options"),
     // The project parses the file (once) and shows its clips in the library.
-    importer: (fileName, bytes, options) => session.importFile(fileName, bytes, options),
+    importer: (fileName, bytes, options, model) => session.importFile(fileName, bytes, options, model),
+    cameraImporter: (fileName, bytes, options) => session.importCamera(fileName, bytes, options),
     onImported: (report, how) => imported(report, how),
     onFiles: (files) => session.takeProjectFiles(files),
   });

@@ -3,10 +3,11 @@
 // project source; Generate with "my moves" fills bars with its segments (the bar strip names
 // it); a reload brings it back (the source with its offset, the same bars); the share note says
 // the link leaves those bars out because MMD files stay with the person, and the link made has
-// them as empty bars.
+// them as empty bars. Then (WebGL2) WAVEFILE given with miku_v2's folder: posed on miku_v2, the
+// model kept in the project, and posed on it again after a reload.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
-import { readFileSync } from "node:fs";
+import { readFileSync, readdirSync } from "node:fs";
 import { join } from "node:path";
 import { startServer, launch, data, BACKENDS } from "./harness.mjs";
 
@@ -90,3 +91,63 @@ for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).
     }
   });
 }
+
+// Issue 28: a VMD given with its model (miku_v2's folder and WAVEFILE, as a person drops them)
+// is posed on that model, and the project keeps the model with the dance: after a reload the
+// dance is posed on miku_v2 again (its joints are miku_v2's bones, not the standard skeleton's,
+// which the same VMD imported on the standard skeleton shows as the control).
+test("an MMD dance given with its model keeps the model in the project across a reload (webgl2)", async () => {
+  const { browser, page, logs } = await launch("webgl2");
+  try {
+    await page.goto(server.url + BACKENDS.webgl2.query);
+    await waitReady(page);
+    const dir = join(data, "mmd/miku_v2");
+    const files = readdirSync(dir).filter((n) => !/\.txt$/i.test(n)).map((n) => ({ name: n, mimeType: "application/octet-stream", buffer: readFileSync(join(dir, n)) }));
+    await page.setInputFiles("#file-input", [...files, { name: "wavefile_v2.vmd", mimeType: "application/octet-stream", buffer: readFileSync(WAVEFILE) }]);
+    const dialog = page.locator("#mmd-import");
+    await dialog.waitFor({ state: "visible", timeout: 30000 });
+    const model = await dialog.locator(".mmd-model").inputValue();
+    assert.notEqual(model, "standard", "the dialog offers the model the VMD's header names first");
+    await dialog.locator(".mmd-offset").fill("160");
+    await dialog.locator("button[value=import]").click();
+    await page.waitForFunction(() => /wavefile_v2\.vmd: dance added to the project, posed on model/.test(document.querySelector("#messages").textContent), null, { timeout: 120000 });
+    const dance = () => page.evaluate(() => {
+      const app = window.odori.project;
+      const src = app.project.doc().sources.find((s) => s.fileName === "wavefile_v2.vmd");
+      const id = src && app.libraryId({ source: src.id, clip: 0 });
+      const lib = window.odori.library;
+      return { model: src?.model?.fileName ?? null, offset: src?.options?.song_offset_frames, joints: id != null ? lib.jointNames(id) : null, at10: id != null ? Array.from(lib.jointPositions(id, 10)) : null };
+    });
+    const before = await dance();
+    assert.equal(before.model, "miku_v2.pmd");
+    assert.equal(before.offset, 160);
+    // The control: the same VMD on Odori's standard MMD skeleton has other joints.
+    const standard = await page.evaluate(async (b64) => {
+      const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+      const r = window.odori.library.importFiles([{ name: "control.vmd", bytes }], { model: "standard" });
+      const id = r.motions[0].clip.id;
+      return { joints: window.odori.library.jointNames(id), at10: Array.from(window.odori.library.jointPositions(id, 10)) };
+    }, readFileSync(WAVEFILE).toString("base64"));
+    // Joint by joint (by name) at 10 s: posed on miku_v2, the figure stands elsewhere than on the standard skeleton.
+    let gap = 0;
+    before.joints.forEach((n, i) => {
+      const k = standard.joints.indexOf(n);
+      if (k >= 0) gap = Math.max(gap, Math.hypot(...[0, 1, 2].map((c) => before.at10[3 * i + c] - standard.at10[3 * k + c])));
+    });
+    console.log(`WAVEFILE on miku_v2 vs on the standard skeleton at 10 s: joints up to ${gap.toFixed(3)} m apart (${before.joints.length} and ${standard.joints.length} joints)`);
+    assert.ok(gap > 0.01 || JSON.stringify(before.joints) !== JSON.stringify(standard.joints), "posed on miku_v2, not on the standard skeleton");
+
+    await page.evaluate(() => window.odori.project.store.flush());
+    await page.reload();
+    await waitReady(page);
+    await page.waitForFunction(() => { const a = window.odori.project; const s = a.project.doc().sources.find((x) => x.fileName === "wavefile_v2.vmd"); return s && a.libraryId({ source: s.id, clip: 0 }) != null; }, null, { timeout: 120000 });
+    const after = await dance();
+    console.log(`WAVEFILE on ${after.model}: ${after.joints.length} joints after the reload, the same pose at 10 s`);
+    assert.deepEqual(after, before, "after the reload the dance is posed on miku_v2 again");
+    const errors = await page.evaluate(() => [...document.querySelectorAll("#messages li.error")].map((li) => li.textContent));
+    assert.deepEqual(errors, []);
+    assert.ok(!logs.some((l) => l.startsWith("[pageerror]")), logs.join("\n"));
+  } finally {
+    await browser.close();
+  }
+});

@@ -423,3 +423,79 @@ test("video (webgl2): a camera VMD drives the camera", { timeout: 900000 }, asyn
     await browser.close();
   }
 });
+
+// Issue 28: a camera VMD opened through the page's file picker is kept in the project (undo and
+// redo take it out and back); after a reload (the project restored from the browser's store)
+// the video dialog offers it, and picked there — not through the API — it makes a video of bars
+// 1–2 whose frames ffprobe counts.
+test("video (webgl2): a camera VMD kept in the project is picked in the video dialog after a reload", { timeout: 900000 }, async () => {
+  const { browser, page, logs } = await danceReady("webgl2");
+  try {
+    const CAM = "tokino_kakera_cam.vmd";
+    await page.setInputFiles("#file-input", [{ name: CAM, mimeType: "application/octet-stream", buffer: readFileSync(join(data, "mmd/motion", CAM)) }]);
+    await page.waitForFunction((cam) => document.querySelector("#messages").textContent.includes(`${cam}: camera motion added to the project`), CAM, { timeout: 60000 });
+    const kept = () => page.evaluate(() => ({ project: window.odori.project.project.summary().cameras.map((c) => c.fileName), library: window.odori.library.cameraTracks().map((t) => t.source) }));
+    assert.deepEqual(await kept(), { project: [CAM], library: [CAM] });
+    await page.evaluate(async () => { window.odori.project.undo(); await window.odori.project.reconciling; });
+    assert.deepEqual(await kept(), { project: [], library: [] }, "undo takes the import back");
+    await page.evaluate(async () => { window.odori.project.redo(); await window.odori.project.reconciling; });
+    assert.deepEqual(await kept(), { project: [CAM], library: [CAM] }, "redo brings it back");
+
+    // Reload: the project (with its camera) comes back from IndexedDB.
+    await page.evaluate(() => window.odori.project.store.flush());
+    await page.reload();
+    await page.waitForFunction(() => document.body.dataset.ready === "1" && document.body.dataset.project === "ready" && window.odori.choreo?.view?.length && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 120000 });
+    await page.waitForFunction(() => window.odori.library.cameraTracks().length > 0, null, { timeout: 30000 });
+    assert.deepEqual(await kept(), { project: [CAM], library: [CAM] }, "the reopened project shows its camera");
+
+    // Export → bars 1–2 → Video; the camera chosen in the dialog's own list.
+    const downloads = [];
+    page.on("download", (d) => downloads.push(d));
+    await page.evaluate(() => { delete window.showSaveFilePicker; });
+    await page.click("#export");
+    await page.selectOption("#export-format", "video");
+    await page.check("input[name=export-what][value=bars]");
+    await page.fill("#export-bar-from", "1");
+    await page.fill("#export-bar-to", "2");
+    await page.click("#export-go");
+    await page.locator("#video-dialog").waitFor({ state: "visible" });
+    const offered = await page.$$eval("#video-camera option", (os) => os.map((o) => o.textContent));
+    assert.ok(offered.includes("Camera VMD: tokino_kakera_cam"), `the dialog offers the project's camera: ${offered.join(", ")}`);
+    await page.selectOption("#video-camera", { label: "Camera VMD: tokino_kakera_cam" });
+    const chosen = await page.evaluate(async () => {
+      const { cameraChoice } = await import("/video/video-panel.js");
+      return cameraChoice(document.querySelector("#video-camera").value);
+    });
+    const track = await page.evaluate((i) => window.odori.library.cameraTracks()[i], chosen.track);
+    assert.equal(chosen.mode, "vmd");
+    assert.equal(track.source, CAM, "the option picks the project's camera track");
+    await page.click("#video-go");
+    await page.waitForFunction(() => /^Done: \d+ frames/.test(document.querySelector("#video-status").textContent), null, { timeout: 600000 });
+    const status = await page.textContent("#video-status");
+    await waitForDownload(downloads);
+    const out = join(artifacts, "video-camera-vmd-dialog.mp4");
+    await downloads[0].saveAs(out);
+    // The range the dialog exports: bars 1–2 from their lead-in count (the same function the dialog uses).
+    const range = await page.evaluate(async () => {
+      const { danceRange } = await import("/video/export-video.js");
+      const grid = window.odori.project.project.grid();
+      return danceRange(grid.bars, 0, 1, grid.beatsPerBar);
+    });
+    const p = probe(out);
+    const want = Math.round((range.endSecs - range.startSecs) * FPS);
+    console.log(`camera VMD from the project, picked in the dialog: ${status} ffprobe: ${p.video.codec_name} ${p.video.width}×${p.video.height}, ${p.video.nb_read_frames} frames (bars 1–2 with the lead-in: ${want})`);
+    assert.equal(Number(p.video.nb_read_frames), want);
+    assert.equal(Number(/Done: (\d+) frames/.exec(status)[1]), want);
+    const errors = await page.evaluate(() => [...document.querySelectorAll("#messages li.error")].map((li) => li.textContent));
+    assert.deepEqual(errors, []);
+    assert.deepEqual(logs.filter((l) => l.startsWith("[pageerror]")), []);
+  } finally {
+    await browser.close();
+  }
+});
+
+async function waitForDownload(list, timeoutMs = 60000) {
+  const t0 = Date.now();
+  while (!list.length && Date.now() - t0 < timeoutMs) await new Promise((r) => setTimeout(r, 100));
+  assert.ok(list.length, "the dialog's video was downloaded");
+}

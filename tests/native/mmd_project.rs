@@ -3,7 +3,10 @@
 //! the song offset kept in its import options), cuts it into segments, Generate with *my moves*
 //! fills bars with them, and the project saved to `.odori` bytes and opened again holds the
 //! same source, the same offset and renders the same dance. A bad VMD is a typed error and
-//! leaves the project as it was.
+//! leaves the project as it was. A VMD given with its model (`add_source_on`) is posed on it as
+//! the library's MMD import poses it, and the project keeps the model so it is posed on it again
+//! after reopening (withheld: the standard skeleton, saying so). A camera VMD (`add_camera`) is
+//! kept as given, survives save and open, and anything else is refused as a camera.
 
 use odori_core::choreo::{MovesSource, RenderOptions};
 use odori_core::music::AnalysisOptions;
@@ -85,5 +88,126 @@ fn a_bad_vmd_is_a_typed_error_and_the_project_is_unchanged() {
     let e = p.add_source("late.vmd", &wave, ImportOptions { song_offset_frames: Some(5000), ..Default::default() }).expect_err("an offset past the end");
     assert_eq!(e.kind(), "bad-argument", "{e}");
     assert!(e.to_string().contains("5000"), "{e}");
+    assert_eq!(p.doc(), &before);
+}
+
+const CAMERA: &str = "mmd/motion/tokino_kakera_cam.vmd";
+
+/// The camera keys' frames as the file lays them out (read here byte by byte, not through the
+/// engine's reader): a V2 header, no bone or morph keys, then the camera count and 61-byte keys.
+fn camera_frames_in_file(bytes: &[u8]) -> Vec<u32> {
+    let word = |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    assert_eq!((&bytes[..25], word(50), word(54)), (&b"Vocaloid Motion Data 0002"[..], 0, 0), "{CAMERA} is a camera-only V2 VMD");
+    (0..word(58) as usize).map(|k| word(62 + 61 * k)).collect()
+}
+
+#[test]
+fn a_camera_vmd_is_kept_in_the_project_and_survives_save_and_open() {
+    let cam = read(CAMERA);
+    let frames = camera_frames_in_file(&cam);
+    let mut p = Project::new();
+    let track = p.add_camera("tokino_kakera_cam.vmd", &cam, None).expect("a camera VMD is a project item");
+    let mut times: Vec<f32> = frames.iter().map(|&f| f as f32 / 30.0).collect();
+    times.sort_by(f32::total_cmp);
+    assert_eq!(track.keys.iter().map(|k| k.time_secs).collect::<Vec<_>>(), times, "one key per camera key of the file, at frame / 30 s");
+    println!("{CAMERA}: {} camera keys over {:.1} s kept in the project", track.keys.len(), times.last().copied().unwrap_or(0.0));
+    let doc = p.doc().clone();
+    assert_eq!(doc.cameras.len(), 1);
+    assert!(p.blobs().get(&doc.cameras[0].blob).is_some_and(|b| **b == cam[..]), "its bytes are kept as given");
+    // Undo takes the import back (and its blob out of what a save writes); redo restores it.
+    assert!(p.undo());
+    assert!(p.doc().cameras.is_empty() && p.referenced_blobs().contains(&doc.cameras[0].blob), "the history still refers to the blob");
+    assert!(p.redo());
+    assert_eq!(p.doc(), &doc);
+    // Saved and opened again (what the .odori file and the browser's store both go through).
+    let bytes = project::save(&p).expect("save");
+    let q = project::open(&bytes).expect("open").project;
+    assert_eq!(q.doc().cameras, doc.cameras);
+    assert_eq!(q.camera_track(0).expect("the reopened camera"), track);
+    // With its bytes missing (a store that lost the blob) the rest opens and the camera says what is gone.
+    let manifest = project::file::manifest_json(&p);
+    let opened = project::file::from_manifest(&manifest, |h| p.blobs().get(h).cloned().filter(|_| *h != doc.cameras[0].blob)).expect("opens");
+    assert_eq!(opened.missing.iter().map(|m| m.what.as_str()).collect::<Vec<_>>(), vec!["camera motion tokino_kakera_cam.vmd"]);
+    let e = opened.project.camera_track(0).expect_err("no bytes, no track");
+    assert_eq!(e.kind(), "missing-blob", "{e}");
+}
+
+#[test]
+fn a_file_that_is_not_a_camera_vmd_is_refused_and_the_project_is_unchanged() {
+    let mut p = Project::new();
+    let before = p.doc().clone();
+    let e = p.add_camera("wavefile_v2.vmd", &read(WAVEFILE), None).expect_err("a dance VMD is no camera");
+    assert_eq!(e.kind(), "mmd-no-camera-keys", "{e}");
+    assert!(e.to_string().contains("wavefile_v2.vmd"), "{e}");
+    let cam = read(CAMERA);
+    let e = p.add_camera("cut_cam.vmd", &cam[..cam.len() - 30], None).expect_err("a truncated camera VMD");
+    assert_eq!(e.kind(), "mmd-count-too-large", "{e}");
+    let e = p.add_camera("x.vmd", b"not a vmd at all, just text", None).expect_err("not a VMD");
+    assert_eq!(e.kind(), "mmd-bad-magic", "{e}");
+    assert_eq!(p.doc(), &before);
+    assert!(p.undo_history().is_empty());
+    assert!(matches!(p.remove_camera(0), Err(e) if e.kind() == "not-found"));
+}
+
+const MIKU: &str = "mmd/miku_v2/miku_v2.pmd";
+
+/// A clip's joint positions (metres) at five frames across it.
+fn poses_of(clip: &Clip) -> Vec<Vec<glam::Vec3>> {
+    let n = clip.frame_count();
+    (0..5).map(|k| clip.world_positions((n.saturating_sub(1)) * k / 4)).collect()
+}
+
+/// The largest distance (metres) between the same joints of two pose lists.
+fn max_gap(a: &[Vec<glam::Vec3>], b: &[Vec<glam::Vec3>]) -> f32 {
+    a.iter().zip(b).flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| p.distance(*q))).fold(0.0, f32::max)
+}
+
+#[test]
+fn a_vmd_dance_on_its_model_keeps_the_model_and_reopens_on_it() {
+    use odori_core::mmd::files::{import_files, MmdFilesOptions, STANDARD_RIG};
+    let (wave, miku) = (read(WAVEFILE), read(MIKU));
+    let opts = ImportOptions { song_offset_frames: Some(160), ..Default::default() };
+    // The reference: the library's own MMD import of the same set, which poses WAVEFILE on the
+    // model its header names.
+    let lib = import_files(&[("miku_v2.pmd".into(), miku.clone()), ("wavefile_v2.vmd".into(), wave.clone())], &[], &MmdFilesOptions { model: None, song_offset_frames: Some(160) });
+    let reference = lib.motions.first().unwrap_or_else(|| panic!("the library poses WAVEFILE: {:?}", lib.problems));
+    assert_ne!(reference.rig, STANDARD_RIG, "WAVEFILE's header names miku_v2");
+
+    let mut p = Project::new();
+    let r = p.add_source_on("wavefile_v2.vmd", &wave, opts.clone(), Some(("miku_v2.pmd", &miku))).expect("a VMD on its model");
+    let on_model = p.imported(r.id).expect("bytes").expect("imports").clips[0].clone();
+    let gap = max_gap(&poses_of(&on_model), &poses_of(&reference.clip));
+    assert!(gap < 1e-5, "the project's dance on miku_v2 is the library's ({gap} m apart)");
+    let mut plain = Project::new();
+    let r0 = plain.add_source("wavefile_v2.vmd", &wave, opts.clone()).expect("on the standard skeleton");
+    let on_standard = plain.imported(r0.id).expect("bytes").expect("imports").clips[0].clone();
+    let apart = max_gap(&poses_of(&on_model), &poses_of(&on_standard));
+    println!("WAVEFILE on miku_v2 vs on the standard skeleton: joints up to {apart:.3} m apart");
+    assert!(apart > 0.01, "the control: the standard skeleton poses it differently ({apart} m)");
+
+    // Saved and opened again: the model is kept with the dance and poses it again.
+    let doc = p.doc().clone();
+    let model = doc.sources[0].model.clone().expect("the source names its model");
+    assert_eq!(model.file_name, "miku_v2.pmd");
+    assert!(p.blobs().get(&model.blob).is_some_and(|b| **b == miku[..]), "the model's bytes are kept as given");
+    let mut q = project::open(&project::save(&p).expect("save")).expect("open").project;
+    let again = q.imported(r.id).expect("bytes").expect("imports").clips[0].clone();
+    assert_eq!(poses_of(&again), poses_of(&on_model), "the reopened dance plays on miku_v2 again");
+
+    // Without the model's bytes: the standard skeleton, and both the open and the import say so.
+    let manifest = project::file::manifest_json(&p);
+    let opened = project::file::from_manifest(&manifest, |h| p.blobs().get(h).cloned().filter(|_| *h != model.blob)).expect("opens");
+    assert_eq!(opened.missing.iter().map(|m| m.what.as_str()).collect::<Vec<_>>(), vec!["MMD model miku_v2.pmd of wavefile_v2.vmd"]);
+    let mut lost = opened.project;
+    let im = lost.imported(r.id).expect("the dance's bytes are there").expect("imports");
+    assert_eq!(poses_of(&im.clips[0]), poses_of(&on_standard), "falls back to the standard skeleton");
+    assert!(im.warnings.iter().any(|w| w.contains("miku_v2.pmd is missing from the project") && w.contains(STANDARD_RIG)), "{:?}", im.warnings);
+
+    // A model that cannot be read, or a model with a file that is not a VMD: typed errors, nothing changed.
+    let before = p.doc().clone();
+    let e = p.add_source_on("wavefile_v2.vmd", &wave, opts.clone(), Some(("bad.pmx", b"not a model"))).expect_err("a bad model");
+    assert_eq!(e.kind(), "mmd-bad-magic", "{e}");
+    let e = p.add_source_on("walk.bvh", b"HIERARCHY\nROOT Hips\n", ImportOptions::default(), Some(("miku_v2.pmd", &miku))).expect_err("a model with a BVH");
+    assert_eq!(e.kind(), "invalid", "{e}");
     assert_eq!(p.doc(), &before);
 }

@@ -1,5 +1,5 @@
-//! The golden `.odori` files of schema versions 1 and 2 (`tests/golden/project_v1.odori`,
-//! `project_v2.odori`, each written once by `tests/tools/make_golden_project.rs` with the build of
+//! The golden `.odori` files of schema versions 1 to 4 (`tests/golden/project_v1.odori` …
+//! `project_v4.odori`, each written once by `tests/tools/make_golden_project.rs` with the build of
 //! its schema and reviewed; never written by the tests) open with this build: everything its
 //! maker put in is there, it renders, and its history works. When the schema changes, these
 //! files must keep opening (through `project::file::migrate`).
@@ -11,6 +11,10 @@ use odori_core::project::{self, BarKind, MoveKey};
 const GOLDEN: &[u8] = include_bytes!("../golden/project_v1.odori");
 /// Written by the tool at main 8823db9 (schema 2: the history as changes, no take).
 const GOLDEN_V2: &[u8] = include_bytes!("../golden/project_v2.odori");
+/// Written by the tool at main 8ed782d (schema 3: the dance's take, no cameras).
+const GOLDEN_V3: &[u8] = include_bytes!("../golden/project_v3.odori");
+/// Written by the tool at s13-mmdcam (schema 4: a camera VMD kept in the project).
+const GOLDEN_V4: &[u8] = include_bytes!("../golden/project_v4.odori");
 
 #[test]
 fn golden_v1_opens_with_everything_in_it() {
@@ -24,10 +28,36 @@ fn golden_v2_opens_with_everything_in_it() {
     golden_opens_with_everything_in_it(GOLDEN_V2, 2);
 }
 
-fn golden_opens_with_everything_in_it(bytes: &[u8], version: u32) {
+#[test]
+fn golden_v3_opens_with_everything_in_it() {
+    // Schema 4 keeps camera VMDs: a v3 project has none.
+    let p = golden_opens_with_everything_in_it(GOLDEN_V3, 3);
+    assert!(p.doc().cameras.is_empty());
+}
+
+#[test]
+fn golden_v4_opens_with_its_camera_vmd() {
+    let mut p = golden_opens_with_everything_in_it(GOLDEN_V4, 4);
+    let doc = p.doc().clone();
+    assert_eq!(doc.cameras.len(), 1);
+    assert_eq!((doc.cameras[0].file_name.as_str(), doc.cameras[0].song_offset_frames), ("golden_cam.vmd", Some(0)));
+    // The kept bytes are the camera the tool wrote: three keys a second apart, yawing 0 → 1 rad.
+    let track = p.camera_track(0).expect("the camera track reads from the kept bytes");
+    assert_eq!(track.keys.len(), 3);
+    assert_eq!(track.keys.iter().map(|k| k.time_secs).collect::<Vec<_>>(), vec![0.0, 1.0, 2.0]);
+    assert!((track.keys[2].rotation_rad.y.abs() - 1.0).abs() < 1e-6, "{:?}", track.keys[2]);
+    assert!((track.keys[0].target_m.y - 10.0 * odori_core::mmd::METRES_PER_MMD_UNIT).abs() < 1e-6);
+    // The import was the last edit: one undo takes the camera (and its blob) away, redo brings it back.
+    assert!(p.undo());
+    assert!(p.doc().cameras.is_empty());
+    assert!(p.redo());
+    assert_eq!(p.doc(), &doc);
+}
+
+fn golden_opens_with_everything_in_it(bytes: &[u8], version: u32) -> project::Project {
     let opened = project::open(bytes).unwrap_or_else(|e| panic!("the golden v{version} file opens: {e}"));
     assert!(opened.missing.is_empty(), "{:?}", opened.missing);
-    assert_eq!(opened.migrated_from, Some(version));
+    assert_eq!(opened.migrated_from, (version < project::CURRENT_SCHEMA_VERSION).then_some(version));
     let mut p = opened.project;
     let doc = p.doc().clone();
     assert_eq!(doc.dance.take, 0, "a dance saved before takes is take 0");
@@ -68,6 +98,7 @@ fn golden_opens_with_everything_in_it(bytes: &[u8], version: u32) {
     // Saved again by this build, it reopens identically.
     let again = project::open(&project::save(&p).unwrap()).unwrap().project;
     assert!(again == p);
+    p
 }
 
 /// The error kinds the `.d.ts` lists (`error_kinds!` in crate/web/src/error.rs) cover every kind the project and
@@ -113,6 +144,8 @@ fn dts_error_kinds_cover_the_core_kinds() {
         ProjectError::UnknownMove { key: f() },
         ProjectError::Incomplete { count: 1, first: f() },
         ProjectError::BadEnvelope { message: f() },
+        ProjectError::NotACamera { file_name: f(), bone_keys: 1, morph_keys: 0 },
+        ProjectError::NoSuchCamera { index: 1, count: 0 },
     ];
     let kinds: Vec<&str> = file_errors.iter().map(FileError::kind).chain(project_errors.iter().map(ProjectError::kind)).collect();
     for k in kinds {

@@ -1,11 +1,12 @@
 //! Writes the golden `.odori` file of the build's schema version (`tests/golden/project_v1.odori`;
-//! `project_v2.odori` was written by it at main 8823db9, schema 2), made
-//! from the engine's own content only (the demo song's envelope, a three-joint BVH written
-//! here, built-in moves), so it can be committed. Run once per released schema version and
-//! review the result; the test run only reads it:
+//! `project_v2.odori` was written by it at main 8823db9, schema 2; `project_v3.odori` at main
+//! 8ed782d, schema 3; `project_v4.odori` by this version, schema 4, which adds a camera VMD),
+//! made from the engine's own content only (the demo song's envelope, a three-joint BVH and a
+//! three-key camera VMD written here, built-in moves), so it can be committed. Run once per
+//! released schema version and review the result; the test run only reads it:
 //!
 //! ```sh
-//! cargo run -p odori-tests --example make_golden_project -- tests/golden/project_v1.odori
+//! cargo run -p odori-tests --example make_golden_project -- tests/golden/project_v4.odori
 //! ```
 
 use odori_core::library::builtin_moves;
@@ -37,6 +38,34 @@ Frame Time: 0.0333333
 0 90 0 0 20 0 10 0 0
 ";
 
+/// A camera VMD of our own: no bone or morph keys, three camera keys (frames 0, 30, 60) orbiting
+/// a point 10 MMD units up, written byte by byte as MMD lays the file out (61 bytes a key).
+pub fn tiny_camera_vmd() -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut magic = b"Vocaloid Motion Data 0002".to_vec();
+    magic.resize(30, 0);
+    out.extend_from_slice(&magic);
+    let mut model = b"camera".to_vec();
+    model.resize(20, 0);
+    out.extend_from_slice(&model);
+    out.extend_from_slice(&0u32.to_le_bytes()); // bone keys
+    out.extend_from_slice(&0u32.to_le_bytes()); // morph keys
+    out.extend_from_slice(&3u32.to_le_bytes()); // camera keys
+    for (frame, yaw) in [(0u32, 0.0f32), (30, 0.5), (60, 1.0)] {
+        out.extend_from_slice(&frame.to_le_bytes());
+        out.extend_from_slice(&(-40.0f32).to_le_bytes()); // distance (in front of the target)
+        for v in [0.0f32, 10.0, 0.0, 0.1, yaw, 0.0] {
+            out.extend_from_slice(&v.to_le_bytes()); // target x y z, rotation x y z
+        }
+        for _ in 0..6 {
+            out.extend_from_slice(&[20, 107, 20, 107]); // linear easing (x1, x2, y1, y2)
+        }
+        out.extend_from_slice(&30u32.to_le_bytes()); // field of view, degrees
+        out.push(0); // perspective
+    }
+    out
+}
+
 fn main() {
     let out = std::env::args().nth(1).unwrap_or_else(|| panic!("usage: make_golden_project OUT.odori"));
     let song = demo_song(22_050.0).expect("demo song");
@@ -55,6 +84,8 @@ fn main() {
     p.generate().expect("generate");
     p.set_rho(0.5).expect("rho");
     p.set_camera(Some(Camera { yaw_rad: 0.5, pitch_rad: 0.2, distance_m: 4.0, target_m: [0.0, 1.0, 0.0] }));
+    // Schema 4: a camera VMD kept in the project.
+    p.add_camera("golden_cam.vmd", &tiny_camera_vmd(), Some(0)).expect("camera");
     let bytes = project::save(&p).expect("save");
     std::fs::write(&out, &bytes).unwrap_or_else(|e| panic!("{out}: {e}"));
     println!("{out}: {} bytes, {} bars, {} undo steps", bytes.len(), p.doc().dance.bars.len(), p.undo_history().len());

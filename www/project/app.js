@@ -41,7 +41,7 @@ export class ProjectSession {
     /** Library clip id → the Project's ClipRef. */
     this.clipRefs = new Map();
     /** What the page shows of the document (see `reconcile`). */
-    this.shown = { sources: new Map(), song: null, corrections: "[]", tags: "[]", texts: "[]", character: bodyKey({}), worn: [] };
+    this.shown = { sources: new Map(), song: null, corrections: "[]", tags: "[]", texts: "[]", character: bodyKey({}), worn: [], cameras: "[]" };
     /** Called after every edit (undo/redo buttons). */
     this.onEdited = null;
     /** The display hooks `reconcile` uses (set by the page, see main.js). */
@@ -119,17 +119,31 @@ export class ProjectSession {
    * Imports a motion file: the project parses it once and shows its clips in the page's
    * library. Returns the library's import report (throws the importer's error).
    */
-  importFile(fileName, bytes, options) {
+  importFile(fileName, bytes, options, model) {
     // The file's own options (frame rate, units) are kept with its source: a reload imports it the same way.
     const o = {};
     if (options && options.fpsOverride) o.fpsOverride = options.fpsOverride;
     if (options && options.unitScale) o.unitScale = options.unitScale;
     // A VMD's song offset (the motion frame that is song time 0) is kept the same way.
     if (options && options.songOffsetFrames) o.songOffsetFrames = options.songOffsetFrames;
-    const report = this.project.importInto(this.library, fileName, bytes, o);
+    // A VMD dance with its MMD model (`{ fileName, bytes }`): the project keeps the model and poses the dance on it.
+    const report = model ? this.project.importOnModelInto(this.library, fileName, bytes, o, model.fileName, model.bytes) : this.project.importInto(this.library, fileName, bytes, o);
     this.mapClips(report.source, report);
     this.edited();
     return report;
+  }
+
+  /**
+   * Imports a camera VMD into the project (kept with it, undoable) and shows the project's
+   * camera motions in the library's `cameraTracks()`, where the video dialog finds them.
+   * Returns the track's info (throws the engine's error: not a VMD, no camera keys).
+   */
+  importCamera(fileName, bytes, options) {
+    const o = options && options.songOffsetFrames ? { songOffsetFrames: options.songOffsetFrames } : {};
+    const info = this.project.addCameraInto(this.library, fileName, bytes, o);
+    this.shown.cameras = JSON.stringify(this.project.summary().cameras);
+    this.edited();
+    return info;
   }
 
   mapClips(sourceId, report) {
@@ -298,6 +312,12 @@ export class ProjectSession {
         this.messages.error(`A clip put on the character could not be made again: ${e.message}`);
       }
     }
+    // Camera motions: the library shows the project's (the video dialog lists them).
+    const cameras = JSON.stringify(now.cameras || []);
+    if (cameras !== this.shown.cameras) {
+      this.shown.cameras = cameras;
+      for (const problem of this.project.camerasInto(this.library)) this.messages.error(problem);
+    }
     const character = bodyKey(now);
     if (character !== this.shown.character) {
       this.shown.character = character;
@@ -369,7 +389,7 @@ export class ProjectSession {
       const r = await saveBytes(bytes, fileNameFor(this.project.summary().name));
       if (r) this.messages.info(`Saved ${r.name} (${(bytes.length / 1024).toFixed(0)} KiB)`);
       // MMD files go into the person's own .odori file, never further: say so when it holds some.
-      const mmd = this.project.doc().sources.map((s) => s.fileName).filter((n) => /\.(vmd|pmx|pmd)$/i.test(n));
+      const mmd = [...this.project.doc().sources.map((s) => s.fileName).filter((n) => /\.(vmd|pmx|pmd)$/i.test(n)), ...this.project.summary().cameras.map((c) => c.fileName)];
       if (r && mmd.length) this.messages.info(`${r.name} holds your MMD file${mmd.length === 1 ? "" : "s"} (${mmd.join(", ")}) for you: MMD creators' terms usually forbid passing them on, so keep this file to yourself (a share link leaves them out).`);
       // Named where it was saved ("my dance.odori" → "my dance"): how Recent projects lists it.
       const named = r && r.name.replace(/\.odori$/i, "").trim();

@@ -28,11 +28,13 @@ export function bvhHeaderFps(bytes) {
 }
 
 export class FileLoader {
-  constructor({ library, messages, status, optionsDialog, onImported, onFiles, importer }) {
+  constructor({ library, messages, status, optionsDialog, onImported, onFiles, importer, cameraImporter }) {
     // `importer(fileName, bytes, options)` → import report: who parses the file (the app's
     // project, which shows its clips in the library); the library's own import otherwise.
+    // `cameraImporter(fileName, bytes, options)` → camera track info: who keeps a camera VMD
+    // (the app's project, which shows it in `library.cameraTracks()`); the library otherwise.
     // `optionsDialog`: the `<dialog>` asking each BVH file's options (index.html #import-options).
-    Object.assign(this, { library, messages, status, optionsDialog, onImported, onFiles, importer });
+    Object.assign(this, { library, messages, status, optionsDialog, onImported, onFiles, importer, cameraImporter });
     this.queue = Promise.resolve();
   }
 
@@ -154,9 +156,12 @@ export class FileLoader {
    * Imports a set of MikuMikuDance files. A VMD dance given as a file of its own becomes a
    * source of the project like a BVH (`importer`: kept with the project on this device, cut into
    * segments Generate and search use, posed on Odori's standard MMD skeleton, starting at its
-   * song offset); models, textures, camera VMDs and zips go to `library.importFiles` as one set
-   * (a model needs its textures). When a dance is opened a dialog asks its song offset (the
-   * motion frame that is song time 0) and, for a dance inside a zip, the model it plays on.
+   * song offset); a camera VMD given as a file of its own becomes a camera motion of the project
+   * (`cameraImporter`: kept with the project, offered as the video's camera); models, textures
+   * and zips go to `library.importFiles` as one set (a model needs its textures). When a dance is opened a dialog asks its song offset (the
+   * motion frame that is song time 0) and, for a dance inside a zip or given with models, the
+   * model it plays on (a project dance keeps a model given with it, and is posed on it again
+   * when the project is reopened).
    * Problems name their file; the rest still imports.
    */
   async openMmd(files) {
@@ -173,14 +178,20 @@ export class FileLoader {
     if (!set.length || typeof this.library.importFiles !== "function") return null;
     let options = {};
     let toProject = [];
+    let cameras = [];
+    let setModels = [];
     try {
       const seen = this.library.inspectMmdFiles(set);
+      // Models given in this set: a project dance can keep one of them (its bytes are here).
+      setModels = seen.filter((f) => f.kind === "model" && !f.error);
       const models = [...this.library.mmdModels().map((m) => m.name), ...seen.filter((f) => f.kind === "model" && !f.error).map((f) => f.modelName)];
       const dances = seen.filter((f) => f.kind === "vmd" && !f.error && f.boneKeys > 0);
       // A dance given as its own file goes into the project (a zip's stays in the library).
       if (this.importer) toProject = dances.filter((d) => set.some((f) => f.name === d.file));
+      // So does a camera VMD (camera keys, no bone keys) given as its own file.
+      if (this.cameraImporter) cameras = seen.filter((f) => f.kind === "vmd" && !f.error && f.cameraKeys > 0 && f.boneKeys === 0 && set.some((s) => s.name === f.file));
       if (dances.length) {
-        const chosen = await this.askMmd(dances, [...new Set(models)], toProject.length < dances.length);
+        const chosen = await this.askMmd(dances, [...new Set(models)], toProject.length < dances.length || setModels.length > 0);
         if (!chosen) {
           this.messages.info(`Import cancelled: ${set.map((f) => f.name).join(", ")} not added`);
           return null;
@@ -193,7 +204,7 @@ export class FileLoader {
     }
     this.progress(`Importing ${set.length} MMD file${set.length === 1 ? "" : "s"}…`);
     await new Promise((r) => requestAnimationFrame(() => setTimeout(r, 0)));
-    const rest = set.filter((f) => !toProject.some((d) => d.file === f.name));
+    const rest = set.filter((f) => !toProject.some((d) => d.file === f.name) && !cameras.some((c) => c.file === f.name));
     let report = { motions: [], models: [], cameras: [], notices: [], problems: [] };
     try {
       if (rest.length) report = this.library.importFiles(rest, options);
@@ -217,11 +228,27 @@ export class FileLoader {
     for (const d of toProject) {
       const f = set.find((x) => x.name === d.file);
       const o = options.songOffsetFrames ? { songOffsetFrames: options.songOffsetFrames } : {};
+      // The model chosen (or the one its header names), kept with the dance when given in this set.
+      const name = options.model && options.model !== "standard" ? options.model : null;
+      const m = name ? setModels.find((x) => x.modelName === name) : null;
+      const mf = m ? set.find((x) => x.name === m.file) : null;
+      if (name && !mf) this.messages.info(`${f.name}: model "${name}" is not among the files given, so the project cannot keep it: posed on Odori's standard MMD skeleton (give the model with the dance to keep it with the project)`);
       try {
-        const r = this.importer(f.name, f.bytes, o);
+        const r = this.importer(f.name, f.bytes, o, mf ? { fileName: mf.name, bytes: mf.bytes } : undefined);
         for (const w of r.warnings) this.messages.info(w.startsWith(f.name) ? w : `${f.name}: ${w}`);
-        this.messages.info(`${f.name}: dance added to the project, posed on Odori's standard MMD skeleton${o.songOffsetFrames ? `, starting at motion frame ${o.songOffsetFrames} (song time 0)` : ""}`);
+        this.messages.info(`${f.name}: dance added to the project, posed on ${mf ? `model "${name}" (${mf.name}, kept in the project with the dance)` : "Odori's standard MMD skeleton"}${o.songOffsetFrames ? `, starting at motion frame ${o.songOffsetFrames} (song time 0)` : ""}`);
         this.onImported(r, { fileName: f.name, mmd: "project" });
+        added++;
+      } catch (e) {
+        this.messages.error(e && e.name === "OdoriError" ? e.message : `${f.name}: ${e && e.message ? e.message : e}`);
+      }
+    }
+    for (const c of cameras) {
+      const f = set.find((x) => x.name === c.file);
+      const o = options.songOffsetFrames ? { songOffsetFrames: options.songOffsetFrames } : {};
+      try {
+        const t = this.cameraImporter(f.name, f.bytes, o);
+        this.messages.info(`${f.name}: camera motion added to the project (${t.keys} keys, ${t.durationSecs.toFixed(1)} s): choose "Camera VMD: ${t.name}" as the video's camera`);
         added++;
       } catch (e) {
         this.messages.error(e && e.name === "OdoriError" ? e.message : `${f.name}: ${e && e.message ? e.message : e}`);

@@ -23,7 +23,10 @@ use crate::library::Library;
 #[derive(Default)]
 pub(crate) struct MmdStore {
     pub models: Vec<ImportedModel>,
+    /// Camera tracks imported into the library itself (a camera VMD inside a zip).
     pub cameras: Vec<CameraTrack>,
+    /// The open project's camera motions (`Project.camerasInto`): listed after `cameras`.
+    pub project_cameras: Vec<CameraTrack>,
     /// Clip id → the rig (model name, or the standard skeleton) an imported VMD was posed on.
     pub posed_on: Vec<(u32, String)>,
     /// Model name → the library clip (its rest pose, with its mesh) that is the model as a
@@ -35,6 +38,17 @@ pub(crate) struct MmdStore {
     /// Clip id → an imported VMD's own bone keys (bone, frame on the clip's timeline): the
     /// export's key reduction keeps them.
     pub own_keys: Vec<(u32, std::collections::HashMap<String, std::collections::HashSet<u32>>)>,
+}
+
+impl MmdStore {
+    /// Camera track `index` of `cameraTracks()`: the library's own, then the project's.
+    pub fn camera(&self, index: usize) -> Option<&CameraTrack> {
+        self.cameras.iter().chain(&self.project_cameras).nth(index)
+    }
+
+    pub fn camera_count(&self) -> usize {
+        self.cameras.len() + self.project_cameras.len()
+    }
 }
 
 #[derive(Deserialize, Default)]
@@ -310,23 +324,29 @@ impl Library {
         Ok(report)
     }
 
+    /// `cameraTracks()[index]`, for the project's import report.
+    pub(crate) fn camera_track_info(&self, index: usize) -> Result<JsValue, OdoriError> {
+        self.mmd.camera(index).map(|c| to_js(&camera_info(c))).ok_or_else(|| OdoriError::new("not-found", format!("no camera track {index} (there are {})", self.mmd.camera_count())))
+    }
+
     /// The MMD models in the library: `{ name, file, format, vertices, bones, morphs, textures, missingTextures, characterId }[]`.
     #[wasm_bindgen(js_name = mmdModels)]
     pub fn mmd_models(&self) -> JsValue {
         to_js(&self.mmd.models.iter().map(|m| model_info(m, &self.mmd)).collect::<Vec<_>>())
     }
 
-    /// Camera tracks imported from camera VMDs: `{ name, source, keys, durationSecs }[]`.
+    /// Camera tracks imported from camera VMDs: `{ name, source, keys, durationSecs }[]` — the
+    /// library's own (a camera VMD inside a zip), then the open project's (`Project.camerasInto`).
     #[wasm_bindgen(js_name = cameraTracks)]
     pub fn camera_tracks(&self) -> JsValue {
-        to_js(&self.mmd.cameras.iter().map(camera_info).collect::<Vec<_>>())
+        to_js(&self.mmd.cameras.iter().chain(&self.mmd.project_cameras).map(camera_info).collect::<Vec<_>>())
     }
 
     /// One camera track's keys (time, target in metres, rotation, distance, fov, curves):
     /// plain data for a camera director.
     #[wasm_bindgen(js_name = cameraTrack)]
     pub fn camera_track(&self, index: usize) -> Result<JsValue, OdoriError> {
-        self.mmd.cameras.get(index).map(to_js).ok_or_else(|| OdoriError::new("not-found", format!("no camera track {index} (there are {})", self.mmd.cameras.len())))
+        self.mmd.camera(index).map(to_js).ok_or_else(|| OdoriError::new("not-found", format!("no camera track {index} (there are {})", self.mmd.camera_count())))
     }
 
     /// Whether clip `id` came from an MMD file (its creators' terms usually forbid

@@ -521,6 +521,27 @@ impl Project {
         self.clips_into(library, r.id.0)
     }
 
+    /// `importInto` of a VMD dance posed on an MMD model file given with it (`modelFileName`,
+    /// `modelBytes`: a PMX/PMD; its bones and IK pose the dance). The project keeps the model
+    /// with the dance, so a reopened project poses it on that model again; when the model's
+    /// bytes are missing it is posed on the standard MMD skeleton and the report's warnings say so.
+    #[wasm_bindgen(js_name = importOnModelInto)]
+    pub fn import_on_model_into(
+        &mut self,
+        library: &mut Library,
+        file_name: &str,
+        bytes: &[u8],
+        #[wasm_bindgen(unchecked_param_type = "ImportOptions | undefined")] options: JsValue,
+        model_file_name: &str,
+        model_bytes: &[u8],
+    ) -> Result<JsValue, OdoriError> {
+        let o: JsImportOptions = from_js(options, "import options", &["fpsOverride", "unitScale", "gltfFps", "songOffsetFrames"])?;
+        let options = ImportOptions { fps_override: o.fps_override, unit_scale: o.unit_scale, gltf_fps: o.gltf_fps.unwrap_or(ImportOptions::default().gltf_fps), song_offset_frames: o.song_offset_frames };
+        let r = self.inner.add_source_on(file_name, bytes, options, Some((model_file_name, model_bytes)))?;
+        self.changed(());
+        self.clips_into(library, r.id.0)
+    }
+
     /// Shows a source's clips in `library` (a restored project, or an import brought back by
     /// undo/redo): the library's `ImportReport` with `source`. Throws "missing-blob" when the
     /// source's bytes are missing, the importer's error when they do not read.
@@ -535,6 +556,50 @@ impl Project {
         let report = library.add_imported(&file_name, &imported);
         js_sys::Reflect::set(&report, &JsValue::from_str("source"), &JsValue::from(source)).map_err(|_| OdoriError::new("bad-argument", "report"))?;
         Ok(report)
+    }
+
+    /// Imports a camera motion (a MikuMikuDance camera VMD) into the project — its bytes kept as
+    /// given, like a source's (in the `.odori` file and the browser's store, never in a share
+    /// link); undoable — and shows the project's camera motions in `library` (`camerasInto`).
+    /// `options`: `{ songOffsetFrames? }` (the motion frame that is song time 0). Returns the
+    /// track `{ name, source, keys, durationSecs, index }` (`index`: in `library.cameraTracks()`).
+    /// Throws "mmd-no-camera-keys" for a VMD without camera keys, the reader's kind for a bad file.
+    #[wasm_bindgen(js_name = addCameraInto)]
+    pub fn add_camera_into(&mut self, library: &mut Library, file_name: &str, bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "{ songOffsetFrames?: number } | undefined")] options: JsValue) -> Result<JsValue, OdoriError> {
+        let o: JsImportOptions = from_js(options, "camera import options", &["songOffsetFrames"])?;
+        self.inner.add_camera(file_name, bytes, o.song_offset_frames)?;
+        self.changed(());
+        self.cameras_into(library);
+        let index = library.mmd.camera_count().saturating_sub(1);
+        let info = library.camera_track_info(index)?;
+        js_sys::Reflect::set(&info, &JsValue::from_str("index"), &JsValue::from(index as u32)).map_err(|_| OdoriError::new("bad-argument", "camera info"))?;
+        Ok(info)
+    }
+
+    /// Removes the project's camera motion `index` (in the project's order, `summary().cameras`). Undoable.
+    #[wasm_bindgen(js_name = removeCamera)]
+    pub fn remove_camera(&mut self, index: u32) -> Result<(), OdoriError> {
+        self.inner.remove_camera(index as usize)?;
+        self.changed(());
+        Ok(())
+    }
+
+    /// Shows the project's camera motions in `library` (after an import, undo/redo, or a
+    /// restored project): they replace the ones shown before and follow the library's own
+    /// (`library.cameraTracks()`). Returns the problems, one message per camera motion that
+    /// cannot be read (its bytes missing from the project).
+    #[wasm_bindgen(js_name = camerasInto)]
+    pub fn cameras_into(&mut self, library: &mut Library) -> Vec<String> {
+        let mut tracks = Vec::new();
+        let mut problems = Vec::new();
+        for i in 0..self.inner.doc().cameras.len() {
+            match self.inner.camera_track(i) {
+                Ok(t) => tracks.push(t),
+                Err(e) => problems.push(e.to_string()),
+            }
+        }
+        library.mmd.project_cameras = tracks;
+        problems
     }
 
     /// Makes up to `count` more built-in moves of the dance library; returns the fraction

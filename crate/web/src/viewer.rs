@@ -791,8 +791,8 @@ impl Viewer {
         let specs = parse_figures(figures)?;
         let req: CameraRequest = from_js(request, "camera request", &["timesSecs", "bars", "sections", "camera", "cameraTrack"])?;
         if let Some(ct) = &req.camera_track {
-            let track = library.mmd.cameras.get(ct.index).ok_or_else(|| {
-                OdoriError::new("not-found", format!("no camera track {} (the library has {})", ct.index, library.mmd.cameras.len()))
+            let track = library.mmd.camera(ct.index).ok_or_else(|| {
+                OdoriError::new("not-found", format!("no camera track {} (the library has {})", ct.index, library.mmd.camera_count()))
             })?;
             let poses = odori_core::camera::mmd::poses(track, &req.times_secs, ct.offset_secs)?;
             let plan = odori_core::camera::CameraPlan { poses, shots: Vec::new(), phrase_bars: 0 };

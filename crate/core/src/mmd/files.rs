@@ -356,18 +356,47 @@ pub fn pose_vmd(file: &str, vmd: Vmd, models: &[&MmdModel], options: &MmdFilesOp
     })
 }
 
+/// The model a project's VMD dance is posed on ([`import_vmd_source_on`]).
+#[derive(Clone, Copy, Debug)]
+pub enum SourceModel<'a> {
+    /// The built-in standard MMD skeleton.
+    Standard,
+    /// A PMX/PMD model file (name, bytes): the dance is posed with its bones and IK.
+    File(&'a str, &'a [u8]),
+    /// The project names a model file whose bytes are missing: posed on the standard skeleton,
+    /// with a warning naming it.
+    Missing(&'a str),
+}
+
 /// A VMD dance as a project source, like a BVH or GLB ([`crate::import::import_bytes`] sends VMD
-/// bytes here): posed on the built-in standard MMD skeleton (a project keeps the dance, not the
-/// character model, so a reopened project poses it the same way on any machine), starting at
-/// `song_offset_frames` when given. Morph keys and keyed bones the skeleton lacks are warnings;
-/// a file that cannot be read or posed is an [`ImportError::Mmd`] with its [`MmdFilesError::kind`].
+/// bytes here): posed on the built-in standard MMD skeleton, starting at `song_offset_frames`
+/// when given. See [`import_vmd_source_on`] for a dance on its model.
 pub fn import_vmd_source(file: &str, bytes: &[u8], song_offset_frames: Option<u32>) -> Result<crate::import::Imported, crate::import::ImportError> {
+    import_vmd_source_on(file, bytes, song_offset_frames, SourceModel::Standard)
+}
+
+/// A VMD dance as a project source posed on `model`: the model file the project keeps with it
+/// (so a reopened project poses it on that model again, on any machine), or the standard MMD
+/// skeleton (none given, or its bytes missing: then a warning says so). Morph keys and keyed
+/// bones the rig lacks are warnings; a file (the VMD or the model) that cannot be read or posed
+/// is an [`ImportError::Mmd`] with its [`MmdFilesError::kind`].
+pub fn import_vmd_source_on(file: &str, bytes: &[u8], song_offset_frames: Option<u32>, model: SourceModel<'_>) -> Result<crate::import::Imported, crate::import::ImportError> {
     use crate::import::{finish, Format, ImportError};
     let err = |e: MmdFilesError| ImportError::Mmd { file: e.file().to_string(), kind: e.kind(), message: e.to_string() };
     let vmd = vmd::read(file, bytes).map_err(|e| err(e.into()))?;
-    let options = MmdFilesOptions { model: Some(STANDARD_RIG.to_string()), song_offset_frames };
-    let m = pose_vmd(file, vmd, &[], &options).map_err(err)?;
     let mut warnings = Vec::new();
+    let parsed = match model {
+        SourceModel::File(model_file, model_bytes) => Some(read_model(model_file, model_bytes).map_err(|e| err(e.into()))?),
+        SourceModel::Missing(model_file) => {
+            warnings.push(format!("{file}: its model {model_file} is missing from the project: posed on the {STANDARD_RIG} instead"));
+            None
+        }
+        SourceModel::Standard => None,
+    };
+    let rig = parsed.as_ref().map_or_else(|| STANDARD_RIG.to_string(), |m| m.name.clone());
+    let options = MmdFilesOptions { model: Some(rig.clone()), song_offset_frames };
+    let models: Vec<&MmdModel> = parsed.iter().collect();
+    let m = pose_vmd(file, vmd, &models, &options).map_err(err)?;
     if m.morph_keys > 0 {
         warnings.push(format!("{file}: {} morph (face) keys kept aside (not played)", m.morph_keys));
     }
@@ -375,7 +404,8 @@ pub fn import_vmd_source(file: &str, bytes: &[u8], song_offset_frames: Option<u3
         warnings.push(format!("{file}: {} camera keys not used by the dance", m.camera_keys));
     }
     if !m.unmatched_bones.is_empty() {
-        warnings.push(format!("{file}: {} keyed bones are not in the {STANDARD_RIG} and were ignored", m.unmatched_bones.len()));
+        let on = if parsed.is_some() { format!("model {rig}") } else { format!("the {STANDARD_RIG}") };
+        warnings.push(format!("{file}: {} keyed bones are not in {on} and were ignored", m.unmatched_bones.len()));
     }
     let skeleton = m.clip.skeleton.clone();
     finish(Format::Vmd, file, skeleton, vec![m.clip], None, warnings)

@@ -136,7 +136,28 @@ impl Derived {
     /// shows the same clips the project cuts).
     pub(crate) fn imported_source(&mut self, src: &Source, blobs: &BlobStore) -> Option<Result<Arc<Imported>, ImportError>> {
         let bytes = blobs.get(&src.blob)?.clone();
-        Some(self.import(&src.blob, &src.file_name, &bytes, &src.options))
+        let model = src.model.as_ref().map(|m| (m.file_name.as_str(), &m.blob, blobs.get(&m.blob).cloned()));
+        Some(self.import_on(&src.blob, &src.file_name, &bytes, &src.options, model.as_ref().map(|(f, h, b)| (*f, *h, b.as_deref()))))
+    }
+
+    /// [`Derived::import`] of a VMD dance posed on an MMD model file (name, hash, bytes; `None`
+    /// bytes: named but missing, so posed on the standard skeleton with a warning), or on the
+    /// standard skeleton like any file when `model` is `None`.
+    pub(crate) fn import_on(&mut self, hash: &BlobHash, file_name: &str, bytes: &[u8], options: &ImportOptions, model: Option<(&str, &BlobHash, Option<&[u8]>)>) -> Result<Arc<Imported>, ImportError> {
+        use crate::mmd::files::{import_vmd_source_on, SourceModel};
+        let Some((model_file, model_hash, model_bytes)) = model else { return self.import(hash, file_name, bytes, options) };
+        let key = format!("{}|on {model_file} {model_hash} {}", import_key(hash, file_name, options), model_bytes.is_some());
+        if let Some(i) = self.imports.get(&key) {
+            return Ok(i.clone());
+        }
+        options.validate(file_name)?;
+        let on = match model_bytes {
+            Some(b) => SourceModel::File(model_file, b),
+            None => SourceModel::Missing(model_file),
+        };
+        let imported = Arc::new(import_vmd_source_on(file_name, bytes, options.song_offset_frames, on)?);
+        self.imports.insert(key, imported.clone());
+        Ok(imported)
     }
 
     /// Imports a file (or returns the copy imported before).
@@ -249,8 +270,7 @@ impl Derived {
     #[allow(clippy::too_many_arguments)]
     fn cut_sources(&mut self, sources: &[Source], blobs: &BlobStore, referenced: &HashSet<String>, old_cuts: &BTreeMap<ClipRef, Vec<Option<f32>>>, mut lib: SegmentLibrary, mut keys: Vec<MoveKey>, mut clips: Vec<ClipInfo>) {
         for src in sources {
-            let Some(bytes) = blobs.get(&src.blob).cloned() else { continue };
-            let Ok(imported) = self.import(&src.blob, &src.file_name, &bytes, &src.options) else { continue };
+            let Some(Ok(imported)) = self.imported_source(src, blobs) else { continue };
             let mut infos = clip_infos(src.id, &imported);
             for (j, clip) in imported.clips.iter().enumerate() {
                 let info = &mut infos[j];

@@ -31,7 +31,7 @@ use super::{BlobHash, BlobStore, Project, ProjectDoc};
 
 /// The schema version this build writes. Bump it with a step in [`migrate`] and a golden file
 /// of the old version in `tests/golden/`.
-pub const CURRENT_SCHEMA_VERSION: u32 = 3;
+pub const CURRENT_SCHEMA_VERSION: u32 = 4;
 /// The oldest schema version this build opens.
 pub const OLDEST_SCHEMA_VERSION: u32 = 1;
 /// The value of the manifest's `format` field.
@@ -332,7 +332,17 @@ fn read_error(size_bytes: usize, what: &str, e: std::io::Error) -> FileError {
 /// The steps from each schema version to the next: `MIGRATIONS[v - OLDEST_SCHEMA_VERSION]`
 /// rewrites a version-`v` manifest (as JSON) into version `v + 1` (a renamed field, a new
 /// field's default...).
-const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes, dance_take];
+const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes, dance_take, no_cameras];
+
+/// 3 → 4: the project keeps the camera motions imported (camera VMDs, issue 28); a project
+/// saved before has none. (The step writes the empty list the reader would assume anyway: the
+/// version is bumped so that a build that does not know cameras refuses a file holding them
+/// instead of dropping them unseen.)
+fn no_cameras(m: &mut serde_json::Value) {
+    if let Some(serde_json::Value::Object(project)) = m.get_mut("project") {
+        project.entry("cameras").or_insert(serde_json::Value::Array(Vec::new()));
+    }
+}
 
 /// 2 → 3: the dance keeps the take of Generate its bars come from (issue 26); a dance saved
 /// before takes existed is take 0 (what Generate made then).
@@ -542,6 +552,11 @@ fn read_manifest(manifest: &[u8], blob: impl Fn(&BlobHash) -> Option<Arc<[u8]>>,
 /// Every blob of a document with what it is, for messages.
 fn named_blobs(d: &ProjectDoc) -> Vec<(BlobHash, String)> {
     let mut out: Vec<(BlobHash, String)> = d.sources.iter().map(|s| (s.blob.clone(), format!("motion file {}", s.file_name))).collect();
+    for s in &d.sources {
+        if let Some(m) = &s.model {
+            out.push((m.blob.clone(), format!("MMD model {} of {}", m.file_name, s.file_name)));
+        }
+    }
     if let Some(song) = &d.song {
         if let Some(a) = &song.audio {
             out.push((a.clone(), format!("song audio {}", song.file_name)));
@@ -552,6 +567,9 @@ fn named_blobs(d: &ProjectDoc) -> Vec<(BlobHash, String)> {
         if let super::WornMotion::Motion { name, bvh } = &w.motion {
             out.push((bvh.clone(), format!("put-on motion {name}")));
         }
+    }
+    for c in &d.cameras {
+        out.push((c.blob.clone(), format!("camera motion {}", c.file_name)));
     }
     out
 }

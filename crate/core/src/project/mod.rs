@@ -3,7 +3,8 @@
 //! (audio bytes, its loudness envelope, the analysis options and every grid correction), the
 //! dance (each bar's state and move by a stable [`MoveKey`], never by an index into a vector;
 //! the shown and liked candidates of each bar's search; ρ and the filling's weights), clip
-//! tags, texts, the chosen character and the camera.
+//! tags, texts, the chosen character and the camera, and the MMD camera motions imported
+//! (camera VMDs, [`CameraSource`]: the bytes as given, like a source's).
 //!
 //! Edits are methods on [`Project`]; each one that changes the document records the previous
 //! document, so undo/redo is the project's history (kept and saved with it). Everything else —
@@ -70,6 +71,19 @@ pub struct Source {
     /// listed is cut at the tempo detected from its motion.
     #[serde(default)]
     pub cut_tempos_bpm: Vec<(u32, f32)>,
+    /// A VMD dance only: the MMD model file it is posed on (its bones and IK), kept with it so
+    /// a reopened project poses it on that model again; `None`: the standard MMD skeleton
+    /// (schema 4; absent when none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<ModelFile>,
+}
+
+/// A PMX/PMD model file a VMD dance is posed on, as given.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct ModelFile {
+    pub file_name: String,
+    pub blob: BlobHash,
 }
 
 impl Source {
@@ -205,6 +219,20 @@ pub struct Worn {
     pub motion: WornMotion,
 }
 
+/// A camera motion the person imported (a MikuMikuDance camera VMD), kept as given: the video
+/// camera can play it ([`Project::camera_track`]). Like every MMD file it stays with the person
+/// (in the `.odori` file and the browser's store, never in a share link).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct CameraSource {
+    pub file_name: String,
+    /// The file's bytes, exactly as given.
+    pub blob: BlobHash,
+    /// The motion frame that is song time 0 (the track starts there), when one was given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub song_offset_frames: Option<u32>,
+}
+
 /// Where the viewer looks from.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -240,6 +268,9 @@ pub struct ProjectDoc {
     /// existed, which read as none: no schema step needed).
     #[serde(default)]
     pub worn: Vec<Worn>,
+    /// Camera motions imported (schema 4; absent, read as none, when there are none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cameras: Vec<CameraSource>,
 }
 
 impl ProjectDoc {
@@ -247,12 +278,13 @@ impl ProjectDoc {
     pub fn blobs(&self) -> impl Iterator<Item = &BlobHash> {
         self.sources
             .iter()
-            .map(|s| &s.blob)
+            .flat_map(|s| std::iter::once(&s.blob).chain(s.model.iter().map(|m| &m.blob)))
             .chain(self.song.iter().flat_map(|s| s.audio.iter().chain(std::iter::once(&s.envelope))))
             .chain(self.worn.iter().filter_map(|w| match &w.motion {
                 WornMotion::Motion { bvh, .. } => Some(bvh),
                 WornMotion::Clip { .. } => None,
             }))
+            .chain(self.cameras.iter().map(|c| &c.blob))
     }
 
     /// Every move key the document refers to for keeps: bars' moves and liked candidates.
@@ -296,6 +328,10 @@ pub enum ProjectError {
     NoSuchWorn { index: usize, count: usize },
     #[error("put on: give a clip of the project or a motion to put on the character")]
     NoMotion,
+    #[error("{file_name}: not a camera motion: it has no camera keys ({bone_keys} bone keys, {morph_keys} morph keys; a dance VMD is imported as a motion)")]
+    NotACamera { file_name: String, bone_keys: usize, morph_keys: usize },
+    #[error("there is no camera motion {index}: the project has {count}")]
+    NoSuchCamera { index: usize, count: usize },
 }
 
 impl ProjectError {
@@ -313,6 +349,8 @@ impl ProjectError {
             ProjectError::Character(e) => e.kind(),
             ProjectError::NoSuchWorn { .. } => "not-found",
             ProjectError::NoMotion => "bad-argument",
+            ProjectError::NotACamera { .. } => "mmd-no-camera-keys",
+            ProjectError::NoSuchCamera { .. } => "not-found",
         }
     }
 }
@@ -405,6 +443,20 @@ pub fn decode_envelope(bytes: &[u8]) -> Result<RmsEnvelope, ProjectError> {
     }
     let bands = (0..bands).map(|b| (0..frames).map(|f| f32::from_le_bytes(word(18 + (b * frames + f) * 4))).collect()).collect();
     Ok(RmsEnvelope { hop_secs, bands })
+}
+
+/// A camera VMD's camera keys as a track (see [`Project::add_camera`]).
+fn camera_track_of(file_name: &str, bytes: &[u8], song_offset_frames: Option<u32>) -> Result<crate::mmd::files::CameraTrack, ProjectError> {
+    use crate::mmd::files::{CameraTrack, MmdFilesError};
+    let vmd = crate::import::vmd::read(file_name, bytes).map_err(|e| {
+        let e = MmdFilesError::from(e);
+        ProjectError::Import(ImportError::Mmd { file: file_name.to_string(), kind: e.kind(), message: e.to_string() })
+    })?;
+    CameraTrack::from_vmd(file_name, &vmd, song_offset_frames.unwrap_or(0)).ok_or_else(|| ProjectError::NotACamera {
+        file_name: file_name.to_string(),
+        bone_keys: vmd.bone_keys.len(),
+        morph_keys: vmd.morph_keys.len(),
+    })
 }
 
 /// The file name a put-on motion's BVH is read under (it names the clip).
@@ -602,14 +654,31 @@ impl Project {
     /// detected tempo; the report gives each clip's cut (or why it is not in the library).
     /// Undoable.
     pub fn add_source(&mut self, file_name: &str, bytes: &[u8], options: ImportOptions) -> Result<SourceReport, ProjectError> {
-        let imported = self.derived.import(&BlobHash::of(bytes), file_name, bytes, &options)?;
+        self.add_source_on(file_name, bytes, options, None)
+    }
+
+    /// [`Project::add_source`] of a VMD dance posed on an MMD model file (`model`: its name and
+    /// bytes, kept in the project with the dance; `None`: the standard MMD skeleton). A model
+    /// with any other file, or one that cannot be read, is a typed error and nothing changes.
+    pub fn add_source_on(&mut self, file_name: &str, bytes: &[u8], options: ImportOptions, model: Option<(&str, &[u8])>) -> Result<SourceReport, ProjectError> {
+        let hash = BlobHash::of(bytes);
+        let imported = match model {
+            None => self.derived.import(&hash, file_name, bytes, &options)?,
+            Some((model_file, model_bytes)) => {
+                if !(bytes.starts_with(crate::import::vmd::MAGIC_V1) || bytes.starts_with(crate::import::vmd::MAGIC_V2)) {
+                    return Err(ImportError::Invalid { file: file_name.to_string(), message: format!("a model ({model_file}) goes only with a VMD dance") }.into());
+                }
+                self.derived.import_on(&hash, file_name, bytes, &options, Some((model_file, &BlobHash::of(model_bytes), Some(model_bytes))))?
+            }
+        };
         let id = SourceId(self.doc.next_source);
         let clips = derive::clip_infos(id, &imported);
         let warnings = imported.warnings.clone();
         let blob = self.blobs.put(bytes);
+        let model = model.map(|(f, b)| ModelFile { file_name: f.to_string(), blob: self.blobs.put(b) });
         let mut doc = self.doc.clone();
         doc.next_source += 1;
-        doc.sources.push(Source { id, file_name: file_name.to_string(), blob, options, cut_tempos_bpm: Vec::new() });
+        doc.sources.push(Source { id, file_name: file_name.to_string(), blob, options, cut_tempos_bpm: Vec::new(), model });
         self.commit(doc);
         // Report each clip as the dance library has it now (its cut, or why it is refused).
         let d = self.derived();
@@ -865,6 +934,40 @@ impl Project {
             }
         };
         Ok((character.retarget(&clip, &map)?, ch))
+    }
+
+    /// Imports a camera motion (a MikuMikuDance camera VMD) into the project: its bytes are kept
+    /// as given, `song_offset_frames` (the motion frame that is song time 0) with them. Returns
+    /// the track as the camera plays it. A file that is not a VMD, or has no camera keys, is a
+    /// typed error and the project is unchanged. Undoable.
+    pub fn add_camera(&mut self, file_name: &str, bytes: &[u8], song_offset_frames: Option<u32>) -> Result<crate::mmd::files::CameraTrack, ProjectError> {
+        let track = camera_track_of(file_name, bytes, song_offset_frames)?;
+        let blob = self.blobs.put(bytes);
+        let mut doc = self.doc.clone();
+        doc.cameras.push(CameraSource { file_name: file_name.to_string(), blob, song_offset_frames });
+        self.commit(doc);
+        Ok(track)
+    }
+
+    /// Removes camera motion `index` from the document. Undoable.
+    pub fn remove_camera(&mut self, index: usize) -> Result<(), ProjectError> {
+        let count = self.doc.cameras.len();
+        if index >= count {
+            return Err(ProjectError::NoSuchCamera { index, count });
+        }
+        let mut doc = self.doc.clone();
+        doc.cameras.remove(index);
+        self.commit(doc);
+        Ok(())
+    }
+
+    /// Camera motion `index` of the document as the camera plays it, read from its kept bytes
+    /// (refused with [`ProjectError::Incomplete`] when they were missing from the opened file).
+    pub fn camera_track(&self, index: usize) -> Result<crate::mmd::files::CameraTrack, ProjectError> {
+        let count = self.doc.cameras.len();
+        let c = self.doc.cameras.get(index).ok_or(ProjectError::NoSuchCamera { index, count })?;
+        let bytes = self.blobs.get(&c.blob).ok_or_else(|| ProjectError::Incomplete { count: 1, first: format!("camera motion {}", c.file_name) })?;
+        camera_track_of(&c.file_name, bytes, c.song_offset_frames)
     }
 
     /// Where the viewer looks from. A view setting, not an edit: kept and saved, not undone.

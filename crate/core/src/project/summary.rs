@@ -1,6 +1,6 @@
 //! What the page shows of a project, as the engine states it: [`ProjectSummary`] names each fact
-//! the page needs (the name, the sources, the song, tags, put-on clips, the body, texts, ρ and
-//! the music weight) and gives a key for each thing whose change the page must notice, so the
+//! the page needs (the name, the sources, the song, tags, put-on clips, the body, texts, ρ,
+//! the music weight and the camera motions) and gives a key for each thing whose change the page must notice, so the
 //! page never reads the document's schema ([`super::ProjectDoc`]). The whole document crosses to
 //! the page only to be stored and given back unchanged (autosave and restore);
 //! [`manifest_blob_hashes`] reads a stored manifest's blob list for the store's collection.
@@ -31,6 +31,17 @@ pub struct ProjectSummary {
     pub rho: f32,
     /// The dance's music weight.
     pub music_weight: f32,
+    /// The camera motions (camera VMDs) imported, in order.
+    pub cameras: Vec<CameraSummary>,
+}
+
+/// A camera motion as the page shows it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct CameraSummary {
+    pub file_name: String,
+    /// Equal for the same file imported the same way: the page shows the cameras again only when a key changes.
+    pub key: String,
 }
 
 /// The song as the page shows it.
@@ -84,6 +95,7 @@ impl Project {
             texts: d.texts.clone(),
             rho: d.dance.settings.rho,
             music_weight: d.dance.settings.fill.music_weight,
+            cameras: d.cameras.iter().map(|c| CameraSummary { file_name: c.file_name.clone(), key: key(serde_json::to_string(c)) }).collect(),
         }
     }
 }
