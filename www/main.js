@@ -194,6 +194,7 @@ async function main() {
   const songPanel = new SongPanel($("#song"), {
     player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars, grid.beatTimesSecs),
     onCorrect: (c) => (c ? session.correctGrid(c) : session.resetGrid()),
+    sections: () => session.project?.sections(),
   });
   songPanel.attachTransport(player);
   player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };

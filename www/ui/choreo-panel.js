@@ -257,6 +257,12 @@ export class ChoreoPanel {
           const j = bq.joinJump == null ? "" : `, join jump ${bq.joinJump.toFixed(2)}`;
           b.title += `\nbeat alignment ${bq.beats.basMusic.toFixed(2)} (half a beat off: ${bq.beats.basMusicShifted.toFixed(2)}), foot skate ${bq.footSkate.meanCmPerS.toFixed(0)} cm/s${j}`;
         }
+        if (note.repeatsBar != null) {
+          // Its section repeats an earlier one, and it holds that bar's move (issue 26 item 2).
+          b.dataset.repeats = String(note.repeatsBar + 1);
+          num.textContent += ` = bar ${note.repeatsBar + 1}`;
+          b.title += `\nrepeats bar ${note.repeatsBar + 1} (its section repeats)`;
+        }
         if (note.flags.length) {
           b.dataset.weak = "1";
           flags.textContent = note.flags.map((f) => FLAG_WORDS[f.kind] ?? f.kind).join(" · ");

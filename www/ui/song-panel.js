@@ -1,11 +1,15 @@
 // The song strip: loudness over time with beat and bar lines, the playhead, and the grid
 // corrections (BPM, tap tempo, nudge, downbeat, beats per bar, reset) that re-derive the
-// bars at once. Shift-click on the strip puts a downbeat there; a plain click seeks.
+// bars at once. Shift-click on the strip puts a downbeat there; a plain click seeks. Along the
+// strip's foot, the song's sections (the engine's `music::sections`, the analysis Generate repeats moves
+// on and the video's director camera cuts on): a letter each, a repeated section named after the
+// one it repeats.
 /** Taps further apart than this start a new count. */
 const TAP_GAP_SECS = 2.5;
 
 export class SongPanel {
-  constructor(root, { player, onGrid, messages, onCorrect }) {
+  constructor(root, { player, onGrid, messages, onCorrect, sections }) {
+    this.getSections = sections; // () => the project's sections ({ sections: [...] }) or undefined
     this.onCorrect = onCorrect; // (correction | null for a reset) after one the song took
     this.root = root;
     this.player = player;        // SongPlayer
@@ -15,6 +19,7 @@ export class SongPanel {
     this.name = "";
     this.grid = null;
     this.taps = [];
+    this.sections = null;        // the sections shown, for the grid shown
     this.canvas = root.querySelector("canvas");
     this.$ = (s) => root.querySelector(s);
     this.bind();
@@ -91,6 +96,9 @@ export class SongPanel {
     this.$("#song-bpb").value = String(grid.beatsPerBar);
     this.$("#song-info").textContent = `${this.name} — ${grid.bpm.toFixed(1)} BPM, ${grid.bars.length} bars of ${grid.beatsPerBar}${grid.regular ? " (regular grid)" : ""}${grid.clearBeat === false ? " — no clear beat found: the grid is a guess; type the tempo or tap along" : ""}`;
     this.root.dataset.bars = String(grid.bars.length);
+    this.sections = null;
+    delete this.root.dataset.sections;
+    delete this.root.dataset.sectionStarts;
     this.draw();
     if (this.onGrid) this.onGrid(grid);
   }
@@ -98,6 +106,46 @@ export class SongPanel {
   toggle() {
     if (this.transport) { this.transport.toggleSong(); return; }
     if (this.player.playing) this.player.stop(); else this.player.play();
+  }
+
+  /** The project's sections for the grid shown, fetched once per grid (null while the project's
+   * grid is not this one yet: they are asked again at the next draw). */
+  currentSections() {
+    if (this.sections || !this.getSections || !this.grid) return this.sections;
+    let s;
+    try { s = this.getSections(); } catch (e) { return null; }
+    const list = s?.sections ?? [];
+    const covered = list.reduce((n, x) => n + x.bars, 0);
+    if (!list.length || covered !== this.grid.bars.length) return null;
+    this.sections = list;
+    const letter = (x) => String.fromCharCode(65 + (x.label % 26));
+    this.root.dataset.sections = list.map(letter).join("");
+    this.root.dataset.sectionStarts = list.map((x) => x.firstBar).join(",");
+    return list;
+  }
+
+  /** Sections as bands along the foot of the strip: a colour per label, a letter each (a repeat names the section
+   * it repeats); a line at each section change. */
+  drawSections(g, x, h, dpr) {
+    const list = this.currentSections();
+    if (!list) return;
+    const bars = this.grid.bars;
+    const band = 14 * dpr;
+    const hues = [210, 30, 130, 280, 350, 60, 180, 0];
+    g.font = `bold ${10 * dpr}px system-ui`;
+    for (const s of list) {
+      const first = bars[s.firstBar], last = bars[s.firstBar + s.bars - 1];
+      if (!first || !last) continue;
+      const x0 = x(first.startSecs), x1 = x(last.endSecs);
+      g.fillStyle = `hsl(${hues[s.label % hues.length]}, 60%, 42%)`;
+      g.fillRect(x0, h - band, x1 - x0, band);
+      g.fillStyle = "#ffffff";
+      g.fillRect(x0, 0, Math.max(1, 2 * dpr), h);
+      // A repeat takes the moves of the first section of its label (as Generate does).
+      const src = s.repeatOf != null ? list.find((o) => o.label === s.label) : null;
+      const name = String.fromCharCode(65 + (s.label % 26)) + (src && src !== s ? ` = bar ${src.firstBar + 1}` : "");
+      if (x1 - x0 > 12 * dpr) g.fillText(name, x0 + 3 * dpr, h - 3 * dpr, Math.max(1, x1 - x0 - 4 * dpr));
+    }
   }
 
   draw() {
@@ -125,6 +173,7 @@ export class SongPanel {
       const px = x(i * loudness.hopSecs), hh = m * (h * 0.42);
       g.fillRect(px, h / 2 - hh, Math.max(1, w / (vals.length / step)), 2 * hh);
     }
+    this.drawSections(g, x, h, dpr);
     // Beat lines thin, bar lines bold and numbered.
     g.fillStyle = "rgba(230, 230, 234, 0.25)";
     for (const t of beatTimesSecs) g.fillRect(x(t), h * 0.75, 1, h * 0.25);

@@ -180,16 +180,10 @@ impl Project {
     /// similarity }], novelty: number[] }`, or undefined without a song. The video camera cuts
     /// at their boundaries (`Viewer.planCamera`).
     pub fn sections(&mut self) -> Result<JsValue, OdoriError> {
-        let Some(song) = self.inner.doc().song.clone() else { return Ok(JsValue::UNDEFINED) };
-        let grid = match self.inner.derived().grid() {
-            None => return Ok(JsValue::UNDEFINED),
-            Some(Ok(g)) => g.clone(),
-            Some(Err(e)) => return Err(e.clone().into()),
-        };
-        let bytes = self.inner.blobs().get(&song.envelope).ok_or_else(|| OdoriError::new("missing-blob", format!("the envelope of {} is missing", song.file_name)))?;
-        let env = odori_core::project::decode_envelope(bytes)?;
-        let s = odori_core::music::sections(&grid, &env, &odori_core::music::SectionOptions::default()).map_err(|e| OdoriError::new("music", e.to_string()))?;
-        Ok(to_js(&s))
+        Ok(match self.inner.sections()? {
+            Some(s) => to_js(&s),
+            None => JsValue::UNDEFINED,
+        })
     }
 
     /// The segment a move key names now (for the calls by segment number), or undefined.
@@ -739,8 +733,9 @@ impl Project {
     /// Each bar's move and its weak spots in words, with the readout they come from (one
     /// render): `{ quality: DanceQuality | null, notes: MoveNote[] }`, a `MoveNote` being `{ bar,
     /// segment, name, source, builtin, flags: [{ kind: "offBeat" | "joinJump" | "footSkate",
-    /// words, value, goal }] }`; `quality` is null while no bar holds a move. `beatTimesSecs`
-    /// as for `quality`.
+    /// words, value, goal }], repeatsBar }`, `repeatsBar` the bar (from 0) whose move it repeats
+    /// where the song's sections repeat (`sections()`), else null; `quality` is null while no bar
+    /// holds a move. `beatTimesSecs` as for `quality`.
     #[wasm_bindgen(js_name = barNotes)]
     pub fn bar_notes(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
         #[derive(Serialize)]
@@ -756,7 +751,9 @@ impl Project {
         let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect());
         let clip = self.inner.render_dance(&RenderOptions::default())?;
         let q = odori_core::choreo::dance_quality(&clip, &bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
-        let notes = odori_core::choreo::bar_notes(self.inner.segment_library(), &bars, &choices, &q.bars);
+        let mut notes = odori_core::choreo::bar_notes(self.inner.segment_library(), &bars, &choices, &q.bars);
+        // A bar holding the move of the bar its section repeats says so.
+        odori_core::choreo::mark_repeats(&mut notes, &self.inner.repeat_of_bars()?);
         Ok(to_js(&Notes { quality: Some(q), notes }))
     }
 

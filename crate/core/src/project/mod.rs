@@ -332,6 +332,8 @@ pub enum ProjectError {
     NotACamera { file_name: String, bone_keys: usize, morph_keys: usize },
     #[error("there is no camera motion {index}: the project has {count}")]
     NoSuchCamera { index: usize, count: usize },
+    #[error(transparent)]
+    Sections(#[from] crate::music::SectionError),
 }
 
 impl ProjectError {
@@ -351,6 +353,7 @@ impl ProjectError {
             ProjectError::NoMotion => "bad-argument",
             ProjectError::NotACamera { .. } => "mmd-no-camera-keys",
             ProjectError::NoSuchCamera { .. } => "not-found",
+            ProjectError::Sections(_) => "music",
         }
     }
 }
@@ -1088,7 +1091,11 @@ impl Project {
         let (bars, mut doc) = self.dance_edit_start()?;
         let d = &self.derived;
         let states: Vec<_> = doc.dance.bars.iter().map(|b| d.state_of(b)).collect();
-        let (states, report) = crate::choreo::generate_states(d.library(), &bars, &states, doc.dance.settings.fill, options)?;
+        // Where the song's sections repeat, the repeated bars take their first occurrence's moves
+        // (issue 26 item 2).
+        let repeat_of = self.repeat_of_bars()?;
+        let d = &self.derived;
+        let (states, report, _) = crate::choreo::generate_states_with_repeats(d.library(), &bars, &states, doc.dance.settings.fill, options, &repeat_of)?;
         for (b, state) in doc.dance.bars.iter_mut().zip(states) {
             if !matches!(state, crate::choreo::BarState::Pinned { .. }) {
                 *b = d.bar_doc(state, b.search.take());
@@ -1105,6 +1112,33 @@ impl Project {
     /// one undo step. A take above [`crate::choreo::generate::MAX_TAKE`] is refused.
     pub fn generate_take(&mut self, take: u32) -> Result<GenerateReport, ProjectError> {
         self.generate_with(&crate::choreo::GenerateOptions { take, ..crate::choreo::GenerateOptions::default() })
+    }
+
+    /// The song's sections (`music::sections` at its default options over the project's grid
+    /// and loudness envelope: the one analysis the dance's repeats and the video's director
+    /// camera use); None without a song.
+    pub fn sections(&mut self) -> Result<Option<crate::music::Sections>, ProjectError> {
+        let Some(song) = self.doc.song.as_ref() else { return Ok(None) };
+        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
+        let grid = match self.derived.grid() {
+            None => return Ok(None),
+            Some(Err(e)) => return Err(e.clone()),
+            Some(Ok(g)) => g,
+        };
+        let bytes = self.blobs.get(&song.envelope).ok_or_else(|| ProjectError::Incomplete { count: 1, first: format!("the envelope of {}", song.file_name) })?;
+        let env = decode_envelope(bytes)?;
+        Ok(Some(crate::music::sections(grid, &env, &crate::music::SectionOptions::default())?))
+    }
+
+    /// Per bar of the song, the earlier bar it repeats where the song's sections repeat
+    /// ([`Project::sections`], `music::Sections::repeat_of_bars`): what Generate gives the
+    /// same move, and what the bar's note says ("repeats bar N"). Empty without a song.
+    pub fn repeat_of_bars(&mut self) -> Result<Vec<Option<usize>>, ProjectError> {
+        let n = match self.derived().grid() {
+            Some(Ok(g)) => g.bars.len(),
+            _ => 0,
+        };
+        Ok(self.sections()?.map(|s| s.repeat_of_bars(n)).unwrap_or_default())
     }
 
     /// The take of Generate the dance's generated bars come from (0 until "another take").
