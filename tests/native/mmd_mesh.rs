@@ -235,6 +235,8 @@ fn a_missing_texture_leaves_the_model_drawn_with_a_notice_naming_it() {
 /// simulate) follows by the damped spring: the tip of the longest chain under the head lags the
 /// animated pose by ≥ 10° at the end of the turn and is back within 2° a second later; the
 /// same clip at 60 fps swings alike (frame-rate independent); with no spring bones there is no lag.
+/// The tip itself turns during the turn: its lag is not a tip standing still, as it was when each
+/// bone of a chain lagged its parent in world space (no carry: the control).
 #[test]
 fn gene_hair_lags_a_head_turn_and_settles_within_a_second() {
     use odori_core::mmd::spring::{apply_springs, spring_bones, SpringParams};
@@ -299,6 +301,53 @@ fn gene_hair_lags_a_head_turn_and_settles_within_a_second() {
     }
     // Control: springs off.
     assert!(lag(&apply_springs(&clip, &[], SpringParams::default()), 0.2) < 1e-3);
+    // The viewer's follower, stepped frame by frame from the last drawn time, is the same
+    // integrator: at each frame time it gives the whole-clip springs' pose (quaternions within 1e-5: acos's f32 floor near 1 is 7e-4 rad);
+    // a jump back (a seek) or forward by more than MAX_GAP_S puts the hair at the animated pose.
+    {
+        use odori_core::mmd::spring::{SpringFollower, MAX_GAP_S};
+        // The distance between two unit quaternions of the same rotation up to sign.
+        let qdiff = |a: glam::Quat, b: glam::Quat| (glam::Vec4::from(a) - glam::Vec4::from(b)).length().min((glam::Vec4::from(a) + glam::Vec4::from(b)).length());
+        let mut f = SpringFollower::new(&sk, &joints);
+        assert!(f.has_springs());
+        for fr in 0..frames {
+            let (rot, _) = f.pose(&clip, fr as f32 / fps, SpringParams::default());
+            let want = sprung.frame_rotations(fr);
+            let worst = rot.iter().zip(want).map(|(a, b)| qdiff(*a, *b)).fold(0.0f32, f32::max);
+            assert!(worst < 1e-5, "frame {fr}: the follower is {worst} off the whole-clip springs");
+        }
+        let animated = |t: f32| {
+            let (mut r, mut tr) = (Vec::new(), Vec::new());
+            clip.sample_into(t, &mut r, &mut tr);
+            r
+        };
+        for (from, to) in [(1.0f32, 0.1f32), (0.05, 0.05 + MAX_GAP_S + 0.05)] {
+            f.pose(&clip, from, SpringParams::default());
+            f.pose(&clip, from + 1.0 / fps, SpringParams::default());
+            let (rot, _) = f.pose(&clip, to, SpringParams::default());
+            let worst = rot.iter().zip(animated(to)).map(|(a, b)| qdiff(*a, b)).fold(0.0f32, f32::max);
+            assert!(worst < 1e-5, "a jump from {from} s to {to} s: {worst} off the animated pose");
+        }
+        // Mid-turn without the jump, the hair is off the animated pose (the check above can fail).
+        let mut g = SpringFollower::new(&sk, &joints);
+        for fr in 0..=3 {
+            g.pose(&clip, fr as f32 / fps, SpringParams::default());
+        }
+        let (rot, _) = g.pose(&clip, 4.0 / fps, SpringParams::default());
+        let off = rot.iter().zip(animated(4.0 / fps)).map(|(a, b)| qdiff(*a, b)).fold(0.0f32, f32::max);
+        assert!(off > 0.02, "stepped mid-turn the hair should lag: {off}");
+    }
+    // The lag is a lag, not a tip standing still: with the default carry the tip turns ≥ 10°
+    // during the turn; the control without carry (each bone left where it was in world space)
+    // is the 12th-order filter whose tip does not move at all during the turn.
+    let moved = |p: SpringParams| {
+        let sp = apply_springs(&clip, &joints, p);
+        tip_rot(&sp, (0.2 * fps) as usize).angle_between(tip_rot(&sp, 0)).to_degrees()
+    };
+    let (with_carry, without) = (moved(SpringParams::default()), moved(SpringParams { carry: 0.0, ..SpringParams::default() }));
+    println!("Gene hair tip (a chain of {}): turned {with_carry:.1}° during the 60° head turn with carry {}, {without:.1}° without", depth(tip), SpringParams::default().carry);
+    assert!(with_carry >= 10.0, "the tip turned only {with_carry}° during the turn");
+    assert!(without < 1.0, "control: without carry the tip turned {without}°");
 }
 
 /// Face morphs (issue 28): WAVEFILE's morph keys on miku_v2.pmd. Each keyed morph's weight is
