@@ -121,6 +121,7 @@ async function main() {
   });
   loader.bindDrop(document.body, $("#drop"));
   $("#stick-figure").addEventListener("change", (ev) => player.setStick(ev.target.checked));
+  bindSprings(viewer, player, $("#springs"));
   // What Export offers first: the dance, once it has a move (rendered if it is not yet).
   exporter.dance = () => {
     if (!choreo || !(choreo.view || []).some((v) => v.state.kind !== "empty")) return null;
@@ -449,6 +450,22 @@ function bindDrawCap(player, adapter, badge) {
   input.addEventListener("change", () => {
     player.setMaxFps(input.checked ? SOFTWARE_MAX_FPS : null);
     try { localStorage.setItem("odori.drawCap", input.checked ? "on" : "off"); } catch { /* storage off */ }
+  });
+}
+
+/**
+ * The *Sway* box: an MMD model's hair and skirt follow by spring (the viewer's `setSprings`),
+ * on unless the person turned it off in this browser.
+ */
+function bindSprings(viewer, player, input) {
+  let off = false;
+  try { off = localStorage.getItem("odori.springs") === "off"; } catch { /* storage off: on */ }
+  input.checked = !off;
+  viewer.setSprings(!off);
+  input.addEventListener("change", () => {
+    viewer.setSprings(input.checked);
+    try { localStorage.setItem("odori.springs", input.checked ? "on" : "off"); } catch { /* storage off */ }
+    player.drawNow();
   });
 }
 

@@ -235,6 +235,8 @@ fn a_missing_texture_leaves_the_model_drawn_with_a_notice_naming_it() {
 /// simulate) follows by the damped spring: the tip of the longest chain under the head lags the
 /// animated pose by ≥ 10° at the end of the turn and is back within 2° a second later; the
 /// same clip at 60 fps swings alike (frame-rate independent); with no spring bones there is no lag.
+/// The tip itself turns during the turn: its lag is not a tip standing still, as it was when each
+/// bone of a chain lagged its parent in world space (no carry: the control).
 #[test]
 fn gene_hair_lags_a_head_turn_and_settles_within_a_second() {
     use odori_core::mmd::spring::{apply_springs, spring_bones, SpringParams};
@@ -299,4 +301,137 @@ fn gene_hair_lags_a_head_turn_and_settles_within_a_second() {
     }
     // Control: springs off.
     assert!(lag(&apply_springs(&clip, &[], SpringParams::default()), 0.2) < 1e-3);
+    // The viewer's follower, stepped frame by frame from the last drawn time, is the same
+    // integrator: at each frame time it gives the whole-clip springs' pose (quaternions within 1e-5: acos's f32 floor near 1 is 7e-4 rad);
+    // a jump back (a seek) or forward by more than MAX_GAP_S puts the hair at the animated pose.
+    {
+        use odori_core::mmd::spring::{SpringFollower, MAX_GAP_S};
+        // The distance between two unit quaternions of the same rotation up to sign.
+        let qdiff = |a: glam::Quat, b: glam::Quat| (glam::Vec4::from(a) - glam::Vec4::from(b)).length().min((glam::Vec4::from(a) + glam::Vec4::from(b)).length());
+        let mut f = SpringFollower::new(&sk, &joints);
+        assert!(f.has_springs());
+        for fr in 0..frames {
+            let (rot, _) = f.pose(&clip, fr as f32 / fps, SpringParams::default());
+            let want = sprung.frame_rotations(fr);
+            let worst = rot.iter().zip(want).map(|(a, b)| qdiff(*a, *b)).fold(0.0f32, f32::max);
+            assert!(worst < 1e-5, "frame {fr}: the follower is {worst} off the whole-clip springs");
+        }
+        let animated = |t: f32| {
+            let (mut r, mut tr) = (Vec::new(), Vec::new());
+            clip.sample_into(t, &mut r, &mut tr);
+            r
+        };
+        for (from, to) in [(1.0f32, 0.1f32), (0.05, 0.05 + MAX_GAP_S + 0.05)] {
+            f.pose(&clip, from, SpringParams::default());
+            f.pose(&clip, from + 1.0 / fps, SpringParams::default());
+            let (rot, _) = f.pose(&clip, to, SpringParams::default());
+            let worst = rot.iter().zip(animated(to)).map(|(a, b)| qdiff(*a, b)).fold(0.0f32, f32::max);
+            assert!(worst < 1e-5, "a jump from {from} s to {to} s: {worst} off the animated pose");
+        }
+        // Mid-turn without the jump, the hair is off the animated pose (the check above can fail).
+        let mut g = SpringFollower::new(&sk, &joints);
+        for fr in 0..=3 {
+            g.pose(&clip, fr as f32 / fps, SpringParams::default());
+        }
+        let (rot, _) = g.pose(&clip, 4.0 / fps, SpringParams::default());
+        let off = rot.iter().zip(animated(4.0 / fps)).map(|(a, b)| qdiff(*a, b)).fold(0.0f32, f32::max);
+        assert!(off > 0.02, "stepped mid-turn the hair should lag: {off}");
+    }
+    // The lag is a lag, not a tip standing still: with the default carry the tip turns ≥ 10°
+    // during the turn; the control without carry (each bone left where it was in world space)
+    // is the 12th-order filter whose tip does not move at all during the turn.
+    let moved = |p: SpringParams| {
+        let sp = apply_springs(&clip, &joints, p);
+        tip_rot(&sp, (0.2 * fps) as usize).angle_between(tip_rot(&sp, 0)).to_degrees()
+    };
+    let (with_carry, without) = (moved(SpringParams::default()), moved(SpringParams { carry: 0.0, ..SpringParams::default() }));
+    println!("Gene hair tip (a chain of {}): turned {with_carry:.1}° during the 60° head turn with carry {}, {without:.1}° without", depth(tip), SpringParams::default().carry);
+    assert!(with_carry >= 10.0, "the tip turned only {with_carry}° during the turn");
+    assert!(without < 1.0, "control: without carry the tip turned {without}°");
+}
+
+/// Face morphs (issue 28): WAVEFILE's morph keys on miku_v2.pmd. Each keyed morph's weight is
+/// its key's weight at every key frame and linear between keys (checked at every key of あ and
+/// まばたき and midway between neighbours); the offsets put on the model's vertices are the
+/// morph's own vertex offsets × weight, z negated and in metres, on exactly its vertices; at a
+/// frame where no morph is keyed above 0 nothing moves. On Gene (PMX), each group morph expands
+/// into its vertex-morph members × member weight.
+#[test]
+fn wavefile_face_morphs_move_mikus_vertices_by_the_models_offsets() {
+    use odori_core::import::mmd_model::MorphData;
+    use odori_core::mmd::morph::{vertex_offsets_into, FaceMorphs};
+    let m = imported("mmd/miku_v2", "miku_v2.pmd", &[]);
+    let vmd = odori_core::import::vmd::read("wavefile_v2.vmd", &read("mmd/motion/wavefile_v2.vmd")).expect("wavefile_v2.vmd reads");
+    assert!(!vmd.morph_keys.is_empty(), "WAVEFILE has morph keys");
+    let faces = FaceMorphs::new(&m.model, &vmd.morph_keys);
+    assert!(!faces.is_empty());
+    let mut offsets = Vec::new();
+    let mut checked = 0;
+    for name in ["あ", "まばたき"] {
+        let mi = m.model.morphs.iter().position(|x| x.name == name).unwrap_or_else(|| panic!("miku_v2 has no morph {name}"));
+        let MorphData::Vertex(data) = &m.model.morphs[mi].data else { panic!("{name} is not a vertex morph") };
+        let mut keys: Vec<(u32, f32)> = vmd.morph_keys.iter().filter(|k| k.name == name).map(|k| (k.frame, k.weight)).collect();
+        keys.sort_by_key(|k| k.0);
+        // The last key of a frame wins.
+        keys.dedup_by(|later, earlier| {
+            if later.0 == earlier.0 {
+                earlier.1 = later.1;
+                true
+            } else {
+                false
+            }
+        });
+        assert!(keys.len() >= 2, "{name}: {} keys", keys.len());
+        let weight = |f: f32| faces.weights_at(f).iter().find(|(k, _)| *k == mi).map_or(0.0, |(_, w)| *w);
+        for (i, &(f, w)) in keys.iter().enumerate() {
+            assert!((weight(f as f32) - w).abs() < 1e-6, "{name} at frame {f}: {} vs key {w}", weight(f as f32));
+            if let Some(&(f1, w1)) = keys.get(i + 1) {
+                let mid = (f as f32 + f1 as f32) / 2.0;
+                assert!((weight(mid) - (w + w1) / 2.0).abs() < 1e-5, "{name} midway {mid}");
+            }
+        }
+        // The frame of the morph's strongest key, with only this morph weighted.
+        let &(f, w) = keys.iter().max_by(|a, b| a.1.total_cmp(&b.1)).expect("keys");
+        assert!(w >= 0.25, "{name}: strongest key {w}");
+        let moved = vertex_offsets_into(&m.model, &[(mi, weight(f as f32))], &mut offsets);
+        let mut want = vec![glam::Vec3::ZERO; m.model.vertices.len()];
+        for (v, d) in data {
+            want[*v] += glam::Vec3::new(d.x, d.y, -d.z) * w * 0.08;
+        }
+        let worst = offsets.iter().zip(&want).map(|(a, b)| (*a - *b).length()).fold(0.0f32, f32::max);
+        let largest = want.iter().map(|o| o.length()).fold(0.0f32, f32::max);
+        println!("miku_v2 {name} at frame {f} (weight {w}): {moved} vertices moved, largest {:.2} mm, worst miss {worst:e} m", largest * 1000.0);
+        assert!(worst < 1e-7 && largest > 1e-4, "{name}: worst {worst}, largest {largest}");
+        assert_eq!(moved, want.iter().filter(|o| **o != glam::Vec3::ZERO).count());
+        checked += 1;
+    }
+    assert_eq!(checked, 2);
+    // Control: no weights, nothing moves.
+    assert_eq!(vertex_offsets_into(&m.model, &[], &mut offsets), 0);
+    assert!(offsets.iter().all(|o| *o == glam::Vec3::ZERO));
+
+    // Groups, on Gene.
+    let g = imported("mmd/gene", "Gene_light.pmx", &["mmd/gene/light"]);
+    let mut groups = 0;
+    for (gi, gm) in g.model.morphs.iter().enumerate() {
+        let MorphData::Group(members) = &gm.data else { continue };
+        let mut want = vec![glam::Vec3::ZERO; g.model.vertices.len()];
+        let mut any = false;
+        for &(member, mw) in members {
+            if let Some(MorphData::Vertex(data)) = g.model.morphs.get(member).map(|x| &x.data) {
+                any = true;
+                for (v, d) in data {
+                    want[*v] += glam::Vec3::new(d.x, d.y, -d.z) * (0.7 * mw * 0.08);
+                }
+            }
+        }
+        if !any {
+            continue;
+        }
+        vertex_offsets_into(&g.model, &[(gi, 0.7)], &mut offsets);
+        let worst = offsets.iter().zip(&want).map(|(a, b)| (*a - *b).length()).fold(0.0f32, f32::max);
+        assert!(worst < 1e-6, "Gene group morph {}: worst {worst}", gm.name);
+        groups += 1;
+    }
+    println!("Gene: {groups} group morphs of vertex morphs expand to their members");
 }

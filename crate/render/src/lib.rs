@@ -26,6 +26,55 @@
 
 mod camera;
 mod mipmap;
+
+/// The WGSL of a pipeline: `common.wgsl` (the camera, the light), then for the skinned
+/// pipelines `skin.wgsl` (the palette binding and `skin_matrix`, written once for the three),
+/// then the pipeline's own file.
+fn pipeline_wgsl(kind: PipelineKind) -> String {
+    let common = include_str!("shaders/common.wgsl");
+    // The MMD shaders are in the full engine only (feature `toon`); without it the player
+    // never asks for these pipelines (its parts carry no toon look that reaches `render`).
+    #[cfg(feature = "toon")]
+    let (toon_src, outline_src) = (include_str!("shaders/toon.wgsl"), include_str!("shaders/outline.wgsl"));
+    #[cfg(not(feature = "toon"))]
+    let (toon_src, outline_src) = (include_str!("shaders/mesh.wgsl"), include_str!("shaders/mesh.wgsl"));
+    let skin = include_str!("shaders/skin.wgsl");
+    match kind {
+        PipelineKind::Lines => format!("{common}\n{}", include_str!("shaders/lines.wgsl")),
+        PipelineKind::Figure => format!("{common}\n{}", include_str!("shaders/figure.wgsl")),
+        PipelineKind::Mesh => format!("{common}\n{skin}\n{}", include_str!("shaders/mesh.wgsl")),
+        PipelineKind::Toon => format!("{common}\n{skin}\n{toon_src}"),
+        PipelineKind::Outline => format!("{common}\n{skin}\n{outline_src}"),
+    }
+}
+
+#[cfg(test)]
+mod shader_tests {
+    use super::*;
+
+    /// Every pipeline's WGSL, as `build_pipeline` puts it together, parses and validates (naga,
+    /// as wgpu compiles it), with `vs_main` and `fs_main`; the palette is declared once, in
+    /// skin.wgsl, and every skinned shader skins through `skin_matrix`. Run with and without
+    /// `--features toon` (the MMD shaders are only put together with it).
+    #[test]
+    fn every_pipeline_shader_validates_and_skinning_is_written_once() {
+        let kinds = [PipelineKind::Lines, PipelineKind::Figure, PipelineKind::Mesh, PipelineKind::Toon, PipelineKind::Outline];
+        for kind in kinds {
+            let src = pipeline_wgsl(kind);
+            let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{kind:?}: {}", e.emit_to_string(&src)));
+            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default())
+                .validate(&module)
+                .unwrap_or_else(|e| panic!("{kind:?}: {e:?}"));
+            for entry in ["vs_main", "fs_main"] {
+                assert!(module.entry_points.iter().any(|e| e.name == entry), "{kind:?}: no {entry}");
+            }
+        }
+        for (name, src) in [("mesh", include_str!("shaders/mesh.wgsl")), ("toon", include_str!("shaders/toon.wgsl")), ("outline", include_str!("shaders/outline.wgsl"))] {
+            assert!(!src.contains("var<uniform> palette") && !src.contains("palette.m["), "{name}.wgsl declares or reads the palette itself");
+            assert!(src.contains("skin_matrix(joints, weights)"), "{name}.wgsl does not skin through skin_matrix");
+        }
+    }
+}
 pub use camera::OrbitCamera;
 
 use glam::{Mat4, Vec3};
@@ -412,24 +461,16 @@ impl Renderer {
 
     fn build_pipeline(&self, kind: PipelineKind) -> wgpu::RenderPipeline {
         let device = &self.device;
-        let common = include_str!("shaders/common.wgsl");
         let mesh_buffer = wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<MeshVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x2, 6 => Float32x4, 7 => Float32],
         };
-        // The MMD shaders are in the full engine only (feature `toon`); without it the player
-        // never asks for these pipelines (its parts carry no toon look that reaches `render`).
-        #[cfg(feature = "toon")]
-        let (toon_src, outline_src) = (include_str!("shaders/toon.wgsl"), include_str!("shaders/outline.wgsl"));
-        #[cfg(not(feature = "toon"))]
-        let (toon_src, outline_src) = (include_str!("shaders/mesh.wgsl"), include_str!("shaders/mesh.wgsl"));
-        let (label, src, layout, buffer) = match kind {
-            PipelineKind::Toon => ("toon", toon_src, &self.toon_layout, mesh_buffer.clone()),
-            PipelineKind::Outline => ("outline", outline_src, &self.outline_layout, mesh_buffer.clone()),
+        let (label, layout, buffer) = match kind {
+            PipelineKind::Toon => ("toon", &self.toon_layout, mesh_buffer.clone()),
+            PipelineKind::Outline => ("outline", &self.outline_layout, mesh_buffer.clone()),
             PipelineKind::Lines => (
                 "lines",
-                include_str!("shaders/lines.wgsl"),
                 &self.basic_layout,
                 wgpu::VertexBufferLayout {
                     array_stride: std::mem::size_of::<LineVertex>() as u64,
@@ -439,7 +480,6 @@ impl Renderer {
             ),
             PipelineKind::Figure => (
                 "figure",
-                include_str!("shaders/figure.wgsl"),
                 &self.basic_layout,
                 wgpu::VertexBufferLayout {
                     array_stride: std::mem::size_of::<CapsuleInstance>() as u64,
@@ -447,7 +487,7 @@ impl Renderer {
                     attributes: &wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4],
                 },
             ),
-            PipelineKind::Mesh => ("mesh", include_str!("shaders/mesh.wgsl"), &self.mesh_layout, mesh_buffer.clone()),
+            PipelineKind::Mesh => ("mesh", &self.mesh_layout, mesh_buffer.clone()),
         };
         // The outline is the hull's inside: front faces culled (MMD's triangles are turned to
         // counter-clockwise fronts on import). Toon parts blend by their alpha, as MMD does.
@@ -456,7 +496,7 @@ impl Renderer {
         let topology = if kind == PipelineKind::Lines { wgpu::PrimitiveTopology::LineList } else { wgpu::PrimitiveTopology::TriangleList };
         let sm = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(format!("{common}\n{src}").into()),
+            source: wgpu::ShaderSource::Wgsl(pipeline_wgsl(kind).into()),
         });
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),

@@ -142,7 +142,11 @@ export interface FigureJoints {
   names: string[];
   /** World positions, x, y, z per joint, metres. */
   positions: number[];
+  /** World rotations, x, y, z, w per joint. */
+  rotations: number[];
   body: FigureBody;
+  /** The pose last drawn with an MMD model's springs stepped (hair and skirt where they swung to). */
+  sprung: boolean;
 }
 export interface ExportOptions {
   /** GLB only. "auto": the clip's own character, else the built-in body for canonical clips; "builtin"; "none": skeleton only; or an imported character's clip id: the motion put on that character. */

@@ -11,6 +11,7 @@ use odori_core::mmd::export::clip_to_vmd_keeping;
 use odori_core::mmd::files::{import_files, CameraTrack, ImportedModel, MmdFilesOptions, STANDARD_RIG};
 use odori_core::import::SkinnedMesh;
 use odori_core::mmd::mesh::model_character;
+use odori_core::mmd::spring::spring_bones;
 use odori_core::mmd::{standard_rig, MmdClipOptions, MmdMotion, MmdRig};
 use std::rc::Rc;
 use serde::{Deserialize, Serialize};
@@ -38,6 +39,9 @@ pub(crate) struct MmdStore {
     /// Clip id → an imported VMD's own bone keys (bone, frame on the clip's timeline): the
     /// export's key reduction keeps them.
     pub own_keys: Vec<(u32, std::collections::HashMap<String, std::collections::HashSet<u32>>)>,
+    /// Mesh key → the joints (of the model's skeleton, which its motions share) that follow by
+    /// spring when the viewer draws the model (`odori_core::mmd::spring`).
+    pub springs: Vec<(u32, Vec<usize>)>,
 }
 
 impl MmdStore {
@@ -157,6 +161,11 @@ fn files_from_js(files: &JsValue) -> JsResult<Vec<(String, Vec<u8>)>> {
 }
 
 impl Library {
+    /// The spring joints of an MMD model's mesh (`None`: not an MMD model's mesh).
+    pub(crate) fn spring_joints(&self, mesh_key: u32) -> Option<&[usize]> {
+        self.mmd.springs.iter().find(|(k, _)| *k == mesh_key).map(|(_, j)| j.as_slice())
+    }
+
     fn rig_named(&self, name: &str) -> JsResult<(MmdRig, String)> {
         if name == STANDARD_RIG || name == "standard" {
             return Ok((standard_rig(), String::new()));
@@ -260,7 +269,10 @@ impl Library {
                     let opts = MmdClipOptions { name: m.model.name.clone(), source: m.file.clone(), ..Default::default() };
                     match c.rig.motion_to_clip(&still, &opts) {
                         Ok(clip) => {
+                            let joints: Vec<usize> = spring_bones(&m.model).iter().filter_map(|b| c.rig_index.iter().position(|i| i == b)).collect();
                             let mesh = (self.next_id(), Rc::new(c.character.mesh));
+                            self.mmd.springs.retain(|(k, _)| *k != mesh.0);
+                            self.mmd.springs.push((mesh.0, joints));
                             let id = self.push(clip, "mmd", c.character.map.clone(), c.character.map.status(&c.character.skeleton, None), Some(mesh.clone()));
                             self.mmd.characters.push((m.model.name.clone(), id));
                             meshes.push((m.model.name.clone(), mesh));

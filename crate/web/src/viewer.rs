@@ -37,6 +37,7 @@ use odori_core::canon::character::Character;
 use odori_core::import::{MeshTexture, SkinnedMesh};
 use odori_core::library::body::builtin_body;
 use odori_core::canon::retarget::{is_canonical, to_canonical};
+use odori_core::mmd::spring::{SpringFollower, SpringParams};
 use odori_core::motion::WorldPose;
 use odori_core::Clip;
 use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, PipelineKind, Renderer, FIGURE_COLORS};
@@ -150,7 +151,24 @@ struct Drawn {
 struct FigureJoints {
     names: Vec<String>,
     positions: Vec<f32>,
+    /// World rotation of each joint, x, y, z, w.
+    rotations: Vec<f32>,
     body: &'static str,
+    /// The pose is the one last drawn with the springs stepped (an MMD model's hair and skirt).
+    sprung: bool,
+}
+
+/// The spring joints of the mesh under `key` when it is an MMD model's (authoring build: the
+/// player build imports no MMD models).
+fn spring_joints(#[cfg_attr(not(feature = "authoring"), allow(unused_variables))] library: &Library, #[cfg_attr(not(feature = "authoring"), allow(unused_variables))] key: u32) -> Option<&[usize]> {
+    #[cfg(feature = "authoring")]
+    {
+        library.spring_joints(key).filter(|j| !j.is_empty())
+    }
+    #[cfg(not(feature = "authoring"))]
+    {
+        None
+    }
 }
 
 /// World positions of a clip at a time (its nearest frames blended), by the motion kernel's
@@ -206,6 +224,11 @@ pub struct Viewer {
     frames_drawn: u32,
     /// Draws go to a texture read back for the video export (`setCapture`), not the canvas.
     capture: Option<capture::Capture>,
+    /// MMD models' hair and skirt chains follow by spring (`setSprings`; on by default).
+    springs_on: bool,
+    /// The springs of each drawn MMD figure, by figure index and clip id, stepped from the
+    /// time it was last drawn.
+    followers: HashMap<(usize, u32), SpringFollower>,
 }
 
 #[wasm_bindgen(typescript_custom_section)]
@@ -522,6 +545,8 @@ impl Viewer {
             #[cfg(feature = "authoring")]
             frames_drawn: 0,
             capture: None,
+            springs_on: true,
+            followers: HashMap::new(),
         };
         // WebGL2: the pipelines the first frame draws with, each made and then drawn with once, a
         // task for each step: on WebGL2 the browser's GL (ANGLE) compiles a pipeline's GPU code only
@@ -641,6 +666,7 @@ impl Viewer {
         };
         self.body = body;
         self.on_body.clear();
+        self.followers.clear();
         self.body_generation = self.body_generation.wrapping_add(1);
         Ok(())
     }
@@ -692,7 +718,10 @@ impl Viewer {
 
     /// World joint positions of clip `clip` at `timeSecs` as the viewer draws it (style
     /// "auto"): on the chosen body when it plays that clip, else the clip's own skeleton.
-    /// `{ names, positions (x, y, z per joint, metres), body }`; `body` as in `lastDrawn`.
+    /// `{ names, positions (x, y, z per joint, metres), rotations (x, y, z, w per joint),
+    /// body, sprung }`; `body` as in `lastDrawn`. An MMD model last drawn at `timeSecs` with
+    /// springs on gives the pose drawn, its hair and skirt where the springs put them
+    /// (`sprung` true); otherwise the clip's pose.
     #[cfg(feature = "authoring")]
     #[wasm_bindgen(js_name = figureJoints, unchecked_return_type = "FigureJoints")]
     pub fn figure_joints(&mut self, library: &Library, clip: u32, time_secs: f32) -> Result<JsValue, OdoriError> {
@@ -705,9 +734,37 @@ impl Viewer {
             Some((c, _, _, body)) => (c.as_ref(), *body),
             None => (&e.clip, if e.mesh.is_some() { "own" } else { "stick" }),
         };
-        let positions = pose_at(c, time_secs).iter().flat_map(|p| p.to_array()).collect();
+        // An MMD figure drawn at this time with springs: its pose as drawn.
+        let mut pose = WorldPose::new();
+        let drawn = self.followers.iter().filter(|((_, id), f)| *id == clip && f.last_time_secs() == Some(time_secs)).find_map(|(_, f)| f.last_pose()).filter(|(r, _)| r.len() == c.skeleton.len());
+        let sprung = drawn.is_some();
+        match drawn {
+            Some((r, t)) => pose.of_locals(&c.skeleton, r, t),
+            None => pose.of_time(c, time_secs),
+        };
+        let positions = pose.positions.iter().flat_map(|p| p.to_array()).collect();
+        let rotations = pose.rotations.iter().flat_map(|q| q.to_array()).collect();
         let names = c.skeleton.joints.iter().map(|j| j.name.clone()).collect();
-        Ok(crate::error::to_js(&FigureJoints { names, positions, body }))
+        Ok(crate::error::to_js(&FigureJoints { names, positions, rotations, body, sprung }))
+    }
+
+    /// MMD models' hair and skirt chains (the bones their rigid bodies simulate, else bones
+    /// named for hair or skirt) follow the body by a damped spring, stepped from the time each
+    /// figure was last drawn (a jump back or of more than a quarter second starts again at rest):
+    /// on (the default) or off (drawn as the motion poses them).
+    #[wasm_bindgen(js_name = setSprings)]
+    pub fn set_springs(&mut self, on: bool) {
+        if on != self.springs_on {
+            self.springs_on = on;
+            self.followers.clear();
+            self.shown = None;
+        }
+    }
+
+    /// Whether MMD models' hair and skirt follow by spring (`setSprings`).
+    #[wasm_bindgen(getter)]
+    pub fn springs(&self) -> bool {
+        self.springs_on
     }
 
     /// Whether the last `draw` was held back until a skinned figure's textures are decoded
@@ -911,30 +968,42 @@ impl Viewer {
             let own = match (&e.mesh, style) {
                 (Some((key, mesh)), "auto" | "mesh") => {
                     let (key, mesh) = (*key, mesh.clone());
-                    self.mesh_handle(key, &mesh).map(|h| (h, mesh, None, "own"))
+                    self.mesh_handle(key, &mesh).map(|h| (h, key, mesh, None, "own"))
                 }
                 _ => None,
             };
             let skinned = match own {
                 Some(o) => Some(o),
                 None if style != "stick" => match self.on_body(e, true) {
-                    Some((clip, key, mesh, body)) => self.mesh_handle(key, &mesh).map(|h| (h, mesh, Some(clip), body)),
+                    Some((clip, key, mesh, body)) => self.mesh_handle(key, &mesh).map(|h| (h, key, mesh, Some(clip), body)),
                     None => None,
                 },
                 None => None,
             };
             let posed: &Clip = match &skinned {
-                Some((_, _, Some(c), _)) => c.as_ref(),
+                Some((_, _, _, Some(c), _)) => c.as_ref(),
                 _ => &e.clip,
             };
-            self.pose.of_time(posed, s.time_secs).matrices_into(&mut self.mats);
+            // An MMD model's hair and skirt follow by spring, stepped from the last drawn time.
+            let springs = match &skinned {
+                Some((_, key, ..)) if self.springs_on => spring_joints(library, *key),
+                _ => None,
+            };
+            match springs {
+                Some(joints) => {
+                    let f = self.followers.entry((i, s.clip)).or_insert_with(|| SpringFollower::new(&posed.skeleton, joints));
+                    let (rot, trans) = f.pose(posed, s.time_secs, SpringParams::default());
+                    self.pose.of_locals(&posed.skeleton, rot, trans).matrices_into(&mut self.mats);
+                }
+                None => self.pose.of_time(posed, s.time_secs).matrices_into(&mut self.mats),
+            }
             let mut pos = self.pose.positions.clone();
             for p in &pos {
                 now_lo = now_lo.min(*p + off);
                 now_hi = now_hi.max(*p + off);
             }
             match skinned {
-                Some((h, mesh, _, body)) => {
+                Some((h, _, mesh, _, body)) => {
                     let shift = Mat4::from_translation(off);
                     let pal = mesh.palette.iter().map(|(j, bind)| shift * self.mats[*j] * *bind).collect();
                     let tint = if several { color.map(|c| 0.35 + 0.65 * c) } else { [1.0; 4] };

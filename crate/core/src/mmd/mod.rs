@@ -10,6 +10,7 @@
 pub mod export;
 pub mod files;
 pub mod mesh;
+pub mod morph;
 mod model;
 mod motion;
 mod names;

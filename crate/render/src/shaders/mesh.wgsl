@@ -1,11 +1,4 @@
-// Skinned characters: linear blend skinning with a palette of joint matrices (group 1).
-const MAX_PALETTE: u32 = 256u;
-struct Palette {
-    m: array<mat4x4<f32>, 256>,
-};
-@group(1) @binding(0) var<uniform> palette: Palette;
-// Multiplies the mesh's colours (white: as it is; figure colours tell candidates apart).
-@group(1) @binding(1) var<uniform> tint: vec4<f32>;
+// Skinned characters, skinned by skin.wgsl's palette (group 1), lit by common.wgsl's `shade`.
 // The part's base-colour texture (white 1×1 when it has none), multiplying its colour.
 @group(2) @binding(0) var base_tex: texture_2d<f32>;
 @group(2) @binding(1) var base_sampler: sampler;
@@ -26,10 +19,7 @@ fn vs_main(
     @location(4) color: vec4<f32>,
     @location(5) uv: vec2<f32>,
 ) -> VOut {
-    let skin = palette.m[min(joints.x, MAX_PALETTE - 1u)] * weights.x
-             + palette.m[min(joints.y, MAX_PALETTE - 1u)] * weights.y
-             + palette.m[min(joints.z, MAX_PALETTE - 1u)] * weights.z
-             + palette.m[min(joints.w, MAX_PALETTE - 1u)] * weights.w;
+    let skin = skin_matrix(joints, weights);
     var o: VOut;
     let world = skin * vec4<f32>(p, 1.0);
     o.pos = cam.view_proj * world;

@@ -1,12 +1,6 @@
 // MMD outlines by the inverted hull: the skinned mesh pushed out along its normals by the
 // part's edge width times its distance from the camera (so the line keeps its width on screen),
 // drawn with front faces culled so only the rim outside the model shows, in the edge colour.
-const MAX_PALETTE: u32 = 256u;
-struct Palette {
-    m: array<mat4x4<f32>, 256>,
-};
-@group(1) @binding(0) var<uniform> palette: Palette;
-@group(1) @binding(1) var<uniform> tint: vec4<f32>;
 
 struct VOut {
     @builtin(position) pos: vec4<f32>,
@@ -22,10 +16,7 @@ fn vs_main(
     @location(6) edge: vec4<f32>,
     @location(7) edge_width: f32,
 ) -> VOut {
-    let skin = palette.m[min(joints.x, MAX_PALETTE - 1u)] * weights.x
-             + palette.m[min(joints.y, MAX_PALETTE - 1u)] * weights.y
-             + palette.m[min(joints.z, MAX_PALETTE - 1u)] * weights.z
-             + palette.m[min(joints.w, MAX_PALETTE - 1u)] * weights.w;
+    let skin = skin_matrix(joints, weights);
     let world = (skin * vec4<f32>(p, 1.0)).xyz;
     let normal = normalize((skin * vec4<f32>(n, 0.0)).xyz);
     let distance = max(length(cam.eye.xyz - world), 0.1);

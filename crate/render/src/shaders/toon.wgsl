@@ -1,12 +1,6 @@
 // MMD models' toon shading: skinned as mesh.wgsl; the colour is the material's diffuse times
 // its texture, times its toon ramp looked up on N·L (MMD's toon textures run from the lit
 // colour at the top to the shadow colour at the bottom: v = ½(1 − N·L)), alpha blended.
-const MAX_PALETTE: u32 = 256u;
-struct Palette {
-    m: array<mat4x4<f32>, 256>,
-};
-@group(1) @binding(0) var<uniform> palette: Palette;
-@group(1) @binding(1) var<uniform> tint: vec4<f32>;
 @group(2) @binding(0) var base_tex: texture_2d<f32>;
 @group(2) @binding(1) var base_sampler: sampler;
 @group(2) @binding(2) var toon_tex: texture_2d<f32>;
@@ -28,10 +22,7 @@ fn vs_main(
     @location(4) color: vec4<f32>,
     @location(5) uv: vec2<f32>,
 ) -> VOut {
-    let skin = palette.m[min(joints.x, MAX_PALETTE - 1u)] * weights.x
-             + palette.m[min(joints.y, MAX_PALETTE - 1u)] * weights.y
-             + palette.m[min(joints.z, MAX_PALETTE - 1u)] * weights.z
-             + palette.m[min(joints.w, MAX_PALETTE - 1u)] * weights.w;
+    let skin = skin_matrix(joints, weights);
     var o: VOut;
     o.pos = cam.view_proj * (skin * vec4<f32>(p, 1.0));
     o.normal = normalize((skin * vec4<f32>(n, 0.0)).xyz);

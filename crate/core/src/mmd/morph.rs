@@ -1,0 +1,133 @@
+//! Face morphs of an MMD model played from a VMD's morph keys (issue 28): each keyed morph's
+//! weight at a frame (VMD morph keys are linear between keys and held outside them), and the
+//! vertex offsets the weighted morphs put on the model's vertices — vertex morphs directly,
+//! group morphs expanded into their members (one level, as MMD does: a group inside a group is
+//! not followed), the other kinds (bone, UV, material, flip, impulse) left out. Offsets are in
+//! the drawn mesh's frame: right-handed (z negated, as the mesh's positions) and in metres.
+//!
+//! Kept apart from the drawing so it is checked natively: a viewer adds the offsets of the
+//! frame to the model's vertices before skinning.
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+
+use super::{to_right_handed, METRES_PER_MMD_UNIT};
+use crate::import::mmd_model::{MmdModel, MorphData};
+use crate::import::vmd::MorphKey;
+
+/// One model morph's keys, in frame order: (frame, weight).
+#[derive(Clone, Debug, PartialEq)]
+struct Track {
+    morph: usize,
+    keys: Vec<(f32, f32)>,
+}
+
+/// A VMD's morph keys matched to a model's morphs by name.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct FaceMorphs {
+    tracks: Vec<Track>,
+    /// Keyed morph names the model lacks (their keys are ignored, as MMD ignores them).
+    pub unmatched: Vec<String>,
+}
+
+impl FaceMorphs {
+    /// The keys of `keys` whose names are morphs of `model` (the first morph of a repeated
+    /// name, as MMD takes it); keys of one morph at the same frame: the last in the file wins.
+    /// Non-finite weights are dropped.
+    pub fn new(model: &MmdModel, keys: &[MorphKey]) -> FaceMorphs {
+        let mut index: HashMap<&str, usize> = HashMap::new();
+        for (i, m) in model.morphs.iter().enumerate() {
+            index.entry(m.name.as_str()).or_insert(i);
+        }
+        let mut by_morph: HashMap<usize, Vec<(f32, f32)>> = HashMap::new();
+        let mut unmatched: Vec<String> = Vec::new();
+        for k in keys.iter().filter(|k| k.weight.is_finite()) {
+            match index.get(k.name.as_str()) {
+                Some(&m) => by_morph.entry(m).or_default().push((k.frame as f32, k.weight)),
+                None => {
+                    if !unmatched.contains(&k.name) {
+                        unmatched.push(k.name.clone());
+                    }
+                }
+            }
+        }
+        let mut tracks: Vec<Track> = by_morph
+            .into_iter()
+            .map(|(morph, mut keys)| {
+                // Stable: the later key of a frame stays after the earlier one.
+                keys.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let mut dedup: Vec<(f32, f32)> = Vec::with_capacity(keys.len());
+                for k in keys {
+                    match dedup.last_mut() {
+                        Some(last) if last.0 == k.0 => *last = k,
+                        _ => dedup.push(k),
+                    }
+                }
+                Track { morph, keys: dedup }
+            })
+            .collect();
+        tracks.sort_by_key(|t| t.morph);
+        FaceMorphs { tracks, unmatched }
+    }
+
+    /// Whether any key matched a morph of the model.
+    pub fn is_empty(&self) -> bool {
+        self.tracks.is_empty()
+    }
+
+    /// Each keyed morph's weight at `frame` (30 fps motion frames; fractional between them):
+    /// linear between its keys, its first weight before them and its last after. Morphs at
+    /// weight 0 are left out.
+    pub fn weights_at(&self, frame: f32) -> Vec<(usize, f32)> {
+        let frame = if frame.is_finite() { frame } else { 0.0 };
+        let mut out = Vec::new();
+        for t in &self.tracks {
+            let w = match t.keys.partition_point(|k| k.0 <= frame) {
+                0 => t.keys[0].1,
+                i if i == t.keys.len() => t.keys[i - 1].1,
+                i => {
+                    let (a, b) = (t.keys[i - 1], t.keys[i]);
+                    let s = (frame - a.0) / (b.0 - a.0);
+                    a.1 + (b.1 - a.1) * s
+                }
+            };
+            if w != 0.0 {
+                out.push((t.morph, w));
+            }
+        }
+        out
+    }
+}
+
+/// The offsets (metres, the mesh's right-handed frame) the weighted morphs put on the model's
+/// vertices, into `out` (one per model vertex; resized and zeroed). Group morphs add their
+/// vertex-morph members at weight × member weight; morph and vertex indices out of range are
+/// skipped. Returns how many vertices moved.
+pub fn vertex_offsets_into(model: &MmdModel, weights: &[(usize, f32)], out: &mut Vec<Vec3>) -> usize {
+    out.clear();
+    out.resize(model.vertices.len(), Vec3::ZERO);
+    let add = |morph: usize, w: f32, out: &mut Vec<Vec3>| {
+        if let Some(MorphData::Vertex(offsets)) = model.morphs.get(morph).map(|m| &m.data) {
+            for (v, d) in offsets {
+                if let Some(o) = out.get_mut(*v) {
+                    *o += to_right_handed(*d) * (w * METRES_PER_MMD_UNIT);
+                }
+            }
+        }
+    };
+    for &(m, w) in weights {
+        match model.morphs.get(m).map(|m| &m.data) {
+            Some(MorphData::Vertex(_)) => add(m, w, out),
+            Some(MorphData::Group(members)) => {
+                for &(member, mw) in members {
+                    if member != m && mw.is_finite() {
+                        add(member, w * mw, out);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    out.iter().filter(|o| **o != Vec3::ZERO).count()
+}

@@ -1,0 +1,17 @@
+// Skinned meshes (mesh.wgsl, toon.wgsl, outline.wgsl; prepended to each by `build_pipeline`):
+// linear blend skinning with a palette of joint matrices (group 1), and the tint that
+// multiplies the mesh's colours (white: as it is; figure colours tell candidates apart).
+const MAX_PALETTE: u32 = 256u;
+struct Palette {
+    m: array<mat4x4<f32>, 256>,
+};
+@group(1) @binding(0) var<uniform> palette: Palette;
+@group(1) @binding(1) var<uniform> tint: vec4<f32>;
+
+// The vertex's skinning matrix: its four joints' palette matrices by weight.
+fn skin_matrix(joints: vec4<u32>, weights: vec4<f32>) -> mat4x4<f32> {
+    return palette.m[min(joints.x, MAX_PALETTE - 1u)] * weights.x
+         + palette.m[min(joints.y, MAX_PALETTE - 1u)] * weights.y
+         + palette.m[min(joints.z, MAX_PALETTE - 1u)] * weights.z
+         + palette.m[min(joints.w, MAX_PALETTE - 1u)] * weights.w;
+}
