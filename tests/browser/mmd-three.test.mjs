@@ -148,7 +148,7 @@ test("a generated dance exported as VMD plays in three r171 (headless Chromium) 
   }
 });
 
-test("the app imports a model folder and a dance through the MMD dialog (the dance into the project), and says MMD files stay with the person", async () => {
+test("the app imports a model folder and a dance through the MMD dialog (the dance into the project, on its model), and says MMD files stay with the person", async () => {
   const server = await startServer();
   const { browser, page, logs } = await launch("webgl2");
   try {
@@ -158,14 +158,15 @@ test("the app imports a model folder and a dance through the MMD dialog (the dan
     await page.setInputFiles("#file-input", files);
     const dialog = page.locator("#mmd-import");
     await dialog.waitFor({ state: "visible", timeout: 30000 });
-    // A dance given as a file goes into the project (posed on the standard skeleton): no model to pick.
-    assert.match(await dialog.textContent(), /project's dance library, posed on Odori's standard MMD skeleton/);
+    // A dance given with its model goes into the project on that model: the dialog offers the
+    // model it was made for first (and the standard skeleton).
+    assert.match(await dialog.textContent(), /Plays on: 初音ミク \(the model it was made for\)/);
     await dialog.locator(".mmd-offset").fill("160");
     await dialog.locator("button[value=import]").click();
     await waitUntil(() => page.evaluate(() => document.querySelector("#messages")?.textContent.includes("MMD files stay with you")), { what: "the import's messages", timeoutMs: 60000 });
     const text = await page.textContent("#messages");
     assert.match(text, /MMD model "初音ミク" added/);
-    assert.match(text, /wavefile_v2\.vmd: dance added to the project, posed on Odori's standard MMD skeleton, starting at motion frame 160/);
+    assert.match(text, /wavefile_v2\.vmd: dance added to the project, posed on model "初音ミク" \(miku_v2\.pmd, kept in the project with the dance\), starting at motion frame 160/);
     assert.ok(!logs.some((l) => l.startsWith("[pageerror]")), logs.join("\n"));
   } finally {
     await browser.close();
