@@ -117,6 +117,14 @@ export async function generateDance(page, timeout = 60000) {
   await danceSettled(page, timeout);
 }
 
+/** Opens the app on `backend`, waits for the demo song's bars and generates their dance (benches, traces). */
+export async function openDemoDance(page, server, backend, timeout = 120000) {
+  await page.goto(server.url + BACKENDS[backend].query);
+  await page.waitForFunction(() => document.body.dataset.ready === "1", null, { timeout });
+  await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout });
+  await generateDance(page, timeout);
+}
+
 /**
  * Selects bar `bar` (0-based, as `data-bar`) and returns its candidate chips, left to right, each
  * with the flags the engine's note gives it: [{ text, flags }] (flags null: no note).

@@ -16,7 +16,7 @@ import { mkdtempSync, readFileSync, readdirSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
 import { execFileSync } from "node:child_process";
-import { startServer, startChromium, BACKENDS, root } from "./harness.mjs";
+import { startServer, startChromium, root, openDemoDance } from "./harness.mjs";
 
 const arg = (name, dflt) => { const i = process.argv.indexOf(`--${name}`); return i > 0 ? process.argv[i + 1] : dflt; };
 const SECS = Number(arg("secs", "60"));
@@ -55,11 +55,7 @@ async function run(backend, server, jobs) {
   await cdp.send("Performance.enable");
   if (beforeSource) await page.route("**/video/export-video.js", (route) => route.fulfill({ contentType: "text/javascript", body: beforeSource }));
   try {
-    await page.goto(server.url + BACKENDS[backend].query);
-    await page.waitForFunction(() => document.body.dataset.ready === "1", null, { timeout: 120000 });
-    await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 120000 });
-    await page.click("#dance-generate");
-    await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 120000 });
+    await openDemoDance(page, server, backend);
     for (const job of jobs) {
       let peakHeap = 0, peakPss = 0, sampling = true;
       const sampler = (async () => {

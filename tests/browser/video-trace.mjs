@@ -13,7 +13,7 @@
 // session 12. `--save DIR` keeps the raw trace (open it in DevTools' Performance panel).
 import { mkdirSync, writeFileSync } from "node:fs";
 import { join } from "node:path";
-import { startServer, launch, BACKENDS } from "./harness.mjs";
+import { startServer, launch, openDemoDance } from "./harness.mjs";
 
 const arg = (name, dflt) => { const i = process.argv.indexOf(`--${name}`); return i > 0 ? process.argv[i + 1] : dflt; };
 const SECS = Number(arg("secs", "4"));
@@ -90,11 +90,7 @@ try {
   for (const backend of BACKS) {
     const { browser, page, logs } = await launch(backend);
     try {
-      await page.goto(server.url + BACKENDS[backend].query);
-      await page.waitForFunction(() => document.body.dataset.ready === "1", null, { timeout: 120000 });
-      await page.waitForFunction(() => Number(document.querySelector("#dance").dataset.bars) > 8, null, { timeout: 120000 });
-      await page.click("#dance-generate");
-      await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 120000 });
+      await openDemoDance(page, server, backend);
       await page.evaluate(() => import("/video/export-video.js"));
       await browser.startTracing(page, { categories: ["devtools.timeline", "disabled-by-default-devtools.timeline", "toplevel", "v8", "v8.execute", "blink.user_timing", "disabled-by-default-v8.cpu_profiler", "disabled-by-default-v8.gc"] });
       const r = await page.evaluate(async ({ secs, backend, paused, progress }) => {
