@@ -435,3 +435,121 @@ fn wavefile_face_morphs_move_mikus_vertices_by_the_models_offsets() {
     }
     println!("Gene: {groups} group morphs of vertex morphs expand to their members");
 }
+
+/// The drawn mesh's map back to the model (issue 28, face morphs drawn): each part draws every
+/// model vertex its material's triangles use exactly once, nothing else, at that vertex's
+/// position (metres, z flipped); every vertex a triangle uses is drawn. Checked on miku_v2 (PMD)
+/// and Gene (PMX), whose materials share vertices.
+#[test]
+fn drawn_vertices_map_each_part_back_to_the_models_vertices_once_per_use() {
+    use std::collections::HashSet;
+    for (folder, file, extra) in [("mmd/miku_v2", "miku_v2.pmd", &[][..]), ("mmd/gene", "Gene_light.pmx", &["mmd/gene/light"][..])] {
+        let m = imported(folder, file, extra);
+        let c = character(&m);
+        let mesh = &c.character.mesh;
+        assert_eq!(c.drawn_vertices.len(), mesh.parts.len(), "{file}: a map per part");
+        let mut start = 0usize;
+        let mut starts = Vec::new();
+        for mat in &m.model.materials {
+            starts.push(start);
+            start += mat.index_count as usize;
+        }
+        let mut drawn_anywhere: HashSet<u32> = HashSet::new();
+        let mut shared = 0usize;
+        for (k, (part, map)) in mesh.parts.iter().zip(&c.drawn_vertices).enumerate() {
+            let mi = c.part_material[k];
+            let run = &m.model.indices[starts[mi]..starts[mi] + m.model.materials[mi].index_count as usize];
+            let used: HashSet<u32> = run.iter().copied().collect();
+            let listed: HashSet<u32> = map.iter().copied().collect();
+            assert_eq!(listed.len(), map.len(), "{file} part {k}: a model vertex drawn twice in one part");
+            assert_eq!(listed, used, "{file} part {k}: the drawn vertices are not the material's");
+            assert_eq!(map.len(), part.positions.len(), "{file} part {k}");
+            for (p, &v) in part.positions.iter().zip(map) {
+                let want = to_right_handed(m.model.vertices[v as usize].position) * METRES_PER_MMD_UNIT;
+                assert!((Vec3::from(*p) - want).length() < 1e-6, "{file} part {k}: vertex {v} drawn at {p:?}, model at {want}");
+            }
+            shared += listed.iter().filter(|v| !drawn_anywhere.insert(**v)).count();
+        }
+        let all_used: HashSet<u32> = m.model.indices.iter().copied().collect();
+        assert_eq!(drawn_anywhere, all_used, "{file}: every vertex a triangle uses is drawn");
+        let total: usize = c.drawn_vertices.iter().map(Vec::len).sum();
+        println!("{file}: {} model vertices, {} used, {total} drawn in {} parts ({shared} drawn again in another part)", m.model.vertices.len(), all_used.len(), mesh.parts.len());
+    }
+}
+
+/// Face morphs on the drawn mesh: WAVEFILE's weights at a frame where あ is high, laid on
+/// miku_v2's drawn vertices by `DrawnMorphs`, equal at every drawn vertex the sum of the model's
+/// own vertex-morph offsets × weight (read here straight from the file's morphs, z negated, in
+/// metres) at the model vertex it draws; the same at a まばたき key; no weights, nothing moves.
+/// On Gene, each group morph lands on the drawn vertices of its members.
+#[test]
+fn face_morph_offsets_on_the_drawn_mesh_are_the_models_own_at_a_frame() {
+    use odori_core::import::mmd_model::MorphData;
+    use odori_core::mmd::morph::DrawnMorphs;
+    let m = imported("mmd/miku_v2", "miku_v2.pmd", &[]);
+    let c = character(&m);
+    let vmd = odori_core::import::vmd::read("wavefile_v2.vmd", &read("mmd/motion/wavefile_v2.vmd")).expect("wavefile_v2.vmd reads");
+    let drawn = DrawnMorphs::new(&m.model, &c.drawn_vertices);
+    let map: Vec<u32> = c.drawn_vertices.iter().flatten().copied().collect();
+    assert_eq!(drawn.drawn_len(), map.len());
+    assert!(!drawn.is_empty());
+    let faces = drawn.faces(&vmd.morph_keys);
+    let model_faces = odori_core::mmd::morph::FaceMorphs::new(&m.model, &vmd.morph_keys);
+    // The expected offset of each model vertex, from the model's morph data alone.
+    let expected = |weights: &[(usize, f32)]| {
+        let mut want = vec![Vec3::ZERO; m.model.vertices.len()];
+        for &(mi, w) in weights {
+            if let MorphData::Vertex(data) = &m.model.morphs[mi].data {
+                for (v, d) in data {
+                    want[*v] += Vec3::new(d.x, d.y, -d.z) * w * 0.08;
+                }
+            }
+        }
+        want
+    };
+    let key_frame = |name: &str| {
+        vmd.morph_keys.iter().filter(|k| k.name == name).max_by(|a, b| a.weight.total_cmp(&b.weight)).map(|k| (k.frame, k.weight)).unwrap_or_else(|| panic!("no {name} key"))
+    };
+    let mut out = Vec::new();
+    for name in ["あ", "まばたき"] {
+        let mi = m.model.morphs.iter().position(|x| x.name == name).expect("morph");
+        let (frame, w) = key_frame(name);
+        let weights = faces.weights_at(frame as f32);
+        assert_eq!(weights, model_faces.weights_at(frame as f32), "matched by name as on the model");
+        assert!(weights.iter().any(|&(k, x)| k == mi && (x - w).abs() < 1e-6), "{name} at frame {frame}: {weights:?}");
+        let moved = drawn.offsets_into(&weights, &mut out);
+        let want = expected(&weights);
+        let worst = out.iter().zip(&map).map(|(o, &v)| (*o - want[v as usize]).length()).fold(0.0f32, f32::max);
+        let largest = out.iter().map(|o| o.length()).fold(0.0f32, f32::max);
+        let own = match &m.model.morphs[mi].data {
+            MorphData::Vertex(d) => d.len(),
+            _ => 0,
+        };
+        println!("miku_v2 frame {frame} ({name} {w:.2}, {} morphs weighted): {moved} drawn vertices moved ({name} alone moves {own} model vertices), largest {:.2} mm, worst miss {worst:e} m", weights.len(), largest * 1e3);
+        assert!(worst < 1e-6 && largest > 1e-3, "{name}: worst {worst}, largest {largest}");
+        assert_eq!(moved, map.iter().filter(|&&v| want[v as usize] != Vec3::ZERO).count());
+    }
+    // Control: no weights, nothing moves.
+    assert_eq!(drawn.offsets_into(&[], &mut out), 0);
+    assert!(out.len() == map.len() && out.iter().all(|o| *o == Vec3::ZERO));
+
+    // Groups, on Gene's drawn mesh.
+    let g = imported("mmd/gene", "Gene_light.pmx", &["mmd/gene/light"]);
+    let gc = character(&g);
+    let gd = DrawnMorphs::new(&g.model, &gc.drawn_vertices);
+    let gmap: Vec<u32> = gc.drawn_vertices.iter().flatten().copied().collect();
+    let mut model_out = Vec::new();
+    let mut groups = 0;
+    for (gi, gm) in g.model.morphs.iter().enumerate() {
+        if !matches!(gm.data, MorphData::Group(_)) {
+            continue;
+        }
+        odori_core::mmd::morph::vertex_offsets_into(&g.model, &[(gi, 0.7)], &mut model_out);
+        gd.offsets_into(&[(gi, 0.7)], &mut out);
+        let worst = out.iter().zip(&gmap).map(|(o, &v)| (*o - model_out[v as usize]).length()).fold(0.0f32, f32::max);
+        assert!(worst < 1e-6, "Gene group morph {}: worst {worst}", gm.name);
+        groups += usize::from(model_out.iter().any(|o| *o != Vec3::ZERO));
+    }
+    assert!(groups > 0, "Gene has group morphs of vertex morphs");
+    println!("Gene: {groups} group morphs land on their members' drawn vertices");
+}

@@ -84,6 +84,10 @@ pub struct ModelCharacter {
     pub looks: Vec<MmdLook>,
     /// Per mesh part, the model's material it draws.
     pub part_material: Vec<usize>,
+    /// Per mesh part, the model vertex each of its vertices draws (a vertex used by several
+    /// materials is drawn once in each): face morphs find their vertices by it
+    /// ([`super::morph::DrawnMorphs`]).
+    pub drawn_vertices: Vec<Vec<u32>>,
     /// Textures missing or undecodable, one line each naming the file.
     pub notices: Vec<String>,
 }
@@ -207,6 +211,7 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
     let mut parts = Vec::new();
     let mut looks = Vec::new();
     let mut part_material = Vec::new();
+    let mut drawn_vertices = Vec::new();
     let mut local = vec![u32::MAX; model.vertices.len()];
     let mut start = 0usize;
     for (mi, m) in model.materials.iter().enumerate() {
@@ -275,6 +280,7 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
         });
         parts.push(part);
         part_material.push(mi);
+        drawn_vertices.push(used.iter().map(|&v| v as u32).collect());
     }
     if parts.is_empty() {
         return Err(ModelMeshError::Empty { file: file.into() });
@@ -291,7 +297,7 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
     }
     let mesh = SkinnedMesh { parts, palette, textures: mesh_textures };
     let character = character_of(file, skeleton, mesh)?;
-    Ok(ModelCharacter { character, rig, rig_index, looks, part_material, notices })
+    Ok(ModelCharacter { character, rig, rig_index, looks, part_material, drawn_vertices, notices })
 }
 
 fn character_of(file: &str, skeleton: Skeleton, mesh: SkinnedMesh) -> Result<Character, ModelMeshError> {

@@ -6,7 +6,10 @@
 //! the drawn mesh's frame: right-handed (z negated, as the mesh's positions) and in metres.
 //!
 //! Kept apart from the drawing so it is checked natively: a viewer adds the offsets of the
-//! frame to the model's vertices before skinning.
+//! frame to the model's vertices before skinning. [`DrawnMorphs`] lays the morphs on the drawn
+//! mesh ([`super::mesh::model_character`] draws a model vertex once in each material part that
+//! uses it), so a frame's offsets come out in the order the renderer's per-vertex offset buffer
+//! holds them, with no model-sized pass between.
 
 use std::collections::HashMap;
 
@@ -36,9 +39,14 @@ impl FaceMorphs {
     /// name, as MMD takes it); keys of one morph at the same frame: the last in the file wins.
     /// Non-finite weights are dropped.
     pub fn new(model: &MmdModel, keys: &[MorphKey]) -> FaceMorphs {
+        FaceMorphs::for_names(model.morphs.iter().map(|m| m.name.as_str()), keys)
+    }
+
+    /// [`FaceMorphs::new`] for a model given by its morph names, in the model's order.
+    pub fn for_names<'a>(names: impl IntoIterator<Item = &'a str>, keys: &[MorphKey]) -> FaceMorphs {
         let mut index: HashMap<&str, usize> = HashMap::new();
-        for (i, m) in model.morphs.iter().enumerate() {
-            index.entry(m.name.as_str()).or_insert(i);
+        for (i, name) in names.into_iter().enumerate() {
+            index.entry(name).or_insert(i);
         }
         let mut by_morph: HashMap<usize, Vec<(f32, f32)>> = HashMap::new();
         let mut unmatched: Vec<String> = Vec::new();
@@ -130,4 +138,110 @@ pub fn vertex_offsets_into(model: &MmdModel, weights: &[(usize, f32)], out: &mut
         }
     }
     out.iter().filter(|o| **o != Vec3::ZERO).count()
+}
+
+/// A model's morphs laid on its drawn mesh: per vertex morph, the drawn vertices it moves (each
+/// model vertex once per material part that draws it) and their offsets (metres, right-handed);
+/// per group morph, its members. Built once per model; [`DrawnMorphs::offsets_into`] then gives
+/// a frame's offsets in drawn-vertex order (the parts of [`super::mesh::ModelCharacter`]'s mesh
+/// one after another), which is what the renderer adds to each vertex before skinning.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DrawnMorphs {
+    /// The model's morph names, in its order (what a VMD's keys are matched by).
+    names: Vec<String>,
+    /// Per model morph: a vertex morph's (drawn vertex, offset); empty for other kinds.
+    vertex: Vec<Vec<(u32, Vec3)>>,
+    /// Per model morph: a group morph's (member, weight); empty for other kinds.
+    group: Vec<Vec<(usize, f32)>>,
+    drawn_len: usize,
+}
+
+impl DrawnMorphs {
+    /// `drawn_vertices`: per mesh part, the model vertex of each of its drawn vertices
+    /// ([`super::mesh::ModelCharacter::drawn_vertices`]). Model vertices out of range (in the
+    /// map or in a morph) are skipped, as are non-finite offsets.
+    pub fn new(model: &MmdModel, drawn_vertices: &[Vec<u32>]) -> DrawnMorphs {
+        // Model vertex → its drawn copies, as offsets into one flat list (CSR).
+        let n = model.vertices.len();
+        let mut start = vec![0u32; n + 1];
+        for &v in drawn_vertices.iter().flatten() {
+            if let Some(c) = start.get_mut(v as usize + 1).filter(|_| (v as usize) < n) {
+                *c += 1;
+            }
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut copies = vec![0u32; start[n] as usize];
+        for (drawn, &v) in drawn_vertices.iter().flatten().enumerate() {
+            if let Some(at) = fill.get_mut(v as usize).filter(|_| (v as usize) < n) {
+                copies[*at as usize] = drawn as u32;
+                *at += 1;
+            }
+        }
+        let mut vertex = Vec::with_capacity(model.morphs.len());
+        let mut group = Vec::with_capacity(model.morphs.len());
+        for m in &model.morphs {
+            let (mut vs, mut gs) = (Vec::new(), Vec::new());
+            match &m.data {
+                MorphData::Vertex(offsets) => {
+                    for (v, d) in offsets {
+                        let d = to_right_handed(*d) * METRES_PER_MMD_UNIT;
+                        if *v >= n || !d.is_finite() {
+                            continue;
+                        }
+                        for &c in &copies[start[*v] as usize..start[*v + 1] as usize] {
+                            vs.push((c, d));
+                        }
+                    }
+                }
+                MorphData::Group(members) => gs = members.iter().copied().filter(|(_, w)| w.is_finite()).collect(),
+                _ => {}
+            }
+            vertex.push(vs);
+            group.push(gs);
+        }
+        DrawnMorphs { names: model.morphs.iter().map(|m| m.name.clone()).collect(), vertex, group, drawn_len: drawn_vertices.iter().map(Vec::len).sum() }
+    }
+
+    /// How many drawn vertices the mesh has (the length of [`DrawnMorphs::offsets_into`]'s output).
+    pub fn drawn_len(&self) -> usize {
+        self.drawn_len
+    }
+
+    /// Whether no vertex morph moves a drawn vertex (nothing a VMD's keys could show).
+    pub fn is_empty(&self) -> bool {
+        self.vertex.iter().all(Vec::is_empty)
+    }
+
+    /// A VMD's morph keys matched to this model's morphs by name ([`FaceMorphs::new`]).
+    pub fn faces(&self, keys: &[MorphKey]) -> FaceMorphs {
+        FaceMorphs::for_names(self.names.iter().map(String::as_str), keys)
+    }
+
+    /// The offsets the weighted morphs put on the drawn vertices, into `out` (one per drawn
+    /// vertex; resized and zeroed): as [`vertex_offsets_into`] on the model, each model vertex's
+    /// offset given to every drawn copy of it. Returns how many drawn vertices moved.
+    pub fn offsets_into(&self, weights: &[(usize, f32)], out: &mut Vec<Vec3>) -> usize {
+        out.clear();
+        out.resize(self.drawn_len, Vec3::ZERO);
+        let add = |morph: usize, w: f32, out: &mut Vec<Vec3>| {
+            for &(v, d) in self.vertex.get(morph).map_or(&[][..], Vec::as_slice) {
+                if let Some(o) = out.get_mut(v as usize) {
+                    *o += d * w;
+                }
+            }
+        };
+        for &(m, w) in weights.iter().filter(|(_, w)| w.is_finite()) {
+            add(m, w, out);
+            // Group morphs, one level deep (a group inside a group is not followed, as in MMD).
+            for &(member, mw) in self.group.get(m).map_or(&[][..], Vec::as_slice) {
+                if member != m {
+                    add(member, w * mw, out);
+                }
+            }
+        }
+        out.iter().filter(|o| **o != Vec3::ZERO).count()
+    }
 }
