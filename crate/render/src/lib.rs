@@ -19,6 +19,13 @@
 //! hull (the skinned mesh pushed out along its normals by the width times the distance to the
 //! camera, front faces culled, in the edge colour). Without the feature they draw as plain parts.
 //!
+//! Morphs: every skinned vertex has an offset added to its rest position before skinning
+//! (vertex buffer 1, 12 bytes a vertex, `skin.wgsl`): zero from a buffer each mesh keeps, or
+//! for a draw that gives [`MeshDraw::morph`] (an MMD model's face morphs at the drawn time;
+//! feature `toon`) that draw's offsets, written whole into a buffer of its draw slot each frame
+//! — the 100-byte vertices are never rewritten. Toon and outline read the same offsets, so the
+//! outline follows an opened mouth.
+//!
 //! Its pipelines can be made one at a time ([`Renderer::new_deferred`], then
 //! [`Renderer::prepare`]): on WebGL2 each one is a shader compile and link that holds the
 //! thread for tens of milliseconds, so a page starting up makes them in separate tasks, and a
@@ -72,6 +79,10 @@ mod shader_tests {
         for (name, src) in [("mesh", include_str!("shaders/mesh.wgsl")), ("toon", include_str!("shaders/toon.wgsl")), ("outline", include_str!("shaders/outline.wgsl"))] {
             assert!(!src.contains("var<uniform> palette") && !src.contains("palette.m["), "{name}.wgsl declares or reads the palette itself");
             assert!(src.contains("skin_matrix(joints, weights)"), "{name}.wgsl does not skin through skin_matrix");
+            // Morph offsets go in before skinning, the same way in all three (the outline must
+            // follow an opened mouth), and no position is skinned without them.
+            assert!(src.contains("@location(8) morph: vec3<f32>") && src.contains("skin_position(skin, p, morph)"), "{name}.wgsl does not add the morph offset");
+            assert!(!src.contains("vec4<f32>(p, 1.0)"), "{name}.wgsl skins a position without its morph offset");
         }
     }
 }
@@ -176,10 +187,18 @@ pub struct MeshDraw<'a> {
     /// Linear RGB(A) multiplying the mesh's colours: white draws it as it is; several figures
     /// on one character (the six candidates) are told apart by their figure colours.
     pub tint: [f32; 4],
+    /// Per vertex of the mesh (its parts' vertices one after another, as uploaded), the offset
+    /// (metres, the mesh's rest frame) added before skinning: an MMD model's face morphs.
+    /// `None`, or a length other than the mesh's vertex count, draws it unmorphed. Feature
+    /// `toon` only (the player draws no MMD model).
+    pub morph: Option<&'a [Vec3]>,
 }
 
 struct GpuMesh {
     vertices: wgpu::Buffer,
+    /// Zero morph offsets, one per vertex (vertex buffer 1 of a draw without morphs).
+    no_morph: wgpu::Buffer,
+    vertex_count: usize,
     indices: wgpu::Buffer,
     /// Per part: drawn one call each, so each can bind its texture.
     parts: Vec<PartDraw>,
@@ -253,6 +272,9 @@ pub struct Renderer {
     /// The pipeline that makes them, made the first time one is needed.
     mip_blit: Option<mipmap::MipBlit>,
     palettes: Vec<PaletteSlot>,
+    /// Per draw slot (as `palettes`), the morph offsets of the draw in it when it has any,
+    /// grown to the largest mesh given morphs.
+    morph_slots: Vec<Option<wgpu::Buffer>>,
     depth: Option<(wgpu::TextureView, u32, u32)>,
     scratch: Vec<CapsuleInstance>,
     /// Background colour.
@@ -427,6 +449,7 @@ impl Renderer {
             pending_mips: Vec::new(),
             mip_blit: None,
             palettes: Vec::new(),
+            morph_slots: Vec::new(),
             depth: None,
             scratch: Vec::new(),
             clear: wgpu::Color { r: 0.055, g: 0.06, b: 0.075, a: 1.0 },
@@ -466,6 +489,12 @@ impl Renderer {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x2, 6 => Float32x4, 7 => Float32],
         };
+        // Skinned pipelines' second buffer: the per-vertex morph offsets (skin.wgsl).
+        let morph_buffer = wgpu::VertexBufferLayout {
+            array_stride: 12,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![8 => Float32x3],
+        };
         let (label, layout, buffer) = match kind {
             PipelineKind::Toon => ("toon", &self.toon_layout, mesh_buffer.clone()),
             PipelineKind::Outline => ("outline", &self.outline_layout, mesh_buffer.clone()),
@@ -494,6 +523,9 @@ impl Renderer {
         let cull_mode = if kind == PipelineKind::Outline { Some(wgpu::Face::Front) } else { None };
         let blend = if kind == PipelineKind::Toon { Some(wgpu::BlendState::ALPHA_BLENDING) } else { None };
         let topology = if kind == PipelineKind::Lines { wgpu::PrimitiveTopology::LineList } else { wgpu::PrimitiveTopology::TriangleList };
+        let skinned = matches!(kind, PipelineKind::Mesh | PipelineKind::Toon | PipelineKind::Outline);
+        let buffers = [Some(buffer), skinned.then_some(morph_buffer)];
+        let buffers = if skinned { &buffers[..] } else { &buffers[..1] };
         let sm = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),
             source: wgpu::ShaderSource::Wgsl(pipeline_wgsl(kind).into()),
@@ -501,7 +533,7 @@ impl Renderer {
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),
             layout: Some(layout),
-            vertex: wgpu::VertexState { module: &sm, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers: &[Some(buffer)] },
+            vertex: wgpu::VertexState { module: &sm, entry_point: Some("vs_main"), compilation_options: Default::default(), buffers },
             primitive: wgpu::PrimitiveState { topology, cull_mode, ..Default::default() },
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: DEPTH,
@@ -578,8 +610,17 @@ impl Renderer {
             contents: bytemuck::cast_slice(&indices),
             usage: wgpu::BufferUsages::INDEX,
         });
+        // Zero-filled on creation (wgpu clears new buffers).
+        let no_morph = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("no morph"),
+            size: (vertices.len() * 12) as u64,
+            usage: wgpu::BufferUsages::VERTEX,
+            mapped_at_creation: false,
+        });
         self.meshes.push(GpuMesh {
             vertices: vb,
+            no_morph,
+            vertex_count: vertices.len(),
             indices: ib,
             parts,
             palette_len: mesh.palette.len(),
@@ -720,6 +761,25 @@ impl Renderer {
             self.queue.write_buffer(&self.palettes[slot].buffer, 0, bytemuck::cast_slice(&m.palette[..n]));
             self.queue.write_buffer(&self.palettes[slot].tint, 0, bytemuck::cast_slice(&m.tint));
         }
+        // Morph offsets, whole, into the slot's buffer (12 B a vertex); a slot without leaves
+        // its buffer unused this frame and draws from the mesh's zeros.
+        let morphs: Vec<bool> = drawable.iter().map(|m| cfg!(feature = "toon") && m.morph.is_some_and(|o| o.len() == self.meshes[m.mesh.0].vertex_count)).collect();
+        self.morph_slots.resize_with(self.morph_slots.len().max(drawable.len()), || None);
+        for (slot, m) in drawable.iter().enumerate() {
+            let Some(offsets) = m.morph.filter(|_| morphs[slot]) else { continue };
+            let bytes: &[u8] = bytemuck::cast_slice(offsets);
+            if self.morph_slots[slot].as_ref().is_none_or(|b| b.size() < bytes.len() as u64) {
+                self.morph_slots[slot] = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("morph offsets"),
+                    size: bytes.len() as u64,
+                    usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }));
+            }
+            if let Some(b) = &self.morph_slots[slot] {
+                self.queue.write_buffer(b, 0, bytes);
+            }
+        }
 
         // Pipelines not made yet are made now, for what this frame draws only.
         self.prepare(PipelineKind::Lines);
@@ -746,6 +806,8 @@ impl Renderer {
             }
         }
         {
+            let morph_slots = &self.morph_slots;
+            let morph_of = |slot: usize, g| morph_slice(morphs[slot], morph_slots.get(slot).and_then(Option::as_ref), g);
             let depth_view = &self.depth.as_ref().map(|d| &d.0).expect("depth texture was just made");
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("scene"),
@@ -776,6 +838,7 @@ impl Renderer {
                     let g = &self.meshes[m.mesh.0];
                     pass.set_bind_group(1, &self.palettes[slot].bind_group, &[]);
                     pass.set_vertex_buffer(0, g.vertices.slice(..));
+                    pass.set_vertex_buffer(1, morph_of(slot, g));
                     pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
                     for (k, part) in g.parts.iter().enumerate() {
                         if let (Some(_), Some(toon), Some(bg)) = (part.toon, &self.toon_pipeline, g.toon_groups[k].as_ref()) {
@@ -799,6 +862,7 @@ impl Renderer {
                         pass.set_pipeline(outline);
                         pass.set_bind_group(1, &self.palettes[slot].bind_group, &[]);
                         pass.set_vertex_buffer(0, g.vertices.slice(..));
+                        pass.set_vertex_buffer(1, morph_of(slot, g));
                         pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
                         for part in g.parts.iter().filter(|p| matches!(p.toon, Some((_, true)))) {
                             pass.draw_indexed(part.range.clone(), 0, 0..1);
@@ -845,6 +909,14 @@ impl Renderer {
                 ],
             }));
         }
+    }
+}
+
+/// A draw's morph offsets: its slot's buffer when it gave morphs this frame, else the mesh's zeros.
+fn morph_slice<'a>(given: bool, slot: Option<&'a wgpu::Buffer>, g: &'a GpuMesh) -> wgpu::BufferSlice<'a> {
+    match (given, slot) {
+        (true, Some(b)) => b.slice(..(g.vertex_count * 12) as u64),
+        _ => g.no_morph.slice(..),
     }
 }
 

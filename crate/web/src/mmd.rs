@@ -11,6 +11,7 @@ use odori_core::mmd::export::clip_to_vmd_keeping;
 use odori_core::mmd::files::{import_files, CameraTrack, ImportedModel, MmdFilesOptions, STANDARD_RIG};
 use odori_core::import::SkinnedMesh;
 use odori_core::mmd::mesh::model_character;
+use odori_core::mmd::morph::DrawnMorphs;
 use odori_core::mmd::spring::spring_bones;
 use odori_core::mmd::{standard_rig, MmdClipOptions, MmdMotion, MmdRig};
 use std::rc::Rc;
@@ -34,7 +35,7 @@ pub(crate) struct MmdStore {
     /// character (`setCharacter`, the *Character* list).
     pub characters: Vec<(String, u32)>,
     /// Clip id → an imported VMD's face (morph) keys and the song offset its clip starts at:
-    /// `exportVmd` writes them back (the engine does not play them).
+    /// the viewer plays them on an MMD model's mesh (`drawn_morphs`), `exportVmd` writes them back.
     pub morphs: Vec<(u32, Vec<odori_core::import::vmd::MorphKey>, u32)>,
     /// Clip id → an imported VMD's own bone keys (bone, frame on the clip's timeline): the
     /// export's key reduction keeps them.
@@ -42,6 +43,9 @@ pub(crate) struct MmdStore {
     /// Mesh key → the joints (of the model's skeleton, which its motions share) that follow by
     /// spring when the viewer draws the model (`odori_core::mmd::spring`).
     pub springs: Vec<(u32, Vec<usize>)>,
+    /// Mesh key → the model's morphs laid on that mesh's drawn vertices (models with vertex
+    /// morphs only): where the viewer draws a clip's face keys.
+    pub drawn_morphs: Vec<(u32, Rc<DrawnMorphs>)>,
 }
 
 impl MmdStore {
@@ -166,6 +170,31 @@ impl Library {
         self.mmd.springs.iter().find(|(k, _)| *k == mesh_key).map(|(_, j)| j.as_slice())
     }
 
+    /// The face morphs of the MMD model whose mesh is under `mesh_key` (`None`: not an MMD
+    /// model's mesh, or one without vertex morphs).
+    pub(crate) fn drawn_morphs(&self, mesh_key: u32) -> Option<&Rc<DrawnMorphs>> {
+        self.mmd.drawn_morphs.iter().find(|(k, _)| *k == mesh_key).map(|(_, d)| d)
+    }
+
+    /// Keeps a model's morphs on its mesh under `mesh_key` (replacing any kept there before).
+    pub(crate) fn keep_drawn_morphs(&mut self, mesh_key: u32, drawn: DrawnMorphs) {
+        self.mmd.drawn_morphs.retain(|(k, _)| *k != mesh_key);
+        if !drawn.is_empty() {
+            self.mmd.drawn_morphs.push((mesh_key, Rc::new(drawn)));
+        }
+    }
+
+    /// Clip `id`'s face (morph) keys and the motion frame the clip starts at, when it has any.
+    pub(crate) fn face_keys(&self, id: u32) -> Option<(&[odori_core::import::vmd::MorphKey], u32)> {
+        self.mmd.morphs.iter().find(|(i, _, _)| *i == id).map(|(_, k, o)| (k.as_slice(), *o))
+    }
+
+    /// Keeps face keys for clip `id` (a project's VMD source shown in the library).
+    pub(crate) fn keep_face_keys(&mut self, id: u32, keys: Vec<odori_core::import::vmd::MorphKey>, offset_frames: u32) {
+        self.mmd.morphs.retain(|(i, _, _)| *i != id);
+        self.mmd.morphs.push((id, keys, offset_frames));
+    }
+
     fn rig_named(&self, name: &str) -> JsResult<(MmdRig, String)> {
         if name == STANDARD_RIG || name == "standard" {
             return Ok((standard_rig(), String::new()));
@@ -240,7 +269,8 @@ impl Library {
     /// missing or undecodable texture is a notice naming it. Each VMD's bone keys become a clip on the
     /// canonical humanoid's naming, posed with MMD's IK and grants on the model `options.model`
     /// names, else the one its header names, else the built-in standard MMD skeleton; camera keys
-    /// become a camera track (`cameraTracks()`); morph keys are kept aside with a notice.
+    /// become a camera track (`cameraTracks()`); morph (face) keys are kept with the motion
+    /// (the viewer plays them on an MMD model's face; `exportVmd` writes them back), with a notice.
     /// `options`: `{ model?: string ("standard" for the built-in skeleton), songOffsetFrames?: number }`
     /// (the motion frame that is song time 0: the clip starts there).
     /// Returns `{ clips: ClipInfo-bearing motions, models, cameras, notices, problems }`; a bad
@@ -273,6 +303,7 @@ impl Library {
                             let mesh = (self.next_id(), Rc::new(c.character.mesh));
                             self.mmd.springs.retain(|(k, _)| *k != mesh.0);
                             self.mmd.springs.push((mesh.0, joints));
+                            self.keep_drawn_morphs(mesh.0, DrawnMorphs::new(&m.model, &c.drawn_vertices));
                             let id = self.push(clip, "mmd", c.character.map.clone(), c.character.map.status(&c.character.skeleton, None), Some(mesh.clone()));
                             self.mmd.characters.push((m.model.name.clone(), id));
                             meshes.push((m.model.name.clone(), mesh));

@@ -18,6 +18,12 @@
 //! once), so no one task holds a page's main thread for the sum of them; the skinned-mesh
 //! pipeline is made by `warmUp` or when a character is first drawn.
 //!
+//! An MMD model's face morphs play from the drawn clip's face keys (an imported VMD's, or a
+//! project VMD source's; a generated dance has none): at the drawn time the core gives each
+//! keyed morph's weight and the offsets they put on the mesh's drawn vertices
+//! (`odori_core::mmd::morph`), which the renderer adds before skinning (`setMorphs` turns them
+//! off; authoring build only: the player draws no MMD model).
+//!
 //! A `draw` that would put the same image on screen again is skipped (it returns false): the
 //! figures' sampled poses (clip, revision and the clamped position `timeSecs × fps` the clip is
 //! sampled at — poses are interpolated between frames, so any change of time is a new pose),
@@ -143,6 +149,8 @@ struct Drawn {
     time_secs: f32,
     /// "own" (the clip's own mesh), "character" (an imported character), "builtin" or "stick".
     body: &'static str,
+    /// Drawn vertices its face morphs moved (an MMD model playing face keys; else 0).
+    morphed: u32,
 }
 
 #[cfg(feature = "authoring")]
@@ -229,6 +237,15 @@ pub struct Viewer {
     /// The springs of each drawn MMD figure, by figure index and clip id, stepped from the
     /// time it was last drawn.
     followers: HashMap<(usize, u32), SpringFollower>,
+    /// MMD models play their clips' face keys (`setMorphs`; on by default).
+    morphs_on: bool,
+    /// A clip's face keys matched to an MMD model's morphs, by (clip id, mesh key), with the
+    /// clip's revision and the motion frame the clip starts at.
+    #[cfg(feature = "authoring")]
+    faces: HashMap<(u32, u32), (u64, Option<(odori_core::mmd::morph::FaceMorphs, u32)>)>,
+    /// Offset buffers (one per drawn vertex) reused from frame to frame.
+    #[cfg(feature = "authoring")]
+    morph_pool: Vec<Vec<Vec3>>,
 }
 
 #[wasm_bindgen(typescript_custom_section)]
@@ -547,6 +564,11 @@ impl Viewer {
             capture: None,
             springs_on: true,
             followers: HashMap::new(),
+            morphs_on: true,
+            #[cfg(feature = "authoring")]
+            faces: HashMap::new(),
+            #[cfg(feature = "authoring")]
+            morph_pool: Vec::new(),
         };
         // WebGL2: the pipelines the first frame draws with, each made and then drawn with once, a
         // task for each step: on WebGL2 the browser's GL (ANGLE) compiles a pipeline's GPU code only
@@ -761,6 +783,22 @@ impl Viewer {
         }
     }
 
+    /// MMD models play the face (morph) keys of the clip they draw — an imported VMD's, or a
+    /// project VMD source's — at the drawn time: on (the default) or off (the face at rest).
+    #[wasm_bindgen(js_name = setMorphs)]
+    pub fn set_morphs(&mut self, on: bool) {
+        if on != self.morphs_on {
+            self.morphs_on = on;
+            self.shown = None;
+        }
+    }
+
+    /// Whether MMD models play their clips' face keys (`setMorphs`).
+    #[wasm_bindgen(getter)]
+    pub fn morphs(&self) -> bool {
+        self.morphs_on
+    }
+
     /// Whether MMD models' hair and skirt follow by spring (`setSprings`).
     #[wasm_bindgen(getter)]
     pub fn springs(&self) -> bool {
@@ -949,7 +987,7 @@ impl Viewer {
         }
         // Poses first (positions for sticks, palettes for meshes).
         let mut sticks: Vec<(Vec<Vec3>, &Entry, [f32; 4])> = Vec::new();
-        let mut palettes: Vec<(MeshHandle, Vec<Mat4>, [f32; 4])> = Vec::new();
+        let mut palettes: Vec<(MeshHandle, Vec<Mat4>, [f32; 4], Option<Vec<Vec3>>)> = Vec::new();
         // One figure is drawn as it is; several (candidates, overlays) each take a wash of
         // their figure colour, so a skinned candidate matches its chip as a stick one does.
         let several = specs.len() > 1;
@@ -1003,19 +1041,23 @@ impl Viewer {
                 now_hi = now_hi.max(*p + off);
             }
             match skinned {
-                Some((h, _, mesh, _, body)) => {
+                Some((h, key, mesh, _, body)) => {
                     let shift = Mat4::from_translation(off);
                     let pal = mesh.palette.iter().map(|(j, bind)| shift * self.mats[*j] * *bind).collect();
                     let tint = if several { color.map(|c| 0.35 + 0.65 * c) } else { [1.0; 4] };
-                    palettes.push((h, pal, tint));
-                    drawn.push(Drawn { clip: s.clip, time_secs: s.time_secs, body });
+                    #[cfg(feature = "authoring")]
+                    let (morph, morphed) = self.face_offsets(library, e, key, s.time_secs);
+                    #[cfg(not(feature = "authoring"))]
+                    let (morph, morphed): (Option<Vec<Vec3>>, u32) = (None, { let _ = key; 0 });
+                    palettes.push((h, pal, tint, morph));
+                    drawn.push(Drawn { clip: s.clip, time_secs: s.time_secs, body, morphed });
                 }
                 None => {
                     for p in pos.iter_mut() {
                         *p += off;
                     }
                     sticks.push((pos, e, color));
-                    drawn.push(Drawn { clip: s.clip, time_secs: s.time_secs, body: "stick" });
+                    drawn.push(Drawn { clip: s.clip, time_secs: s.time_secs, body: "stick", morphed: 0 });
                 }
             }
         }
@@ -1039,11 +1081,13 @@ impl Viewer {
             let since = *self.held_since_ms.get_or_insert(now);
             if now - since < TEXTURE_WAIT_MS {
                 self.shown = None;
+                #[cfg(feature = "authoring")]
+                self.morph_pool.extend(palettes.into_iter().filter_map(|p| p.3));
                 return Ok(false);
             }
         }
         self.held_since_ms = None;
-        let meshes: Vec<MeshDraw> = palettes.iter().map(|(h, p, tint)| MeshDraw { mesh: *h, palette: p, tint: *tint }).collect();
+        let meshes: Vec<MeshDraw> = palettes.iter().map(|(h, p, tint, morph)| MeshDraw { mesh: *h, palette: p, tint: *tint, morph: morph.as_deref() }).collect();
         self.last_drawn = drawn;
         if let Some(y) = self.follow_y {
             // Track the travelling figures on the ground plane.
@@ -1055,6 +1099,9 @@ impl Viewer {
 
         // Keyed with the camera as drawn (a followed figure moved its target).
         self.shown = self.present(&figures, &meshes).then_some(Shown { camera: self.camera, ..key });
+        drop(meshes);
+        #[cfg(feature = "authoring")]
+        self.morph_pool.extend(palettes.into_iter().filter_map(|p| p.3));
         #[cfg(feature = "authoring")]
         {
             self.frames_drawn += u32::from(self.shown.is_some());
@@ -1064,6 +1111,30 @@ impl Viewer {
 }
 
 impl Viewer {
+    /// The face morph offsets of clip `e` drawn at `time_secs` on the mesh under `mesh_key`
+    /// (one per drawn vertex, from the pool) and how many vertices they move: `None` when morphs
+    /// are off, the clip has no face keys, or the mesh is not an MMD model's with morphs. The
+    /// motion frame is the clip's start in the VMD plus the clip's frame at that time, clamped
+    /// to the clip as its pose is.
+    #[cfg(feature = "authoring")]
+    fn face_offsets(&mut self, library: &Library, e: &Entry, mesh_key: u32, time_secs: f32) -> (Option<Vec<Vec3>>, u32) {
+        if !self.morphs_on {
+            return (None, 0);
+        }
+        let Some(drawn) = library.drawn_morphs(mesh_key) else { return (None, 0) };
+        let cached = self.faces.get(&(e.id, mesh_key)).filter(|(rev, _)| *rev == e.rev);
+        if cached.is_none() {
+            let faces = library.face_keys(e.id).map(|(keys, offset)| (drawn.faces(keys), offset)).filter(|(f, _)| !f.is_empty());
+            self.faces.insert((e.id, mesh_key), (e.rev, faces));
+        }
+        let Some((faces, offset)) = self.faces.get(&(e.id, mesh_key)).and_then(|(_, f)| f.as_ref()) else { return (None, 0) };
+        let at = (time_secs * e.clip.fps).clamp(0.0, e.clip.frame_count().saturating_sub(1) as f32);
+        let frame = *offset as f32 + at * odori_core::import::vmd::VMD_FPS / e.clip.fps.max(1e-3);
+        let mut out = self.morph_pool.pop().unwrap_or_default();
+        let moved = drawn.offsets_into(&faces.weights_at(frame), &mut out);
+        (Some(out), moved as u32)
+    }
+
     /// What a draw of `specs` would show, to compare with the last drawn (see `Shown`).
     fn shown_key(&self, library: &Library, specs: &[FigureSpec]) -> JsResult<Shown> {
         let mut figures = Vec::with_capacity(specs.len() * 12);

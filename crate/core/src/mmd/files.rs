@@ -116,7 +116,8 @@ pub struct ImportedMotion {
     /// Keyed bone names the rig lacks (their keys are ignored, as three.js ignores them).
     pub unmatched_bones: Vec<String>,
     pub matched_bones: usize,
-    /// Morph (face) keys kept aside: the clip carries bones only.
+    /// Morph (face) keys kept aside: the clip carries bones only (a viewer plays them on an MMD
+    /// model's face, `super::morph`; the VMD export writes them back).
     pub morph_keys: usize,
     /// Camera keys in the same file (a camera track is made of them too).
     pub camera_keys: usize,
@@ -398,7 +399,7 @@ pub fn import_vmd_source_on(file: &str, bytes: &[u8], song_offset_frames: Option
     let models: Vec<&MmdModel> = parsed.iter().collect();
     let m = pose_vmd(file, vmd, &models, &options).map_err(err)?;
     if m.morph_keys > 0 {
-        warnings.push(format!("{file}: {} morph (face) keys kept aside (not played)", m.morph_keys));
+        warnings.push(format!("{file}: {} morph (face) keys kept aside: played on an MMD model's face, written back on VMD export", m.morph_keys));
     }
     if m.camera_keys > 0 {
         warnings.push(format!("{file}: {} camera keys not used by the dance", m.camera_keys));
@@ -468,13 +469,13 @@ pub fn import_files(files: &[(String, Vec<u8>)], library_models: &[&MmdModel], o
             }
         }
         if vmd.bone_keys.is_empty() && !vmd.morph_keys.is_empty() {
-            notices.push(format!("{name}: {} morph (face) keys and no bone keys: nothing to play yet (morphs are not played)", vmd.morph_keys.len()));
+            notices.push(format!("{name}: {} morph (face) keys and no bone keys: nothing to play yet (face keys play with a motion's bone keys)", vmd.morph_keys.len()));
             continue;
         }
         match pose_vmd(name, vmd, &models, options) {
             Ok(m) => {
                 if m.morph_keys > 0 {
-                    notices.push(format!("{name}: {} morph (face) keys kept aside (not played)", m.morph_keys));
+                    notices.push(format!("{name}: {} morph (face) keys kept aside: played on an MMD model's face, written back on VMD export", m.morph_keys));
                 }
                 if m.rig == STANDARD_RIG {
                     let why = if m.header_model.is_empty() { "it names no model".to_string() } else { format!("its model '{}' is not in the library", m.header_model) };

@@ -18,10 +18,11 @@ fn vs_main(
     @location(3) weights: vec4<f32>,
     @location(4) color: vec4<f32>,
     @location(5) uv: vec2<f32>,
+    @location(8) morph: vec3<f32>,
 ) -> VOut {
     let skin = skin_matrix(joints, weights);
     var o: VOut;
-    let world = skin * vec4<f32>(p, 1.0);
+    let world = skin_position(skin, p, morph);
     o.pos = cam.view_proj * world;
     o.normal = normalize((skin * vec4<f32>(n, 0.0)).xyz);
     o.color = color;

@@ -15,9 +15,10 @@ fn vs_main(
     @location(3) weights: vec4<f32>,
     @location(6) edge: vec4<f32>,
     @location(7) edge_width: f32,
+    @location(8) morph: vec3<f32>,
 ) -> VOut {
     let skin = skin_matrix(joints, weights);
-    let world = (skin * vec4<f32>(p, 1.0)).xyz;
+    let world = skin_position(skin, p, morph).xyz;
     let normal = normalize((skin * vec4<f32>(n, 0.0)).xyz);
     let distance = max(length(cam.eye.xyz - world), 0.1);
     var o: VOut;
