@@ -547,7 +547,14 @@ impl Project {
             None => return Err(OdoriError::new("missing-blob", format!("{file_name}: its bytes are missing from the project"))),
             Some(r) => r?,
         };
+        let before = library.size();
         let report = library.add_imported(&file_name, &imported);
+        // A VMD's face keys, from the bytes the project keeps: played on an MMD model's face.
+        if let Some((keys, offset)) = self.inner.face_keys(id) {
+            for clip in library.ids_from(before) {
+                library.keep_face_keys(clip, keys.clone(), offset);
+            }
+        }
         js_sys::Reflect::set(&report, &JsValue::from_str("source"), &JsValue::from(source)).map_err(|_| OdoriError::new("bad-argument", "report"))?;
         Ok(report)
     }

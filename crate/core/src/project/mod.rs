@@ -599,6 +599,20 @@ impl Project {
         self.derived.imported_source(&src, &self.blobs)
     }
 
+    /// A VMD source's face (morph) keys and the motion frame its clip starts at (the song
+    /// offset), read again from the kept bytes on each call: the `.odori` file holds the VMD as
+    /// given, so they need no field of their own. `None` for a source that is not a VMD, has no
+    /// morph keys, or whose bytes are missing or unreadable (its import says why).
+    pub fn face_keys(&self, source: SourceId) -> Option<(Vec<crate::import::vmd::MorphKey>, u32)> {
+        let src = self.doc.source(source)?;
+        let bytes = self.blobs.get(&src.blob)?;
+        if !(bytes.starts_with(crate::import::vmd::MAGIC_V1) || bytes.starts_with(crate::import::vmd::MAGIC_V2)) {
+            return None;
+        }
+        let vmd = crate::import::vmd::read(&src.file_name, bytes).ok()?;
+        (!vmd.morph_keys.is_empty()).then(|| (vmd.morph_keys, src.options.song_offset_frames.unwrap_or(0)))
+    }
+
     /// Opens a group of edits that one undo takes back (a share link applied bar by bar and
     /// generated): every edit until [`Project::end_group`] joins the undo step of the group's
     /// first edit. Undo, redo and the end close the group.
