@@ -211,3 +211,47 @@ fn a_vmd_dance_on_its_model_keeps_the_model_and_reopens_on_it() {
     assert_eq!(e.kind(), "invalid", "{e}");
     assert_eq!(p.doc(), &before);
 }
+
+/// Face keys of a project's VMD dance (issue 28: "face morph keys play on the model and survive
+/// a VMD round trip"): read again from the bytes the project keeps — no field of the `.odori`
+/// file of their own — they are the VMD's own morph keys (as the library's MMD import sets
+/// them aside) with the song offset the dance starts at, alike on the model and on the standard
+/// skeleton, and after saving and opening again. Written back by the export and read back: equal
+/// on the export's timeline. A VMD without morph keys has none (the control).
+#[test]
+fn a_vmd_sources_face_keys_come_from_its_kept_bytes_and_survive_a_round_trip() {
+    use odori_core::mmd::export::{clip_to_vmd, put_morph_keys};
+    use odori_core::mmd::MmdRig;
+    let (wave, miku) = (read(WAVEFILE), read(MIKU));
+    let vmd = odori_core::import::vmd::read("wavefile_v2.vmd", &wave).expect("reads");
+    assert!(vmd.morph_keys.len() > 1000, "{}", vmd.morph_keys.len());
+    let opts = ImportOptions { song_offset_frames: Some(160), ..Default::default() };
+    let mut p = Project::new();
+    let on_model = p.add_source_on("wavefile_v2.vmd", &wave, opts.clone(), Some(("miku_v2.pmd", &miku))).expect("a VMD on its model").id;
+    let on_standard = p.add_source("wavefile_v2.vmd", &wave, opts.clone()).expect("a VMD").id;
+    for id in [on_model, on_standard] {
+        let (keys, offset) = p.face_keys(id).expect("face keys");
+        assert_eq!(offset, 160);
+        assert_eq!(keys, vmd.morph_keys, "the VMD's own keys");
+    }
+    let mut q = project::open(&project::save(&p).expect("save")).expect("open").project;
+    assert_eq!(q.face_keys(on_model), p.face_keys(on_model), "the same after reopening");
+
+    // Exported as VMD on miku_v2 with its face keys, and read back.
+    let model = odori_core::import::mmd_model::read_model("miku_v2.pmd", &miku).expect("model");
+    let rig = MmdRig::from_model(&model).expect("rig");
+    let clip = q.imported(on_model).expect("bytes").expect("imports").clips[0].clone();
+    let mut out = clip_to_vmd(&clip, &rig, &model.name).expect("export");
+    let (keys, offset) = q.face_keys(on_model).expect("face keys");
+    put_morph_keys(&mut out, &keys, offset);
+    let back = odori_core::import::vmd::read("out.vmd", &odori_core::export::vmd::write("out.vmd", &out).expect("write")).expect("read back");
+    let want: Vec<(String, u32, f32)> = vmd.morph_keys.iter().filter(|k| k.frame >= offset).map(|k| (k.name.clone(), k.frame - offset, k.weight)).collect();
+    let got: Vec<(String, u32, f32)> = back.morph_keys.iter().map(|k| (k.name.clone(), k.frame, k.weight)).collect();
+    assert_eq!(got, want);
+    println!("WAVEFILE as a project source: {} face keys read from the kept bytes (offset {offset}); {} written back from the offset on and read back equal", keys.len(), got.len());
+
+    // Control: a VMD without face keys (the same dance exported without them) has none.
+    let bare = odori_core::export::vmd::write("bare.vmd", &clip_to_vmd(&clip, &rig, &model.name).expect("export")).expect("write");
+    let r = p.add_source("bare.vmd", &bare, ImportOptions::default()).expect("a VMD without face keys");
+    assert_eq!(p.face_keys(r.id), None);
+}
