@@ -765,7 +765,7 @@ impl Renderer {
         // its buffer unused this frame and draws from the mesh's zeros.
         let morphs: Vec<bool> = drawable.iter().map(|m| cfg!(feature = "toon") && m.morph.is_some_and(|o| o.len() == self.meshes[m.mesh.0].vertex_count)).collect();
         self.morph_slots.resize_with(self.morph_slots.len().max(drawable.len()), || None);
-        for (slot, m) in drawable.iter().enumerate() {
+        for (slot, m) in drawable.iter().enumerate().filter(|_| cfg!(feature = "toon")) {
             let Some(offsets) = m.morph.filter(|_| morphs[slot]) else { continue };
             let bytes: &[u8] = bytemuck::cast_slice(offsets);
             if self.morph_slots[slot].as_ref().is_none_or(|b| b.size() < bytes.len() as u64) {

@@ -238,6 +238,7 @@ pub struct Viewer {
     /// time it was last drawn.
     followers: HashMap<(usize, u32), SpringFollower>,
     /// MMD models play their clips' face keys (`setMorphs`; on by default).
+    #[cfg(feature = "authoring")]
     morphs_on: bool,
     /// A clip's face keys matched to an MMD model's morphs, by (clip id, mesh key), with the
     /// clip's revision and the motion frame the clip starts at.
@@ -564,6 +565,7 @@ impl Viewer {
             capture: None,
             springs_on: true,
             followers: HashMap::new(),
+            #[cfg(feature = "authoring")]
             morphs_on: true,
             #[cfg(feature = "authoring")]
             faces: HashMap::new(),
@@ -785,6 +787,8 @@ impl Viewer {
 
     /// MMD models play the face (morph) keys of the clip they draw — an imported VMD's, or a
     /// project VMD source's — at the drawn time: on (the default) or off (the face at rest).
+    /// (Not in the player build, which draws no MMD model.)
+    #[cfg(feature = "authoring")]
     #[wasm_bindgen(js_name = setMorphs)]
     pub fn set_morphs(&mut self, on: bool) {
         if on != self.morphs_on {
@@ -794,6 +798,7 @@ impl Viewer {
     }
 
     /// Whether MMD models play their clips' face keys (`setMorphs`).
+    #[cfg(feature = "authoring")]
     #[wasm_bindgen(getter)]
     pub fn morphs(&self) -> bool {
         self.morphs_on
