@@ -547,7 +547,17 @@ impl Project {
             None => return Err(OdoriError::new("missing-blob", format!("{file_name}: its bytes are missing from the project"))),
             Some(r) => r?,
         };
-        let report = library.add_imported(&file_name, &imported);
+        // A VMD dance posed on the model kept with it: drawn with the library's mesh of that
+        // model when it has one (with its textures), else the mesh the project made from the
+        // model file; `exportVmd` fits it to that model by default.
+        let model = self.inner.source_model(id).ok().flatten();
+        let shared = model.as_ref().zip(imported.clips.first()).and_then(|(m, c)| library.character_mesh(&m.name, &c.skeleton));
+        let count = library.size();
+        let report = library.add_imported_on(&file_name, &imported, shared);
+        if let Some(m) = model {
+            let ids = library.ids_from(count);
+            library.link_project_dance(&ids, m);
+        }
         js_sys::Reflect::set(&report, &JsValue::from_str("source"), &JsValue::from(source)).map_err(|_| OdoriError::new("bad-argument", "report"))?;
         Ok(report)
     }
