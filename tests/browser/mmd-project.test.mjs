@@ -3,7 +3,7 @@
 // project source; Generate with "my moves" fills bars with its segments (the bar strip names
 // it); a reload brings it back (the source with its offset, the same bars); the share note says
 // the link leaves those bars out because MMD files stay with the person, and the link made has
-// them as empty bars. Then (WebGL2) WAVEFILE given with miku_v2's folder: posed on miku_v2, the
+// them as empty bars. Then (both back ends) WAVEFILE given with miku_v2's folder: posed on miku_v2, the
 // model kept in the project, and posed on it again after a reload.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
@@ -96,10 +96,10 @@ for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).
 // is posed on that model, and the project keeps the model with the dance: after a reload the
 // dance is posed on miku_v2 again (its joints are miku_v2's bones, not the standard skeleton's,
 // which the same VMD imported on the standard skeleton shows as the control).
-test("an MMD dance given with its model keeps the model in the project across a reload (webgl2)", async () => {
-  const { browser, page, logs } = await launch("webgl2");
+for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).split(",")) test(`an MMD dance given with its model keeps the model in the project across a reload (${backend})`, async () => {
+  const { browser, page, logs } = await launch(backend);
   try {
-    await page.goto(server.url + BACKENDS.webgl2.query);
+    await page.goto(server.url + BACKENDS[backend].query);
     await waitReady(page);
     const dir = join(data, "mmd/miku_v2");
     const files = readdirSync(dir).filter((n) => !/\.txt$/i.test(n)).map((n) => ({ name: n, mimeType: "application/octet-stream", buffer: readFileSync(join(dir, n)) }));
@@ -134,7 +134,7 @@ test("an MMD dance given with its model keeps the model in the project across a 
       const k = standard.joints.indexOf(n);
       if (k >= 0) gap = Math.max(gap, Math.hypot(...[0, 1, 2].map((c) => before.at10[3 * i + c] - standard.at10[3 * k + c])));
     });
-    console.log(`WAVEFILE on miku_v2 vs on the standard skeleton at 10 s: joints up to ${gap.toFixed(3)} m apart (${before.joints.length} and ${standard.joints.length} joints)`);
+    console.log(`${backend}: WAVEFILE on miku_v2 vs on the standard skeleton at 10 s: joints up to ${gap.toFixed(3)} m apart (${before.joints.length} and ${standard.joints.length} joints)`);
     assert.ok(gap > 0.01 || JSON.stringify(before.joints) !== JSON.stringify(standard.joints), "posed on miku_v2, not on the standard skeleton");
 
     await page.evaluate(() => window.odori.project.store.flush());
@@ -142,7 +142,7 @@ test("an MMD dance given with its model keeps the model in the project across a 
     await waitReady(page);
     await page.waitForFunction(() => { const a = window.odori.project; const s = a.project.doc().sources.find((x) => x.fileName === "wavefile_v2.vmd"); return s && a.libraryId({ source: s.id, clip: 0 }) != null; }, null, { timeout: 120000 });
     const after = await dance();
-    console.log(`WAVEFILE on ${after.model}: ${after.joints.length} joints after the reload, the same pose at 10 s`);
+    console.log(`${backend}: WAVEFILE on ${after.model}: ${after.joints.length} joints after the reload, the same pose at 10 s`);
     assert.deepEqual(after, before, "after the reload the dance is posed on miku_v2 again");
     const errors = await page.evaluate(() => [...document.querySelectorAll("#messages li.error")].map((li) => li.textContent));
     assert.deepEqual(errors, []);

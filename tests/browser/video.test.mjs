@@ -428,8 +428,8 @@ test("video (webgl2): a camera VMD drives the camera", { timeout: 900000 }, asyn
 // redo take it out and back); after a reload (the project restored from the browser's store)
 // the video dialog offers it, and picked there — not through the API — it makes a video of bars
 // 1–2 whose frames ffprobe counts.
-test("video (webgl2): a camera VMD kept in the project is picked in the video dialog after a reload", { timeout: 900000 }, async () => {
-  const { browser, page, logs } = await danceReady("webgl2");
+for (const backend of ["webgl2", "webgpu"]) test(`video (${backend}): a camera VMD kept in the project is picked in the video dialog after a reload`, { timeout: 900000 }, async () => {
+  const { browser, page, logs } = await danceReady(backend);
   try {
     const CAM = "tokino_kakera_cam.vmd";
     await page.setInputFiles("#file-input", [{ name: CAM, mimeType: "application/octet-stream", buffer: readFileSync(join(data, "mmd/motion", CAM)) }]);
@@ -473,7 +473,7 @@ test("video (webgl2): a camera VMD kept in the project is picked in the video di
     await page.waitForFunction(() => /^Done: \d+ frames/.test(document.querySelector("#video-status").textContent), null, { timeout: 600000 });
     const status = await page.textContent("#video-status");
     await waitForDownload(downloads);
-    const out = join(artifacts, "video-camera-vmd-dialog.mp4");
+    const out = join(artifacts, `video-camera-vmd-dialog-${backend}.mp4`);
     await downloads[0].saveAs(out);
     // The range the dialog exports: bars 1–2 from their lead-in count (the same function the dialog uses).
     const range = await page.evaluate(async () => {
@@ -483,7 +483,7 @@ test("video (webgl2): a camera VMD kept in the project is picked in the video di
     });
     const p = probe(out);
     const want = Math.round((range.endSecs - range.startSecs) * FPS);
-    console.log(`camera VMD from the project, picked in the dialog: ${status} ffprobe: ${p.video.codec_name} ${p.video.width}×${p.video.height}, ${p.video.nb_read_frames} frames (bars 1–2 with the lead-in: ${want})`);
+    console.log(`${backend}: camera VMD from the project, picked in the dialog: ${status} ffprobe: ${p.video.codec_name} ${p.video.width}×${p.video.height}, ${p.video.nb_read_frames} frames (bars 1–2 with the lead-in: ${want})`);
     assert.equal(Number(p.video.nb_read_frames), want);
     assert.equal(Number(/Done: (\d+) frames/.exec(status)[1]), want);
     const errors = await page.evaluate(() => [...document.querySelectorAll("#messages li.error")].map((li) => li.textContent));

@@ -255,3 +255,54 @@ fn a_vmd_sources_face_keys_come_from_its_kept_bytes_and_survive_a_round_trip() {
     let r = p.add_source("bare.vmd", &bare, ImportOptions::default()).expect("a VMD without face keys");
     assert_eq!(p.face_keys(r.id), None);
 }
+
+// Issue 28: a project dance posed on its model is drawn with that model's mesh (the control, the
+// same dance on the standard skeleton, has none), and the project names the model
+// (`Project::source_model`) so a host links the dance to it: the library's textured mesh of the
+// same model, and `exportVmd`'s default model. The library keeps a model file's bytes, so a
+// model imported earlier can be kept with a dance later.
+#[test]
+fn a_vmd_dance_on_its_model_is_drawn_with_its_mesh_and_names_its_model() {
+    use odori_core::mmd::files::{import_files, MmdFilesOptions};
+    use odori_core::mmd::mesh::model_character;
+    let (wave, miku) = (read(WAVEFILE), read(MIKU));
+    let opts = ImportOptions { song_offset_frames: Some(160), ..Default::default() };
+    // The reference: the library's import of the model alone, and its mesh as a character.
+    let lib = import_files(&[("miku_v2.pmd".into(), miku.clone())], &[], &MmdFilesOptions::default());
+    let m = lib.models.first().unwrap_or_else(|| panic!("miku_v2 imports: {:?}", lib.problems));
+    assert!(m.bytes == miku, "the library keeps the model file's bytes as given");
+    let c = model_character(&m.file, &m.model, &m.textures, &m.missing_textures, &[]).unwrap_or_else(|e| panic!("{e}"));
+
+    let mut p = Project::new();
+    let r = p.add_source_on("wavefile_v2.vmd", &wave, opts.clone(), Some(("miku_v2.pmd", &miku))).expect("a VMD on its model");
+    let im = p.imported(r.id).expect("bytes").expect("imports");
+    let mesh = im.mesh.as_ref().expect("the dance on miku_v2 is drawn with miku_v2's mesh");
+    let joints: Vec<&str> = im.clips[0].skeleton.joints.iter().map(|j| j.name.as_str()).collect();
+    let character_joints: Vec<&str> = c.character.skeleton.joints.iter().map(|j| j.name.as_str()).collect();
+    assert_eq!(joints, character_joints, "the dance's skeleton is the model character's: either mesh draws it");
+    assert_eq!(mesh.palette, c.character.mesh.palette, "the same skin as the library's mesh of miku_v2");
+    let tris = |m: &odori_core::import::SkinnedMesh| m.parts.iter().map(|p| p.indices.len() / 3).sum::<usize>();
+    assert_eq!(tris(mesh), tris(&c.character.mesh));
+    assert!(mesh.palette.iter().all(|(j, _)| *j < joints.len()));
+    assert!(mesh.textures.is_empty(), "the project keeps the model file, not its textures");
+    assert!(im.warnings.iter().any(|w| w.contains("keeps the model file miku_v2.pmd, not its") && w.contains("drawn on its mesh")), "{:?}", im.warnings);
+    let named = p.source_model(r.id).expect("reads").expect("the source names its model");
+    assert_eq!(named.name, m.model.name);
+
+    // The control: the same dance on the standard skeleton has no mesh and no model.
+    let mut plain = Project::new();
+    let r0 = plain.add_source("wavefile_v2.vmd", &wave, opts.clone()).expect("on the standard skeleton");
+    assert!(plain.imported(r0.id).expect("bytes").expect("imports").mesh.is_none());
+    assert_eq!(plain.source_model(r0.id).expect("reads"), None);
+    assert_eq!(plain.source_model(project::SourceId(99)).expect_err("no such source").kind(), "not-found");
+
+    // Saved and opened: still drawn with the mesh and named; without the model's bytes neither.
+    let mut q = project::open(&project::save(&p).expect("save")).expect("open").project;
+    assert_eq!(q.imported(r.id).expect("bytes").expect("imports").mesh.as_ref().map(|m| m.palette.clone()), Some(mesh.palette.clone()));
+    assert_eq!(q.source_model(r.id).expect("reads").map(|m| m.name), Some(named.name.clone()));
+    let model_blob = p.doc().sources[0].model.clone().expect("kept").blob;
+    let manifest = project::file::manifest_json(&p);
+    let mut lost = project::file::from_manifest(&manifest, |h| p.blobs().get(h).cloned().filter(|_| *h != model_blob)).expect("opens").project;
+    assert!(lost.imported(r.id).expect("bytes").expect("imports").mesh.is_none());
+    assert_eq!(lost.source_model(r.id).expect("reads"), None);
+}

@@ -156,16 +156,18 @@ export class FileLoader {
    * Imports a set of MikuMikuDance files. A VMD dance given as a file of its own becomes a
    * source of the project like a BVH (`importer`: kept with the project on this device, cut into
    * segments Generate and search use, posed on Odori's standard MMD skeleton, starting at its
-   * song offset); a camera VMD given as a file of its own becomes a camera motion of the project
-   * (`cameraImporter`: kept with the project, offered as the video's camera); models, textures
-   * and zips go to `library.importFiles` as one set (a model needs its textures). When a dance is opened a dialog asks its song offset (the
-   * motion frame that is song time 0) and, for a dance inside a zip or given with models, the
-   * model it plays on (a project dance keeps a model given with it, and is posed on it again
-   * when the project is reopened).
+   * song offset); a camera VMD given as a file of its own or inside a zip becomes a camera motion
+   * of the project (`cameraImporter`: kept with the project, offered as the video's camera);
+   * models, textures and zips go to `library.importFiles` as one set (a model needs its
+   * textures). When a dance is opened a dialog asks its song offset (the motion frame that is
+   * song time 0) and, for a dance inside a zip or when a model is given or in the library, the
+   * model it plays on (a project dance keeps that model's file — one given with it, or the one
+   * the library kept — and is posed on it and drawn with its mesh again when the project is
+   * reopened).
    * Problems name their file; the rest still imports.
    */
   async openMmd(files) {
-    const set = [];
+    let set = [];
     for (const file of files) {
       try {
         // A dropped folder's files keep their folder path, so textures resolve beside the model.
@@ -184,14 +186,28 @@ export class FileLoader {
       const seen = this.library.inspectMmdFiles(set);
       // Models given in this set: a project dance can keep one of them (its bytes are here).
       setModels = seen.filter((f) => f.kind === "model" && !f.error);
-      const models = [...this.library.mmdModels().map((m) => m.name), ...seen.filter((f) => f.kind === "model" && !f.error).map((f) => f.modelName)];
+      const libraryModels = this.library.mmdModels().map((m) => m.name);
+      const models = [...libraryModels, ...seen.filter((f) => f.kind === "model" && !f.error).map((f) => f.modelName)];
       const dances = seen.filter((f) => f.kind === "vmd" && !f.error && f.boneKeys > 0);
       // A dance given as its own file goes into the project (a zip's stays in the library).
       if (this.importer) toProject = dances.filter((d) => set.some((f) => f.name === d.file));
-      // So does a camera VMD (camera keys, no bone keys) given as its own file.
-      if (this.cameraImporter) cameras = seen.filter((f) => f.kind === "vmd" && !f.error && f.cameraKeys > 0 && f.boneKeys === 0 && set.some((s) => s.name === f.file));
+      // So does a camera VMD (camera keys, no bone keys), given as its own file or inside a zip:
+      // a zip holding one is opened here, the camera goes to the project and the zip's other
+      // files to the library as one set, named as importFiles names them ("zip name/entry").
+      if (this.cameraImporter) {
+        const isCamera = (f) => f.kind === "vmd" && !f.error && f.cameraKeys > 0 && f.boneKeys === 0;
+        const zipped = seen.filter((f) => isCamera(f) && !set.some((s) => s.name === f.file));
+        const opened = [];
+        for (const z of set) {
+          if (/\.zip$/i.test(z.name) && zipped.some((c) => c.file.startsWith(`${z.name}/`))) opened.push(...this.library.constructor.unzipMmd(z.name, z.bytes));
+          else opened.push(z);
+        }
+        set = opened;
+        cameras = seen.filter((f) => isCamera(f) && set.some((s) => s.name === f.file));
+      }
       if (dances.length) {
-        const chosen = await this.askMmd(dances, [...new Set(models)], toProject.length < dances.length || setModels.length > 0);
+        // A project dance can be posed on a model of the set or one kept in the library (whose file it keeps).
+        const chosen = await this.askMmd(dances, [...new Set(models)], toProject.length < dances.length || setModels.length > 0 || libraryModels.length > 0);
         if (!chosen) {
           this.messages.info(`Import cancelled: ${set.map((f) => f.name).join(", ")} not added`);
           return null;
@@ -231,8 +247,17 @@ export class FileLoader {
       // The model chosen (or the one its header names), kept with the dance when given in this set.
       const name = options.model && options.model !== "standard" ? options.model : null;
       const m = name ? setModels.find((x) => x.modelName === name) : null;
-      const mf = m ? set.find((x) => x.name === m.file) : null;
-      if (name && !mf) this.messages.info(`${f.name}: model "${name}" is not among the files given, so the project cannot keep it: posed on Odori's standard MMD skeleton (give the model with the dance to keep it with the project)`);
+      let mf = m ? set.find((x) => x.name === m.file) : null;
+      // A model in the library (imported now or earlier): the library kept its file.
+      if (name && !mf) {
+        try {
+          const lib = this.library.mmdModelFile(name);
+          mf = { name: lib.fileName, bytes: lib.bytes };
+        } catch {
+          // not-found: said below
+        }
+      }
+      if (name && !mf) this.messages.info(`${f.name}: model "${name}" is neither among the files given nor in the library, so the project cannot keep it: posed on Odori's standard MMD skeleton`);
       try {
         const r = this.importer(f.name, f.bytes, o, mf ? { fileName: mf.name, bytes: mf.bytes } : undefined);
         for (const w of r.warnings) this.messages.info(w.startsWith(f.name) ? w : `${f.name}: ${w}`);

@@ -119,6 +119,17 @@ impl Library {
         self.push(clip, "character", map, status, mesh)
     }
 
+    /// Draws clip `id` with `mesh` from now on (a clip posed on an MMD model linked to the
+    /// model's mesh once the model is in the library).
+    #[cfg_attr(not(feature = "authoring"), allow(dead_code))]
+    pub(crate) fn set_mesh(&mut self, id: u32, mesh: (u32, Rc<SkinnedMesh>)) {
+        let rev = self.bump_rev();
+        if let Some(e) = self.entries.iter_mut().find(|e| e.id == id) {
+            e.mesh = Some(mesh);
+            e.rev = rev;
+        }
+    }
+
     /// The id the next added clip gets (a mesh shared by clips is keyed by its first clip's id).
     #[cfg_attr(not(feature = "authoring"), allow(dead_code))]
     pub(crate) fn next_id(&self) -> u32 {
@@ -150,12 +161,19 @@ impl Library {
     /// Adds every clip of an imported file; returns the `ImportReport` (clips with their ids).
     #[cfg_attr(not(feature = "authoring"), allow(dead_code))]
     pub(crate) fn add_imported(&mut self, file_name: &str, im: &Imported) -> JsValue {
+        self.add_imported_on(file_name, im, None)
+    }
+
+    /// [`Library::add_imported`] drawn with `mesh` (a mesh the library already holds, shared)
+    /// instead of the file's own when given.
+    #[cfg_attr(not(feature = "authoring"), allow(dead_code))]
+    pub(crate) fn add_imported_on(&mut self, file_name: &str, im: &Imported, mesh: Option<(u32, Rc<SkinnedMesh>)>) -> JsValue {
         let format = match im.format {
             Format::Bvh => "bvh",
             Format::Gltf => "gltf",
             Format::Vmd => "vmd",
         };
-        let mesh = im.mesh.clone().map(|m| (self.next_id, Rc::new(m)));
+        let mesh = mesh.or_else(|| im.mesh.clone().map(|m| (self.next_id, Rc::new(m))));
         let first = self.entries.len();
         for clip in &im.clips {
             self.push(clip.clone(), format, im.humanoid.clone(), im.status.clone(), mesh.clone());

@@ -46,6 +46,10 @@ pub(crate) struct MmdStore {
     /// Mesh key → the model's morphs laid on that mesh's drawn vertices (models with vertex
     /// morphs only): where the viewer draws a clip's face keys.
     pub drawn_morphs: Vec<(u32, Rc<DrawnMorphs>)>,
+    /// The models the open project keeps with its VMD dances (`Project.clipsInto`), by name:
+    /// `exportVmd` fits a project dance to its model with them when the library has no model of
+    /// that name (a reopened project).
+    pub project_models: Vec<odori_core::import::mmd_model::MmdModel>,
 }
 
 impl MmdStore {
@@ -199,12 +203,52 @@ impl Library {
         if name == STANDARD_RIG || name == "standard" {
             return Ok((standard_rig(), String::new()));
         }
-        let m = self.mmd.models.iter().find(|m| m.model.name == name).ok_or_else(|| {
+        let model = self.mmd.models.iter().map(|m| (&m.model, m.file.as_str())).chain(self.mmd.project_models.iter().map(|m| (m, "the project's model"))).find(|(m, _)| m.name == name);
+        let (m, file) = model.ok_or_else(|| {
             let have: Vec<&str> = self.mmd.models.iter().map(|m| m.model.name.as_str()).collect();
             OdoriError::new("bad-argument", format!("no MMD model named '{name}' in the library (models: {}; or \"standard\")", have.join(", ")))
         })?;
-        let rig = MmdRig::from_model(&m.model).map_err(|e| OdoriError::new("mmd-rig", format!("{}: {e}", m.file)))?;
-        Ok((rig, m.model.name.clone()))
+        let rig = MmdRig::from_model(m).map_err(|e| OdoriError::new("mmd-rig", format!("{file}: {e}")))?;
+        Ok((rig, m.name.clone()))
+    }
+
+    /// The mesh of model `name`'s character clip in the library, when that clip's skeleton is
+    /// `skeleton` joint for joint (a motion posed on the model shares it; a different model of
+    /// the same name does not).
+    pub(crate) fn character_mesh(&self, name: &str, skeleton: &odori_core::Skeleton) -> Option<(u32, Rc<SkinnedMesh>)> {
+        let (_, id) = self.mmd.characters.iter().find(|(n, _)| n == name)?;
+        let e = self.entry(*id).ok()?;
+        let same = e.clip.skeleton.joints.len() == skeleton.joints.len() && e.clip.skeleton.joints.iter().zip(&skeleton.joints).all(|(a, b)| a.name == b.name);
+        same.then(|| e.mesh.clone()).flatten()
+    }
+
+    /// Links the clips posed on model `name` (`posed_on`) to the mesh of its character clip:
+    /// a VMD imported before its model, a project dance shown before the model was imported.
+    fn link_posed_to(&mut self, name: &str) {
+        let posed: Vec<u32> = self.mmd.posed_on.iter().filter(|(_, r)| r == name).map(|(i, _)| *i).collect();
+        for id in posed {
+            let Ok(e) = self.entry(id) else { continue };
+            let skeleton = e.clip.skeleton.clone();
+            if let Some(mesh) = self.character_mesh(name, &skeleton) {
+                if e.mesh.as_ref().map(|(k, _)| *k) != Some(mesh.0) {
+                    self.set_mesh(id, mesh);
+                }
+            }
+        }
+    }
+
+    /// Keeps the model a project dance is posed on (from `Project.clipsInto`) and links the
+    /// dance's clips to it: `exportVmd`'s default model, and drawn with the library's mesh of
+    /// that model when the library has one (its textures), else the mesh the project made.
+    pub(crate) fn link_project_dance(&mut self, ids: &[u32], model: odori_core::import::mmd_model::MmdModel) {
+        for &id in ids {
+            self.mmd.posed_on.retain(|(i, _)| *i != id);
+            self.mmd.posed_on.push((id, model.name.clone()));
+        }
+        let name = model.name.clone();
+        self.mmd.project_models.retain(|m| m.name != name);
+        self.mmd.project_models.push(model);
+        self.link_posed_to(&name);
     }
 }
 
@@ -314,11 +358,16 @@ impl Library {
                 Err(e) => notices.push(format!("{e} (the model is kept for motions to play on and for VMD export, not drawn)")),
             }
         }
+        // Clips posed on these models before (a VMD imported earlier, a project dance) now draw on them.
+        for (name, _) in &meshes {
+            self.link_posed_to(name);
+        }
         let mut motions = Vec::new();
         for m in &r.motions {
             let map = HumanoidMap::from_skeleton(&m.clip.skeleton);
             let status = map.status(&m.clip.skeleton, Some(&m.clip));
-            let mesh = meshes.iter().find(|(n, _)| *n == m.rig).map(|(_, mesh)| mesh.clone());
+            // The model's mesh: imported in this call, else kept from an earlier one.
+            let mesh = meshes.iter().find(|(n, _)| *n == m.rig).map(|(_, mesh)| mesh.clone()).or_else(|| self.character_mesh(&m.rig, &m.clip.skeleton));
             let id = self.push(m.clip.clone(), "vmd", map, status, mesh);
             self.mmd.posed_on.push((id, m.rig.clone()));
             let offset = m.song_offset_frames.unwrap_or(0);
@@ -376,6 +425,40 @@ impl Library {
     #[wasm_bindgen(js_name = mmdModels)]
     pub fn mmd_models(&self) -> JsValue {
         to_js(&self.mmd.models.iter().map(|m| model_info(m, &self.mmd)).collect::<Vec<_>>())
+    }
+
+    /// The file of MMD model `name` in the library, as it was given: `{ fileName, bytes }`, so a
+    /// project dance can keep the model (`Project.importOnModelInto`) after the model was
+    /// imported on its own. Only the model file: its textures stay with the library (a reopened
+    /// project draws the dance on the model's mesh in its materials' colours until the model is
+    /// imported again with its textures). Throws "not-found" when there is no model of that name.
+    #[wasm_bindgen(js_name = mmdModelFile, unchecked_return_type = "{ fileName: string, bytes: Uint8Array }")]
+    pub fn mmd_model_file(&self, name: &str) -> Result<JsValue, OdoriError> {
+        let m = self.mmd.models.iter().find(|m| m.model.name == name).ok_or_else(|| {
+            let have: Vec<&str> = self.mmd.models.iter().map(|m| m.model.name.as_str()).collect();
+            OdoriError::new("not-found", format!("no MMD model named '{name}' in the library (models: {})", have.join(", ")))
+        })?;
+        let o = js_sys::Object::new();
+        let set = |k: &str, v: &JsValue| Reflect::set(&o, &JsValue::from_str(k), v).map(|_| ()).map_err(|_| OdoriError::new("bad-argument", "mmdModelFile"));
+        set("fileName", &JsValue::from_str(&m.file))?;
+        set("bytes", &Uint8Array::from(m.bytes.as_slice()).into())?;
+        Ok(o.into())
+    }
+
+    /// The files inside a `.zip` of MMD files, `{ name, bytes }[]`, each named `zip name/entry`
+    /// as `importFiles` names them (so a page can send one of them elsewhere: a camera VMD into
+    /// the project). Throws "mmd-zip" for a zip that does not read, "too-large" for an entry over the limit.
+    #[wasm_bindgen(js_name = unzipMmd, unchecked_return_type = "{ name: string, bytes: Uint8Array }[]")]
+    pub fn unzip_mmd(file_name: &str, bytes: &[u8]) -> Result<JsValue, OdoriError> {
+        let entries = odori_core::mmd::files::unzip(file_name, bytes).map_err(|e| OdoriError { kind: e.kind(), message: e.to_string(), file: Some(file_name.to_string()) })?;
+        let out = Array::new();
+        for (name, b) in entries {
+            let o = js_sys::Object::new();
+            Reflect::set(&o, &"name".into(), &JsValue::from_str(&name)).map_err(|_| OdoriError::new("bad-argument", "unzipMmd"))?;
+            Reflect::set(&o, &"bytes".into(), &Uint8Array::from(b.as_slice()).into()).map_err(|_| OdoriError::new("bad-argument", "unzipMmd"))?;
+            out.push(&o);
+        }
+        Ok(out.into())
     }
 
     /// Camera tracks imported from camera VMDs: `{ name, source, keys, durationSecs }[]` — the

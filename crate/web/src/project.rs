@@ -547,13 +547,22 @@ impl Project {
             None => return Err(OdoriError::new("missing-blob", format!("{file_name}: its bytes are missing from the project"))),
             Some(r) => r?,
         };
+        // A VMD dance posed on the model kept with it: drawn with the library's mesh of that
+        // model when it has one (with its textures), else the mesh the project made from the
+        // model file; `exportVmd` fits it to that model by default.
+        let model = self.inner.source_model(id).ok().flatten();
+        let shared = model.as_ref().zip(imported.clips.first()).and_then(|(m, c)| library.character_mesh(&m.name, &c.skeleton));
         let before = library.size();
-        let report = library.add_imported(&file_name, &imported);
+        let report = library.add_imported_on(&file_name, &imported, shared);
         // A VMD's face keys, from the bytes the project keeps: played on an MMD model's face.
         if let Some((keys, offset)) = self.inner.face_keys(id) {
             for clip in library.ids_from(before) {
                 library.keep_face_keys(clip, keys.clone(), offset);
             }
+        }
+        if let Some(m) = model {
+            let ids = library.ids_from(before);
+            library.link_project_dance(&ids, m);
         }
         js_sys::Reflect::set(&report, &JsValue::from_str("source"), &JsValue::from(source)).map_err(|_| OdoriError::new("bad-argument", "report"))?;
         Ok(report)

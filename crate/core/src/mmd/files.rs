@@ -102,6 +102,9 @@ pub struct ImportedModel {
     pub textures: Vec<(String, String, Vec<u8>)>,
     /// Texture paths the model names that were not in the set.
     pub missing_textures: Vec<String>,
+    /// The model file's bytes as given, so a host can keep the model with a project dance
+    /// later (`Project::add_source_on`) without asking for the file again.
+    pub bytes: Vec<u8>,
 }
 
 /// A VMD's bone keys posed on a rig: the clip, where it was posed, and what was set aside.
@@ -306,7 +309,7 @@ fn import_model(file: &str, bytes: &[u8], files: &[(String, Vec<u8>)]) -> Result
         }
     }
     let problem = (!missing.is_empty()).then(|| MmdFilesError::MissingTextures { file: file.into(), missing: missing.join(", ") });
-    Ok((ImportedModel { file: file.into(), model, textures, missing_textures: missing }, problem))
+    Ok((ImportedModel { file: file.into(), model, textures, missing_textures: missing, bytes: bytes.to_vec() }, problem))
 }
 
 /// Poses one parsed VMD on the model chosen by `options.model`, else the model its header names
@@ -408,8 +411,26 @@ pub fn import_vmd_source_on(file: &str, bytes: &[u8], song_offset_frames: Option
         let on = if parsed.is_some() { format!("model {rig}") } else { format!("the {STANDARD_RIG}") };
         warnings.push(format!("{file}: {} keyed bones are not in {on} and were ignored", m.unmatched_bones.len()));
     }
+    // Drawn on the model's own mesh. The project keeps the model file, not its textures: the
+    // mesh has its materials' colours (a host draws the library's textured mesh of the same
+    // model instead when it has one).
+    let mesh = match (&parsed, model) {
+        (Some(pm), SourceModel::File(model_file, _)) => match crate::mmd::mesh::model_character(model_file, pm, &[], &[], &[]) {
+            Ok(c) => {
+                if pm.textures.iter().any(|t| !t.trim().is_empty()) {
+                    warnings.push(format!("{file}: the project keeps the model file {model_file}, not its {} textures: without the model in the library the dance is drawn on its mesh in its materials' colours", pm.textures.len()));
+                }
+                Some(c.character.mesh)
+            }
+            Err(e) => {
+                warnings.push(format!("{e} (the dance is posed on the model but not drawn with its mesh)"));
+                None
+            }
+        },
+        _ => None,
+    };
     let skeleton = m.clip.skeleton.clone();
-    finish(Format::Vmd, file, skeleton, vec![m.clip], None, warnings)
+    finish(Format::Vmd, file, skeleton, vec![m.clip], mesh, warnings)
 }
 
 /// Imports a set of files: zips are opened; models are read with their textures; each VMD is

@@ -613,6 +613,22 @@ impl Project {
         (!vmd.morph_keys.is_empty()).then(|| (vmd.morph_keys, src.options.song_offset_frames.unwrap_or(0)))
     }
 
+    /// The MMD model kept with a VMD source ([`Project::add_source_on`]), read from its bytes:
+    /// `Ok(None)` when the source has no model or the project lacks the model's bytes (then the
+    /// dance is posed on the standard skeleton). A host links the dance to the model by its name
+    /// (drawing with the model's mesh, `exportVmd`'s default model). A model file that does not
+    /// read is the reader's error ([`ImportError::Mmd`]).
+    pub fn source_model(&self, source: SourceId) -> Result<Option<crate::import::mmd_model::MmdModel>, ProjectError> {
+        let src = self.doc.source(source).ok_or(ProjectError::NoSuchSource { source_id: source.0 })?;
+        let Some(m) = &src.model else { return Ok(None) };
+        let Some(bytes) = self.blobs.get(&m.blob) else { return Ok(None) };
+        let model = crate::import::mmd_model::read_model(&m.file_name, bytes).map_err(|e| {
+            let e = crate::mmd::files::MmdFilesError::from(e);
+            ImportError::Mmd { file: e.file().to_string(), kind: e.kind(), message: e.to_string() }
+        })?;
+        Ok(Some(model))
+    }
+
     /// Opens a group of edits that one undo takes back (a share link applied bar by bar and
     /// generated): every edit until [`Project::end_group`] joins the undo step of the group's
     /// first edit. Undo, redo and the end close the group.
