@@ -15,9 +15,11 @@
 //!
 //! MMD models (feature `toon`, on in the full engine, off in the player): a part with a
 //! [`odori_core::import::ToonLook`] is drawn with MMD's toon shading (its ramp texture looked
-//! up on N·L, alpha blended) and, where its edge width is above 0, an outline by the inverted
-//! hull (the skinned mesh pushed out along its normals by the width times the distance to the
-//! camera, front faces culled, in the edge colour). Without the feature they draw as plain parts.
+//! up on N·L, alpha blended; its sphere map, if any, looked up by the view-space normal and
+//! multiplied or added as MMD does) and, where its edge width is above 0, an outline by the
+//! inverted hull (the skinned mesh pushed out along its normals by the width, times the
+//! vertex's edge scale, times the distance to the camera, front faces culled, in the edge
+//! colour). Without the feature they draw as plain parts.
 //!
 //! Morphs: every skinned vertex has an offset added to its rest position before skinning
 //! (vertex buffer 1, 12 bytes a vertex, `skin.wgsl`): zero from a buffer each mesh keeps, or
@@ -172,8 +174,17 @@ impl PipelineKind {
 struct PartDraw {
     range: std::ops::Range<u32>,
     texture: Option<usize>,
-    /// MMD toon: its ramp texture, and whether it has an outline.
-    toon: Option<(Option<usize>, bool)>,
+    /// MMD toon: its ramp and sphere textures, whether it has an outline.
+    toon: Option<ToonDraw>,
+}
+
+/// An MMD part's textures besides its base colour, and whether it has an outline.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct ToonDraw {
+    ramp: Option<usize>,
+    outline: bool,
+    /// The sphere map, and whether it is added (else multiplied).
+    sphere: Option<(usize, bool)>,
 }
 
 /// A skinned mesh uploaded once.
@@ -208,7 +219,7 @@ struct GpuMesh {
     textures: Vec<Option<wgpu::BindGroup>>,
     /// The textures' views once their images are in (the toon parts' bind groups take two).
     views: Vec<Option<wgpu::TextureView>>,
-    /// Per part, its toon bind group (base and ramp), made at the first draw after its
+    /// Per part, its toon bind group (base, ramp and sphere maps), made at the first draw after its
     /// textures last changed.
     toon_groups: Vec<Option<wgpu::BindGroup>>,
 }
@@ -254,6 +265,8 @@ pub struct Renderer {
     toon_layout: wgpu::PipelineLayout,
     outline_layout: wgpu::PipelineLayout,
     white_view: wgpu::TextureView,
+    /// 1×1 black: the added sphere map of a part that has none.
+    black_view: wgpu::TextureView,
     format: wgpu::TextureFormat,
     /// Made on demand (`prepare`): `None` until then.
     line_pipeline: Option<wgpu::RenderPipeline>,
@@ -379,7 +392,9 @@ impl Renderer {
         let sampler_entry = |binding| wgpu::BindGroupLayoutEntry { binding, visibility: wgpu::ShaderStages::FRAGMENT, ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering), count: None };
         let toon_texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("toon textures"),
-            entries: &[tex_entry(0), sampler_entry(1), tex_entry(2), sampler_entry(3)],
+            // Base, ramp, then the sphere map twice: as multiplied (white when none) and as
+            // added (black when none), so one shader does either without a branch.
+            entries: &[tex_entry(0), sampler_entry(1), tex_entry(2), sampler_entry(3), tex_entry(4), tex_entry(5), sampler_entry(6)],
         });
         let toon_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("toon"),
@@ -421,6 +436,22 @@ impl Renderer {
         );
         let white = texture_bind_group(&device, &texture_layout, &white_tex, &odori_core::import::Sampler::default());
         let white_view = white_tex.create_view(&Default::default());
+        let black_tex = device.create_texture_with_data(
+            &queue,
+            &wgpu::TextureDescriptor {
+                label: Some("black"),
+                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: TEXTURE_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            &[0, 0, 0, 255],
+        );
+        let black_view = black_tex.create_view(&Default::default());
         Renderer {
             device,
             queue,
@@ -435,6 +466,7 @@ impl Renderer {
             toon_layout,
             outline_layout,
             white_view,
+            black_view,
             format,
             line_pipeline: None,
             figure_pipeline: None,
@@ -575,6 +607,8 @@ impl Renderer {
             let textured = part.texture.filter(|t| *t < mesh.textures.len() && part.uvs.len() == part.positions.len());
             let toon = if cfg!(feature = "toon") { part.toon } else { None };
             let (edge, edge_width) = toon.map_or(([0.0; 4], 0.0), |t| (t.edge_colour, t.edge_width.max(0.0)));
+            // The outline's width per vertex: the part's times the vertex's edge scale.
+            let edge_scale = |k: usize| part.edge_scales.get(k).copied().filter(|e| e.is_finite()).map_or(1.0, |e| e.max(0.0));
             for k in 0..part.positions.len() {
                 let j = part.joints[k];
                 vertices.push(MeshVertex {
@@ -589,12 +623,13 @@ impl Renderer {
                         (Some(_), Some(t)) => t.apply(part.uvs[k]),
                     },
                     edge,
-                    edge_width,
+                    edge_width: edge_width * edge_scale(k),
                 });
             }
             let start = indices.len() as u32;
             indices.extend(part.indices.iter().map(|i| i + base));
-            let toon = toon.map(|t| (t.ramp.filter(|r| *r < mesh.textures.len()), t.edge_width > 0.0));
+            let n_tex = mesh.textures.len();
+            let toon = toon.map(|t| ToonDraw { ramp: t.ramp.filter(|r| *r < n_tex), outline: t.edge_width > 0.0, sphere: t.sphere.filter(|s| *s < n_tex).map(|s| (s, t.sphere_add)) });
             parts.push(PartDraw { range: start..indices.len() as u32, texture: textured, toon });
         }
         if indices.is_empty() {
@@ -856,7 +891,7 @@ impl Renderer {
                 if let Some(outline) = &self.outline_pipeline {
                     for (slot, m) in drawable.iter().enumerate() {
                         let g = &self.meshes[m.mesh.0];
-                        if !g.parts.iter().any(|p| matches!(p.toon, Some((_, true)))) {
+                        if !g.parts.iter().any(|p| p.toon.is_some_and(|t| t.outline)) {
                             continue;
                         }
                         pass.set_pipeline(outline);
@@ -864,7 +899,7 @@ impl Renderer {
                         pass.set_vertex_buffer(0, g.vertices.slice(..));
                         pass.set_vertex_buffer(1, morph_of(slot, g));
                         pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
-                        for part in g.parts.iter().filter(|p| matches!(p.toon, Some((_, true)))) {
+                        for part in g.parts.iter().filter(|p| p.toon.is_some_and(|t| t.outline)) {
                             pass.draw_indexed(part.range.clone(), 0, 0..1);
                         }
                     }
@@ -881,12 +916,13 @@ impl Renderer {
 }
 
 impl Renderer {
-    /// Makes the toon bind groups (base colour and ramp) of mesh `h`'s toon parts that have
-    /// none: a texture not in yet is the white one (a ramp of white is no shading).
+    /// Makes the toon bind groups (base colour, ramp, sphere maps) of mesh `h`'s toon parts
+    /// that have none: a texture not in yet is the white one (a ramp of white is no shading),
+    /// a sphere map not in yet or absent is white multiplied and black added (no change).
     fn make_toon_groups(&mut self, h: usize) {
         let Some(g) = self.meshes.get_mut(h) else { return };
         for k in 0..g.parts.len() {
-            let Some((ramp, _)) = g.parts[k].toon else { continue };
+            let Some(ToonDraw { ramp, sphere, .. }) = g.parts[k].toon else { continue };
             if g.toon_groups[k].is_some() {
                 continue;
             }
@@ -898,6 +934,10 @@ impl Renderer {
             let clamp = odori_core::import::Sampler { wrap_s: 33071, wrap_t: 33071, mag_filter: Some(9729), min_filter: Some(9729) };
             let base_sampler = make_sampler(&self.device, &base_s);
             let ramp_sampler = make_sampler(&self.device, &clamp);
+            // The sphere map is looked up inside its disc (u, v in 0–1): clamped as well.
+            let sphere_view = |add: bool| sphere.filter(|s| s.1 == add).and_then(|s| pick(Some(s.0))).map(|(v, _)| v);
+            let sphere_mul = sphere_view(false).unwrap_or(&self.white_view);
+            let sphere_add = sphere_view(true).unwrap_or(&self.black_view);
             g.toon_groups[k] = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("toon textures"),
                 layout: &self.toon_texture_layout,
@@ -906,6 +946,9 @@ impl Renderer {
                     wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&base_sampler) },
                     wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(ramp_view) },
                     wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::Sampler(&ramp_sampler) },
+                    wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(sphere_mul) },
+                    wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(sphere_add) },
+                    wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(&ramp_sampler) },
                 ],
             }));
         }

@@ -40,7 +40,7 @@ use glam::{Mat4, Vec3};
 use odori_core::camera::CameraPose;
 use odori_core::canon::builtin::canonical_skeleton;
 use odori_core::canon::character::Character;
-use odori_core::import::{MeshTexture, SkinnedMesh};
+use odori_core::import::{MeshTexture, SkinnedBounds, SkinnedMesh};
 use odori_core::library::body::builtin_body;
 use odori_core::canon::retarget::{is_canonical, to_canonical};
 use odori_core::mmd::spring::{SpringFollower, SpringParams};
@@ -247,6 +247,9 @@ pub struct Viewer {
     /// Offset buffers (one per drawn vertex) reused from frame to frame.
     #[cfg(feature = "authoring")]
     morph_pool: Vec<Vec<Vec3>>,
+    /// Per mesh key, its vertices' boxes per palette slot (`frameFigures` frames a skinned
+    /// figure by them).
+    bounds: HashMap<u32, Rc<SkinnedBounds>>,
 }
 
 #[wasm_bindgen(typescript_custom_section)]
@@ -571,6 +574,7 @@ impl Viewer {
             faces: HashMap::new(),
             #[cfg(feature = "authoring")]
             morph_pool: Vec::new(),
+            bounds: HashMap::new(),
         };
         // WebGL2: the pipelines the first frame draws with, each made and then drawn with once, a
         // task for each step: on WebGL2 the browser's GL (ANGLE) compiles a pipeline's GPU code only
@@ -925,7 +929,10 @@ impl Viewer {
     /// Points the camera so the figures of `figures` fill the view. Figures that stay in place
     /// are framed over their whole clip; figures that travel (a text animation running across
     /// the floor) would be drawn tiny that way, so the camera is sized to the largest moment
-    /// (all figures at one time) and follows their centre as they move.
+    /// (all figures at one time) and follows their centre as they move. A figure drawn with a
+    /// mesh (an MMD model, a GLB character, a clip on the chosen body) is framed by its posed
+    /// vertices' bounds ([`SkinnedBounds`]: hair and skirts included), a stick figure by its
+    /// joints.
     #[wasm_bindgen(js_name = frameFigures)]
     pub fn frame_figures(
         &mut self,
@@ -942,12 +949,28 @@ impl Viewer {
             let e = library.entry(s.clip)?;
             let off = Vec3::from(s.offset.unwrap_or([0.0; 3]));
             // Framed as drawn: on the chosen body (a character's size differs from the clip's).
-            let on = if s.style.as_deref() == Some("stick") { None } else { self.on_body(e, true) };
+            let stick = s.style.as_deref() == Some("stick");
+            // As `draw` chooses: the clip's own mesh, else the chosen body's, else joints.
+            let own = e.mesh.clone().filter(|_| !stick);
+            let on = if stick || own.is_some() { None } else { self.on_body(e, true) };
             let clip: &Clip = on.as_ref().map(|o| &*o.0).unwrap_or(&e.clip);
+            let mesh = own.or_else(|| on.as_ref().map(|o| (o.1, o.2.clone())));
+            let bounds = mesh.map(|(key, mesh)| (self.bounds.entry(key).or_insert_with(|| Rc::new(SkinnedBounds::of_mesh(&mesh))).clone(), mesh));
             let frames = clip.frame_count();
+            let mut pose = WorldPose::new();
+            let mut mats = Vec::new();
             for (k, m) in moments.iter_mut().enumerate() {
                 let t = (k as f32 / (SAMPLES - 1) as f32) * (frames.saturating_sub(1)) as f32 / clip.fps;
-                for p in pose_at(clip, t) {
+                pose.of_time(clip, t).matrices_into(&mut mats);
+                let skinned = bounds.as_ref().and_then(|(b, mesh)| {
+                    let palette: Vec<Mat4> = mesh.palette.iter().map(|(j, bind)| mats.get(*j).copied().unwrap_or(Mat4::IDENTITY) * *bind).collect();
+                    b.posed(&palette)
+                });
+                let points = match skinned {
+                    Some((a, b)) => vec![a, b],
+                    None => pose.positions.clone(),
+                };
+                for p in points {
                     lo = lo.min(p + off);
                     hi = hi.max(p + off);
                     m.0 = m.0.min(p + off);

@@ -42,6 +42,10 @@ pub struct MeshPart {
     /// glTF parts (and ignored by GLB export).
     #[serde(default)]
     pub toon: Option<ToonLook>,
+    /// MMD: per vertex, the factor on the outline's width there (PMX's vertex edge scale; PMD
+    /// 0 where a vertex's edge flag turns the edge off). Empty: 1 everywhere (glTF parts).
+    #[serde(default)]
+    pub edge_scales: Vec<f32>,
 }
 
 /// How an MMD material is drawn besides its colour and texture: its toon ramp looked up on
@@ -55,6 +59,14 @@ pub struct ToonLook {
     /// Outline width, metres per metre of distance from the camera (so it keeps its width on
     /// screen); 0: no outline.
     pub edge_width: f32,
+    /// The sphere map (MMD's `.sph`/`.spa`, PMX's sphere texture), an index into
+    /// [`SkinnedMesh::textures`], looked up by the view-space normal; `None`: none.
+    #[serde(default)]
+    pub sphere: Option<usize>,
+    /// How the sphere map combines with the colour: added (`.spa`, PMX mode 2), else
+    /// multiplied (`.sph`, PMX mode 1).
+    #[serde(default)]
+    pub sphere_add: bool,
 }
 
 /// A `KHR_texture_transform`: the UVs are scaled, then rotated, then offset

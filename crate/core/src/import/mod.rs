@@ -18,6 +18,7 @@ pub mod mmd_model;
 pub mod mmd_text;
 pub mod pmd;
 pub mod pmx;
+pub mod skinned_bounds;
 pub mod vmd;
 
 use std::sync::Arc;
@@ -30,6 +31,7 @@ use crate::canon::humanoid::{HumanoidMap, HumanoidStatus};
 use crate::skeleton::Skeleton;
 
 pub use self::gltf::{MeshPart, MeshTexture, Sampler, SkinnedMesh, ToonLook, UvTransform};
+pub use self::skinned_bounds::SkinnedBounds;
 
 /// What the person (or the caller) can say about a file before it is read.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

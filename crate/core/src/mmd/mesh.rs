@@ -12,6 +12,13 @@
 //!   the rest of the material (ambient, specular, double-sided, toon, edge) in [`MmdLook`].
 //! - Textures: PNG/JPEG as given, TGA/BMP decoded ([`super::texture`]); a texture that is
 //!   missing or undecodable leaves its material drawn in its colour, with a notice naming it.
+//! - Sphere maps (`.sph` multiplied, `.spa` added; PMX modes 1 and 2) go to the part's
+//!   [`ToonLook`] for the toon shader, which looks them up by the view-space normal as MMD
+//!   does; a missing one is a notice and the material is drawn without it. PMX's sub-texture
+//!   mode (3, indexed by the additional UV 1) is not drawn (three.js r171 does not either):
+//!   a notice names the material.
+//! - Outline width per vertex: the material's edge size times the vertex's edge scale (PMX),
+//!   or 0 where a PMD vertex's edge flag turns the edge off ([`MeshPart::edge_scales`]).
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -23,7 +30,7 @@ use super::texture::mesh_texture;
 use super::{to_right_handed, MmdRig, MmdRigError, METRES_PER_MMD_UNIT};
 use crate::canon::character::{Character, CharacterError};
 use crate::canon::humanoid::HumanoidMap;
-use crate::import::mmd_model::{material_flags, normalize_texture_path, MmdModel, SkinKind, Toon};
+use crate::import::mmd_model::{material_flags, normalize_texture_path, MmdModel, SkinKind, SphereMode, Toon};
 use crate::import::{MeshPart, SkinnedMesh, ToonLook};
 use crate::skeleton::Skeleton;
 
@@ -67,6 +74,10 @@ pub struct MmdLook {
     /// mesh's textures when the file was in the set.
     pub toon: Toon,
     pub toon_texture: Option<usize>,
+    /// The sphere map as drawn, an index into the mesh's textures (None: none, not found, or
+    /// a mode not drawn), and the mode the material gives.
+    pub sphere: Option<usize>,
+    pub sphere_mode: SphereMode,
     pub edge: bool,
     pub edge_colour: Vec4,
     pub edge_size: f32,
@@ -103,7 +114,22 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
     }
     let rig = MmdRig::from_model(model).map_err(|source| ModelMeshError::Rig { file: file.into(), source })?;
     let (skeleton, rig_index) = rig.deform_skeleton(METRES_PER_MMD_UNIT);
-    let mut notices: Vec<String> = missing.iter().map(|m| format!("{file}: texture '{m}' is not in the files given: its materials are drawn in their colour")).collect();
+    // A path only materials' sphere maps name is a sphere map (the rest are drawn without it).
+    let sphere_only = |path: &str| {
+        let want = normalize_texture_path(path);
+        let named = |i: Option<usize>| i.and_then(|i| model.textures.get(i)).is_some_and(|p| normalize_texture_path(p) == want);
+        model.materials.iter().any(|m| named(m.sphere)) && !model.materials.iter().any(|m| named(m.texture) || matches!(m.toon, Toon::Texture(t) if named(Some(t))))
+    };
+    let mut notices: Vec<String> = missing
+        .iter()
+        .map(|m| {
+            if sphere_only(m) {
+                format!("{file}: sphere map '{m}' is not in the files given: its materials are drawn without it")
+            } else {
+                format!("{file}: texture '{m}' is not in the files given: its materials are drawn in their colour")
+            }
+        })
+        .collect();
 
     // Rig bone → skeleton joint (IK helpers → their nearest deforming ancestor, else joint 0).
     let n = rig.len();
@@ -230,6 +256,18 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
             Toon::Shared(k) => shared_toon(k),
             Toon::Texture(i) => model_tex(Some(i)),
         };
+        let sphere = match m.sphere_mode {
+            SphereMode::Multiply | SphereMode::Add => model_tex(m.sphere),
+            SphereMode::SubTexture => {
+                if m.sphere.is_some() {
+                    notices.push(format!("{file}: material {mi} ('{}') uses its sphere map as a sub-texture (PMX sphere mode 3), which is not drawn", m.name));
+                }
+                None
+            }
+            SphereMode::None => None,
+        };
+        // The sphere map is looked up by the normal, not the UVs: a part with only a sphere
+        // map still needs none.
         let mut part = MeshPart { color: m.diffuse.to_array(), texture, ..Default::default() };
         let mut used = Vec::new();
         for (k, tri) in run.chunks_exact(3).enumerate() {
@@ -253,6 +291,7 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
             let (j, w) = &skins[v];
             part.joints.push(std::array::from_fn(|k| if w[k] > 0.0 { slot_of_joint[j[k]].unwrap_or(0) } else { 0 }));
             part.weights.push(*w);
+            part.edge_scales.push(if mv.edge_scale.is_finite() { mv.edge_scale.max(0.0) } else { 1.0 });
             if texture.is_some() {
                 part.uvs.push(mv.uv.to_array());
             }
@@ -263,6 +302,8 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
             ramp: toon_texture,
             edge_colour: m.edge_colour.to_array(),
             edge_width: if edge { m.edge_size * EDGE_WIDTH_PER_SIZE } else { 0.0 },
+            sphere,
+            sphere_add: m.sphere_mode == SphereMode::Add,
         });
         looks.push(MmdLook {
             name: m.name.clone(),
@@ -274,6 +315,8 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
             texture,
             toon: m.toon,
             toon_texture,
+            sphere,
+            sphere_mode: m.sphere_mode,
             edge: m.flags & material_flags::EDGE != 0,
             edge_colour: m.edge_colour,
             edge_size: m.edge_size,

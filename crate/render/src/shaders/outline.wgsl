@@ -1,5 +1,6 @@
 // MMD outlines by the inverted hull: the skinned mesh pushed out along its normals by the
-// part's edge width times its distance from the camera (so the line keeps its width on screen),
+// part's edge width (times the vertex's edge scale, folded into `edge_width` on upload) times
+// its distance from the camera (so the line keeps its width on screen),
 // drawn with front faces culled so only the rim outside the model shows, in the edge colour.
 
 struct VOut {

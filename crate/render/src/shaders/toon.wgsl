@@ -1,10 +1,16 @@
 // MMD models' toon shading: skinned as mesh.wgsl; the colour is the material's diffuse times
 // its texture, times its toon ramp looked up on N·L (MMD's toon textures run from the lit
 // colour at the top to the shadow colour at the bottom: v = ½(1 − N·L)), alpha blended.
+// Before the ramp, the sphere map as MMD's shader applies it: looked up by the view-space
+// normal (u = ½ + ½x, v = ½ − ½y, the top of the image facing up), multiplied (.sph) or added
+// (.spa). Both bindings are always there: white multiplied and black added are no change.
 @group(2) @binding(0) var base_tex: texture_2d<f32>;
 @group(2) @binding(1) var base_sampler: sampler;
 @group(2) @binding(2) var toon_tex: texture_2d<f32>;
 @group(2) @binding(3) var toon_sampler: sampler;
+@group(2) @binding(4) var sphere_mul_tex: texture_2d<f32>;
+@group(2) @binding(5) var sphere_add_tex: texture_2d<f32>;
+@group(2) @binding(6) var sphere_sampler: sampler;
 
 struct VOut {
     @builtin(position) pos: vec4<f32>,
@@ -37,9 +43,18 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
     let tex = textureSample(base_tex, base_sampler, i.uv);
     let ndl = dot(normalize(i.normal), normalize(cam.light.xyz));
     let ramp = textureSample(toon_tex, toon_sampler, vec2<f32>(0.5, clamp(0.5 * (1.0 - ndl), 0.02, 0.98))).rgb;
+    // The camera's right and up axes in the world: view_proj's first two rows are the view
+    // matrix's, scaled by the projection (which does not mix x or y with other axes).
+    let m = cam.view_proj;
+    let right = normalize(vec3<f32>(m[0].x, m[1].x, m[2].x));
+    let up = normalize(vec3<f32>(m[0].y, m[1].y, m[2].y));
+    let n = normalize(i.normal);
+    let suv = vec2<f32>(0.5 + 0.5 * dot(n, right), 0.5 - 0.5 * dot(n, up));
+    let sphere = textureSample(sphere_mul_tex, sphere_sampler, suv).rgb;
+    let sphere_add = textureSample(sphere_add_tex, sphere_sampler, suv).rgb;
     let alpha = i.color.a * tex.a;
     if (alpha < 0.004) {
         discard;
     }
-    return vec4<f32>(i.color.rgb * tex.rgb * tint.rgb * ramp, alpha);
+    return vec4<f32>((i.color.rgb * tex.rgb * sphere + sphere_add) * tint.rgb * ramp, alpha);
 }
