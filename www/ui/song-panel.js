@@ -107,7 +107,7 @@ export class SongPanel {
     this.player.setGrid(grid);
     this.$("#song-bpm").value = grid.bpm.toFixed(1);
     this.$("#song-bpb").value = String(grid.beatsPerBar);
-    this.$("#song-info").textContent = `${this.name} — ${grid.bpm.toFixed(1)} BPM, ${grid.bars.length} bars of ${grid.beatsPerBar}${grid.regular ? " (regular grid)" : ""}${grid.clearBeat === false ? " — no clear beat found: the grid is a guess; type the tempo or tap along" : ""}`;
+    this.$("#song-info").title = this.$("#song-info").textContent = `${this.name} — ${grid.bpm.toFixed(1)} BPM, ${grid.bars.length} bars of ${grid.beatsPerBar}${grid.regular ? " (regular grid)" : ""}${grid.clearBeat === false ? " — no clear beat found: the grid is a guess; type the tempo or tap along" : ""}`;
     this.root.dataset.bars = String(grid.bars.length);
     this.sections = null;
     this.repeats = null;
@@ -155,9 +155,8 @@ export class SongPanel {
       b.type = "button";
       b.className = "repeat-remove";
       b.dataset.firstBar = String(r.firstBar);
-      b.textContent = `${range(r.firstBar, r.bars)} = bar ${r.ofBar + 1}${r.marked ? " (marked)" : ""} ✕`;
-      b.setAttribute("aria-label", `Remove the repeat: bars ${range(r.firstBar, r.bars)} take the moves of bars ${range(r.ofBar, r.bars)} (${r.marked ? "marked" : "found in the song"})`);
-      b.title = "Remove this repeat: Generate then fills these bars on their own (one undo step)";
+      b.textContent = `Remove ${range(r.firstBar, r.bars)} = bar ${r.ofBar + 1}${r.marked ? " (marked)" : ""}`;
+      b.title = `Bars ${range(r.firstBar, r.bars)} take the moves of bars ${range(r.ofBar, r.bars)} (${r.marked ? "marked" : "found in the song"}); remove this repeat and Generate fills them on their own (one undo step)`;
       return b;
     }));
     return list;
