@@ -196,6 +196,12 @@ async function main() {
     player: songPlayer, messages, onGrid: (grid) => choreo.setBars(grid.bars, grid.beatTimesSecs),
     onCorrect: (c) => (c ? session.correctGrid(c) : session.resetGrid()),
     sections: () => session.project?.sections(),
+    // Repeats are project edits (kept, one undo step each); the Dance strip's notes follow.
+    repeats: {
+      list: () => session.project?.repeats(),
+      mark: (first, bars, of) => { session.project.markRepeat(first, bars, of, bars); session.edited(); choreo.refresh(); },
+      remove: (bar) => { const r = session.project.removeRepeat(bar); session.edited(); choreo.refresh(); return r; },
+    },
   });
   songPanel.attachTransport(player);
   player.onTick = () => { if (songPlayer.playing) songPanel.draw(); };
@@ -233,6 +239,7 @@ async function main() {
     addWorn: (info) => { if (searchClient) searchClient.add(info.id); else waitingForSearch.push(info.id); panel.refresh(); },
     character: (id) => exporter.showCharacter(id),
     dance: (summary) => {
+      songPanel.refreshRepeats();
       $("#dance-rho").value = String(summary.rho);
       $("#dance-music").value = String(summary.musicWeight);
       choreo.refreshClips();

@@ -194,3 +194,96 @@ fn the_project_gives_a_repeated_section_its_first_occurrences_moves() {
         assert!(notes[t].words().contains(&format!("repeats bar {}", r + 1)), "bar {t}'s note: {:?}", notes[t].words());
     }
 }
+
+/// Mixed dances and repeats (issue 26 item 2: the repeated section *may* take the same moves;
+/// Generate follows the repeats with imported moves in the library too). With the built-in moves
+/// and every CMU salsa and Indian clip (the dance fixture's library, "my moves" by default), on
+/// the three demo pieces (whose chorus repeats) and on Vibe Ace with bars 9–16 marked by hand as
+/// repeating bars 1–8: the dance Generate makes through the project, which follows the repeats,
+/// against the same pipeline without them (the control). Printed per piece: beat alignment
+/// (BAS-music, random moves', half-shifted), the largest join jump (spec §J, feet held as
+/// rendered), imported bars. Asserted: every repeated bar holds its first occurrence's move, and
+/// following the repeats keeps every beat goal the control meets and joins no worse than the
+/// control by more than 0.1 (or within the 1.5 goal).
+#[test]
+fn mixed_dances_follow_repeats_and_keep_the_beat_and_joins() {
+    use odori_core::choreo::generate_states;
+    use odori_core::project::{BarRange, Project};
+    use odori_core::ImportOptions;
+    use odori_tests::{all_bvh, fps_override_for, read};
+    let mut p = Project::new();
+    for rel in all_bvh().into_iter().filter(|r| r.contains("cmu-salsa") || r.contains("cmu-indian")) {
+        let opts = ImportOptions { fps_override: fps_override_for(&rel), ..Default::default() };
+        p.add_source(&rel, &read(&rel), opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    }
+    let demo = |bpb: u32, bpm: f32, end: f32| {
+        let song = demo_song_with(22050.0, &DemoSongOptions { beats_per_bar: bpb, bpm, end_bpm: end }).expect("demo");
+        envelope(&[&song.samples], 22050.0).expect("envelope")
+    };
+    let d = DemoSongOptions::default();
+    let pieces: Vec<(String, RmsEnvelope, bool)> = vec![
+        ("demo song".into(), demo(d.beats_per_bar, d.bpm, d.end_bpm), false),
+        ("demo in 3, 150 BPM".into(), demo(3, 150.0, 150.0), false),
+        ("demo in 4, 90→130 BPM".into(), demo(4, 90.0, 130.0), false),
+        ("Vibe Ace, bars 9–16 marked".into(), music_audio::decode_envelope(music_audio::FULL_TRACKS[0]), true),
+    ];
+    assert!(music_audio::FULL_TRACKS[0].contains("Vibe_Ace"));
+    let mut failures = Vec::new();
+    for (label, env, mark) in pieces {
+        p.set_song(&label, None, &env, AnalysisOptions::default()).unwrap_or_else(|e| panic!("{label}: {e}"));
+        p.begin_group();
+        for bar in 0..p.doc().dance.bars.len() {
+            p.clear(bar).expect("clear");
+        }
+        p.end_group();
+        if mark {
+            p.mark_repeat(BarRange { first_bar: 8, bars: 8 }, BarRange { first_bar: 0, bars: 8 }).unwrap_or_else(|e| panic!("{label}: {e}"));
+        }
+        let repeats = p.repeat_of_bars().expect("repeats");
+        let repeated: Vec<(usize, usize)> = repeats.iter().enumerate().filter_map(|(t, r)| r.map(|r| (t, r))).collect();
+        assert!(repeated.len() >= 4, "{label}: {repeated:?}");
+        p.generate().unwrap_or_else(|e| panic!("{label}: {e}"));
+        let with: Vec<Option<usize>> = p.dance_view().expect("view").iter().map(|v| v.state.segment()).collect();
+        let bars = p.song_bars().expect("bars");
+        let beats = match p.derived().grid() {
+            Some(Ok(g)) => g.beat_times_secs.clone(),
+            _ => panic!("{label}: no grid"),
+        };
+        let fill = p.fill_weights();
+        let lib = p.segment_library();
+        let (plain, _) = generate_states(lib, &bars, &[], fill, &GenerateOptions::default()).unwrap_or_else(|e| panic!("{label}: {e}"));
+        let without: Vec<Option<usize>> = plain.iter().map(BarState::segment).collect();
+        let random = random_moves_bas(lib, &bars, &beats, RANDOM_MOVES_SEED);
+        let imported = |c: &[Option<usize>]| c.iter().flatten().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
+        let (qw, qo) = (dance_quality_of(lib, &bars, &beats, &with), dance_quality_of(lib, &bars, &beats, &without));
+        let same = |c: &[Option<usize>]| repeated.iter().filter(|&&(t, r)| c[t] == c[r]).count();
+        println!(
+            "{label}: {} bars, {} repeat; following the repeats: BAS-music {:.3} (shifted {:.3}), join max {:.2}, imported {} bars, repeats held {}; without: BAS-music {:.3} (shifted {:.3}), join max {:.2}, imported {}, repeats held {}; random moves {random:.3}",
+            bars.len(),
+            repeated.len(),
+            qw.beats.bas_music,
+            qw.beats.bas_music_shifted,
+            qw.join_jump_max,
+            imported(&with),
+            same(&with),
+            qo.beats.bas_music,
+            qo.beats.bas_music_shifted,
+            qo.join_jump_max,
+            imported(&without),
+            same(&without)
+        );
+        if same(&with) != repeated.len() {
+            failures.push(format!("{label}: {} of {} repeated bars hold their first occurrence's move", same(&with), repeated.len()));
+        }
+        let goals = |q: &odori_core::choreo::quality::DanceQuality| [q.beats.bas_music >= random + 0.05, q.beats.bas_music >= q.beats.bas_music_shifted + 0.10];
+        for (i, (w, o)) in goals(&qw).into_iter().zip(goals(&qo)).enumerate() {
+            if o && !w {
+                failures.push(format!("{label}: following the repeats loses beat goal {} the control meets (BAS-music {:.3} against {:.3})", i + 1, qw.beats.bas_music, qo.beats.bas_music));
+            }
+        }
+        if qw.join_jump_max > 1.5 && qw.join_jump_max > qo.join_jump_max + 0.1 {
+            failures.push(format!("{label}: following the repeats joins at {:.2} against the control's {:.2}", qw.join_jump_max, qo.join_jump_max));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

@@ -1,5 +1,5 @@
-//! The golden `.odori` files of schema versions 1 to 4 (`tests/golden/project_v1.odori` …
-//! `project_v4.odori`, each written once by `tests/tools/make_golden_project.rs` with the build of
+//! The golden `.odori` files of schema versions 1 to 5 (`tests/golden/project_v1.odori` …
+//! `project_v5.odori`, each written once by `tests/tools/make_golden_project.rs` with the build of
 //! its schema and reviewed; never written by the tests) open with this build: everything its
 //! maker put in is there, it renders, and its history works. When the schema changes, these
 //! files must keep opening (through `project::file::migrate`).
@@ -15,6 +15,8 @@ const GOLDEN_V2: &[u8] = include_bytes!("../golden/project_v2.odori");
 const GOLDEN_V3: &[u8] = include_bytes!("../golden/project_v3.odori");
 /// Written by the tool at s13-mmdcam (schema 4: a camera VMD kept in the project).
 const GOLDEN_V4: &[u8] = include_bytes!("../golden/project_v4.odori");
+/// Written by the tool at s14-repeats (schema 5: a found repeat removed and a repeat marked).
+const GOLDEN_V5: &[u8] = include_bytes!("../golden/project_v5.odori");
 
 #[test]
 fn golden_v1_opens_with_everything_in_it() {
@@ -38,6 +40,9 @@ fn golden_v3_opens_with_everything_in_it() {
 #[test]
 fn golden_v4_opens_with_its_camera_vmd() {
     let mut p = golden_opens_with_everything_in_it(GOLDEN_V4, 4);
+    // Schema 5 keeps the repeats marked by hand: a v4 dance has none, and follows the analysis.
+    assert!(p.doc().dance.repeats.is_empty());
+    assert!(p.repeat_runs().expect("repeats").iter().all(|r| !r.marked));
     let doc = p.doc().clone();
     assert_eq!(doc.cameras.len(), 1);
     assert_eq!((doc.cameras[0].file_name.as_str(), doc.cameras[0].song_offset_frames), ("golden_cam.vmd", Some(0)));
@@ -52,6 +57,40 @@ fn golden_v4_opens_with_its_camera_vmd() {
     assert!(p.doc().cameras.is_empty());
     assert!(p.redo());
     assert_eq!(p.doc(), &doc);
+}
+
+#[test]
+fn golden_v5_opens_with_its_repeats() {
+    use odori_core::project::{BarRange, RepeatMark, RepeatRun};
+    let mut p = golden_opens_with_everything_in_it(GOLDEN_V5, 5);
+    assert_eq!(p.doc().cameras.len(), 1);
+    let n = p.doc().dance.bars.len();
+    let marks = p.doc().dance.repeats.clone();
+    // What the tool did: the found repeat (the demo song's second chorus) removed, then the
+    // last two bars marked as repeating the first two.
+    assert_eq!(marks.len(), 2, "{marks:?}");
+    assert_eq!(marks[0].of_bar, None);
+    assert_eq!(marks[1], RepeatMark { first_bar: n - 2, bars: 2, of_bar: Some(0) });
+    // The removed repeat is one the analysis finds (the same file without the marks has it).
+    let mut control = project::open(GOLDEN_V5).expect("opens").project;
+    assert!(control.undo() && control.undo(), "the marks are the last two undo steps");
+    assert!(control.doc().dance.repeats.is_empty());
+    let found = control.repeat_runs().expect("repeats");
+    assert!(found.iter().any(|r| !r.marked && r.first_bar == marks[0].first_bar && r.bars == marks[0].bars), "{found:?} against {marks:?}");
+    // With the marks: the one marked run, nothing found left.
+    assert_eq!(p.repeat_runs().expect("repeats"), vec![RepeatRun { first_bar: n - 2, bars: 2, of_bar: 0, marked: true }]);
+    // Generate follows it.
+    p.generate().expect("generate");
+    let keys: Vec<_> = p.doc().dance.bars.iter().map(|b| b.r#move.clone()).collect();
+    assert_eq!(keys[n - 2], keys[0]);
+    assert_eq!(keys[n - 1], keys[1]);
+    // One undo step each: undo the Generate and the mark, and the mark is gone.
+    assert!(p.undo() && p.undo());
+    assert_eq!(p.doc().dance.repeats.len(), 1);
+    // A bad range is refused with the project unchanged.
+    let before = p.doc().clone();
+    assert!(p.mark_repeat(BarRange { first_bar: 1, bars: 2 }, BarRange { first_bar: 0, bars: 2 }).is_err());
+    assert_eq!(p.doc(), &before);
 }
 
 fn golden_opens_with_everything_in_it(bytes: &[u8], version: u32) -> project::Project {
@@ -146,6 +185,8 @@ fn dts_error_kinds_cover_the_core_kinds() {
         ProjectError::BadEnvelope { message: f() },
         ProjectError::NotACamera { file_name: f(), bone_keys: 1, morph_keys: 0 },
         ProjectError::NoSuchCamera { index: 1, count: 0 },
+        ProjectError::Repeat(odori_core::project::RepeatError::Overlapping { first_bar: 1, end_bar: 3, of_first_bar: 0, of_end_bar: 2 }),
+        ProjectError::Repeat(odori_core::project::RepeatError::NotARepeat { bar: 1, song_bars: 2 }),
     ];
     let kinds: Vec<&str> = file_errors.iter().map(FileError::kind).chain(project_errors.iter().map(ProjectError::kind)).collect();
     for k in kinds {

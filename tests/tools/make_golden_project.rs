@@ -1,12 +1,13 @@
 //! Writes the golden `.odori` file of the build's schema version (`tests/golden/project_v1.odori`;
 //! `project_v2.odori` was written by it at main 8823db9, schema 2; `project_v3.odori` at main
-//! 8ed782d, schema 3; `project_v4.odori` by this version, schema 4, which adds a camera VMD),
+//! 8ed782d, schema 3; `project_v4.odori` at main 67f699e, schema 4, which adds a camera VMD;
+//! `project_v5.odori` by this version, schema 5, which adds a repeat marked and one removed),
 //! made from the engine's own content only (the demo song's envelope, a three-joint BVH and a
 //! three-key camera VMD written here, built-in moves), so it can be committed. Run once per
 //! released schema version and review the result; the test run only reads it:
 //!
 //! ```sh
-//! cargo run -p odori-tests --example make_golden_project -- tests/golden/project_v4.odori
+//! cargo run -p odori-tests --example make_golden_project -- tests/golden/project_v5.odori
 //! ```
 
 use odori_core::library::builtin_moves;
@@ -86,6 +87,12 @@ fn main() {
     p.set_camera(Some(Camera { yaw_rad: 0.5, pitch_rad: 0.2, distance_m: 4.0, target_m: [0.0, 1.0, 0.0] }));
     // Schema 4: a camera VMD kept in the project.
     p.add_camera("golden_cam.vmd", &tiny_camera_vmd(), Some(0)).expect("camera");
+    // Schema 5: the repeat the analysis finds in the demo song (its second chorus) removed, and
+    // the last two bars marked as repeating the first two.
+    let found = p.repeat_runs().expect("repeats").first().copied().expect("the demo song's second chorus repeats the first");
+    p.remove_repeat(found.first_bar).expect("remove the found repeat");
+    let n = p.doc().dance.bars.len();
+    p.mark_repeat(project::BarRange { first_bar: n - 2, bars: 2 }, project::BarRange { first_bar: 0, bars: 2 }).expect("mark a repeat");
     let bytes = project::save(&p).expect("save");
     std::fs::write(&out, &bytes).unwrap_or_else(|e| panic!("{out}: {e}"));
     println!("{out}: {} bytes, {} bars, {} undo steps", bytes.len(), p.doc().dance.bars.len(), p.undo_history().len());

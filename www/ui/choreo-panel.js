@@ -258,10 +258,12 @@ export class ChoreoPanel {
           b.title += `\nbeat alignment ${bq.beats.basMusic.toFixed(2)} (half a beat off: ${bq.beats.basMusicShifted.toFixed(2)}), foot skate ${bq.footSkate.meanCmPerS.toFixed(0)} cm/s${j}`;
         }
         if (note.repeatsBar != null) {
-          // Its section repeats an earlier one, and it holds that bar's move (issue 26 item 2).
+          // Its section repeats an earlier one (found, or marked by the person on the song
+          // strip), and it holds that bar's move (issue 26 item 2).
           b.dataset.repeats = String(note.repeatsBar + 1);
-          num.textContent += ` = bar ${note.repeatsBar + 1}`;
-          b.title += `\nrepeats bar ${note.repeatsBar + 1} (its section repeats)`;
+          if (note.repeatMarked) b.dataset.repeatMarked = "1";
+          num.textContent += ` = bar ${note.repeatsBar + 1}${note.repeatMarked ? " (marked)" : ""}`;
+          b.title += `\nrepeats bar ${note.repeatsBar + 1} (${note.repeatMarked ? "marked" : "its section repeats"})`;
         }
         if (note.flags.length) {
           b.dataset.weak = "1";

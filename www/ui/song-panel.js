@@ -3,13 +3,18 @@
 // bars at once. Shift-click on the strip puts a downbeat there; a plain click seeks. Along the
 // strip's foot, the song's sections (the engine's `music::sections`, the analysis Generate repeats moves
 // on and the video's director camera cuts on): a letter each, a repeated section named after the
-// one it repeats.
+// one it repeats. Below the strip, the repeats Generate follows (found, or marked by the person:
+// "Bars 17 to 24 repeat bar 1", each with a button that removes it, one undo step each).
 /** Taps further apart than this start a new count. */
 const TAP_GAP_SECS = 2.5;
 
 export class SongPanel {
-  constructor(root, { player, onGrid, messages, onCorrect, sections }) {
+  constructor(root, { player, onGrid, messages, onCorrect, sections, repeats }) {
     this.getSections = sections; // () => the project's sections ({ sections: [...] }) or undefined
+    // { list: () => the project's repeat runs, mark(firstBar, bars, ofFirstBar), remove(bar) }
+    // (bars from 0; mark and remove are project edits that throw the engine's error when refused).
+    this.repeatEdits = repeats;
+    this.repeats = null;         // the repeat runs shown, for the grid shown
     this.onCorrect = onCorrect; // (correction | null for a reset) after one the song took
     this.root = root;
     this.player = player;        // SongPlayer
@@ -36,6 +41,14 @@ export class SongPanel {
     $("#song-reset").addEventListener("click", () => { if (this.song) { const g = this.song.reset(); if (this.onCorrect) this.onCorrect(null); this.setGrid(g); } });
     $("#song-metronome").addEventListener("change", (ev) => { this.player.metronome = ev.target.checked; });
     $("#song-tap").addEventListener("click", (ev) => this.tap(ev.timeStamp));
+    $("#repeat-mark").addEventListener("click", () => this.markRepeat());
+    for (const id of ["#repeat-first", "#repeat-last", "#repeat-of"]) {
+      $(id).addEventListener("keydown", (ev) => { if (ev.key === "Enter") this.markRepeat(); });
+    }
+    $("#repeat-list").addEventListener("click", (ev) => {
+      const b = ev.target.closest("[data-first-bar]");
+      if (b) this.removeRepeat(Number(b.dataset.firstBar));
+    });
     this.canvas.addEventListener("click", (ev) => {
       if (!this.song) return;
       const r = this.canvas.getBoundingClientRect();
@@ -94,9 +107,10 @@ export class SongPanel {
     this.player.setGrid(grid);
     this.$("#song-bpm").value = grid.bpm.toFixed(1);
     this.$("#song-bpb").value = String(grid.beatsPerBar);
-    this.$("#song-info").textContent = `${this.name} — ${grid.bpm.toFixed(1)} BPM, ${grid.bars.length} bars of ${grid.beatsPerBar}${grid.regular ? " (regular grid)" : ""}${grid.clearBeat === false ? " — no clear beat found: the grid is a guess; type the tempo or tap along" : ""}`;
+    this.$("#song-info").title = this.$("#song-info").textContent = `${this.name} — ${grid.bpm.toFixed(1)} BPM, ${grid.bars.length} bars of ${grid.beatsPerBar}${grid.regular ? " (regular grid)" : ""}${grid.clearBeat === false ? " — no clear beat found: the grid is a guess; type the tempo or tap along" : ""}`;
     this.root.dataset.bars = String(grid.bars.length);
     this.sections = null;
+    this.repeats = null;
     delete this.root.dataset.sections;
     delete this.root.dataset.sectionStarts;
     this.draw();
@@ -124,11 +138,74 @@ export class SongPanel {
     return list;
   }
 
+  /** The project's repeat runs for the grid shown (null while the project's grid is not this
+   * one yet), listed below the strip with a button each that removes it. */
+  currentRepeats() {
+    if (this.repeats || !this.repeatEdits || !this.grid) return this.repeats;
+    let list;
+    try { list = this.repeatEdits.list() ?? []; } catch (e) { return null; }
+    const n = this.grid.bars.length;
+    if (list.some((r) => r.firstBar + r.bars > n)) return null;
+    this.repeats = list;
+    const range = (a, k) => (k > 1 ? `${a + 1}–${a + k}` : `${a + 1}`);
+    this.root.dataset.repeats = list.map((r) => `${r.firstBar + 1}-${r.firstBar + r.bars}=${r.ofBar + 1}${r.marked ? "m" : ""}`).join(",");
+    const box = this.$("#repeat-list");
+    box.replaceChildren(...list.map((r) => {
+      const b = document.createElement("button");
+      b.type = "button";
+      b.className = "repeat-remove";
+      b.dataset.firstBar = String(r.firstBar);
+      b.textContent = `Remove ${range(r.firstBar, r.bars)} = bar ${r.ofBar + 1}${r.marked ? " (marked)" : ""}`;
+      b.title = `Bars ${range(r.firstBar, r.bars)} take the moves of bars ${range(r.ofBar, r.bars)} (${r.marked ? "marked" : "found in the song"}); remove this repeat and Generate fills them on their own (one undo step)`;
+      return b;
+    }));
+    return list;
+  }
+
+  /** After an edit, undo or redo of the project: show its repeats again. */
+  refreshRepeats() {
+    this.repeats = null;
+    this.draw();
+  }
+
+  /** Marks the bars typed (from 1, as the strip numbers them) as repeating the earlier bars typed. */
+  markRepeat() {
+    if (!this.repeatEdits || !this.grid) return;
+    const $ = this.$;
+    const first = Number($("#repeat-first").value), last = Number($("#repeat-last").value), of = Number($("#repeat-of").value);
+    if (![first, last, of].every((v) => Number.isInteger(v) && v >= 1) || last < first) {
+      this.messages.error("Repeat: type the first and last bar of the repeat and the first bar it repeats (whole numbers from 1, the last not before the first)");
+      return;
+    }
+    const bars = last - first + 1;
+    try {
+      this.repeatEdits.mark(first - 1, bars, of - 1, bars);
+      this.messages.info(`Bars ${first}–${last} repeat bars ${of}–${of + bars - 1}: Generate gives them the same moves`);
+    } catch (e) {
+      this.messages.error(`Repeat: ${e.message}`);
+    }
+    this.refreshRepeats();
+  }
+
+  /** Removes the repeat that starts at bar `firstBar` (from 0). */
+  removeRepeat(firstBar) {
+    if (!this.repeatEdits) return;
+    try {
+      const r = this.repeatEdits.remove(firstBar);
+      this.messages.info(`Bars ${r.firstBar + 1}–${r.firstBar + r.bars} no longer repeat bar ${r.ofBar + 1}`);
+    } catch (e) {
+      this.messages.error(`Repeat: ${e.message}`);
+    }
+    this.refreshRepeats();
+    const next = this.$("#repeat-list button") ?? this.$("#repeat-first");
+    if (next) next.focus();
+  }
+
   /** Sections as bands along the foot of the strip: a colour per label, a letter each (a repeat names the section
    * it repeats); a line at each section change. */
   drawSections(g, x, h, dpr) {
-    const list = this.currentSections();
-    if (!list) return;
+    const list = this.currentSections() ?? [];
+    const repeats = this.currentRepeats() ?? [];
     const bars = this.grid.bars;
     const band = 14 * dpr;
     const hues = [210, 30, 130, 280, 350, 60, 180, 0];
@@ -141,10 +218,23 @@ export class SongPanel {
       g.fillRect(x0, h - band, x1 - x0, band);
       g.fillStyle = "#ffffff";
       g.fillRect(x0, 0, Math.max(1, 2 * dpr), h);
-      // A repeat takes the moves of the first section of its label (as Generate does).
-      const src = s.repeatOf != null ? list.find((o) => o.label === s.label) : null;
+      // A repeat takes the moves of the first section of its label (as Generate does), unless
+      // the person removed it.
+      const found = repeats.some((r) => !r.marked && r.firstBar === s.firstBar);
+      const src = s.repeatOf != null && found ? list.find((o) => o.label === s.label) : null;
       const name = String.fromCharCode(65 + (s.label % 26)) + (src && src !== s ? ` = bar ${src.firstBar + 1}` : "");
       if (x1 - x0 > 12 * dpr) g.fillText(name, x0 + 3 * dpr, h - 3 * dpr, Math.max(1, x1 - x0 - 4 * dpr));
+    }
+    // Marked repeats: a band above the sections', named after the bar they repeat.
+    for (const r of repeats) {
+      if (!r.marked) continue;
+      const first = bars[r.firstBar], last = bars[r.firstBar + r.bars - 1];
+      if (!first || !last) continue;
+      const x0 = x(first.startSecs), x1 = x(last.endSecs);
+      g.fillStyle = "rgba(255, 214, 102, 0.85)";
+      g.fillRect(x0, h - 2 * band, x1 - x0, band - dpr);
+      g.fillStyle = "#10121a";
+      if (x1 - x0 > 12 * dpr) g.fillText(`= bar ${r.ofBar + 1} (marked)`, x0 + 3 * dpr, h - band - 4 * dpr, Math.max(1, x1 - x0 - 4 * dpr));
     }
   }
 

@@ -42,6 +42,7 @@ error_kinds! {
     "choreo": "choreography: no bars yet, clip already added, bad bar or segment",
     "text": "text to animation: nothing could be animated, or a clip cannot be tagged",
     "no-song": "project: a dance edit needs a song first",
+    "bad-repeat": "project: a repeat's bars are empty, out of the song, of another length than the bars they repeat, overlap them or come before them",
     "missing-blob": "project: an item's bytes were missing when the project was opened (the dance is read-only)",
     "not-odori": ".odori: not an Odori project file (no manifest, or another format)",
     "truncated": ".odori: the file ends early",

@@ -186,6 +186,35 @@ impl Project {
         })
     }
 
+    /// The runs of repeated bars Generate follows: the song's sections' repeats with the
+    /// person's marks laid over them, `[{ firstBar, bars, ofBar, marked }]` (bars from 0: bars
+    /// `firstBar .. firstBar + bars` take the moves of bars `ofBar ..`); `marked` when the person
+    /// marked it (`markRepeat`). Empty without a song.
+    pub fn repeats(&mut self) -> Result<JsValue, OdoriError> {
+        Ok(to_js(&self.inner.repeat_runs()?))
+    }
+
+    /// Marks bars `firstBar .. firstBar + bars` as repeating the earlier bars `ofFirstBar ..
+    /// ofFirstBar + ofBars` (bars from 0): Generate gives them the same moves. One undo step,
+    /// kept in the project. A bad range is an error of kind `bad-repeat` naming it (empty, out
+    /// of the song, unequal lengths, overlapping, or the repeated bars not earlier).
+    #[wasm_bindgen(js_name = markRepeat)]
+    pub fn mark_repeat(&mut self, first_bar: f64, bars: f64, of_first_bar: f64, of_bars: f64) -> Result<(), OdoriError> {
+        let range = odori_core::project::BarRange { first_bar: index_arg("firstBar", first_bar)?, bars: index_arg("bars", bars)? };
+        let of = odori_core::project::BarRange { first_bar: index_arg("ofFirstBar", of_first_bar)?, bars: index_arg("ofBars", of_bars)? };
+        self.inner.mark_repeat(range, of)?;
+        Ok(self.changed(()))
+    }
+
+    /// Removes the repeat holding bar `bar` (found by the analysis or marked; its whole run):
+    /// Generate then fills those bars on their own. One undo step. Returns the run removed
+    /// (`{ firstBar, bars, ofBar, marked }`); a bar that repeats nothing is `not-found`.
+    #[wasm_bindgen(js_name = removeRepeat)]
+    pub fn remove_repeat(&mut self, bar: f64) -> Result<JsValue, OdoriError> {
+        let run = self.inner.remove_repeat(index_arg("bar", bar)?)?;
+        Ok(self.changed(to_js(&run)))
+    }
+
     /// The segment a move key names now (for the calls by segment number), or undefined.
     #[wasm_bindgen(js_name = segmentOf)]
     pub fn segment_of(&mut self, key: JsValue) -> Result<Option<u32>, OdoriError> {
@@ -750,7 +779,8 @@ impl Project {
     /// render): `{ quality: DanceQuality | null, notes: MoveNote[] }`, a `MoveNote` being `{ bar,
     /// segment, name, source, builtin, flags: [{ kind: "offBeat" | "joinJump" | "footSkate",
     /// words, value, goal }], repeatsBar }`, `repeatsBar` the bar (from 0) whose move it repeats
-    /// where the song's sections repeat (`sections()`), else null; `quality` is null while no bar
+    /// where the song's sections repeat (`repeats()`: found, or marked by the person), else null,
+    /// and `repeatMarked` true when the person marked that repeat; `quality` is null while no bar
     /// holds a move. `beatTimesSecs` as for `quality`.
     #[wasm_bindgen(js_name = barNotes)]
     pub fn bar_notes(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
@@ -768,8 +798,9 @@ impl Project {
         let clip = self.inner.render_dance(&RenderOptions::default())?;
         let q = odori_core::choreo::dance_quality(&clip, &bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
         let mut notes = odori_core::choreo::bar_notes(self.inner.segment_library(), &bars, &choices, &q.bars);
-        // A bar holding the move of the bar its section repeats says so.
-        odori_core::choreo::mark_repeats(&mut notes, &self.inner.repeat_of_bars()?);
+        // A bar holding the move of the bar its section repeats says so, and whether the
+        // person marked the repeat.
+        odori_core::project::repeats::mark_notes(&mut notes, &self.inner.repeats()?);
         Ok(to_js(&Notes { quality: Some(q), notes }))
     }
 

@@ -71,13 +71,18 @@ pub struct MoveNote {
     /// (issue 26; [`mark_repeats`]); absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repeats_bar: Option<usize>,
+    /// The repeat was marked by the person on the song strip (`project::Project::mark_repeat`),
+    /// not found by the analysis; absent when false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub repeat_marked: bool,
 }
 
 impl MoveNote {
     /// The flags as one line ("" when clean), after "repeats bar N" (N counted from 1, as the
     /// strip numbers bars) when the bar repeats another's move.
     pub fn words(&self) -> String {
-        let repeat = self.repeats_bar.map(|r| format!("repeats bar {} (its section repeats)", r + 1));
+        let why = if self.repeat_marked { "marked" } else { "its section repeats" };
+        let repeat = self.repeats_bar.map(|r| format!("repeats bar {} ({why})", r + 1));
         repeat.iter().map(String::as_str).chain(self.flags.iter().map(|f| f.words.as_str())).collect::<Vec<_>>().join("; ")
     }
 }
@@ -123,7 +128,7 @@ fn note_of(lib: &SegmentLibrary, bars: &[Bar], bar: usize, segment: Option<usize
             flags.push(Flag { kind: FlagKind::FootSkate, words: format!("foot skate {skate:.0} cm/s (its source {paced:.0} cm/s)"), value: skate, goal: paced });
         }
     }
-    MoveNote { bar, segment, name, source, builtin, flags, repeats_bar: None }
+    MoveNote { bar, segment, name, source, builtin, flags, repeats_bar: None, repeat_marked: false }
 }
 
 /// Every bar's note, from the dance's readout `quality` (`dance_quality` of the rendered dance

@@ -31,7 +31,7 @@ use super::{BlobHash, BlobStore, Project, ProjectDoc};
 
 /// The schema version this build writes. Bump it with a step in [`migrate`] and a golden file
 /// of the old version in `tests/golden/`.
-pub const CURRENT_SCHEMA_VERSION: u32 = 4;
+pub const CURRENT_SCHEMA_VERSION: u32 = 5;
 /// The oldest schema version this build opens.
 pub const OLDEST_SCHEMA_VERSION: u32 = 1;
 /// The value of the manifest's `format` field.
@@ -332,7 +332,18 @@ fn read_error(size_bytes: usize, what: &str, e: std::io::Error) -> FileError {
 /// The steps from each schema version to the next: `MIGRATIONS[v - OLDEST_SCHEMA_VERSION]`
 /// rewrites a version-`v` manifest (as JSON) into version `v + 1` (a renamed field, a new
 /// field's default...).
-const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes, dance_take, no_cameras];
+const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes, dance_take, no_cameras, no_repeat_marks];
+
+/// 4 → 5: the dance keeps the repeats the person marked or removed on the song strip (issue
+/// 26); a dance saved before has none. (The step writes the empty list the reader would assume
+/// anyway: the version is bumped so that a build that does not know marks refuses a file
+/// holding them instead of dropping them unseen, and Generate's repeats stay as the person set
+/// them.)
+fn no_repeat_marks(m: &mut serde_json::Value) {
+    if let Some(serde_json::Value::Object(dance)) = m.get_mut("project").and_then(|p| p.get_mut("dance")) {
+        dance.entry("repeats").or_insert(serde_json::Value::Array(Vec::new()));
+    }
+}
 
 /// 3 → 4: the project keeps the camera motions imported (camera VMDs, issue 28); a project
 /// saved before has none. (The step writes the empty list the reader would assume anyway: the

@@ -20,6 +20,7 @@
 pub mod blob;
 pub mod derive;
 pub mod file;
+pub mod repeats;
 pub mod summary;
 
 use crate::history::History;
@@ -38,6 +39,7 @@ use crate::music::{AnalysisOptions, GridCorrection, MusicError, RmsEnvelope};
 pub use blob::{BlobHash, BlobStore};
 pub use derive::{ClipInfo, Derived};
 pub use file::{open, save, FileError, MissingBlob, Opened, CURRENT_SCHEMA_VERSION, ODORI_MIME};
+pub use repeats::{BarRange, BarRepeat, RepeatError, RepeatMark, RepeatRun};
 pub use summary::{manifest_blob_hashes, ProjectSummary};
 
 /// Most undo steps a project keeps (and saves): enough for a session's work, small enough that
@@ -186,6 +188,10 @@ pub struct DanceDoc {
     /// 0 for Generate, counted up by "another take"); kept from schema 3 (older files read 0).
     #[serde(default)]
     pub take: u32,
+    /// The repeats the person marked or removed on the song strip, in the order made
+    /// ([`repeats`]; schema 5, absent when none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub repeats: Vec<RepeatMark>,
 }
 
 /// Words a person attached to a clip so text can call it.
@@ -334,6 +340,8 @@ pub enum ProjectError {
     NoSuchCamera { index: usize, count: usize },
     #[error(transparent)]
     Sections(#[from] crate::music::SectionError),
+    #[error(transparent)]
+    Repeat(#[from] RepeatError),
 }
 
 impl ProjectError {
@@ -354,6 +362,7 @@ impl ProjectError {
             ProjectError::NotACamera { .. } => "mmd-no-camera-keys",
             ProjectError::NoSuchCamera { .. } => "not-found",
             ProjectError::Sections(_) => "music",
+            ProjectError::Repeat(e) => e.kind(),
         }
     }
 }
@@ -1160,15 +1169,54 @@ impl Project {
         Ok(Some(crate::music::sections(grid, &env, &crate::music::SectionOptions::default())?))
     }
 
-    /// Per bar of the song, the earlier bar it repeats where the song's sections repeat
-    /// ([`Project::sections`], `music::Sections::repeat_of_bars`): what Generate gives the
-    /// same move, and what the bar's note says ("repeats bar N"). Empty without a song.
+    /// Per bar of the song, the earlier bar it repeats: where the song's sections repeat
+    /// ([`Project::sections`], `music::Sections::repeat_of_bars`), with the person's marks laid
+    /// over them ([`Project::repeats`]): what Generate gives the same move, and what the bar's
+    /// note says ("repeats bar N"). Empty without a song.
     pub fn repeat_of_bars(&mut self) -> Result<Vec<Option<usize>>, ProjectError> {
+        Ok(self.repeats()?.into_iter().map(|r| r.map(|r| r.of_bar)).collect())
+    }
+
+    /// Per bar of the song, what it repeats (the first occurrence's bar, and whether the person
+    /// marked it): the analysis's repeats with the marks laid over them in order
+    /// ([`repeats::resolve`]). Empty without a song.
+    pub fn repeats(&mut self) -> Result<Vec<Option<BarRepeat>>, ProjectError> {
         let n = match self.derived().grid() {
             Some(Ok(g)) => g.bars.len(),
             _ => 0,
         };
-        Ok(self.sections()?.map(|s| s.repeat_of_bars(n)).unwrap_or_default())
+        let found = self.sections()?.map(|s| s.repeat_of_bars(n)).unwrap_or_default();
+        Ok(repeats::resolve(&found, &self.doc.dance.repeats, n))
+    }
+
+    /// The runs of repeated bars ([`Project::repeats`] as ranges): what the song strip shows
+    /// and offers to remove.
+    pub fn repeat_runs(&mut self) -> Result<Vec<RepeatRun>, ProjectError> {
+        Ok(repeats::runs(&self.repeats()?))
+    }
+
+    /// Marks bars `range` as repeating the earlier bars `of` (issue 26: the person hears a
+    /// repeat the analysis missed): Generate then gives them the same moves. One undo step;
+    /// refused, with nothing changed, when a range is empty or out of the song, the two differ
+    /// in length, overlap, or `of` is not earlier.
+    pub fn mark_repeat(&mut self, range: BarRange, of: BarRange) -> Result<(), ProjectError> {
+        let (bars, mut doc) = self.dance_edit_start()?;
+        doc.dance.repeats = repeats::with_mark(&doc.dance.repeats, range, of, bars.len())?;
+        self.commit(doc);
+        Ok(())
+    }
+
+    /// Removes the repeat holding bar `bar` (found by the analysis or marked), its whole run:
+    /// Generate then fills those bars on their own. One undo step; refused when the bar repeats
+    /// nothing. Returns the run removed.
+    pub fn remove_repeat(&mut self, bar: usize) -> Result<RepeatRun, ProjectError> {
+        let n = self.song_bars()?.len();
+        let found = self.sections()?.map(|s| s.repeat_of_bars(n)).unwrap_or_default();
+        let (bars, mut doc) = self.dance_edit_start()?;
+        let (marks, run) = repeats::without_repeat(&found, &doc.dance.repeats, bar, bars.len())?;
+        doc.dance.repeats = marks;
+        self.commit(doc);
+        Ok(run)
     }
 
     /// The take of Generate the dance's generated bars come from (0 until "another take").
