@@ -257,6 +257,11 @@ export class ChoreoPanel {
           const j = bq.joinJump == null ? "" : `, join jump ${bq.joinJump.toFixed(2)}`;
           b.title += `\nbeat alignment ${bq.beats.basMusic.toFixed(2)} (half a beat off: ${bq.beats.basMusicShifted.toFixed(2)}), foot skate ${bq.footSkate.meanCmPerS.toFixed(0)} cm/s${j}`;
         }
+        if (note.builtinWhy) {
+          // Built-in though your moves come first: why, from the Generate that chose it (issue 26).
+          b.dataset.builtinWhy = "1";
+          b.title += `\n${note.builtinWhy}`;
+        }
         if (note.repeatsBar != null) {
           // Its section repeats an earlier one (found, or marked by the person on the song
           // strip), and it holds that bar's move (issue 26 item 2).

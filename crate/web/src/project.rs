@@ -778,10 +778,12 @@ impl Project {
     /// Each bar's move and its weak spots in words, with the readout they come from (one
     /// render): `{ quality: DanceQuality | null, notes: MoveNote[] }`, a `MoveNote` being `{ bar,
     /// segment, name, source, builtin, flags: [{ kind: "offBeat" | "joinJump" | "footSkate",
-    /// words, value, goal }], repeatsBar }`, `repeatsBar` the bar (from 0) whose move it repeats
-    /// where the song's sections repeat (`repeats()`: found, or marked by the person), else null,
-    /// and `repeatMarked` true when the person marked that repeat; `quality` is null while no bar
-    /// holds a move. `beatTimesSecs` as for `quality`.
+    /// words, value, goal }], repeatsBar, repeatMarked, builtinWhy }`, `repeatsBar` the bar (from
+    /// 0) whose move it repeats where the song's sections repeat (`repeats()`: found, or marked by
+    /// the person), else null, and `repeatMarked` true when the person marked that repeat;
+    /// `builtinWhy`, on a built-in bar under *my moves*, why no move of the person's is there
+    /// (from the last Generate), else absent; `quality` is null while no bar holds a move.
+    /// `beatTimesSecs` as for `quality`.
     #[wasm_bindgen(js_name = barNotes)]
     pub fn bar_notes(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
         #[derive(Serialize)]
@@ -801,6 +803,8 @@ impl Project {
         // A bar holding the move of the bar its section repeats says so, and whether the
         // person marked the repeat.
         odori_core::project::repeats::mark_notes(&mut notes, &self.inner.repeats()?);
+        // A built-in bar under *my moves* says why (issue 26's preference order).
+        odori_core::choreo::mark_builtin_why(&mut notes, self.inner.builtin_why());
         Ok(to_js(&Notes { quality: Some(q), notes }))
     }
 

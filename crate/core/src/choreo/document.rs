@@ -161,6 +161,10 @@ pub struct GenerateReport {
     pub pinned: usize,
     /// Cost of the chosen path (transitions + music + repetition).
     pub cost: f32,
+    /// Per bar, why it holds a built-in move under *my moves* (issue 26's preference order,
+    /// [`super::generate::BuiltinWhy`]); `None` elsewhere. Empty when nothing was filled.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub builtin_why: Vec<Option<super::generate::BuiltinWhy>>,
 }
 
 /// Bars must exist, have positive length, come in order and have an intensity in 0..=1.
@@ -245,7 +249,7 @@ pub fn generate_states_with_repeats(lib: &SegmentLibrary, bars: &[Bar], states: 
     let current: Vec<BarState> = (0..bars.len()).map(state).collect();
     let pinned = current.iter().filter(|s| matches!(s, BarState::Pinned { .. })).count();
     if pinned == bars.len() {
-        return Ok((current, GenerateReport { filled: 0, pinned, cost: 0.0 }, vec![None; bars.len()]));
+        return Ok((current, GenerateReport { filled: 0, pinned, cost: 0.0, builtin_why: Vec::new() }, vec![None; bars.len()]));
     }
     let layers: Vec<Layer> = bars
         .iter()
@@ -255,9 +259,9 @@ pub fn generate_states_with_repeats(lib: &SegmentLibrary, bars: &[Bar], states: 
             _ => Layer::Open { intensity: b.intensity },
         })
         .collect();
-    let (path, cost, repeats) = generate::generate_with_repeats(lib, bars, &layers, weights, options, repeat_of)?;
+    let (path, cost, repeats, builtin_why) = generate::generate_with_repeats_explained(lib, bars, &layers, weights, options, repeat_of)?;
     let out = current.iter().zip(path).map(|(s, seg)| if matches!(s, BarState::Pinned { .. }) { *s } else { BarState::Generated { segment: seg } }).collect();
-    Ok((out, GenerateReport { filled: bars.len() - pinned, pinned, cost }, repeats))
+    Ok((out, GenerateReport { filled: bars.len() - pinned, pinned, cost, builtin_why }, repeats))
 }
 
 /// The dance of `states` over `bars` as one canonical clip; frame 0 is song time 0. A bar that

@@ -63,10 +63,11 @@ pub enum Layer {
 #[serde(rename_all = "camelCase")]
 pub enum MovesSource {
     /// Imported moves first: in a bar the library holds an imported move of the bar's count for,
-    /// a built-in move costs [`MOVES_SOURCE_CHARGE`] more (far above any term of the objective:
-    /// a preference order, not a weight), so built-in moves fill only bars no imported move
-    /// fits, and bars whose imported move makes a join over the goal that the join repair
-    /// lifts the charge in ([`super::generate::join_repair_stage`]). With no imported move in the library, as `Mixed` (built-in moves only, there
+    /// the first fill charges a built-in move [`MOVES_SOURCE_CHARGE`] more (far above any term
+    /// of the objective), so built-in moves fill only bars no imported move fits, and the bars
+    /// the preference order opens from measured goals: where the imported moves tried there
+    /// miss the beat or join goal as played ([`super::generate::order_stage`]; the join repair
+    /// opens the bar of an imported move it bars too, [`super::generate::join_repair_stage`]). With no imported move in the library, as `Mixed` (built-in moves only, there
     /// being no other): so the default is *my moves* once the person has imported a humanoid
     /// clip, and the built-in moves before (issue 26).
     #[default]

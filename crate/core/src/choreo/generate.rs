@@ -12,6 +12,10 @@
 //! 4. [`skate_stage`]: the dance's foot skate no worse than its source clips'
 //!    ([`skate_goal_cm_per_s`]); if not, refills charging skate at each weight of
 //!    [`skate_ladder`].
+//!
+//!    4b. [`order_stage`], the preference order (issue 26): under *my moves*, a bar takes a
+//!    built-in move only where the imported moves tried there miss the beat or join goal as
+//!    the dance is played, and says why ([`BuiltinWhy`]).
 //! 5. [`join_repair_stage`]: every join within [`GenerateOptions::join_jump_goal`]; if not,
 //!    bars the move after the worst join and refills, up to [`GenerateOptions::join_repairs`]
 //!    times, keeping a refill only when it improves that join and keeps what the dance met.
@@ -22,16 +26,20 @@
 //! least [`TAKE_DIFFER`] of the open bars while its objective stays within [`TAKE_SLACK`] of the
 //! best; take 0 is the dance without it.
 //!
-//! The measured stages render the dance unheld and measure it as §J does ([`dance_figures`]);
+//! Stages 2 to 4 render the dance unheld and measure it as §J does ([`dance_figures`]); stages
+//! 4b and 5 measure it as it is played, feet held ([`played_figures`]);
 //! a path's figures are measured once and kept ([`Measured`]). Deterministic: the same library,
 //! bars and options give the same dance.
 
 use std::collections::BTreeSet;
 use std::sync::Arc;
 
+use serde::{Deserialize, Serialize};
+
 use super::fill::{
     bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, path_cost_with_tempi, MovesSource, MOVES_SOURCE_CHARGE, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
 };
+use super::notes::OFF_BEAT_MARGIN;
 use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, JOIN_JUMP_GOAL, QUALITY_FPS};
 use super::render::{render, RenderOptions};
 use super::segment::SegmentLibrary;
@@ -90,6 +98,15 @@ pub struct GenerateOptions {
     /// different dance of comparable cost ([`takes`]). Deterministic: the same take of
     /// the same problem is the same dance. Default 0; range 0..=[`MAX_TAKE`].
     pub take: u32,
+    /// Stage 4b, [`order_stage`]: under [`MovesSource::Mine`], a bar takes a built-in move only
+    /// where the imported moves tried there miss the beat or join goal as the dance is played.
+    /// Default true; false: the control (the source's charge alone keeps built-in moves out of
+    /// every bar an imported move of its count fits, session 13's rule).
+    pub follow_order: bool,
+    /// Stage 5 (and 1b) measure the dance as it is played ([`played_figures`]: joins blended,
+    /// feet held), what the viewer sees. Default true; false: the control (unheld, session
+    /// 13's rule, blind to a join the held feet make abrupt).
+    pub measure_played: bool,
 }
 
 impl Default for GenerateOptions {
@@ -103,6 +120,8 @@ impl Default for GenerateOptions {
             join_repairs: JOIN_REPAIRS,
             variety_weight: VARIETY_WEIGHT_DEFAULT,
             take: 0,
+            follow_order: true,
+            measure_played: true,
         }
     }
 }
@@ -144,23 +163,97 @@ pub struct DanceFigures {
     pub worst_join_bar: Option<usize>,
 }
 
+/// Why a bar holds a built-in move under [`MovesSource::Mine`] (issue 26's preference order:
+/// built-in moves fill only where no imported move does), for the bar's readout
+/// ([`super::notes::MoveNote::builtin_why`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "camelCase")]
+pub enum BuiltinWhy {
+    /// The library holds no imported move of the bar's count (e.g. none in 3).
+    NoneOfItsCount { counts: usize },
+    /// The imported moves tried in the bar missed its counts as played (the strip's "off the
+    /// beat" rule, [`PlayedBar::beat_margin`]).
+    OffBeat,
+    /// The imported moves tried in the bar joined it over the join goal as played.
+    RoughJoin,
+}
+
+impl BuiltinWhy {
+    /// In words, for the strip.
+    pub fn words(&self) -> String {
+        match self {
+            BuiltinWhy::NoneOfItsCount { counts } => format!("built-in: none of your moves is a bar of {counts} counts"),
+            BuiltinWhy::OffBeat => "built-in: no move of yours tried here lands on the beat".to_string(),
+            BuiltinWhy::RoughJoin => "built-in: no move of yours tried here joins smoothly".to_string(),
+        }
+    }
+}
+
 /// [`DanceFigures`] of the dance `path` fills `bars` with; `None` when it cannot be measured
 /// (too short, no bars).
 pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<DanceFigures> {
-    let (first, last) = (bars.first()?, bars.last()?);
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
     // Unheld: holding the feet (a cost on every measure of a refill) only lowers the skate the
     // filling follows, and each bar keeps its holds only where they keep its beat figures.
     let clip = render(lib, bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
     let m = QualityMotion::from_clip(&clip).ok()?;
-    let kinetic = kinetic_beats_secs(&m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
+    figures_of(&m, bars)
+}
+
+/// One bar of the dance as it is played ([`played_figures`]), measured as the strip's notes
+/// measure it ([`super::notes`]) on the bar's own counts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlayedBar {
+    /// BAS-music on the bar's counts less BAS-music on its counts moved by half a count (§J's
+    /// control): the bar lands on its counts when this is at least
+    /// [`super::notes::OFF_BEAT_MARGIN`] (else the strip flags it "off the beat").
+    pub beat_margin: f32,
+    /// The join jump at the bar's start (§J), `None` for the first bar.
+    pub join_jump: Option<f32>,
+}
+
+/// The dance as it is played, measured ([`played_figures`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Played {
+    /// The whole dance's figures.
+    pub whole: DanceFigures,
+    /// BAS-music of the whole dance on its bars' counts (§J).
+    pub bas_music: f32,
+    /// Each bar's.
+    pub bars: Vec<PlayedBar>,
+}
+
+/// The dance `path` fills `bars` with as the viewer sees it (rendered as played: joins
+/// blended, feet held, [`RenderOptions::default`]), measured ([`Played`]); `None` when it
+/// cannot be measured. What the join repair and the preference
+/// order measure ([`GenerateOptions::measure_played`], [`order_stage`]): holding the feet moves
+/// the feet across a join, so a dance whose joins are within the goal unheld can join over it
+/// as played (the 150 BPM demo piece in 3 of `choreo_my_moves`: 1.92 held).
+pub fn played_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<Played> {
+    let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
+    let clip = render(lib, bars, &choices, &RenderOptions::default());
+    let m = QualityMotion::from_clip(&clip).ok()?;
+    let whole = figures_of(&m, bars)?;
+    let counts: Vec<f32> = bars.iter().flat_map(|b| {
+        let n = b.beat_count().max(1);
+        (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32)
+    }).collect();
+    let q = super::quality::dance_quality_of(&m, bars, &counts).ok()?;
+    let per_bar = q.bars.iter().map(|b| PlayedBar { beat_margin: b.beats.bas_music - b.beats.bas_music_shifted, join_jump: b.join_jump }).collect();
+    Some(Played { whole, bas_music: q.beats.bas_music, bars: per_bar })
+}
+
+/// [`DanceFigures`] of a rendered dance `m` over `bars`.
+fn figures_of(m: &QualityMotion, bars: &[Bar]) -> Option<DanceFigures> {
+    let (first, last) = (bars.first()?, bars.last()?);
+    let kinetic = kinetic_beats_secs(m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
     let frames = m.frames();
     let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
-    let skate = summarize_skate(&foot_skate_samples(&m), frame_of(first.start_secs)..frame_of(last.end_secs));
+    let skate = summarize_skate(&foot_skate_samples(m), frame_of(first.start_secs)..frame_of(last.end_secs));
     let counts: usize = bars.iter().map(Bar::beat_count).sum();
     // Join jumps as dance_quality measures them (joins at the bars' starts after the first).
     let joins: Vec<(usize, usize)> = bars.iter().enumerate().skip(1).map(|(i, b)| (i, frame_of(b.start_secs))).filter(|&(_, f)| f + 1 < frames).collect();
-    let jumps = join_jumps(&m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
+    let jumps = join_jumps(m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
     let worst = jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (joins[k].0, j));
     Some(DanceFigures {
         kinetic_per_count: kinetic as f32 / counts.max(1) as f32,
@@ -220,9 +313,17 @@ pub struct Problem<'a> {
     free_skate_slack: f32,
     /// The variety term ([`GenerateOptions::variety_weight`]); None when off.
     variety: Option<super::variety::Variety>,
-    /// Per layer, per segment: a cost every fill of this problem adds (a take's penalty on the
-    /// earlier takes' moves, [`takes`]). Empty: none.
+    /// Per layer, per segment: a cost every fill of this problem adds (the moves source's
+    /// charge, a take's penalty on the earlier takes' moves, [`takes`], and the charge lifted
+    /// where [`order_stage`] opened a bar). Empty: none.
     base: Vec<Vec<f32>>,
+    /// The moves source's charge ([`Problem::moves_source_charge`]), per layer and segment.
+    charge: Vec<Vec<f32>>,
+    /// Per layer, why the preference order opened the bar to built-in moves (the last
+    /// pipeline run's, [`order_stage`] and [`join_repair_stage`]).
+    why: std::cell::RefCell<Vec<Option<BuiltinWhy>>>,
+    /// Per layer, whether the charge is already lifted in `base` ([`order_stage`]).
+    opened: Vec<bool>,
 }
 
 impl<'a> Problem<'a> {
@@ -254,8 +355,29 @@ impl<'a> Problem<'a> {
         };
         let beat_rate: Vec<Vec<f32>> = kinetic.iter().map(|v| v.iter().map(|&k| beat_rate_cost(k)).collect()).collect();
         let follow_beat_rate = follow && !kinetic.is_empty();
-        let mut p = Problem { lib, bars, layers, weights, table, intensity, node_cost, bar_counts, segment_counts, bar_bpm, segment_bpm, beat_rate, follow_beat_rate, free_skate_slack: options.free_skate_slack, variety, base: Vec::new() };
-        p.base = p.moves_source_charge();
+        let mut p = Problem {
+            lib,
+            bars,
+            layers,
+            weights,
+            table,
+            intensity,
+            node_cost,
+            bar_counts,
+            segment_counts,
+            bar_bpm,
+            segment_bpm,
+            beat_rate,
+            follow_beat_rate,
+            free_skate_slack: options.free_skate_slack,
+            variety,
+            base: Vec::new(),
+            charge: Vec::new(),
+            why: std::cell::RefCell::new(vec![None; layers.len()]),
+            opened: vec![false; layers.len()],
+        };
+        p.charge = p.moves_source_charge();
+        p.base = p.charge.clone();
         p
     }
 
@@ -304,7 +426,10 @@ impl<'a> Problem<'a> {
     /// ([`join_repair_stage`]): the preference order of issue 26, built-in moves only where no
     /// imported move meets the goals.
     fn lift_charge(&self, extra: &mut [Vec<f32>], t: usize) {
-        if let (Some(base), Some(row)) = (self.base.get(t), extra.get_mut(t)) {
+        if self.opened.get(t).copied().unwrap_or(false) {
+            return;
+        }
+        if let (Some(base), Some(row)) = (self.charge.get(t), extra.get_mut(t)) {
             for (e, b) in row.iter_mut().zip(base) {
                 *e -= b;
             }
@@ -329,6 +454,21 @@ impl<'a> Problem<'a> {
         free_skate_pass(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&extra), weights, self.free_skate_slack, &excess, path)
     }
 
+    /// §N's foot skate goal of the dance `path`: each bar's source clip's skate at the bar's
+    /// pace (skate is a speed), averaged over the bars.
+    pub fn paced_source_skate_cm_per_s(&self, path: &[usize]) -> f32 {
+        let v: Vec<f32> = path
+            .iter()
+            .enumerate()
+            .filter_map(|(t, &s)| {
+                let seg = self.lib.segments().get(s)?;
+                let rate = self.bar_bpm.get(t).copied().unwrap_or(0.0);
+                Some(if seg.tempo_bpm > 0.0 && rate > 0.0 { seg.clip_skate_cm_per_s * rate / seg.tempo_bpm } else { seg.clip_skate_cm_per_s })
+            })
+            .collect();
+        v.iter().sum::<f32>() / v.len().max(1) as f32
+    }
+
     /// Segment `s`'s skate above its clip's as bar `t` plays it: its feet slide faster by the
     /// factor it is sped up by (a salsa bar at 80 counts per minute on a bar at 140 slides 1.75
     /// times as fast), against its clip's at the clip's own tempo.
@@ -343,6 +483,7 @@ impl<'a> Problem<'a> {
 #[derive(Default)]
 pub struct Measured {
     done: Vec<(Vec<usize>, Option<DanceFigures>)>,
+    played: Vec<(Vec<usize>, Option<Played>)>,
 }
 
 impl Measured {
@@ -355,11 +496,158 @@ impl Measured {
         self.done.push((path.to_vec(), f));
         f
     }
+
+    /// [`played_figures`] of `path`, measured once.
+    pub fn played(&mut self, p: &Problem, path: &[usize]) -> Option<Played> {
+        if let Some((_, f)) = self.played.iter().find(|(q, _)| q == path) {
+            return f.clone();
+        }
+        let f = played_figures(p.lib, p.bars, path);
+        self.played.push((path.to_vec(), f.clone()));
+        f
+    }
+
+    /// The whole dance's figures as played ([`Measured::played`]) when `played`, else unheld
+    /// ([`Measured::of`]).
+    pub fn figures(&mut self, p: &Problem, path: &[usize], played: bool) -> Option<DanceFigures> {
+        if played {
+            self.played(p, path).map(|f| f.whole)
+        } else {
+            self.of(p, path)
+        }
+    }
 }
 
 /// Stage 1: the minimum-cost path of spec §G over the objective's terms ([`super::fill`]).
 pub fn fill_stage(p: &Problem) -> Result<Vec<usize>, FillError> {
     p.fill(&p.weights, &[])
+}
+
+/// The share of its bars a dance keeps imported when [`order_stage`] opens bars to built-in
+/// moves, where the first fill had it (issue 26's Acceptance: at least half the bars from the
+/// person's clips): the stage opens at most as many bars as keep it.
+pub const ORDER_IMPORTED_FLOOR: f32 = 0.5;
+
+/// Rounds of [`order_stage`]: in each, the bars still missing a goal first try another imported
+/// move, then open to built-in moves.
+pub const ORDER_ROUNDS: usize = 2;
+
+/// Stage 4b, the preference order of issue 26 (built-in moves fill only where no imported move
+/// does; [`GenerateOptions::follow_order`], under [`MovesSource::Mine`] with imported moves of
+/// the bar's count in the library). The first fill keeps built-in moves out of those bars (the
+/// source's charge); this stage measures the dance as it is played ([`played_figures`]) and
+/// finds the bars whose imported move misses a goal there: off its counts by the strip's rule
+/// (BAS-music on the counts less than [`OFF_BEAT_MARGIN`] above on the half-shifted counts), or
+/// a join at its start over [`GenerateOptions::join_jump_goal`]. Each round, (1) those bars
+/// bar their move and refill (another imported move tried), then (2) the bars still missing
+/// open to built-in moves (the charge lifted there, so both kinds compete on the objective),
+/// the furthest from their goal first, at most as many as keep [`ORDER_IMPORTED_FLOOR`] of the
+/// dance's bars imported; a refill is kept only when fewer bars miss (or as many, by less) and
+/// the whole dance's BAS-music on its counts is no lower (fewer bars off their counts alone
+/// let the 138 BPM drum take fall from 0.707 to 0.673 with half the person's files).
+/// Returns the dance, the cost to add to every later fill (the bars barred and opened) and,
+/// per bar, why it was opened.
+pub fn order_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, measured: &mut Measured) -> Result<(Vec<usize>, Vec<Vec<f32>>, Vec<Option<BuiltinWhy>>), FillError> {
+    let n = p.layers.len();
+    let mut why: Vec<Option<BuiltinWhy>> = vec![None; n];
+    let charged: Vec<bool> = (0..n).map(|t| p.charge.get(t).is_some_and(|r| r.iter().any(|&c| c > 0.0))).collect();
+    if !options.follow_order || p.weights.moves_source != MovesSource::Mine || !charged.iter().any(|&c| c) {
+        return Ok((path, Vec::new(), why));
+    }
+    let imported = |s: usize| p.lib.segments().get(s).is_some_and(|seg| seg.builtin.is_none());
+    let goal = options.join_jump_goal;
+    // The bars whose imported move misses a goal as played: why, and how far (the beat
+    // margin's shortfall, or the join's excess as a share of the goal).
+    let misses = |q: &[usize], bars: &[PlayedBar]| -> Vec<(usize, BuiltinWhy, f32)> {
+        (0..n)
+            .filter(|&t| charged[t] && q.get(t).is_some_and(|&s| imported(s)))
+            .filter_map(|t| {
+                let b = bars.get(t)?;
+                let beat = OFF_BEAT_MARGIN - b.beat_margin;
+                let join = b.join_jump.map_or(0.0, |j| (j - goal) / goal.max(1e-3));
+                if beat > 0.0 {
+                    Some((t, BuiltinWhy::OffBeat, beat))
+                } else if join > 0.0 {
+                    Some((t, BuiltinWhy::RoughJoin, join))
+                } else {
+                    None
+                }
+            })
+            .collect()
+    };
+    let score = |m: &[(usize, BuiltinWhy, f32)]| (m.len(), m.iter().map(|x| x.2).sum::<f32>());
+    let better = |a: &[(usize, BuiltinWhy, f32)], b: &[(usize, BuiltinWhy, f32)]| {
+        let (sa, sb) = (score(a), score(b));
+        sa.0 < sb.0 || (sa.0 == sb.0 && sa.1 < sb.1 - 1e-6)
+    };
+    let count_imported = |q: &[usize]| q.iter().filter(|&&s| imported(s)).count();
+    let floor = (ORDER_IMPORTED_FLOOR * n as f32).ceil() as usize;
+    let Some(first) = measured.played(p, &path) else { return Ok((path, Vec::new(), why)) };
+    let mut best_miss = misses(&path, &first.bars);
+    let mut best_bas = first.bas_music;
+    // What the dance met, kept: the beat-rate band and §N's skate goal (each bar's source clip
+    // at the bar's pace), as played.
+    let on_beat = in_beat_rate_band(first.whole.kinetic_per_count);
+    let skate_met = first.whole.foot_skate_cm_per_s <= p.paced_source_skate_cm_per_s(&path);
+    let keeps = |q: &[usize], f: &Played| (!on_beat || in_beat_rate_band(f.whole.kinetic_per_count)) && (!skate_met || f.whole.foot_skate_cm_per_s <= p.paced_source_skate_cm_per_s(q));
+    let mut best = path;
+    if best_miss.is_empty() {
+        return Ok((best, Vec::new(), why));
+    }
+    let mut extra: Vec<Vec<f32>> = vec![vec![0.0; p.lib.len()]; n];
+    let mut opened = vec![false; n];
+    // The last refill tried and its misses: its missing moves are barred too, kept or not, so
+    // a round never repeats the last one's refill.
+    let (mut last, mut last_miss) = (best.clone(), best_miss.clone());
+    for _ in 0..ORDER_ROUNDS {
+        // (1) Another imported move: each missing bar's move barred there.
+        let mut tried = extra.clone();
+        for (q, m) in [(&best, &best_miss), (&last, &last_miss)] {
+            for &(t, _, _) in m {
+                if let Some(c) = tried.get_mut(t).and_then(|row| row.get_mut(q[t])) {
+                    *c = JOIN_BAN;
+                }
+            }
+        }
+        let q = p.fill(weights, &tried)?;
+        if let Some(f) = measured.played(p, &q) {
+            let m = misses(&q, &f.bars);
+            (last, last_miss) = (q.clone(), m.clone());
+            if better(&m, &best_miss) && f.bas_music >= best_bas - 1e-4 && keeps(&q, &f) && count_imported(&q) >= floor.min(count_imported(&best)) {
+                (best, best_miss, best_bas, extra) = (q, m, f.bas_music, tried);
+            }
+        }
+        if best_miss.is_empty() {
+            break;
+        }
+        // (2) Built-in moves where it still misses, the furthest first, within the floor.
+        let room = count_imported(&best).saturating_sub(floor);
+        let mut order = best_miss.clone();
+        order.sort_by(|a, b| b.2.total_cmp(&a.2).then(a.0.cmp(&b.0)));
+        let newly: Vec<(usize, BuiltinWhy)> = order.iter().filter(|m| !opened[m.0]).take(room).map(|m| (m.0, m.1)).collect();
+        if newly.is_empty() {
+            break;
+        }
+        let mut tried = extra.clone();
+        for &(t, _) in &newly {
+            p.lift_charge(&mut tried, t);
+        }
+        let q = p.fill(weights, &tried)?;
+        if let Some(f) = measured.played(p, &q) {
+            let m = misses(&q, &f.bars);
+            if better(&m, &best_miss) && f.bas_music >= best_bas - 1e-4 && keeps(&q, &f) && count_imported(&q) >= floor.min(count_imported(&best)) {
+                (best, best_miss, best_bas, extra) = (q, m, f.bas_music, tried);
+                for &(t, w) in &newly {
+                    opened[t] = true;
+                    why[t] = Some(w);
+                }
+            }
+        }
+        if best_miss.is_empty() {
+            break;
+        }
+    }
+    Ok((best, extra, why))
 }
 
 /// Stage 2: the dance's kinetic beat rate near the song's ([`GenerateOptions::follow_beat_rate`]),
@@ -434,7 +722,8 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
     if p.layers.len() < 2 {
         return Ok((path, cost));
     }
-    let current = measured.of(p, &path);
+    let played = options.measure_played;
+    let current = measured.figures(p, &path, played);
     let (mut trial_path, mut trial) = (path.clone(), current);
     let mut best = current;
     let skate_met = current.is_some_and(|f| f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &path));
@@ -465,6 +754,9 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
             }
             if p.weights.moves_source == MovesSource::Mine && p.lib.segments().get(s).is_some_and(|seg| seg.builtin.is_none()) {
                 opened[t] = true;
+                if let Some(w) = p.why.borrow_mut().get_mut(t) {
+                    w.get_or_insert(BuiltinWhy::RoughJoin);
+                }
             }
         }
         if !skate_ok {
@@ -477,7 +769,7 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
         }
         let q = p.fill(weights, &extra)?;
         let (q, c) = p.free_skate(weights, &extra, &q);
-        let after = measured.of(p, &q);
+        let after = measured.figures(p, &q, played);
         if let (Some(a), Some(b)) = (after, best) {
             // Kept only when its worst join is better and nothing the dance met is lost: the
             // beat rate's band, and the skate goal.
@@ -510,11 +802,14 @@ fn take_penalty(p: &Problem, earlier: &[Vec<usize>], open: &[usize], penalty: f3
     m
 }
 
-/// One take's dance on `p` whose base is `base` (stages 1 to 5).
-fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -> Result<Vec<usize>, FillError> {
+/// One take's dance on `p` whose base is `base` (stages 1 to 5), and why each of its built-in
+/// bars is ([`builtin_why`]).
+fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -> Result<(Vec<usize>, Vec<Option<BuiltinWhy>>), FillError> {
     p.base = base;
     let path = fill_stage(p)?;
-    Ok(stages(p, options, path)?.0)
+    let path = stages(p, options, path)?.0;
+    let why = builtin_why(p, &path);
+    Ok((path, why))
 }
 
 /// Takes 0 to `take` in order (issue 26, [`GenerateOptions::take`]); returns the last. Take 0 is
@@ -528,12 +823,19 @@ fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -
 /// dance made within the slack (in the band, if any was) (the weakest penalty's when none is). Pinned bars never change,
 /// so they never differ. Take k runs the pipeline at least k + 1 times.
 pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Vec<usize>, FillError> {
+    Ok(takes_explained(p, options, take)?.0)
+}
+
+/// [`takes`], with why each built-in bar of the take is ([`BuiltinWhy`]).
+pub fn takes_explained(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<(Vec<usize>, Vec<Option<BuiltinWhy>>), FillError> {
     let base = p.base.clone();
     let open: Vec<usize> = p.layers.iter().enumerate().filter(|(_, l)| matches!(l, Layer::Open { .. })).map(|(t, _)| t).collect();
     let best = p.objective(&fill_stage(p)?);
     let per_bar = if best.is_finite() && best > 0.0 { best / open.len().max(1) as f32 } else { 1.0 };
     let within = |obj: f32| obj <= best * (1.0 + TAKE_SLACK) + 1e-6;
-    let mut earlier: Vec<Vec<usize>> = vec![take_dance(p, options, base.clone())?];
+    let (zero, zero_why) = take_dance(p, options, base.clone())?;
+    let mut earlier: Vec<Vec<usize>> = vec![zero];
+    let mut whys = vec![zero_why];
     // A take keeps take 0's beat rate in its band (when take 0's is): measured on the dance.
     let (lib, bars) = (p.lib, p.bars);
     // And its joins within the goal (when take 0's are): a take of the demo piece in 3 at 126 BPM
@@ -546,7 +848,7 @@ pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Ve
     let keep_band = take > 0 && (band0 || keep_joins);
     for _ in 0..take {
         let least = |q: &[usize], earlier: &[Vec<usize>]| earlier.iter().map(|e| differ(q, e, &open)).fold(1.0f32, f32::min);
-        let mut chosen: Option<(bool, Vec<usize>)> = None;
+        let mut chosen: Option<(bool, Vec<usize>, Vec<Option<BuiltinWhy>>)> = None;
         for f in TAKE_LADDER {
             p.base = base.clone();
             let penalty = take_penalty(p, &earlier, &open, f * per_bar);
@@ -559,19 +861,19 @@ pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Ve
             if least(&first, &earlier) < TAKE_DIFFER {
                 continue;
             }
-            let dance = take_dance(p, options, charged)?;
+            let (dance, why) = take_dance(p, options, charged)?;
             let banded = !keep_band || in_band(&dance);
             let done = within(p.objective(&dance)) && least(&dance, &earlier) >= TAKE_DIFFER && banded;
             // A dance in the band replaces one out of it, not the other way round.
-            if banded || chosen.as_ref().is_none_or(|c: &(bool, Vec<usize>)| !c.0) {
-                chosen = Some((banded, dance));
+            if banded || chosen.as_ref().is_none_or(|c| !c.0) {
+                chosen = Some((banded, dance, why));
             }
             if done {
                 break;
             }
         }
-        let dance = match chosen {
-            Some((_, d)) => d,
+        let (dance, why) = match chosen {
+            Some((_, d, w)) => (d, w),
             None => {
                 p.base = base.clone();
                 let penalty = take_penalty(p, &earlier, &open, TAKE_LADDER[0] * per_bar);
@@ -580,9 +882,10 @@ pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Ve
             }
         };
         earlier.push(dance);
+        whys.push(why);
     }
     p.base = base;
-    Ok(earlier.pop().unwrap_or_default())
+    Ok((earlier.pop().unwrap_or_default(), whys.pop().unwrap_or_default()))
 }
 
 /// The whole pipeline: stages 1 to 5 in order on the problem of filling `layers` (one per bar
@@ -590,10 +893,16 @@ pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Ve
 /// bar (pinned bars keep theirs) and the path's cost (the objective with `weights`, without any
 /// stage's or take's charge, so dances and takes compare: [`Problem::objective`]).
 pub fn generate(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: FillWeights, options: &GenerateOptions) -> Result<(Vec<usize>, f32), FillError> {
+    generate_explained(lib, bars, layers, weights, options).map(|(path, cost, _)| (path, cost))
+}
+
+/// [`generate`], with why each built-in bar of the dance is ([`BuiltinWhy`]; `None` for a bar
+/// holding an imported move, a pinned bar, or where the moves source is not *my moves*).
+pub fn generate_explained(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: FillWeights, options: &GenerateOptions) -> Result<(Vec<usize>, f32, Vec<Option<BuiltinWhy>>), FillError> {
     let mut p = Problem::new(lib, bars, layers, weights, options);
-    let path = takes(&mut p, options, options.take)?;
+    let (path, why) = takes_explained(&mut p, options, options.take)?;
     let cost = p.objective(&path);
-    Ok((path, cost))
+    Ok((path, cost, why))
 }
 
 /// Generate where the song's sections repeat (issue 26 item 2: a repeated section may take the
@@ -605,11 +914,18 @@ pub fn generate(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: F
 /// is charged nothing beyond what the moves cost: a repeated section pays its repeat window and
 /// variety as any other bars) and, per bar, the bar whose move it repeats.
 pub fn generate_with_repeats(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: FillWeights, options: &GenerateOptions, repeat_of: &[Option<usize>]) -> Result<(Vec<usize>, f32, Vec<Option<usize>>), FillError> {
-    let (first, cost) = generate(lib, bars, layers, weights, options)?;
+    generate_with_repeats_explained(lib, bars, layers, weights, options, repeat_of).map(|(path, cost, repeats, _)| (path, cost, repeats))
+}
+
+/// [`generate_with_repeats`], with why each built-in bar is ([`generate_explained`]; a bar
+/// pinned for the second run keeps the first run's reason).
+#[allow(clippy::type_complexity)]
+pub fn generate_with_repeats_explained(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: FillWeights, options: &GenerateOptions, repeat_of: &[Option<usize>]) -> Result<(Vec<usize>, f32, Vec<Option<usize>>, Vec<Option<BuiltinWhy>>), FillError> {
+    let (first, cost, first_why) = generate_explained(lib, bars, layers, weights, options)?;
     let open = |t: usize| matches!(layers.get(t), Some(Layer::Open { .. }));
     let repeats: Vec<Option<usize>> = (0..layers.len()).map(|t| repeat_of.get(t).copied().flatten().filter(|&r| r < t && open(t) && open(r))).collect();
     if repeats.iter().all(Option::is_none) {
-        return Ok((first, cost, repeats));
+        return Ok((first, cost, repeats, first_why));
     }
     let mut pinned = layers.to_vec();
     for (t, &r) in repeats.iter().enumerate() {
@@ -618,22 +934,60 @@ pub fn generate_with_repeats(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer
         pinned[t] = Layer::Fixed { segment };
         pinned[r] = Layer::Fixed { segment };
     }
-    let (path, _) = generate(lib, bars, &pinned, weights, options)?;
+    let (path, _, mut why) = generate_explained(lib, bars, &pinned, weights, options)?;
+    for (t, w) in why.iter_mut().enumerate() {
+        if matches!(pinned[t], Layer::Fixed { .. }) && open(t) {
+            *w = first_why.get(t).copied().flatten();
+        }
+    }
     let cost = Problem::new(lib, bars, layers, weights, options).objective(&path);
-    Ok((path, cost, repeats))
+    Ok((path, cost, repeats, why))
 }
 
-/// Stages 2 to 5 in order on `p`, from stage 1's `path`.
-fn stages(p: &Problem, options: &GenerateOptions, path: Vec<usize>) -> Result<(Vec<usize>, f32), FillError> {
+/// Stages 2 to 5 in order on `p`, from stage 1's `path`. Stage 4b's bars barred and opened
+/// ([`order_stage`]) hold for every later stage's fills; `p`'s base is as it was afterwards,
+/// and `p.why` says why each bar the order opened was.
+fn stages(p: &mut Problem, options: &GenerateOptions, path: Vec<usize>) -> Result<(Vec<usize>, f32), FillError> {
     let mut measured = Measured::default();
     let (path, weights) = beat_rate_stage(p, path, &mut measured)?;
     let (path, cost) = free_skate_stage(p, &weights, &path);
     let (path, cost) = if options.follow_skate { skate_stage(p, &weights, path, cost, &mut measured)? } else { (path, cost) };
-    if options.follow_joins {
-        join_repair_stage(p, &weights, options, path, cost, &mut measured)
-    } else {
-        Ok((path, cost))
+    let (order_path, order, why) = order_stage(p, &weights, options, path.clone(), &mut measured)?;
+    let (base, opened) = (p.base.clone(), p.opened.clone());
+    if !order.is_empty() {
+        p.base = p.with_base(&order).into_owned();
+        for (t, w) in why.iter().enumerate() {
+            if w.is_some() {
+                p.opened[t] = true;
+            }
+        }
     }
+    *p.why.borrow_mut() = why;
+    let cost = if order_path == path { cost } else { path_cost_with_tempi(&p.table, p.layers, &p.intensity, &p.node_cost, &p.tempi(&p.base), &weights, &order_path) };
+    let out = if options.follow_joins { join_repair_stage(p, &weights, options, order_path, cost, &mut measured) } else { Ok((order_path, cost)) };
+    (p.base, p.opened) = (base, opened);
+    out
+}
+
+/// Per bar of `path` (the pipeline's dance on `p`), why it holds a built-in move under
+/// [`MovesSource::Mine`] with imported moves in the library (`None` elsewhere, and for a
+/// pinned bar).
+fn builtin_why(p: &Problem, path: &[usize]) -> Vec<Option<BuiltinWhy>> {
+    let has_imported = p.lib.segments().iter().any(|s| s.builtin.is_none() && !s.retired);
+    let why = p.why.borrow();
+    (0..p.layers.len())
+        .map(|t| {
+            let builtin = path.get(t).and_then(|&s| p.lib.segments().get(s)).is_some_and(|s| s.builtin.is_some());
+            if !builtin || !has_imported || p.weights.moves_source != MovesSource::Mine || !matches!(p.layers[t], Layer::Open { .. }) {
+                return None;
+            }
+            let charged = p.charge.get(t).is_some_and(|r| r.iter().any(|&c| c > 0.0));
+            if !charged {
+                return Some(BuiltinWhy::NoneOfItsCount { counts: p.bars.get(t).map_or(0, Bar::beat_count) });
+            }
+            why.get(t).copied().flatten()
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -803,8 +1157,9 @@ mod tests {
         let opts = GenerateOptions::default();
         let (zero, zero_cost) = generate(lib, &bars, &layers, FillWeights::default(), &opts).unwrap();
         // Take 0 is the pipeline without a take's charge, its stages in order.
-        let p = Problem::new(lib, &bars, &layers, FillWeights::default(), &opts);
-        let (staged, _) = stages(&p, &opts, fill_stage(&p).unwrap()).unwrap();
+        let mut p = Problem::new(lib, &bars, &layers, FillWeights::default(), &opts);
+        let first = fill_stage(&p).unwrap();
+        let (staged, _) = stages(&mut p, &opts, first).unwrap();
         assert_eq!((zero.clone(), zero_cost), (staged.clone(), p.objective(&staged)));
         let takes: Vec<Vec<usize>> = (0..5).map(|take| generate(lib, &bars, &layers, FillWeights::default(), &GenerateOptions { take, ..opts }).unwrap().0).collect();
         assert_eq!(takes[0], zero);
@@ -854,18 +1209,63 @@ mod tests {
     }
 
     #[test]
+    fn stage_4b_opens_bars_to_built_in_moves_only_where_imported_ones_miss_and_keeps_half_imported() {
+        let lib = crate::choreo::segment::tests::small_library_with_an_imported_clip();
+        let bars = bars_at(100.0);
+        let layers = open_layers(&bars);
+        let imported = |q: &[usize]| q.iter().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
+        // A join goal no join of these moves meets: every bar after the first misses it, so
+        // the order must open bars, but no more than keep half the dance imported.
+        let strict = GenerateOptions { join_jump_goal: 0.05, ..GenerateOptions::default() };
+        let p = Problem::new(&lib, &bars, &layers, FillWeights::default(), &strict);
+        let first = fill_stage(&p).unwrap();
+        assert_eq!(imported(&first), bars.len(), "the first fill keeps built-in moves out: {first:?}");
+        let mut m = Measured::default();
+        let before = m.played(&p, &first).unwrap();
+        let (path, extra, why) = order_stage(&p, &p.weights, &strict, first.clone(), &mut m).unwrap();
+        let after = m.played(&p, &path).unwrap();
+        let opened: Vec<usize> = (0..bars.len()).filter(|&t| why[t].is_some()).collect();
+        assert!(!opened.is_empty(), "nothing opened: {path:?}");
+        assert!(opened.iter().all(|&t| why[t] == Some(BuiltinWhy::RoughJoin) && t > 0), "{why:?}");
+        assert!(2 * imported(&path) >= bars.len(), "{path:?} keeps fewer than half its bars imported");
+        assert!(imported(&path) < bars.len(), "no bar took a built-in move: {path:?}");
+        assert!(after.bas_music >= before.bas_music - 1e-4, "{} against {}", after.bas_music, before.bas_music);
+        assert_eq!(extra.len(), bars.len());
+        // Off, or another moves source: the first fill's dance as it was.
+        for (source, opts) in [(MovesSource::Mine, GenerateOptions { follow_order: false, ..strict }), (MovesSource::Mixed, strict)] {
+            let q = Problem::new(&lib, &bars, &layers, FillWeights { moves_source: source, ..FillWeights::default() }, &opts);
+            let start = fill_stage(&q).unwrap();
+            let (same, extra, why) = order_stage(&q, &q.weights, &opts, start.clone(), &mut Measured::default()).unwrap();
+            assert_eq!((same, extra.len()), (start, 0));
+            assert!(why.iter().all(Option::is_none));
+        }
+        // Every built-in bar of the whole pipeline's dance says why.
+        let (dance, _, whys) = generate_explained(&lib, &bars, &layers, FillWeights::default(), &strict).unwrap();
+        for (t, &s) in dance.iter().enumerate() {
+            assert_eq!(whys[t].is_some(), lib.segments()[s].builtin.is_some(), "bar {t}: {dance:?} {whys:?}");
+        }
+    }
+
+    #[test]
     fn the_pipeline_is_its_stages_in_order() {
         let lib = crate::choreo::segment::tests::small_library_with_an_imported_clip();
         let bars = bars_at(100.0);
         let layers = open_layers(&bars);
         let opts = GenerateOptions::default();
         let (whole, cost) = generate(&lib, &bars, &layers, FillWeights::default(), &opts).unwrap();
-        let p = Problem::new(&lib, &bars, &layers, FillWeights::default(), &opts);
+        let mut p = Problem::new(&lib, &bars, &layers, FillWeights::default(), &opts);
         let mut m = Measured::default();
         let path = fill_stage(&p).unwrap();
         let (path, w) = beat_rate_stage(&p, path, &mut m).unwrap();
         let (path, c) = free_skate_stage(&p, &w, &path);
         let (path, c) = skate_stage(&p, &w, path, c, &mut m).unwrap();
+        let (path, order, why) = order_stage(&p, &w, &opts, path, &mut m).unwrap();
+        if !order.is_empty() {
+            p.base = p.with_base(&order).into_owned();
+            for (t, w) in why.iter().enumerate() {
+                p.opened[t] |= w.is_some();
+            }
+        }
         let (path, _) = join_repair_stage(&p, &w, &opts, path, c, &mut m).unwrap();
         assert_eq!((whole, cost), (path.clone(), p.objective(&path)));
     }

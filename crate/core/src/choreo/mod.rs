@@ -26,14 +26,14 @@ pub mod variety;
 
 pub use document::{bar_views, check_bar, check_bars, generate_states, generate_states_with_repeats, next_round, open_search, render_states, BarState, BarView, ChoreoError, GenerateReport, Setting, Settings};
 pub use eigen::Signature;
-pub use generate::{bar_counts, dance_figures, skate_goal_cm_per_s, DanceFigures, GenerateOptions, JOIN_REPAIRS};
+pub use generate::{bar_counts, dance_figures, played_figures, skate_goal_cm_per_s, BuiltinWhy, DanceFigures, GenerateOptions, Played, PlayedBar, JOIN_REPAIRS};
 pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, CANDIDATES_PER_ROUND, TAU_DECAY};
 pub use fill::{
     bar_count_rate_bpm, beat_rate_cost, count_rate_bpm, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, free_skate_pass, node_costs, node_costs_with_skate, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
     FillWeights, Layer, MovesSource, MOVES_SOURCE_CHARGE, Tempi, TransitionTable, FREE_SKATE_SLACK_DEFAULT, BEAT_RATE_BAND, beat_rate_ladder, in_beat_rate_band, skate_ladder,
 };
 pub use grid::{bars_from_tempo, GridError};
-pub use notes::{bar_notes, candidate_notes, mark_repeats, Flag, FlagKind, MoveNote, NotesError};
+pub use notes::{bar_notes, candidate_notes, mark_builtin_why, mark_repeats, Flag, FlagKind, MoveNote, NotesError};
 pub use quality::{JOIN_JUMP_GOAL, dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
 pub use render::{render, segment_clip, speed_jumps, JoinBlend, RenderOptions};
 pub use table::{blended_join_jump, blended_join_jump_at, TableBuilder, TableProgress, TableScope};

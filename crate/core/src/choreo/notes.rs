@@ -75,6 +75,11 @@ pub struct MoveNote {
     /// not found by the analysis; absent when false.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub repeat_marked: bool,
+    /// Why the bar holds a built-in move though the person's moves come first (issue 26's
+    /// preference order: "built-in: no move of yours tried here lands on the beat"), from the
+    /// Generate that chose it ([`mark_builtin_why`]); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub builtin_why: Option<String>,
 }
 
 impl MoveNote {
@@ -83,7 +88,16 @@ impl MoveNote {
     pub fn words(&self) -> String {
         let why = if self.repeat_marked { "marked" } else { "its section repeats" };
         let repeat = self.repeats_bar.map(|r| format!("repeats bar {} ({why})", r + 1));
-        repeat.iter().map(String::as_str).chain(self.flags.iter().map(|f| f.words.as_str())).collect::<Vec<_>>().join("; ")
+        repeat.iter().map(String::as_str).chain(self.builtin_why.iter().map(String::as_str)).chain(self.flags.iter().map(|f| f.words.as_str())).collect::<Vec<_>>().join("; ")
+    }
+}
+
+/// Says on the notes of built-in bars why they are built-in (`why[i]`: bar `i`'s move when
+/// Generate chose it, and why, from [`super::GenerateReport::builtin_why`]): only where the bar
+/// still holds that move (a bar the person changed since says nothing).
+pub fn mark_builtin_why(notes: &mut [MoveNote], why: &[Option<(usize, super::generate::BuiltinWhy)>]) {
+    for (i, note) in notes.iter_mut().enumerate() {
+        note.builtin_why = why.get(i).copied().flatten().filter(|&(s, _)| note.builtin && note.segment == Some(s)).map(|(_, w)| w.words());
     }
 }
 
@@ -128,7 +142,7 @@ fn note_of(lib: &SegmentLibrary, bars: &[Bar], bar: usize, segment: Option<usize
             flags.push(Flag { kind: FlagKind::FootSkate, words: format!("foot skate {skate:.0} cm/s (its source {paced:.0} cm/s)"), value: skate, goal: paced });
         }
     }
-    MoveNote { bar, segment, name, source, builtin, flags, repeats_bar: None, repeat_marked: false }
+    MoveNote { bar, segment, name, source, builtin, flags, repeats_bar: None, repeat_marked: false, builtin_why: None }
 }
 
 /// Every bar's note, from the dance's readout `quality` (`dance_quality` of the rendered dance

@@ -408,6 +408,9 @@ pub struct Project {
     /// An open group of edits ([`Project::begin_group`]): `Some(true)` once its first edit
     /// recorded the undo step the rest join.
     group: Option<bool>,
+    /// Per bar, the built-in move the last Generate put there and why (issue 26's preference
+    /// order; [`Project::builtin_why`]). Not saved: a readout of that Generate.
+    builtin_why: Vec<Option<(usize, crate::choreo::BuiltinWhy)>>,
 }
 
 /// Two projects are the same when what a person made (document, history, blobs) is the same;
@@ -486,7 +489,7 @@ impl Project {
     /// names what the document refers to that was not there.
     pub(crate) fn from_parts(doc: ProjectDoc, undo: Vec<ProjectDoc>, redo: Vec<ProjectDoc>, blobs: BlobStore, missing: Vec<MissingBlob>) -> Self {
         let diffs = std::sync::Mutex::new(file::DiffCache::default());
-        Self { doc, history: History::from_parts(undo, redo), blobs, missing, derived: Derived::default(), diffs, group: None }
+        Self { doc, history: History::from_parts(undo, redo), blobs, missing, derived: Derived::default(), diffs, group: None, builtin_why: Vec::new() }
     }
 
     pub fn doc(&self) -> &ProjectDoc {
@@ -1135,6 +1138,7 @@ impl Project {
         let repeat_of = self.repeat_of_bars()?;
         let d = &self.derived;
         let (states, report, _) = crate::choreo::generate_states_with_repeats(d.library(), &bars, &states, doc.dance.settings.fill, options, &repeat_of)?;
+        let why = states.iter().enumerate().map(|(i, s)| Some((s.segment()?, report.builtin_why.get(i).copied().flatten()?))).collect();
         for (b, state) in doc.dance.bars.iter_mut().zip(states) {
             if !matches!(state, crate::choreo::BarState::Pinned { .. }) {
                 *b = d.bar_doc(state, b.search.take());
@@ -1142,6 +1146,7 @@ impl Project {
         }
         doc.dance.take = options.take;
         self.commit(doc);
+        self.builtin_why = why;
         Ok(report)
     }
 
@@ -1217,6 +1222,13 @@ impl Project {
         doc.dance.repeats = marks;
         self.commit(doc);
         Ok(run)
+    }
+
+    /// Per bar, the built-in move the last Generate chose there and why it is built-in though
+    /// the person's moves come first (issue 26; [`crate::choreo::mark_builtin_why`] says it
+    /// on the bar's note while the bar still holds that move). Empty before any Generate.
+    pub fn builtin_why(&self) -> &[Option<(usize, crate::choreo::BuiltinWhy)>] {
+        &self.builtin_why
     }
 
     /// The take of Generate the dance's generated bars come from (0 until "another take").
