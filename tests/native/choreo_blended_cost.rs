@@ -1,9 +1,10 @@
 //! The predicted blended jump in the table's cost (issue 26 item 1, spec §G and §J): the
-//! transition table's C(a, b) now adds [`BLENDED_JUMP_WEIGHT`] × the §J join jump predicted
-//! after the inertialized join ([`odori_core::choreo::blended_join_jump`]). Here every dance is
-//! made twice in the same run, at default settings: with the table's cost as it is, and with
-//! the cost before it (the control: the same library with a table at weight 0 installed, so
-//! the whole Generate pipeline — fill, ladders, join repair — runs on the old C). The songs are
+//! transition table's C(a, b) with [`JumpTerm::MEASURED`] adds 2 × max(0, J − 1.5), J the §J
+//! join jump predicted after the inertialized join ([`odori_core::choreo::blended_join_jump`]).
+//! (Not the default yet: see [`JumpTerm::MEASURED`].) Here every dance is made twice in the same
+//! run, at default settings: with that term in the table's cost, and with the cost before it
+//! (the control, [`JumpTerm::OFF`]; each a copy of the library with its table installed, so the
+//! whole Generate pipeline — fill, ladders, join repair — runs on that C). The songs are
 //! those of `choreo_variety` and `choreo_takes` with the built-in library (every song in
 //! ../shared/data/music, the drum take, the demo pieces of both; five takes each) and those of
 //! `choreo_my_moves` with the person's library (every humanoid dance clip in ../shared/data/mocap
@@ -19,7 +20,8 @@
 //! timed at both weights on the person's 4-count block (printed; test profile).
 //!
 //! `ODORI_BLENDED_JUMP_WEIGHT=x`, `ODORI_BLENDED_JUMP_FREE=y` try another term for the new cost
-//! (the assertions stay).
+//! (the assertions stay); `ODORI_ONLY=s` keeps the pieces whose label contains s (and then skips
+//! the person's library unless s is in one of its labels; the assertions are then not made).
 
 #[path = "music_audio.rs"]
 mod music_audio;
@@ -31,20 +33,16 @@ use odori_core::music::{analyze, AnalysisOptions};
 use odori_core::ImportOptions;
 use odori_tests::{all_bvh, best_ms, dance_quality_of, fps_override_for, random_moves_bas, read, RANDOM_MOVES_SEED};
 
-/// Dances (label substring, take) whose beat goals the new cost loses, each with its figures
-/// (2026-11-29, w 1, J₀ 1): the built-in moves in 3 at 84 BPM, takes 0 and 2 — the smoother
-/// joins are found among moves whose counts sit less clearly on the beat (with every jump
-/// charged, J₀ 0, four takes of this piece fell below random moves). Each listed loss must
-/// still happen (else take it off the list).
-const KNOWN_BEAT_LOSSES: &[(&str, u32, &str)] = &[
-    ("demo in 3, 84", 0, "BAS-music 0.645 (old 0.642, random 0.570)"),
-    ("demo in 3, 84", 2, "BAS-music 0.647 (old 0.653, random 0.570)"),
-];
+/// Dances (label substring, take) whose beat goals the new cost loses, each with its figures;
+/// each listed loss must still happen (else take it off the list). None at the product's term
+/// (w 2, J₀ 1.5); at w 1, J₀ 1 the built-in moves in 3 at 84 BPM lost the beat rate on takes 0
+/// and 2 (1.25 kinetic beats a count).
+const KNOWN_BEAT_LOSSES: &[(&str, u32, &str)] = &[];
 
 /// The term under test: the product's, or `ODORI_BLENDED_JUMP_WEIGHT` / `ODORI_BLENDED_JUMP_FREE`.
 fn term() -> JumpTerm {
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f32>().ok());
-    let d = JumpTerm::default();
+    let d = JumpTerm::MEASURED;
     JumpTerm { weight: env("ODORI_BLENDED_JUMP_WEIGHT").unwrap_or(d.weight), free: env("ODORI_BLENDED_JUMP_FREE").unwrap_or(d.free) }
 }
 
@@ -105,8 +103,12 @@ fn the_blended_jump_in_the_cost_smooths_the_joins_and_keeps_the_beat() {
     let demos = [(4u32, 100.0f32, 100.0f32), (4, 140.0, 140.0), (4, 90.0, 130.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (3, 84.0, 84.0), (3, 126.0, 126.0)];
     let builtin_songs = odori_tests::acceptance_songs(&music_audio::ACCEPTANCE_TRACKS, music_audio::decode_envelope, &demos);
     let person_songs = odori_tests::acceptance_songs(&music_audio::ACCEPTANCE_TRACKS, music_audio::decode_envelope, &[(4, 100.0, 100.0), (4, 90.0, 130.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (3, 96.0, 120.0)]);
+    let only = std::env::var("ODORI_ONLY").ok();
+    let keep = |label: &str| only.as_deref().is_none_or(|o| label.contains(o));
+    let builtin_songs: Vec<_> = builtin_songs.into_iter().filter(|(l, _)| keep(l)).collect();
+    let person_songs: Vec<_> = person_songs.into_iter().filter(|(l, _)| keep(l)).collect();
     let builtin = SegmentLibrary::builtin();
-    let person = person_library();
+    let person = if person_songs.is_empty() { builtin.clone() } else { person_library() };
     // The table build at both weights, the person's 4-count block.
     let scope = TableScope::for_metres(&[4]);
     let four = person.segments().iter().filter(|s| s.counts() == 4).count();
@@ -168,6 +170,9 @@ fn the_blended_jump_in_the_cost_smooths_the_joins_and_keeps_the_beat() {
         new.iter().filter(|f| f.beat_goals).count(),
         old.iter().filter(|f| f.beat_goals).count()
     );
+    if only.is_some() {
+        return;
+    }
     assert!(lost.is_empty(), "beat goals lost with the blended jump in the cost:\n{}", lost.join("\n"));
     let kept: Vec<_> = KNOWN_BEAT_LOSSES.iter().enumerate().filter(|(i, _)| !known_lost.contains(i)).map(|(_, k)| k).collect();
     assert!(kept.is_empty(), "listed as lost but met now (take them off the list): {kept:?}");
