@@ -11,9 +11,10 @@
 //! ([`odori_core::choreo::blended_join_jump_at`]) by Spearman's ρ, on each half: the
 //! prediction has no fitted weight, so each half is held out. Asserted: ρ ≥ [`RHO_FLOOR`] on
 //! both halves, and above the table's C by [`RHO_MARGIN`] (the control). Since session 14 the
-//! table's cost may hold the prediction ([`odori_core::choreo::JumpTerm::MEASURED`], not the
-//! default yet): "the table's C" here is the cost without it ([`JumpTerm::OFF`]), and the cost
-//! with it must rank the joins above C by [`TABLE_RHO_MARGIN`] on each half.
+//! table's cost may hold the prediction ([`odori_core::choreo::JumpTerm`], not by default yet):
+//! "the table's C" here is the cost without it ([`JumpTerm::OFF`]); the table's cost with the
+//! whole prediction added (weight 1, nothing free: the table's own 5-sample term) must rank the
+//! joins above C by [`TABLE_RHO_MARGIN`] on each half; [`JumpTerm::MEASURED`]'s is printed.
 
 use odori_core::choreo::quality::dance_quality;
 use odori_core::choreo::{bars_from_tempo, blended_join_jump, blended_join_jump_at, render, JumpTerm, RenderOptions, SegmentLibrary, SegmentOptions, TableScope, TransitionTable};
@@ -46,8 +47,9 @@ fn half_library(half: usize) -> SegmentLibrary {
 }
 
 /// Per pair of the half: (table cost without the term, predicted jump at the moves' tempi,
-/// predicted at 120 counts a minute, measured jump, the table's cost with the term).
-fn measure(half: usize) -> [Vec<f32>; 5] {
+/// predicted at 120 counts a minute, measured jump, the table's cost with the whole prediction,
+/// with [`JumpTerm::MEASURED`]).
+fn measure(half: usize) -> [Vec<f32>; 6] {
     let lib = half_library(half);
     let four: Vec<usize> = lib.segments().iter().filter(|s| !s.retired && s.builtin.is_none() && s.counts() == 4).map(|s| s.index).collect();
     assert!(four.len() > 100, "half {half}: only {} imported 4-count segments", four.len());
@@ -55,8 +57,9 @@ fn measure(half: usize) -> [Vec<f32>; 5] {
     assert_eq!(bars.len(), 2);
     let beats: Vec<f32> = (0..8).map(|k| k as f32 * 0.5).collect();
     let table = TransitionTable::for_scope_with_term(&lib, 3.0, &TableScope::for_bar_counts(&[4]), JumpTerm::OFF);
-    let now = TransitionTable::for_scope_with_term(&lib, 3.0, &TableScope::for_bar_counts(&[4]), JumpTerm::MEASURED);
-    let mut out: [Vec<f32>; 5] = Default::default();
+    let now = TransitionTable::for_scope_with_term(&lib, 3.0, &TableScope::for_bar_counts(&[4]), JumpTerm { weight: 1.0, free: 0.0 });
+    let measured_term = TransitionTable::for_scope_with_term(&lib, 3.0, &TableScope::for_bar_counts(&[4]), JumpTerm::MEASURED);
+    let mut out: [Vec<f32>; 6] = Default::default();
     for &a in &four {
         for &b in &four {
             if lib.segments()[a].clip == lib.segments()[b].clip {
@@ -69,6 +72,7 @@ fn measure(half: usize) -> [Vec<f32>; 5] {
             out[2].push(blended_join_jump_at(&lib, a, b, Some(120.0)).expect("in range"));
             out[3].push(q.join_jump_max);
             out[4].push(now.cost(a, b));
+            out[5].push(measured_term.cost(a, b));
         }
     }
     out
@@ -79,12 +83,13 @@ fn the_blended_join_jump_ranks_joins_as_the_viewer_sees_them() {
     let mut failures = Vec::new();
     for half in [0, 1] {
         let t = std::time::Instant::now();
-        let [cost, predicted, at_rate, measured, now] = measure(half);
+        let [cost, predicted, at_rate, measured, now, with_measured] = measure(half);
         let (rho_c, rho_p, rho_r, rho_now) = (spearman(&cost, &measured), spearman(&predicted, &measured), spearman(&at_rate, &measured), spearman(&now, &measured));
         println!(
-            "half {half}: {} pairs ({:.0} s): Spearman ρ(table C without the term, jump) {rho_c:.2}, ρ(blended prediction, jump) {rho_p:.2} (at the bars' rate {rho_r:.2}), ρ(the table's cost with the term, jump) {rho_now:.2}; measured jump mean {:.2}, over 1.5 {}",
+            "half {half}: {} pairs ({:.0} s): Spearman ρ(table C without the term, jump) {rho_c:.2}, ρ(blended prediction, jump) {rho_p:.2} (at the bars' rate {rho_r:.2}), ρ(the table's cost with the term, jump) {rho_now:.2} (with JumpTerm::MEASURED {:.2}); measured jump mean {:.2}, over 1.5 {}",
             cost.len(),
             t.elapsed().as_secs_f32(),
+            spearman(&with_measured, &measured),
             measured.iter().sum::<f32>() / measured.len() as f32,
             measured.iter().filter(|&&j| j > 1.5).count()
         );
