@@ -10,7 +10,13 @@
 //! adds `repeat_penalty` to an edge whose two segments share frames of the same clip, and an
 //! end-effector gap term, [`END_GAP_WEIGHT`] × Σ over hands and feet of the distance between
 //! where each is at the end of A and at the start of B (normalised body), which S, a sum of
-//! per-link cosines, barely sees (see [`END_GAP_WEIGHT`]).
+//! per-link cosines, barely sees (see [`END_GAP_WEIGHT`]). Since session 14 (issue 26) C may
+//! also hold what the viewer sees after the blend ([`JumpTerm`]): [`BLENDED_JUMP_WEIGHT`] ×
+//! max(0, J − [`BLENDED_JUMP_FREE`]), J the §J join jump predicted after the inertialized join
+//! ([`blended_join_jump`], sampled at [`TABLE_BLEND_SAMPLES`] points of the decay), which ranks
+//! the measured jumps at Spearman ρ 0.6 where C alone ranks them at 0.17. The default is
+//! [`JumpTerm::OFF`], the cost before it, until the term stops costing the person's dances foot
+//! skate ([`JumpTerm::MEASURED`]); a table extended block by block keeps its term.
 //!
 //! Speed. The costs need one square root and one division per link and pair (the jump
 //! direction h(v_l(j_B) − v_l(i_A)) cannot be factored), so the work is M² · 20 of those;
@@ -45,6 +51,7 @@ use std::collections::BTreeSet;
 use std::sync::Arc;
 
 use super::segment::{JoinEnds, SegmentLibrary, LINKS, LINK_COUNT};
+use crate::canon::humanoid::CANON_COUNT;
 
 /// Floor on S, so C = 1/S stays finite.
 pub const MIN_S: f32 = 0.02;
@@ -133,6 +140,124 @@ pub fn blended_join_jump_at(lib: &SegmentLibrary, a: usize, b: usize, count_rate
 
 /// Points of the decay [`blended_join_jump_at`] samples the offset's acceleration at.
 const BLEND_SAMPLES: usize = 10;
+
+/// Weight of the predicted blended join jump in the table's C (issue 26 item 1): C(a, b) +=
+/// this × max(0, J − [`BLENDED_JUMP_FREE`]), J the jump [`blended_join_jump`] predicts (each
+/// move at its own tempo), sampled at the points [`TABLE_BLEND_SAMPLES`]. A predicted jump of 2
+/// then costs 1, about the spread of C between a good and a poor join before it. Chosen on the
+/// songs of `tests/native/choreo_blended_cost.rs` (`docs/benchmarks-notes-choreo.md` lists the
+/// terms tried).
+pub const BLENDED_JUMP_WEIGHT: f32 = 2.0;
+/// The predicted jump the table's term lets pass free: C(a, b) += [`BLENDED_JUMP_WEIGHT`] ×
+/// max(0, jump − this). 1.5, spec §J's goal: only a join predicted over the goal pays, so the
+/// joins within it keep their C (and the balance of C against the beat term the dances were
+/// tuned on). Charging every jump (0) smoothed the joins most but took the built-in moves in 3
+/// off the beat (84 BPM: BAS-music 0.42–0.52 against random moves' 0.57); 1 still turned the
+/// 84 BPM piece in 3 at 1.25 kinetic beats a count and gave the person's Let's Go Fishin' a
+/// join of 1.70 (`docs/benchmarks-notes-choreo.md`).
+pub const BLENDED_JUMP_FREE: f32 = 1.5;
+
+/// The blended-jump term of a table's costs: `weight` × max(0, predicted jump − `free`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JumpTerm {
+    pub weight: f32,
+    pub free: f32,
+}
+
+impl JumpTerm {
+    /// The term off: the cost before session 14 (§G's C and the end gaps).
+    pub const OFF: JumpTerm = JumpTerm { weight: 0.0, free: 0.0 };
+
+    /// Its weight within 0..=100 and its free jump within 0..=100 (non-finite: 0).
+    fn clamped(self) -> JumpTerm {
+        let c = |x: f32| if x.is_finite() { x.clamp(0.0, 100.0) } else { 0.0 };
+        JumpTerm { weight: c(self.weight), free: c(self.free) }
+    }
+}
+
+impl JumpTerm {
+    /// [`BLENDED_JUMP_WEIGHT`] and [`BLENDED_JUMP_FREE`]: the term measured in
+    /// `tests/native/choreo_blended_cost.rs`. Not the default yet: with the person's library it
+    /// let the feet slide more than the sources' on the 150 BPM piece in 3 (66.8 against 63.0
+    /// cm/s; 103.7 against 64.0 on half 0 of the files) and joined one piece at 1.63
+    /// (`choreo_my_moves`), and the drum take at 1.51 (`choreo_beats`).
+    pub const MEASURED: JumpTerm = JumpTerm { weight: BLENDED_JUMP_WEIGHT, free: BLENDED_JUMP_FREE };
+}
+
+impl Default for JumpTerm {
+    /// [`JumpTerm::OFF`] for now (see [`JumpTerm::MEASURED`]): the dances are those before it.
+    fn default() -> Self {
+        JumpTerm::OFF
+    }
+}
+
+/// The points of the decay (in tenths of [`super::render::INERTIAL_BLEND_SECS`]) at which the
+/// table samples the offset's acceleration: the odd tenths. The tenth 0 is the outgoing move's
+/// own acceleration (the offset carries it on), counted apart. Five samples ranked the measured
+/// jumps as the ten of [`blended_join_jump`] do (ρ 0.61/0.59 against 0.62/0.59,
+/// `docs/benchmarks.md`) at half the work.
+pub const TABLE_BLEND_SAMPLES: [usize; 5] = [1, 3, 5, 7, 9];
+/// Floats per segment of each side's blend data: xyz per sample and canonical joint.
+const BLEND_FLOATS: usize = 3 * TABLE_BLEND_SAMPLES.len() * CANON_COUNT;
+
+/// The quintic decay's acceleration at tenth `k` of the span as coefficients of the offset's
+/// pose, velocity and acceleration (it is linear in them): (k_x, k_v, k_a).
+fn decay_coefficients(k: usize) -> (f32, f32, f32) {
+    let span = blend_span_frames();
+    let t = span * k as f32 / BLEND_SAMPLES as f32;
+    let at = |x0: glam::Vec3, v0: glam::Vec3, a0: glam::Vec3| super::render::quintic_offset_accel(x0, v0, a0, span, t).x;
+    let (z, one) = (glam::Vec3::ZERO, glam::Vec3::X);
+    (at(one, z, z), at(z, one, z), at(z, z, one))
+}
+
+/// Each segment's blend data for the table (see [`Ends`]): the predecessor side P_k(a) =
+/// k_x·(x_A + v_A + ½a_A) + k_v·v_A + k_a·a_A and the successor side Q_k(b) = k_x·x_B + k_v·v_B
+/// + (k_a − 1)·a_B per sample k and joint, so that the incoming motion's acceleration plus the
+/// offset's at sample k is P_k(a) − Q_k(b): the pair loop is then one distance per sample and
+/// joint. Also the outgoing move's largest joint acceleration at its end, squared.
+fn blend_sides(e: &JoinEnds) -> ([f32; BLEND_FLOATS], [f32; BLEND_FLOATS], f32) {
+    let (mut p, mut q) = ([0.0f32; BLEND_FLOATS], [0.0f32; BLEND_FLOATS]);
+    let mut peak2 = 0.0f32;
+    for (si, &k) in TABLE_BLEND_SAMPLES.iter().enumerate() {
+        let (kx, kv, ka) = decay_coefficients(k);
+        for j in 0..CANON_COUNT {
+            let [xa, va, aa] = e.end_joint[j];
+            let [xb, vb, ab] = e.start_joint[j];
+            let pa = kx * (xa + va + 0.5 * aa) + kv * va + ka * aa;
+            let qb = kx * xb + kv * vb + (ka - 1.0) * ab;
+            let o = 3 * (si * CANON_COUNT + j);
+            p[o..o + 3].copy_from_slice(&pa.to_array());
+            q[o..o + 3].copy_from_slice(&qb.to_array());
+            peak2 = peak2.max(aa.length_squared());
+        }
+    }
+    (p, q, peak2)
+}
+
+/// Adds `term` (its weight × the predicted blended jump over its free part) to each cost of a block of predecessors
+/// (`a(r)`: row r of their [`blend_sides`] P, `a_peak2`, `a_sharp` alongside; `b`: the
+/// successor's Q and sharpness). `peak`: scratch as long as `costs`.
+#[allow(clippy::too_many_arguments)]
+fn blend_jumps<'a>(costs: &mut [f32], peak: &mut [f32], b: &[f32], b_sharp: f32, a: impl Fn(usize) -> &'a [f32], a_peak2: &[f32], a_sharp: &[f32], term: JumpTerm) {
+    let n = costs.len();
+    let peak = &mut peak[..n];
+    peak.copy_from_slice(&a_peak2[..n]);
+    for r in 0..BLEND_FLOATS / 3 {
+        let (px, py, pz) = (&a(3 * r)[..n], &a(3 * r + 1)[..n], &a(3 * r + 2)[..n]);
+        let (qx, qy, qz) = (b[3 * r], b[3 * r + 1], b[3 * r + 2]);
+        for i in 0..n {
+            let (dx, dy, dz) = (px[i] - qx, py[i] - qy, pz[i] - qz);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            peak[i] = if d2 > peak[i] { d2 } else { peak[i] };
+        }
+    }
+    let a_sharp = &a_sharp[..n];
+    for i in 0..n {
+        let own = 0.5 * (a_sharp[i] + b_sharp);
+        let over = peak[i].sqrt() / (if own > 1e-6 { own } else { 1e-6 }) - term.free;
+        costs[i] += term.weight * if over > 0.0 { over } else { 0.0 };
+    }
+}
 
 /// Which ordered pairs of segments a [`TransitionTable`] holds, as blocks by metre: the
 /// (p, n) block holds C(a, b) for every segment a of p counts and b of n counts
@@ -260,7 +385,24 @@ struct Ends {
     a_gap: Vec<f32>,
     /// Successor end-effector positions at their start, `[b][GAP_FLOATS]`.
     b_gap: Vec<f32>,
+    /// Predecessor blend data P ([`blend_sides`]), `[BLEND_FLOATS][m]`, their largest end
+    /// acceleration squared and their sharpness, `[m]` each.
+    a_blend: Vec<f32>,
+    a_peak2: Vec<f32>,
+    sharp: Vec<f32>,
+    /// Successor blend data Q, `[b][BLEND_FLOATS]`.
+    b_blend: Vec<f32>,
     overlaps: Vec<Vec<usize>>,
+}
+
+/// The predecessor side of a block's segments ([`Ends::gather`]).
+#[derive(Clone, Debug, Default)]
+struct Gathered {
+    a_side: Vec<f32>,
+    a_gap: Vec<f32>,
+    a_blend: Vec<f32>,
+    a_peak2: Vec<f32>,
+    a_sharp: Vec<f32>,
 }
 
 impl Ends {
@@ -302,12 +444,25 @@ impl Ends {
                 }
             }
         }
-        Ends { m, a_side, b_side, a_gap, b_gap, overlaps: lib.overlaps.clone() }
+        let mut a_blend = vec![0.0f32; BLEND_FLOATS * m];
+        let mut b_blend = vec![0.0f32; m * BLEND_FLOATS];
+        let mut a_peak2 = vec![0.0f32; m];
+        for (s, e) in ends.iter().enumerate() {
+            let (p, q, peak2) = blend_sides(e);
+            for (r, x) in p.into_iter().enumerate() {
+                a_blend[r * m + s] = x;
+            }
+            b_blend[s * BLEND_FLOATS..(s + 1) * BLEND_FLOATS].copy_from_slice(&q);
+            a_peak2[s] = peak2;
+        }
+        let sharp = ends.iter().map(|e| e.sharpness).collect();
+        Ends { m, a_side, b_side, a_gap, b_gap, a_blend, a_peak2, sharp, b_blend, overlaps: lib.overlaps.clone() }
     }
 
-    /// The predecessor side of the segments `from`, packed as [`Ends::a_side`] and
-    /// [`Ends::a_gap`] with `from.len()` in place of m.
-    fn gather(&self, from: &[u32]) -> (Vec<f32>, Vec<f32>) {
+    /// The predecessor side of the segments `from`, packed as [`Ends::a_side`],
+    /// [`Ends::a_gap`] and [`Ends::a_blend`] with `from.len()` in place of m, and their
+    /// [`Ends::a_peak2`] and [`Ends::sharp`].
+    fn gather(&self, from: &[u32]) -> Gathered {
         let (m, n) = (self.m, from.len());
         let mut a_side = vec![0.0f32; LINK_COUNT * A_FLOATS * n];
         for row in 0..LINK_COUNT * A_FLOATS {
@@ -323,12 +478,21 @@ impl Ends {
                 *d = src[a as usize];
             }
         }
-        (a_side, a_gap)
+        let mut a_blend = vec![0.0f32; BLEND_FLOATS * n];
+        for row in 0..BLEND_FLOATS {
+            let (src, dst) = (&self.a_blend[row * m..(row + 1) * m], &mut a_blend[row * n..(row + 1) * n]);
+            for (d, &a) in dst.iter_mut().zip(from) {
+                *d = src[a as usize];
+            }
+        }
+        let a_peak2 = from.iter().map(|&a| self.a_peak2[a as usize]).collect();
+        let a_sharp = from.iter().map(|&a| self.sharp[a as usize]).collect();
+        Gathered { a_side, a_gap, a_blend, a_peak2, a_sharp }
     }
 
     /// C(a, b) of one pair, by the very operations of the block loop (so bit for bit the
-    /// cost a block holds), repetition penalty included.
-    fn pair_cost(&self, a: usize, b: usize, repeat_penalty: f32) -> f32 {
+    /// cost a block holds), repetition penalty and blended-jump term included.
+    fn pair_cost(&self, a: usize, b: usize, repeat_penalty: f32, term: JumpTerm) -> f32 {
         let m = self.m;
         if a >= m || b >= m {
             return f32::INFINITY;
@@ -344,6 +508,11 @@ impl Ends {
         let s = acc[0];
         let mut c = [1.0 / if s > MIN_S { s } else { MIN_S }];
         end_gaps(&mut c, &self.b_gap[b * GAP_FLOATS..(b + 1) * GAP_FLOATS], |k| &self.a_gap[k * m + a..k * m + a + 1]);
+        if term.weight > 0.0 {
+            let mut peak = [0.0f32; 1];
+            let bq = &self.b_blend[b * BLEND_FLOATS..(b + 1) * BLEND_FLOATS];
+            blend_jumps(&mut c, &mut peak, bq, self.sharp[b], |r| &self.a_blend[r * m + a..r * m + a + 1], &self.a_peak2[a..a + 1], &self.sharp[a..a + 1], term);
+        }
         let mut c = c[0];
         for &x in &self.overlaps[a] {
             if x == b {
@@ -375,6 +544,9 @@ pub struct TransitionTable {
     /// them, see [`SegmentLibrary::recut_clip`]).
     pub(crate) available: Vec<bool>,
     repeat_penalty: f32,
+    /// The predicted blended jump's term in its costs ([`JumpTerm`]; [`JumpTerm::OFF`]: the
+    /// cost before it).
+    jump_term: JumpTerm,
     /// The library revision the table was built from (0 for tables built from given costs).
     revision: u64,
 }
@@ -391,7 +563,7 @@ impl TransitionTable {
                 t[b * m + a] = if c.is_finite() { c.clamp(0.0, 1e6) } else { 1e6 };
             }
         }
-        let mut b = TableBuilder::with_groups(m, Layout::one_group(m), None, TableScope::all_pairs(), vec![true; m], 0.0, 0, None);
+        let mut b = TableBuilder::with_groups(m, Layout::one_group(m), None, TableScope::all_pairs(), vec![true; m], (0.0, JumpTerm::OFF), 0, None);
         if let Some(job) = b.jobs.first_mut() {
             job.costs = t;
             job.next_col = m;
@@ -408,7 +580,14 @@ impl TransitionTable {
 
     /// The blocks of `scope` only ([`TableScope`]).
     pub fn for_scope(lib: &SegmentLibrary, repeat_penalty: f32, scope: &TableScope) -> TransitionTable {
-        let mut b = TableBuilder::for_scope(lib, repeat_penalty, scope, None);
+        TransitionTable::for_scope_with_term(lib, repeat_penalty, scope, JumpTerm::default())
+    }
+
+    /// [`TransitionTable::for_scope`] with the predicted blended jump's term `term`
+    /// ([`JumpTerm::OFF`]: the cost before session 14, §G's C and the end gaps alone; for
+    /// comparisons).
+    pub fn for_scope_with_term(lib: &SegmentLibrary, repeat_penalty: f32, scope: &TableScope, term: JumpTerm) -> TransitionTable {
+        let mut b = TableBuilder::for_scope_with_term(lib, repeat_penalty, scope, None, term);
         while !b.step(usize::MAX).is_done() {}
         b.finish().unwrap_or_else(|| unreachable_empty(lib.len()))
     }
@@ -464,13 +643,18 @@ impl TransitionTable {
             return block.costs[self.local[b] as usize * block.from.len() + self.local[a] as usize];
         }
         match &self.ends {
-            Some(e) => e.pair_cost(a, b, self.repeat_penalty),
+            Some(e) => e.pair_cost(a, b, self.repeat_penalty, self.jump_term),
             None => f32::INFINITY,
         }
     }
 
     pub fn repeat_penalty(&self) -> f32 {
         self.repeat_penalty
+    }
+
+    /// The predicted blended jump's term in its costs ([`JumpTerm`]).
+    pub fn jump_term(&self) -> JumpTerm {
+        self.jump_term
     }
 
     /// The library revision this table was built from.
@@ -517,6 +701,7 @@ fn unreachable_empty(m: usize) -> TransitionTable {
         ends: None,
         available: Vec::new(),
         repeat_penalty: 0.0,
+        jump_term: JumpTerm::OFF,
         revision: 0,
     }
 }
@@ -601,9 +786,8 @@ struct Job {
     ends: Option<Arc<Ends>>,
     from: Vec<u32>,
     to: Vec<u32>,
-    /// The predecessors' link data, packed as [`Ends::a_side`] / [`Ends::a_gap`] over `from`.
-    a_side: Vec<f32>,
-    a_gap: Vec<f32>,
+    /// The predecessors' link and blend data, packed as [`Ends`] over `from`.
+    a: Gathered,
     costs: Vec<f32>,
     next_col: usize,
     next_top: usize,
@@ -651,6 +835,7 @@ pub struct TableBuilder {
     job: usize,
     available: Vec<bool>,
     repeat_penalty: f32,
+    jump_term: JumpTerm,
     revision: u64,
 }
 
@@ -669,21 +854,31 @@ impl TableBuilder {
     /// already holds when it was built from this library (same revision and penalty): only the
     /// missing blocks are built, and the table holds both.
     pub fn for_scope(lib: &SegmentLibrary, repeat_penalty: f32, scope: &TableScope, earlier: Option<&TransitionTable>) -> TableBuilder {
+        // Blocks added to an earlier table are costed as its own are.
+        let term = earlier.map_or_else(JumpTerm::default, |t| t.jump_term);
+        TableBuilder::for_scope_with_term(lib, repeat_penalty, scope, earlier, term)
+    }
+
+    /// [`TableBuilder::for_scope`] with the predicted blended jump's term `term`
+    /// ([`JumpTerm::OFF`]: the cost before session 14); `earlier` is taken over only when it
+    /// has the same term.
+    pub fn for_scope_with_term(lib: &SegmentLibrary, repeat_penalty: f32, scope: &TableScope, earlier: Option<&TransitionTable>, term: JumpTerm) -> TableBuilder {
         let m = lib.len();
+        let jump_term = term.clamped();
         let available = lib.segments().iter().map(|s| !s.retired).collect();
         let ends = Some(Arc::new(Ends::from_library(lib)));
         let (layout, earlier) = if scope.is_all_pairs() {
             (Layout::one_group(m), None)
         } else {
             let layout = Layout::by_counts(lib);
-            let earlier = earlier.filter(|t| t.revision == lib.revision() && t.m == m && t.repeat_penalty == repeat_penalty && !t.scope.is_all_pairs() && t.metres == layout.metres);
+            let earlier = earlier.filter(|t| t.revision == lib.revision() && t.m == m && t.repeat_penalty == repeat_penalty && t.jump_term == jump_term && !t.scope.is_all_pairs() && t.metres == layout.metres);
             (layout, earlier)
         };
-        TableBuilder::with_groups(m, layout, earlier, scope.clone(), available, repeat_penalty, lib.revision(), ends)
+        TableBuilder::with_groups(m, layout, earlier, scope.clone(), available, (repeat_penalty, jump_term), lib.revision(), ends)
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn with_groups(m: usize, layout: Layout, earlier: Option<&TransitionTable>, scope: TableScope, available: Vec<bool>, repeat_penalty: f32, revision: u64, ends: Option<Arc<Ends>>) -> TableBuilder {
+    fn with_groups(m: usize, layout: Layout, earlier: Option<&TransitionTable>, scope: TableScope, available: Vec<bool>, (repeat_penalty, jump_term): (f32, JumpTerm), revision: u64, ends: Option<Arc<Ends>>) -> TableBuilder {
         let groups = layout.members.len().max(1);
         let blocks: Vec<Option<Arc<Block>>> = match earlier {
             Some(t) if t.blocks.len() == groups * groups => t.blocks.clone(),
@@ -708,7 +903,7 @@ impl TableBuilder {
                 (Some(f), Some(t)) => (f.clone(), t.clone()),
                 _ => (Vec::new(), Vec::new()),
             };
-            let (a_side, a_gap) = ends.as_ref().map_or((Vec::new(), Vec::new()), |e| e.gather(&from));
+            let a = ends.as_ref().map_or_else(Gathered::default, |e| e.gather(&from));
             let costs = vec![0.0f32; from.len() * to.len()];
             jobs.push(Job {
                 g,
@@ -717,8 +912,7 @@ impl TableBuilder {
                 ends: ends.clone(),
                 from,
                 to,
-                a_side,
-                a_gap,
+                a,
                 costs,
                 next_col: 0,
                 next_top: 0,
@@ -730,7 +924,7 @@ impl TableBuilder {
                 scratch: Vec::new(),
             });
         }
-        TableBuilder { m, scope, layout, blocks, ends, jobs, job: 0, available, repeat_penalty, revision }
+        TableBuilder { m, scope, layout, blocks, ends, jobs, job: 0, available, repeat_penalty, jump_term, revision }
     }
 
     /// The library revision it is building for.
@@ -766,7 +960,7 @@ impl TableBuilder {
         }
         let (overlaps, group, local) = (self.ends.as_ref().map(|e| &e.overlaps), &self.layout.group, &self.layout.local);
         if let Some(job) = self.jobs.get_mut(self.job) {
-            job.step(columns, self.repeat_penalty, overlaps.map(|o| (o.as_slice(), group.as_slice(), local.as_slice())));
+            job.step(columns, (self.repeat_penalty, self.jump_term), overlaps.map(|o| (o.as_slice(), group.as_slice(), local.as_slice())));
         }
         self.progress()
     }
@@ -776,7 +970,7 @@ impl TableBuilder {
         if !self.progress().is_done() {
             return None;
         }
-        let TableBuilder { m, scope, layout, mut blocks, ends, jobs, available, repeat_penalty, revision, .. } = self;
+        let TableBuilder { m, scope, layout, mut blocks, ends, jobs, available, repeat_penalty, jump_term, revision, .. } = self;
         let groups = layout.members.len().max(1);
         for j in jobs {
             let at = j.g * groups + j.h;
@@ -789,19 +983,19 @@ impl TableBuilder {
             [Some(b)] if metres.is_empty() && b.costs.len() == m * m => Some(b.costs.clone()),
             _ => None,
         };
-        Some(TransitionTable { m, scope, metres, group, local, blocks, flat, ends, available, repeat_penalty, revision })
+        Some(TransitionTable { m, scope, metres, group, local, blocks, flat, ends, available, repeat_penalty, jump_term, revision })
     }
 }
 
 impl Job {
     /// Up to `columns` columns of work. `overlaps`: the library's overlaps and the segments'
     /// groups and local indices (for the repetition penalty).
-    fn step(&mut self, columns: usize, repeat_penalty: f32, overlaps: Option<(&[Vec<usize>], &[u8], &[u32])>) {
+    fn step(&mut self, columns: usize, (repeat_penalty, jump_term): (f32, JumpTerm), overlaps: Option<(&[Vec<usize>], &[u8], &[u32])>) {
         let (nf, nt) = (self.from.len(), self.to.len());
         let mut budget = columns.max(1);
         if self.next_col < nt {
             let end = self.next_col.saturating_add(budget).min(nt);
-            self.pair_columns(self.next_col, end);
+            self.pair_columns(self.next_col, end, jump_term);
             budget -= end - self.next_col;
             self.next_col = end;
             if self.next_col == nt {
@@ -831,13 +1025,15 @@ impl Job {
     }
 
     /// Pair costs of columns `b0..b1`, blocked over predecessors.
-    fn pair_columns(&mut self, b0: usize, b1: usize) {
+    fn pair_columns(&mut self, b0: usize, b1: usize, term: JumpTerm) {
         let m = self.from.len();
         let Some(ends) = self.ends.clone() else { return };
-        if self.a_side.len() != LINK_COUNT * A_FLOATS * m {
+        let a = &self.a;
+        if a.a_side.len() != LINK_COUNT * A_FLOATS * m {
             return;
         }
-        let mut acc = [0.0f32; BLOCK];
+        let blend = term.weight > 0.0 && a.a_blend.len() == BLEND_FLOATS * m && a.a_peak2.len() == m && a.a_sharp.len() == m;
+        let (mut acc, mut peak) = ([0.0f32; BLOCK], [0.0f32; BLOCK]);
         for a0 in (0..m).step_by(BLOCK) {
             let n = BLOCK.min(m - a0);
             for lb in b0..b1 {
@@ -851,17 +1047,21 @@ impl Job {
                         None => continue,
                     };
                     let base = l * A_FLOATS * m + a0;
-                    let col = |k: usize| &self.a_side[base + k * m..base + k * m + n];
+                    let col = |k: usize| &a.a_side[base + k * m..base + k * m + n];
                     link_pairs(acc, bs, [col(0), col(1), col(2), col(3), col(4), col(5), col(6), col(7), col(8)]);
                 }
                 for (slot, s) in self.costs[lb * m + a0..lb * m + a0 + n].iter_mut().zip(acc.iter()) {
                     *slot = 1.0 / if *s > MIN_S { *s } else { MIN_S };
                 }
                 if let Some(bg) = ends.b_gap.get(b * GAP_FLOATS..(b + 1) * GAP_FLOATS) {
-                    if self.a_gap.len() == GAP_FLOATS * m {
-                        let col = |k: usize| &self.a_gap[k * m + a0..k * m + a0 + n];
+                    if a.a_gap.len() == GAP_FLOATS * m {
+                        let col = |k: usize| &a.a_gap[k * m + a0..k * m + a0 + n];
                         end_gaps(&mut self.costs[lb * m + a0..lb * m + a0 + n], bg, col);
                     }
+                }
+                if let (true, Some(bq), Some(&b_sharp)) = (blend, ends.b_blend.get(b * BLEND_FLOATS..(b + 1) * BLEND_FLOATS), ends.sharp.get(b)) {
+                    let col = |r: usize| &a.a_blend[r * m + a0..r * m + a0 + n];
+                    blend_jumps(&mut self.costs[lb * m + a0..lb * m + a0 + n], &mut peak, bq, b_sharp, col, &a.a_peak2[a0..a0 + n], &a.a_sharp[a0..a0 + n], term);
                 }
             }
         }
@@ -1010,13 +1210,57 @@ mod tests {
                 (start - end).length()
             })
             .sum();
-        1.0 / (s_pose + s_move).max(MIN_S) + END_GAP_WEIGHT * gap
+        1.0 / (s_pose + s_move).max(MIN_S) + END_GAP_WEIGHT * gap + BLENDED_JUMP_WEIGHT * (reference_jump(e_a, e_b) - BLENDED_JUMP_FREE).max(0.0)
+    }
+
+    /// The predicted blended jump as the table samples it, written out joint by joint with the
+    /// render's quintic (not through the P − Q split of [`blend_sides`]).
+    fn reference_jump(e_a: &JoinEnds, e_b: &JoinEnds) -> f32 {
+        let span = blend_span_frames();
+        let mut peak = 0.0f32;
+        for (&[xa, va, aa], &[xb, vb, ab]) in e_a.end_joint.iter().zip(&e_b.start_joint) {
+            let (x0, v0, a0) = (xa + va + 0.5 * aa - xb, va - vb, aa - ab);
+            peak = peak.max(aa.length());
+            for k in TABLE_BLEND_SAMPLES {
+                let t = span * k as f32 / 10.0;
+                peak = peak.max((ab + crate::choreo::render::quintic_offset_accel(x0, v0, a0, span, t)).length());
+            }
+        }
+        peak / (0.5 * (e_a.sharpness + e_b.sharpness)).max(1e-6)
+    }
+
+    #[test]
+    fn the_tables_blended_term_samples_the_predicted_jump() {
+        // The table's term (its cost less the cost at weight 0) against the ten-sample
+        // prediction of `blended_join_jump`: never above it (its samples are a subset), and
+        // close to it (printed); the control, the cost at weight 0, holds no such term.
+        let lib = SegmentLibrary::builtin();
+        let scope = TableScope::all_pairs();
+        let all = JumpTerm { weight: 1.0, free: 0.0 };
+        let (with, without) = (TransitionTable::for_scope_with_term(&lib, 0.0, &scope, all), TransitionTable::for_scope_with_term(&lib, 0.0, &scope, JumpTerm::OFF));
+        assert_eq!(TransitionTable::for_scope(&lib, 0.0, &TableScope::none()).jump_term(), JumpTerm::OFF);
+        assert_eq!(without.jump_term(), JumpTerm::OFF);
+        let m = lib.len();
+        let (mut worst_over, mut ratios) = (0.0f32, Vec::new());
+        for a in (0..m).step_by(3) {
+            for b in (0..m).step_by(7) {
+                let full = blended_join_jump(&lib, a, b).unwrap();
+                let term = with.cost(a, b) - without.cost(a, b);
+                worst_over = worst_over.max((term - full) / full.max(1e-3));
+                ratios.push(term / full.max(1e-3));
+            }
+        }
+        ratios.sort_by(f32::total_cmp);
+        let (p5, median) = (ratios[ratios.len() / 20], ratios[ratios.len() / 2]);
+        println!("{} pairs: the table's term over the ten-sample prediction: 5th percentile {p5:.3}, median {median:.3}, most over {worst_over:.2e}", ratios.len());
+        assert!(worst_over < 1e-3, "the table's term exceeds the prediction by {worst_over}");
+        assert!(p5 > 0.8 && median > 0.95, "the table's term falls short of the prediction: 5th percentile {p5}, median {median}");
     }
 
     #[test]
     fn costs_follow_the_spec_formula_pair_by_pair() {
         let lib = SegmentLibrary::builtin();
-        let t = TransitionTable::from_library(&lib, 0.0);
+        let t = TransitionTable::for_scope_with_term(&lib, 0.0, &TableScope::all_pairs(), JumpTerm::MEASURED);
         let m = lib.len();
         let mut worst = 0.0f32;
         for a in (0..m).step_by(7) {
