@@ -47,11 +47,17 @@ use odori_tests::{all_bvh, fps_override_for, read};
 /// built-in), the drum take 0.787 against 0.713 (0.707), the 90→130 BPM piece 0.823 against
 /// 0.695 (0.736); every dance ≥ 90 % imported. New: half 1's 108 BPM piece in 3 joins at 1.58
 /// as played (control 1.46): as played its dance before the repair joins at 3.59 (unheld the
-/// control's repair saw less and refilled differently), and 16 refills reach 1.58.
+/// control's repair saw less and refilled differently), and 16 refills reach 1.58. Then the
+/// order keeps a refill only if the feet slide no more than before it, or still less than the
+/// source clips' both paced and unpaced (it had let the demo pieces in 3 at 150 and 96→120
+/// BPM of `choreo_beats` slide 34.8 → 49.6 and 30.1 → 38.8 cm/s, past their sources' 36.2):
+/// half 1's 90→130 BPM piece is back under random + 0.05 (0.736 against 0.695, as the
+/// control; its 0.823 refill slid more).
 const KNOWN_MISSES: &[(&str, &str, &str, &str)] = &[
     ("all", "solo-trumpet-06", "skate", "one bar: skate 53.4 against its sources' 37.7 cm/s (as before the change)"),
     ("half 1", "Lets_Go_Fishin", "rate", "1.30 kinetic beats a count (control 1.26)"),
     ("half 1", "demo in 3, 108", "join", "join 1.58 as played (control 1.46)"),
+    ("half 1", "demo in 4, 90→130", "random", "BAS-music 0.736 against random 0.695 + 0.05 (control 0.736): the refill on the beat slid more"),
 ];
 
 /// The person's files: every humanoid dance clip and RobotExpressive's Dance; `half` keeps
