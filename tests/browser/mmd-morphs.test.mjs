@@ -214,8 +214,9 @@ for (const backend of ["webgl2", "webgpu"]) {
       assert.ok(ed.outside <= 0.01 * ed.inside, `pixels changed away from the morphs: ${ed.outside}`);
 
       // The same dance as a project source on its model (the face keys read from the VMD the
-      // project keeps), drawn on miku_v2 chosen as the character: the same vertices move at the
-      // mouth's frame as for the library's import; none with morphs off.
+      // project keeps), miku_v2 also chosen as the character: the dance is drawn on its own
+      // model's mesh (a project dance is linked to the model kept with it), and the same
+      // vertices move at the mouth's frame as for the library's import; none with morphs off.
       const proj = await page.evaluate(({ vmd, pmd, t, libClip, modelName }) => {
         const { library, viewer } = window.odori;
         const r = window.odori.project.project.importOnModelInto(library, "wavefile_v2.vmd", window.__test.bytes(vmd), {}, "miku_v2.pmd", window.__test.bytes(pmd));
@@ -228,8 +229,8 @@ for (const backend of ["webgl2", "webgpu"]) {
         viewer.setMorphs(true);
         return out;
       }, { vmd: files.at(-1).b64, pmd: files.find((f) => /\.pmd$/i.test(f.name)).b64, t: mouth.frame / 30, libClip: setup.clip.id, modelName: model.name });
-      console.log(`${backend}: WAVEFILE as a project source on miku_v2 (the character): ${proj.on.morphed} drawn vertices morphed at frame ${mouth.frame} (the library's import: ${proj.library.morphed}), ${proj.off.morphed} with morphs off`);
-      assert.equal(proj.on.body, "character");
+      console.log(`${backend}: WAVEFILE as a project source on miku_v2 (its own model's mesh): ${proj.on.morphed} drawn vertices morphed at frame ${mouth.frame} (the library's import: ${proj.library.morphed}), ${proj.off.morphed} with morphs off`);
+      assert.equal(proj.on.body, "own");
       assert.ok(proj.on.morphed > 0 && proj.on.morphed === proj.library.morphed && proj.off.morphed === 0, JSON.stringify(proj));
       assert.ok(!logs.some((l) => l.startsWith("[pageerror]") || /Validation/.test(l)), logs.join("\n"));
     } finally {
