@@ -1,3 +1,5 @@
+//! Unit tests of the camera (fixed, orbit, follow, director): framing, cuts on phrase starts.
+
 use super::*;
 use crate::music::sections::Section;
 

@@ -40,27 +40,17 @@ use super::fill::{
     bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, path_cost_with_tempi, MovesSource, MOVES_SOURCE_CHARGE, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
 };
 use super::notes::OFF_BEAT_MARGIN;
-use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, JOIN_JUMP_GOAL, QUALITY_FPS};
-use super::render::{render, RenderOptions};
+use super::quality::JOIN_JUMP_GOAL;
 use super::segment::SegmentLibrary;
 use super::table::TableScope;
+pub use super::figures::{dance_figures, played_figures, DanceFigures, Measured, Played, PlayedBar};
+pub use super::takes::{takes, takes_explained, MAX_TAKE, TAKE_DIFFER, TAKE_LADDER, TAKE_SLACK};
 use crate::bars::Bar;
 
 /// Refills the join repair tries at most by default ([`GenerateOptions::join_repairs`]).
 pub const JOIN_REPAIRS: usize = 16;
 /// Default [`GenerateOptions::variety_weight`]: see there.
 pub const VARIETY_WEIGHT_DEFAULT: f32 = 0.25;
-
-/// The largest take [`GenerateOptions::take`] accepts: take k makes the k takes before it
-/// first (the whole pipeline each), so its time grows with k.
-pub const MAX_TAKE: u32 = 15;
-/// Penalties tried per bar on an earlier take's move, as multiples of the best path's mean
-/// cost per open bar, weakest first ([`takes`]).
-pub const TAKE_LADDER: [f32; 7] = [0.05, 0.1, 0.2, 0.3, 0.5, 0.75, 1.0];
-/// The share of open bars a take should differ in from each earlier take.
-pub const TAKE_DIFFER: f32 = 0.5;
-/// How far above the best path's objective a take's may be (a fraction of it).
-pub const TAKE_SLACK: f32 = 0.1;
 
 /// Cost added to a segment in the bar after a join it made too abrupt, so the refill takes
 /// another there: far above any term of the objective (a ban that stays finite, so a bar
@@ -149,20 +139,6 @@ impl GenerateOptions {
     }
 }
 
-/// What the pipeline checks of a dance it made (spec §J, on the rendered dance within its bars).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DanceFigures {
-    /// Kinetic beats over the bars' beats (4 a bar in 4/4, 3 in 3/4): 1 turns on every count,
-    /// 0.5 on every other.
-    pub kinetic_per_count: f32,
-    /// Mean foot skate, centimetres per second.
-    pub foot_skate_cm_per_s: f32,
-    /// The largest join jump (spec §J, [`super::quality::join_jumps`]), 0 with one bar.
-    pub join_jump_max: f32,
-    /// The bar after that join (its first bar is 1), if any.
-    pub worst_join_bar: Option<usize>,
-}
-
 /// Why a bar holds a built-in move under [`MovesSource::Mine`] (issue 26's preference order:
 /// built-in moves fill only where no imported move does), for the bar's readout
 /// ([`super::notes::MoveNote::builtin_why`]).
@@ -187,80 +163,6 @@ impl BuiltinWhy {
             BuiltinWhy::RoughJoin => "built-in: no move of yours tried here joins smoothly".to_string(),
         }
     }
-}
-
-/// [`DanceFigures`] of the dance `path` fills `bars` with; `None` when it cannot be measured
-/// (too short, no bars).
-pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<DanceFigures> {
-    let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
-    // Unheld: holding the feet (a cost on every measure of a refill) only lowers the skate the
-    // filling follows, and each bar keeps its holds only where they keep its beat figures.
-    let clip = render(lib, bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
-    let m = QualityMotion::from_clip(&clip).ok()?;
-    figures_of(&m, bars)
-}
-
-/// One bar of the dance as it is played ([`played_figures`]), measured as the strip's notes
-/// measure it ([`super::notes`]) on the bar's own counts.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlayedBar {
-    /// BAS-music on the bar's counts less BAS-music on its counts moved by half a count (§J's
-    /// control): the bar lands on its counts when this is at least
-    /// [`super::notes::OFF_BEAT_MARGIN`] (else the strip flags it "off the beat").
-    pub beat_margin: f32,
-    /// The join jump at the bar's start (§J), `None` for the first bar.
-    pub join_jump: Option<f32>,
-}
-
-/// The dance as it is played, measured ([`played_figures`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Played {
-    /// The whole dance's figures.
-    pub whole: DanceFigures,
-    /// BAS-music of the whole dance on its bars' counts (§J).
-    pub bas_music: f32,
-    /// Each bar's.
-    pub bars: Vec<PlayedBar>,
-}
-
-/// The dance `path` fills `bars` with as the viewer sees it (rendered as played: joins
-/// blended, feet held, [`RenderOptions::default`]), measured ([`Played`]); `None` when it
-/// cannot be measured. What the join repair and the preference
-/// order measure ([`GenerateOptions::measure_played`], [`order_stage`]): holding the feet moves
-/// the feet across a join, so a dance whose joins are within the goal unheld can join over it
-/// as played (the 150 BPM demo piece in 3 of `choreo_my_moves`: 1.92 held).
-pub fn played_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<Played> {
-    let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
-    let clip = render(lib, bars, &choices, &RenderOptions::default());
-    let m = QualityMotion::from_clip(&clip).ok()?;
-    let whole = figures_of(&m, bars)?;
-    let counts: Vec<f32> = bars.iter().flat_map(|b| {
-        let n = b.beat_count().max(1);
-        (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32)
-    }).collect();
-    let q = super::quality::dance_quality_of(&m, bars, &counts).ok()?;
-    let per_bar = q.bars.iter().map(|b| PlayedBar { beat_margin: b.beats.bas_music - b.beats.bas_music_shifted, join_jump: b.join_jump }).collect();
-    Some(Played { whole, bas_music: q.beats.bas_music, bars: per_bar })
-}
-
-/// [`DanceFigures`] of a rendered dance `m` over `bars`.
-fn figures_of(m: &QualityMotion, bars: &[Bar]) -> Option<DanceFigures> {
-    let (first, last) = (bars.first()?, bars.last()?);
-    let kinetic = kinetic_beats_secs(m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
-    let frames = m.frames();
-    let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
-    let skate = summarize_skate(&foot_skate_samples(m), frame_of(first.start_secs)..frame_of(last.end_secs));
-    let counts: usize = bars.iter().map(Bar::beat_count).sum();
-    // Join jumps as dance_quality measures them (joins at the bars' starts after the first).
-    let joins: Vec<(usize, usize)> = bars.iter().enumerate().skip(1).map(|(i, b)| (i, frame_of(b.start_secs))).filter(|&(_, f)| f + 1 < frames).collect();
-    let jumps = join_jumps(m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
-    let worst = jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (joins[k].0, j));
-    Some(DanceFigures {
-        kinetic_per_count: kinetic as f32 / counts.max(1) as f32,
-        foot_skate_cm_per_s: skate.mean_cm_per_s,
-        join_jump_max: worst.map_or(0.0, |w| w.1),
-        worst_join_bar: worst.map(|w| w.0),
-    })
 }
 
 /// The counts each bar takes (spec §E, [`super::segment`]'s module docs): its beats, when the
@@ -316,7 +218,7 @@ pub struct Problem<'a> {
     /// Per layer, per segment: a cost every fill of this problem adds (the moves source's
     /// charge, a take's penalty on the earlier takes' moves, [`takes`], and the charge lifted
     /// where [`order_stage`] opened a bar). Empty: none.
-    base: Vec<Vec<f32>>,
+    pub(super) base: Vec<Vec<f32>>,
     /// The moves source's charge ([`Problem::moves_source_charge`]), per layer and segment.
     charge: Vec<Vec<f32>>,
     /// Per layer, why the preference order opened the bar to built-in moves (the last
@@ -382,7 +284,7 @@ impl<'a> Problem<'a> {
     }
 
     /// `extra` with the problem's base cost added (each as it is when the other is empty).
-    fn with_base<'b>(&'b self, extra: &'b [Vec<f32>]) -> std::borrow::Cow<'b, [Vec<f32>]> {
+    pub(super) fn with_base<'b>(&'b self, extra: &'b [Vec<f32>]) -> std::borrow::Cow<'b, [Vec<f32>]> {
         if self.base.is_empty() {
             return std::borrow::Cow::Borrowed(extra);
         }
@@ -483,45 +385,6 @@ impl<'a> Problem<'a> {
         let seg = &self.lib.segments()[s];
         let speed_up = if seg.tempo_bpm > 0.0 && self.bar_bpm[t] > 0.0 { self.bar_bpm[t] / seg.tempo_bpm } else { 1.0 };
         seg.skate_cm_per_s * speed_up - seg.clip_skate_cm_per_s
-    }
-}
-
-/// The figures of the paths measured so far (a render and a measure each: kept, not redone).
-#[derive(Default)]
-pub struct Measured {
-    done: Vec<(Vec<usize>, Option<DanceFigures>)>,
-    played: Vec<(Vec<usize>, Option<Played>)>,
-}
-
-impl Measured {
-    /// [`dance_figures`] of `path`, measured once.
-    pub fn of(&mut self, p: &Problem, path: &[usize]) -> Option<DanceFigures> {
-        if let Some((_, f)) = self.done.iter().find(|(q, _)| q == path) {
-            return *f;
-        }
-        let f = dance_figures(p.lib, p.bars, path);
-        self.done.push((path.to_vec(), f));
-        f
-    }
-
-    /// [`played_figures`] of `path`, measured once.
-    pub fn played(&mut self, p: &Problem, path: &[usize]) -> Option<Played> {
-        if let Some((_, f)) = self.played.iter().find(|(q, _)| q == path) {
-            return f.clone();
-        }
-        let f = played_figures(p.lib, p.bars, path);
-        self.played.push((path.to_vec(), f.clone()));
-        f
-    }
-
-    /// The whole dance's figures as played ([`Measured::played`]) when `played`, else unheld
-    /// ([`Measured::of`]).
-    pub fn figures(&mut self, p: &Problem, path: &[usize], played: bool) -> Option<DanceFigures> {
-        if played {
-            self.played(p, path).map(|f| f.whole)
-        } else {
-            self.of(p, path)
-        }
     }
 }
 
@@ -801,110 +664,6 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
     Ok((path, cost))
 }
 
-/// The share of `open` bars in which paths `a` and `b` differ.
-fn differ(a: &[usize], b: &[usize], open: &[usize]) -> f32 {
-    open.iter().filter(|&&t| a.get(t) != b.get(t)).count() as f32 / open.len().max(1) as f32
-}
-
-/// `penalty` on each move `earlier` dances chose in each open bar, per bar and segment.
-fn take_penalty(p: &Problem, earlier: &[Vec<usize>], open: &[usize], penalty: f32) -> Vec<Vec<f32>> {
-    let mut m = vec![vec![0.0f32; p.lib.len()]; p.layers.len()];
-    for path in earlier {
-        for &t in open {
-            if let Some(c) = path.get(t).and_then(|&s| m[t].get_mut(s)) {
-                *c += penalty;
-            }
-        }
-    }
-    m
-}
-
-/// One take's dance on `p` whose base is `base` (stages 1 to 5), and why each of its built-in
-/// bars is ([`builtin_why`]).
-fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -> Result<(Vec<usize>, Vec<Option<BuiltinWhy>>), FillError> {
-    p.base = base;
-    let path = fill_stage(p)?;
-    let path = stages(p, options, path)?.0;
-    let why = builtin_why(p, &path);
-    Ok((path, why))
-}
-
-/// Takes 0 to `take` in order (issue 26, [`GenerateOptions::take`]); returns the last. Take 0 is
-/// the pipeline on `p`. Take k > 0 adds a penalty on the move each earlier take's dance (as the
-/// whole pipeline made it) chose in each open bar: of [`TAKE_LADDER`] (times take 0's mean cost
-/// per open bar), weakest first, the first whose shortest path differs from every earlier take
-/// in at least [`TAKE_DIFFER`] of the open bars and whose dance, after every stage, does too,
-/// with objectives within [`TAKE_SLACK`] of take 0's shortest path's, and whose kinetic beats per
-/// count stay in [`super::BEAT_RATE_BAND`] when take 0's are (and its joins within
-/// [`GenerateOptions::join_jump_goal`] when take 0's are); when none does, the last
-/// dance made within the slack (in the band, if any was) (the weakest penalty's when none is). Pinned bars never change,
-/// so they never differ. Take k runs the pipeline at least k + 1 times.
-pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Vec<usize>, FillError> {
-    Ok(takes_explained(p, options, take)?.0)
-}
-
-/// [`takes`], with why each built-in bar of the take is ([`BuiltinWhy`]).
-pub fn takes_explained(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<(Vec<usize>, Vec<Option<BuiltinWhy>>), FillError> {
-    let base = p.base.clone();
-    let open: Vec<usize> = p.layers.iter().enumerate().filter(|(_, l)| matches!(l, Layer::Open { .. })).map(|(t, _)| t).collect();
-    let best = p.objective(&fill_stage(p)?);
-    let per_bar = if best.is_finite() && best > 0.0 { best / open.len().max(1) as f32 } else { 1.0 };
-    let within = |obj: f32| obj <= best * (1.0 + TAKE_SLACK) + 1e-6;
-    let (zero, zero_why) = take_dance(p, options, base.clone())?;
-    let mut earlier: Vec<Vec<usize>> = vec![zero];
-    let mut whys = vec![zero_why];
-    // A take keeps take 0's beat rate in its band (when take 0's is): measured on the dance.
-    let (lib, bars) = (p.lib, p.bars);
-    // And its joins within the goal (when take 0's are): a take of the demo piece in 3 at 126 BPM
-    // joined at 2.93 before this (take 0: 0.84).
-    let goal = options.join_jump_goal;
-    let figures0 = if take > 0 { dance_figures(lib, bars, &earlier[0]) } else { None };
-    let keep_joins = figures0.is_some_and(|f| f.join_jump_max <= goal);
-    let band0 = figures0.is_none_or(|f| in_beat_rate_band(f.kinetic_per_count));
-    let in_band = |d: &[usize]| dance_figures(lib, bars, d).is_none_or(|f| (!band0 || in_beat_rate_band(f.kinetic_per_count)) && (!keep_joins || f.join_jump_max <= goal));
-    let keep_band = take > 0 && (band0 || keep_joins);
-    for _ in 0..take {
-        let least = |q: &[usize], earlier: &[Vec<usize>]| earlier.iter().map(|e| differ(q, e, &open)).fold(1.0f32, f32::min);
-        let mut chosen: Option<(bool, Vec<usize>, Vec<Option<BuiltinWhy>>)> = None;
-        for f in TAKE_LADDER {
-            p.base = base.clone();
-            let penalty = take_penalty(p, &earlier, &open, f * per_bar);
-            let charged = p.with_base(&penalty).into_owned();
-            p.base = charged.clone();
-            let first = fill_stage(p)?;
-            if !within(p.objective(&first)) {
-                break;
-            }
-            if least(&first, &earlier) < TAKE_DIFFER {
-                continue;
-            }
-            let (dance, why) = take_dance(p, options, charged)?;
-            let banded = !keep_band || in_band(&dance);
-            let done = within(p.objective(&dance)) && least(&dance, &earlier) >= TAKE_DIFFER && banded;
-            // A dance in the band replaces one out of it, not the other way round.
-            if banded || chosen.as_ref().is_none_or(|c| !c.0) {
-                chosen = Some((banded, dance, why));
-            }
-            if done {
-                break;
-            }
-        }
-        let (dance, why) = match chosen {
-            Some((_, d, w)) => (d, w),
-            None => {
-                p.base = base.clone();
-                let penalty = take_penalty(p, &earlier, &open, TAKE_LADDER[0] * per_bar);
-                let charged = p.with_base(&penalty).into_owned();
-                take_dance(p, options, charged)?
-            }
-        };
-        earlier.push(dance);
-        whys.push(why);
-    }
-    p.base = base;
-    Ok((earlier.pop().unwrap_or_default(), whys.pop().unwrap_or_default()))
-}
-
 /// The whole pipeline: stages 1 to 5 in order on the problem of filling `layers` (one per bar
 /// of `bars`) from `lib`, for take [`GenerateOptions::take`] ([`takes`]). Returns one segment per
 /// bar (pinned bars keep theirs) and the path's cost (the objective with `weights`, without any
@@ -964,7 +723,7 @@ pub fn generate_with_repeats_explained(lib: &SegmentLibrary, bars: &[Bar], layer
 /// Stages 2 to 5 in order on `p`, from stage 1's `path`. Stage 4b's bars barred and opened
 /// ([`order_stage`]) hold for every later stage's fills; `p`'s base is as it was afterwards,
 /// and `p.why` says why each bar the order opened was.
-fn stages(p: &mut Problem, options: &GenerateOptions, path: Vec<usize>) -> Result<(Vec<usize>, f32), FillError> {
+pub(super) fn stages(p: &mut Problem, options: &GenerateOptions, path: Vec<usize>) -> Result<(Vec<usize>, f32), FillError> {
     let mut measured = Measured::default();
     let (path, weights) = beat_rate_stage(p, path, &mut measured)?;
     let (path, cost) = free_skate_stage(p, &weights, &path);
@@ -989,7 +748,7 @@ fn stages(p: &mut Problem, options: &GenerateOptions, path: Vec<usize>) -> Resul
 /// Per bar of `path` (the pipeline's dance on `p`), why it holds a built-in move under
 /// [`MovesSource::Mine`] with imported moves in the library (`None` elsewhere, and for a
 /// pinned bar).
-fn builtin_why(p: &Problem, path: &[usize]) -> Vec<Option<BuiltinWhy>> {
+pub(super) fn builtin_why(p: &Problem, path: &[usize]) -> Vec<Option<BuiltinWhy>> {
     let has_imported = p.lib.segments().iter().any(|s| s.builtin.is_none() && !s.retired);
     let why = p.why.borrow();
     (0..p.layers.len())

@@ -14,14 +14,17 @@ pub const MAX_MOVE_BPM: f32 = 300.0;
 pub mod document;
 pub mod eigen;
 pub mod feedback;
+pub mod figures;
 pub mod fill;
 pub mod generate;
 pub mod grid;
+pub mod jump;
 pub mod notes;
 pub mod quality;
 pub mod render;
 pub mod segment;
 pub mod table;
+pub mod takes;
 pub mod variety;
 
 pub use document::{bar_views, check_bar, check_bars, generate_states, generate_states_with_repeats, next_round, open_search, render_states, BarState, BarView, ChoreoError, GenerateReport, Setting, Settings};

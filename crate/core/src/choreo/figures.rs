@@ -1,0 +1,137 @@
+//! The figures the generation pipeline checks of a dance (spec §J, [`super::generate`]): the
+//! dance rendered unheld ([`dance_figures`], what stages 2 to 4 follow) or as it is played,
+//! joins blended and feet held ([`played_figures`], what the preference order and the join repair
+//! follow), and [`Measured`], which keeps each path's figures so no stage renders a path twice.
+
+use super::generate::Problem;
+use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
+use super::render::{render, RenderOptions};
+use super::segment::SegmentLibrary;
+use crate::bars::Bar;
+
+/// What the pipeline checks of a dance it made (spec §J, on the rendered dance within its bars).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DanceFigures {
+    /// Kinetic beats over the bars' beats (4 a bar in 4/4, 3 in 3/4): 1 turns on every count,
+    /// 0.5 on every other.
+    pub kinetic_per_count: f32,
+    /// Mean foot skate, centimetres per second.
+    pub foot_skate_cm_per_s: f32,
+    /// The largest join jump (spec §J, [`super::quality::join_jumps`]), 0 with one bar.
+    pub join_jump_max: f32,
+    /// The bar after that join (its first bar is 1), if any.
+    pub worst_join_bar: Option<usize>,
+}
+
+/// [`DanceFigures`] of the dance `path` fills `bars` with; `None` when it cannot be measured
+/// (too short, no bars).
+pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<DanceFigures> {
+    let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
+    // Unheld: holding the feet (a cost on every measure of a refill) only lowers the skate the
+    // filling follows, and each bar keeps its holds only where they keep its beat figures.
+    let clip = render(lib, bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
+    let m = QualityMotion::from_clip(&clip).ok()?;
+    figures_of(&m, bars)
+}
+
+/// One bar of the dance as it is played ([`played_figures`]), measured as the strip's notes
+/// measure it ([`super::notes`]) on the bar's own counts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlayedBar {
+    /// BAS-music on the bar's counts less BAS-music on its counts moved by half a count (§J's
+    /// control): the bar lands on its counts when this is at least
+    /// [`super::notes::OFF_BEAT_MARGIN`] (else the strip flags it "off the beat").
+    pub beat_margin: f32,
+    /// The join jump at the bar's start (§J), `None` for the first bar.
+    pub join_jump: Option<f32>,
+}
+
+/// The dance as it is played, measured ([`played_figures`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Played {
+    /// The whole dance's figures.
+    pub whole: DanceFigures,
+    /// BAS-music of the whole dance on its bars' counts (§J).
+    pub bas_music: f32,
+    /// Each bar's.
+    pub bars: Vec<PlayedBar>,
+}
+
+/// The dance `path` fills `bars` with as the viewer sees it (rendered as played: joins
+/// blended, feet held, [`RenderOptions::default`]), measured ([`Played`]); `None` when it
+/// cannot be measured. What the join repair and the preference
+/// order measure ([`GenerateOptions::measure_played`], [`order_stage`]): holding the feet moves
+/// the feet across a join, so a dance whose joins are within the goal unheld can join over it
+/// as played (the 150 BPM demo piece in 3 of `choreo_my_moves`: 1.92 held).
+pub fn played_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<Played> {
+    let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
+    let clip = render(lib, bars, &choices, &RenderOptions::default());
+    let m = QualityMotion::from_clip(&clip).ok()?;
+    let whole = figures_of(&m, bars)?;
+    let counts: Vec<f32> = bars.iter().flat_map(|b| {
+        let n = b.beat_count().max(1);
+        (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32)
+    }).collect();
+    let q = super::quality::dance_quality_of(&m, bars, &counts).ok()?;
+    let per_bar = q.bars.iter().map(|b| PlayedBar { beat_margin: b.beats.bas_music - b.beats.bas_music_shifted, join_jump: b.join_jump }).collect();
+    Some(Played { whole, bas_music: q.beats.bas_music, bars: per_bar })
+}
+
+/// [`DanceFigures`] of a rendered dance `m` over `bars`.
+fn figures_of(m: &QualityMotion, bars: &[Bar]) -> Option<DanceFigures> {
+    let (first, last) = (bars.first()?, bars.last()?);
+    let kinetic = kinetic_beats_secs(m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
+    let frames = m.frames();
+    let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
+    let skate = summarize_skate(&foot_skate_samples(m), frame_of(first.start_secs)..frame_of(last.end_secs));
+    let counts: usize = bars.iter().map(Bar::beat_count).sum();
+    // Join jumps as dance_quality measures them (joins at the bars' starts after the first).
+    let joins: Vec<(usize, usize)> = bars.iter().enumerate().skip(1).map(|(i, b)| (i, frame_of(b.start_secs))).filter(|&(_, f)| f + 1 < frames).collect();
+    let jumps = join_jumps(m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
+    let worst = jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (joins[k].0, j));
+    Some(DanceFigures {
+        kinetic_per_count: kinetic as f32 / counts.max(1) as f32,
+        foot_skate_cm_per_s: skate.mean_cm_per_s,
+        join_jump_max: worst.map_or(0.0, |w| w.1),
+        worst_join_bar: worst.map(|w| w.0),
+    })
+}
+
+/// The figures of the paths measured so far (a render and a measure each: kept, not redone).
+#[derive(Default)]
+pub struct Measured {
+    pub(super) done: Vec<(Vec<usize>, Option<DanceFigures>)>,
+    played: Vec<(Vec<usize>, Option<Played>)>,
+}
+
+impl Measured {
+    /// [`dance_figures`] of `path`, measured once.
+    pub fn of(&mut self, p: &Problem, path: &[usize]) -> Option<DanceFigures> {
+        if let Some((_, f)) = self.done.iter().find(|(q, _)| q == path) {
+            return *f;
+        }
+        let f = dance_figures(p.lib, p.bars, path);
+        self.done.push((path.to_vec(), f));
+        f
+    }
+
+    /// [`played_figures`] of `path`, measured once.
+    pub fn played(&mut self, p: &Problem, path: &[usize]) -> Option<Played> {
+        if let Some((_, f)) = self.played.iter().find(|(q, _)| q == path) {
+            return f.clone();
+        }
+        let f = played_figures(p.lib, p.bars, path);
+        self.played.push((path.to_vec(), f.clone()));
+        f
+    }
+
+    /// The whole dance's figures as played ([`Measured::played`]) when `played`, else unheld
+    /// ([`Measured::of`]).
+    pub fn figures(&mut self, p: &Problem, path: &[usize], played: bool) -> Option<DanceFigures> {
+        if played {
+            self.played(p, path).map(|f| f.whole)
+        } else {
+            self.of(p, path)
+        }
+    }
+}

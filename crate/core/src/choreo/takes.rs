@@ -1,0 +1,124 @@
+//! Another take (issue 26, [`super::generate::GenerateOptions::take`]): take k > 0 runs the whole
+//! pipeline on the objective plus a penalty on the moves the earlier takes' dances chose in each
+//! bar, the weakest penalty of [`TAKE_LADDER`] that makes it differ from each earlier take in at
+//! least [`TAKE_DIFFER`] of the open bars while its objective stays within [`TAKE_SLACK`] of the
+//! best; take 0 is the dance without it.
+
+use super::fill::{in_beat_rate_band, FillError, Layer};
+use super::figures::dance_figures;
+use super::generate::{builtin_why, fill_stage, stages, BuiltinWhy, GenerateOptions, Problem};
+
+/// The largest take [`GenerateOptions::take`] accepts: take k makes the k takes before it
+/// first (the whole pipeline each), so its time grows with k.
+pub const MAX_TAKE: u32 = 15;
+/// Penalties tried per bar on an earlier take's move, as multiples of the best path's mean
+/// cost per open bar, weakest first ([`takes`]).
+pub const TAKE_LADDER: [f32; 7] = [0.05, 0.1, 0.2, 0.3, 0.5, 0.75, 1.0];
+/// The share of open bars a take should differ in from each earlier take.
+pub const TAKE_DIFFER: f32 = 0.5;
+/// How far above the best path's objective a take's may be (a fraction of it).
+pub const TAKE_SLACK: f32 = 0.1;
+
+/// The share of `open` bars in which paths `a` and `b` differ.
+fn differ(a: &[usize], b: &[usize], open: &[usize]) -> f32 {
+    open.iter().filter(|&&t| a.get(t) != b.get(t)).count() as f32 / open.len().max(1) as f32
+}
+
+/// `penalty` on each move `earlier` dances chose in each open bar, per bar and segment.
+fn take_penalty(p: &Problem, earlier: &[Vec<usize>], open: &[usize], penalty: f32) -> Vec<Vec<f32>> {
+    let mut m = vec![vec![0.0f32; p.lib.len()]; p.layers.len()];
+    for path in earlier {
+        for &t in open {
+            if let Some(c) = path.get(t).and_then(|&s| m[t].get_mut(s)) {
+                *c += penalty;
+            }
+        }
+    }
+    m
+}
+
+/// One take's dance on `p` whose base is `base` (stages 1 to 5), and why each of its built-in
+/// bars is ([`builtin_why`]).
+fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -> Result<(Vec<usize>, Vec<Option<BuiltinWhy>>), FillError> {
+    p.base = base;
+    let path = fill_stage(p)?;
+    let path = stages(p, options, path)?.0;
+    let why = builtin_why(p, &path);
+    Ok((path, why))
+}
+
+/// Takes 0 to `take` in order (issue 26, [`GenerateOptions::take`]); returns the last. Take 0 is
+/// the pipeline on `p`. Take k > 0 adds a penalty on the move each earlier take's dance (as the
+/// whole pipeline made it) chose in each open bar: of [`TAKE_LADDER`] (times take 0's mean cost
+/// per open bar), weakest first, the first whose shortest path differs from every earlier take
+/// in at least [`TAKE_DIFFER`] of the open bars and whose dance, after every stage, does too,
+/// with objectives within [`TAKE_SLACK`] of take 0's shortest path's, and whose kinetic beats per
+/// count stay in [`super::BEAT_RATE_BAND`] when take 0's are (and its joins within
+/// [`GenerateOptions::join_jump_goal`] when take 0's are); when none does, the last
+/// dance made within the slack (in the band, if any was) (the weakest penalty's when none is). Pinned bars never change,
+/// so they never differ. Take k runs the pipeline at least k + 1 times.
+pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Vec<usize>, FillError> {
+    Ok(takes_explained(p, options, take)?.0)
+}
+
+/// [`takes`], with why each built-in bar of the take is ([`BuiltinWhy`]).
+pub fn takes_explained(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<(Vec<usize>, Vec<Option<BuiltinWhy>>), FillError> {
+    let base = p.base.clone();
+    let open: Vec<usize> = p.layers.iter().enumerate().filter(|(_, l)| matches!(l, Layer::Open { .. })).map(|(t, _)| t).collect();
+    let best = p.objective(&fill_stage(p)?);
+    let per_bar = if best.is_finite() && best > 0.0 { best / open.len().max(1) as f32 } else { 1.0 };
+    let within = |obj: f32| obj <= best * (1.0 + TAKE_SLACK) + 1e-6;
+    let (zero, zero_why) = take_dance(p, options, base.clone())?;
+    let mut earlier: Vec<Vec<usize>> = vec![zero];
+    let mut whys = vec![zero_why];
+    // A take keeps take 0's beat rate in its band (when take 0's is): measured on the dance.
+    let (lib, bars) = (p.lib, p.bars);
+    // And its joins within the goal (when take 0's are): a take of the demo piece in 3 at 126 BPM
+    // joined at 2.93 before this (take 0: 0.84).
+    let goal = options.join_jump_goal;
+    let figures0 = if take > 0 { dance_figures(lib, bars, &earlier[0]) } else { None };
+    let keep_joins = figures0.is_some_and(|f| f.join_jump_max <= goal);
+    let band0 = figures0.is_none_or(|f| in_beat_rate_band(f.kinetic_per_count));
+    let in_band = |d: &[usize]| dance_figures(lib, bars, d).is_none_or(|f| (!band0 || in_beat_rate_band(f.kinetic_per_count)) && (!keep_joins || f.join_jump_max <= goal));
+    let keep_band = take > 0 && (band0 || keep_joins);
+    for _ in 0..take {
+        let least = |q: &[usize], earlier: &[Vec<usize>]| earlier.iter().map(|e| differ(q, e, &open)).fold(1.0f32, f32::min);
+        let mut chosen: Option<(bool, Vec<usize>, Vec<Option<BuiltinWhy>>)> = None;
+        for f in TAKE_LADDER {
+            p.base = base.clone();
+            let penalty = take_penalty(p, &earlier, &open, f * per_bar);
+            let charged = p.with_base(&penalty).into_owned();
+            p.base = charged.clone();
+            let first = fill_stage(p)?;
+            if !within(p.objective(&first)) {
+                break;
+            }
+            if least(&first, &earlier) < TAKE_DIFFER {
+                continue;
+            }
+            let (dance, why) = take_dance(p, options, charged)?;
+            let banded = !keep_band || in_band(&dance);
+            let done = within(p.objective(&dance)) && least(&dance, &earlier) >= TAKE_DIFFER && banded;
+            // A dance in the band replaces one out of it, not the other way round.
+            if banded || chosen.as_ref().is_none_or(|c| !c.0) {
+                chosen = Some((banded, dance, why));
+            }
+            if done {
+                break;
+            }
+        }
+        let (dance, why) = match chosen {
+            Some((_, d, w)) => (d, w),
+            None => {
+                p.base = base.clone();
+                let penalty = take_penalty(p, &earlier, &open, TAKE_LADDER[0] * per_bar);
+                let charged = p.with_base(&penalty).into_owned();
+                take_dance(p, options, charged)?
+            }
+        };
+        earlier.push(dance);
+        whys.push(why);
+    }
+    p.base = base;
+    Ok((earlier.pop().unwrap_or_default(), whys.pop().unwrap_or_default()))
+}
