@@ -1,5 +1,5 @@
 // Odori app bootstrap: loads the wasm engine, opens the viewer, wires the UI modules.
-import init, { Library, Viewer, Song, DemoSong, TextAnimator, Project, SearchIndex, tempoLimits, envelopeDefinition, version } from "./pkg/odori.js";
+import init, { Library, Viewer, Song, DemoSong, TextAnimator, Project, SearchIndex, tempoLimits, envelopeDefinition, version, importFormats } from "./pkg/odori.js";
 import { LibraryPanel } from "./ui/library-panel.js";
 import { Player } from "./ui/player.js";
 import { FileLoader } from "./ui/files.js";
@@ -113,6 +113,7 @@ async function main() {
     cameraImporter: (fileName, bytes, options) => session.importCamera(fileName, bytes, options),
     onImported: (report, how) => imported(report, how),
     onFiles: (files) => session.takeProjectFiles(files),
+    formats: importFormats(),
   });
   loader.bindInput($("#file-input"));
   exporter = new ExportPanel({

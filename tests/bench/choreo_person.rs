@@ -29,35 +29,26 @@
 
 #[path = "../native/music_audio.rs"]
 mod music_audio;
+#[path = "../native/person_common.rs"]
+mod person_common;
 
 use std::collections::BTreeMap;
 use std::time::Instant;
 
 use odori_core::bars::Bar;
 use odori_core::choreo::quality::{dance_quality, DanceQuality};
-use odori_core::choreo::{GenerateOptions, MovesSource, RenderOptions, SegmentLibrary, SegmentOptions};
-use odori_core::import::import_bytes;
+use odori_core::choreo::{GenerateOptions, MovesSource, RenderOptions, SegmentLibrary};
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
-use odori_core::ImportOptions;
-use odori_tests::{all_bvh, fps_override_for, read};
+
 
 /// The library of a person who imported every dance clip the shared data holds.
 fn person_library() -> SegmentLibrary {
-    let mut lib = SegmentLibrary::builtin();
-    let mut files: Vec<String> = all_bvh().into_iter().filter(|r| !r.contains("cmu-martial") && !r.ends_with("005_01.bvh")).collect();
-    files.push("gltf/RobotExpressive.glb".into());
-    for rel in files {
-        let opts = ImportOptions { fps_override: fps_override_for(&rel), ..Default::default() };
-        let imp = import_bytes(&rel, &read(&rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
-        for clip in imp.clips.iter().filter(|c| !rel.ends_with(".glb") || c.name == "Dance") {
-            match lib.add_clip(clip, &imp.humanoid, &imp.status, &SegmentOptions::default()) {
-                Ok(s) => println!("  imported {rel} {}: {:.1} s, {:.1} counts/min, {} segments", clip.name, clip.duration_secs(), s.tempo_bpm, s.segments),
-                Err(e) => println!("  imported {rel} {}: refused: {e}", clip.name),
-            }
-        }
-    }
-    lib
+    person_common::person_library_with(None, |rel, clip, taken| match taken {
+        Ok(s) => println!("  imported {rel} {}: {:.1} s, {:.1} counts/min, {} segments", clip.name, clip.duration_secs(), s.tempo_bpm, s.segments),
+        Err(e) => println!("  imported {rel} {}: refused: {e}", clip.name),
+    })
+    .0
 }
 
 /// Demo pieces from the demo-song generator (no setting tuned on them): 4/4 at 100, 140 and a

@@ -25,13 +25,13 @@
 
 #[path = "music_audio.rs"]
 mod music_audio;
+#[path = "person_common.rs"]
+mod person_common;
 
 use odori_core::bars::Bar;
-use odori_core::choreo::{bar_counts, FillWeights, GenerateOptions, JumpTerm, SegmentLibrary, SegmentOptions, TableScope, TransitionTable};
-use odori_core::import::import_bytes;
+use odori_core::choreo::{bar_counts, FillWeights, GenerateOptions, JumpTerm, SegmentLibrary, TableScope, TransitionTable};
 use odori_core::music::{analyze, AnalysisOptions};
-use odori_core::ImportOptions;
-use odori_tests::{all_bvh, best_ms, dance_quality_of, fps_override_for, random_moves_bas, read, RANDOM_MOVES_SEED};
+use odori_tests::{best_ms, dance_quality_of, random_moves_bas, RANDOM_MOVES_SEED};
 
 /// Dances (label substring, take) whose beat goals the new cost loses, each with its figures;
 /// each listed loss must still happen (else take it off the list). None at the product's term
@@ -48,18 +48,7 @@ fn term() -> JumpTerm {
 
 /// The person's library (as `choreo_my_moves` builds it, all files).
 fn person_library() -> SegmentLibrary {
-    let mut lib = SegmentLibrary::builtin();
-    let mut files: Vec<String> = all_bvh().into_iter().filter(|r| !r.contains("cmu-martial") && !r.ends_with("005_01.bvh")).collect();
-    files.push("gltf/RobotExpressive.glb".into());
-    for rel in &files {
-        let opts = ImportOptions { fps_override: fps_override_for(rel), ..Default::default() };
-        let imp = import_bytes(rel, &read(rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
-        for clip in imp.clips.iter().filter(|c| !rel.ends_with(".glb") || c.name == "Dance") {
-            // A clip the segmenter refuses (too short, not humanoid) is simply not in the library.
-            let _ = lib.add_clip(clip, &imp.humanoid, &imp.status, &SegmentOptions::default());
-        }
-    }
-    lib
+    person_common::person_library(None).0
 }
 
 /// A copy of `lib` whose cached table (the blocks `bars` need) is built with `term`: Generate on

@@ -16,11 +16,12 @@
 //! whole prediction added (weight 1, nothing free: the table's own 5-sample term) must rank the
 //! joins above C by [`TABLE_RHO_MARGIN`] on each half; [`JumpTerm::MEASURED`]'s is printed.
 
+#[path = "person_common.rs"]
+mod person_common;
+
 use odori_core::choreo::quality::dance_quality;
-use odori_core::choreo::{bars_from_tempo, blended_join_jump, blended_join_jump_at, render, JumpTerm, RenderOptions, SegmentLibrary, SegmentOptions, TableScope, TransitionTable};
-use odori_core::import::import_bytes;
-use odori_core::ImportOptions;
-use odori_tests::{all_bvh, fps_override_for, read, spearman};
+use odori_core::choreo::{bars_from_tempo, blended_join_jump, blended_join_jump_at, render, JumpTerm, RenderOptions, SegmentLibrary, TableScope, TransitionTable};
+use odori_tests::spearman;
 
 /// The least Spearman ρ between the predicted and the measured join jump, on each half
 /// (measured 2026-11-29: 0.62 and 0.59, 13,318 and 10,778 pairs; the table's C 0.17 and 0.16).
@@ -32,18 +33,7 @@ const TABLE_RHO_MARGIN: f32 = 0.2;
 
 /// The person's files of half `half` (every other one of the sorted list), as one library.
 fn half_library(half: usize) -> SegmentLibrary {
-    let mut lib = SegmentLibrary::builtin();
-    let mut files: Vec<String> = all_bvh().into_iter().filter(|r| !r.contains("cmu-martial") && !r.ends_with("005_01.bvh")).collect();
-    files.push("gltf/RobotExpressive.glb".into());
-    for (_, rel) in files.iter().enumerate().filter(|(i, _)| i % 2 == half) {
-        let opts = ImportOptions { fps_override: fps_override_for(rel), ..Default::default() };
-        let imp = import_bytes(rel, &read(rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
-        for clip in imp.clips.iter().filter(|c| !rel.ends_with(".glb") || c.name == "Dance") {
-            // A clip the segmenter refuses (too short, not humanoid) is simply not in the library.
-            let _ = lib.add_clip(clip, &imp.humanoid, &imp.status, &SegmentOptions::default());
-        }
-    }
-    lib
+    person_common::person_library(Some(half)).0
 }
 
 /// Per pair of the half: (table cost without the term, predicted jump at the moves' tempi,

@@ -15,15 +15,15 @@
 
 #[path = "music_audio.rs"]
 mod music_audio;
+#[path = "person_common.rs"]
+mod person_common;
 
 use odori_core::bars::Bar;
 use odori_core::choreo::quality::{dance_quality, DanceQuality};
-use odori_core::choreo::{bar_counts, count_rate_bpm, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
-use odori_core::import::import_bytes;
+use odori_core::choreo::{bar_counts, count_rate_bpm, GenerateOptions, RenderOptions, SegmentLibrary};
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
-use odori_core::ImportOptions;
-use odori_tests::{all_bvh, fps_override_for, read};
+
 
 /// (library, song label substring, goal) pairs known to miss, each with why; every other goal
 /// on every song must hold, and each listed one is reported when it starts to hold.
@@ -62,20 +62,9 @@ const KNOWN_MISSES: &[(&str, &str, &str, &str)] = &[
 
 /// The person's files: every humanoid dance clip and RobotExpressive's Dance; `half` keeps
 /// every other one of the sorted list (`Some(0)` or `Some(1)`).
+/// (The shared loader: `person_common.rs`.)
 fn person_library(half: Option<usize>) -> (SegmentLibrary, usize) {
-    let mut lib = SegmentLibrary::builtin();
-    let mut files: Vec<String> = all_bvh().into_iter().filter(|r| !r.contains("cmu-martial") && !r.ends_with("005_01.bvh")).collect();
-    files.push("gltf/RobotExpressive.glb".into());
-    let files: Vec<String> = files.into_iter().enumerate().filter(|(i, _)| half.is_none_or(|h| i % 2 == h)).map(|(_, f)| f).collect();
-    for rel in &files {
-        let opts = ImportOptions { fps_override: fps_override_for(rel), ..Default::default() };
-        let imp = import_bytes(rel, &read(rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
-        for clip in imp.clips.iter().filter(|c| !rel.ends_with(".glb") || c.name == "Dance") {
-            // A clip the segmenter refuses (too short, not humanoid) is simply not in the library.
-            let _ = lib.add_clip(clip, &imp.humanoid, &imp.status, &SegmentOptions::default());
-        }
-    }
-    (lib, files.len())
+    person_common::person_library(half)
 }
 
 fn songs() -> Vec<(String, RmsEnvelope)> {

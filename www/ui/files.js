@@ -4,13 +4,39 @@
 // its own frame rate (read from its header) and units, and what is chosen there is used for
 // that file only (and kept with it in the project, so a reload imports it the same way).
 // glTF and GLB files state their units (metres) and key times themselves: nothing to ask.
-const ACCEPT = /\.(bvh|glb|gltf)$/i;
+// Which files are taken, and the message for any other, come from the engine's list
+// (`importFormats()`, passed in as `formats`): the page keeps no list of its own.
 const BVH = /\.bvh$/i;
-// MikuMikuDance: motions (VMD), models (PMX/PMD) and a zip of them; the files beside a model
-// (its textures) come along when a model or zip is in the batch.
-const MMD = /\.(vmd|pmx|pmd|zip)$/i;
-const MMD_MODEL = /\.(pmx|pmd|zip)$/i;
-const MMD_TEXTURE = /\.(bmp|tga|png|jpe?g|spa|sph|dds)$/i;
+// MikuMikuDance: motions (VMD), models (PMX/PMD) and a zip of them go to `importFiles` as one
+// set; the files beside a model (its textures, any image MMD uses) come along when a model or
+// zip is in the batch.
+const MMD_TEXTURES = ["bmp", "tga", "png", "jpg", "jpeg", "spa", "sph", "dds"];
+
+/** A file name's extension, lower case, without the dot ("" for none). */
+const extensionOf = (name) => (/\.([^./\\]+)$/.exec(name)?.[1] ?? "").toLowerCase();
+
+/**
+ * The page's file filters from the engine's `importFormats()` (`{ name, extension, mmd, alone }[]`):
+ * `accepts(name)` (a file the engine imports on its own), `isMmd(name)` (goes to `importFiles`
+ * with its set), `isMmdModel(name)` (a model or zip: its textures come along), the file input's
+ * `accept` list, and `message(name)`: a file of any other kind named, with every format listed.
+ */
+export function fileFormats(formats) {
+  const list = [...formats];
+  const plain = new Set(list.filter((f) => !f.mmd).map((f) => f.extension));
+  const mmd = new Set(list.filter((f) => f.mmd).map((f) => f.extension));
+  const names = list.map((f) => f.name);
+  const spoken = names.length > 1 ? `${names.slice(0, -1).join(", ")} or ${names[names.length - 1]}` : names.join("");
+  return {
+    accepts: (name) => plain.has(extensionOf(name)),
+    isMmd: (name) => mmd.has(extensionOf(name)),
+    // A model, or a zip that may hold one: an MMD file the importer does not read alone.
+    isMmdModel: (name) => list.some((f) => f.mmd && !f.alone && f.extension === extensionOf(name)),
+    isMmdTexture: (name) => MMD_TEXTURES.includes(extensionOf(name)),
+    accept: [...list.map((f) => f.extension), ...MMD_TEXTURES].map((e) => `.${e}`).join(","),
+    message: (name) => `${name}: not a file Odori reads (it reads ${spoken})`,
+  };
+}
 
 /** Units a BVH file may be in: metres per file unit ("" = guessed from the skeleton's size). */
 const UNITS = [["", "guess from the rig"], ["0.01", "centimetres"], ["1", "metres"], ["0.001", "millimetres"], ["0.0254", "inches"]];
@@ -28,17 +54,20 @@ export function bvhHeaderFps(bytes) {
 }
 
 export class FileLoader {
-  constructor({ library, messages, status, optionsDialog, onImported, onFiles, importer, cameraImporter }) {
+  constructor({ library, messages, status, optionsDialog, onImported, onFiles, importer, cameraImporter, formats }) {
     // `importer(fileName, bytes, options)` → import report: who parses the file (the app's
     // project, which shows its clips in the library); the library's own import otherwise.
     // `cameraImporter(fileName, bytes, options)` → camera track info: who keeps a camera VMD
     // (the app's project, which shows it in `library.cameraTracks()`); the library otherwise.
     // `optionsDialog`: the `<dialog>` asking each BVH file's options (index.html #import-options).
+    // `formats`: the engine's `importFormats()`, what files are taken (see `fileFormats`).
     Object.assign(this, { library, messages, status, optionsDialog, onImported, onFiles, importer, cameraImporter });
+    this.formats = fileFormats(formats);
     this.queue = Promise.resolve();
   }
 
   bindInput(input) {
+    input.accept = this.formats.accept;
     input.addEventListener("change", () => {
       this.openAll([...input.files]);
       input.value = "";
@@ -73,15 +102,15 @@ export class FileLoader {
   async openBatch(files) {
     const read = [];
     // MMD files go to the library's importFiles as one set (a model needs its textures).
-    const withModel = files.some((f) => MMD_MODEL.test(f.name));
-    const mmd = files.filter((f) => MMD.test(f.name) || (withModel && MMD_TEXTURE.test(f.name)));
+    const withModel = files.some((f) => this.formats.isMmdModel(f.name));
+    const mmd = files.filter((f) => this.formats.isMmd(f.name) || (withModel && this.formats.isMmdTexture(f.name)));
     if (mmd.length) {
       await this.openMmd(mmd);
       files = files.filter((f) => !mmd.includes(f));
     }
     for (const file of files) {
-      if (!ACCEPT.test(file.name)) {
-        this.messages.error(`${file.name}: not a motion file Odori reads (BVH, glTF, GLB, or MMD's VMD, PMX, PMD)`);
+      if (!this.formats.accepts(file.name)) {
+        this.messages.error(this.formats.message(file.name));
         continue;
       }
       try {

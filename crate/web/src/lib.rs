@@ -13,6 +13,8 @@ mod library;
 mod viewer;
 // Authoring (feature "authoring", on by default): left out of the player build.
 #[cfg(feature = "authoring")]
+mod formats;
+#[cfg(feature = "authoring")]
 mod mmd;
 #[cfg(feature = "authoring")]
 mod music;

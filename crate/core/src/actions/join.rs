@@ -634,7 +634,8 @@ pub(crate) fn step_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, en
     let ramp_frames = (STEP_RAMP_SECS * fps).max(1.0);
     let forced = ((FORCED_STEP_SECS * fps).round() as usize).max(2);
     // The floor under each ankle (spec §J: its 1st-percentile height): a foot in the air
-    // lower than the contact band above it lifts before it travels.
+    // within the one contact rule's band over it (`canon::contact::within_band`) lifts before
+    // it travels.
     let all = out.all_world_positions();
     let floors: [f32; 2] = Foot::BOTH.map(|ft| {
         let h: Vec<f32> = (0..frames).map(|f| all[f * n + ft.ankle().index()].y).collect();
@@ -668,7 +669,7 @@ pub(crate) fn step_feet(out: &mut Clip, contacts: &[[bool; 2]], start: usize, en
             state[s] = if contacts[start][s] {
                 FootState::Planted { at, rot }
             } else {
-                let lift = at.y < floors[s] + 0.05;
+                let lift = crate::canon::contact::within_band(at.y - floors[s]);
                 plan_step(s, start, start.saturating_sub(1), at, rot, lift, 1)
             };
         }

@@ -121,6 +121,17 @@ impl Format {
         }
     }
 
+    /// The file extension (lower case, no dot) of each of [`Format::names`], in the same order:
+    /// what a page's file chooser takes the format's files by (the web crate's
+    /// `importFormats()`; the importer itself sniffs the bytes).
+    pub fn extensions(self) -> &'static [&'static str] {
+        match self {
+            Format::Bvh => &["bvh"],
+            Format::Gltf => &["gltf", "glb"],
+            Format::Vmd => &["vmd"],
+        }
+    }
+
     /// Whether `bytes` start as this format's files do.
     fn starts(self, bytes: &[u8]) -> bool {
         // Text formats may open with a byte-order mark or blank lines.
@@ -266,6 +277,10 @@ mod tests {
     fn the_unknown_format_text_names_every_format_sniff_reads() {
         let names: Vec<&str> = Format::ALL.iter().flat_map(|f| f.names().iter().copied()).collect();
         let (last, rest) = names.split_last().expect("formats");
+        // One extension per name, in the same order.
+        for f in Format::ALL {
+            assert_eq!(f.extensions().len(), f.names().len(), "{f:?}");
+        }
         assert_eq!(crate::import_format_names!(), format!("{} or {last}", rest.join(", ")));
         // Each format's own first bytes are sniffed as it, and only as it.
         let starts: [(&[u8], Format); 5] = [

@@ -218,6 +218,11 @@ pub enum MmdFileKind {
     Other,
 }
 
+/// The MMD files [`import_files`] takes as a set (besides the textures beside a model), as a
+/// person knows them and by their extension (lower case, no dot; [`kind_of`] reads it): what a
+/// page's file chooser hands to `importFiles` (the web crate's `importFormats()`).
+pub const MMD_FILE_FORMATS: [(&str, &str); 4] = [("VMD", "vmd"), ("PMX", "pmx"), ("PMD", "pmd"), ("zip of MMD files", "zip")];
+
 pub fn kind_of(name: &str) -> MmdFileKind {
     let lower = name.to_ascii_lowercase();
     match lower.rsplit('.').next() {
@@ -527,6 +532,9 @@ mod tests {
         assert_eq!(kind_of("x.Pmx"), MmdFileKind::Model);
         assert_eq!(kind_of("x.zip"), MmdFileKind::Zip);
         assert_eq!(kind_of("tex.bmp"), MmdFileKind::Other);
+        for (name, ext) in MMD_FILE_FORMATS {
+            assert_ne!(kind_of(&format!("a.{}", ext.to_uppercase())), MmdFileKind::Other, "{name}");
+        }
         assert_eq!(folder("m/a\\b.pmd"), "m/a");
         assert_eq!(relative_to("M/Tex/a.png", "m"), Some("Tex/a.png"));
         assert_eq!(relative_to("n/a.png", "m"), None);

@@ -63,7 +63,7 @@ pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>);
         .collect();
     let given = GivenHolds { contacts, release: Release::CatchUp { speed: catch_up_m_s } };
     let map = HumanoidMap::from_skeleton(&clip.skeleton);
-    let mut out = figure.play(clip, &map, &RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true }, Some(&given)).ok()?;
+    let mut out = figure.play(clip, &map, &RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true, release_over_swing: true }, Some(&given)).ok()?;
     out.name = clip.name.clone();
     out.source = clip.source.clone();
     Some(out)
@@ -123,14 +123,38 @@ pub(super) enum Contact {
 ///   released foot eases back onto its (shifted) free path over [`RELEASE_S`].
 #[cfg(test)]
 pub(super) fn hold_plan(feet: &[FootTracks], fps: f32) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3>) {
-    hold_plan_with(feet, fps, None, Release::Ease)
+    hold_plan_with(feet, fps, None, Release::Ease { over_swing: true })
 }
+
+/// The longest a released foot takes to close its horizontal gap to its free path (within the
+/// swing until it lands again, [`Release::Ease`]), s.
+pub(super) const RELEASE_SWING_MAX_S: f32 = 0.6;
+/// How fast, on average, a released foot closes its horizontal gap to its free path at most
+/// ([`Release::Ease`] over its swing), m/s: the ease's steepest frame (smoothstep: 1.5× the
+/// mean) then moves the foot 1.5 m/s past its free path, 5 cm a frame at 30 fps — the
+/// one-frame bound `character_retarget` holds a foot's move to over the source's.
+pub(super) const RELEASE_CLOSE_M_S: f32 = 1.0;
+/// How high a foot released into a long ease ([`RELEASE_CLOSE_M_S`]) rises while it travels,
+/// m at canonical size: clear of the contact band ([`CONTACT_HEIGHT_M`]), so it steps rather
+/// than slides (the text actions' joins step 8 cm).
+pub(super) const RELEASE_STEP_LIFT_M: f32 = 0.08;
 
 /// How a released foot goes back onto its free path.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum Release {
-    /// Over [`RELEASE_S`], height included (retargeting: the free path is near the hold).
-    Ease,
+    /// Eased back (retargeting: the free path is near the hold): its height over
+    /// [`RELEASE_S`] (the foot lifts as the source's does); its horizontal gap over [`RELEASE_S`]
+    /// too, or, when `over_swing` and the gap is too wide to close that fast at
+    /// [`RELEASE_CLOSE_M_S`], over as long as that takes within the swing (until the foot lands
+    /// again, at most [`RELEASE_SWING_MAX_S`]). `over_swing` off: the control (the hold before
+    /// issue 27's mend). Why: a rig with wider hips than the source's turning on one foot
+    /// (RobotExpressive's pivot turns, its stance 1.2 m wide) carries the other, held, foot a
+    /// metre off its free path; closed in 0.15 s that gap was a snap of up to 0.47 m a frame
+    /// (+0.36 m over the source's fastest foot). Only wide gaps take longer: easing every
+    /// release over the whole swing also halved that, but bent the legs off the source's
+    /// directions on every rig (Xbot's pivot turns' direction p95 2.2° → 5.9°) and let more of
+    /// the robot's moves skate (24 → 46 above the source's + 1 cm/s).
+    Ease { over_swing: bool },
     /// Horizontally at no more than `speed` m/s, at its free (unheld) height, until it
     /// reaches its free path (a rendered dance: a planted foot may have been held far from a
     /// free path that the time warp, the placement or a join slid away; an ease over a fixed
@@ -144,7 +168,16 @@ pub(super) enum Release {
 /// planted foot stands on; `None`: read from the source tracks by the one contact rule,
 /// [`planted_frames`]) and a
 /// choice of [`Release`].
+#[cfg(test)]
 pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[Vec<Option<Contact>>]>, release: Release) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3>) {
+    let (targets, shift, _) = hold_plan_stepping(feet, fps, contacts, release);
+    (targets, shift)
+}
+
+/// [`hold_plan_with`], and per leg and frame whether the foot is stepping: released into a
+/// long ease ([`RELEASE_CLOSE_M_S`]), travelling to its free path (the pelvis does not drop
+/// for it: [`pelvis_drop`]).
+pub(super) fn hold_plan_stepping(feet: &[FootTracks], fps: f32, contacts: Option<&[Vec<Option<Contact>>]>, release: Release) -> (Vec<Vec<Option<Vec3>>>, Vec<Vec3>, Vec<Vec<bool>>) {
     let legs = feet.len();
     let frames = feet.iter().flat_map(|t| [t.src_ankle.len(), t.free_ankle.len()]).min().unwrap_or(0);
     let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
@@ -181,13 +214,17 @@ pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[V
     };
     let mut body: Option<Vec<Vec3>> = None;
     let mut targets: Vec<Vec<Option<Vec3>>> = Vec::new();
+    let mut stepping: Vec<Vec<bool>> = Vec::new();
     for plan in 0..2 {
         targets = vec![vec![None; frames]; legs];
+        stepping = vec![vec![false; frames]; legs];
         let mut shift = vec![Vec3::ZERO; frames];
         let mut offset = Vec3::ZERO;
         // Per leg: the contact point held now (which, where), and the last held target.
         let mut point: Vec<Option<(Contact, Vec3)>> = vec![None; legs];
         let mut last: Vec<Option<(Vec3, usize)>> = vec![None; legs];
+        // Per leg: the frames a release eases its horizontal gap over ([`Release::Ease`]).
+        let mut swing: Vec<usize> = vec![w; legs];
         for f in 0..frames {
             // Where the body is: the first plan's smoothed shift; in the first, the running
             // shift so far.
@@ -199,10 +236,27 @@ pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[V
                 let Some(c) = contact[k][f] else {
                     point[k] = None;
                     match release {
-                        Release::Ease => {
-                            if let Some((held, end)) = last[k].filter(|(_, end)| f - end <= w) {
-                                let s = (f - end) as f32 / (w + 1) as f32;
-                                targets[k][f] = Some(held.lerp(free, motion::smoothstep(s)));
+                        Release::Ease { over_swing } => {
+                            if let Some((held, end)) = last[k] {
+                                // The swing: the frames until the foot lands again.
+                                if f == end + 1 {
+                                    let next = (f..frames).find(|&g| contact[k][g].is_some()).unwrap_or(frames);
+                                    let most = ((RELEASE_SWING_MAX_S * fps).round() as usize).min(next - f).max(w);
+                                    let gap = flat(held - free).length();
+                                    let need = (gap * fps / RELEASE_CLOSE_M_S).ceil() as usize;
+                                    swing[k] = if over_swing { need.clamp(w, most) } else { w };
+                                }
+                                if f - end <= swing[k] {
+                                    let u = (f - end) as f32 / (swing[k] + 1) as f32;
+                                    let lifted = held.lerp(free, motion::smoothstep((f - end) as f32 / (w + 1) as f32));
+                                    let across = held.lerp(free, motion::smoothstep(u));
+                                    // A long ease is a step: the foot rises clear of the floor
+                                    // while it travels (not a slide along it), and comes down
+                                    // as it ends.
+                                    let step = if swing[k] > w { RELEASE_STEP_LIFT_M * t.scale * (std::f32::consts::PI * u).sin() } else { 0.0 };
+                                    targets[k][f] = Some(Vec3::new(across.x, lifted.y + step, across.z));
+                                    stepping[k][f] = swing[k] > w;
+                                }
                             }
                         }
                         Release::CatchUp { speed } => {
@@ -226,6 +280,9 @@ pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[V
                 };
                 let lead = if c == Contact::Toe { toe_from_ankle(k, f) } else { Vec3::ZERO };
                 let lands = point[k].is_none();
+                // A frame at the foot's free height: left free, or eased past its height.
+                let eased_since = last[k].map(|(_, end)| end).filter(|_| matches!(release, Release::Ease { over_swing: true }));
+                let at_free_height = |tg: &[Option<Vec3>], g: usize| tg[g].is_none() || eased_since.is_some_and(|end| g > end + w);
                 let p = match point[k] {
                     Some((c0, p)) if c0 == c => p,
                     // Lands, or changes point: where the ankle was on the previous frame (its
@@ -240,7 +297,7 @@ pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[V
                 // hold sits at the source's height. Spread that step in height over the eased
                 // frames, so the foot does not snap to it in one.
                 if lands {
-                    if let Some((_, end)) = last[k].filter(|&(_, end)| release == Release::Ease && end + 1 < f && f - end <= w + 1) {
+                    if let Some((_, end)) = last[k].filter(|&(_, end)| matches!(release, Release::Ease { .. }) && end + 1 < f && f - end <= w + 1) {
                         if let Some(prev) = targets[k][f - 1] {
                             let step = target.y - prev.y;
                             for g in end + 1..f {
@@ -249,25 +306,30 @@ pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[V
                                 }
                             }
                         }
-                    } else if f > 0 && targets[k][f - 1].is_none() {
+                    } else if f > 0 && at_free_height(&targets[k], f - 1) {
                         // Landing from the free path: a rig that lifts its foot higher than
                         // the source (a longer foot, straightened legs) comes down to the
                         // source's height over the frames before, on its (shifted) free path,
                         // not in one.
-                        // Only frames left free (not a release ease's, which keep theirs).
+                        // Only frames at their free height: left free, or a release ease's past
+                        // its height (its swing, `Release::Ease`), which keep their place.
                         // The step is how much higher the free path is than the hold at the
                         // landing frame itself: measured against the frame before, it also held
                         // the foot's own last frame of descent, and a figure whose free path is
                         // its source (a rendered dance) landed a frame early (6.3 mm high).
                         let mut start = f;
-                        while start > f.saturating_sub(w + 1) && targets[k][start - 1].is_none() {
+                        while start > f.saturating_sub(w + 1) && at_free_height(&targets[k], start - 1) {
                             start -= 1;
                         }
                         let step = target.y - t.free_ankle[f].y;
                         for g in start..f {
                             let at = body.as_ref().map_or(shift[g], |b| b[g]);
                             let s = (g + 1 - start) as f32 / (f - start + 1) as f32;
-                            targets[k][g] = Some(t.free_ankle[g] + at + Vec3::Y * (step * s));
+                            let on = t.free_ankle[g] + at + Vec3::Y * (step * s);
+                            targets[k][g] = Some(match targets[k][g] {
+                                Some(eased) => Vec3::new(eased.x, eased.y + step * s, eased.z),
+                                None => on,
+                            });
                         }
                     }
                 }
@@ -285,7 +347,7 @@ pub(super) fn hold_plan_with(feet: &[FootTracks], fps: f32, contacts: Option<&[V
             body = Some(smooth(&shift));
         }
     }
-    (targets, body.unwrap_or_else(|| vec![Vec3::ZERO; frames]))
+    (targets, body.unwrap_or_else(|| vec![Vec3::ZERO; frames]), stepping)
 }
 
 /// The most [`toe_clearance`] pitches a foot up: a quarter turn (a foot pointed straight down
@@ -385,14 +447,19 @@ pub(super) fn toe_clearance(feet: &[FootTracks], hinge: &[Vec<Vec3>], toe_y_offs
 
 /// How far the pelvis drops on each frame so every held foot is within reach of its hip
 /// (legs nearly straight at most), smoothed so the body does not bob: a running maximum then
-/// a running mean over ±[`RELEASE_S`].
-pub(super) fn pelvis_drop(legs: &[Leg], hips: &[Vec<Vec3>], targets: &[Vec<Option<Vec3>>], fps: f32) -> Vec<f32> {
+/// a running mean over ±[`RELEASE_S`]. Not for a stepping foot (`stepping`, from
+/// [`hold_plan_stepping`]): a foot travelling a long way to its free path reaches as far as
+/// its leg does (dropping the body to its height bent the held leg off its planted frames).
+pub(super) fn pelvis_drop(legs: &[Leg], hips: &[Vec<Vec3>], targets: &[Vec<Option<Vec3>>], stepping: &[Vec<bool>], fps: f32) -> Vec<f32> {
     let frames = targets.first().map_or(0, |t| t.len());
     let mut raw = vec![0.0f32; frames];
     for (k, leg) in legs.iter().enumerate() {
         let reach = (leg.thigh_m + leg.shin_m) * 0.995;
         for f in 0..frames {
             let Some(goal) = targets[k][f] else { continue };
+            if stepping.get(k).and_then(|s| s.get(f)).copied().unwrap_or(false) {
+                continue;
+            }
             let d = goal - hips[k][f];
             let across = Vec3::new(d.x, 0.0, d.z).length();
             // Lowering the hip by y brings it to |d + y·Y| = reach: y = −d.y − √(reach² − across²).
@@ -404,4 +471,44 @@ pub(super) fn pelvis_drop(legs: &[Leg], hips: &[Vec<Vec3>], targets: &[Vec<Optio
     let window = |f: usize| f.saturating_sub(w)..(f + w + 1).min(frames);
     let held: Vec<f32> = (0..frames).map(|f| raw[window(f)].iter().copied().fold(0.0, f32::max)).collect();
     (0..frames).map(|f| held[window(f)].iter().sum::<f32>() / window(f).len() as f32).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 27: a foot held while the rig's free path sweeps it a long way off (a body with wide
+    /// hips turning on the other foot), then released into a swing, steps back to its free path,
+    /// lifted, within the swing, where the control (over [`RELEASE_S`]) snaps it back.
+    #[test]
+    fn a_foot_released_far_from_its_free_path_steps_back_over_its_swing() {
+        let (fps, frames) = (30.0, 60);
+        let still = |x: f32| -> Vec<Vec3> { (0..frames).map(|_| Vec3::new(x, 0.08, 0.0)).collect() };
+        // Right foot: planted for frames 0..20 and from 40, in the air between; its free path
+        // sweeps 1 m away over frames 0..20 (5 cm a frame) and stays there.
+        let src_r: Vec<Vec3> = (0..frames).map(|f| Vec3::new(-0.2, if (20..40).contains(&f) { 0.3 } else { 0.08 }, 0.0)).collect();
+        let free_r: Vec<Vec3> = (0..frames).map(|f| Vec3::new(-0.2 - 0.05 * f.min(20) as f32, src_r[f].y, 0.0)).collect();
+        let feet = |_: ()| {
+            [
+                FootTracks { src_ankle: still(0.2), src_toe: Vec::new(), free_ankle: still(0.2), free_toe: Vec::new(), y_offset: 0.0, scale: 1.0 },
+                FootTracks { src_ankle: src_r.clone(), src_toe: Vec::new(), free_ankle: free_r.clone(), free_toe: Vec::new(), y_offset: 0.0, scale: 1.0 },
+            ]
+        };
+        let moves = |over_swing: bool| -> (f32, f32) {
+            let (targets, shift, _) = hold_plan_stepping(&feet(()), fps, None, Release::Ease { over_swing });
+            let at = |f: usize| targets[1][f].unwrap_or(free_r[f] + shift[f]);
+            let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
+            let worst = (21..40).map(|f| (flat(at(f)) - flat(at(f - 1))).length()).fold(0.0, f32::max);
+            let lift = (21..40).map(|f| at(f).y - free_r[f].y).fold(f32::MIN, f32::max);
+            (worst, lift)
+        };
+        let (eased, eased_lift) = moves(false);
+        let (stepped, lift) = moves(true);
+        // The gap is closed in 6 frames by the control, over the swing by the hold (measured:
+        // 0.255 against 0.084 m in the worst frame, the body's shift included), the foot lifted
+        // clear of the contact band meanwhile.
+        assert!(eased > 0.15, "control: {eased}");
+        assert!(stepped < eased / 2.0 && stepped < 0.1, "hold: {stepped} (control {eased})");
+        assert!(lift > CONTACT_HEIGHT_M && eased_lift < 1e-4, "lift {lift}, control {eased_lift}");
+    }
 }

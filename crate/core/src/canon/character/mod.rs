@@ -26,7 +26,9 @@
 //!   source's, turning on one foot, must move round it — so the character's path can drift
 //!   from the source's scaled one; the pelvis drops where a held foot would be out of reach
 //!   (a foot not held then keeps its free path by IK, so the drop does not drag a step down
-//!   onto the floor), and a released foot eases back onto its free path. A landing foot comes
+//!   onto the floor), and a released foot eases back onto its free path (one released far
+//!   from it — the other foot of a wide rig turning on one, as RobotExpressive's pivot turns —
+//!   steps there, lifted, over its swing rather than snapping back). A landing foot comes
 //!   down to the hold's height (the source's) over the frames before it, on its free path or
 //!   over the release ease it lands within, not in one frame: a rig that lifts its foot
 //!   higher than the source (RobotExpressive's longer feet) would otherwise snap down.
@@ -335,7 +337,7 @@ impl Character {
     /// [`Character::retarget`] with a choice of transfer (the direction-only one is the
     /// benchmark's control).
     pub fn retarget_with(&self, clip: &Clip, clip_map: &HumanoidMap, transfer: Transfer) -> Result<Clip, CharacterError> {
-        self.retarget_options(clip, clip_map, &RetargetOptions { transfer, hold_feet: true })
+        self.retarget_options(clip, clip_map, &RetargetOptions { transfer, ..Default::default() })
     }
 
     /// [`Character::retarget`] with every choice spelled out (the benchmark's controls).
@@ -512,16 +514,17 @@ impl Character {
         }
         for pass in if hold { 0..2 } else { 1..2 } {
             if pass == 1 && hold {
-                (plant_target, shift_m) = match given {
-                    Some(g) => hold_plan_with(&feet, src.fps, Some(&g.contacts), g.release),
-                    None => hold_plan_with(&feet, src.fps, None, Release::Ease),
+                let stepping;
+                (plant_target, shift_m, stepping) = match given {
+                    Some(g) => hold_plan_stepping(&feet, src.fps, Some(&g.contacts), g.release),
+                    None => hold_plan_stepping(&feet, src.fps, None, Release::Ease { over_swing: options.release_over_swing }),
                 };
                 for hips in free_hip.iter_mut() {
                     for (h, shift) in hips.iter_mut().zip(&shift_m) {
                         *h += *shift;
                     }
                 }
-                drop_m = pelvis_drop(&legs, &free_hip, &plant_target, src.fps);
+                drop_m = pelvis_drop(&legs, &free_hip, &plant_target, &stepping, src.fps);
                 toe_pitch = toe_clearance(&feet, &free_hinge, &toe_y_offset, &shift_m, &plant_target, src.fps);
                 // A foot not held, where the pelvis drops for the other, keeps its (shifted)
                 // free path by IK: lowering the body must not lower the step with it — a
@@ -668,11 +671,15 @@ pub struct RetargetOptions {
     /// Hold the character's foot where the source's foot is planted (two-bone IK, the
     /// pelvis lowered to reach); off only as a control.
     pub hold_feet: bool,
+    /// A released foot closes its horizontal gap to its free path over its swing, until it
+    /// lands again (`hold.rs`, `Release::Ease`); off only as the control (over 0.15 s, the hold
+    /// before issue 27's mend).
+    pub release_over_swing: bool,
 }
 
 impl Default for RetargetOptions {
     fn default() -> Self {
-        RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true }
+        RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true, release_over_swing: true }
     }
 }
 
@@ -937,7 +944,7 @@ mod tests {
         let caught = caught.expect("back on its free path");
         assert!(caught > 55 && targets[0][caught..].iter().all(Option::is_none), "caught up at {caught}");
         // The retargeting's release (an ease) is unchanged: back within RELEASE_S.
-        let (eased, _) = hold_plan_with(&feet, fps, Some(&contacts), Release::Ease);
+        let (eased, _) = hold_plan_with(&feet, fps, Some(&contacts), Release::Ease { over_swing: false });
         assert!(eased[0][30 + (RELEASE_S * fps) as usize + 2].is_none());
     }
 

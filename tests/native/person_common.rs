@@ -1,0 +1,43 @@
+//! The person's library, shared by the native tests and the benchmark that dance with the
+//! moves a person imported (`choreo_my_moves`, `choreo_blended_cost`, `choreo_join_cost`,
+//! `tests/bench/choreo_person.rs`): one list of the person's files and one way they are loaded,
+//! so the tests' figures are all on the same library.
+#![allow(dead_code)]
+
+use odori_core::choreo::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
+use odori_core::import::{import_bytes, ImportOptions};
+use odori_core::Clip;
+use odori_tests::{all_bvh, fps_override_for, read};
+
+/// The person's files, in the order they are added: every BVH take in ../shared/data/mocap
+/// but the martial-arts takes and modern dance's 005_01 (sorted, as [`all_bvh`] lists them),
+/// then RobotExpressive's glTF (its `Dance` clip).
+pub fn person_files() -> Vec<String> {
+    let mut files: Vec<String> = all_bvh().into_iter().filter(|r| !r.contains("cmu-martial") && !r.ends_with("005_01.bvh")).collect();
+    files.push("gltf/RobotExpressive.glb".into());
+    files
+}
+
+/// The built-in moves and the person's files (`half`: every other one of [`person_files`],
+/// `Some(0)` or `Some(1)`; `None`: all), each file imported at its own frame rate and cut at
+/// its own tempo with the default options; `on_clip` hears how each clip was taken (a clip the
+/// segmenter refuses, too short or not humanoid, is simply not in the library). Returns the
+/// library and how many files went into it.
+pub fn person_library_with(half: Option<usize>, mut on_clip: impl FnMut(&str, &Clip, &Result<ClipSummary, SegmentError>)) -> (SegmentLibrary, usize) {
+    let mut lib = SegmentLibrary::builtin();
+    let files: Vec<String> = person_files().into_iter().enumerate().filter(|(i, _)| half.is_none_or(|h| i % 2 == h)).map(|(_, f)| f).collect();
+    for rel in &files {
+        let opts = ImportOptions { fps_override: fps_override_for(rel), ..Default::default() };
+        let imp = import_bytes(rel, &read(rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        for clip in imp.clips.iter().filter(|c| !rel.ends_with(".glb") || c.name == "Dance") {
+            let taken = lib.add_clip(clip, &imp.humanoid, &imp.status, &SegmentOptions::default());
+            on_clip(rel, clip, &taken);
+        }
+    }
+    (lib, files.len())
+}
+
+/// [`person_library_with`], quietly.
+pub fn person_library(half: Option<usize>) -> (SegmentLibrary, usize) {
+    person_library_with(half, |_, _, _| {})
+}
