@@ -59,3 +59,48 @@ impl Problem<'_> {
         profile::timed(Work::Fill, || Ok(fill_with_tempi(&self.table, &layers, &self.intensity, &self.node_cost, &self.tempi(&extra), weights)?.0))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::choreo::generate::{fill_stage, GenerateOptions};
+    use crate::choreo::grid::bars_from_tempo;
+    use crate::choreo::segment::SegmentLibrary;
+
+    #[test]
+    fn a_window_refills_only_the_bars_near_a_change_and_a_whole_window_is_the_whole_fill() {
+        let lib = SegmentLibrary::builtin();
+        let secs = 24.0 * 2.0 + 0.01;
+        let bars = bars_from_tempo(secs, 120.0, 4, 0.0, |a, _| (a / secs).clamp(0.0, 1.0)).unwrap();
+        let layers: Vec<Layer> = bars.iter().map(|b| Layer::Open { intensity: b.intensity }).collect();
+        // Every term local (repeat window 1, no variety count): the shortest path is exact.
+        let exact = FillWeights { repeat_window: 1, ..FillWeights::default() };
+        let p = Problem::new(&lib, &bars, &layers, exact, &GenerateOptions { variety_weight: 0.0, ..GenerateOptions::default() });
+        let path = fill_stage(&p).unwrap();
+        let w = margin_bars(&p.weights);
+        let d = FillWeights::default();
+        assert!(margin_bars(&d) > d.repeat_window && margin_bars(&d) > VARIETY_WINDOW && w > VARIETY_WINDOW);
+        // Nothing changed: the path as it was.
+        assert_eq!(p.fill_window(&p.weights, &[], &path, &[]).unwrap(), path);
+        // Bar 12's move barred there: it takes another, and no bar further than the margin moves.
+        let mut barred = vec![vec![0.0f32; lib.len()]; bars.len()];
+        barred[12][path[12]] = 100.0;
+        let q = p.fill_window(&p.weights, &barred, &path, &[12]).unwrap();
+        assert_ne!(q[12], path[12]);
+        for t in (0..bars.len()).filter(|&t| t.abs_diff(12) > w) {
+            assert_eq!(q[t], path[t], "bar {t}, outside the window, moved");
+        }
+        // Its cost with the bar: no higher than the path's own with the bar barred, and every
+        // window path tried from the reference (the path with bar 12 alone changed) is no cheaper.
+        let cost = |r: &[usize]| crate::choreo::fill::path_cost_with_tempi(&p.table, p.layers, &p.intensity, &p.node_cost, &p.tempi(&p.with_base(&barred)), &p.weights, r);
+        for s in (0..lib.len()).filter(|&s| s != path[12]) {
+            let mut r = path.clone();
+            r[12] = s;
+            assert!(cost(&q) <= cost(&r) + 1e-4, "bar 12 → segment {s} is cheaper than the window's path");
+        }
+        // A window over every bar is the whole fill.
+        let all: Vec<usize> = (0..bars.len()).collect();
+        let whole = crate::choreo::fill::fill_with_tempi(&p.table, p.layers, &p.intensity, &p.node_cost, &p.tempi(&p.with_base(&barred)), &p.weights).unwrap().0;
+        assert_eq!(p.fill_window(&p.weights, &barred, &path, &all).unwrap(), whole);
+    }
+}
