@@ -141,6 +141,22 @@ pub fn generate_all(lib: &odori_core::choreo::SegmentLibrary, bars: &[odori_core
     (states.iter().map(odori_core::choreo::BarState::segment).collect(), report.cost)
 }
 
+/// Where one Generate's time went ([`odori_core::choreo::profile`]), a line per stage that took
+/// any: its time, its fills and its renders-and-measures (count and time), and the total.
+pub fn profile_lines(p: &odori_core::choreo::profile::Profile) -> Vec<String> {
+    let mut out = Vec::new();
+    let (mut all, mut fills, mut measures) = (0.0, 0.0, 0.0);
+    for (name, s) in odori_core::choreo::profile::STAGES.iter().zip(&p.stages) {
+        if s.total_ms == 0.0 && s.fills == 0 && s.measures == 0 {
+            continue;
+        }
+        (all, fills, measures) = (all + s.total_ms, fills + s.fill_ms, measures + s.measure_ms);
+        out.push(format!("stage {name:<14} {:>7.0} ms: {:>2} fills {:>7.0} ms, {:>2} measures {:>7.0} ms", s.total_ms, s.fills, s.fill_ms, s.measures, s.measure_ms));
+    }
+    out.push(format!("stages in all {all:.0} ms: fills {fills:.0} ms, renders and measures {measures:.0} ms"));
+    out
+}
+
 /// Foot drift of a whole clip on the canonical skeleton (issue #14's join measure, after spec
 /// §J's foot skate): a foot joint — either ankle or toe — is on the floor while within 5 cm of
 /// its floor (the 1st percentile of its height over the clip); its drift is the largest

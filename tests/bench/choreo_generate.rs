@@ -9,7 +9,14 @@
 //! agree.
 //! `cargo bench -p odori-tests --bench choreo_generate`.
 
+use std::sync::OnceLock;
 use std::time::Instant;
+
+/// Milliseconds since the first reading (the clock the core's profile borrows).
+fn clock_ms() -> f64 {
+    static START: OnceLock<Instant> = OnceLock::new();
+    START.get_or_init(Instant::now).elapsed().as_secs_f64() * 1e3
+}
 
 fn main() {
     let t = Instant::now();
@@ -27,6 +34,46 @@ fn main() {
         assert_eq!((again, c), (first.clone(), cost), "Generate is deterministic");
     }
     println!("native: Generate 90 bars from {} segments (every stage, default settings): {best:.0} ms (best of 5; first call with the table {first_ms:.0} ms), objective {cost:.3}", lib.len());
+    // Where the time goes, per stage: the fills (shortest paths and free-skate passes) against
+    // the renders and measures (odori_core::choreo::profile, with this clock).
+    let ((), profile) = odori_core::choreo::profile::profiled(clock_ms, || {
+        odori_tests::generate_all(&lib, &bars);
+    });
+    for line in odori_tests::profile_lines(&profile) {
+        println!("native:   {line}");
+    }
+    // Windowed refills (GenerateOptions::windowed_refills) against the control (whole refills,
+    // the default) in the same run: times, objectives, whether the dance is the same.
+    let windowed = odori_core::choreo::GenerateOptions { windowed_refills: true, ..odori_core::choreo::GenerateOptions::default() };
+    let run = |o: &odori_core::choreo::GenerateOptions| {
+        let (states, r) = odori_core::choreo::generate_states(&lib, &bars, &[], odori_core::choreo::FillWeights::default(), o).expect("generate");
+        (states.iter().map(odori_core::choreo::BarState::segment).collect::<Vec<_>>(), r.cost)
+    };
+    let ((), profile) = odori_core::choreo::profile::profiled(clock_ms, || {
+        run(&windowed);
+    });
+    println!("native:   the same, windowed refills:");
+    for line in odori_tests::profile_lines(&profile) {
+        println!("native:   {line}");
+    }
+    let (mut whole_ms, mut window_ms) = (f64::MAX, f64::MAX);
+    let (mut whole, mut window) = ((Vec::new(), 0.0), (Vec::new(), 0.0));
+    for _ in 0..3 {
+        let t = Instant::now();
+        whole = run(&odori_core::choreo::GenerateOptions::default());
+        whole_ms = whole_ms.min(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        window = run(&windowed);
+        window_ms = window_ms.min(t.elapsed().as_secs_f64() * 1e3);
+    }
+    let differ = whole.0.iter().zip(&window.0).filter(|(a, b)| a != b).count();
+    println!(
+        "native: Generate 90 bars, whole refills (control): {whole_ms:.0} ms, objective {:.3}; windowed refills: {window_ms:.0} ms, objective {:.3} (best of 3 each): {:.2}x, {}",
+        whole.1,
+        window.1,
+        whole_ms / window_ms,
+        if differ == 0 { "the same dance".to_string() } else { format!("dances differ in {differ} bars") }
+    );
     // Where the time goes: the same call with one stage off at a time, and stage 1 alone (the
     // fill: every later stage off), best of 3 each.
     let stage = |label: &str, o: odori_core::choreo::GenerateOptions| {
@@ -44,6 +91,7 @@ fn main() {
     stage("stage 2 off (beat rate)", odori_core::choreo::GenerateOptions { follow_beat_rate: false, ..d() });
     stage("stage 3 off (free skate)", odori_core::choreo::GenerateOptions { free_skate_slack: 0.0, ..d() });
     stage("stage 4 off (skate)", odori_core::choreo::GenerateOptions { follow_skate: false, ..d() });
+    stage("stage 4b off (preference order)", odori_core::choreo::GenerateOptions { follow_order: false, ..d() });
     stage("stage 5 off (join repair)", odori_core::choreo::GenerateOptions { follow_joins: false, ..d() });
     stage("stage 1 alone (the fill)", odori_core::choreo::GenerateOptions { follow_beat_rate: false, free_skate_slack: 0.0, follow_skate: false, follow_joins: false, ..d() });
     // The built-in library alone, where the variety term is on (off while a library holds

@@ -5,7 +5,9 @@ import { performance } from "node:perf_hooks";
 
 const bytes = readFileSync(process.argv[2]);
 const label = process.argv[3] ?? "wasm";
-const { instance } = await WebAssembly.instantiate(bytes, {});
+const { instance } = await WebAssembly.instantiate(bytes, { env: { now_ms: () => performance.now() } });
+// GENERATE_ONLY=1: only Generate's figures (issue 26's speed work), not the analysis or the table.
+const only = process.env.GENERATE_ONLY === "1";
 const x = instance.exports;
 const time = (f) => { const t = performance.now(); const r = f(); return [performance.now() - t, r]; };
 const median = (f, n) => { const ts = []; let r; for (let i = 0; i < n; i++) { const [t, v] = time(f); ts.push(t); r = v; } ts.sort((a, b) => a - b); return [ts[n >> 1], r]; };
@@ -13,6 +15,7 @@ const best = (f, n) => { let b = Infinity, r; for (let i = 0; i < n; i++) { cons
 const say = (s) => console.log(`${label}: ${s}`);
 
 // Song analysis (issue 4).
+if (!only) {
 const [prepMs, frames] = time(() => x.prepare());
 say(`(node ${process.version}) input = demo song envelope looped to 180 s, ${frames} frames (prepared in ${prepMs.toFixed(0)} ms)`);
 const [renderMs] = median(() => x.render_demo(), 3);
@@ -25,8 +28,11 @@ say(`core analysis, envelope -> grid (3-minute song):  ${analysisMs.toFixed(2)} 
 // Choreography (issue 5).
 const [builtinMs, builtin] = best(() => x.build_builtin(), 5);
 say(`built-in library: ${builtin} segments in ${builtinMs.toFixed(1)} ms (best of 5)`);
+}
 const [setupMs, m] = time(() => x.setup());
 say(`library of ${m} segments (built-in + medley of every move, cut at every count) built in ${setupMs.toFixed(0)} ms`);
+let cost;
+if (!only) {
 const [tableMs] = best(() => x.table(), 3);
 say(`transition table ${m} x ${m} in one go: ${tableMs.toFixed(0)} ms (best of 3)`);
 // As the app builds it: slices of columns between frames.
@@ -41,10 +47,12 @@ for (const columns of [32, 128]) {
   say(`  in slices of ${columns} columns: ${slices} slices, ${total.toFixed(0)} ms in all, longest slice ${worst.toFixed(1)} ms; ${same ? "same table" : "DIFFERENT TABLE"}`);
   if (!same) process.exitCode = 1;
 }
-let [fillMs, cost] = best(() => x.fill90(), 5);
+let fillMs;
+[fillMs, cost] = best(() => x.fill90(), 5);
 say(`fill 90 open bars from ${m} segments (exact, repeat window 1) in ${fillMs.toFixed(1)} ms (best of 5), cost ${cost.toFixed(3)}`);
 [fillMs, cost] = best(() => x.fill90_default(), 3);
 say(`fill 90 open bars, default repeat window 4: ${fillMs.toFixed(1)} ms (best of 3), cost ${cost.toFixed(3)}`);
+}
 // Generate on 90 bars (issue 26's goal: under 300 ms in wasm with ≥ 2,000 segments). The first
 // call also builds the library's cached transition table for the song's metre.
 const [firstGenMs] = time(() => x.generate90());
@@ -54,3 +62,23 @@ say(`Generate 90 bars from ${m} segments (every stage, default settings): ${genM
 const [firstBuiltinMs] = time(() => x.generate90_builtin());
 [genMs, cost] = best(() => x.generate90_builtin(), 3);
 say(`Generate 90 bars from the built-in library alone (variety term on): ${genMs.toFixed(0)} ms (best of 3; first call with the library and table ${firstBuiltinMs.toFixed(0)} ms), objective ${cost.toFixed(3)}`);
+
+// Issue 26's speed work: where Generate's time goes per stage (fills against renders and
+// measures), and windowed refills against the control (whole refills, the default) in the same run.
+const STAGES = ["1 fill", "2 beat rate", "3 free skate", "4 skate", "4b order", "5 join repair", "takes"];
+for (const windowed of [0, 1]) {
+  x.generate90_profile(windowed);
+  let all = 0, fills = 0, measures = 0;
+  say(`Generate profiled, ${windowed ? "windowed refills" : "whole refills (control)"}:`);
+  STAGES.forEach((name, k) => {
+    const v = [0, 1, 2, 3, 4].map((f) => x.profile_value(k, f));
+    if (v[0] === 0 && v[1] === 0 && v[3] === 0) return;
+    all += v[0]; fills += v[2]; measures += v[4];
+    say(`  stage ${name.padEnd(14)} ${v[0].toFixed(0).padStart(6)} ms: ${v[1]} fills ${v[2].toFixed(0)} ms, ${v[3]} measures ${v[4].toFixed(0)} ms`);
+  });
+  say(`  stages in all ${all.toFixed(0)} ms: fills ${fills.toFixed(0)} ms, renders and measures ${measures.toFixed(0)} ms`);
+}
+const [wholeMs, wholeCost] = best(() => x.generate90_refills(0), 3);
+const [windowMs, windowCost] = best(() => x.generate90_refills(1), 3);
+const same = x.generate90_same();
+say(`Generate 90 bars, whole refills (control): ${wholeMs.toFixed(0)} ms, objective ${wholeCost.toFixed(3)}; windowed refills: ${windowMs.toFixed(0)} ms, objective ${windowCost.toFixed(3)} (best of 3 each): ${(wholeMs / windowMs).toFixed(2)}x, ${same === 1 ? "the same dance" : `dances differ in ${-same} bars`}`);

@@ -121,3 +121,81 @@ pub extern "C" fn generate90_builtin() -> f32 {
         odori_tests::generate_all(lib, &odori_tests::bench_bars()).1
     })
 }
+
+// Issue 26's speed work: the same Generate with windowed refills (GenerateOptions::
+// windowed_refills) against the control (whole refills, the default), and where the time goes
+// per stage (odori_core::choreo::profile, on the host's clock).
+
+#[link(wasm_import_module = "env")]
+extern "C" {
+    /// The host's `performance.now()`, milliseconds.
+    fn now_ms() -> f64;
+}
+
+fn host_clock() -> f64 {
+    // SAFETY: an import run.mjs provides; it reads the host's clock and touches no memory.
+    unsafe { now_ms() }
+}
+
+thread_local! {
+    static PROFILE: RefCell<Option<profile::Profile>> = const { RefCell::new(None) };
+    static DANCES: RefCell<[Vec<Option<usize>>; 2]> = const { RefCell::new([Vec::new(), Vec::new()]) };
+}
+
+fn generate90_with(windowed: bool) -> (Vec<Option<usize>>, f32) {
+    LIB.with(|l| {
+        let lib = l.borrow();
+        let Some(lib) = lib.as_ref() else { return (Vec::new(), -1.0) };
+        let o = GenerateOptions { windowed_refills: windowed, ..GenerateOptions::default() };
+        match generate_states(lib, &odori_tests::bench_bars(), &[], FillWeights::default(), &o) {
+            Ok((states, r)) => (states.iter().map(BarState::segment).collect(), r.cost),
+            Err(_) => (Vec::new(), -1.0),
+        }
+    })
+}
+
+/// Generate as [`generate90`] with windowed refills (`windowed` 1) or whole ones (0, the
+/// control, the default); keeps the dance for [`generate90_same`]. Returns the objective.
+#[no_mangle]
+pub extern "C" fn generate90_refills(windowed: u32) -> f32 {
+    let (dance, cost) = generate90_with(windowed == 1);
+    DANCES.with(|d| d.borrow_mut()[usize::from(windowed == 1)] = dance);
+    cost
+}
+
+/// Whether the last windowed and whole-refill dances are the same (1), and else in how many bars
+/// they differ (negative).
+#[no_mangle]
+pub extern "C" fn generate90_same() -> i32 {
+    DANCES.with(|d| {
+        let d = d.borrow();
+        let differ = d[0].iter().zip(&d[1]).filter(|(a, b)| a != b).count() + d[0].len().abs_diff(d[1].len());
+        if differ == 0 { 1 } else { -(differ as i32) }
+    })
+}
+
+/// One Generate profiled (windowed refills when `windowed` is 1); read with [`profile_value`].
+#[no_mangle]
+pub extern "C" fn generate90_profile(windowed: u32) -> f32 {
+    let ((_, cost), p) = profile::profiled(host_clock, || generate90_with(windowed == 1));
+    PROFILE.with(|x| *x.borrow_mut() = Some(p));
+    cost
+}
+
+/// Of the last profile, stage `stage` (index into `profile::STAGES`): `field` 0 its total ms,
+/// 1 fills, 2 fill ms, 3 measures, 4 measure ms (-1 when none).
+#[no_mangle]
+pub extern "C" fn profile_value(stage: u32, field: u32) -> f64 {
+    PROFILE.with(|x| {
+        let x = x.borrow();
+        let Some(s) = x.as_ref().and_then(|p| p.stages.get(stage as usize)) else { return -1.0 };
+        match field {
+            0 => s.total_ms,
+            1 => s.fills as f64,
+            2 => s.fill_ms,
+            3 => s.measures as f64,
+            4 => s.measure_ms,
+            _ => -1.0,
+        }
+    })
+}

@@ -4,6 +4,7 @@
 //! follow), and [`Measured`], which keeps each path's figures so no stage renders a path twice.
 
 use super::generate::Problem;
+use super::profile::{self, Work};
 use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
 use super::render::{render, RenderOptions};
 use super::segment::SegmentLibrary;
@@ -110,7 +111,7 @@ impl Measured {
         if let Some((_, f)) = self.done.iter().find(|(q, _)| q == path) {
             return *f;
         }
-        let f = dance_figures(p.lib, p.bars, path);
+        let f = profile::timed(Work::Measure, || dance_figures(p.lib, p.bars, path));
         self.done.push((path.to_vec(), f));
         f
     }
@@ -120,7 +121,7 @@ impl Measured {
         if let Some((_, f)) = self.played.iter().find(|(q, _)| q == path) {
             return f.clone();
         }
-        let f = played_figures(p.lib, p.bars, path);
+        let f = profile::timed(Work::Measure, || played_figures(p.lib, p.bars, path));
         self.played.push((path.to_vec(), f.clone()));
         f
     }

@@ -40,6 +40,7 @@ use super::fill::{
     bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, path_cost_with_tempi, MovesSource, MOVES_SOURCE_CHARGE, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
 };
 use super::notes::OFF_BEAT_MARGIN;
+use super::profile::{self, Work};
 use super::quality::JOIN_JUMP_GOAL;
 use super::segment::SegmentLibrary;
 use super::table::TableScope;
@@ -97,6 +98,11 @@ pub struct GenerateOptions {
     /// feet held), what the viewer sees. Default true; false: the control (unheld, session
     /// 13's rule, blind to a join the held feet make abrupt).
     pub measure_played: bool,
+    /// Stages 4b and 5 refill only the bars around those a refill changes the cost of
+    /// ([`super::refill`]: a window with its neighbours fixed), not the whole dance. Default
+    /// false (issue 26's speed goal: measured by `choreo_generate`, not yet the default);
+    /// false: every refill is a whole fill, the control.
+    pub windowed_refills: bool,
 }
 
 impl Default for GenerateOptions {
@@ -112,6 +118,7 @@ impl Default for GenerateOptions {
             take: 0,
             follow_order: true,
             measure_played: true,
+            windowed_refills: false,
         }
     }
 }
@@ -201,9 +208,9 @@ pub struct Problem<'a> {
     pub bars: &'a [Bar],
     pub layers: &'a [Layer],
     pub weights: FillWeights,
-    table: Arc<TransitionTable>,
-    intensity: Vec<f32>,
-    node_cost: Vec<f32>,
+    pub(super) table: Arc<TransitionTable>,
+    pub(super) intensity: Vec<f32>,
+    pub(super) node_cost: Vec<f32>,
     bar_counts: Vec<usize>,
     segment_counts: Vec<usize>,
     bar_bpm: Vec<f32>,
@@ -339,21 +346,21 @@ impl<'a> Problem<'a> {
     }
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
-    fn tempi<'b>(&'b self, extra: &'b [Vec<f32>]) -> Tempi<'b> {
+    pub(super) fn tempi<'b>(&'b self, extra: &'b [Vec<f32>]) -> Tempi<'b> {
         Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref() }
     }
 
     /// The minimum-cost path with `weights` and `extra` costs.
     fn fill(&self, weights: &FillWeights, extra: &[Vec<f32>]) -> Result<Vec<usize>, FillError> {
         let extra = self.with_base(extra);
-        Ok(fill_with_tempi(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&extra), weights)?.0)
+        profile::timed(Work::Fill, || Ok(fill_with_tempi(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&extra), weights)?.0))
     }
 
     /// [`free_skate_pass`] over the problem with `weights` and `extra` costs.
     fn free_skate(&self, weights: &FillWeights, extra: &[Vec<f32>], path: &[usize]) -> (Vec<usize>, f32) {
         let excess = |t: usize, s: usize| self.skate_excess(t, s);
         let extra = self.with_base(extra);
-        free_skate_pass(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&extra), weights, self.free_skate_slack, &excess, path)
+        profile::timed(Work::Fill, || free_skate_pass(&self.table, self.layers, &self.intensity, &self.node_cost, &self.tempi(&extra), weights, self.free_skate_slack, &excess, path))
     }
 
     /// §N's foot skate goal of the dance `path`: each bar's source clip's skate at the bar's
@@ -489,7 +496,12 @@ pub fn order_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions
                 }
             }
         }
-        let q = p.fill(weights, &tried)?;
+        let q = if options.windowed_refills {
+            let changed: Vec<usize> = best_miss.iter().chain(&last_miss).map(|m| m.0).collect();
+            p.fill_window(weights, &tried, &best, &changed)?
+        } else {
+            p.fill(weights, &tried)?
+        };
         if let Some(f) = measured.played(p, &q) {
             let m = misses(&q, &f.bars);
             (last, last_miss) = (q.clone(), m.clone());
@@ -512,7 +524,12 @@ pub fn order_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions
         for &(t, _) in &newly {
             p.lift_charge(&mut tried, t);
         }
-        let q = p.fill(weights, &tried)?;
+        let q = if options.windowed_refills {
+            let changed: Vec<usize> = newly.iter().map(|m| m.0).collect();
+            p.fill_window(weights, &tried, &best, &changed)?
+        } else {
+            p.fill(weights, &tried)?
+        };
         if let Some(f) = measured.played(p, &q) {
             let m = misses(&q, &f.bars);
             if better(&m, &best_miss) && f.bas_music >= best_bas - 1e-4 && keeps(&q, &f) && count_imported(&q) >= floor.min(count_imported(&best)) {
@@ -623,6 +640,9 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
         if ban.is_empty() {
             ban = vec![vec![0.0; p.lib.len()]; p.layers.len()];
         }
+        // The bars whose cost this refill changes (for a windowed refill, [`super::refill`]).
+        let mut changed: Vec<usize> = Vec::new();
+        let mut reweighted = false;
         if !joins_ok {
             // The bar after the join takes another move (the one before it, when that one is
             // pinned; both pinned: nothing to change).
@@ -632,7 +652,11 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
             for v in ban.iter_mut() {
                 v[s] += JOIN_BAN;
             }
+            changed.extend((0..trial_path.len()).filter(|&u| trial_path[u] == s));
             if p.weights.moves_source == MovesSource::Mine && p.lib.segments().get(s).is_some_and(|seg| seg.builtin.is_none()) {
+                if !opened[t] && !p.opened.get(t).copied().unwrap_or(false) {
+                    changed.push(t);
+                }
                 opened[t] = true;
                 if let Some(w) = p.why.borrow_mut().get_mut(t) {
                     w.get_or_insert(BuiltinWhy::RoughJoin);
@@ -642,12 +666,13 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
         if !skate_ok {
             let Some(w) = skate_weights.next() else { break };
             skate_weight = w;
+            reweighted = true;
         }
         let mut extra: Vec<Vec<f32>> = ban.iter().enumerate().map(|(t, v)| v.iter().enumerate().map(|(s, b)| b + skate_weight * p.skate_excess(t, s).max(0.0) / 100.0).collect()).collect();
         for t in (0..opened.len()).filter(|&t| opened[t]) {
             p.lift_charge(&mut extra, t);
         }
-        let q = p.fill(weights, &extra)?;
+        let q = if options.windowed_refills && !reweighted { p.fill_window(weights, &extra, &trial_path, &changed)? } else { p.fill(weights, &extra)? };
         let (q, c) = p.free_skate(weights, &extra, &q);
         let after = measured.figures(p, &q, played);
         if let (Some(a), Some(b)) = (after, best) {
@@ -725,10 +750,10 @@ pub fn generate_with_repeats_explained(lib: &SegmentLibrary, bars: &[Bar], layer
 /// and `p.why` says why each bar the order opened was.
 pub(super) fn stages(p: &mut Problem, options: &GenerateOptions, path: Vec<usize>) -> Result<(Vec<usize>, f32), FillError> {
     let mut measured = Measured::default();
-    let (path, weights) = beat_rate_stage(p, path, &mut measured)?;
-    let (path, cost) = free_skate_stage(p, &weights, &path);
-    let (path, cost) = if options.follow_skate { skate_stage(p, &weights, path, cost, &mut measured)? } else { (path, cost) };
-    let (order_path, order, why) = order_stage(p, &weights, options, path.clone(), &mut measured)?;
+    let (path, weights) = profile::stage("2 beat rate", || beat_rate_stage(p, path, &mut measured))?;
+    let (path, cost) = profile::stage("3 free skate", || free_skate_stage(p, &weights, &path));
+    let (path, cost) = if options.follow_skate { profile::stage("4 skate", || skate_stage(p, &weights, path, cost, &mut measured))? } else { (path, cost) };
+    let (order_path, order, why) = profile::stage("4b order", || order_stage(p, &weights, options, path.clone(), &mut measured))?;
     let (base, opened) = (p.base.clone(), p.opened.clone());
     if !order.is_empty() {
         p.base = p.with_base(&order).into_owned();
@@ -740,7 +765,7 @@ pub(super) fn stages(p: &mut Problem, options: &GenerateOptions, path: Vec<usize
     }
     *p.why.borrow_mut() = why;
     let cost = if order_path == path { cost } else { path_cost_with_tempi(&p.table, p.layers, &p.intensity, &p.node_cost, &p.tempi(&p.base), &weights, &order_path) };
-    let out = if options.follow_joins { join_repair_stage(p, &weights, options, order_path, cost, &mut measured) } else { Ok((order_path, cost)) };
+    let out = if options.follow_joins { profile::stage("5 join repair", || join_repair_stage(p, &weights, options, order_path, cost, &mut measured)) } else { Ok((order_path, cost)) };
     (p.base, p.opened) = (base, opened);
     out
 }

@@ -6,6 +6,7 @@
 
 use super::fill::{in_beat_rate_band, FillError, Layer};
 use super::figures::dance_figures;
+use super::profile;
 use super::generate::{builtin_why, fill_stage, stages, BuiltinWhy, GenerateOptions, Problem};
 
 /// The largest take [`GenerateOptions::take`] accepts: take k makes the k takes before it
@@ -41,7 +42,7 @@ fn take_penalty(p: &Problem, earlier: &[Vec<usize>], open: &[usize], penalty: f3
 /// bars is ([`builtin_why`]).
 fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -> Result<(Vec<usize>, Vec<Option<BuiltinWhy>>), FillError> {
     p.base = base;
-    let path = fill_stage(p)?;
+    let path = profile::stage("1 fill", || fill_stage(p))?;
     let path = stages(p, options, path)?.0;
     let why = builtin_why(p, &path);
     Ok((path, why))
@@ -65,7 +66,8 @@ pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Ve
 pub fn takes_explained(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<(Vec<usize>, Vec<Option<BuiltinWhy>>), FillError> {
     let base = p.base.clone();
     let open: Vec<usize> = p.layers.iter().enumerate().filter(|(_, l)| matches!(l, Layer::Open { .. })).map(|(t, _)| t).collect();
-    let best = p.objective(&fill_stage(p)?);
+    // Take 0 needs no reference (its shortest path is the first stage's own, filled there).
+    let best = if take > 0 { profile::stage("takes", || fill_stage(p)).map(|q| p.objective(&q))? } else { 0.0 };
     let per_bar = if best.is_finite() && best > 0.0 { best / open.len().max(1) as f32 } else { 1.0 };
     let within = |obj: f32| obj <= best * (1.0 + TAKE_SLACK) + 1e-6;
     let (zero, zero_why) = take_dance(p, options, base.clone())?;
