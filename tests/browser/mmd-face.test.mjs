@@ -205,7 +205,7 @@ for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).
       await page.evaluate(() => window.odori.project.store.flush());
       await page.reload();
       await page.waitForFunction(() => document.body.dataset.ready === "1", null, { timeout: 120000 });
-      await page.waitForFunction(() => window.odori.choreo && window.odori.choreo.view.length > 8 && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 180000 });
+      await page.waitForFunction(() => window.odori.choreo && window.odori.choreo.view && window.odori.choreo.view.length > 8 && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 180000 });
       const back = await page.evaluate(() => window.odori.project.project.summary().faceTracks.map((f) => f.fileName));
       assert.deepEqual(back, ["lip.vmd"], "the face track after the reload");
       await setUp();
