@@ -65,6 +65,8 @@ async function main() {
   const waitingForDance = [], waitingForSearch = [];
   const player = new Player({ viewer, library, canvas, scrub: $("#scrub"), label: $("#frame-label"), playButton: $("#play"), loop: $("#loop") });
   bindDrawCap(player, viewer.adapterInfo, badge);
+  // A face (lip-sync) track keying morphs the drawn MMD model lacks: ignored there, and said.
+  player.onMissingMorphs = (names) => messages.info(`This model lacks the face track's morphs ${names.join(", ")}: their keys are ignored on it`);
   // The library's order and selection as the person left them, kept per project in this browser.
   const viewKey = () => (session.store && session.store.projectId ? `odori.view.${session.store.projectId}` : null);
   const panel = new LibraryPanel($("#library tbody"), library, {
@@ -111,6 +113,7 @@ async function main() {
     // The project parses the file (once) and shows its clips in the library.
     importer: (fileName, bytes, options, model) => session.importFile(fileName, bytes, options, model),
     cameraImporter: (fileName, bytes, options) => session.importCamera(fileName, bytes, options),
+    faceImporter: (fileName, bytes, options) => session.importFaceTrack(fileName, bytes, options),
     onImported: (report, how) => imported(report, how),
     onFiles: (files) => session.takeProjectFiles(files),
     formats: importFormats(),

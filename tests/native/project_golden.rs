@@ -1,5 +1,5 @@
-//! The golden `.odori` files of schema versions 1 to 5 (`tests/golden/project_v1.odori` …
-//! `project_v5.odori`, each written once by `tests/tools/make_golden_project.rs` with the build of
+//! The golden `.odori` files of schema versions 1 to 6 (`tests/golden/project_v1.odori` …
+//! `project_v6.odori`, each written once by `tests/tools/make_golden_project.rs` with the build of
 //! its schema and reviewed; never written by the tests) open with this build: everything its
 //! maker put in is there, it renders, and its history works. When the schema changes, these
 //! files must keep opening (through `project::file::migrate`).
@@ -17,6 +17,8 @@ const GOLDEN_V3: &[u8] = include_bytes!("../golden/project_v3.odori");
 const GOLDEN_V4: &[u8] = include_bytes!("../golden/project_v4.odori");
 /// Written by the tool at s14-repeats (schema 5: a found repeat removed and a repeat marked).
 const GOLDEN_V5: &[u8] = include_bytes!("../golden/project_v5.odori");
+/// Written by the tool at s15-mmdface (schema 6: a face (lip-sync) track kept in the project).
+const GOLDEN_V6: &[u8] = include_bytes!("../golden/project_v6.odori");
 
 #[test]
 fn golden_v1_opens_with_everything_in_it() {
@@ -64,6 +66,8 @@ fn golden_v5_opens_with_its_repeats() {
     use odori_core::project::{BarRange, RepeatMark, RepeatRun};
     let mut p = golden_opens_with_everything_in_it(GOLDEN_V5, 5);
     assert_eq!(p.doc().cameras.len(), 1);
+    // Schema 6 keeps face tracks: a v5 project has none.
+    assert!(p.doc().faces.is_empty());
     let n = p.doc().dance.bars.len();
     let marks = p.doc().dance.repeats.clone();
     // What the tool did: the found repeat (the demo song's second chorus) removed, then the
@@ -91,6 +95,44 @@ fn golden_v5_opens_with_its_repeats() {
     let before = p.doc().clone();
     assert!(p.mark_repeat(BarRange { first_bar: 1, bars: 2 }, BarRange { first_bar: 0, bars: 2 }).is_err());
     assert_eq!(p.doc(), &before);
+}
+
+#[test]
+fn golden_v6_opens_with_its_face_track() {
+    let mut p = golden_opens_with_everything_in_it(GOLDEN_V6, 6);
+    assert_eq!((p.doc().cameras.len(), p.doc().dance.repeats.len()), (1, 2));
+    let doc = p.doc().clone();
+    assert_eq!(doc.faces.len(), 1);
+    assert_eq!((doc.faces[0].file_name.as_str(), doc.faces[0].song_offset_frames), ("golden_lip.vmd", Some(10)));
+    // The kept bytes are the face VMD the tool wrote byte by byte: あ shut at 0, open at 15, shut at 30.
+    let track = p.face_track(0).expect("the face track reads from the kept bytes");
+    let keys: Vec<(&str, u32, f32)> = track.keys.iter().map(|k| (k.name.as_str(), k.frame, k.weight)).collect();
+    assert_eq!(keys, vec![("あ", 0, 0.0), ("あ", 15, 1.0), ("あ", 30, 0.0)]);
+    assert_eq!(track.song_offset_frames, 10);
+    // At song time 1/6 s (motion frame 15) the mouth is fully open.
+    let faces = odori_core::mmd::face_track::LayeredFaces::new(&["い", "あ"], None, &[&track]);
+    assert_eq!(faces.weights_at(0.0, 5.0 / 30.0), vec![(1, 1.0)]);
+    // The track was the last edit: one undo takes it away, redo brings it back.
+    assert!(p.undo());
+    assert!(p.doc().faces.is_empty());
+    assert!(p.redo());
+    assert_eq!(p.doc(), &doc);
+}
+
+/// A build that knows schema 5 only refuses a v6 file (it would drop the face track unseen):
+/// the v6 golden's manifest with its version raised past this build's is refused the same way.
+#[test]
+fn a_file_newer_than_this_build_is_refused() {
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(GOLDEN_V6)).expect("a zip");
+    let mut manifest = String::new();
+    std::io::Read::read_to_string(&mut zip.by_name("manifest.json").expect("manifest"), &mut manifest).expect("reads");
+    let next = project::CURRENT_SCHEMA_VERSION + 1;
+    let newer = manifest.replacen(&format!("\"schemaVersion\":{}", project::CURRENT_SCHEMA_VERSION), &format!("\"schemaVersion\":{next}"), 1);
+    assert_ne!(newer, manifest);
+    match project::file::from_manifest(newer.as_bytes(), |_| None) {
+        Err(e) => assert_eq!(e, project::FileError::NewerVersion { found: next, supported: project::CURRENT_SCHEMA_VERSION }),
+        Ok(_) => panic!("a newer schema opened"),
+    }
 }
 
 fn golden_opens_with_everything_in_it(bytes: &[u8], version: u32) -> project::Project {
@@ -185,6 +227,8 @@ fn dts_error_kinds_cover_the_core_kinds() {
         ProjectError::BadEnvelope { message: f() },
         ProjectError::NotACamera { file_name: f(), bone_keys: 1, morph_keys: 0 },
         ProjectError::NoSuchCamera { index: 1, count: 0 },
+        ProjectError::NotAFaceTrack { file_name: f(), bone_keys: 1, camera_keys: 0 },
+        ProjectError::NoSuchFaceTrack { index: 1, count: 0 },
         ProjectError::Repeat(odori_core::project::RepeatError::Overlapping { first_bar: 1, end_bar: 3, of_first_bar: 0, of_end_bar: 2 }),
         ProjectError::Repeat(odori_core::project::RepeatError::NotARepeat { bar: 1, song_bars: 2 }),
     ];

@@ -1,13 +1,14 @@
 //! Writes the golden `.odori` file of the build's schema version (`tests/golden/project_v1.odori`;
 //! `project_v2.odori` was written by it at main 8823db9, schema 2; `project_v3.odori` at main
 //! 8ed782d, schema 3; `project_v4.odori` at main 67f699e, schema 4, which adds a camera VMD;
-//! `project_v5.odori` by this version, schema 5, which adds a repeat marked and one removed),
-//! made from the engine's own content only (the demo song's envelope, a three-joint BVH and a
-//! three-key camera VMD written here, built-in moves), so it can be committed. Run once per
-//! released schema version and review the result; the test run only reads it:
+//! `project_v5.odori` at s14-repeats, schema 5, which adds a repeat marked and one removed;
+//! `project_v6.odori` by this version, schema 6, which adds a face (lip-sync) track), made from
+//! the engine's own content only (the demo song's envelope, a three-joint BVH, a three-key camera
+//! VMD and a three-key face VMD written here, built-in moves), so it can be committed. Run once
+//! per released schema version and review the result; the test run only reads it:
 //!
 //! ```sh
-//! cargo run -p odori-tests --example make_golden_project -- tests/golden/project_v5.odori
+//! cargo run -p odori-tests --example make_golden_project -- tests/golden/project_v6.odori
 //! ```
 
 use odori_core::library::builtin_moves;
@@ -67,6 +68,29 @@ pub fn tiny_camera_vmd() -> Vec<u8> {
     out
 }
 
+/// A lip-sync VMD of our own: no bone keys, three morph keys of あ (the mouth open) — shut at
+/// frame 0, open at 15, shut at 30 — written byte by byte as MMD lays the file out (a 15-byte
+/// Shift-JIS name, the frame, the weight: 23 bytes a key).
+pub fn tiny_face_vmd() -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut magic = b"Vocaloid Motion Data 0002".to_vec();
+    magic.resize(30, 0);
+    out.extend_from_slice(&magic);
+    let mut model = b"golden".to_vec();
+    model.resize(20, 0);
+    out.extend_from_slice(&model);
+    out.extend_from_slice(&0u32.to_le_bytes()); // bone keys
+    out.extend_from_slice(&3u32.to_le_bytes()); // morph keys
+    for (frame, weight) in [(0u32, 0.0f32), (15, 1.0), (30, 0.0)] {
+        let mut name = vec![0x82, 0xA0]; // あ in Shift-JIS
+        name.resize(15, 0);
+        out.extend_from_slice(&name);
+        out.extend_from_slice(&frame.to_le_bytes());
+        out.extend_from_slice(&weight.to_le_bytes());
+    }
+    out
+}
+
 fn main() {
     let out = std::env::args().nth(1).unwrap_or_else(|| panic!("usage: make_golden_project OUT.odori"));
     let song = demo_song(22_050.0).expect("demo song");
@@ -93,6 +117,8 @@ fn main() {
     p.remove_repeat(found.first_bar).expect("remove the found repeat");
     let n = p.doc().dance.bars.len();
     p.mark_repeat(project::BarRange { first_bar: n - 2, bars: 2 }, project::BarRange { first_bar: 0, bars: 2 }).expect("mark a repeat");
+    // Schema 6: a face (lip-sync) track, its frame 10 at song time 0.
+    p.add_face_track("golden_lip.vmd", &tiny_face_vmd(), Some(10)).expect("face track");
     let bytes = project::save(&p).expect("save");
     std::fs::write(&out, &bytes).unwrap_or_else(|e| panic!("{out}: {e}"));
     println!("{out}: {} bytes, {} bars, {} undo steps", bytes.len(), p.doc().dance.bars.len(), p.undo_history().len());

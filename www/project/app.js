@@ -41,7 +41,7 @@ export class ProjectSession {
     /** Library clip id → the Project's ClipRef. */
     this.clipRefs = new Map();
     /** What the page shows of the document (see `reconcile`). */
-    this.shown = { sources: new Map(), song: null, corrections: "[]", tags: "[]", texts: "[]", character: bodyKey({}), worn: [], cameras: "[]" };
+    this.shown = { sources: new Map(), song: null, corrections: "[]", tags: "[]", texts: "[]", character: bodyKey({}), worn: [], cameras: "[]", faceTracks: "[]" };
     /** Called after every edit (undo/redo buttons). */
     this.onEdited = null;
     /** The display hooks `reconcile` uses (set by the page, see main.js). */
@@ -142,6 +142,20 @@ export class ProjectSession {
     const o = options && options.songOffsetFrames ? { songOffsetFrames: options.songOffsetFrames } : {};
     const info = this.project.addCameraInto(this.library, fileName, bytes, o);
     this.shown.cameras = JSON.stringify(this.project.summary().cameras);
+    this.edited();
+    return info;
+  }
+
+  /**
+   * Keeps a lip-sync VMD (face keys only) as the project's face track (kept with it, undoable)
+   * and shows the project's face tracks in the library, where the viewer plays them on the dance
+   * drawn on an MMD model. Returns the track's info (throws the engine's error: not a VMD, no
+   * morph keys, cut short).
+   */
+  importFaceTrack(fileName, bytes, options) {
+    const o = options && options.songOffsetFrames ? { songOffsetFrames: options.songOffsetFrames } : {};
+    const info = this.project.addFaceTrack(this.library, fileName, bytes, o);
+    this.shown.faceTracks = JSON.stringify(this.project.summary().faceTracks);
     this.edited();
     return info;
   }
@@ -318,6 +332,12 @@ export class ProjectSession {
       this.shown.cameras = cameras;
       for (const problem of this.project.camerasInto(this.library)) this.messages.error(problem);
     }
+    // Face tracks: the library shows the project's (the viewer plays them on the dance).
+    const faceTracks = JSON.stringify(now.faceTracks || []);
+    if (faceTracks !== this.shown.faceTracks && this.project.faceTracksInto) {
+      this.shown.faceTracks = faceTracks;
+      for (const problem of this.project.faceTracksInto(this.library)) this.messages.error(problem);
+    }
     const character = bodyKey(now);
     if (character !== this.shown.character) {
       this.shown.character = character;
@@ -389,7 +409,7 @@ export class ProjectSession {
       const r = await saveBytes(bytes, fileNameFor(this.project.summary().name));
       if (r) this.messages.info(`Saved ${r.name} (${(bytes.length / 1024).toFixed(0)} KiB)`);
       // MMD files go into the person's own .odori file, never further: say so when it holds some.
-      const mmd = [...this.project.doc().sources.map((s) => s.fileName).filter((n) => /\.(vmd|pmx|pmd)$/i.test(n)), ...this.project.summary().cameras.map((c) => c.fileName)];
+      const mmd = [...this.project.doc().sources.map((s) => s.fileName).filter((n) => /\.(vmd|pmx|pmd)$/i.test(n)), ...this.project.summary().cameras.map((c) => c.fileName), ...(this.project.summary().faceTracks || []).map((c) => c.fileName)];
       if (r && mmd.length) this.messages.info(`${r.name} holds your MMD file${mmd.length === 1 ? "" : "s"} (${mmd.join(", ")}) for you: MMD creators' terms usually forbid passing them on, so keep this file to yourself (a share link leaves them out).`);
       // Named where it was saved ("my dance.odori" → "my dance"): how Recent projects lists it.
       const named = r && r.name.replace(/\.odori$/i, "").trim();

@@ -54,14 +54,16 @@ export function bvhHeaderFps(bytes) {
 }
 
 export class FileLoader {
-  constructor({ library, messages, status, optionsDialog, onImported, onFiles, importer, cameraImporter, formats }) {
+  constructor({ library, messages, status, optionsDialog, onImported, onFiles, importer, cameraImporter, faceImporter, formats }) {
     // `importer(fileName, bytes, options)` → import report: who parses the file (the app's
     // project, which shows its clips in the library); the library's own import otherwise.
     // `cameraImporter(fileName, bytes, options)` → camera track info: who keeps a camera VMD
     // (the app's project, which shows it in `library.cameraTracks()`); the library otherwise.
+    // `faceImporter(fileName, bytes, options)` → face track info: who keeps a lip-sync VMD (face
+    // keys only) as the project's face track; without it the library lists it (not refused).
     // `optionsDialog`: the `<dialog>` asking each BVH file's options (index.html #import-options).
     // `formats`: the engine's `importFormats()`, what files are taken (see `fileFormats`).
-    Object.assign(this, { library, messages, status, optionsDialog, onImported, onFiles, importer, cameraImporter });
+    Object.assign(this, { library, messages, status, optionsDialog, onImported, onFiles, importer, cameraImporter, faceImporter });
     this.formats = fileFormats(formats);
     this.queue = Promise.resolve();
   }
@@ -210,6 +212,7 @@ export class FileLoader {
     let options = {};
     let toProject = [];
     let cameras = [];
+    let lipSyncs = [];
     let setModels = [];
     try {
       const seen = this.library.inspectMmdFiles(set);
@@ -223,25 +226,31 @@ export class FileLoader {
       // So does a camera VMD (camera keys, no bone keys), given as its own file or inside a zip:
       // a zip holding one is opened here, the camera goes to the project and the zip's other
       // files to the library as one set, named as importFiles names them ("zip name/entry").
-      if (this.cameraImporter) {
+      // A lip-sync VMD (face keys only) is offered as the project's face track the same way.
+      if (this.cameraImporter || this.faceImporter) {
         const isCamera = (f) => f.kind === "vmd" && !f.error && f.cameraKeys > 0 && f.boneKeys === 0;
-        const zipped = seen.filter((f) => isCamera(f) && !set.some((s) => s.name === f.file));
+        const isLipSync = (f) => f.kind === "vmd" && !f.error && f.morphKeys > 0 && f.boneKeys === 0 && f.cameraKeys === 0;
+        const wanted = (f) => (this.cameraImporter && isCamera(f)) || (this.faceImporter && isLipSync(f));
+        const zipped = seen.filter((f) => wanted(f) && !set.some((s) => s.name === f.file));
         const opened = [];
         for (const z of set) {
           if (/\.zip$/i.test(z.name) && zipped.some((c) => c.file.startsWith(`${z.name}/`))) opened.push(...this.library.constructor.unzipMmd(z.name, z.bytes));
           else opened.push(z);
         }
         set = opened;
-        cameras = seen.filter((f) => isCamera(f) && set.some((s) => s.name === f.file));
+        if (this.cameraImporter) cameras = seen.filter((f) => isCamera(f) && set.some((s) => s.name === f.file));
+        if (this.faceImporter) lipSyncs = seen.filter((f) => isLipSync(f) && set.some((s) => s.name === f.file));
       }
-      if (dances.length) {
+      if (dances.length || lipSyncs.length) {
         // A project dance can be posed on a model of the set or one kept in the library (whose file it keeps).
-        const chosen = await this.askMmd(dances, [...new Set(models)], toProject.length < dances.length || setModels.length > 0 || libraryModels.length > 0);
+        const chosen = await this.askMmd(dances, [...new Set(models)], dances.length > 0 && (toProject.length < dances.length || setModels.length > 0 || libraryModels.length > 0), lipSyncs);
         if (!chosen) {
           this.messages.info(`Import cancelled: ${set.map((f) => f.name).join(", ")} not added`);
           return null;
         }
-        options = chosen;
+        const { lipSync = [], ...rest } = chosen;
+        lipSyncs = lipSyncs.filter((l) => lipSync.includes(l.file));
+        options = rest;
       }
     } catch (e) {
       this.messages.error(e && e.name === "OdoriError" ? e.message : `MMD files: ${e && e.message ? e.message : e}`);
@@ -249,7 +258,7 @@ export class FileLoader {
     }
     this.progress(`Importing ${set.length} MMD file${set.length === 1 ? "" : "s"}…`);
     await new Promise((r) => requestAnimationFrame(() => setTimeout(r, 0)));
-    const rest = set.filter((f) => !toProject.some((d) => d.file === f.name) && !cameras.some((c) => c.file === f.name));
+    const rest = set.filter((f) => !toProject.some((d) => d.file === f.name) && !cameras.some((c) => c.file === f.name) && !lipSyncs.some((l) => l.file === f.name));
     let report = { motions: [], models: [], cameras: [], notices: [], problems: [] };
     try {
       if (rest.length) report = this.library.importFiles(rest, options);
@@ -263,6 +272,9 @@ export class FileLoader {
     for (const n of report.notices) this.messages.info(n);
     for (const m of report.models) {
       this.messages.info(`${m.file}: MMD model "${m.name}" added (${m.vertices} vertices, ${m.bones} bones, ${m.textures.length} textures)${m.characterId != null ? ": choose it in the Character list" : ""}`);
+    }
+    for (const t of report.faceTracks || []) {
+      this.messages.info(`${t.source}: a lip-sync (${t.keys} face keys, no bone keys)${this.faceImporter ? "" : ": open it in the app to keep it as the project's face track"}`);
     }
     for (const m of report.motions) {
       this.messages.info(`${m.file}: dance added, posed on ${m.rig}${m.songOffsetFrames ? `, starting at motion frame ${m.songOffsetFrames} (song time 0)` : ""}`);
@@ -308,6 +320,18 @@ export class FileLoader {
         this.messages.error(e && e.name === "OdoriError" ? e.message : `${f.name}: ${e && e.message ? e.message : e}`);
       }
     }
+    for (const l of lipSyncs) {
+      const f = set.find((x) => x.name === l.file);
+      const o = options.songOffsetFrames ? { songOffsetFrames: options.songOffsetFrames } : {};
+      try {
+        const t = this.faceImporter(f.name, f.bytes, o);
+        const morphs = t.morphs.slice(0, 6).join(", ") + (t.morphs.length > 6 ? " …" : "");
+        this.messages.info(`${f.name}: lip-sync added to the project (${t.keys} face keys of ${t.morphs.length} morphs: ${morphs}; ${t.durationSecs.toFixed(1)} s): the dance plays it when drawn on an MMD model`);
+        added++;
+      } catch (e) {
+        this.messages.error(e && e.name === "OdoriError" ? e.message : `${f.name}: ${e && e.message ? e.message : e}`);
+      }
+    }
     if (added || report.motions.length || report.models.length) {
       this.messages.info("MMD files stay with you: MMD creators' terms usually forbid passing them on, so the project keeps them on this device (and in the .odori file you save for yourself) and a share link leaves them out.");
     }
@@ -318,7 +342,7 @@ export class FileLoader {
    * The MMD dialog: the song offset and, when a dance plays from the library (`pickModel`: a
    * dance inside a zip), the model it plays on; null when cancelled.
    */
-  askMmd(dances, models, pickModel = true) {
+  askMmd(dances, models, pickModel = true, lipSyncs = []) {
     let dialog = document.getElementById("mmd-import");
     if (!dialog) {
       dialog = document.createElement("dialog");
@@ -353,13 +377,23 @@ export class FileLoader {
     else l1.textContent = "The dance goes into the project's dance library, posed on Odori's standard MMD skeleton.";
     const l2 = document.createElement("label");
     l2.append(`Song offset: motion frame `, offset, ` is song time 0 (30 frames a second; WAVEFILE's is 160)`);
-    body.append(Object.assign(document.createElement("p"), { textContent: names }), l1, l2);
+    dialog.querySelector("h2").textContent = dances.length ? "Import MMD dance" : "Import MMD lip-sync";
+    // Each lip-sync (face keys only) offered as the project's face track, checked.
+    const lips = lipSyncs.map((l) => {
+      const box = Object.assign(document.createElement("input"), { type: "checkbox", className: "mmd-lip-sync", checked: true, value: l.file });
+      const label = document.createElement("label");
+      label.append(box, ` ${l.file}: lip-sync for this project (${l.morphKeys} face keys, no bone keys; played on the dance when it is drawn on an MMD model)`);
+      return { box, label };
+    });
+    if (dances.length) body.append(Object.assign(document.createElement("p"), { textContent: names }), l1);
+    body.append(l2, ...lips.map((l) => l.label));
     return new Promise((resolve) => {
       dialog.addEventListener("close", () => {
         if (dialog.returnValue !== "import") return resolve(null);
         const o = pickModel ? { model: model.value } : {};
         const f = Math.round(Number(offset.value));
         if (f > 0) o.songOffsetFrames = f;
+        if (lips.length) o.lipSync = lips.filter((l) => l.box.checked).map((l) => l.box.value);
         resolve(o);
       }, { once: true });
       dialog.returnValue = "";

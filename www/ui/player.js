@@ -263,6 +263,13 @@ export class Player {
     this.scrub.value = String(frame);
     this.label.textContent = `${frame} / ${c.frames - 1}`;
     this.viewer.draw(this.library, this.figures());
+    // The project's face track keys morphs the drawn MMD model lacks: said once per set of names.
+    if (this.onMissingMorphs && this.library.mmdModels && this.viewer.lastDrawn) {
+      const missing = [...new Set(this.viewer.lastDrawn().flatMap((d) => d.missingMorphs || []))];
+      const key = missing.join("、");
+      if (key && key !== this.missingMorphsSaid) this.onMissingMorphs(missing);
+      this.missingMorphsSaid = key;
+    }
     this.preparePending();
     if (!this.drawnOnce) {
       this.drawnOnce = true;

@@ -78,6 +78,7 @@ error_kinds! {
     "mmd-no-bone-keys": "MMD import: a VMD with no bone keys to pose",
     "mmd-no-matching-bones": "MMD import: none of a VMD's bones is a bone of the model it is posed on",
     "mmd-no-camera-keys": "Camera import: a VMD with no camera keys (a dance VMD is imported as a motion)",
+    "mmd-no-morph-keys": "Face track import: a VMD with no morph (face) keys to use as a lip-sync",
     "mmd-rig": "MMD import: a model whose bones or IK chains cannot be posed",
     "mmd-missing-textures": "MMD import: a model naming textures not among the files given (the model is kept)",
 }

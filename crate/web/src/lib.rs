@@ -138,6 +138,10 @@ export interface DrawnFigure {
   clip: number;
   timeSecs: number;
   body: FigureBody;
+  /** Drawn vertices the face morphs moved (an MMD model playing face keys; else 0). */
+  morphed: number;
+  /** Morphs the project's face tracks key that the drawn MMD model lacks (their keys are ignored). */
+  missingMorphs: string[];
 }
 export interface FigureJoints {
   /** Joint names of the skeleton the figure is posed on (the character's rig when on one). */

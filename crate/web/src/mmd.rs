@@ -8,6 +8,7 @@
 use js_sys::{Array, Reflect, Uint8Array};
 use odori_core::canon::humanoid::HumanoidMap;
 use odori_core::mmd::export::clip_to_vmd_keeping;
+use odori_core::mmd::face_track::{layer_keys, FaceTrack};
 use odori_core::mmd::files::{import_files, CameraTrack, ImportedModel, MmdFilesOptions, STANDARD_RIG};
 use odori_core::import::SkinnedMesh;
 use odori_core::mmd::mesh::model_character;
@@ -50,6 +51,14 @@ pub(crate) struct MmdStore {
     /// `exportVmd` fits a project dance to its model with them when the library has no model of
     /// that name (a reopened project).
     pub project_models: Vec<odori_core::import::mmd_model::MmdModel>,
+    /// The open project's face (lip-sync) tracks (`Project.faceTracksInto`), in its order: the
+    /// viewer plays them on the song-time clips below, `exportVmd` writes them into their VMDs.
+    pub face_tracks: Vec<FaceTrack>,
+    /// Bumped whenever `face_tracks` changes (the viewer's cached faces and last frame key on it).
+    pub faces_generation: u32,
+    /// Clips whose time is song time and that face tracks play on: the project's dance
+    /// (`renderDance`, `playInto` and the dance put on its character) and its VMD dances.
+    pub song_clips: Vec<u32>,
 }
 
 impl MmdStore {
@@ -136,6 +145,24 @@ fn camera_info(c: &CameraTrack) -> CameraInfo<'_> {
     CameraInfo { name: &c.name, source: &c.source, keys: c.keys.len(), duration_secs: c.keys.last().map_or(0.0, |k| k.time_secs) }
 }
 
+/// A face (lip-sync) track as the page sees it.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+pub(crate) struct FaceTrackInfo<'a> {
+    /// The file's name.
+    source: &'a str,
+    keys: usize,
+    /// The morphs it keys, each once.
+    morphs: Vec<String>,
+    song_offset_frames: u32,
+    /// Song time of its last key.
+    duration_secs: f32,
+}
+
+pub(crate) fn face_track_info(t: &FaceTrack) -> FaceTrackInfo<'_> {
+    FaceTrackInfo { source: &t.source, keys: t.keys.len(), morphs: t.morph_names(), song_offset_frames: t.song_offset_frames, duration_secs: t.duration_secs() }
+}
+
 /// One file of the set, as `Library.inspectMmdFiles` sees it before importing.
 #[derive(Serialize)]
 #[serde(rename_all = "camelCase")]
@@ -191,6 +218,30 @@ impl Library {
     /// Clip `id`'s face (morph) keys and the motion frame the clip starts at, when it has any.
     pub(crate) fn face_keys(&self, id: u32) -> Option<(&[odori_core::import::vmd::MorphKey], u32)> {
         self.mmd.morphs.iter().find(|(i, _, _)| *i == id).map(|(_, k, o)| (k.as_slice(), *o))
+    }
+
+    /// The project's face tracks and whether they play on clip `id` (a song-time clip).
+    pub(crate) fn face_tracks_on(&self, id: u32) -> &[FaceTrack] {
+        if self.mmd.song_clips.contains(&id) {
+            &self.mmd.face_tracks
+        } else {
+            &[]
+        }
+    }
+
+    /// Marks clip `id` as on song time: the project's face tracks play on it.
+    pub(crate) fn mark_song_clip(&mut self, id: u32) {
+        if !self.mmd.song_clips.contains(&id) {
+            self.mmd.song_clips.push(id);
+        }
+    }
+
+    /// Shows the project's face tracks (replacing the ones shown before).
+    pub(crate) fn set_face_tracks(&mut self, tracks: Vec<FaceTrack>) {
+        if tracks != self.mmd.face_tracks {
+            self.mmd.face_tracks = tracks;
+            self.mmd.faces_generation = self.mmd.faces_generation.wrapping_add(1);
+        }
     }
 
     /// Keeps face keys for clip `id` (a project's VMD source shown in the library).
@@ -317,7 +368,10 @@ impl Library {
     /// (the viewer plays them on an MMD model's face; `exportVmd` writes them back), with a notice.
     /// `options`: `{ model?: string ("standard" for the built-in skeleton), songOffsetFrames?: number }`
     /// (the motion frame that is song time 0: the clip starts there).
-    /// Returns `{ clips: ClipInfo-bearing motions, models, cameras, notices, problems }`; a bad
+    /// A VMD of morph keys and no bone keys (a lip-sync) is no motion: it is listed in
+    /// `faceTracks` (`{ source, keys, morphs, songOffsetFrames, durationSecs }`), for the page to
+    /// offer as the project's face track (`Project.addFaceTrack`).
+    /// Returns `{ motions, models, cameras, faceTracks, notices, problems }`; a bad
     /// file is a problem `{ file, kind, message }` and the rest of the set still imports.
     #[wasm_bindgen(js_name = importFiles)]
     pub fn import_files(&mut self, files: JsValue, #[wasm_bindgen(unchecked_param_type = "MmdImportOptions | undefined")] options: JsValue) -> Result<JsValue, OdoriError> {
@@ -397,6 +451,8 @@ impl Library {
             motions: Vec<MotionInfo<'a>>,
             models: Vec<ModelInfo<'a>>,
             cameras: Vec<CameraInfo<'a>>,
+            /// Face-only VMDs (lip-syncs): offered as face tracks of the project (`Project.addFaceTrack`).
+            face_tracks: Vec<FaceTrackInfo<'a>>,
             notices: &'a [String],
             problems: &'a [odori_core::mmd::files::FileProblem],
         }
@@ -404,6 +460,7 @@ impl Library {
             motions,
             models: r.models.iter().map(|m| model_info(m, &self.mmd)).collect(),
             cameras: r.cameras.iter().map(camera_info).collect(),
+            face_tracks: r.face_tracks.iter().map(face_track_info).collect(),
             notices: &notices,
             problems: &r.problems,
         });
@@ -502,6 +559,10 @@ impl Library {
         let mut vmd = clip_to_vmd_keeping(&clip, &rig, &header, &keep).map_err(|err| OdoriError::new(err.kind(), err.to_string()))?;
         if let Some((_, morphs, offset)) = self.mmd.morphs.iter().find(|(i, _, _)| *i == id) {
             odori_core::mmd::export::put_morph_keys(&mut vmd, morphs, offset.saturating_add(start));
+        }
+        // The project's face tracks over the clip's own face keys (a clip on song time: the dance).
+        for t in self.face_tracks_on(id) {
+            vmd.morph_keys = layer_keys(std::mem::take(&mut vmd.morph_keys), &t.keys_from(start));
         }
         let file = format!("{}.vmd", e.clip.name);
         odori_core::export::vmd::write(&file, &vmd).map_err(|err| OdoriError { kind: err.kind(), message: err.to_string(), file: Some(file) })

@@ -147,7 +147,7 @@ impl Project {
 
     /// What the page shows of the project (`ProjectSummary`): name, sources, song (with a key
     /// that changes only when the song does), tags, put-on clips (each with a key), the body,
-    /// texts, ρ and the music weight.
+    /// texts, ρ, the music weight, the camera motions and the face tracks (each with a key).
     #[wasm_bindgen(unchecked_return_type = "ProjectSummary")]
     pub fn summary(&self) -> JsValue {
         to_js(&self.inner.summary())
@@ -593,6 +593,13 @@ impl Project {
             let ids = library.ids_from(before);
             library.link_project_dance(&ids, m);
         }
+        // A VMD dance starts at its song offset: its clip's time is song time, and the
+        // project's face tracks play on it.
+        if file_name.to_ascii_lowercase().ends_with(".vmd") {
+            for clip in library.ids_from(before) {
+                library.mark_song_clip(clip);
+            }
+        }
         js_sys::Reflect::set(&report, &JsValue::from_str("source"), &JsValue::from(source)).map_err(|_| OdoriError::new("bad-argument", "report"))?;
         Ok(report)
     }
@@ -638,6 +645,55 @@ impl Project {
             }
         }
         library.mmd.project_cameras = tracks;
+        problems
+    }
+
+    /// Keeps a lip-sync VMD (its morph keys; usually a file of face keys only) as a face track
+    /// of the project — its bytes kept as given, like a source's (in the `.odori` file and the
+    /// browser's store, never in a share link); undoable — and shows the project's face tracks
+    /// in `library` (`faceTracksInto`). When the dance is drawn on an MMD model's mesh the
+    /// viewer plays the track's weights at the song time (over the dance's own face keys, for
+    /// the morphs it keys), and `exportVmd` of the dance writes its keys. `options`:
+    /// `{ songOffsetFrames? }` (the motion frame that is song time 0). Returns
+    /// `{ source, keys, morphs, songOffsetFrames, durationSecs, index }`. Throws
+    /// "mmd-no-morph-keys" for a VMD without morph keys, the reader's kind ("mmd-bad-magic",
+    /// "mmd-truncated", "mmd-count-too-large") for a bad file, naming it; nothing changes then.
+    #[wasm_bindgen(js_name = addFaceTrack, unchecked_return_type = "FaceTrackInfo & { index: number }")]
+    pub fn add_face_track(&mut self, library: &mut Library, file_name: &str, bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "{ songOffsetFrames?: number } | undefined")] options: JsValue) -> Result<JsValue, OdoriError> {
+        let o: JsImportOptions = from_js(options, "face track options", &["songOffsetFrames"])?;
+        let track = self.inner.add_face_track(file_name, bytes, o.song_offset_frames).map_err(|e| OdoriError { kind: e.kind(), message: e.to_string(), file: Some(file_name.to_string()) })?;
+        self.changed(());
+        self.face_tracks_into(library);
+        let info = to_js(&crate::mmd::face_track_info(&track));
+        let index = self.inner.doc().faces.len().saturating_sub(1) as u32;
+        js_sys::Reflect::set(&info, &JsValue::from_str("index"), &JsValue::from(index)).map_err(|_| OdoriError::new("bad-argument", "face track info"))?;
+        Ok(info)
+    }
+
+    /// Removes the project's face track `index` (in `summary().faceTracks`' order) and shows
+    /// the rest in `library`. Undoable.
+    #[wasm_bindgen(js_name = removeFaceTrack)]
+    pub fn remove_face_track(&mut self, library: &mut Library, index: u32) -> Result<(), OdoriError> {
+        self.inner.remove_face_track(index as usize)?;
+        self.changed(());
+        self.face_tracks_into(library);
+        Ok(())
+    }
+
+    /// Shows the project's face tracks in `library` (after an import, undo/redo, or a restored
+    /// project): they replace the ones shown before. Returns the problems, one message per
+    /// track that cannot be read (its bytes missing from the project).
+    #[wasm_bindgen(js_name = faceTracksInto)]
+    pub fn face_tracks_into(&mut self, library: &mut Library) -> Vec<String> {
+        let mut tracks = Vec::new();
+        let mut problems = Vec::new();
+        for i in 0..self.inner.doc().faces.len() {
+            match self.inner.face_track(i) {
+                Ok(t) => tracks.push(t),
+                Err(e) => problems.push(e.to_string()),
+            }
+        }
+        library.set_face_tracks(tracks);
         problems
     }
 
@@ -863,6 +919,7 @@ impl Project {
         };
         let clip = self.inner.render_dance(&RenderOptions::default())?;
         let id = library.insert_clip(clip, "dance", None);
+        library.mark_song_clip(id);
         // The project's character, when its file is there (a missing one plays on the built-in body).
         let (mut character_clip, mut character_name) = (None, None);
         if let Some(c) = doc.character {
@@ -873,6 +930,9 @@ impl Project {
                 if let Some(&character) = library.ids_from(before).get(c.clip as usize) {
                     let on = library.put_on_character(id, character)?;
                     character_clip = js_sys::Reflect::get(&on, &JsValue::from_str("id")).ok().and_then(|v| v.as_f64()).map(|v| v as u32);
+                    if let Some(c) = character_clip {
+                        library.mark_song_clip(c);
+                    }
                     character_name = Some(source.file_name.clone());
                 }
             }
@@ -890,7 +950,9 @@ impl Project {
     #[wasm_bindgen(js_name = renderDance)]
     pub fn render_dance(&mut self, library: &mut Library, replace: Option<u32>) -> Result<u32, OdoriError> {
         let clip = self.inner.render_dance(&RenderOptions::default())?;
-        Ok(library.insert_clip(clip, "dance", replace))
+        let id = library.insert_clip(clip, "dance", replace);
+        library.mark_song_clip(id);
+        Ok(id)
     }
 }
 
@@ -936,7 +998,13 @@ export interface ProjectSummary {
   texts: string[];
   rho: number;
   musicWeight: number;
+  /** Camera motions (camera VMDs) kept in the project, in order; `key` changes only when one does. */
+  cameras: { fileName: string; key: string }[];
+  /** Face (lip-sync) tracks kept in the project (`addFaceTrack`), in order; `key` changes only when one does. */
+  faceTracks: { fileName: string; key: string }[];
 }
+/** A face (lip-sync) track: its file, key count, the morphs it keys (each once), the motion frame that is song time 0 and the song time of its last key. */
+export interface FaceTrackInfo { source: string; keys: number; morphs: string[]; songOffsetFrames: number; durationSecs: number; }
 export type MoveKey =
   | { kind: "builtin"; move: { step: string; arms: string; energy: string; mirrored: boolean } }
   | { kind: "cut"; clip: ClipRef; cutTempoBpm: number | null; firstCount: number };

@@ -151,6 +151,10 @@ struct Drawn {
     body: &'static str,
     /// Drawn vertices its face morphs moved (an MMD model playing face keys; else 0).
     morphed: u32,
+    /// Morphs the project's face tracks key that the drawn MMD model lacks: their keys are
+    /// ignored (the page says so, naming them).
+    #[cfg(feature = "authoring")]
+    missing_morphs: Vec<String>,
 }
 
 #[cfg(feature = "authoring")]
@@ -240,10 +244,10 @@ pub struct Viewer {
     /// MMD models play their clips' face keys (`setMorphs`; on by default).
     #[cfg(feature = "authoring")]
     morphs_on: bool,
-    /// A clip's face keys matched to an MMD model's morphs, by (clip id, mesh key), with the
-    /// clip's revision and the motion frame the clip starts at.
+    /// A clip's face keys and the project's face tracks matched to an MMD model's morphs, by
+    /// (clip id, mesh key), with the clip's revision and the library's face-track generation.
     #[cfg(feature = "authoring")]
-    faces: HashMap<(u32, u32), (u64, Option<(odori_core::mmd::morph::FaceMorphs, u32)>)>,
+    faces: HashMap<(u32, u32), (u64, u32, Rc<odori_core::mmd::face_track::LayeredFaces>)>,
     /// Offset buffers (one per drawn vertex) reused from frame to frame.
     #[cfg(feature = "authoring")]
     morph_pool: Vec<Vec<Vec3>>,
@@ -1074,18 +1078,32 @@ impl Viewer {
                     let pal = mesh.palette.iter().map(|(j, bind)| shift * self.mats[*j] * *bind).collect();
                     let tint = if several { color.map(|c| 0.35 + 0.65 * c) } else { [1.0; 4] };
                     #[cfg(feature = "authoring")]
-                    let (morph, morphed) = self.face_offsets(library, e, key, s.time_secs);
+                    let (morph, morphed, missing_morphs) = self.face_offsets(library, e, key, s.time_secs);
                     #[cfg(not(feature = "authoring"))]
                     let (morph, morphed): (Option<Vec<Vec3>>, u32) = (None, { let _ = key; 0 });
                     palettes.push((h, pal, tint, morph));
-                    drawn.push(Drawn { clip: s.clip, time_secs: s.time_secs, body, morphed });
+                    drawn.push(Drawn {
+                        clip: s.clip,
+                        time_secs: s.time_secs,
+                        body,
+                        morphed,
+                        #[cfg(feature = "authoring")]
+                        missing_morphs,
+                    });
                 }
                 None => {
                     for p in pos.iter_mut() {
                         *p += off;
                     }
                     sticks.push((pos, e, color));
-                    drawn.push(Drawn { clip: s.clip, time_secs: s.time_secs, body: "stick", morphed: 0 });
+                    drawn.push(Drawn {
+                        clip: s.clip,
+                        time_secs: s.time_secs,
+                        body: "stick",
+                        morphed: 0,
+                        #[cfg(feature = "authoring")]
+                        missing_morphs: Vec::new(),
+                    });
                 }
             }
         }
@@ -1140,27 +1158,36 @@ impl Viewer {
 
 impl Viewer {
     /// The face morph offsets of clip `e` drawn at `time_secs` on the mesh under `mesh_key`
-    /// (one per drawn vertex, from the pool) and how many vertices they move: `None` when morphs
-    /// are off, the clip has no face keys, or the mesh is not an MMD model's with morphs. The
-    /// motion frame is the clip's start in the VMD plus the clip's frame at that time, clamped
-    /// to the clip as its pose is.
+    /// (one per drawn vertex, from the pool), how many vertices they move, and the morphs the
+    /// project's face tracks key that the model lacks: `None` when morphs are off, nothing keys
+    /// a morph of the model, or the mesh is not an MMD model's with morphs. The clip's own keys
+    /// play at the clip's start in the VMD plus the clip's frame at that time, clamped to the
+    /// clip as its pose is; the project's face tracks (on a song-time clip: the dance) at the
+    /// song time `time_secs`, over the clip's keys for the morphs they key
+    /// (`odori_core::mmd::face_track::LayeredFaces`).
     #[cfg(feature = "authoring")]
-    fn face_offsets(&mut self, library: &Library, e: &Entry, mesh_key: u32, time_secs: f32) -> (Option<Vec<Vec3>>, u32) {
+    fn face_offsets(&mut self, library: &Library, e: &Entry, mesh_key: u32, time_secs: f32) -> (Option<Vec<Vec3>>, u32, Vec<String>) {
         if !self.morphs_on {
-            return (None, 0);
+            return (None, 0, Vec::new());
         }
-        let Some(drawn) = library.drawn_morphs(mesh_key) else { return (None, 0) };
-        let cached = self.faces.get(&(e.id, mesh_key)).filter(|(rev, _)| *rev == e.rev);
+        let Some(drawn) = library.drawn_morphs(mesh_key) else { return (None, 0, Vec::new()) };
+        let generation = library.mmd.faces_generation;
+        let cached = self.faces.get(&(e.id, mesh_key)).filter(|(rev, g, _)| *rev == e.rev && *g == generation);
         if cached.is_none() {
-            let faces = library.face_keys(e.id).map(|(keys, offset)| (drawn.faces(keys), offset)).filter(|(f, _)| !f.is_empty());
-            self.faces.insert((e.id, mesh_key), (e.rev, faces));
+            let names: Vec<&str> = drawn.morph_names().iter().map(String::as_str).collect();
+            let tracks: Vec<&odori_core::mmd::face_track::FaceTrack> = library.face_tracks_on(e.id).iter().collect();
+            let faces = odori_core::mmd::face_track::LayeredFaces::new(&names, library.face_keys(e.id), &tracks);
+            self.faces.insert((e.id, mesh_key), (e.rev, generation, Rc::new(faces)));
         }
-        let Some((faces, offset)) = self.faces.get(&(e.id, mesh_key)).and_then(|(_, f)| f.as_ref()) else { return (None, 0) };
+        let Some(faces) = self.faces.get(&(e.id, mesh_key)).map(|(_, _, f)| f.clone()) else { return (None, 0, Vec::new()) };
+        if faces.is_empty() {
+            return (None, 0, faces.missing.clone());
+        }
         let at = (time_secs * e.clip.fps).clamp(0.0, e.clip.frame_count().saturating_sub(1) as f32);
-        let frame = *offset as f32 + at * odori_core::import::vmd::VMD_FPS / e.clip.fps.max(1e-3);
+        let frame = faces.base_offset_frames() as f32 + at * odori_core::import::vmd::VMD_FPS / e.clip.fps.max(1e-3);
         let mut out = self.morph_pool.pop().unwrap_or_default();
-        let moved = drawn.offsets_into(&faces.weights_at(frame), &mut out);
-        (Some(out), moved as u32)
+        let moved = drawn.offsets_into(&faces.weights_at(frame, time_secs), &mut out);
+        (Some(out), moved as u32, faces.missing.clone())
     }
 
     /// What a draw of `specs` would show, to compare with the last drawn (see `Shown`).
@@ -1179,6 +1206,14 @@ impl Viewer {
                 Some(_) => 4,
             };
             figures.extend([s.clip, e.rev as u32, (e.rev >> 32) as u32, at.to_bits(), style]);
+            // The project's face tracks play at the song time itself (not clamped to the clip).
+            #[cfg(feature = "authoring")]
+            {
+                figures.push(library.mmd.faces_generation);
+                if !library.face_tracks_on(s.clip).is_empty() {
+                    figures.push(s.time_secs.to_bits());
+                }
+            }
             figures.extend(s.color.map_or([u32::MAX; 3], |c| c.map(f32::to_bits)));
             figures.extend(s.offset.unwrap_or([0.0; 3]).map(f32::to_bits));
         }

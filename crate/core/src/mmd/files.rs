@@ -203,6 +203,9 @@ pub struct MmdFilesImport {
     pub models: Vec<ImportedModel>,
     pub motions: Vec<ImportedMotion>,
     pub cameras: Vec<CameraTrack>,
+    /// VMDs of face (morph) keys and no bone keys (lip-sync files): no motion of their own,
+    /// offered as a face track of the project (`Project::add_face_track`).
+    pub face_tracks: Vec<super::face_track::FaceTrack>,
     /// Things set aside or chosen (morph keys not played, a motion posed on the standard skeleton).
     pub notices: Vec<String>,
     pub problems: Vec<FileProblem>,
@@ -473,6 +476,7 @@ pub fn import_files(files: &[(String, Vec<u8>)], library_models: &[&MmdModel], o
     models.extend(library_models.iter().copied());
     let mut motions = Vec::new();
     let mut cameras = Vec::new();
+    let mut face_tracks = Vec::new();
     let mut problems = Vec::new();
     let mut notices = Vec::new();
     for (name, bytes) in &all {
@@ -494,9 +498,12 @@ pub fn import_files(files: &[(String, Vec<u8>)], library_models: &[&MmdModel], o
                 continue;
             }
         }
-        if vmd.bone_keys.is_empty() && !vmd.morph_keys.is_empty() {
-            notices.push(format!("{name}: {} morph (face) keys and no bone keys: nothing to play yet (face keys play with a motion's bone keys)", vmd.morph_keys.len()));
-            continue;
+        if vmd.bone_keys.is_empty() {
+            if let Some(face) = super::face_track::FaceTrack::from_vmd(name, &vmd, offset) {
+                notices.push(format!("{name}: {} morph (face) keys and no bone keys: a lip-sync, kept as a face track to add to the project", face.keys.len()));
+                face_tracks.push(face);
+                continue;
+            }
         }
         match pose_vmd(name, vmd, &models, options) {
             Ok(m) => {
@@ -517,6 +524,7 @@ pub fn import_files(files: &[(String, Vec<u8>)], library_models: &[&MmdModel], o
     }
     out.motions = motions;
     out.cameras = cameras;
+    out.face_tracks = face_tracks;
     out.problems.extend(problems);
     out.notices = notices;
     out

@@ -8,6 +8,7 @@
 //! three.js's `MMDAnimationHelper` + `CCDIKSolver` point for point. Clips leave in metres.
 
 pub mod export;
+pub mod face_track;
 pub mod files;
 pub mod mesh;
 pub mod morph;

@@ -84,6 +84,11 @@ impl FaceMorphs {
         self.tracks.is_empty()
     }
 
+    /// The model morphs its keys play (whatever their weight), in the model's order.
+    pub fn keyed(&self) -> impl Iterator<Item = usize> + '_ {
+        self.tracks.iter().map(|t| t.morph)
+    }
+
     /// Each keyed morph's weight at `frame` (30 fps motion frames; fractional between them):
     /// linear between its keys, its first weight before them and its last after. Morphs at
     /// weight 0 are left out.
@@ -203,6 +208,11 @@ impl DrawnMorphs {
             group.push(gs);
         }
         DrawnMorphs { names: model.morphs.iter().map(|m| m.name.clone()).collect(), vertex, group, drawn_len: drawn_vertices.iter().map(Vec::len).sum() }
+    }
+
+    /// The model's morph names, in its order (what morph indices of weights refer to).
+    pub fn morph_names(&self) -> &[String] {
+        &self.names
     }
 
     /// How many drawn vertices the mesh has (the length of [`DrawnMorphs::offsets_into`]'s output).

@@ -31,7 +31,7 @@ use super::{BlobHash, BlobStore, Project, ProjectDoc};
 
 /// The schema version this build writes. Bump it with a step in [`migrate`] and a golden file
 /// of the old version in `tests/golden/`.
-pub const CURRENT_SCHEMA_VERSION: u32 = 5;
+pub const CURRENT_SCHEMA_VERSION: u32 = 6;
 /// The oldest schema version this build opens.
 pub const OLDEST_SCHEMA_VERSION: u32 = 1;
 /// The value of the manifest's `format` field.
@@ -332,7 +332,17 @@ fn read_error(size_bytes: usize, what: &str, e: std::io::Error) -> FileError {
 /// The steps from each schema version to the next: `MIGRATIONS[v - OLDEST_SCHEMA_VERSION]`
 /// rewrites a version-`v` manifest (as JSON) into version `v + 1` (a renamed field, a new
 /// field's default...).
-const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes, dance_take, no_cameras, no_repeat_marks];
+const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes, dance_take, no_cameras, no_repeat_marks, no_face_tracks];
+
+/// 5 → 6: the project keeps the face (lip-sync) tracks imported (lip-sync VMDs, issue 28); a
+/// project saved before has none. (The step writes the empty list the reader would assume
+/// anyway: the version is bumped so that a build that does not know face tracks refuses a file
+/// holding them instead of dropping them unseen.)
+fn no_face_tracks(m: &mut serde_json::Value) {
+    if let Some(serde_json::Value::Object(project)) = m.get_mut("project") {
+        project.entry("faces").or_insert(serde_json::Value::Array(Vec::new()));
+    }
+}
 
 /// 4 → 5: the dance keeps the repeats the person marked or removed on the song strip (issue
 /// 26); a dance saved before has none. (The step writes the empty list the reader would assume
@@ -581,6 +591,9 @@ fn named_blobs(d: &ProjectDoc) -> Vec<(BlobHash, String)> {
     }
     for c in &d.cameras {
         out.push((c.blob.clone(), format!("camera motion {}", c.file_name)));
+    }
+    for f in &d.faces {
+        out.push((f.blob.clone(), format!("face track {}", f.file_name)));
     }
     out
 }

@@ -3,8 +3,9 @@
 //! (audio bytes, its loudness envelope, the analysis options and every grid correction), the
 //! dance (each bar's state and move by a stable [`MoveKey`], never by an index into a vector;
 //! the shown and liked candidates of each bar's search; ρ and the filling's weights), clip
-//! tags, texts, the chosen character and the camera, and the MMD camera motions imported
-//! (camera VMDs, [`CameraSource`]: the bytes as given, like a source's).
+//! tags, texts, the chosen character and the camera, and the MMD camera motions and face
+//! (lip-sync) tracks imported (camera VMDs, [`CameraSource`]; lip-sync VMDs, [`FaceSource`]: the
+//! bytes as given, like a source's).
 //!
 //! Edits are methods on [`Project`]; each one that changes the document records the previous
 //! document, so undo/redo is the project's history (kept and saved with it). Everything else —
@@ -20,6 +21,7 @@
 pub mod blob;
 mod dance;
 pub mod derive;
+pub mod faces;
 pub mod file;
 pub mod repeats;
 pub mod summary;
@@ -39,6 +41,7 @@ use crate::music::{AnalysisOptions, GridCorrection, MusicError, RmsEnvelope};
 
 pub use blob::{BlobHash, BlobStore};
 pub use derive::{ClipInfo, Derived};
+pub use faces::FaceSource;
 pub use file::{open, save, FileError, MissingBlob, Opened, CURRENT_SCHEMA_VERSION, ODORI_MIME};
 pub use repeats::{BarRange, BarRepeat, RepeatError, RepeatMark, RepeatRun};
 pub use summary::{manifest_blob_hashes, ProjectSummary};
@@ -278,6 +281,9 @@ pub struct ProjectDoc {
     /// Camera motions imported (schema 4; absent, read as none, when there are none).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub cameras: Vec<CameraSource>,
+    /// Face (lip-sync) tracks imported ([`faces`]; schema 6, absent when none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub faces: Vec<FaceSource>,
 }
 
 impl ProjectDoc {
@@ -292,6 +298,7 @@ impl ProjectDoc {
                 WornMotion::Clip { .. } => None,
             }))
             .chain(self.cameras.iter().map(|c| &c.blob))
+            .chain(self.faces.iter().map(|f| &f.blob))
     }
 
     /// Every move key the document refers to for keeps: bars' moves and liked candidates.
@@ -339,6 +346,10 @@ pub enum ProjectError {
     NotACamera { file_name: String, bone_keys: usize, morph_keys: usize },
     #[error("there is no camera motion {index}: the project has {count}")]
     NoSuchCamera { index: usize, count: usize },
+    #[error("{file_name}: not a lip-sync (face) motion: it has no morph keys ({bone_keys} bone keys, {camera_keys} camera keys)")]
+    NotAFaceTrack { file_name: String, bone_keys: usize, camera_keys: usize },
+    #[error("there is no face track {index}: the project has {count}")]
+    NoSuchFaceTrack { index: usize, count: usize },
     #[error(transparent)]
     Sections(#[from] crate::music::SectionError),
     #[error(transparent)]
@@ -362,6 +373,8 @@ impl ProjectError {
             ProjectError::NoMotion => "bad-argument",
             ProjectError::NotACamera { .. } => "mmd-no-camera-keys",
             ProjectError::NoSuchCamera { .. } => "not-found",
+            ProjectError::NotAFaceTrack { .. } => "mmd-no-morph-keys",
+            ProjectError::NoSuchFaceTrack { .. } => "not-found",
             ProjectError::Sections(_) => "music",
             ProjectError::Repeat(e) => e.kind(),
         }

@@ -1,6 +1,6 @@
 //! What the page shows of a project, as the engine states it: [`ProjectSummary`] names each fact
 //! the page needs (the name, the sources, the song, tags, put-on clips, the body, texts, ρ,
-//! the music weight and the camera motions) and gives a key for each thing whose change the page must notice, so the
+//! the music weight, the camera motions and face tracks) and gives a key for each thing whose change the page must notice, so the
 //! page never reads the document's schema ([`super::ProjectDoc`]). The whole document crosses to
 //! the page only to be stored and given back unchanged (autosave and restore);
 //! [`manifest_blob_hashes`] reads a stored manifest's blob list for the store's collection.
@@ -33,6 +33,8 @@ pub struct ProjectSummary {
     pub music_weight: f32,
     /// The camera motions (camera VMDs) imported, in order.
     pub cameras: Vec<CameraSummary>,
+    /// The face (lip-sync) tracks imported, in order (same shape: file name and key).
+    pub face_tracks: Vec<CameraSummary>,
 }
 
 /// A camera motion as the page shows it.
@@ -96,6 +98,7 @@ impl Project {
             rho: d.dance.settings.rho,
             music_weight: d.dance.settings.fill.music_weight,
             cameras: d.cameras.iter().map(|c| CameraSummary { file_name: c.file_name.clone(), key: key(serde_json::to_string(c)) }).collect(),
+            face_tracks: d.faces.iter().map(|f| CameraSummary { file_name: f.file_name.clone(), key: key(serde_json::to_string(f)) }).collect(),
         }
     }
 }
