@@ -102,8 +102,16 @@ pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], opt
     render_traced(lib, bars, choices, options).0
 }
 
-/// [`render`], with what its feet were held to.
-fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Holds) {
+/// [`render`], with where each join falls: the song time (seconds) at which the dance switches
+/// from bar i's move to bar i + 1's, one per bar after the first. What every measure of the
+/// joins reads (spec §J's join jump is measured at the switch, [`super::quality::dance_quality_switched`]).
+pub fn render_switched(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Vec<f32>) {
+    let (clip, _, switches) = render_traced(lib, bars, choices, options);
+    (clip, switches)
+}
+
+/// [`render`], with what its feet were held to and where its joins fall ([`render_switched`]).
+fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Holds, Vec<f32>) {
     let fps = if options.fps.is_finite() && options.fps > 0.0 { options.fps } else { 60.0 };
     let skeleton = Arc::new(canonical_skeleton());
     let end_secs = bars.iter().map(|b| b.end_secs).fold(0.0f32, f32::max);
@@ -233,11 +241,10 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: roots }],
     };
-    if options.hold_feet {
-        hold_planted_feet(lib, bars, clip, &played, &bar_of)
-    } else {
-        (clip, Holds::default())
-    }
+    // Every switch on its bar line.
+    let switches: Vec<f32> = bars.iter().skip(1).map(|b| b.start_secs).collect();
+    let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches) } else { (clip, Holds::default()) };
+    (clip, holds, switches)
 }
 
 /// What [`hold_planted_feet`] held: per frame, the source's planted flags (left ankle, left
@@ -273,7 +280,7 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   [`HOLD_RULE_ROUNDS`] times. Last, the whole dance keeps its holds only if its BAS-music on
 ///   its counts is still as far above that on the half-shifted counts, and its kinetic beats
 ///   per count no further from the target, as unheld, and its feet slide no more in all.
-fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>]) -> (Clip, Holds) {
+fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32]) -> (Clip, Holds) {
     use crate::canon::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
     let frames = clip.frame_count();
     if frames < 3 || played.len() < frames {
@@ -304,7 +311,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         let kinetic = super::quality::kinetic_beats_secs(&m);
         let q_frames = m.frames();
         let frame_of = |t: f32| ((t * super::quality::QUALITY_FPS).round().max(0.0) as usize).min(q_frames);
-        let joins: Vec<usize> = bars.iter().skip(1).map(|b| frame_of(b.start_secs)).collect();
+        let joins: Vec<usize> = bars.iter().enumerate().skip(1).map(|(i, b)| frame_of(switches.get(i - 1).copied().unwrap_or(b.start_secs))).collect();
         let jumps = super::quality::join_jumps(&m, &joins);
         let skate = super::quality::foot_skate_samples(&m);
         fn bar_counts(b: &Bar) -> impl Iterator<Item = f32> + '_ {
@@ -551,7 +558,7 @@ mod tests {
             let (lib, bars, choices) = dance(bpm, 30.0);
             let opts = RenderOptions::default();
             assert!(opts.hold_feet, "on by default");
-            let (held, holds) = render_traced(&lib, &bars, &choices, &opts);
+            let (held, holds, _) = render_traced(&lib, &bars, &choices, &opts);
             let free = render(&lib, &bars, &choices, &RenderOptions { hold_feet: false, ..opts });
             let fps = opts.fps;
             // No time added: the same frames, song time 0 at frame 0, and everything above the
@@ -621,7 +628,7 @@ mod tests {
     fn held_bars_keep_their_beat_figures() {
         use crate::choreo::quality::{beat_alignment, kinetic_beats_secs, QualityMotion};
         let (lib, bars, choices) = dance(128.0, 40.0);
-        let (held, holds) = render_traced(&lib, &bars, &choices, &RenderOptions::default());
+        let (held, holds, _) = render_traced(&lib, &bars, &choices, &RenderOptions::default());
         let free = render(&lib, &bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
         let figures = |c: &Clip| {
             let kinetic = kinetic_beats_secs(&QualityMotion::from_clip(c).unwrap());
