@@ -23,6 +23,7 @@ pub mod notes;
 pub mod quality;
 pub mod render;
 pub mod segment;
+pub mod switch;
 pub mod table;
 pub mod takes;
 pub mod variety;

@@ -39,11 +39,15 @@ pub struct RenderOptions {
     /// at the clip's own pace ([`hold_planted_feet`]); default on (and for files saved before
     /// the option: missing reads as the default). Off: the control.
     pub hold_feet: bool,
+    /// Choose each inertialized join's switch within a count of the bar line, where the two
+    /// moves agree best ([`super::switch`]); off (the default for now, and the control): every
+    /// switch on the bar line. Missing reads as the default.
+    pub join_points: bool,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { fps: 60.0, join_frames: 5, join_blend: JoinBlend::Inertial, hold_feet: true }
+        Self { fps: 60.0, join_frames: 5, join_blend: JoinBlend::Inertial, hold_feet: true, join_points: false }
     }
 }
 
@@ -134,6 +138,15 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
     // (the lead-in counts as the first bar's).
     let mut played: Vec<Option<(usize, f32)>> = Vec::with_capacity(frames);
     let mut bar_of: Vec<Option<usize>> = Vec::with_capacity(frames);
+    // Where each join switches ([`super::switch`]): on the bar line unless join points are
+    // chosen (inertialized joins only).
+    let blend_frames = ((INERTIAL_BLEND_SECS * fps).round() as usize).max(2);
+    let chosen = options.join_points && options.join_frames > 0 && options.join_blend == JoinBlend::Inertial && bars.len() > 1;
+    let places = if chosen { super::switch::placements(lib, bars, choices) } else { Vec::new() };
+    let switches: Vec<f32> =
+        if chosen { super::switch::choose_switches(lib, bars, choices, &places, fps, blend_frames) } else { bars.iter().skip(1).map(|b| b.start_secs).collect() };
+    // The bar whose move the previous frame within the bars played.
+    let mut playing_prev: Option<usize> = None;
     for f in 0..frames {
         let t = f as f32 / fps;
         while bar_i + 1 < bars.len() && t >= bars[bar_i + 1].start_secs {
@@ -170,13 +183,31 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
                         place_yaw = yaw_of(q * rq);
                     }
                 }
-                boundaries.push(f);
             }
             let (start, dyaw) = match seg.and_then(|s| sample_segment(lib, s, 0.0, &mut rot, &mut trans)) {
                 Some((rt, rq)) => (Vec3::new(rt.x, 0.0, rt.z), place_yaw - yaw_of(rq)),
                 None => (Vec3::ZERO, 0.0),
             };
             xf = Some((bar_i, start, dyaw));
+        }
+        // A switch off the bar line: this frame plays the neighbouring bar's move.
+        let instead = if chosen && in_bar { super::switch::played_instead(bars, &switches, bar_i, t) } else { None };
+        if in_bar {
+            let playing = instead.map_or(bar_i, |(k, _)| k);
+            if playing_prev.is_some_and(|p| p != playing) {
+                boundaries.push(f);
+            }
+            playing_prev = Some(playing);
+        }
+        if let Some((k, uk)) = instead {
+            let sk = choices.get(k).copied().flatten();
+            if let Some(root) = sk.zip(places.get(k)).and_then(|(s, p)| super::switch::placed(lib, s, uk, p, &mut rot, &mut trans)) {
+                played.push(sk.and_then(|s| lib.segment(s)).map(|s| (s.clip, super::switch::played_frame(s, uk))));
+                bar_of.push(Some(bar_i));
+                rotations.extend_from_slice(&rot);
+                roots.push(root);
+                continue;
+            }
         }
         let sampled = seg.and_then(|s| sample_segment(lib, s, u, &mut rot, &mut trans));
         played.push(seg.and_then(|s| lib.segment(s)).filter(|_| sampled.is_some()).map(|s| (s.clip, s.frame_before(u))));
@@ -226,7 +257,7 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
             match options.join_blend {
                 JoinBlend::Hermite => join_at(&mut rotations, &mut roots, j, options.join_frames),
                 JoinBlend::Inertial => {
-                    let blend = ((INERTIAL_BLEND_SECS * fps).round() as usize).max(2);
+                    let blend = blend_frames;
                     let until_next = boundaries.get(i + 1).map_or(usize::MAX, |&n| n.saturating_sub(j));
                     inertialize_at(&mut rotations, &mut roots, j, blend.min(until_next));
                 }
@@ -241,8 +272,6 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: roots }],
     };
-    // Every switch on its bar line.
-    let switches: Vec<f32> = bars.iter().skip(1).map(|b| b.start_secs).collect();
     let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches) } else { (clip, Holds::default()) };
     (clip, holds, switches)
 }
@@ -416,7 +445,7 @@ fn quintic_offset3(x0: Vec3, v0: Vec3, a0: Vec3, span: f32, t: f32) -> Vec3 {
 /// root position, that offset is added to frames `j .. j + span` of the incoming motion,
 /// decayed by [`quintic_offset`]. Frames before `j` are untouched; from `j + span` on the
 /// incoming motion plays as it is.
-fn inertialize_at(rotations: &mut [Quat], roots: &mut [Vec3], j: usize, span: usize) {
+pub(super) fn inertialize_at(rotations: &mut [Quat], roots: &mut [Vec3], j: usize, span: usize) {
     let frames = roots.len();
     // The outgoing motion's acceleration needs frames j-3..j-1; the incoming one's j..j+2.
     if j < 3 || j + 3 > frames || span < 2 {
