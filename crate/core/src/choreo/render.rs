@@ -9,6 +9,8 @@
 //! [`INERTIAL_BLEND_SECS`], so the viewer sees no jump and the incoming segment keeps its own
 //! timing: no time is added and every bar stays on its beat. (The spec's §G join, a cubic
 //! Hermite rewrite of 5 frames either side, is kept as [`JoinBlend::Hermite`], the control.)
+//! The switch is on the bar line, or with [`RenderOptions::join_points`] within a count of it
+//! ([`super::switch`]); [`render_switched`] reports where each falls, for the join measures.
 //! Frame 0 is song time 0.
 
 use std::sync::Arc;
