@@ -356,8 +356,8 @@ pub fn random_moves(lib: &odori_core::choreo::SegmentLibrary, bars: &[odori_core
 /// BAS-music (spec §J) of the dance `choices` fills `bars` with, rendered as the product plays it
 /// (default render options), scored on the song's `beats`.
 pub fn dance_quality_of(lib: &odori_core::choreo::SegmentLibrary, bars: &[odori_core::bars::Bar], beats: &[f32], choices: &[Option<usize>]) -> odori_core::choreo::quality::DanceQuality {
-    let clip = odori_core::choreo::render(lib, bars, choices, &odori_core::choreo::RenderOptions::default());
-    odori_core::choreo::quality::dance_quality(&clip, bars, beats).expect("dance quality")
+    let (clip, switches) = odori_core::choreo::render_switched(lib, bars, choices, &odori_core::choreo::RenderOptions::default());
+    odori_core::choreo::quality::dance_quality_switched(&clip, bars, beats, &switches).expect("dance quality")
 }
 
 /// The random-moves control's BAS-music: the mean over the dances of [`random_moves`].

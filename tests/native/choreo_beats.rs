@@ -24,7 +24,7 @@
 #[path = "music_audio.rs"]
 mod music_audio;
 
-use odori_core::choreo::quality::{dance_quality, motion_quality, DanceQuality, QualityMotion};
+use odori_core::choreo::quality::{dance_quality_switched, motion_quality, DanceQuality, QualityMotion};
 use odori_core::choreo::{generate_states, BarState, FillWeights, GenerateOptions, RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
@@ -81,8 +81,8 @@ fn generated_dances_follow_the_beat_on_every_real_song() {
             assert_eq!(grid.beats_per_bar, 3, "{rel}: the grid did not find the metre");
         }
         let q = |choices: &[Option<usize>]| -> DanceQuality {
-            let clip = odori_core::choreo::render(&lib, &bars, choices, &RenderOptions::default());
-            dance_quality(&clip, &bars, &beats).unwrap()
+            let (clip, switches) = odori_core::choreo::render_switched(&lib, &bars, choices, &RenderOptions::default());
+            dance_quality_switched(&clip, &bars, &beats, &switches).unwrap()
         };
         let generate = |options: &GenerateOptions| -> Vec<Option<usize>> {
             generate_states(&lib, &bars, &[], FillWeights::default(), options).unwrap().0.iter().map(BarState::segment).collect()

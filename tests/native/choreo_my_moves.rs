@@ -19,7 +19,7 @@ mod music_audio;
 mod person_common;
 
 use odori_core::bars::Bar;
-use odori_core::choreo::quality::{dance_quality, DanceQuality};
+use odori_core::choreo::quality::{dance_quality, dance_quality_switched, DanceQuality};
 use odori_core::choreo::{bar_counts, count_rate_bpm, GenerateOptions, RenderOptions, SegmentLibrary};
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
@@ -81,8 +81,8 @@ fn songs() -> Vec<(String, RmsEnvelope)> {
 }
 
 fn quality(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], choices: &[Option<usize>]) -> DanceQuality {
-    let clip = odori_core::choreo::render(lib, bars, choices, &RenderOptions::default());
-    dance_quality(&clip, bars, beats).expect("dance quality")
+    let (clip, switches) = odori_core::choreo::render_switched(lib, bars, choices, &RenderOptions::default());
+    dance_quality_switched(&clip, bars, beats, &switches).expect("dance quality")
 }
 
 /// BAS-music of random dances on the same bars (each bar's own count; a fixed generator): the

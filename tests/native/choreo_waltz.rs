@@ -13,7 +13,7 @@
 //! asserted on the mean of the six pieces, and printed per piece; the beat rate is asserted
 //! between the half and the whole of the song's (126 BPM: 0.74).
 
-use odori_core::choreo::quality::{dance_quality, DanceQuality};
+use odori_core::choreo::quality::{dance_quality_switched, DanceQuality};
 use odori_core::choreo::{RenderOptions, SegmentLibrary, SegmentOptions};
 use odori_core::import::import_bytes;
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
@@ -51,8 +51,8 @@ fn dances_in_three(lib: &SegmentLibrary) -> Vec<(String, DanceQuality, f32, f32)
         assert_eq!(grid.beats_per_bar, 3, "{rel}: the grid did not find the metre");
         let (bars, beats) = (grid.bars.clone(), grid.beat_times_secs.clone());
         let q = |choices: &[Option<usize>]| -> DanceQuality {
-            let clip = odori_core::choreo::render(lib, &bars, choices, &RenderOptions::default());
-            dance_quality(&clip, &bars, &beats).unwrap()
+            let (clip, switches) = odori_core::choreo::render_switched(lib, &bars, choices, &RenderOptions::default());
+            dance_quality_switched(&clip, &bars, &beats, &switches).unwrap()
         };
         let mut doc = odori_tests::Dance::new(bars.clone());
         doc.generate(lib).unwrap();

@@ -826,8 +826,8 @@ impl Project {
     pub fn quality(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
         let bars = self.inner.song_bars()?;
         let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect());
-        let clip = self.inner.render_dance(&RenderOptions::default())?;
-        let q = odori_core::choreo::dance_quality(&clip, &bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
+        let (clip, switches) = self.inner.render_dance_switched(&RenderOptions::default())?;
+        let q = odori_core::choreo::dance_quality_switched(&clip, &bars, &beats, &switches).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
         Ok(to_js(&q))
     }
 
@@ -853,8 +853,8 @@ impl Project {
             return Ok(to_js(&Notes { quality: None, notes: odori_core::choreo::bar_notes(self.inner.segment_library(), &bars, &choices, &[]) }));
         }
         let beats = beat_times_secs.unwrap_or_else(|| bars.iter().flat_map(|b| (0..b.beat_count()).map(move |k| b.start_secs + b.duration_secs() * k as f32 / b.beat_count() as f32)).collect());
-        let clip = self.inner.render_dance(&RenderOptions::default())?;
-        let q = odori_core::choreo::dance_quality(&clip, &bars, &beats).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
+        let (clip, switches) = self.inner.render_dance_switched(&RenderOptions::default())?;
+        let q = odori_core::choreo::dance_quality_switched(&clip, &bars, &beats, &switches).map_err(|e| OdoriError::new("bad-argument", e.to_string()))?;
         let mut notes = odori_core::choreo::bar_notes(self.inner.segment_library(), &bars, &choices, &q.bars);
         // A bar holding the move of the bar its section repeats says so, and whether the
         // person marked the repeat.

@@ -6,7 +6,7 @@
 use super::generate::Problem;
 use super::profile::{self, Work};
 use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
-use super::render::{render, RenderOptions};
+use super::render::{render_switched, RenderOptions};
 use super::segment::SegmentLibrary;
 use crate::bars::Bar;
 
@@ -30,9 +30,9 @@ pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Opti
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
     // Unheld: holding the feet (a cost on every measure of a refill) only lowers the skate the
     // filling follows, and each bar keeps its holds only where they keep its beat figures.
-    let clip = render(lib, bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
+    let (clip, switches) = render_switched(lib, bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
     let m = QualityMotion::from_clip(&clip).ok()?;
-    figures_of(&m, bars)
+    figures_of(&m, bars, &switches)
 }
 
 /// One bar of the dance as it is played ([`played_figures`]), measured as the strip's notes
@@ -66,28 +66,29 @@ pub struct Played {
 /// as played (the 150 BPM demo piece in 3 of `choreo_my_moves`: 1.92 held).
 pub fn played_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<Played> {
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
-    let clip = render(lib, bars, &choices, &RenderOptions::default());
+    let (clip, switches) = render_switched(lib, bars, &choices, &RenderOptions::default());
     let m = QualityMotion::from_clip(&clip).ok()?;
-    let whole = figures_of(&m, bars)?;
+    let whole = figures_of(&m, bars, &switches)?;
     let counts: Vec<f32> = bars.iter().flat_map(|b| {
         let n = b.beat_count().max(1);
         (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32)
     }).collect();
-    let q = super::quality::dance_quality_of(&m, bars, &counts).ok()?;
+    let q = super::quality::dance_quality_switched_of(&m, bars, &counts, &switches).ok()?;
     let per_bar = q.bars.iter().map(|b| PlayedBar { beat_margin: b.beats.bas_music - b.beats.bas_music_shifted, join_jump: b.join_jump }).collect();
     Some(Played { whole, bas_music: q.beats.bas_music, bars: per_bar })
 }
 
-/// [`DanceFigures`] of a rendered dance `m` over `bars`.
-fn figures_of(m: &QualityMotion, bars: &[Bar]) -> Option<DanceFigures> {
+/// [`DanceFigures`] of a rendered dance `m` over `bars`, its joins falling at `switches`
+/// ([`super::render_switched`]).
+fn figures_of(m: &QualityMotion, bars: &[Bar], switches: &[f32]) -> Option<DanceFigures> {
     let (first, last) = (bars.first()?, bars.last()?);
     let kinetic = kinetic_beats_secs(m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
     let frames = m.frames();
     let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
     let skate = summarize_skate(&foot_skate_samples(m), frame_of(first.start_secs)..frame_of(last.end_secs));
     let counts: usize = bars.iter().map(Bar::beat_count).sum();
-    // Join jumps as dance_quality measures them (joins at the bars' starts after the first).
-    let joins: Vec<(usize, usize)> = bars.iter().enumerate().skip(1).map(|(i, b)| (i, frame_of(b.start_secs))).filter(|&(_, f)| f + 1 < frames).collect();
+    // Join jumps as dance_quality measures them (at each switch, wherever it falls).
+    let joins: Vec<(usize, usize)> = (1..bars.len()).map(|i| (i, frame_of(super::quality::switch_of(bars, switches, i)))).filter(|&(_, f)| f + 1 < frames).collect();
     let jumps = join_jumps(m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
     let worst = jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (joins[k].0, j));
     Some(DanceFigures {

@@ -25,6 +25,7 @@ pub mod quality;
 pub mod refill;
 pub mod render;
 pub mod segment;
+pub mod switch;
 pub mod table;
 pub mod takes;
 pub mod variety;
@@ -39,7 +40,7 @@ pub use fill::{
 };
 pub use grid::{bars_from_tempo, GridError};
 pub use notes::{bar_notes, candidate_notes, mark_builtin_why, mark_repeats, Flag, FlagKind, MoveNote, NotesError};
-pub use quality::{JOIN_JUMP_GOAL, dance_quality, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
-pub use render::{render, segment_clip, speed_jumps, JoinBlend, RenderOptions};
+pub use quality::{JOIN_JUMP_GOAL, dance_quality, dance_quality_switched, BarQuality, BeatAlignment, DanceQuality, FootSkate, MotionQuality, QualityError, QualityMotion};
+pub use render::{render, render_switched, segment_clip, speed_jumps, JoinBlend, RenderOptions};
 pub use table::{blended_join_jump, blended_join_jump_at, JumpTerm, TableBuilder, TableProgress, TableScope};
 pub use segment::{kinetic_per_count_by_rate, KINETIC_RATES_BPM, SEGMENT_COUNTS, SEGMENT_METRES, BuiltinLoader, ClipSummary, LibraryClip, Recut, Segment, SegmentError, SegmentLibrary, SegmentOptions, LIBRARY_FPS};

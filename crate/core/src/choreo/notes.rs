@@ -13,8 +13,8 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::quality::{dance_quality, BarQuality, QualityError, JOIN_JUMP_GOAL};
-use super::render::{render, RenderOptions};
+use super::quality::{dance_quality_switched, BarQuality, QualityError, JOIN_JUMP_GOAL};
+use super::render::{render_switched, RenderOptions};
 use super::segment::SegmentLibrary;
 use crate::bars::Bar;
 
@@ -145,8 +145,8 @@ fn note_of(lib: &SegmentLibrary, bars: &[Bar], bar: usize, segment: Option<usize
     MoveNote { bar, segment, name, source, builtin, flags, repeats_bar: None, repeat_marked: false, builtin_why: None }
 }
 
-/// Every bar's note, from the dance's readout `quality` (`dance_quality` of the rendered dance
-/// of `choices` on `bars`).
+/// Every bar's note, from the dance's readout `quality` (`dance_quality_switched` of the
+/// rendered dance of `choices` on `bars`, its joins measured where they fall).
 pub fn bar_notes(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], quality: &[BarQuality]) -> Vec<MoveNote> {
     (0..bars.len()).map(|i| note_of(lib, bars, i, choices.get(i).copied().flatten(), quality.get(i))).collect()
 }
@@ -186,8 +186,8 @@ pub fn candidate_notes(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usi
     for &c in candidates {
         let mut ch: Vec<Option<usize>> = choices[a..b].to_vec();
         ch[at] = Some(c);
-        let clip = render(lib, &window, &ch, &RenderOptions::default());
-        let q = dance_quality(&clip, &window, &beats)?;
+        let (clip, switches) = render_switched(lib, &window, &ch, &RenderOptions::default());
+        let q = dance_quality_switched(&clip, &window, &beats, &switches)?;
         let mut note = note_of(lib, &window, at, Some(c), q.bars.get(at));
         note.bar = bar;
         // The join into the next bar, when it holds a move.
@@ -214,8 +214,8 @@ mod tests {
         let bars = bars_from_tempo(16.0, 120.0, 4, 0.0, |_, _| 0.5).unwrap();
         let choices: Vec<Option<usize>> = (0..bars.len()).map(|i| Some((i * 37) % 420)).collect();
         let beats: Vec<f32> = (0..40).map(|k| k as f32 * 0.5).collect();
-        let clip = render(&lib, &bars, &choices, &RenderOptions::default());
-        let q = dance_quality(&clip, &bars, &beats).unwrap();
+        let (clip, switches) = render_switched(&lib, &bars, &choices, &RenderOptions::default());
+        let q = dance_quality_switched(&clip, &bars, &beats, &switches).unwrap();
         let notes = bar_notes(&lib, &bars, &choices, &q.bars);
         assert_eq!(notes.len(), bars.len());
         for (n, c) in notes.iter().zip(&choices) {
@@ -239,7 +239,8 @@ mod tests {
         let c = cn[0].segment.unwrap();
         let mut set = choices.clone();
         set[3] = Some(c);
-        let whole = dance_quality(&render(&lib, &bars, &set, &RenderOptions::default()), &bars, &beats).unwrap();
+        let (clip, switches) = render_switched(&lib, &bars, &set, &RenderOptions::default());
+        let whole = dance_quality_switched(&clip, &bars, &beats, &switches).unwrap();
         let bq = &whole.bars[3];
         assert_eq!(cn[0].flags.iter().any(|f| f.kind == FlagKind::OffBeat), bq.beats.bas_music - bq.beats.bas_music_shifted < OFF_BEAT_MARGIN, "{:?} vs {:?}", cn[0], bq.beats);
         // Bad input: typed errors.

@@ -467,18 +467,39 @@ pub fn dance_quality(clip: &Clip, bars: &[Bar], music_beats_secs: &[f32]) -> Res
 
 /// [`dance_quality`] of a motion already at [`QUALITY_FPS`].
 pub fn dance_quality_of(m: &QualityMotion, bars: &[Bar], music_beats_secs: &[f32]) -> Result<DanceQuality, QualityError> {
+    dance_quality_switched_of(m, bars, music_beats_secs, &[])
+}
+
+/// [`dance_quality`] of a dance whose joins fall at `switch_secs` (song time of the switch into
+/// bar i + 1's move, one per bar after the first, as [`super::render_switched`] reports them):
+/// each join jump is measured there, wherever it falls; a join not given is on its bar line.
+pub fn dance_quality_switched(clip: &Clip, bars: &[Bar], music_beats_secs: &[f32], switch_secs: &[f32]) -> Result<DanceQuality, QualityError> {
+    let m = QualityMotion::from_clip(clip)?;
+    dance_quality_switched_of(&m, bars, music_beats_secs, switch_secs)
+}
+
+/// Where bar `i`'s join falls (`i` ≥ 1): `switch_secs[i - 1]` when given and finite, else the
+/// bar's start.
+pub fn switch_of(bars: &[Bar], switch_secs: &[f32], i: usize) -> f32 {
+    let start = bars.get(i).map_or(0.0, |b| b.start_secs);
+    i.checked_sub(1).and_then(|k| switch_secs.get(k)).copied().filter(|t| t.is_finite()).unwrap_or(start)
+}
+
+/// [`dance_quality_switched`] of a motion already at [`QUALITY_FPS`].
+pub fn dance_quality_switched_of(m: &QualityMotion, bars: &[Bar], music_beats_secs: &[f32], switch_secs: &[f32]) -> Result<DanceQuality, QualityError> {
     check_beats(music_beats_secs)?;
     let (Some(first), Some(last)) = (bars.first(), bars.last()) else { return Err(QualityError::NoBars) };
     let kinetic = kinetic_beats_secs(m);
     let frames = m.frames();
     let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
-    let joins: Vec<usize> = bars.iter().skip(1).map(|b| frame_of(b.start_secs)).filter(|&f| f + 1 < frames).collect();
+    let join_of = |i: usize| frame_of(switch_of(bars, switch_secs, i));
+    let joins: Vec<usize> = (1..bars.len()).map(join_of).filter(|&f| f + 1 < frames).collect();
     let jumps = join_jumps(m, &joins);
     let skate = foot_skate_samples(m);
     let mut per_bar = Vec::with_capacity(bars.len());
     let mut ji = 0;
     for (i, b) in bars.iter().enumerate() {
-        let join_jump = if i > 0 && frame_of(b.start_secs) + 1 < frames {
+        let join_jump = if i > 0 && join_of(i) + 1 < frames {
             ji += 1;
             jumps.get(ji - 1).copied()
         } else {

@@ -9,6 +9,8 @@
 //! [`INERTIAL_BLEND_SECS`], so the viewer sees no jump and the incoming segment keeps its own
 //! timing: no time is added and every bar stays on its beat. (The spec's §G join, a cubic
 //! Hermite rewrite of 5 frames either side, is kept as [`JoinBlend::Hermite`], the control.)
+//! The switch is on the bar line, or with [`RenderOptions::join_points`] within a count of it
+//! ([`super::switch`]); [`render_switched`] reports where each falls, for the join measures.
 //! Frame 0 is song time 0.
 
 use std::sync::Arc;
@@ -39,11 +41,15 @@ pub struct RenderOptions {
     /// at the clip's own pace ([`hold_planted_feet`]); default on (and for files saved before
     /// the option: missing reads as the default). Off: the control.
     pub hold_feet: bool,
+    /// Choose each inertialized join's switch within a count of the bar line, where the two
+    /// moves agree best ([`super::switch`]); off (the default for now, and the control): every
+    /// switch on the bar line. Missing reads as the default.
+    pub join_points: bool,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { fps: 60.0, join_frames: 5, join_blend: JoinBlend::Inertial, hold_feet: true }
+        Self { fps: 60.0, join_frames: 5, join_blend: JoinBlend::Inertial, hold_feet: true, join_points: false }
     }
 }
 
@@ -102,8 +108,16 @@ pub fn render(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], opt
     render_traced(lib, bars, choices, options).0
 }
 
-/// [`render`], with what its feet were held to.
-fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Holds) {
+/// [`render`], with where each join falls: the song time (seconds) at which the dance switches
+/// from bar i's move to bar i + 1's, one per bar after the first. What every measure of the
+/// joins reads (spec §J's join jump is measured at the switch, [`super::quality::dance_quality_switched`]).
+pub fn render_switched(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Vec<f32>) {
+    let (clip, _, switches) = render_traced(lib, bars, choices, options);
+    (clip, switches)
+}
+
+/// [`render`], with what its feet were held to and where its joins fall ([`render_switched`]).
+fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Holds, Vec<f32>) {
     let fps = if options.fps.is_finite() && options.fps > 0.0 { options.fps } else { 60.0 };
     let skeleton = Arc::new(canonical_skeleton());
     let end_secs = bars.iter().map(|b| b.end_secs).fold(0.0f32, f32::max);
@@ -126,6 +140,15 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
     // (the lead-in counts as the first bar's).
     let mut played: Vec<Option<(usize, f32)>> = Vec::with_capacity(frames);
     let mut bar_of: Vec<Option<usize>> = Vec::with_capacity(frames);
+    // Where each join switches ([`super::switch`]): on the bar line unless join points are
+    // chosen (inertialized joins only).
+    let blend_frames = ((INERTIAL_BLEND_SECS * fps).round() as usize).max(2);
+    let chosen = options.join_points && options.join_frames > 0 && options.join_blend == JoinBlend::Inertial && bars.len() > 1;
+    let places = if chosen { super::switch::placements(lib, bars, choices) } else { Vec::new() };
+    let switches: Vec<f32> =
+        if chosen { super::switch::choose_switches(lib, bars, choices, &places, fps, blend_frames) } else { bars.iter().skip(1).map(|b| b.start_secs).collect() };
+    // The bar whose move the previous frame within the bars played.
+    let mut playing_prev: Option<usize> = None;
     for f in 0..frames {
         let t = f as f32 / fps;
         while bar_i + 1 < bars.len() && t >= bars[bar_i + 1].start_secs {
@@ -162,13 +185,31 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
                         place_yaw = yaw_of(q * rq);
                     }
                 }
-                boundaries.push(f);
             }
             let (start, dyaw) = match seg.and_then(|s| sample_segment(lib, s, 0.0, &mut rot, &mut trans)) {
                 Some((rt, rq)) => (Vec3::new(rt.x, 0.0, rt.z), place_yaw - yaw_of(rq)),
                 None => (Vec3::ZERO, 0.0),
             };
             xf = Some((bar_i, start, dyaw));
+        }
+        // A switch off the bar line: this frame plays the neighbouring bar's move.
+        let instead = if chosen && in_bar { super::switch::played_instead(bars, &switches, bar_i, t) } else { None };
+        if in_bar {
+            let playing = instead.map_or(bar_i, |(k, _)| k);
+            if playing_prev.is_some_and(|p| p != playing) {
+                boundaries.push(f);
+            }
+            playing_prev = Some(playing);
+        }
+        if let Some((k, uk)) = instead {
+            let sk = choices.get(k).copied().flatten();
+            if let Some(root) = sk.zip(places.get(k)).and_then(|(s, p)| super::switch::placed(lib, s, uk, p, &mut rot, &mut trans)) {
+                played.push(sk.and_then(|s| lib.segment(s)).map(|s| (s.clip, super::switch::played_frame(s, uk))));
+                bar_of.push(Some(bar_i));
+                rotations.extend_from_slice(&rot);
+                roots.push(root);
+                continue;
+            }
         }
         let sampled = seg.and_then(|s| sample_segment(lib, s, u, &mut rot, &mut trans));
         played.push(seg.and_then(|s| lib.segment(s)).filter(|_| sampled.is_some()).map(|s| (s.clip, s.frame_before(u))));
@@ -218,7 +259,7 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
             match options.join_blend {
                 JoinBlend::Hermite => join_at(&mut rotations, &mut roots, j, options.join_frames),
                 JoinBlend::Inertial => {
-                    let blend = ((INERTIAL_BLEND_SECS * fps).round() as usize).max(2);
+                    let blend = blend_frames;
                     let until_next = boundaries.get(i + 1).map_or(usize::MAX, |&n| n.saturating_sub(j));
                     inertialize_at(&mut rotations, &mut roots, j, blend.min(until_next));
                 }
@@ -233,11 +274,8 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: roots }],
     };
-    if options.hold_feet {
-        hold_planted_feet(lib, bars, clip, &played, &bar_of)
-    } else {
-        (clip, Holds::default())
-    }
+    let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches) } else { (clip, Holds::default()) };
+    (clip, holds, switches)
 }
 
 /// What [`hold_planted_feet`] held: per frame, the source's planted flags (left ankle, left
@@ -273,7 +311,7 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   [`HOLD_RULE_ROUNDS`] times. Last, the whole dance keeps its holds only if its BAS-music on
 ///   its counts is still as far above that on the half-shifted counts, and its kinetic beats
 ///   per count no further from the target, as unheld, and its feet slide no more in all.
-fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>]) -> (Clip, Holds) {
+fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32]) -> (Clip, Holds) {
     use crate::canon::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
     let frames = clip.frame_count();
     if frames < 3 || played.len() < frames {
@@ -304,7 +342,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         let kinetic = super::quality::kinetic_beats_secs(&m);
         let q_frames = m.frames();
         let frame_of = |t: f32| ((t * super::quality::QUALITY_FPS).round().max(0.0) as usize).min(q_frames);
-        let joins: Vec<usize> = bars.iter().skip(1).map(|b| frame_of(b.start_secs)).collect();
+        let joins: Vec<usize> = bars.iter().enumerate().skip(1).map(|(i, b)| frame_of(switches.get(i - 1).copied().unwrap_or(b.start_secs))).collect();
         let jumps = super::quality::join_jumps(&m, &joins);
         let skate = super::quality::foot_skate_samples(&m);
         fn bar_counts(b: &Bar) -> impl Iterator<Item = f32> + '_ {
@@ -409,7 +447,7 @@ fn quintic_offset3(x0: Vec3, v0: Vec3, a0: Vec3, span: f32, t: f32) -> Vec3 {
 /// root position, that offset is added to frames `j .. j + span` of the incoming motion,
 /// decayed by [`quintic_offset`]. Frames before `j` are untouched; from `j + span` on the
 /// incoming motion plays as it is.
-fn inertialize_at(rotations: &mut [Quat], roots: &mut [Vec3], j: usize, span: usize) {
+pub(super) fn inertialize_at(rotations: &mut [Quat], roots: &mut [Vec3], j: usize, span: usize) {
     let frames = roots.len();
     // The outgoing motion's acceleration needs frames j-3..j-1; the incoming one's j..j+2.
     if j < 3 || j + 3 > frames || span < 2 {
@@ -551,7 +589,7 @@ mod tests {
             let (lib, bars, choices) = dance(bpm, 30.0);
             let opts = RenderOptions::default();
             assert!(opts.hold_feet, "on by default");
-            let (held, holds) = render_traced(&lib, &bars, &choices, &opts);
+            let (held, holds, _) = render_traced(&lib, &bars, &choices, &opts);
             let free = render(&lib, &bars, &choices, &RenderOptions { hold_feet: false, ..opts });
             let fps = opts.fps;
             // No time added: the same frames, song time 0 at frame 0, and everything above the
@@ -621,7 +659,7 @@ mod tests {
     fn held_bars_keep_their_beat_figures() {
         use crate::choreo::quality::{beat_alignment, kinetic_beats_secs, QualityMotion};
         let (lib, bars, choices) = dance(128.0, 40.0);
-        let (held, holds) = render_traced(&lib, &bars, &choices, &RenderOptions::default());
+        let (held, holds, _) = render_traced(&lib, &bars, &choices, &RenderOptions::default());
         let free = render(&lib, &bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
         let figures = |c: &Clip| {
             let kinetic = kinetic_beats_secs(&QualityMotion::from_clip(c).unwrap());

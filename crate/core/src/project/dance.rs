@@ -257,12 +257,21 @@ impl Project {
     /// The whole dance as one canonical clip; frame 0 is song time 0. Bars whose move cannot
     /// be found (a missing source) stand neutral.
     pub fn render_dance(&mut self, options: &crate::choreo::RenderOptions) -> Result<Clip, ProjectError> {
+        Ok(self.render_dance_switched(options)?.0)
+    }
+
+    /// [`Project::render_dance`], with where each join falls (song seconds of the switch into
+    /// each bar after the first, [`crate::choreo::render_switched`]): what the readouts measure
+    /// the joins at ([`crate::choreo::dance_quality_switched`]).
+    pub fn render_dance_switched(&mut self, options: &crate::choreo::RenderOptions) -> Result<(Clip, Vec<f32>), ProjectError> {
         let bars = self.song_bars()?;
         let d = &self.derived;
-        let states: Vec<_> = self.doc.dance.bars.iter().map(|b| d.state_of(b)).collect();
-        let mut clip = crate::choreo::render_states(d.library(), &bars, &states, options);
+        let lib = d.library();
+        let choices: Vec<Option<usize>> = self.doc.dance.bars.iter().map(|b| d.state_of(b).segment().filter(|&s| s < lib.len())).collect();
+        let choices: Vec<Option<usize>> = (0..bars.len()).map(|i| choices.get(i).copied().flatten()).collect();
+        let (mut clip, switches) = crate::choreo::render_switched(lib, &bars, &choices, options);
         clip.name = "Dance".into();
         clip.source = "choreography".into();
-        Ok(clip)
+        Ok((clip, switches))
     }
 }
