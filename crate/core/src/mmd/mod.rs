@@ -11,6 +11,7 @@ pub mod export;
 pub mod files;
 pub mod mesh;
 pub mod morph;
+pub mod morph_effects;
 mod model;
 mod motion;
 mod names;
