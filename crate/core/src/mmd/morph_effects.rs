@@ -338,7 +338,7 @@ mod tests {
             pmd_type: None,
         };
         MmdModel {
-            format: ModelFormat::Pmx,
+            format: ModelFormat::Pmx { version: 2.0 },
             name: String::new(),
             name_en: String::new(),
             comment: String::new(),
