@@ -409,10 +409,11 @@ mod tests {
         assert_eq!(out[0], BoneMorph::NONE);
         assert!((out[1].translation - Vec3::new(0.25, 0.5, -0.75)).length() < 1e-6);
         let want = Quat::IDENTITY.slerp(quat_to_right_handed(q), 0.25);
-        assert!(out[1].rotation.angle_between(want) < 1e-5);
+        // Compared as quaternions, up to sign (an f32 angle between near-equal rotations is no finer than ~1e-3 rad).
+        assert!((out[1].rotation - want).length().min((out[1].rotation + want).length()) < 1e-5, "{:?} vs {want:?}", out[1].rotation);
         // Through the group at 1: half the morph.
         bone_morphs_into(&m, &[(1, 1.0)], &mut out);
         assert!((out[1].translation - Vec3::new(0.5, 1.0, -1.5)).length() < 1e-6);
-        assert!((out[1].rotation.angle_between(Quat::IDENTITY) - 0.4).abs() < 1e-5);
+        assert!((out[1].rotation.angle_between(Quat::IDENTITY) - 0.4).abs() < 1e-4);
     }
 }
