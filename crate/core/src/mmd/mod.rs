@@ -618,7 +618,7 @@ mod tests {
         // each iteration, moving only itself and e: three's CCDIKSolver does the same.
         let (axis, angle) = pose.local_rotations[3].to_axis_angle();
         assert!((angle - 0.5).abs() < 1e-4 && axis.z.abs() > 0.99, "d: {axis:?} {angle}");
-        let e = pose.world_positions[3] + pose.world_rotations[3] * (Vec3::X * 2.0);
+        let e = pose.world_positions[3] + pose.world_rotations[3] * Vec3::X;
         assert!((pose.world_positions[4] - e).length() < 1e-5);
         let c = pose.world_positions[1] + pose.world_rotations[1] * Vec3::Y;
         assert!((pose.world_positions[2] - c).length() < 1e-5, "the effector hangs from b alone");
