@@ -553,3 +553,121 @@ fn face_morph_offsets_on_the_drawn_mesh_are_the_models_own_at_a_frame() {
     assert!(groups > 0, "Gene has group morphs of vertex morphs");
     println!("Gene: {groups} group morphs land on their members' drawn vertices");
 }
+
+/// Every model in ../shared/data/mmd (found by walking it, so a model added there is not
+/// missed) becomes a character whose mesh covers the model and plays WAVEFILE with its skin
+/// where the rig puts it — mokou_A.pmd too, whose hair IK chain 右髪ＣＩＫ lists 右髪Ｃ０, a bone
+/// off the chain's path (MMD and three r171's CCDIKSolver keep such a link; the rig used to
+/// refuse the model).
+#[test]
+fn every_real_model_becomes_a_character_and_plays_wavefile() {
+    let mut found = Vec::new();
+    let mut stack = vec![data_dir().join("mmd")];
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e} (the MMD test data is missing)", dir.display())).filter_map(|e| e.ok()) {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x.eq_ignore_ascii_case("pmd") || x.eq_ignore_ascii_case("pmx")) {
+                found.push(p.strip_prefix(data_dir()).unwrap_or(&p).to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+    found.sort();
+    let sets: [(&str, &str, &[&str]); 7] = [
+        ("mmd/gene", "Gene_light.pmd", &["mmd/gene/light"]),
+        ("mmd/gene", "Gene_light.pmx", &["mmd/gene/light"]),
+        ("mmd/low_poly", "gumi.pmd", &[]),
+        ("mmd/low_poly", "miku.pmd", &[]),
+        ("mmd/miku_v2", "miku_v2.pmd", &[]),
+        ("mmd/mokou", "mokou_A.pmd", &[]),
+        ("mmd/mokou", "mokou_B.pmd", &[]),
+    ];
+    let listed: Vec<String> = sets.iter().map(|(d, f, _)| format!("{d}/{f}")).collect();
+    assert_eq!(found, listed, "the models in the data folder");
+    let dance = vmd_motion("mmd/motion/wavefile_v2.vmd");
+    for (folder, file, extra) in sets {
+        let (m, set) = imported_set(folder, file, extra);
+        let c = model_character(&m.file, &m.model, &m.textures, &m.missing_textures, &set).unwrap_or_else(|e| panic!("{file}: {e}"));
+        check_mesh(&m.model, &c);
+        let worst = [0, 1500].iter().map(|&f| skin_error(&m.model, &c, &dance, f)).fold(0.0f32, f32::max);
+        eprintln!("{file}: {} vertices in {} parts, {} bones; WAVEFILE's skin at most {worst:.2e} m from the rig's; notices {:?}", m.model.vertices.len(), c.character.mesh.parts.len(), m.model.bones.len(), c.notices);
+        assert!(worst < 1e-4, "{file}: a vertex is {worst} m from where the rig puts it");
+    }
+}
+
+/// The morph kinds of every real model, as read (three r171's MMDParser reads Gene_light.pmx as
+/// 3 group, 177 vertex, 1 UV and 3 material morphs; PMD has vertex morphs only): no model here
+/// has a bone morph. Gene's 3 material morphs each add 1 to the alpha of an overlay material
+/// drawn at alpha 0 (青ざめ, どんより: the pale face 青ざめ; いらいら: イライラ), and 29_Terrified.vmd
+/// keys 青ざめ: at its key the part drawing that material gets the model's data × the key's
+/// weight (diffuse alpha 0 + 1 × w), every other part none; its one UV morph (メッシュなし) is
+/// named as not played.
+#[test]
+fn gene_material_morphs_give_the_overlay_part_the_models_data_times_weight() {
+    use odori_core::import::mmd_model::MorphData;
+    use odori_core::mmd::morph::DrawnMorphs;
+    use odori_core::mmd::morph_effects::{unplayed_morphs, MaterialFactors};
+    let kinds = |m: &MmdModel| {
+        let mut k = [0usize; 5]; // group, vertex, bone, UV, material
+        for x in &m.morphs {
+            match x.data {
+                MorphData::Group(_) => k[0] += 1,
+                MorphData::Vertex(_) => k[1] += 1,
+                MorphData::Bone(_) => k[2] += 1,
+                MorphData::Uv { .. } => k[3] += 1,
+                MorphData::Material(_) => k[4] += 1,
+                _ => {}
+            }
+        }
+        k
+    };
+    for (folder, file, extra) in [("mmd/miku_v2", "miku_v2.pmd", &[][..]), ("mmd/low_poly", "miku.pmd", &[]), ("mmd/low_poly", "gumi.pmd", &[]), ("mmd/mokou", "mokou_A.pmd", &[]), ("mmd/mokou", "mokou_B.pmd", &[]), ("mmd/gene", "Gene_light.pmd", &["mmd/gene/light"])] {
+        let k = kinds(&imported(folder, file, extra).model);
+        println!("{file}: morphs group {} vertex {} bone {} UV {} material {}", k[0], k[1], k[2], k[3], k[4]);
+        assert_eq!((k[0], k[2], k[3], k[4]), (0, 0, 0, 0), "{file}: a PMD has vertex morphs only");
+    }
+    let m = imported("mmd/gene", "Gene_light.pmx", &["mmd/gene/light"]);
+    let k = kinds(&m.model);
+    println!("Gene_light.pmx: morphs group {} vertex {} bone {} UV {} material {}", k[0], k[1], k[2], k[3], k[4]);
+    assert_eq!(k, [3, 177, 0, 1, 3], "Gene_light.pmx's morph kinds as three r171's MMDParser reads them");
+    assert_eq!(unplayed_morphs(&m.model), vec![("メッシュなし", "UV")]);
+    let c = character(&m);
+    let drawn = DrawnMorphs::new(&m.model, &c.drawn_vertices).with_effects(&m.model, &c.part_material);
+    assert!(drawn.effects().has_material_morphs() && !drawn.shows_nothing());
+    let vmd = odori_core::import::vmd::read("29_Terrified.vmd", &read("mmd/gene/motion/29_Terrified.vmd")).expect("29_Terrified.vmd reads");
+    let faces = drawn.faces(&vmd.morph_keys);
+    let key = vmd.morph_keys.iter().filter(|k| k.name == "青ざめ" && k.weight > 0.0).min_by_key(|k| k.frame).expect("29_Terrified keys 青ざめ");
+    let pale = m.model.morphs.iter().position(|x| x.name == "青ざめ").expect("the morph 青ざめ");
+    let target = match &m.model.morphs[pale].data {
+        MorphData::Material(o) => o[0].material.expect("one material"),
+        d => panic!("青ざめ is {d:?}"),
+    };
+    let part = c.part_material.iter().position(|&x| x == target).expect("a part draws the overlay");
+    assert_eq!(c.looks[part].diffuse.w, 0.0, "the overlay is drawn at alpha 0 without the morph");
+    let mut parts = Vec::new();
+    // The control: no weights, nothing changed and the overlay stays unseen.
+    assert_eq!(drawn.part_factors_into(&[], &mut parts), 0);
+    assert_eq!(parts[part].0.diffuse(c.looks[part].diffuse).w, 0.0);
+    let weights = faces.weights_at(key.frame as f32);
+    let w_pale = weights.iter().find(|(i, _)| *i == pale).map_or(0.0, |x| x.1);
+    assert!((w_pale - key.weight).abs() < 1e-6, "青ざめ at frame {}: {weights:?}", key.frame);
+    let changed = drawn.part_factors_into(&weights, &mut parts);
+    assert_eq!(parts.len(), c.character.mesh.parts.len());
+    let alpha = parts[part].0.diffuse(c.looks[part].diffuse).w;
+    println!("29_Terrified frame {}: 青ざめ at {w_pale:.2}, {} morphs weighted: {changed} parts changed; the overlay's alpha {alpha:.2}", key.frame, weights.len());
+    assert!((alpha - w_pale).abs() < 1e-6, "the overlay's alpha {alpha} vs the key's weight {w_pale}");
+    // Only parts whose material a weighted material morph names change.
+    let named: Vec<usize> = weights
+        .iter()
+        .filter_map(|(i, _)| match &m.model.morphs[*i].data {
+            MorphData::Material(o) => Some(o.iter().filter_map(|x| x.material).collect::<Vec<_>>()),
+            _ => None,
+        })
+        .flatten()
+        .collect();
+    for (k, (f, _)) in parts.iter().enumerate() {
+        assert!(named.contains(&c.part_material[k]) || *f == MaterialFactors::NONE, "part {k} changed: {f:?}");
+    }
+    assert!(key.weight > 0.5, "a strong key: {}", key.weight);
+}

@@ -313,3 +313,18 @@ fn tokino_kakera_on_gene_agrees_with_three_js() {
     let rig = MmdRig::from_model(&model("mmd/gene/Gene_light.pmx")).unwrap();
     agrees_with_and_without_early_exit(include_str!("../golden/mmd/three_tokino_gene.json"), rig, &motion("mmd/motion/tokino_kakera.vmd"), "時間のカケラ on Gene");
 }
+
+/// mokou_A.pmd's hair chain 右髪ＣＩＫ lists 右髪Ｃ０, which is not an ancestor of its effector
+/// 右髪C６ (three r171 warns "bone 右髪C１ is not the child of bone 右髪Ｃ０" and solves on): the rig
+/// keeps that link as MMD and three do, and WAVEFILE on it agrees with three's pose, the hair
+/// chain's effector, the link off its path and the IK bone included.
+#[test]
+fn wavefile_on_mokou_with_its_detached_hair_link_agrees_with_three_js() {
+    let m = model("mmd/mokou/mokou_A.pmd");
+    let rig = MmdRig::from_model(&m).unwrap_or_else(|e| panic!("mokou_A.pmd: {e}"));
+    let ik = &rig.bones[bone(&rig, "右髪ＣＩＫ")];
+    let links: Vec<&str> = ik.ik.as_ref().expect("右髪ＣＩＫ is an IK bone").links.iter().map(|l| rig.bones[l.bone].name.as_str()).collect();
+    assert!(links.contains(&"右髪Ｃ０"), "links {links:?}");
+    assert_ne!(rig.bones[bone(&rig, "右髪C１")].parent, Some(bone(&rig, "右髪Ｃ０")), "the file's chain skips a bone");
+    agrees_with_and_without_early_exit(include_str!("../golden/mmd/three_wavefile_mokou.json"), rig, &motion("mmd/motion/wavefile_v2.vmd"), "WAVEFILE on mokou_A");
+}

@@ -5,17 +5,21 @@
 // it is not a project dependency:
 //   (cd /tmp && npm pack three@0.171.0 && mkdir -p three && tar xzf three-0.171.0.tgz -C three)
 //   node tests/tools/mmd_three_reference.mjs ../shared/data /tmp/three/package > tests/golden/mmd/three_wavefile_miku.json
-// Another pair: append MODEL MOTION (paths under DATA_DIR), e.g. mmd/gene/Gene_light.pmx mmd/motion/tokino_kakera.vmd.
+// Another pair: append MODEL MOTION (paths under DATA_DIR), e.g. mmd/gene/Gene_light.pmx mmd/motion/tokino_kakera.vmd;
+// bone names after them are recorded too (mokou_A.pmd's hair chain: 右髪C６ 右髪Ｃ０).
 // (the clip's very last frame is left out: three's mixer loops there and shows frame 0.)
 // Runs in Node: the loader's texture loads fail quietly against a stub document; bones need none.
 import fs from 'node:fs';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
 
-const [data, threeDir, modelRel = 'mmd/miku_v2/miku_v2.pmd', motionRel = 'mmd/motion/wavefile_v2.vmd'] = process.argv.slice(2);
+const [data, threeDir, modelRel = 'mmd/miku_v2/miku_v2.pmd', motionRel = 'mmd/motion/wavefile_v2.vmd', ...extraBones] = process.argv.slice(2);
 if (!data || !threeDir) throw new Error('usage: mmd_three_reference.mjs DATA_DIR THREE_PACKAGE_DIR [MODEL MOTION]');
 globalThis.document = { createElementNS: () => ({ addEventListener() {}, removeEventListener() {}, style: {}, setAttribute() {} }), createElement: () => ({ getContext: () => null, style: {} }) };
 globalThis.self = globalThis;
+// TGA textures load through Request + fetch, which throw at once on a plain path: refuse them quietly too.
+globalThis.Request = class { constructor(url) { this.url = String(url); this.headers = new Headers(); } };
+globalThis.fetch = () => Promise.reject(new Error('no textures in Node'));
 const mod = (rel) => import(pathToFileURL(path.join(threeDir, rel)).href);
 const THREE = await mod('build/three.module.js');
 const { MMDLoader } = await mod('examples/jsm/loaders/MMDLoader.js');
@@ -31,7 +35,7 @@ const mesh = loader.meshBuilder.build(pmd, `${data}/${path.dirname(modelRel)}/`,
 const clip = loader.animationBuilder.build(vmd, mesh);
 const helper = new MMDAnimationHelper({ afterglow: 0 });
 helper.add(mesh, { animation: clip, physics: false });
-const names = ['センター', '頭', '左手首', '右手首', '左足首', '右足首', '左つま先', '右つま先'];
+const names = ['センター', '頭', '左手首', '右手首', '左足首', '右足首', '左つま先', '右つま先', ...extraBones];
 const last = Math.max(...vmd.motions.map((m) => m.frameNum)) - 1;
 const frames = Array.from({ length: 20 }, (_, k) => Math.round((k * last) / 19));
 const out = { model: path.basename(modelRel), motion: path.basename(motionRel), three: THREE.REVISION, frames: [] };

@@ -203,6 +203,47 @@ pub struct MeshDraw<'a> {
     /// `None`, or a length other than the mesh's vertex count, draws it unmorphed. Feature
     /// `toon` only (the player draws no MMD model).
     pub morph: Option<&'a [Vec3]>,
+    /// Per part of the mesh (as uploaded), the factors an MMD model's material morphs put on
+    /// its look at the drawn time. `None`, or a length other than the mesh's part count, draws
+    /// every part as uploaded. Feature `toon` only, on the toon and outline pipelines.
+    pub looks: Option<&'a [PartLook]>,
+}
+
+/// An MMD part's look changed by material morphs (PMX type 8) at one frame: each colour
+/// becomes colour × mul + add (the diffuse colour and alpha, the base texture's colour, the
+/// edge colour), and the outline's width is scaled by `edge_width_scale`. [`PartLook::NONE`]
+/// draws the part as uploaded.
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct PartLook {
+    pub diffuse_mul: [f32; 4],
+    pub diffuse_add: [f32; 4],
+    pub texture_mul: [f32; 4],
+    pub texture_add: [f32; 4],
+    pub edge_mul: [f32; 4],
+    pub edge_add: [f32; 4],
+    /// x: the outline width's scale; y, z, w unused.
+    pub edge_width_scale: [f32; 4],
+}
+
+impl PartLook {
+    pub const NONE: PartLook = PartLook {
+        diffuse_mul: [1.0; 4],
+        diffuse_add: [0.0; 4],
+        texture_mul: [1.0; 4],
+        texture_add: [0.0; 4],
+        edge_mul: [1.0; 4],
+        edge_add: [0.0; 4],
+        edge_width_scale: [1.0, 0.0, 0.0, 0.0],
+    };
+}
+
+/// A draw slot's part looks: one uniform block per part at `stride` bytes (the device's
+/// uniform offset alignment), bound with a dynamic offset per part.
+struct LookSlot {
+    buffer: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    parts: usize,
 }
 
 struct GpuMesh {
@@ -288,6 +329,11 @@ pub struct Renderer {
     /// Per draw slot (as `palettes`), the morph offsets of the draw in it when it has any,
     /// grown to the largest mesh given morphs.
     morph_slots: Vec<Option<wgpu::Buffer>>,
+    /// MMD parts' looks (group 3 of the toon pipeline, 2 of the outline): per draw slot, grown
+    /// to the most parts drawn in it; the layout, and the bytes between two parts' blocks.
+    look_slots: Vec<Option<LookSlot>>,
+    look_layout: wgpu::BindGroupLayout,
+    look_stride: u64,
     depth: Option<(wgpu::TextureView, u32, u32)>,
     scratch: Vec<CapsuleInstance>,
     /// Background colour.
@@ -396,14 +442,27 @@ impl Renderer {
             // added (black when none), so one shader does either without a branch.
             entries: &[tex_entry(0), sampler_entry(1), tex_entry(2), sampler_entry(3), tex_entry(4), tex_entry(5), sampler_entry(6)],
         });
+        // One part's look at a dynamic offset into its draw slot's buffer.
+        let look_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("part looks"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<PartLook>() as u64),
+                },
+                ..uniform_entry(wgpu::ShaderStages::VERTEX_FRAGMENT)
+            }],
+        });
+        let look_stride = (std::mem::size_of::<PartLook>() as u64).next_multiple_of(u64::from(device.limits().min_uniform_buffer_offset_alignment.max(1)));
         let toon_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("toon"),
-            bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout), Some(&toon_texture_layout)],
+            bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout), Some(&toon_texture_layout), Some(&look_layout)],
             immediate_size: 0,
         });
         let outline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("outline"),
-            bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout)],
+            bind_group_layouts: &[Some(&camera_layout), Some(&palette_layout), Some(&look_layout)],
             immediate_size: 0,
         });
         let grid_v = grid_lines();
@@ -419,39 +478,10 @@ impl Renderer {
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let white_tex = device.create_texture_with_data(
-            &queue,
-            &wgpu::TextureDescriptor {
-                label: Some("white"),
-                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: TEXTURE_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
-            &[255, 255, 255, 255],
-        );
+        let white_tex = solid_texture(&device, &queue, "white", [255, 255, 255, 255]);
         let white = texture_bind_group(&device, &texture_layout, &white_tex, &odori_core::import::Sampler::default());
         let white_view = white_tex.create_view(&Default::default());
-        let black_tex = device.create_texture_with_data(
-            &queue,
-            &wgpu::TextureDescriptor {
-                label: Some("black"),
-                size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: TEXTURE_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
-            &[0, 0, 0, 255],
-        );
-        let black_view = black_tex.create_view(&Default::default());
+        let black_view = solid_texture(&device, &queue, "black", [0, 0, 0, 255]).create_view(&Default::default());
         Renderer {
             device,
             queue,
@@ -482,6 +512,9 @@ impl Renderer {
             mip_blit: None,
             palettes: Vec::new(),
             morph_slots: Vec::new(),
+            look_slots: Vec::new(),
+            look_layout,
+            look_stride,
             depth: None,
             scratch: Vec::new(),
             clear: wgpu::Color { r: 0.055, g: 0.06, b: 0.075, a: 1.0 },
@@ -816,6 +849,46 @@ impl Renderer {
             }
         }
 
+        // MMD parts' looks: every toon mesh's slot holds one block per part (the given looks,
+        // or none changed), so its parts bind their block by offset.
+        if cfg!(feature = "toon") {
+            self.look_slots.resize_with(self.look_slots.len().max(drawable.len()), || None);
+            for (slot, m) in drawable.iter().enumerate() {
+                let g = &self.meshes[m.mesh.0];
+                if !g.parts.iter().any(|p| p.toon.is_some()) {
+                    continue;
+                }
+                let n = g.parts.len();
+                let given = m.looks.filter(|l| l.len() == n);
+                if self.look_slots[slot].as_ref().is_none_or(|l| l.parts < n) {
+                    let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("part looks"),
+                        size: self.look_stride * n as u64,
+                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    });
+                    let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("part looks"),
+                        layout: &self.look_layout,
+                        entries: &[wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: &buffer, offset: 0, size: wgpu::BufferSize::new(std::mem::size_of::<PartLook>() as u64) }),
+                        }],
+                    });
+                    self.look_slots[slot] = Some(LookSlot { buffer, bind_group, parts: n });
+                }
+                let mut bytes = vec![0u8; (self.look_stride as usize) * n];
+                for k in 0..n {
+                    let look = given.map_or(PartLook::NONE, |l| l[k]);
+                    let at = k * self.look_stride as usize;
+                    bytes[at..at + std::mem::size_of::<PartLook>()].copy_from_slice(bytemuck::bytes_of(&look));
+                }
+                if let Some(l) = &self.look_slots[slot] {
+                    self.queue.write_buffer(&l.buffer, 0, &bytes);
+                }
+            }
+        }
+
         // Pipelines not made yet are made now, for what this frame draws only.
         self.prepare(PipelineKind::Lines);
         if !drawable.is_empty() {
@@ -876,9 +949,11 @@ impl Renderer {
                     pass.set_vertex_buffer(1, morph_of(slot, g));
                     pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
                     for (k, part) in g.parts.iter().enumerate() {
-                        if let (Some(_), Some(toon), Some(bg)) = (part.toon, &self.toon_pipeline, g.toon_groups[k].as_ref()) {
+                        let look = self.look_slots.get(slot).and_then(Option::as_ref);
+                        if let (Some(_), Some(toon), Some(bg), Some(look)) = (part.toon, &self.toon_pipeline, g.toon_groups[k].as_ref(), look) {
                             pass.set_pipeline(toon);
                             pass.set_bind_group(2, bg, &[]);
+                            pass.set_bind_group(3, &look.bind_group, &[(k as u64 * self.look_stride) as u32]);
                         } else {
                             let bg = part.texture.and_then(|t| g.textures.get(t)).and_then(Option::as_ref).unwrap_or(&self.white);
                             pass.set_pipeline(mesh);
@@ -891,6 +966,7 @@ impl Renderer {
                 if let Some(outline) = &self.outline_pipeline {
                     for (slot, m) in drawable.iter().enumerate() {
                         let g = &self.meshes[m.mesh.0];
+                        let Some(look) = self.look_slots.get(slot).and_then(Option::as_ref) else { continue };
                         if !g.parts.iter().any(|p| p.toon.is_some_and(|t| t.outline)) {
                             continue;
                         }
@@ -899,7 +975,8 @@ impl Renderer {
                         pass.set_vertex_buffer(0, g.vertices.slice(..));
                         pass.set_vertex_buffer(1, morph_of(slot, g));
                         pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
-                        for part in g.parts.iter().filter(|p| p.toon.is_some_and(|t| t.outline)) {
+                        for (k, part) in g.parts.iter().enumerate().filter(|(_, p)| p.toon.is_some_and(|t| t.outline)) {
+                            pass.set_bind_group(2, &look.bind_group, &[(k as u64 * self.look_stride) as u32]);
                             pass.draw_indexed(part.range.clone(), 0, 0..1);
                         }
                     }
@@ -965,6 +1042,25 @@ fn morph_slice<'a>(given: bool, slot: Option<&'a wgpu::Buffer>, g: &'a GpuMesh) 
 
 /// Base-colour textures are sRGB-encoded (glTF): sampled as linear colour.
 const TEXTURE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// A 1×1 texture of one colour (the white base of untextured parts, the black added sphere).
+fn solid_texture(device: &wgpu::Device, queue: &wgpu::Queue, label: &str, rgba: [u8; 4]) -> wgpu::Texture {
+    device.create_texture_with_data(
+        queue,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: TEXTURE_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        &rgba,
+    )
+}
 
 /// glTF sampler codes → wgpu: the minification filter's own filter within a level and its
 /// filter between levels (a texture without levels ignores the latter).

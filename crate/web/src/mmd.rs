@@ -210,7 +210,7 @@ impl Library {
     /// Keeps a model's morphs on its mesh under `mesh_key` (replacing any kept there before).
     pub(crate) fn keep_drawn_morphs(&mut self, mesh_key: u32, drawn: DrawnMorphs) {
         self.mmd.drawn_morphs.retain(|(k, _)| *k != mesh_key);
-        if !drawn.is_empty() {
+        if !drawn.shows_nothing() {
             self.mmd.drawn_morphs.push((mesh_key, Rc::new(drawn)));
         }
     }
@@ -401,7 +401,10 @@ impl Library {
                             let mesh = (self.next_id(), Rc::new(c.character.mesh));
                             self.mmd.springs.retain(|(k, _)| *k != mesh.0);
                             self.mmd.springs.push((mesh.0, joints));
-                            self.keep_drawn_morphs(mesh.0, DrawnMorphs::new(&m.model, &c.drawn_vertices));
+                            self.keep_drawn_morphs(mesh.0, DrawnMorphs::new(&m.model, &c.drawn_vertices).with_effects(&m.model, &c.part_material));
+                            for (name, kind) in odori_core::mmd::morph_effects::unplayed_morphs(&m.model) {
+                                notices.push(format!("{}: morph '{name}' is a {kind} morph, which is not played", m.file));
+                            }
                             let id = self.push(clip, "mmd", c.character.map.clone(), c.character.map.status(&c.character.skeleton, None), Some(mesh.clone()));
                             self.mmd.characters.push((m.model.name.clone(), id));
                             meshes.push((m.model.name.clone(), mesh));

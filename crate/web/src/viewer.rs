@@ -46,7 +46,7 @@ use odori_core::canon::retarget::{is_canonical, to_canonical};
 use odori_core::mmd::spring::{SpringFollower, SpringParams};
 use odori_core::motion::WorldPose;
 use odori_core::Clip;
-use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, PipelineKind, Renderer, FIGURE_COLORS};
+use odori_render::{Figure, MeshDraw, MeshHandle, OrbitCamera, PartLook, PipelineKind, Renderer, FIGURE_COLORS};
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 use web_sys::HtmlCanvasElement;
@@ -959,6 +959,15 @@ impl Viewer {
             let on = if stick || own.is_some() { None } else { self.on_body(e, true) };
             let clip: &Clip = on.as_ref().map(|o| &*o.0).unwrap_or(&e.clip);
             let mesh = own.or_else(|| on.as_ref().map(|o| (o.1, o.2.clone())));
+            // An MMD model's hair and skirt sway past the animated pose: framed as `draw` plays
+            // them, springs stepped through the whole clip.
+            #[cfg(feature = "authoring")]
+            let sprung = match &mesh {
+                Some((key, _)) if self.springs_on => spring_joints(library, *key).map(|j| odori_core::mmd::spring::apply_springs(clip, j, SpringParams::default())),
+                _ => None,
+            };
+            #[cfg(feature = "authoring")]
+            let clip: &Clip = sprung.as_ref().unwrap_or(clip);
             let bounds = mesh.map(|(key, mesh)| (self.bounds.entry(key).or_insert_with(|| Rc::new(SkinnedBounds::of_mesh(&mesh))).clone(), mesh));
             let frames = clip.frame_count();
             let mut pose = WorldPose::new();
@@ -1020,6 +1029,9 @@ impl Viewer {
         // Poses first (positions for sticks, palettes for meshes).
         let mut sticks: Vec<(Vec<Vec3>, &Entry, [f32; 4])> = Vec::new();
         let mut palettes: Vec<(MeshHandle, Vec<Mat4>, [f32; 4], Option<Vec<Vec3>>)> = Vec::new();
+        // Per skinned draw, its parts' looks under material morphs (none in the player).
+        #[cfg_attr(not(feature = "authoring"), allow(unused_mut))]
+        let mut looks: Vec<Option<Vec<PartLook>>> = Vec::new();
         // One figure is drawn as it is; several (candidates, overlays) each take a wash of
         // their figure colour, so a skinned candidate matches its chip as a stick one does.
         let several = specs.len() > 1;
@@ -1081,6 +1093,8 @@ impl Viewer {
                     let (morph, morphed, missing_morphs) = self.face_offsets(library, e, key, s.time_secs);
                     #[cfg(not(feature = "authoring"))]
                     let (morph, morphed): (Option<Vec<Vec3>>, u32) = (None, { let _ = key; 0 });
+                    #[cfg(feature = "authoring")]
+                    looks.push(self.face_looks(library, e, key, s.time_secs));
                     palettes.push((h, pal, tint, morph));
                     drawn.push(Drawn {
                         clip: s.clip,
@@ -1133,7 +1147,11 @@ impl Viewer {
             }
         }
         self.held_since_ms = None;
-        let meshes: Vec<MeshDraw> = palettes.iter().map(|(h, p, tint, morph)| MeshDraw { mesh: *h, palette: p, tint: *tint, morph: morph.as_deref() }).collect();
+        let meshes: Vec<MeshDraw> = palettes
+            .iter()
+            .enumerate()
+            .map(|(k, (h, p, tint, morph))| MeshDraw { mesh: *h, palette: p, tint: *tint, morph: morph.as_deref(), looks: looks.get(k).and_then(Option::as_deref) })
+            .collect();
         self.last_drawn = drawn;
         if let Some(y) = self.follow_y {
             // Track the travelling figures on the ground plane.
@@ -1188,6 +1206,37 @@ impl Viewer {
         let mut out = self.morph_pool.pop().unwrap_or_default();
         let moved = drawn.offsets_into(&faces.weights_at(frame, time_secs), &mut out);
         (Some(out), moved as u32, faces.missing.clone())
+    }
+
+    /// The looks an MMD model's material morphs give its mesh's parts for clip `e` drawn at
+    /// `time_secs` on the mesh under `mesh_key` (the face keys' weights at the frame
+    /// `face_offsets` takes), or `None` when morphs are off or nothing changes a part.
+    #[cfg(feature = "authoring")]
+    fn face_looks(&mut self, library: &Library, e: &Entry, mesh_key: u32, time_secs: f32) -> Option<Vec<PartLook>> {
+        let drawn = library.drawn_morphs(mesh_key).filter(|d| self.morphs_on && d.effects().has_material_morphs())?;
+        let (faces, offset) = self.faces.get(&(e.id, mesh_key)).filter(|(rev, _)| *rev == e.rev).and_then(|(_, f)| f.as_ref())?;
+        let at = (time_secs * e.clip.fps).clamp(0.0, e.clip.frame_count().saturating_sub(1) as f32);
+        let frame = *offset as f32 + at * odori_core::import::vmd::VMD_FPS / e.clip.fps.max(1e-3);
+        let mut parts = Vec::new();
+        if drawn.part_factors_into(&faces.weights_at(frame), &mut parts) == 0 {
+            return None;
+        }
+        let four = |v: glam::Vec4| v.to_array();
+        Some(
+            parts
+                .iter()
+                .map(|(f, edge_size)| PartLook {
+                    diffuse_mul: four(f.diffuse_mul),
+                    diffuse_add: four(f.diffuse_add),
+                    texture_mul: four(f.texture_mul),
+                    texture_add: four(f.texture_add),
+                    edge_mul: four(f.edge_colour_mul),
+                    edge_add: four(f.edge_colour_add),
+                    // The outline is as wide as the edge size: an edge of size 0 stays off.
+                    edge_width_scale: [if *edge_size > 0.0 { f.edge_size(*edge_size) / edge_size } else { 1.0 }, 0.0, 0.0, 0.0],
+                })
+                .collect(),
+        )
     }
 
     /// What a draw of `specs` would show, to compare with the last drawn (see `Shown`).

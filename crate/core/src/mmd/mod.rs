@@ -12,6 +12,7 @@ pub mod face_track;
 pub mod files;
 pub mod mesh;
 pub mod morph;
+pub mod morph_effects;
 mod model;
 mod motion;
 mod names;
@@ -109,8 +110,6 @@ pub enum MmdRigError {
     NonFinite { bone: usize, name: String, what: &'static str },
     #[error("IK bone {bone} '{name}': {role} {index} is not one of the {count} bones")]
     IkBoneOutOfRange { bone: usize, name: String, role: &'static str, index: usize, count: usize },
-    #[error("IK bone {bone} '{name}': link {link} (bone {link_bone}) is not an ancestor of the effector {effector} and the links before it")]
-    IkChainBroken { bone: usize, name: String, link: usize, link_bone: usize, effector: usize },
     #[error("motion runs to frame {last_frame}: more than the {max_frames} frames (one hour at 30 fps) a clip may have")]
     TooLong { last_frame: u32, max_frames: usize },
     #[error("pose has {got} {what} for a rig of {bones} bones")]
@@ -141,9 +140,13 @@ pub struct MmdRig {
     process_order: Vec<usize>,
     /// Per IK bone: the effector's ancestor path from the outermost link down to the effector.
     ik_paths: Vec<Option<Vec<usize>>>,
-    /// Per IK bone: the bones whose world transforms its solve reads (the IK bone's and the
-    /// effector's ancestors, themselves included), parents first.
+    /// Per IK bone: the bones whose world transforms its solve reads (the IK bone's, the
+    /// effector's and every link's ancestors, themselves included), parents first.
     ik_inputs: Vec<Option<Vec<usize>>>,
+    /// Per IK bone: its links that are not ancestors of the effector (mokou_A.pmd's 右髪Ｃ０),
+    /// each with its subtree, parents first. MMD and three.js's `CCDIKSolver` keep such a link:
+    /// it turns towards the target like the others but cannot move the effector.
+    ik_detached: Vec<Vec<(usize, Vec<usize>)>>,
     /// Run every CCD iteration (three.js's rule) instead of stopping early: see [`MmdRig::with_full_ccd`].
     full_ccd: bool,
 }
@@ -159,8 +162,9 @@ pub struct MmdPose {
 }
 
 impl MmdRig {
-    /// Validates the bones: parents and grant parents in range without cycles, IK chains whose
-    /// links are ancestors of their effector in order, finite numbers.
+    /// Validates the bones: parents and grant parents in range without cycles, IK bones in
+    /// range, finite numbers. An IK link that is not an ancestor of the effector and of the
+    /// links before it is kept as MMD keeps it (a detached link, see `ik_detached`).
     pub fn new(name: impl Into<String>, bones: Vec<MmdBone>) -> Result<MmdRig, MmdRigError> {
         let n = bones.len();
         if n == 0 {
@@ -234,28 +238,44 @@ impl MmdRig {
                 }
             }
         }
-        // IK paths: each link must be an ancestor of the effector and of the links before it.
+        // IK paths: the links that are ancestors of the effector and of the links before them,
+        // with the bones between; any other link is detached (its subtree kept to update).
         let mut ik_paths = vec![None; n];
+        let mut ik_detached = vec![Vec::new(); n];
         for (i, b) in bones.iter().enumerate() {
             let Some(ik) = &b.ik else { continue };
             let mut path = vec![ik.effector];
-            for (li, l) in ik.links.iter().enumerate() {
+            for l in &ik.links {
                 let mut k = *path.last().unwrap_or(&ik.effector);
                 let mut up = Vec::new();
-                loop {
+                let found = loop {
                     match bones[k].parent {
                         Some(p) if p == l.bone => {
                             up.push(p);
-                            break;
+                            break true;
                         }
                         Some(p) => {
                             up.push(p);
                             k = p;
                         }
-                        None => return Err(MmdRigError::IkChainBroken { bone: i, name: b.name.clone(), link: li, link_bone: l.bone, effector: ik.effector }),
+                        None => break false,
                     }
+                };
+                if found {
+                    path.extend(up);
+                } else {
+                    let below = |j: usize| {
+                        let mut k = Some(j);
+                        while let Some(x) = k {
+                            if x == l.bone {
+                                return true;
+                            }
+                            k = bones[x].parent;
+                        }
+                        false
+                    };
+                    ik_detached[i].push((l.bone, fk_order.iter().copied().filter(|&j| below(j)).collect()));
                 }
-                path.extend(up);
             }
             path.reverse();
             ik_paths[i] = Some(path);
@@ -264,7 +284,7 @@ impl MmdRig {
             .map(|i| {
                 let ik = bones[i].ik.as_ref()?;
                 let mut needed = vec![false; n];
-                for start in [i, ik.effector] {
+                for start in [i, ik.effector].into_iter().chain(ik.links.iter().map(|l| l.bone)) {
                     let mut k = Some(start);
                     while let Some(j) = k.filter(|&j| !needed[j]) {
                         needed[j] = true;
@@ -299,7 +319,7 @@ impl MmdRig {
                 }
             }
         }
-        Ok(MmdRig { name: name.into(), bones, offsets, fk_order, process_order, ik_paths, ik_inputs, full_ccd: false })
+        Ok(MmdRig { name: name.into(), bones, offsets, fk_order, process_order, ik_paths, ik_inputs, ik_detached, full_ccd: false })
     }
 
     /// The same rig solving IK exactly as three.js does, every CCD iteration run (no early
@@ -474,6 +494,11 @@ impl MmdRig {
                     for &b in &path[start..] {
                         self.world_one(b, p);
                     }
+                } else if let Some((_, subtree)) = self.ik_detached[ik_bone].iter().find(|(b, _)| *b == l) {
+                    // A detached link: it and what hangs below it (three's updateMatrixWorld).
+                    for &b in subtree {
+                        self.world_one(b, p);
+                    }
                 }
                 rotated = true;
             }
@@ -576,6 +601,31 @@ mod tests {
     }
 
     #[test]
+    fn a_link_off_the_effector_path_is_kept_and_turns_as_three_turns_it() {
+        // c (2) is the effector, b (1) an ancestor link, d (3) a link beside the chain with a
+        // child e (4); the IK bone (5) out of reach of b alone, so every iteration leaves a gap.
+        let mut b = chain3();
+        b.push(MmdBone::new("d", Some(0), Vec3::X));
+        b.push(MmdBone::new("e", Some(3), Vec3::X * 2.0));
+        b.push(MmdBone::new("ik", None, Vec3::new(3.0, 1.0, 0.0)));
+        b[5].ik = Some(IkChain { effector: 2, loop_count: 2, limit_angle_rad: 0.25, links: vec![IkLink { bone: 1, limit: None }, IkLink { bone: 3, limit: None }] });
+        let rig = MmdRig::new("t", b).unwrap().with_full_ccd();
+        let mut pose = MmdPose::default();
+        rig.pose_into(&[Quat::IDENTITY; 6], &[Vec3::ZERO; 6], &mut pose).unwrap();
+        // b turns 0.25 rad (the unit angle) towards the target per iteration, about -Z.
+        let (axis, angle) = pose.local_rotations[1].to_axis_angle();
+        assert!((angle - 0.5).abs() < 1e-4 && (axis + Vec3::Z).length() < 1e-4, "b: {axis:?} {angle}");
+        // d sees the effector and the target at some angle apart and turns by the unit angle
+        // each iteration, moving only itself and e: three's CCDIKSolver does the same.
+        let (axis, angle) = pose.local_rotations[3].to_axis_angle();
+        assert!((angle - 0.5).abs() < 1e-4 && axis.z.abs() > 0.99, "d: {axis:?} {angle}");
+        let e = pose.world_positions[3] + pose.world_rotations[3] * Vec3::X;
+        assert!((pose.world_positions[4] - e).length() < 1e-5);
+        let c = pose.world_positions[1] + pose.world_rotations[1] * Vec3::Y;
+        assert!((pose.world_positions[2] - c).length() < 1e-5, "the effector hangs from b alone");
+    }
+
+    #[test]
     fn constructor_rejects_bad_rigs() {
         let mut b = chain3();
         b[1].parent = Some(7);
@@ -587,10 +637,6 @@ mod tests {
         b[1].grant = Some(Grant { parent: 2, ratio: 1.0, rotate: true, translate: false, local: false });
         b[2].grant = Some(Grant { parent: 1, ratio: 1.0, rotate: true, translate: false, local: false });
         assert!(matches!(MmdRig::new("t", b), Err(MmdRigError::GrantCycle { .. })));
-        let mut b = chain3();
-        b.push(MmdBone::new("ik", None, Vec3::Y));
-        b[3].ik = Some(IkChain { effector: 1, loop_count: 3, limit_angle_rad: 1.0, links: vec![IkLink { bone: 2, limit: None }] });
-        assert!(matches!(MmdRig::new("t", b), Err(MmdRigError::IkChainBroken { link_bone: 2, .. })));
         let mut b = chain3();
         b[2].rest_position.x = f32::NAN;
         assert!(matches!(MmdRig::new("t", b), Err(MmdRigError::NonFinite { bone: 2, .. })));

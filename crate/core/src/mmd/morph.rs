@@ -2,7 +2,8 @@
 //! weight at a frame (VMD morph keys are linear between keys and held outside them), and the
 //! vertex offsets the weighted morphs put on the model's vertices — vertex morphs directly,
 //! group morphs expanded into their members (one level, as MMD does: a group inside a group is
-//! not followed), the other kinds (bone, UV, material, flip, impulse) left out. Offsets are in
+//! not followed), the other kinds left out here (bone and material morphs are in
+//! [`super::morph_effects`]; UV, flip and impulse morphs are not played). Offsets are in
 //! the drawn mesh's frame: right-handed (z negated, as the mesh's positions) and in metres.
 //!
 //! Kept apart from the drawing so it is checked natively: a viewer adds the offsets of the
@@ -15,6 +16,7 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
+use super::morph_effects::{MaterialFactors, MorphEffects};
 use super::{to_right_handed, METRES_PER_MMD_UNIT};
 use crate::import::mmd_model::{MmdModel, MorphData};
 use crate::import::vmd::MorphKey;
@@ -159,6 +161,10 @@ pub struct DrawnMorphs {
     /// Per model morph: a group morph's (member, weight); empty for other kinds.
     group: Vec<Vec<(usize, f32)>>,
     drawn_len: usize,
+    /// The model's bone and material morphs ([`DrawnMorphs::with_effects`]; empty without).
+    effects: MorphEffects,
+    /// Per mesh part, the model material it draws ([`super::mesh::ModelCharacter::part_material`]).
+    part_material: Vec<usize>,
 }
 
 impl DrawnMorphs {
@@ -207,7 +213,45 @@ impl DrawnMorphs {
             vertex.push(vs);
             group.push(gs);
         }
-        DrawnMorphs { names: model.morphs.iter().map(|m| m.name.clone()).collect(), vertex, group, drawn_len: drawn_vertices.iter().map(Vec::len).sum() }
+        DrawnMorphs {
+            names: model.morphs.iter().map(|m| m.name.clone()).collect(),
+            vertex,
+            group,
+            drawn_len: drawn_vertices.iter().map(Vec::len).sum(),
+            effects: MorphEffects::default(),
+            part_material: Vec::new(),
+        }
+    }
+
+    /// The same, also keeping the model's bone and material morphs, and which material each
+    /// mesh part draws (`part_material`, [`super::mesh::ModelCharacter::part_material`]), so
+    /// [`DrawnMorphs::part_factors_into`] gives a frame's material factors per part.
+    pub fn with_effects(mut self, model: &MmdModel, part_material: &[usize]) -> DrawnMorphs {
+        self.effects = MorphEffects::new(model);
+        self.part_material = part_material.to_vec();
+        self
+    }
+
+    /// The model's bone and material morphs (empty unless made [`DrawnMorphs::with_effects`]).
+    pub fn effects(&self) -> &MorphEffects {
+        &self.effects
+    }
+
+    /// Whether the weights a VMD keys can show nothing on the mesh: no vertex morph moves a
+    /// drawn vertex and there is no material morph.
+    pub fn shows_nothing(&self) -> bool {
+        self.is_empty() && !self.effects.has_material_morphs()
+    }
+
+    /// Per mesh part, the material factors the weighted morphs put on its material, into `out`
+    /// (one per part; resized and reset), and the part's material's edge size; returns how many
+    /// parts changed.
+    pub fn part_factors_into(&self, weights: &[(usize, f32)], out: &mut Vec<(MaterialFactors, f32)>) -> usize {
+        let mut per_material = Vec::new();
+        self.effects.material_factors_into(weights, &mut per_material);
+        out.clear();
+        out.extend(self.part_material.iter().map(|&m| (per_material.get(m).copied().unwrap_or(MaterialFactors::NONE), self.effects.edge_size(m))));
+        out.iter().filter(|(f, _)| *f != MaterialFactors::NONE).count()
     }
 
     /// The model's morph names, in its order (what morph indices of weights refer to).

@@ -3,6 +3,19 @@
 // its distance from the camera (so the line keeps its width on screen),
 // drawn with front faces culled so only the rim outside the model shows, in the edge colour.
 
+// The part's material morphs at the drawn time (renderer `PartLook`; the edge colour × mul +
+// add, the width × scale), as toon.wgsl declares them.
+struct Look {
+    diffuse_mul: vec4<f32>,
+    diffuse_add: vec4<f32>,
+    texture_mul: vec4<f32>,
+    texture_add: vec4<f32>,
+    edge_mul: vec4<f32>,
+    edge_add: vec4<f32>,
+    edge_width_scale: vec4<f32>,
+};
+@group(2) @binding(0) var<uniform> look: Look;
+
 struct VOut {
     @builtin(position) pos: vec4<f32>,
     @location(0) color: vec4<f32>,
@@ -23,8 +36,8 @@ fn vs_main(
     let normal = normalize((skin * vec4<f32>(n, 0.0)).xyz);
     let distance = max(length(cam.eye.xyz - world), 0.1);
     var o: VOut;
-    o.pos = cam.view_proj * vec4<f32>(world + normal * edge_width * distance, 1.0);
-    o.color = edge;
+    o.pos = cam.view_proj * vec4<f32>(world + normal * edge_width * max(look.edge_width_scale.x, 0.0) * distance, 1.0);
+    o.color = clamp(edge * look.edge_mul + look.edge_add, vec4<f32>(0.0), vec4<f32>(1.0));
     return o;
 }
 
