@@ -1214,11 +1214,17 @@ impl Viewer {
     #[cfg(feature = "authoring")]
     fn face_looks(&mut self, library: &Library, e: &Entry, mesh_key: u32, time_secs: f32) -> Option<Vec<PartLook>> {
         let drawn = library.drawn_morphs(mesh_key).filter(|d| self.morphs_on && d.effects().has_material_morphs())?;
-        let (faces, offset) = self.faces.get(&(e.id, mesh_key)).filter(|(rev, _)| *rev == e.rev).and_then(|(_, f)| f.as_ref())?;
+        // The same layered weights `face_offsets` plays (the clip's own keys and the project's
+        // face tracks), cached there for this clip, mesh and face-track generation.
+        let generation = library.mmd.faces_generation;
+        let faces = self.faces.get(&(e.id, mesh_key)).filter(|(rev, g, _)| *rev == e.rev && *g == generation).map(|(_, _, f)| f.clone())?;
+        if faces.is_empty() {
+            return None;
+        }
         let at = (time_secs * e.clip.fps).clamp(0.0, e.clip.frame_count().saturating_sub(1) as f32);
-        let frame = *offset as f32 + at * odori_core::import::vmd::VMD_FPS / e.clip.fps.max(1e-3);
+        let frame = faces.base_offset_frames() as f32 + at * odori_core::import::vmd::VMD_FPS / e.clip.fps.max(1e-3);
         let mut parts = Vec::new();
-        if drawn.part_factors_into(&faces.weights_at(frame), &mut parts) == 0 {
+        if drawn.part_factors_into(&faces.weights_at(frame, time_secs), &mut parts) == 0 {
             return None;
         }
         let four = |v: glam::Vec4| v.to_array();
