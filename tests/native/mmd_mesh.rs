@@ -601,8 +601,8 @@ fn every_real_model_becomes_a_character_and_plays_wavefile() {
 /// has a bone morph. Gene's 3 material morphs each add 1 to the alpha of an overlay material
 /// drawn at alpha 0 (青ざめ, どんより: the pale face 青ざめ; いらいら: イライラ), and 29_Terrified.vmd
 /// keys 青ざめ: at its key the part drawing that material gets the model's data × the key's
-/// weight (diffuse alpha 0 + 1 × w), every other part none; its one UV morph (メッシュなし) is
-/// named as not played.
+/// weight (diffuse alpha 0 + 1 × w), every other part none; its one UV morph (メッシュなし, of
+/// the base UV) is played (`mmd_morph_play.rs`), so no morph is named as not played.
 #[test]
 fn gene_material_morphs_give_the_overlay_part_the_models_data_times_weight() {
     use odori_core::import::mmd_model::MorphData;
@@ -631,7 +631,7 @@ fn gene_material_morphs_give_the_overlay_part_the_models_data_times_weight() {
     let k = kinds(&m.model);
     println!("Gene_light.pmx: morphs group {} vertex {} bone {} UV {} material {}", k[0], k[1], k[2], k[3], k[4]);
     assert_eq!(k, [3, 177, 0, 1, 3], "Gene_light.pmx's morph kinds as three r171's MMDParser reads them");
-    assert_eq!(unplayed_morphs(&m.model), vec![("メッシュなし", "UV")]);
+    assert_eq!(unplayed_morphs(&m.model), vec![], "Gene's UV morph moves the base UV: played");
     let c = character(&m);
     let drawn = DrawnMorphs::new(&m.model, &c.drawn_vertices).with_effects(&m.model, &c.part_material);
     assert!(drawn.effects().has_material_morphs() && !drawn.shows_nothing());

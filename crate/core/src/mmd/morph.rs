@@ -3,7 +3,8 @@
 //! vertex offsets the weighted morphs put on the model's vertices — vertex morphs directly,
 //! group morphs expanded into their members (one level, as MMD does: a group inside a group is
 //! not followed), the other kinds left out here (bone and material morphs are in
-//! [`super::morph_effects`]; UV, flip and impulse morphs are not played). Offsets are in
+//! [`super::morph_effects`]; UV morphs of the base UV are laid on the drawn mesh here as
+//! UV offsets, those of the additional UVs and flip and impulse morphs are not played). Offsets are in
 //! the drawn mesh's frame: right-handed (z negated, as the mesh's positions) and in metres.
 //!
 //! Kept apart from the drawing so it is checked natively: a viewer adds the offsets of the
@@ -14,9 +15,9 @@
 
 use std::collections::HashMap;
 
-use glam::Vec3;
+use glam::{Quat, Vec3};
 
-use super::morph_effects::{MaterialFactors, MorphEffects};
+use super::morph_effects::{apply_bone_morphs, BoneMorph, MaterialBase, MaterialFactors, MorphEffects};
 use super::{to_right_handed, METRES_PER_MMD_UNIT};
 use crate::import::mmd_model::{MmdModel, MorphData};
 use crate::import::vmd::MorphKey;
@@ -160,11 +161,17 @@ pub struct DrawnMorphs {
     vertex: Vec<Vec<(u32, Vec3)>>,
     /// Per model morph: a group morph's (member, weight); empty for other kinds.
     group: Vec<Vec<(usize, f32)>>,
+    /// Per model morph: a UV morph's (drawn vertex, offset of the base UV); empty for other
+    /// kinds and for morphs of the additional UVs (which nothing draws).
+    uv: Vec<Vec<(u32, [f32; 2])>>,
     drawn_len: usize,
     /// The model's bone and material morphs ([`DrawnMorphs::with_effects`]; empty without).
     effects: MorphEffects,
     /// Per mesh part, the model material it draws ([`super::mesh::ModelCharacter::part_material`]).
     part_material: Vec<usize>,
+    /// Per skeleton joint, the rig bone it is ([`super::mesh::ModelCharacter::rig_index`]):
+    /// where bone morphs go on a sampled pose ([`DrawnMorphs::bone_morph_pose`]; empty without).
+    rig_index: Vec<usize>,
 }
 
 impl DrawnMorphs {
@@ -193,8 +200,9 @@ impl DrawnMorphs {
         }
         let mut vertex = Vec::with_capacity(model.morphs.len());
         let mut group = Vec::with_capacity(model.morphs.len());
+        let mut uv = Vec::with_capacity(model.morphs.len());
         for m in &model.morphs {
-            let (mut vs, mut gs) = (Vec::new(), Vec::new());
+            let (mut vs, mut gs, mut us) = (Vec::new(), Vec::new(), Vec::new());
             match &m.data {
                 MorphData::Vertex(offsets) => {
                     for (v, d) in offsets {
@@ -208,18 +216,32 @@ impl DrawnMorphs {
                     }
                 }
                 MorphData::Group(members) => gs = members.iter().copied().filter(|(_, w)| w.is_finite()).collect(),
+                // The base UV's offsets (x, y of PMX's four; UVs as the mesh keeps them, v down).
+                MorphData::Uv { channel: 0, offsets } => {
+                    for (v, d) in offsets {
+                        if *v >= n || !(d.x.is_finite() && d.y.is_finite()) {
+                            continue;
+                        }
+                        for &c in &copies[start[*v] as usize..start[*v + 1] as usize] {
+                            us.push((c, [d.x, d.y]));
+                        }
+                    }
+                }
                 _ => {}
             }
             vertex.push(vs);
             group.push(gs);
+            uv.push(us);
         }
         DrawnMorphs {
             names: model.morphs.iter().map(|m| m.name.clone()).collect(),
             vertex,
             group,
+            uv,
             drawn_len: drawn_vertices.iter().map(Vec::len).sum(),
             effects: MorphEffects::default(),
             part_material: Vec::new(),
+            rig_index: Vec::new(),
         }
     }
 
@@ -232,15 +254,39 @@ impl DrawnMorphs {
         self
     }
 
+    /// The same, also keeping which rig bone each joint of the drawn skeleton is (`rig_index`,
+    /// [`super::mesh::ModelCharacter::rig_index`]), so [`DrawnMorphs::bone_morph_pose`] can put
+    /// the bone morphs on a sampled pose.
+    pub fn with_rig_index(mut self, rig_index: &[usize]) -> DrawnMorphs {
+        self.rig_index = rig_index.to_vec();
+        self
+    }
+
+    /// Whether the model has bone morphs this can put on a pose (made [`DrawnMorphs::with_effects`]
+    /// and [`DrawnMorphs::with_rig_index`]).
+    pub fn has_bone_morphs(&self) -> bool {
+        !self.rig_index.is_empty() && self.effects.has_bone_morphs()
+    }
+
+    /// Puts the bone morphs of `weights` on a local pose of the drawn skeleton (sampled from a
+    /// clip, before world transforms and skinning), in place ([`super::morph_effects::apply_bone_morphs`]);
+    /// `scratch` is reused. Returns how many joints moved.
+    pub fn bone_morph_pose(&self, weights: &[(usize, f32)], scratch: &mut Vec<BoneMorph>, rotations: &mut [Quat], translations: &mut [Vec3]) -> usize {
+        if !self.has_bone_morphs() || self.effects.bone_morphs_into(weights, scratch) == 0 {
+            return 0;
+        }
+        apply_bone_morphs(scratch, &self.rig_index, METRES_PER_MMD_UNIT, rotations, translations)
+    }
+
     /// The model's bone and material morphs (empty unless made [`DrawnMorphs::with_effects`]).
     pub fn effects(&self) -> &MorphEffects {
         &self.effects
     }
 
-    /// Whether the weights a VMD keys can show nothing on the mesh: no vertex morph moves a
-    /// drawn vertex and there is no material morph.
+    /// Whether the weights a VMD keys can show nothing on the mesh: no vertex or UV morph moves
+    /// a drawn vertex and there is no material or bone morph.
     pub fn shows_nothing(&self) -> bool {
-        self.is_empty() && !self.effects.has_material_morphs()
+        self.is_empty() && !self.has_uv_morphs() && !self.effects.has_material_morphs() && !self.has_bone_morphs()
     }
 
     /// Per mesh part, the material factors the weighted morphs put on its material, into `out`
@@ -252,6 +298,11 @@ impl DrawnMorphs {
         out.clear();
         out.extend(self.part_material.iter().map(|&m| (per_material.get(m).copied().unwrap_or(MaterialFactors::NONE), self.effects.edge_size(m))));
         out.iter().filter(|(f, _)| *f != MaterialFactors::NONE).count()
+    }
+
+    /// Mesh part `part`'s material's ambient and specular values (zero when out of range).
+    pub fn part_base(&self, part: usize) -> MaterialBase {
+        self.part_material.get(part).map(|&m| self.effects.material_base(m)).unwrap_or_default()
     }
 
     /// The model's morph names, in its order (what morph indices of weights refer to).
@@ -272,6 +323,36 @@ impl DrawnMorphs {
     /// A VMD's morph keys matched to this model's morphs by name ([`FaceMorphs::new`]).
     pub fn faces(&self, keys: &[MorphKey]) -> FaceMorphs {
         FaceMorphs::for_names(self.names.iter().map(String::as_str), keys)
+    }
+
+    /// Whether the model has a UV morph of the base UV that moves a drawn vertex.
+    pub fn has_uv_morphs(&self) -> bool {
+        self.uv.iter().any(|u| !u.is_empty())
+    }
+
+    /// The base-UV offsets the weighted UV morphs put on the drawn vertices, into `out` (one per
+    /// drawn vertex; resized and zeroed), group members one level deep as for vertex morphs:
+    /// what the renderer adds to each vertex's UV. Returns how many drawn vertices' UVs moved.
+    pub fn uv_offsets_into(&self, weights: &[(usize, f32)], out: &mut Vec<[f32; 2]>) -> usize {
+        out.clear();
+        out.resize(self.drawn_len, [0.0; 2]);
+        let add = |morph: usize, w: f32, out: &mut Vec<[f32; 2]>| {
+            for &(v, d) in self.uv.get(morph).map_or(&[][..], Vec::as_slice) {
+                if let Some(o) = out.get_mut(v as usize) {
+                    o[0] += d[0] * w;
+                    o[1] += d[1] * w;
+                }
+            }
+        };
+        for &(m, w) in weights.iter().filter(|(_, w)| w.is_finite()) {
+            add(m, w, out);
+            for &(member, mw) in self.group.get(m).map_or(&[][..], Vec::as_slice) {
+                if member != m {
+                    add(member, w * mw, out);
+                }
+            }
+        }
+        out.iter().filter(|o| **o != [0.0; 2]).count()
     }
 
     /// The offsets the weighted morphs put on the drawn vertices, into `out` (one per drawn

@@ -8,7 +8,11 @@
 //! top of the motion's key; a multiply material morph scales each value by lerp(1, value, w),
 //! an add morph adds w × value, and several morphs combine as value × Π(mul) + Σ(add). Kept
 //! apart from the drawing so it is checked natively against the model's data × weight; the
-//! viewer hands the factors of each drawn part to the renderer (a small uniform per part).
+//! viewer hands the factors of each drawn part to the renderer (a small uniform per part), and
+//! puts the bone morphs on the pose it samples from the clip ([`apply_bone_morphs`]) before
+//! world transforms and skinning. The clip's IK and grants were solved when it was made, so a
+//! bone morph on an IK link or a grant parent moves that bone alone (MMD would re-solve), and
+//! one on an IK bone (not in the drawn skeleton) moves nothing.
 
 use glam::{Quat, Vec3, Vec4};
 
@@ -37,12 +41,23 @@ fn expanded<'a>(data: impl Fn(usize) -> Option<&'a MorphData>, weights: &[(usize
 /// A model's bone and material morphs kept apart from the model (what a viewer holds per
 /// mesh, beside its vertex morphs in [`super::morph::DrawnMorphs`]): the morphs' data (groups,
 /// bone and material morphs; other kinds kept as empty groups so indices stay the model's),
-/// and the materials' edge sizes.
+/// and the materials' edge sizes and the values the other factors act on.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MorphEffects {
     data: Vec<MorphData>,
     bones: usize,
     edge_sizes: Vec<f32>,
+    bases: Vec<MaterialBase>,
+}
+
+/// The values of a material that its morphs' ambient and specular factors act on (as the
+/// model gives them: the ambient colour MMD adds to the lit diffuse, the specular colour and
+/// power of its Blinn-Phong highlight).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MaterialBase {
+    pub ambient: Vec3,
+    pub specular: Vec3,
+    pub specular_power: f32,
 }
 
 impl MorphEffects {
@@ -55,7 +70,12 @@ impl MorphEffects {
                 _ => MorphData::Group(Vec::new()),
             })
             .collect();
-        MorphEffects { data, bones: model.bones.len(), edge_sizes: model.materials.iter().map(|m| m.edge_size).collect() }
+        MorphEffects {
+            data,
+            bones: model.bones.len(),
+            edge_sizes: model.materials.iter().map(|m| m.edge_size).collect(),
+            bases: model.materials.iter().map(|m| MaterialBase { ambient: m.ambient, specular: m.specular, specular_power: m.specular_power }).collect(),
+        }
     }
 
     /// Whether the model has no bone or material morph.
@@ -68,9 +88,19 @@ impl MorphEffects {
         self.data.iter().any(|d| matches!(d, MorphData::Material(_)))
     }
 
+    /// Whether the model has bone morphs.
+    pub fn has_bone_morphs(&self) -> bool {
+        self.data.iter().any(|d| matches!(d, MorphData::Bone(_)))
+    }
+
     /// Material `m`'s edge size as the model gives it (0 when out of range).
     pub fn edge_size(&self, m: usize) -> f32 {
         self.edge_sizes.get(m).copied().unwrap_or(0.0)
+    }
+
+    /// Material `m`'s ambient and specular values as the model gives them (zero when out of range).
+    pub fn material_base(&self, m: usize) -> MaterialBase {
+        self.bases.get(m).copied().unwrap_or_default()
     }
 
     /// [`bone_morphs_into`] on the kept morphs.
@@ -122,6 +152,28 @@ fn bones_into<'a>(data: impl Fn(usize) -> Option<&'a MorphData>, bones: usize, w
         }
     });
     out.iter().filter(|b| **b != BoneMorph::NONE).count()
+}
+
+/// Puts bone morphs (per rig bone, as [`bone_morphs_into`] gives them) on a local pose of the
+/// model's deforming skeleton ([`super::MmdRig::deform_skeleton`]; `rig_index`: per joint, its
+/// rig bone), in place: each joint's translation (metres, its parent's frame) moved by its
+/// bone's morph translation × `metres_per_unit`, its rotation turned by the morph's after the
+/// key's (`rotation × morph`, the morph's turn in the bone's own frame, as the rig composes a
+/// key with its grant share). Bones with no joint (IK bones and their targets) are not posed
+/// here. Joints past the pose's or the index's length are left. Returns how many joints moved.
+pub fn apply_bone_morphs(morphs: &[BoneMorph], rig_index: &[usize], metres_per_unit: f32, rotations: &mut [Quat], translations: &mut [Vec3]) -> usize {
+    let mut moved = 0;
+    for (j, &b) in rig_index.iter().enumerate() {
+        let Some(m) = morphs.get(b).filter(|m| **m != BoneMorph::NONE) else { continue };
+        if let Some(r) = rotations.get_mut(j) {
+            *r = (*r * m.rotation).normalize();
+        }
+        if let Some(t) = translations.get_mut(j) {
+            *t += m.translation * metres_per_unit;
+        }
+        moved += 1;
+    }
+    moved
 }
 
 /// Multiply and add factors on a material's values at the weights given: each value becomes
@@ -217,6 +269,21 @@ impl MaterialFactors {
         base * self.edge_colour_mul + self.edge_colour_add
     }
 
+    /// An ambient colour (RGB) with these factors on it.
+    pub fn ambient(&self, base: Vec3) -> Vec3 {
+        base * self.ambient_mul + self.ambient_add
+    }
+
+    /// A specular colour (RGB) with these factors on it.
+    pub fn specular(&self, base: Vec3) -> Vec3 {
+        base * self.specular_mul + self.specular_add
+    }
+
+    /// A specular power with these factors on it (never below 0).
+    pub fn specular_power(&self, base: f32) -> f32 {
+        (base * self.specular_power_mul + self.specular_power_add).max(0.0)
+    }
+
     /// An edge size with these factors on it (never below 0).
     pub fn edge_size(&self, base: f32) -> f32 {
         (base * self.edge_size_mul + self.edge_size_add).max(0.0)
@@ -262,15 +329,16 @@ fn materials_into<'a>(data: impl Fn(usize) -> Option<&'a MorphData>, materials: 
     out.iter().filter(|f| **f != MaterialFactors::NONE).count()
 }
 
-/// Which of a model's morphs are of a kind the engine does not play (UV, flip, impulse), by
-/// name, for a notice. Vertex, group, bone and material morphs are played.
+/// Which of a model's morphs are of a kind the engine does not play (UVs of the additional
+/// UV channels, flip, impulse), by name, for a notice. Vertex, group, bone, material and base-UV
+/// morphs are played.
 pub fn unplayed_morphs(model: &MmdModel) -> Vec<(&str, &'static str)> {
     model
         .morphs
         .iter()
         .filter_map(|m| {
             let kind = match &m.data {
-                MorphData::Uv { .. } => "UV",
+                MorphData::Uv { channel: 1.., .. } => "additional-UV",
                 MorphData::Flip(_) => "flip",
                 MorphData::Impulse(_) => "impulse",
                 _ => return None,
