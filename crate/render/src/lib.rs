@@ -26,7 +26,9 @@
 //! for a draw that gives [`MeshDraw::morph`] (an MMD model's face morphs at the drawn time;
 //! feature `toon`) that draw's offsets, written whole into a buffer of its draw slot each frame
 //! — the 100-byte vertices are never rewritten. Toon and outline read the same offsets, so the
-//! outline follows an opened mouth.
+//! outline follows an opened mouth. A mesh with toon parts also has a UV offset per vertex
+//! (vertex buffer 2, 8 bytes, read by the toon pipeline only): zeros, or a draw's
+//! [`MeshDraw::uv_morph`] (an MMD model's UV morphs) written the same way.
 //!
 //! Its pipelines can be made one at a time ([`Renderer::new_deferred`], then
 //! [`Renderer::prepare`]): on WebGL2 each one is a shader compile and link that holds the
@@ -48,12 +50,17 @@ fn pipeline_wgsl(kind: PipelineKind) -> String {
     #[cfg(not(feature = "toon"))]
     let (toon_src, outline_src) = (include_str!("shaders/mesh.wgsl"), include_str!("shaders/mesh.wgsl"));
     let skin = include_str!("shaders/skin.wgsl");
+    // The material-morph `Look` the toon and outline shaders share (none without `toon`).
+    #[cfg(feature = "toon")]
+    let look = include_str!("shaders/look.wgsl");
+    #[cfg(not(feature = "toon"))]
+    let look = "";
     match kind {
         PipelineKind::Lines => format!("{common}\n{}", include_str!("shaders/lines.wgsl")),
         PipelineKind::Figure => format!("{common}\n{}", include_str!("shaders/figure.wgsl")),
         PipelineKind::Mesh => format!("{common}\n{skin}\n{}", include_str!("shaders/mesh.wgsl")),
-        PipelineKind::Toon => format!("{common}\n{skin}\n{toon_src}"),
-        PipelineKind::Outline => format!("{common}\n{skin}\n{outline_src}"),
+        PipelineKind::Toon => format!("{common}\n{skin}\n{look}\n{toon_src}"),
+        PipelineKind::Outline => format!("{common}\n{skin}\n{look}\n{outline_src}"),
     }
 }
 
@@ -86,6 +93,32 @@ mod shader_tests {
             assert!(src.contains("@location(8) morph: vec3<f32>") && src.contains("skin_position(skin, p, morph)"), "{name}.wgsl does not add the morph offset");
             assert!(!src.contains("vec4<f32>(p, 1.0)"), "{name}.wgsl skins a position without its morph offset");
         }
+    }
+
+    /// The WGSL `Look` (look.wgsl, declared there only) is `PartLook` field for field: the
+    /// same names in the same order at the same byte offsets (naga's layout, as the GPU reads
+    /// the uniform), the same size, and every field 16 bytes so `FIELDS` misses none.
+    #[cfg(feature = "toon")]
+    #[test]
+    fn the_wgsl_look_is_part_look_field_for_field() {
+        for (name, src) in [("toon", include_str!("shaders/toon.wgsl")), ("outline", include_str!("shaders/outline.wgsl"))] {
+            assert!(!src.contains("struct Look"), "{name}.wgsl declares Look itself");
+        }
+        let src = pipeline_wgsl(PipelineKind::Toon);
+        let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+        let (members, span) = module
+            .types
+            .iter()
+            .find_map(|(_, t)| match (&t.name, &t.inner) {
+                (Some(n), naga::TypeInner::Struct { members, span }) if n == "Look" => Some((members.clone(), *span)),
+                _ => None,
+            })
+            .expect("toon's WGSL declares Look");
+        let wgsl: Vec<(String, usize)> = members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize)).collect();
+        let rust: Vec<(String, usize)> = PartLook::FIELDS.iter().map(|(n, o)| (n.to_string(), *o)).collect();
+        assert_eq!(wgsl, rust, "WGSL Look vs PartLook (name, offset)");
+        assert_eq!(span as usize, std::mem::size_of::<PartLook>(), "sizes");
+        assert_eq!(PartLook::FIELDS.len() * 16, std::mem::size_of::<PartLook>(), "PartLook::FIELDS lists every field");
     }
 }
 pub use camera::OrbitCamera;
@@ -207,12 +240,19 @@ pub struct MeshDraw<'a> {
     /// its look at the drawn time. `None`, or a length other than the mesh's part count, draws
     /// every part as uploaded. Feature `toon` only, on the toon and outline pipelines.
     pub looks: Option<&'a [PartLook]>,
+    /// Per vertex of the mesh (as `morph`), the offset added to its UV: an MMD model's UV
+    /// morphs at the drawn time. `None`, or a length other than the mesh's vertex count, draws
+    /// the UVs as uploaded. Feature `toon` only, on the toon pipeline.
+    pub uv_morph: Option<&'a [[f32; 2]]>,
 }
 
 /// An MMD part's look changed by material morphs (PMX type 8) at one frame: each colour
 /// becomes colour × mul + add (the diffuse colour and alpha, the base texture's colour, the
-/// edge colour), and the outline's width is scaled by `edge_width_scale`. [`PartLook::NONE`]
-/// draws the part as uploaded.
+/// edge colour, the sphere map's colour in its mode — `sph_*` multiplied, `spa_*` added — and
+/// the toon ramp's), the outline's width is scaled by `edge_width_scale`, and the morphs'
+/// change to MMD's ambient term and highlight is added (`shaders/look.wgsl` says how).
+/// [`PartLook::NONE`] draws the part as uploaded. The WGSL `Look` struct mirrors it field for
+/// field (a test holds them in step).
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct PartLook {
@@ -224,6 +264,17 @@ pub struct PartLook {
     pub edge_add: [f32; 4],
     /// x: the outline width's scale; y, z, w unused.
     pub edge_width_scale: [f32; 4],
+    pub sph_mul: [f32; 4],
+    pub sph_add: [f32; 4],
+    pub spa_mul: [f32; 4],
+    pub spa_add: [f32; 4],
+    pub toon_mul: [f32; 4],
+    pub toon_add: [f32; 4],
+    /// rgb: the ambient colour with the morphs minus without; w unused.
+    pub ambient_add: [f32; 4],
+    /// The specular colour (rgb) and power (w) without the morphs and with them; equal: no change.
+    pub specular_before: [f32; 4],
+    pub specular_after: [f32; 4],
 }
 
 impl PartLook {
@@ -235,7 +286,36 @@ impl PartLook {
         edge_mul: [1.0; 4],
         edge_add: [0.0; 4],
         edge_width_scale: [1.0, 0.0, 0.0, 0.0],
+        sph_mul: [1.0; 4],
+        sph_add: [0.0; 4],
+        spa_mul: [1.0; 4],
+        spa_add: [0.0; 4],
+        toon_mul: [1.0; 4],
+        toon_add: [0.0; 4],
+        ambient_add: [0.0; 4],
+        specular_before: [0.0; 4],
+        specular_after: [0.0; 4],
     };
+
+    /// Each field's name and byte offset, in order (what the WGSL `Look` must declare).
+    pub const FIELDS: [(&'static str, usize); 16] = [
+        ("diffuse_mul", std::mem::offset_of!(PartLook, diffuse_mul)),
+        ("diffuse_add", std::mem::offset_of!(PartLook, diffuse_add)),
+        ("texture_mul", std::mem::offset_of!(PartLook, texture_mul)),
+        ("texture_add", std::mem::offset_of!(PartLook, texture_add)),
+        ("edge_mul", std::mem::offset_of!(PartLook, edge_mul)),
+        ("edge_add", std::mem::offset_of!(PartLook, edge_add)),
+        ("edge_width_scale", std::mem::offset_of!(PartLook, edge_width_scale)),
+        ("sph_mul", std::mem::offset_of!(PartLook, sph_mul)),
+        ("sph_add", std::mem::offset_of!(PartLook, sph_add)),
+        ("spa_mul", std::mem::offset_of!(PartLook, spa_mul)),
+        ("spa_add", std::mem::offset_of!(PartLook, spa_add)),
+        ("toon_mul", std::mem::offset_of!(PartLook, toon_mul)),
+        ("toon_add", std::mem::offset_of!(PartLook, toon_add)),
+        ("ambient_add", std::mem::offset_of!(PartLook, ambient_add)),
+        ("specular_before", std::mem::offset_of!(PartLook, specular_before)),
+        ("specular_after", std::mem::offset_of!(PartLook, specular_after)),
+    ];
 }
 
 /// A draw slot's part looks: one uniform block per part at `stride` bytes (the device's
@@ -250,6 +330,9 @@ struct GpuMesh {
     vertices: wgpu::Buffer,
     /// Zero morph offsets, one per vertex (vertex buffer 1 of a draw without morphs).
     no_morph: wgpu::Buffer,
+    /// Zero UV offsets, one per vertex (vertex buffer 2 of a toon draw without UV morphs);
+    /// only for a mesh with toon parts.
+    no_uv: Option<wgpu::Buffer>,
     vertex_count: usize,
     indices: wgpu::Buffer,
     /// Per part: drawn one call each, so each can bind its texture.
@@ -329,6 +412,8 @@ pub struct Renderer {
     /// Per draw slot (as `palettes`), the morph offsets of the draw in it when it has any,
     /// grown to the largest mesh given morphs.
     morph_slots: Vec<Option<wgpu::Buffer>>,
+    /// Per draw slot, the UV offsets of the draw in it when it has any (as `morph_slots`).
+    uv_slots: Vec<Option<wgpu::Buffer>>,
     /// MMD parts' looks (group 3 of the toon pipeline, 2 of the outline): per draw slot, grown
     /// to the most parts drawn in it; the layout, and the bytes between two parts' blocks.
     look_slots: Vec<Option<LookSlot>>,
@@ -512,6 +597,7 @@ impl Renderer {
             mip_blit: None,
             palettes: Vec::new(),
             morph_slots: Vec::new(),
+            uv_slots: Vec::new(),
             look_slots: Vec::new(),
             look_layout,
             look_stride,
@@ -560,6 +646,12 @@ impl Renderer {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &wgpu::vertex_attr_array![8 => Float32x3],
         };
+        // The toon pipeline's third: the per-vertex UV offsets (an MMD model's UV morphs).
+        let uv_buffer = wgpu::VertexBufferLayout {
+            array_stride: 8,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![9 => Float32x2],
+        };
         let (label, layout, buffer) = match kind {
             PipelineKind::Toon => ("toon", &self.toon_layout, mesh_buffer.clone()),
             PipelineKind::Outline => ("outline", &self.outline_layout, mesh_buffer.clone()),
@@ -589,8 +681,12 @@ impl Renderer {
         let blend = if kind == PipelineKind::Toon { Some(wgpu::BlendState::ALPHA_BLENDING) } else { None };
         let topology = if kind == PipelineKind::Lines { wgpu::PrimitiveTopology::LineList } else { wgpu::PrimitiveTopology::TriangleList };
         let skinned = matches!(kind, PipelineKind::Mesh | PipelineKind::Toon | PipelineKind::Outline);
-        let buffers = [Some(buffer), skinned.then_some(morph_buffer)];
-        let buffers = if skinned { &buffers[..] } else { &buffers[..1] };
+        let buffers = [Some(buffer), skinned.then_some(morph_buffer), (kind == PipelineKind::Toon).then_some(uv_buffer)];
+        let buffers = match kind {
+            PipelineKind::Toon => &buffers[..],
+            _ if skinned => &buffers[..2],
+            _ => &buffers[..1],
+        };
         let sm = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),
             source: wgpu::ShaderSource::Wgsl(pipeline_wgsl(kind).into()),
@@ -685,9 +781,13 @@ impl Renderer {
             usage: wgpu::BufferUsages::VERTEX,
             mapped_at_creation: false,
         });
+        let no_uv = parts.iter().any(|p| p.toon.is_some()).then(|| {
+            self.device.create_buffer(&wgpu::BufferDescriptor { label: Some("no uv morph"), size: (vertices.len() * 8) as u64, usage: wgpu::BufferUsages::VERTEX, mapped_at_creation: false })
+        });
         self.meshes.push(GpuMesh {
             vertices: vb,
             no_morph,
+            no_uv,
             vertex_count: vertices.len(),
             indices: ib,
             parts,
@@ -849,6 +949,25 @@ impl Renderer {
             }
         }
 
+        // UV offsets the same way (8 B a vertex), for toon meshes.
+        let uv_given: Vec<bool> = drawable.iter().map(|m| cfg!(feature = "toon") && self.meshes[m.mesh.0].no_uv.is_some() && m.uv_morph.is_some_and(|o| o.len() == self.meshes[m.mesh.0].vertex_count)).collect();
+        self.uv_slots.resize_with(self.uv_slots.len().max(drawable.len()), || None);
+        for (slot, m) in drawable.iter().enumerate() {
+            let Some(offsets) = m.uv_morph.filter(|_| uv_given[slot]) else { continue };
+            let bytes: &[u8] = bytemuck::cast_slice(offsets);
+            if self.uv_slots[slot].as_ref().is_none_or(|b| b.size() < bytes.len() as u64) {
+                self.uv_slots[slot] = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("uv offsets"),
+                    size: bytes.len() as u64,
+                    usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }));
+            }
+            if let Some(b) = &self.uv_slots[slot] {
+                self.queue.write_buffer(b, 0, bytes);
+            }
+        }
+
         // MMD parts' looks: every toon mesh's slot holds one block per part (the given looks,
         // or none changed), so its parts bind their block by offset.
         if cfg!(feature = "toon") {
@@ -947,6 +1066,11 @@ impl Renderer {
                     pass.set_bind_group(1, &self.palettes[slot].bind_group, &[]);
                     pass.set_vertex_buffer(0, g.vertices.slice(..));
                     pass.set_vertex_buffer(1, morph_of(slot, g));
+                    if let Some(zeros) = &g.no_uv {
+                        // Only the toon pipeline reads it.
+                        let given = self.uv_slots.get(slot).and_then(Option::as_ref).filter(|_| uv_given[slot]);
+                        pass.set_vertex_buffer(2, given.map_or(zeros.slice(..), |b| b.slice(..(g.vertex_count * 8) as u64)));
+                    }
                     pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
                     for (k, part) in g.parts.iter().enumerate() {
                         let look = self.look_slots.get(slot).and_then(Option::as_ref);

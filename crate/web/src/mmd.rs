@@ -401,7 +401,7 @@ impl Library {
                             let mesh = (self.next_id(), Rc::new(c.character.mesh));
                             self.mmd.springs.retain(|(k, _)| *k != mesh.0);
                             self.mmd.springs.push((mesh.0, joints));
-                            self.keep_drawn_morphs(mesh.0, DrawnMorphs::new(&m.model, &c.drawn_vertices).with_effects(&m.model, &c.part_material));
+                            self.keep_drawn_morphs(mesh.0, DrawnMorphs::new(&m.model, &c.drawn_vertices).with_effects(&m.model, &c.part_material).with_rig_index(&c.rig_index));
                             for (name, kind) in odori_core::mmd::morph_effects::unplayed_morphs(&m.model) {
                                 notices.push(format!("{}: morph '{name}' is a {kind} morph, which is not played", m.file));
                             }

@@ -251,6 +251,10 @@ pub struct Viewer {
     /// Offset buffers (one per drawn vertex) reused from frame to frame.
     #[cfg(feature = "authoring")]
     morph_pool: Vec<Vec<Vec3>>,
+    /// A drawn MMD model's sampled local pose with its bone morphs on (reused), and the
+    /// per-bone morphs they came from.
+    #[cfg(feature = "authoring")]
+    bone_locals: (Vec<glam::Quat>, Vec<Vec3>, Vec<odori_core::mmd::morph_effects::BoneMorph>),
     /// Per mesh key, its vertices' boxes per palette slot (`frameFigures` frames a skinned
     /// figure by them).
     bounds: HashMap<u32, Rc<SkinnedBounds>>,
@@ -578,6 +582,8 @@ impl Viewer {
             faces: HashMap::new(),
             #[cfg(feature = "authoring")]
             morph_pool: Vec::new(),
+            #[cfg(feature = "authoring")]
+            bone_locals: Default::default(),
             bounds: HashMap::new(),
         };
         // WebGL2: the pipelines the first frame draws with, each made and then drawn with once, a
@@ -1032,6 +1038,9 @@ impl Viewer {
         // Per skinned draw, its parts' looks under material morphs (none in the player).
         #[cfg_attr(not(feature = "authoring"), allow(unused_mut))]
         let mut looks: Vec<Option<Vec<PartLook>>> = Vec::new();
+        // Per skinned draw, its UV morphs' offsets (none in the player).
+        #[cfg_attr(not(feature = "authoring"), allow(unused_mut))]
+        let mut uv_morphs: Vec<Option<Vec<[f32; 2]>>> = Vec::new();
         // One figure is drawn as it is; several (candidates, overlays) each take a wash of
         // their figure colour, so a skinned candidate matches its chip as a stick one does.
         let several = specs.len() > 1;
@@ -1071,13 +1080,42 @@ impl Viewer {
                 Some((_, key, ..)) if self.springs_on => spring_joints(library, *key),
                 _ => None,
             };
-            match springs {
-                Some(joints) => {
+            // An MMD model's bone morphs at this time, put on the sampled local pose before
+            // world transforms and skinning (as MMD puts them on the keys).
+            #[cfg(feature = "authoring")]
+            let bones = match &skinned {
+                Some((_, key, ..)) => self.bone_morph_weights(library, e, *key, s.time_secs),
+                None => None,
+            };
+            #[cfg(feature = "authoring")]
+            let bones = bones.as_ref();
+            #[cfg(not(feature = "authoring"))]
+            let bones: Option<()> = None;
+            match (springs, bones) {
+                (Some(joints), _) => {
                     let f = self.followers.entry((i, s.clip)).or_insert_with(|| SpringFollower::new(&posed.skeleton, joints));
                     let (rot, trans) = f.pose(posed, s.time_secs, SpringParams::default());
+                    #[cfg(feature = "authoring")]
+                    if let Some((drawn, weights)) = bones {
+                        let (r, t, scratch) = &mut self.bone_locals;
+                        (r.clear(), t.clear());
+                        (r.extend_from_slice(rot), t.extend_from_slice(trans));
+                        drawn.bone_morph_pose(weights, scratch, r, t);
+                        self.pose.of_locals(&posed.skeleton, r, t).matrices_into(&mut self.mats);
+                    } else {
+                        self.pose.of_locals(&posed.skeleton, rot, trans).matrices_into(&mut self.mats);
+                    }
+                    #[cfg(not(feature = "authoring"))]
                     self.pose.of_locals(&posed.skeleton, rot, trans).matrices_into(&mut self.mats);
                 }
-                None => self.pose.of_time(posed, s.time_secs).matrices_into(&mut self.mats),
+                #[cfg(feature = "authoring")]
+                (None, Some((drawn, weights))) => {
+                    let (r, t, scratch) = &mut self.bone_locals;
+                    posed.sample_into(s.time_secs, r, t);
+                    drawn.bone_morph_pose(weights, scratch, r, t);
+                    self.pose.of_locals(&posed.skeleton, r, t).matrices_into(&mut self.mats);
+                }
+                _ => self.pose.of_time(posed, s.time_secs).matrices_into(&mut self.mats),
             }
             let mut pos = self.pose.positions.clone();
             for p in &pos {
@@ -1094,7 +1132,9 @@ impl Viewer {
                     #[cfg(not(feature = "authoring"))]
                     let (morph, morphed): (Option<Vec<Vec3>>, u32) = (None, { let _ = key; 0 });
                     #[cfg(feature = "authoring")]
-                    looks.push(self.face_looks(library, e, key, s.time_secs));
+                    looks.push(self.face_looks(library, e, key, &mesh, s.time_secs));
+                    #[cfg(feature = "authoring")]
+                    uv_morphs.push(self.uv_offsets(library, e, key, s.time_secs));
                     palettes.push((h, pal, tint, morph));
                     drawn.push(Drawn {
                         clip: s.clip,
@@ -1150,7 +1190,14 @@ impl Viewer {
         let meshes: Vec<MeshDraw> = palettes
             .iter()
             .enumerate()
-            .map(|(k, (h, p, tint, morph))| MeshDraw { mesh: *h, palette: p, tint: *tint, morph: morph.as_deref(), looks: looks.get(k).and_then(Option::as_deref) })
+            .map(|(k, (h, p, tint, morph))| MeshDraw {
+                mesh: *h,
+                palette: p,
+                tint: *tint,
+                morph: morph.as_deref(),
+                looks: looks.get(k).and_then(Option::as_deref),
+                uv_morph: uv_morphs.get(k).and_then(Option::as_deref),
+            })
             .collect();
         self.last_drawn = drawn;
         if let Some(y) = self.follow_y {
@@ -1189,30 +1236,63 @@ impl Viewer {
             return (None, 0, Vec::new());
         }
         let Some(drawn) = library.drawn_morphs(mesh_key) else { return (None, 0, Vec::new()) };
-        let generation = library.mmd.faces_generation;
-        let cached = self.faces.get(&(e.id, mesh_key)).filter(|(rev, g, _)| *rev == e.rev && *g == generation);
-        if cached.is_none() {
-            let names: Vec<&str> = drawn.morph_names().iter().map(String::as_str).collect();
-            let tracks: Vec<&odori_core::mmd::face_track::FaceTrack> = library.face_tracks_on(e.id).iter().collect();
-            let faces = odori_core::mmd::face_track::LayeredFaces::new(&names, library.face_keys(e.id), &tracks);
-            self.faces.insert((e.id, mesh_key), (e.rev, generation, Rc::new(faces)));
-        }
-        let Some(faces) = self.faces.get(&(e.id, mesh_key)).map(|(_, _, f)| f.clone()) else { return (None, 0, Vec::new()) };
+        let faces = self.layered_faces(library, e, mesh_key, drawn);
         if faces.is_empty() {
             return (None, 0, faces.missing.clone());
         }
-        let at = (time_secs * e.clip.fps).clamp(0.0, e.clip.frame_count().saturating_sub(1) as f32);
-        let frame = faces.base_offset_frames() as f32 + at * odori_core::import::vmd::VMD_FPS / e.clip.fps.max(1e-3);
+        let frame = face_frame(e, &faces, time_secs);
         let mut out = self.morph_pool.pop().unwrap_or_default();
         let moved = drawn.offsets_into(&faces.weights_at(frame, time_secs), &mut out);
         (Some(out), moved as u32, faces.missing.clone())
+    }
+
+    /// The layered face weights of clip `e` on the MMD model under `mesh_key` (the clip's own
+    /// keys and the project's face tracks), cached per clip revision and face-track generation.
+    #[cfg(feature = "authoring")]
+    fn layered_faces(&mut self, library: &Library, e: &Entry, mesh_key: u32, drawn: &odori_core::mmd::morph::DrawnMorphs) -> Rc<odori_core::mmd::face_track::LayeredFaces> {
+        let generation = library.mmd.faces_generation;
+        match self.faces.get(&(e.id, mesh_key)).filter(|(rev, g, _)| *rev == e.rev && *g == generation) {
+            Some((_, _, f)) => f.clone(),
+            None => {
+                let names: Vec<&str> = drawn.morph_names().iter().map(String::as_str).collect();
+                let tracks: Vec<&odori_core::mmd::face_track::FaceTrack> = library.face_tracks_on(e.id).iter().collect();
+                let faces = Rc::new(odori_core::mmd::face_track::LayeredFaces::new(&names, library.face_keys(e.id), &tracks));
+                self.faces.insert((e.id, mesh_key), (e.rev, generation, faces.clone()));
+                faces
+            }
+        }
+    }
+
+    /// The weights the face keys give an MMD model's morphs for clip `e` drawn at `time_secs`
+    /// on the mesh under `mesh_key`, with the model's drawn morphs, when it has bone morphs and
+    /// some are keyed (else `None`): what the draw puts on the sampled pose.
+    #[cfg(feature = "authoring")]
+    fn bone_morph_weights(&mut self, library: &Library, e: &Entry, mesh_key: u32, time_secs: f32) -> Option<(Rc<odori_core::mmd::morph::DrawnMorphs>, Vec<(usize, f32)>)> {
+        let drawn = library.drawn_morphs(mesh_key).filter(|d| self.morphs_on && d.has_bone_morphs())?.clone();
+        let faces = self.layered_faces(library, e, mesh_key, &drawn);
+        let weights = faces.weights_at(face_frame(e, &faces, time_secs), time_secs);
+        (!weights.is_empty()).then_some((drawn, weights))
+    }
+
+    /// The UV offsets an MMD model's UV morphs give its drawn vertices for clip `e` drawn at
+    /// `time_secs` on the mesh under `mesh_key` (the face keys' weights `face_offsets` plays),
+    /// or `None` when morphs are off, the model has no UV morph or none moves a UV.
+    #[cfg(feature = "authoring")]
+    fn uv_offsets(&mut self, library: &Library, e: &Entry, mesh_key: u32, time_secs: f32) -> Option<Vec<[f32; 2]>> {
+        let drawn = library.drawn_morphs(mesh_key).filter(|d| self.morphs_on && d.has_uv_morphs())?;
+        let faces = self.layered_faces(library, e, mesh_key, drawn);
+        if faces.is_empty() {
+            return None;
+        }
+        let mut out = Vec::new();
+        (drawn.uv_offsets_into(&faces.weights_at(face_frame(e, &faces, time_secs), time_secs), &mut out) > 0).then_some(out)
     }
 
     /// The looks an MMD model's material morphs give its mesh's parts for clip `e` drawn at
     /// `time_secs` on the mesh under `mesh_key` (the face keys' weights at the frame
     /// `face_offsets` takes), or `None` when morphs are off or nothing changes a part.
     #[cfg(feature = "authoring")]
-    fn face_looks(&mut self, library: &Library, e: &Entry, mesh_key: u32, time_secs: f32) -> Option<Vec<PartLook>> {
+    fn face_looks(&mut self, library: &Library, e: &Entry, mesh_key: u32, mesh: &SkinnedMesh, time_secs: f32) -> Option<Vec<PartLook>> {
         let drawn = library.drawn_morphs(mesh_key).filter(|d| self.morphs_on && d.effects().has_material_morphs())?;
         // The same layered weights `face_offsets` plays (the clip's own keys and the project's
         // face tracks), cached there for this clip, mesh and face-track generation.
@@ -1221,8 +1301,7 @@ impl Viewer {
         if faces.is_empty() {
             return None;
         }
-        let at = (time_secs * e.clip.fps).clamp(0.0, e.clip.frame_count().saturating_sub(1) as f32);
-        let frame = faces.base_offset_frames() as f32 + at * odori_core::import::vmd::VMD_FPS / e.clip.fps.max(1e-3);
+        let frame = face_frame(e, &faces, time_secs);
         let mut parts = Vec::new();
         if drawn.part_factors_into(&faces.weights_at(frame, time_secs), &mut parts) == 0 {
             return None;
@@ -1231,15 +1310,37 @@ impl Viewer {
         Some(
             parts
                 .iter()
-                .map(|(f, edge_size)| PartLook {
-                    diffuse_mul: four(f.diffuse_mul),
-                    diffuse_add: four(f.diffuse_add),
-                    texture_mul: four(f.texture_mul),
-                    texture_add: four(f.texture_add),
-                    edge_mul: four(f.edge_colour_mul),
-                    edge_add: four(f.edge_colour_add),
-                    // The outline is as wide as the edge size: an edge of size 0 stays off.
-                    edge_width_scale: [if *edge_size > 0.0 { f.edge_size(*edge_size) / edge_size } else { 1.0 }, 0.0, 0.0, 0.0],
+                .enumerate()
+                .map(|(k, (f, edge_size))| {
+                    // The sphere factors act on the part's own sphere map, in its mode (none: no change).
+                    let sphere = mesh.parts.get(k).and_then(|p| p.toon.as_ref()).filter(|t| t.sphere.is_some()).map(|t| t.sphere_add);
+                    let (none_mul, none_add) = ([1.0; 4], [0.0; 4]);
+                    let (sph, spa) = match sphere {
+                        Some(false) => ((four(f.sphere_mul), four(f.sphere_add)), (none_mul, none_add)),
+                        Some(true) => ((none_mul, none_add), (four(f.sphere_mul), four(f.sphere_add))),
+                        None => ((none_mul, none_add), (none_mul, none_add)),
+                    };
+                    let base = drawn.part_base(k);
+                    let ambient = f.ambient(base.ambient) - base.ambient;
+                    PartLook {
+                        diffuse_mul: four(f.diffuse_mul),
+                        diffuse_add: four(f.diffuse_add),
+                        texture_mul: four(f.texture_mul),
+                        texture_add: four(f.texture_add),
+                        edge_mul: four(f.edge_colour_mul),
+                        edge_add: four(f.edge_colour_add),
+                        // The outline is as wide as the edge size: an edge of size 0 stays off.
+                        edge_width_scale: [if *edge_size > 0.0 { f.edge_size(*edge_size) / edge_size } else { 1.0 }, 0.0, 0.0, 0.0],
+                        sph_mul: sph.0,
+                        sph_add: sph.1,
+                        spa_mul: spa.0,
+                        spa_add: spa.1,
+                        toon_mul: four(f.toon_mul),
+                        toon_add: four(f.toon_add),
+                        ambient_add: ambient.extend(0.0).to_array(),
+                        specular_before: base.specular.extend(base.specular_power).to_array(),
+                        specular_after: f.specular(base.specular).extend(f.specular_power(base.specular_power)).to_array(),
+                    }
                 })
                 .collect(),
         )
@@ -1295,6 +1396,14 @@ impl Viewer {
         self.renderer.queue().present(frame);
         true
     }
+}
+
+/// The VMD motion frame whose face keys clip `e` plays at `time_secs`: the clip's start in the
+/// VMD plus its frame at that time, clamped to the clip as its pose is.
+#[cfg(feature = "authoring")]
+fn face_frame(e: &Entry, faces: &odori_core::mmd::face_track::LayeredFaces, time_secs: f32) -> f32 {
+    let at = (time_secs * e.clip.fps).clamp(0.0, e.clip.frame_count().saturating_sub(1) as f32);
+    faces.base_offset_frames() as f32 + at * odori_core::import::vmd::VMD_FPS / e.clip.fps.max(1e-3)
 }
 
 fn parse_figures(figures: JsValue) -> JsResult<Vec<FigureSpec>> {

@@ -3,17 +3,8 @@
 // its distance from the camera (so the line keeps its width on screen),
 // drawn with front faces culled so only the rim outside the model shows, in the edge colour.
 
-// The part's material morphs at the drawn time (renderer `PartLook`; the edge colour × mul +
-// add, the width × scale), as toon.wgsl declares them.
-struct Look {
-    diffuse_mul: vec4<f32>,
-    diffuse_add: vec4<f32>,
-    texture_mul: vec4<f32>,
-    texture_add: vec4<f32>,
-    edge_mul: vec4<f32>,
-    edge_add: vec4<f32>,
-    edge_width_scale: vec4<f32>,
-};
+// The part's material morphs at the drawn time (`Look`, look.wgsl; the edge colour × mul +
+// add, the width × scale).
 @group(2) @binding(0) var<uniform> look: Look;
 
 struct VOut {

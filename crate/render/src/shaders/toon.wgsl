@@ -4,7 +4,11 @@
 // Before the ramp, the sphere map as MMD's shader applies it: looked up by the view-space
 // normal (u = ½ + ½x, v = ½ − ½y, the top of the image facing up), multiplied (.sph) or added
 // (.spa). Both bindings are always there: white multiplied and black added are no change.
-// The diffuse colour and the texture's colour first take the part's material morphs (group 3).
+// The part's material morphs (group 3, `Look` in look.wgsl) act on the diffuse colour, the
+// texture's colour, the sphere map's, the toon ramp's, and add their change to MMD's ambient
+// and specular terms (three r171's MMDToonShader and MMD's own: the ambient is emissive-like,
+// added before the texture; the Blinn-Phong highlight, pow(N·H, power) × specular × the light's
+// specular 154/255, is added after the toon ramp).
 @group(2) @binding(0) var base_tex: texture_2d<f32>;
 @group(2) @binding(1) var base_sampler: sampler;
 @group(2) @binding(2) var toon_tex: texture_2d<f32>;
@@ -12,16 +16,6 @@
 @group(2) @binding(4) var sphere_mul_tex: texture_2d<f32>;
 @group(2) @binding(5) var sphere_add_tex: texture_2d<f32>;
 @group(2) @binding(6) var sphere_sampler: sampler;
-// The part's material morphs at the drawn time (renderer `PartLook`): colour × mul + add.
-struct Look {
-    diffuse_mul: vec4<f32>,
-    diffuse_add: vec4<f32>,
-    texture_mul: vec4<f32>,
-    texture_add: vec4<f32>,
-    edge_mul: vec4<f32>,
-    edge_add: vec4<f32>,
-    edge_width_scale: vec4<f32>,
-};
 @group(3) @binding(0) var<uniform> look: Look;
 
 struct VOut {
@@ -29,6 +23,7 @@ struct VOut {
     @location(0) normal: vec3<f32>,
     @location(1) color: vec4<f32>,
     @location(2) uv: vec2<f32>,
+    @location(3) world: vec3<f32>,
 };
 
 @vertex
@@ -40,22 +35,27 @@ fn vs_main(
     @location(4) color: vec4<f32>,
     @location(5) uv: vec2<f32>,
     @location(8) morph: vec3<f32>,
+    @location(9) uv_morph: vec2<f32>,
 ) -> VOut {
     let skin = skin_matrix(joints, weights);
     var o: VOut;
-    o.pos = cam.view_proj * skin_position(skin, p, morph);
+    let world = skin_position(skin, p, morph);
+    o.pos = cam.view_proj * world;
+    o.world = world.xyz;
     o.normal = normalize((skin * vec4<f32>(n, 0.0)).xyz);
     o.color = color;
-    o.uv = uv;
+    // The UV morphs' offsets (zero without), as MMD adds them to the vertex's UV.
+    o.uv = uv + uv_morph;
     return o;
 }
 
 @fragment
 fn fs_main(i: VOut) -> @location(0) vec4<f32> {
     let tex = clamp(textureSample(base_tex, base_sampler, i.uv) * look.texture_mul + look.texture_add, vec4<f32>(0.0), vec4<f32>(1.0));
-    let color = clamp(i.color * look.diffuse_mul + look.diffuse_add, vec4<f32>(0.0), vec4<f32>(1.0));
+    var color = clamp(i.color * look.diffuse_mul + look.diffuse_add, vec4<f32>(0.0), vec4<f32>(1.0));
+    color = vec4<f32>(clamp(color.rgb + look.ambient_add.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), color.a);
     let ndl = dot(normalize(i.normal), normalize(cam.light.xyz));
-    let ramp = textureSample(toon_tex, toon_sampler, vec2<f32>(0.5, clamp(0.5 * (1.0 - ndl), 0.02, 0.98))).rgb;
+    let ramp = clamp(textureSample(toon_tex, toon_sampler, vec2<f32>(0.5, clamp(0.5 * (1.0 - ndl), 0.02, 0.98))) * look.toon_mul + look.toon_add, vec4<f32>(0.0), vec4<f32>(1.0)).rgb;
     // The camera's right and up axes in the world: view_proj's first two rows are the view
     // matrix's, scaled by the projection (which does not mix x or y with other axes).
     let m = cam.view_proj;
@@ -63,11 +63,22 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
     let up = normalize(vec3<f32>(m[0].y, m[1].y, m[2].y));
     let n = normalize(i.normal);
     let suv = vec2<f32>(0.5 + 0.5 * dot(n, right), 0.5 - 0.5 * dot(n, up));
-    let sphere = textureSample(sphere_mul_tex, sphere_sampler, suv).rgb;
-    let sphere_add = textureSample(sphere_add_tex, sphere_sampler, suv).rgb;
+    let sphere = clamp(textureSample(sphere_mul_tex, sphere_sampler, suv) * look.sph_mul + look.sph_add, vec4<f32>(0.0), vec4<f32>(1.0)).rgb;
+    let sphere_add = clamp(textureSample(sphere_add_tex, sphere_sampler, suv) * look.spa_mul + look.spa_add, vec4<f32>(0.0), vec4<f32>(1.0)).rgb;
+    // The change the morphs make to MMD's highlight (none without morphs).
+    let h = normalize(normalize(cam.light.xyz) + normalize(cam.eye.xyz - i.world));
+    let ndh = max(dot(n, h), 1e-6);
+    let highlight = highlight_of(look.specular_after, ndh) - highlight_of(look.specular_before, ndh);
     let alpha = color.a * tex.a;
     if (alpha < 0.004) {
         discard;
     }
-    return vec4<f32>((color.rgb * tex.rgb * sphere + sphere_add) * tint.rgb * ramp, alpha);
+    return vec4<f32>(max((color.rgb * tex.rgb * sphere + sphere_add) * ramp + highlight, vec3<f32>(0.0)) * tint.rgb, alpha);
+}
+
+// MMD's Blinn-Phong highlight of a specular colour (rgb) and power (w) at N·H (> 0): a power
+// of 0 lights everything by the colour, as pow(x, 0) = 1.
+fn highlight_of(specular: vec4<f32>, ndh: f32) -> vec3<f32> {
+    let shine = select(pow(ndh, specular.w), 1.0, specular.w <= 0.0);
+    return shine * specular.rgb * (154.0 / 255.0);
 }
