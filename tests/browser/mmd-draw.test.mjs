@@ -14,16 +14,13 @@
 // Screenshots go to tests/artifacts/.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
-import { readFileSync, readdirSync, statSync, existsSync } from "node:fs";
+import { readFileSync, readdirSync, statSync } from "node:fs";
 import { join, relative } from "node:path";
-import { root, data, startServer, launch, openApp, canvasPixels, decodeImageInPage, pixel, waitUntil } from "./harness.mjs";
+import { data, startServer, launch, openApp, canvasPixels, decodeImageInPage, pixel, waitUntil } from "./harness.mjs";
+import { MMDParser, M } from "./mmd-common.mjs";
 
-const parserPath = join(root, "node_modules", "three-mmd", "examples", "jsm", "libs", "mmdparser.module.js");
-if (!existsSync(parserPath)) throw new Error("node_modules/three-mmd (three@0.171.0) is missing: run npm ci");
-const { MMDParser } = await import(parserPath);
 
 const LIGHT = (() => { const l = [0.4, 0.9, 0.6]; const n = Math.hypot(...l); return l.map((x) => x / n); })();
-const M = 0.08; // metres per MMD unit
 const s2l = (c) => { const x = c / 255; return x <= 0.04045 ? x / 12.92 : ((x + 0.055) / 1.055) ** 2.4; };
 const l2s = (x) => 255 * (x <= 0.0031308 ? x * 12.92 : 1.055 * Math.max(x, 0) ** (1 / 2.4) - 0.055);
 

@@ -13,21 +13,16 @@
 // the mouth opens again. Screenshots go to tests/artifacts/.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
-import { readFileSync, readdirSync, existsSync } from "node:fs";
+import { readFileSync, readdirSync } from "node:fs";
 import { join } from "node:path";
-import { root, data, startServer, launch, openDemoDance, canvasPixels, pixel, waitUntil, BACKENDS } from "./harness.mjs";
-
-const parserPath = join(root, "node_modules", "three-mmd", "examples", "jsm", "libs", "mmdparser.module.js");
-if (!existsSync(parserPath)) throw new Error("node_modules/three-mmd (three@0.171.0) is missing: run npm ci");
-const { MMDParser } = await import(parserPath);
+import { data, startServer, launch, openDemoDance, canvasPixels, pixel, waitUntil, BACKENDS } from "./harness.mjs";
+import { needData, readMorphKeys, readPmdMorphs, faceCamera, sameCamera, morphBox, movingBoxes, inBox, countIn, CHANGED } from "./mmd-common.mjs";
 
 const mikuDir = join(data, "mmd", "miku_v2");
 const vmdPath = join(data, "mmd", "motion", "wavefile_v2.vmd");
-for (const p of [join(mikuDir, "miku_v2.pmd"), vmdPath]) if (!existsSync(p)) throw new Error(`${p} is missing (the MMD test data in ../shared/data)`);
+needData(join(mikuDir, "miku_v2.pmd"), vmdPath);
 
-const M = 0.08; // metres per MMD unit
 const OFFSET = 160; // WAVEFILE's motion frame at song time 0
-const ab = (buf) => buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.byteLength);
 
 /** WAVEFILE's morph keys as a face-only VMD, byte by byte: its 50-byte header, 0 bone keys, its morph section (count and 23-byte keys), 0 camera keys. */
 function lipSyncVmd() {
@@ -40,37 +35,12 @@ function lipSyncVmd() {
   return { bytes: Buffer.concat([wave.subarray(0, 50), zero, section, zero]), morphs };
 }
 
-/** The model's morphs as three's parser reads them: name → [{ v, d }] (model vertex, offset in metres); the vertices 頭 alone carries. */
-function readModel() {
-  const model = new MMDParser.Parser().parsePmd(ab(readFileSync(join(mikuDir, "miku_v2.pmd"))), true);
-  const base = model.morphs.find((m) => m.type === 0);
-  const morphs = new Map();
-  for (const m of model.morphs) if (m !== base) morphs.set(m.name, m.elements.map((e) => ({ v: base.elements[e.index].index, d: e.position.map((x) => x * M) })));
-  const head = model.bones.findIndex((b) => b.name === "頭");
-  const onHead = (v) => model.vertices[v].skinWeights.every((w, k) => w === 0 || model.vertices[v].skinIndices[k] === head);
-  return { morphs, onHead, rest: (v) => model.vertices[v].position.map((x) => x * M), headRest: model.bones[head].position.map((x) => x * M), name: model.metadata.modelName };
-}
-
 /** The lip-sync's keys by three's parser: name → [{ frame, weight }] in frame order. */
 function readKeys(bytes) {
-  const vmd = new MMDParser.Parser().parseVmd(ab(bytes), true);
-  assert.equal(vmd.motions.length, 0, "the lip-sync has no bone keys");
-  const keys = new Map();
-  for (const k of vmd.morphs) {
-    if (!keys.has(k.morphName)) keys.set(k.morphName, []);
-    keys.get(k.morphName).push({ frame: k.frameNum, weight: k.weight });
-  }
-  for (const list of keys.values()) list.sort((a, b) => a.frame - b.frame);
+  const { keys, boneKeys } = readMorphKeys(bytes);
+  assert.equal(boneKeys, 0, "the lip-sync has no bone keys");
   return keys;
 }
-
-const rotate = (q, v) => {
-  const [x, y, z, w] = q;
-  const c1 = [y * v[2] - z * v[1], z * v[0] - x * v[2], x * v[1] - y * v[0]];
-  const c2 = [y * c1[2] - z * c1[1], z * c1[0] - x * c1[2], x * c1[1] - y * c1[0]];
-  return [0, 1, 2].map((i) => v[i] + 2 * w * c1[i] + 2 * c2[i]);
-};
-const CHANGED = (a, b) => Math.max(Math.abs(a[0] - b[0]), Math.abs(a[1] - b[1]), Math.abs(a[2] - b[2])) > 24;
 
 let server;
 before(async () => { server = await startServer(); });
@@ -78,7 +48,7 @@ after(() => server && server.stop());
 
 for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).split(",")) {
   test(`a lip-sync VMD is the project's face track: the generated dance on miku_v2 opens its mouth, and again after a reload (${backend})`, async () => {
-    const model = readModel();
+    const model = readPmdMorphs(join(mikuDir, "miku_v2.pmd"));
     const lip = lipSyncVmd();
     const keys = readKeys(lip.bytes);
     const files = readdirSync(mikuDir).filter((f) => /\.(pmd|bmp)$/i.test(f)).map((f) => ({ name: `miku_v2/${f}`, b64: readFileSync(join(mikuDir, f)).toString("base64") }));
@@ -133,9 +103,7 @@ for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).
           const i = j.names.indexOf("頭");
           return { q: j.rotations.slice(4 * i, 4 * i + 4), p: j.positions.slice(3 * i, 3 * i + 3), body: j.body };
         }, { t });
-        const fwd = rotate(pose.q, [0, 0, 1]);
-        const eye = rotate(pose.q, [0, 0.06, 0]).map((x, k) => x + pose.p[k]);
-        const camera = { target: eye, yaw: Math.atan2(fwd[0], fwd[2]), pitch: Math.asin(Math.max(-1, Math.min(1, fwd[1]))), distance: 0.55, fovY: 0.5 };
+        const camera = faceCamera(pose, 0.06, 0.55);
         const out = { pose };
         for (const withTrack of [true, false]) {
           for (let tries = 0; ; tries++) {
@@ -150,8 +118,7 @@ for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).
             }, { withTrack, camera });
             const img = await canvasPixels(page, `${backend}-mmd-face-${label}-${withTrack ? "track" : "none"}.png`);
             const now = await page.evaluate(() => window.odori.viewer.camera);
-            const same = Math.abs(now.yaw - camera.yaw) < 1e-4 && Math.abs(now.pitch - camera.pitch) < 1e-4 && Math.abs(now.distance - camera.distance) < 1e-4 && now.target.every((x, k) => Math.abs(x - camera.target[k]) < 1e-4);
-            if (same && (withTrack || (img.width === out.img.width && img.height === out.img.height))) {
+            if (sameCamera(now, camera) && (withTrack || (img.width === out.img.width && img.height === out.img.height))) {
               out[withTrack ? "drawn" : "control"] = drawn;
               out[withTrack ? "img" : "ctl"] = img;
               break;
@@ -161,42 +128,17 @@ for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).
         }
         return out;
       };
-      /** The projected box (pixels, padded) of a morph's head-carried vertices at rest and moved by `weight`. */
-      const boxOf = async (name, weight, pose, padPx) => {
-        const els = model.morphs.get(name).filter((e) => model.onHead(e.v) && Math.hypot(...e.d) > 1e-4);
-        const world = (p) => rotate(pose.q, p.map((x, k) => x - model.headRest[k])).map((x, k) => x + pose.p[k]);
-        const pts = els.flatMap((e) => { const r = model.rest(e.v); return [world(r), world(r.map((x, k) => x + weight * e.d[k]))]; });
-        const xy = (await page.evaluate((ps) => ps.map((p) => window.odori.viewer.project(p[0], p[1], p[2])), pts)).filter(Boolean);
-        const xs = xy.map((p) => p[0]), ys = xy.map((p) => p[1]);
-        return { n: els.length, x0: Math.floor(Math.min(...xs)) - padPx, x1: Math.ceil(Math.max(...xs)) + padPx, y0: Math.floor(Math.min(...ys)) - padPx, y1: Math.ceil(Math.max(...ys)) + padPx };
-      };
-      /** Boxes of every morph the track weights at motion frame `frame` (linear between keys, held outside). */
-      const movingAt = async (frame, pose) => {
-        const out = [];
-        for (const [name, list] of keys) {
-          if (!model.morphs.has(name)) continue;
-          let w = list[0].weight;
-          for (let k = 0; k < list.length; k++) {
-            if (list[k].frame <= frame) w = list[k].weight;
-            if (list[k].frame > frame) { const p = list[k - 1]; if (p) w = p.weight + ((list[k].weight - p.weight) * (frame - p.frame)) / (list[k].frame - p.frame); break; }
-          }
-          if (Math.abs(w) > 1e-4 && model.morphs.get(name).some((e) => model.onHead(e.v))) out.push(await boxOf(name, w, pose, 8));
-        }
-        return out;
-      };
-      const inBox = (b, x, y) => x >= b.x0 && x <= b.x1 && y >= b.y0 && y <= b.y1;
-      const count = (img, b, pred) => { let n = 0; for (let y = Math.max(0, b.y0); y <= Math.min(img.height - 1, b.y1); y++) for (let x = Math.max(0, b.x0); x <= Math.min(img.width - 1, b.x1); x++) if (pred(x, y)) n++; return n; };
       const check = async (label) => {
         const shot = await shoot(label);
         assert.equal(shot.pose.body, "character", "the dance is drawn on miku_v2 as the character");
         assert.ok(shot.drawn.morphed > 0 && shot.control.morphed === 0, `vertices morphed: with the track ${shot.drawn.morphed}, without ${shot.control.morphed}`);
         assert.deepEqual(shot.drawn.missingMorphs, [], "miku_v2 has every morph WAVEFILE keys");
-        const box = await boxOf("あ", mouth.weight, shot.pose, 4);
-        const moving = await movingAt(mouth.frame, shot.pose);
+        const box = await morphBox(page, model, "あ", mouth.weight, shot.pose, 4);
+        const moving = await movingBoxes(page, model, keys, mouth.frame, shot.pose);
         const changed = (x, y) => CHANGED(pixel(shot.img, x, y), pixel(shot.ctl, x, y));
-        const inside = count(shot.img, box, changed);
+        const inside = countIn(shot.img, box, changed);
         const all = { x0: 0, y0: 0, x1: shot.img.width - 1, y1: shot.img.height - 1 };
-        const outside = count(shot.img, all, (x, y) => !moving.some((b) => inBox(b, x, y)) && changed(x, y));
+        const outside = countIn(shot.img, all, (x, y) => !moving.some((b) => inBox(b, x, y)) && changed(x, y));
         console.log(`${backend} ${label}: song time ${t.toFixed(2)} s (motion frame ${mouth.frame}, あ ${mouth.weight.toFixed(2)}): ${shot.drawn.morphed} drawn vertices morphed with the track, ${shot.control.morphed} without; ${inside} pixels around the mouth's ${box.n} vertices changed against the track removed, ${outside} away from the weighted morphs`);
         assert.ok(inside >= 300, `the mouth does not open: ${inside} pixels changed`);
         assert.ok(outside <= 0.01 * inside, `pixels changed away from the morphs: ${outside}`);

@@ -1,0 +1,149 @@
+// Helpers the browser MMD tests share (mmd-face, mmd-morphs, mmd-material-morphs, mmd-uv-morphs,
+// mmd-draw): three r171's MMDParser (`three-mmd`, a reader no one here wrote) and what the
+// tests read with it — a VMD's morph keys, a PMD's vertex morphs and the vertices 頭 alone
+// carries — and the quaternion maths that puts a head-rest point where the posed head has it
+// and a camera in front of the face.
+import { readFileSync, existsSync } from "node:fs";
+import { join } from "node:path";
+import { root, canvasPixels } from "./harness.mjs";
+
+const parserPath = join(root, "node_modules", "three-mmd", "examples", "jsm", "libs", "mmdparser.module.js");
+if (!existsSync(parserPath)) throw new Error("node_modules/three-mmd (three@0.171.0) is missing: run npm ci");
+export const { MMDParser } = await import(parserPath);
+
+/** Metres per MMD unit (the engine's and three's MMD examples' scale). */
+export const M = 0.08;
+
+/** A Node Buffer's bytes as the ArrayBuffer MMDParser reads. */
+export const ab = (buf) => buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.byteLength);
+
+/** Fails with a clear message when a file of the shared MMD data is absent. */
+export function needData(...paths) {
+  for (const p of paths) if (!existsSync(p)) throw new Error(`${p} is missing (the MMD test data in ../shared/data)`);
+}
+
+/** `v` rotated by the unit quaternion `q` ([x, y, z, w]): v + 2w (u × v) + 2 u × (u × v). */
+export const rotate = (q, v) => {
+  const [x, y, z, w] = q;
+  const c1 = [y * v[2] - z * v[1], z * v[0] - x * v[2], x * v[1] - y * v[0]];
+  const c2 = [y * c1[2] - z * c1[1], z * c1[0] - x * c1[2], x * c1[1] - y * c1[0]];
+  return [0, 1, 2].map((i) => v[i] + 2 * w * c1[i] + 2 * c2[i]);
+};
+
+/** A pixel changed: some channel differs by more than 24 of 255. */
+export const CHANGED = (a, b) => Math.max(Math.abs(a[0] - b[0]), Math.abs(a[1] - b[1]), Math.abs(a[2] - b[2])) > 24;
+
+/** Where a rest point (metres) carried by the head alone is when the head (rest position `headRest`) is posed at { q, p }. */
+export const onPosedHead = (pose, headRest) => (r) => rotate(pose.q, r.map((x, k) => x - headRest[k])).map((x, k) => x + pose.p[k]);
+
+/** A camera looking the posed head in the face: at `up` metres above the head joint along its up, from its forward (+z at rest), `distance` away. */
+export function faceCamera(pose, up, distance) {
+  const fwd = rotate(pose.q, [0, 0, 1]);
+  const target = rotate(pose.q, [0, up, 0]).map((x, k) => x + pose.p[k]);
+  return { target, yaw: Math.atan2(fwd[0], fwd[2]), pitch: Math.asin(Math.max(-1, Math.min(1, fwd[1]))), distance, fovY: 0.5 };
+}
+
+/** A VMD's morph keys by three's parser: name → [{ frame, weight }] in frame order; and its bone-key count. */
+export function readMorphKeys(bytes) {
+  const vmd = new MMDParser.Parser().parseVmd(ab(bytes), true);
+  const keys = new Map();
+  for (const k of vmd.morphs) {
+    if (!keys.has(k.morphName)) keys.set(k.morphName, []);
+    keys.get(k.morphName).push({ frame: k.frameNum, weight: k.weight });
+  }
+  for (const list of keys.values()) list.sort((a, b) => a.frame - b.frame);
+  return { keys, boneKeys: vmd.motions.length };
+}
+
+/** A keyed morph's weight at `frame` as MMD plays it: linear between keys, held outside them. */
+export function weightAt(list, frame) {
+  let w = list[0].weight;
+  for (let k = 0; k < list.length; k++) {
+    if (list[k].frame <= frame) w = list[k].weight;
+    if (list[k].frame > frame) { const a = list[k - 1]; if (a) w = a.weight + ((list[k].weight - a.weight) * (frame - a.frame)) / (list[k].frame - a.frame); break; }
+  }
+  return w;
+}
+
+/** A PMD's vertex morphs as three's parser reads them (right-handed): name → [{ v, d }] (model vertex, offset in metres); whether a vertex is carried by 頭 alone; rest positions (metres); 頭's rest position; the model's name. */
+export function readPmdMorphs(path) {
+  const model = new MMDParser.Parser().parsePmd(ab(readFileSync(path)), true);
+  const base = model.morphs.find((m) => m.type === 0);
+  if (!base) throw new Error(`${path}: a PMD has a base morph`);
+  const morphs = new Map();
+  for (const m of model.morphs) if (m !== base) morphs.set(m.name, m.elements.map((e) => ({ v: base.elements[e.index].index, d: e.position.map((x) => x * M) })));
+  const head = model.bones.findIndex((b) => b.name === "頭");
+  if (head < 0) throw new Error(`${path}: no bone 頭`);
+  const onHead = (v) => model.vertices[v].skinWeights.every((w, k) => w === 0 || model.vertices[v].skinIndices[k] === head);
+  return { morphs, onHead, rest: (v) => model.vertices[v].position.map((x) => x * M), headRest: model.bones[head].position.map((x) => x * M), name: model.metadata.modelName };
+}
+
+/** Whether the viewer's camera `now` is `camera` (within 1e-4): the page may frame the figures again meanwhile. */
+export const sameCamera = (now, camera) =>
+  Math.abs(now.yaw - camera.yaw) < 1e-4 && Math.abs(now.pitch - camera.pitch) < 1e-4 && Math.abs(now.distance - camera.distance) < 1e-4 && now.target.every((x, k) => Math.abs(x - camera.target[k]) < 1e-4);
+
+/** The box (pixels, padded by `padPx`) the world points `pts` project to in the page's viewer. */
+export async function projectedBox(page, pts, padPx) {
+  const xy = (await page.evaluate((ps) => ps.map((p) => window.odori.viewer.project(p[0], p[1], p[2])), pts)).filter(Boolean);
+  const xs = xy.map((p) => p[0]), ys = xy.map((p) => p[1]);
+  return { x0: Math.floor(Math.min(...xs)) - padPx, x1: Math.ceil(Math.max(...xs)) + padPx, y0: Math.floor(Math.min(...ys)) - padPx, y1: Math.ceil(Math.max(...ys)) + padPx };
+}
+
+/** The projected box of a PMD morph's head-carried vertices (`readPmdMorphs`) at rest and moved by `weight`, the head posed at `pose`. */
+export async function morphBox(page, model, name, weight, pose, padPx) {
+  const els = model.morphs.get(name).filter((e) => model.onHead(e.v) && Math.hypot(...e.d) > 1e-4);
+  const world = onPosedHead(pose, model.headRest);
+  const pts = els.flatMap((e) => { const r = model.rest(e.v); return [world(r), world(r.map((x, k) => x + weight * e.d[k]))]; });
+  return { n: els.length, ...(await projectedBox(page, pts, padPx)) };
+}
+
+/** Boxes of every head-carried morph `keys` weight at motion `frame` (`weightAt`), padded 8 px. */
+export async function movingBoxes(page, model, keys, frame, pose) {
+  const out = [];
+  for (const [name, list] of keys) {
+    if (!model.morphs.has(name)) continue;
+    const w = weightAt(list, frame);
+    if (Math.abs(w) > 1e-4 && model.morphs.get(name).some((e) => model.onHead(e.v))) out.push(await morphBox(page, model, name, w, pose, 8));
+  }
+  return out;
+}
+
+export const inBox = (b, x, y) => x >= b.x0 && x <= b.x1 && y >= b.y0 && y <= b.y1;
+
+/** How many pixels of `img` inside box `b` satisfy `pred(x, y)`. */
+export const countIn = (img, b, pred) => { let n = 0; for (let y = Math.max(0, b.y0); y <= Math.min(img.height - 1, b.y1); y++) for (let x = Math.max(0, b.x0); x <= Math.min(img.width - 1, b.x1); x++) if (pred(x, y)) n++; return n; };
+
+/** Headless screenshots of the page's frame (`player.drawNow`) with the viewer's camera at `camera`, morphs on and off (the control): { on, off }, each { img, drawn } (`viewer.lastDrawn()[0]`); drawn again until the shot is of this camera and both are of one size. Morphs are left on. */
+export async function shotsMorphsOnOff(page, camera, file) {
+  const shots = {};
+  for (const on of [true, false]) {
+    for (let tries = 0; ; tries++) {
+      const drawn = await page.evaluate(({ on, camera }) => {
+        const { viewer, player } = window.odori;
+        viewer.setCamera(camera);
+        viewer.setMorphs(on);
+        player.drawNow();
+        return viewer.lastDrawn()[0];
+      }, { on, camera });
+      const img = await canvasPixels(page, `${file}-${on ? "on" : "off"}.png`);
+      const now = await page.evaluate(() => window.odori.viewer.camera);
+      if (sameCamera(now, camera) && (on || (img.width === shots.on.img.width && img.height === shots.on.img.height))) {
+        shots[on ? "on" : "off"] = { img, drawn };
+        break;
+      }
+      if (tries >= 10) throw new Error("the camera keeps being moved by the page");
+    }
+  }
+  await page.evaluate(() => window.odori.viewer.setMorphs(true));
+  return shots;
+}
+
+/** The head 頭's world pose ({ q, p }) and the body drawn, for clip `clip` at `t` s in the page's viewer (drawn there first). */
+export const headPose = (page, clip, t) => page.evaluate(({ clip, t }) => {
+  const { library, viewer, player } = window.odori;
+  player.time = t;
+  player.drawNow();
+  const j = viewer.figureJoints(library, clip, t);
+  const i = j.names.indexOf("頭");
+  return { q: j.rotations.slice(4 * i, 4 * i + 4), p: j.positions.slice(3 * i, 3 * i + 3), body: j.body };
+}, { clip, t });
