@@ -461,6 +461,25 @@ mod tests {
     }
 
     #[test]
+    fn bone_morphs_go_on_the_joints_of_their_bones_and_ambient_specular_factors_apply() {
+        let q = Quat::from_rotation_z(0.5);
+        let morphs = [BoneMorph::NONE, BoneMorph { translation: Vec3::new(1.0, 0.0, 0.0), rotation: q }, BoneMorph { translation: Vec3::Y, rotation: Quat::IDENTITY }];
+        // Joints 0 and 1 are rig bones 1 and 0; bone 2 (an IK bone) has no joint; a joint past the pose is left.
+        let (mut rot, mut trans) = (vec![Quat::from_rotation_x(0.3), Quat::IDENTITY], vec![Vec3::ZERO, Vec3::ONE]);
+        assert_eq!(apply_bone_morphs(&morphs, &[1, 0, 1], 0.08, &mut rot, &mut trans), 2);
+        assert!((rot[0] - (Quat::from_rotation_x(0.3) * q)).length() < 1e-6, "the key's rotation, then the morph's");
+        assert!((trans[0] - Vec3::new(0.08, 0.0, 0.0)).length() < 1e-7, "translation in metres");
+        assert_eq!((rot[1], trans[1]), (Quat::IDENTITY, Vec3::ONE), "bone 0 has no morph");
+        let mut f = MaterialFactors::NONE;
+        assert_eq!((f.ambient(Vec3::splat(0.5)), f.specular(Vec3::splat(0.2)), f.specular_power(5.0)), (Vec3::splat(0.5), Vec3::splat(0.2), 5.0));
+        f.ambient_mul = Vec3::splat(0.5);
+        f.ambient_add = Vec3::X;
+        f.specular_power_add = -10.0;
+        assert_eq!(f.ambient(Vec3::splat(0.5)), Vec3::new(1.25, 0.25, 0.25));
+        assert_eq!(f.specular_power(5.0), 0.0, "never below 0");
+    }
+
+    #[test]
     fn bone_morphs_move_and_turn_their_bones_by_weight() {
         let q = Quat::from_rotation_y(0.8);
         let m = model(
