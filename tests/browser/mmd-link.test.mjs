@@ -5,9 +5,11 @@
 // - WAVEFILE opened alone through the MMD dialog: the dialog offers the library's miku_v2 (the
 //   library kept its file), the project keeps that model with the dance, the dance is drawn with
 //   the model's mesh, and `exportVmd`'s default model is miku_v2 (the VMD header names it; the
-//   control, `model: "standard"`, names another); after a reload (the library empty again) the
-//   project's dance is still drawn with a mesh (the one the project makes from the model file,
-//   in its materials' colours, which a message says) and still exports on miku_v2;
+//   control, `model: "standard"`, names another); the project keeps the model's textures and
+//   toon ramps with it (schema 7), so after a reload (the library empty again) the project's
+//   dance is still drawn with a mesh — the one the project makes from the model file and those
+//   files, with as many textures as the library's mesh had — and still exports on miku_v2; the
+//   page names the files it keeps when the project is saved;
 // - a camera VMD inside a .zip (made here with Python's zipfile) goes into the project, like a
 //   loose one, and is listed once.
 import { test, before, after } from "node:test";
@@ -59,6 +61,8 @@ const projectDance = (page) => page.evaluate(() => {
     model: src.model?.fileName ?? null,
     id,
     hasMesh: lib.clip(id).hasMesh,
+    meshTextures: lib.clip(id).meshTextures,
+    keptTextures: (src.model?.textures ?? []).map((t) => t.name),
     exported: header(lib.exportVmd(id, { endSecs: 2 })),
     standard: header(lib.exportVmd(id, { endSecs: 2, model: "standard" })),
     at10: Array.from(lib.jointPositions(id, 10)),
@@ -105,7 +109,12 @@ for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).
       assert.equal(kept.exported, model, "exportVmd's default model is the dance's model");
       assert.notEqual(kept.standard, model, "the control: exported on the standard skeleton the header names another");
 
-      assert.match(await messages(page), /keeps the model file miku_v2\.pmd, not its \d+ textures/, "the page says what the project keeps of the model");
+      console.log(`${backend}: the project keeps ${kept.keptTextures.length} files with miku_v2 (${kept.keptTextures.join(", ")}); the dance's mesh draws with ${kept.meshTextures} textures`);
+      assert.ok(kept.keptTextures.includes("eyeM2.bmp") && kept.keptTextures.some((n) => /^toon\d\d\.bmp$/.test(n)), `the model's texture and the toon ramps it uses are kept: ${kept.keptTextures}`);
+      assert.ok(kept.meshTextures > 0, "the dance is drawn textured");
+      assert.doesNotMatch(await messages(page), /not its \d+ textures|without \d+ of its textures/, "no note that textures are left out");
+      const mmdFiles = await page.evaluate(() => window.odori.project.project.summary().mmdFiles);
+      assert.ok(["wavefile_v2.vmd", "miku_v2.pmd", "eyeM2.bmp"].every((f) => mmdFiles.includes(f)), `summary().mmdFiles names what the save note names: ${mmdFiles}`);
 
       // Reload: the library is empty again; the project's dance is still on miku_v2, drawn and exported on it.
       await page.evaluate(() => window.odori.project.store.flush());
@@ -115,7 +124,7 @@ for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).
       const again = await projectDance(page);
       assert.equal(await page.evaluate(() => window.odori.library.mmdModels().length), 0, "the library holds no model after the reload");
       console.log(`${backend}: after the reload: on ${again.model}, hasMesh ${again.hasMesh}, exported on "${again.exported}"`);
-      assert.deepEqual({ ...again, id: 0 }, { ...kept, id: 0 }, "after the reload: the same model, mesh, export and pose");
+      assert.deepEqual({ ...again, id: 0 }, { ...kept, id: 0 }, "after the reload: the same model, mesh (as many textures), export and pose");
 
       // 4. A camera VMD inside a zip goes into the project, like a loose one, and is listed once.
       const zip = zipOf([["cams/tokino_kakera_cam.vmd", CAMERA]]);

@@ -166,7 +166,7 @@ test("the app imports a model folder and a dance through the MMD dialog (the dan
     await waitUntil(() => page.evaluate(() => document.querySelector("#messages")?.textContent.includes("MMD files stay with you")), { what: "the import's messages", timeoutMs: 60000 });
     const text = await page.textContent("#messages");
     assert.match(text, /MMD model "初音ミク" added/);
-    assert.match(text, /wavefile_v2\.vmd: dance added to the project, posed on model "初音ミク" \(miku_v2\.pmd, kept in the project with the dance\), starting at motion frame 160/);
+    assert.match(text, /wavefile_v2\.vmd: dance added to the project, posed on model "初音ミク" \(miku_v2\.pmd, kept in the project with the dance, with the textures found for it\), starting at motion frame 160/);
     assert.ok(!logs.some((l) => l.startsWith("[pageerror]")), logs.join("\n"));
   } finally {
     await browser.close();

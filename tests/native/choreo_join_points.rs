@@ -17,47 +17,24 @@
 //! over 1.5, beat goals lost, skate. `ODORI_ONLY=s` keeps the songs
 //! whose label contains s; `ODORI_HALVES=0` measures the full library alone.
 
-#[path = "music_audio.rs"]
-mod music_audio;
+
+#[path = "person_common.rs"]
+mod person_common;
 
 use odori_core::bars::Bar;
 use odori_core::choreo::quality::{dance_quality_switched, DanceQuality};
-use odori_core::choreo::{render_switched, RenderOptions, SegmentLibrary, SegmentOptions};
-use odori_core::import::import_bytes;
-use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
-use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
-use odori_core::ImportOptions;
-use odori_tests::{all_bvh, fps_override_for, random_moves_bas, read, RANDOM_MOVES_SEED};
+use odori_core::choreo::{render_switched, RenderOptions, SegmentLibrary};
+use odori_core::music::{analyze, AnalysisOptions, RmsEnvelope};
+use odori_tests::{random_moves_bas, RANDOM_MOVES_SEED};
 
-/// The person's files (as `choreo_my_moves`): `half` keeps every other one of the sorted list.
+/// The person's library of `choreo_my_moves` (`half` keeps every other one of the sorted list).
 fn person_library(half: Option<usize>) -> SegmentLibrary {
-    let mut lib = SegmentLibrary::builtin();
-    let mut files: Vec<String> = all_bvh().into_iter().filter(|r| !r.contains("cmu-martial") && !r.ends_with("005_01.bvh")).collect();
-    files.push("gltf/RobotExpressive.glb".into());
-    let files: Vec<String> = files.into_iter().enumerate().filter(|(i, _)| half.is_none_or(|h| i % 2 == h)).map(|(_, f)| f).collect();
-    for rel in &files {
-        let opts = ImportOptions { fps_override: fps_override_for(rel), ..Default::default() };
-        let imp = import_bytes(rel, &read(rel), &opts).unwrap_or_else(|e| panic!("{rel}: {e}"));
-        for clip in imp.clips.iter().filter(|c| !rel.ends_with(".glb") || c.name == "Dance") {
-            // A clip the segmenter refuses (too short, not humanoid) is simply not in the library.
-            let _ = lib.add_clip(clip, &imp.humanoid, &imp.status, &SegmentOptions::default());
-        }
-    }
-    lib
+    person_common::person_library(half).0
 }
 
 /// The songs of `choreo_my_moves`.
 fn songs() -> Vec<(String, RmsEnvelope)> {
-    let mut out: Vec<(String, RmsEnvelope)> = music_audio::FULL_TRACKS
-        .iter()
-        .chain([&music_audio::TRUMPET, &music_audio::DRUMS])
-        .map(|rel| (rel.to_string(), music_audio::decode_data(rel).envelope().unwrap_or_else(|e| panic!("{rel}: {e}"))))
-        .collect();
-    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 90.0, 130.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (3, 96.0, 120.0)] {
-        let song = demo_song_with(22050.0, &DemoSongOptions { beats_per_bar: bpb, bpm, end_bpm: end }).expect("demo song");
-        out.push((format!("demo in {bpb}, {bpm}→{end} BPM"), envelope(&[&song.samples], 22050.0).expect("envelope")));
-    }
-    out
+    person_common::songs()
 }
 
 /// The dance `choices` as played (feet held), with or without join points, measured at its switches.

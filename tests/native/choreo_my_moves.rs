@@ -13,16 +13,13 @@
 //! that misses, and asserted to be the only ones. Figures per song are printed by
 //! `tests/bench/choreo_person.rs`.
 
-#[path = "music_audio.rs"]
-mod music_audio;
 #[path = "person_common.rs"]
 mod person_common;
 
 use odori_core::bars::Bar;
 use odori_core::choreo::quality::{dance_quality, dance_quality_switched, DanceQuality};
 use odori_core::choreo::{bar_counts, count_rate_bpm, GenerateOptions, RenderOptions, SegmentLibrary};
-use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
-use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
+use odori_core::music::{analyze, AnalysisOptions, RmsEnvelope};
 
 
 /// (library, song label substring, goal) pairs known to miss, each with why; every other goal
@@ -68,16 +65,7 @@ fn person_library(half: Option<usize>) -> (SegmentLibrary, usize) {
 }
 
 fn songs() -> Vec<(String, RmsEnvelope)> {
-    let mut out: Vec<(String, RmsEnvelope)> = music_audio::FULL_TRACKS
-        .iter()
-        .chain([&music_audio::TRUMPET, &music_audio::DRUMS])
-        .map(|rel| (rel.to_string(), music_audio::decode_data(rel).envelope().unwrap_or_else(|e| panic!("{rel}: {e}"))))
-        .collect();
-    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 90.0, 130.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (3, 96.0, 120.0)] {
-        let song = demo_song_with(22050.0, &DemoSongOptions { beats_per_bar: bpb, bpm, end_bpm: end }).expect("demo song");
-        out.push((format!("demo in {bpb}, {bpm}→{end} BPM"), envelope(&[&song.samples], 22050.0).expect("envelope")));
-    }
-    out
+    person_common::songs()
 }
 
 fn quality(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], choices: &[Option<usize>]) -> DanceQuality {

@@ -12,7 +12,7 @@ use odori_core::import::vmd::{self, MorphKey, Vmd, VmdVersion};
 use odori_core::mmd::face_track::{layer_keys, FaceTrack, LayeredFaces};
 use odori_core::mmd::morph::FaceMorphs;
 use odori_core::music::{demo_song, envelope, AnalysisOptions};
-use odori_core::project::{self, Project};
+use odori_core::project::{self, Project, TrackKind};
 use odori_tests::read;
 
 const WAVEFILE: &str = "mmd/motion/wavefile_v2.vmd";
@@ -39,29 +39,29 @@ fn a_lip_sync_vmd_is_a_face_track_kept_after_save_and_reopen() {
     assert_eq!(track.keys, keys, "the VMD's keys, in file order");
     assert_eq!(track.song_offset_frames, 160);
     let doc = p.doc().clone();
-    assert_eq!(doc.faces.len(), 1);
-    assert!(p.blobs().get(&doc.faces[0].blob).is_some_and(|b| **b == bytes[..]), "its bytes are kept as given");
+    assert_eq!(doc.tracks(TrackKind::Face).count(), 1);
+    assert!(p.blobs().get(&doc.mmd_tracks[0].blob).is_some_and(|b| **b == bytes[..]), "its bytes are kept as given");
     assert_eq!(p.summary().face_tracks.iter().map(|f| f.file_name.as_str()).collect::<Vec<_>>(), vec!["lip.vmd"]);
     // One undo step: undo takes it back, redo restores it.
     assert_eq!(p.undo_history().len(), 1);
     assert!(p.undo());
-    assert!(p.doc().faces.is_empty());
+    assert!(p.doc().tracks(TrackKind::Face).next().is_none());
     assert!(p.redo());
     assert_eq!(p.doc(), &doc);
     // Saved and opened again: the same keys, read from the kept bytes.
     let mut q = project::open(&project::save(&p).expect("save")).expect("open").project;
-    assert_eq!(q.doc().faces, doc.faces);
+    assert_eq!(q.doc().tracks(TrackKind::Face).collect::<Vec<_>>(), doc.tracks(TrackKind::Face).collect::<Vec<_>>());
     let again = q.face_track(0).expect("the reopened track");
     assert_eq!(again, track);
     println!("lip.vmd (WAVEFILE's face keys, no bone keys): {} keys of {} morphs kept, equal after save and reopen", again.keys.len(), again.morph_names().len());
     // Removing is one undo step too.
     q.remove_face_track(0).expect("remove");
-    assert!(q.doc().faces.is_empty());
+    assert!(q.doc().tracks(TrackKind::Face).next().is_none());
     assert!(q.undo());
     assert_eq!(q.face_track(0).expect("back"), track);
     // With its bytes missing the rest opens and the track says what is gone.
     let manifest = project::file::manifest_json(&p);
-    let opened = project::file::from_manifest(&manifest, |h| p.blobs().get(h).cloned().filter(|_| *h != doc.faces[0].blob)).expect("opens");
+    let opened = project::file::from_manifest(&manifest, |h| p.blobs().get(h).cloned().filter(|_| *h != doc.mmd_tracks[0].blob)).expect("opens");
     assert_eq!(opened.missing.iter().map(|m| m.what.as_str()).collect::<Vec<_>>(), vec!["face track lip.vmd"]);
     assert_eq!(opened.project.face_track(0).expect_err("no bytes, no track").kind(), "missing-blob");
 }

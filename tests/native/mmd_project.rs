@@ -10,7 +10,7 @@
 
 use odori_core::choreo::{MovesSource, RenderOptions};
 use odori_core::music::AnalysisOptions;
-use odori_core::project::{self, BarKind, MoveKey, Project};
+use odori_core::project::{self, BarKind, MoveKey, Project, TrackKind};
 use odori_core::{Clip, ImportOptions};
 use odori_tests::read;
 
@@ -112,21 +112,21 @@ fn a_camera_vmd_is_kept_in_the_project_and_survives_save_and_open() {
     assert_eq!(track.keys.iter().map(|k| k.time_secs).collect::<Vec<_>>(), times, "one key per camera key of the file, at frame / 30 s");
     println!("{CAMERA}: {} camera keys over {:.1} s kept in the project", track.keys.len(), times.last().copied().unwrap_or(0.0));
     let doc = p.doc().clone();
-    assert_eq!(doc.cameras.len(), 1);
-    assert!(p.blobs().get(&doc.cameras[0].blob).is_some_and(|b| **b == cam[..]), "its bytes are kept as given");
+    assert_eq!(doc.tracks(TrackKind::Camera).count(), 1);
+    assert!(p.blobs().get(&doc.mmd_tracks[0].blob).is_some_and(|b| **b == cam[..]), "its bytes are kept as given");
     // Undo takes the import back (and its blob out of what a save writes); redo restores it.
     assert!(p.undo());
-    assert!(p.doc().cameras.is_empty() && p.referenced_blobs().contains(&doc.cameras[0].blob), "the history still refers to the blob");
+    assert!(p.doc().tracks(TrackKind::Camera).next().is_none() && p.referenced_blobs().contains(&doc.mmd_tracks[0].blob), "the history still refers to the blob");
     assert!(p.redo());
     assert_eq!(p.doc(), &doc);
     // Saved and opened again (what the .odori file and the browser's store both go through).
     let bytes = project::save(&p).expect("save");
     let q = project::open(&bytes).expect("open").project;
-    assert_eq!(q.doc().cameras, doc.cameras);
+    assert_eq!(q.doc().tracks(TrackKind::Camera).collect::<Vec<_>>(), doc.tracks(TrackKind::Camera).collect::<Vec<_>>());
     assert_eq!(q.camera_track(0).expect("the reopened camera"), track);
     // With its bytes missing (a store that lost the blob) the rest opens and the camera says what is gone.
     let manifest = project::file::manifest_json(&p);
-    let opened = project::file::from_manifest(&manifest, |h| p.blobs().get(h).cloned().filter(|_| *h != doc.cameras[0].blob)).expect("opens");
+    let opened = project::file::from_manifest(&manifest, |h| p.blobs().get(h).cloned().filter(|_| *h != doc.mmd_tracks[0].blob)).expect("opens");
     assert_eq!(opened.missing.iter().map(|m| m.what.as_str()).collect::<Vec<_>>(), vec!["camera motion tokino_kakera_cam.vmd"]);
     let e = opened.project.camera_track(0).expect_err("no bytes, no track");
     assert_eq!(e.kind(), "missing-blob", "{e}");
@@ -284,8 +284,8 @@ fn a_vmd_dance_on_its_model_is_drawn_with_its_mesh_and_names_its_model() {
     let tris = |m: &odori_core::import::SkinnedMesh| m.parts.iter().map(|p| p.indices.len() / 3).sum::<usize>();
     assert_eq!(tris(mesh), tris(&c.character.mesh));
     assert!(mesh.palette.iter().all(|(j, _)| *j < joints.len()));
-    assert!(mesh.textures.is_empty(), "the project keeps the model file, not its textures");
-    assert!(im.warnings.iter().any(|w| w.contains("keeps the model file miku_v2.pmd, not its") && w.contains("drawn on its mesh")), "{:?}", im.warnings);
+    assert!(mesh.textures.is_empty(), "given without its textures, the project keeps the model file only");
+    assert!(im.warnings.iter().any(|w| w.contains("keeps the model file miku_v2.pmd without") && w.contains("eyeM2.bmp") && w.contains("drawn in their colours")), "{:?}", im.warnings);
     let named = p.source_model(r.id).expect("reads").expect("the source names its model");
     assert_eq!(named.name, m.model.name);
 

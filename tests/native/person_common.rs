@@ -1,11 +1,17 @@
 //! The person's library, shared by the native tests and the benchmark that dance with the
-//! moves a person imported (`choreo_my_moves`, `choreo_blended_cost`, `choreo_join_cost`,
-//! `tests/bench/choreo_person.rs`): one list of the person's files and one way they are loaded,
-//! so the tests' figures are all on the same library.
+//! moves a person imported (`choreo_my_moves`, `choreo_join_points`, `choreo_blended_cost`,
+//! `choreo_join_cost`, `tests/bench/choreo_person.rs`): one list of the person's files and one
+//! way they are loaded, so the tests' figures are all on the same library; and the songs they
+//! dance to ([`songs`]).
 #![allow(dead_code)]
+
+#[path = "music_audio.rs"]
+mod music_audio;
 
 use odori_core::choreo::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
 use odori_core::import::{import_bytes, ImportOptions};
+use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
+use odori_core::music::{envelope, RmsEnvelope};
 use odori_core::Clip;
 use odori_tests::{all_bvh, fps_override_for, read};
 
@@ -40,4 +46,20 @@ pub fn person_library_with(half: Option<usize>, mut on_clip: impl FnMut(&str, &C
 /// [`person_library_with`], quietly.
 pub fn person_library(half: Option<usize>) -> (SegmentLibrary, usize) {
     person_library_with(half, |_, _, _| {})
+}
+
+/// The songs the person's dances are made for: every full track of ../shared/data/music, the
+/// trumpet and the drum take, then the demo song in 4 (100 BPM; 90→130 BPM) and in 3 (150, 108,
+/// 96→120 BPM), each with its envelope as the browser host computes it.
+pub fn songs() -> Vec<(String, RmsEnvelope)> {
+    let mut out: Vec<(String, RmsEnvelope)> = music_audio::FULL_TRACKS
+        .iter()
+        .chain([&music_audio::TRUMPET, &music_audio::DRUMS])
+        .map(|rel| (rel.to_string(), music_audio::decode_data(rel).envelope().unwrap_or_else(|e| panic!("{rel}: {e}"))))
+        .collect();
+    for (bpb, bpm, end) in [(4u32, 100.0f32, 100.0f32), (4, 90.0, 130.0), (3, 150.0, 150.0), (3, 108.0, 108.0), (3, 96.0, 120.0)] {
+        let song = demo_song_with(22050.0, &DemoSongOptions { beats_per_bar: bpb, bpm, end_bpm: end }).expect("demo song");
+        out.push((format!("demo in {bpb}, {bpm}→{end} BPM"), envelope(&[&song.samples], 22050.0).expect("envelope")));
+    }
+    out
 }

@@ -1,12 +1,12 @@
-//! The golden `.odori` files of schema versions 1 to 6 (`tests/golden/project_v1.odori` …
-//! `project_v6.odori`, each written once by `tests/tools/make_golden_project.rs` with the build of
+//! The golden `.odori` files of schema versions 1 to 7 (`tests/golden/project_v1.odori` …
+//! `project_v7.odori`, each written once by `tests/tools/make_golden_project.rs` with the build of
 //! its schema and reviewed; never written by the tests) open with this build: everything its
 //! maker put in is there, it renders, and its history works. When the schema changes, these
 //! files must keep opening (through `project::file::migrate`).
 
 use odori_core::choreo::RenderOptions;
 use odori_core::library::builtin_moves;
-use odori_core::project::{self, BarKind, MoveKey};
+use odori_core::project::{self, BarKind, MoveKey, TrackKind};
 
 const GOLDEN: &[u8] = include_bytes!("../golden/project_v1.odori");
 /// Written by the tool at main 8823db9 (schema 2: the history as changes, no take).
@@ -19,6 +19,9 @@ const GOLDEN_V4: &[u8] = include_bytes!("../golden/project_v4.odori");
 const GOLDEN_V5: &[u8] = include_bytes!("../golden/project_v5.odori");
 /// Written by the tool at s15-mmdface (schema 6: a face (lip-sync) track kept in the project).
 const GOLDEN_V6: &[u8] = include_bytes!("../golden/project_v6.odori");
+/// Written by the tool at s16-schema7 (schema 7: one list of MMD tracks, a model's texture and
+/// shared toon ramp kept with its VMD dance, built-in bars keeping why).
+const GOLDEN_V7: &[u8] = include_bytes!("../golden/project_v7.odori");
 
 #[test]
 fn golden_v1_opens_with_everything_in_it() {
@@ -36,7 +39,7 @@ fn golden_v2_opens_with_everything_in_it() {
 fn golden_v3_opens_with_everything_in_it() {
     // Schema 4 keeps camera VMDs: a v3 project has none.
     let p = golden_opens_with_everything_in_it(GOLDEN_V3, 3);
-    assert!(p.doc().cameras.is_empty());
+    assert!(p.doc().tracks(TrackKind::Camera).next().is_none());
 }
 
 #[test]
@@ -46,8 +49,8 @@ fn golden_v4_opens_with_its_camera_vmd() {
     assert!(p.doc().dance.repeats.is_empty());
     assert!(p.repeat_runs().expect("repeats").iter().all(|r| !r.marked));
     let doc = p.doc().clone();
-    assert_eq!(doc.cameras.len(), 1);
-    assert_eq!((doc.cameras[0].file_name.as_str(), doc.cameras[0].song_offset_frames), ("golden_cam.vmd", Some(0)));
+    assert_eq!(doc.tracks(TrackKind::Camera).count(), 1);
+    assert_eq!((doc.mmd_tracks[0].file_name.as_str(), doc.mmd_tracks[0].song_offset_frames), ("golden_cam.vmd", Some(0)));
     // The kept bytes are the camera the tool wrote: three keys a second apart, yawing 0 → 1 rad.
     let track = p.camera_track(0).expect("the camera track reads from the kept bytes");
     assert_eq!(track.keys.len(), 3);
@@ -56,7 +59,7 @@ fn golden_v4_opens_with_its_camera_vmd() {
     assert!((track.keys[0].target_m.y - 10.0 * odori_core::mmd::METRES_PER_MMD_UNIT).abs() < 1e-6);
     // The import was the last edit: one undo takes the camera (and its blob) away, redo brings it back.
     assert!(p.undo());
-    assert!(p.doc().cameras.is_empty());
+    assert!(p.doc().tracks(TrackKind::Camera).next().is_none());
     assert!(p.redo());
     assert_eq!(p.doc(), &doc);
 }
@@ -65,9 +68,9 @@ fn golden_v4_opens_with_its_camera_vmd() {
 fn golden_v5_opens_with_its_repeats() {
     use odori_core::project::{BarRange, RepeatMark, RepeatRun};
     let mut p = golden_opens_with_everything_in_it(GOLDEN_V5, 5);
-    assert_eq!(p.doc().cameras.len(), 1);
+    assert_eq!(p.doc().tracks(TrackKind::Camera).count(), 1);
     // Schema 6 keeps face tracks: a v5 project has none.
-    assert!(p.doc().faces.is_empty());
+    assert!(p.doc().tracks(TrackKind::Face).next().is_none());
     let n = p.doc().dance.bars.len();
     let marks = p.doc().dance.repeats.clone();
     // What the tool did: the found repeat (the demo song's second chorus) removed, then the
@@ -100,10 +103,13 @@ fn golden_v5_opens_with_its_repeats() {
 #[test]
 fn golden_v6_opens_with_its_face_track() {
     let mut p = golden_opens_with_everything_in_it(GOLDEN_V6, 6);
-    assert_eq!((p.doc().cameras.len(), p.doc().dance.repeats.len()), (1, 2));
+    assert_eq!((p.doc().tracks(TrackKind::Camera).count(), p.doc().dance.repeats.len()), (1, 2));
     let doc = p.doc().clone();
-    assert_eq!(doc.faces.len(), 1);
-    assert_eq!((doc.faces[0].file_name.as_str(), doc.faces[0].song_offset_frames), ("golden_lip.vmd", Some(10)));
+    assert_eq!(doc.tracks(TrackKind::Face).count(), 1);
+    let face = doc.tracks(TrackKind::Face).next().expect("the face track");
+    assert_eq!((face.file_name.as_str(), face.song_offset_frames), ("golden_lip.vmd", Some(10)));
+    // Schema 7 keeps both kinds in one list, the camera (imported first) first.
+    assert_eq!(doc.mmd_tracks.iter().map(|t| t.kind).collect::<Vec<_>>(), vec![TrackKind::Camera, TrackKind::Face]);
     // The kept bytes are the face VMD the tool wrote byte by byte: あ shut at 0, open at 15, shut at 30.
     let track = p.face_track(0).expect("the face track reads from the kept bytes");
     let keys: Vec<(&str, u32, f32)> = track.keys.iter().map(|k| (k.name.as_str(), k.frame, k.weight)).collect();
@@ -114,16 +120,66 @@ fn golden_v6_opens_with_its_face_track() {
     assert_eq!(faces.weights_at(0.0, 5.0 / 30.0), vec![(1, 1.0)]);
     // The track was the last edit: one undo takes it away, redo brings it back.
     assert!(p.undo());
-    assert!(p.doc().faces.is_empty());
+    assert!(p.doc().tracks(TrackKind::Face).next().is_none());
     assert!(p.redo());
     assert_eq!(p.doc(), &doc);
 }
 
-/// A build that knows schema 5 only refuses a v6 file (it would drop the face track unseen):
-/// the v6 golden's manifest with its version raised past this build's is refused the same way.
+#[test]
+fn golden_v7_opens_with_its_model_textures_tracks_and_whys() {
+    use odori_core::mmd::texture::decode_rgba;
+    let mut p = golden_opens_with_everything_in_it(GOLDEN_V7, 7);
+    let doc = p.doc().clone();
+    // One list of MMD tracks, in the order imported: the camera, then the face track.
+    let tracks: Vec<(TrackKind, &str, Option<u32>)> = doc.mmd_tracks.iter().map(|t| (t.kind, t.file_name.as_str(), t.song_offset_frames)).collect();
+    assert_eq!(tracks, vec![(TrackKind::Camera, "golden_cam.vmd", Some(0)), (TrackKind::Face, "golden_lip.vmd", Some(10))]);
+    assert_eq!(p.camera_track(0).expect("camera").keys.len(), 3);
+    assert_eq!(p.face_track(0).expect("face").keys.len(), 3);
+    assert_eq!(p.camera_track(1).expect_err("one camera").kind(), "not-found");
+    // The VMD dance keeps its model and the two files it draws with, each a blob of the file.
+    let src = doc.sources.iter().find(|s| s.file_name == "golden_dance.vmd").expect("the VMD dance");
+    let model = src.model.as_ref().expect("its model");
+    assert_eq!(model.file_name, "golden/golden.pmd");
+    let names: Vec<(&str, &str)> = model.textures.iter().map(|t| (t.name.as_str(), t.path.as_str())).collect();
+    assert_eq!(names, vec![("golden_tex.bmp", "golden/golden_tex.bmp"), ("toon01.bmp", "golden/toon01.bmp")]);
+    // The texture is the 2×2 BMP the tool wrote: red, green / blue, white (read by the `image`
+    // crate's BMP codec, not by anything the tool shares).
+    let tex = p.blobs().get(&model.textures[0].blob).expect("the texture's bytes are in the file");
+    let (w, h, rgba) = decode_rgba("golden_tex.bmp", "bmp", tex).expect("a BMP");
+    assert_eq!((w, h), (2, 2));
+    let px: Vec<[u8; 3]> = rgba.chunks(4).map(|c| [c[0], c[1], c[2]]).collect();
+    assert_eq!(px, vec![[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]]);
+    // The model names them: its material's texture, and shared toon 1.
+    let m = p.source_model(src.id).expect("reads").expect("kept");
+    assert_eq!(m.textures, vec!["golden_tex.bmp".to_string()]);
+    assert_eq!(m.materials[0].toon, odori_core::import::mmd_model::Toon::Shared(0));
+    let files = p.source_model_files(src.id);
+    assert_eq!(files.len(), 2);
+    assert!(p.summary().mmd_files.iter().any(|f| f == "golden/golden_tex.bmp"), "{:?}", p.summary().mmd_files);
+    // Built-in bars keep why (a join goal no move of the person's met): every bar with a why
+    // holds a built-in move, and the readout gives it per bar.
+    let whys = p.builtin_why();
+    let with_why: Vec<usize> = (0..whys.len()).filter(|&i| whys[i].is_some()).collect();
+    assert!(!with_why.is_empty(), "the tool's Generate left bars built-in with a why");
+    for &i in &with_why {
+        assert!(matches!(doc.dance.bars[i].r#move, Some(MoveKey::Builtin { .. })), "bar {i}");
+        assert_eq!(whys[i].map(|(_, w)| w), doc.dance.bars[i].builtin_why);
+    }
+    let mine = doc.dance.bars.iter().filter(|b| matches!(b.r#move, Some(MoveKey::Cut { .. }))).count();
+    println!("golden v7: {} bars, {mine} of the person's moves, {} built-in with a why", doc.dance.bars.len(), with_why.len());
+    // Generate was the last edit: undo takes the whys away with its bars, redo brings them back.
+    assert!(p.undo());
+    assert!(p.doc().dance.bars.iter().all(|b| b.builtin_why.is_none()));
+    assert!(p.redo());
+    assert_eq!(p.builtin_why(), whys);
+}
+
+/// A build that knows schema 6 only refuses a v7 file (it would drop the model's textures and
+/// the whys unseen, and find no camera or face track where it looks for them): the v7 golden's
+/// manifest with its version raised past this build's is refused the same way.
 #[test]
 fn a_file_newer_than_this_build_is_refused() {
-    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(GOLDEN_V6)).expect("a zip");
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(GOLDEN_V7)).expect("a zip");
     let mut manifest = String::new();
     std::io::Read::read_to_string(&mut zip.by_name("manifest.json").expect("manifest"), &mut manifest).expect("reads");
     let next = project::CURRENT_SCHEMA_VERSION + 1;
@@ -143,7 +199,8 @@ fn golden_opens_with_everything_in_it(bytes: &[u8], version: u32) -> project::Pr
     let doc = p.doc().clone();
     assert_eq!(doc.dance.take, 0, "a dance saved before takes is take 0");
     assert_eq!(doc.name, "golden v1");
-    assert_eq!(doc.sources.len(), 1);
+    // Schema 7's golden adds a VMD dance on its model and a humanoid BVH of the person's moves.
+    assert_eq!(doc.sources.len(), if version >= 7 { 3 } else { 1 });
     assert_eq!(doc.sources[0].file_name, "tiny.bvh");
     assert_eq!(doc.sources[0].options.fps_override, Some(30.0));
     let song = doc.song.as_ref().expect("song");

@@ -176,3 +176,41 @@ test("summary() states what the page shows, as the document has it; manifestBlob
   assert.deepEqual([...Project.manifestBlobHashes(p.manifest())].sort(), [...p.blobHashes()].sort());
   assert.throws(() => Project.manifestBlobHashes(new TextEncoder().encode("{ not json")), (e) => e.name === "OdoriError" && e.kind === "corrupt");
 });
+
+test("importOnModelInto keeps a model's textures (modelFiles, or the library's model): a reopened project draws the dance textured with no library", () => {
+  const dir = join(data, "mmd", "miku_v2");
+  const folder = ["miku_v2.pmd", "eyeM2.bmp", ...Array.from({ length: 11 }, (_, k) => `toon${String(k).padStart(2, "0")}.bmp`)].map((n) => ({ name: `miku_v2/${n}`, bytes: read(`mmd/miku_v2/${n}`) }));
+  const wave = read("mmd/motion/wavefile_v2.vmd");
+  const model = folder[0];
+  const textures = (lib, report) => lib.clip(report.clips[0].id).meshTextures;
+  // The reference: the library's own import of the folder draws the model with its textures.
+  const ref = new Library();
+  const imported = ref.importFiles(folder, {});
+  const character = ref.clip(imported.models[0].characterId);
+  assert.ok(character.meshTextures > 0, "the library draws miku_v2 textured");
+  // The files given with the model.
+  const p = new Project();
+  const lib = new Library();
+  const r = p.importOnModelInto(lib, "wavefile_v2.vmd", wave, { songOffsetFrames: 160 }, model.name, model.bytes, folder.slice(1));
+  assert.equal(textures(lib, r), character.meshTextures, "drawn with as many textures as the library's mesh");
+  const kept = p.doc().sources[0].model.textures.map((t) => t.name);
+  assert.ok(kept.includes("eyeM2.bmp") && kept.some((n) => /^toon\d\d\.bmp$/.test(n)), JSON.stringify(kept));
+  assert.ok(p.summary().mmdFiles.includes("miku_v2/eyeM2.bmp"), JSON.stringify(p.summary().mmdFiles));
+  // Left out, they are the library's model's (the same file).
+  const q = new Project();
+  const r2 = q.importOnModelInto(ref, "wavefile_v2.vmd", wave, { songOffsetFrames: 160 }, model.name, model.bytes);
+  assert.deepEqual(q.doc().sources[0].model.textures, p.doc().sources[0].model.textures);
+  assert.ok(r2.clips[0].hasMesh);
+  // Saved and opened with an empty library: the same textures drawn.
+  const o = Project.open(p.save());
+  const empty = new Library();
+  const again = o.clipsInto(empty, o.doc().sources[0].id);
+  assert.equal(textures(empty, again), character.meshTextures);
+  // The control: the model alone (no files given, no library model) is drawn untextured.
+  const bare = new Project();
+  const bareLib = new Library();
+  const r3 = bare.importOnModelInto(bareLib, "wavefile_v2.vmd", wave, { songOffsetFrames: 160 }, model.name, model.bytes);
+  assert.equal(textures(bareLib, r3), 0);
+  assert.deepEqual(bare.doc().sources[0].model.textures ?? [], []);
+  assert.ok(r3.warnings.some((w) => /without \d+ of its textures/.test(w)), JSON.stringify(r3.warnings));
+});

@@ -409,7 +409,8 @@ export class ProjectSession {
       const r = await saveBytes(bytes, fileNameFor(this.project.summary().name));
       if (r) this.messages.info(`Saved ${r.name} (${(bytes.length / 1024).toFixed(0)} KiB)`);
       // MMD files go into the person's own .odori file, never further: say so when it holds some.
-      const mmd = [...this.project.doc().sources.map((s) => s.fileName).filter((n) => /\.(vmd|pmx|pmd)$/i.test(n)), ...this.project.summary().cameras.map((c) => c.fileName), ...(this.project.summary().faceTracks || []).map((c) => c.fileName)];
+      // (VMD dances, their models with the textures kept for them, camera and face tracks.)
+      const mmd = this.project.summary().mmdFiles || [];
       if (r && mmd.length) this.messages.info(`${r.name} holds your MMD file${mmd.length === 1 ? "" : "s"} (${mmd.join(", ")}) for you: MMD creators' terms usually forbid passing them on, so keep this file to yourself (a share link leaves them out).`);
       // Named where it was saved ("my dance.odori" → "my dance"): how Recent projects lists it.
       const named = r && r.name.replace(/\.odori$/i, "").trim();

@@ -302,7 +302,7 @@ export class FileLoader {
       try {
         const r = this.importer(f.name, f.bytes, o, mf ? { fileName: mf.name, bytes: mf.bytes } : undefined);
         for (const w of r.warnings) this.messages.info(w.startsWith(f.name) ? w : `${f.name}: ${w}`);
-        this.messages.info(`${f.name}: dance added to the project, posed on ${mf ? `model "${name}" (${mf.name}, kept in the project with the dance)` : "Odori's standard MMD skeleton"}${o.songOffsetFrames ? `, starting at motion frame ${o.songOffsetFrames} (song time 0)` : ""}`);
+        this.messages.info(`${f.name}: dance added to the project, posed on ${mf ? `model "${name}" (${mf.name}, kept in the project with the dance, with the textures found for it)` : "Odori's standard MMD skeleton"}${o.songOffsetFrames ? `, starting at motion frame ${o.songOffsetFrames} (song time 0)` : ""}`);
         this.onImported(r, { fileName: f.name, mmd: "project" });
         added++;
       } catch (e) {

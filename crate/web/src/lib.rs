@@ -102,6 +102,8 @@ export interface ClipInfo {
   humanoid: HumanoidStatus;
   /** True when the clip drives a skinned character (glTF; an MMD model, and a VMD posed on one). */
   hasMesh: boolean;
+  /** The textures its mesh draws with (0: no mesh, or drawn in its materials' colours; an MMD model's kept with a project dance count too). */
+  meshTextures: number;
 }
 export interface GenerateOptions {
   /** Which take of Generate, 0..=15 (default 0): each take above 0 is a different dance of comparable cost (issue 26). */

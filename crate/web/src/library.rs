@@ -41,6 +41,8 @@ struct ClipInfo<'a> {
     points: usize,
     humanoid: &'a HumanoidStatus,
     has_mesh: bool,
+    /// The textures its mesh draws with (0: no mesh, or drawn in its materials' colours).
+    mesh_textures: usize,
 }
 
 #[derive(Serialize)]
@@ -76,6 +78,7 @@ fn info(e: &Entry) -> ClipInfo<'_> {
         points: e.clip.joint_count(),
         humanoid: &e.status,
         has_mesh: e.mesh.is_some(),
+        mesh_textures: e.mesh.as_ref().map_or(0, |(_, m)| m.textures.len()),
     }
 }
 

@@ -181,7 +181,7 @@ struct Inspected {
 }
 
 /// `{ name, bytes }[]` from JS.
-fn files_from_js(files: &JsValue) -> JsResult<Vec<(String, Vec<u8>)>> {
+pub(crate) fn files_from_js(files: &JsValue) -> JsResult<Vec<(String, Vec<u8>)>> {
     let arr: &Array = files.dyn_ref().ok_or_else(|| OdoriError::new("bad-argument", "importFiles: expected an array of { name, bytes }"))?;
     let mut out = Vec::with_capacity(arr.length() as usize);
     for (i, f) in arr.iter().enumerate() {
@@ -205,6 +205,13 @@ impl Library {
     /// model's mesh, or one without vertex morphs).
     pub(crate) fn drawn_morphs(&self, mesh_key: u32) -> Option<&Rc<DrawnMorphs>> {
         self.mmd.drawn_morphs.iter().find(|(k, _)| *k == mesh_key).map(|(_, d)| d)
+    }
+
+    /// The files the library's MMD model with file bytes `model_bytes` draws with (its textures
+    /// and shared toon ramps, `ImportedModel::drawn_files`): what a project keeps with a dance
+    /// posed on it. Empty when the library holds no model of those bytes.
+    pub(crate) fn mmd_drawn_files(&self, model_bytes: &[u8]) -> Vec<(String, String, Vec<u8>)> {
+        self.mmd.models.iter().find(|m| m.bytes == model_bytes).map(|m| m.drawn_files()).unwrap_or_default()
     }
 
     /// Keeps a model's morphs on its mesh under `mesh_key` (replacing any kept there before).
@@ -489,9 +496,9 @@ impl Library {
 
     /// The file of MMD model `name` in the library, as it was given: `{ fileName, bytes }`, so a
     /// project dance can keep the model (`Project.importOnModelInto`) after the model was
-    /// imported on its own. Only the model file: its textures stay with the library (a reopened
-    /// project draws the dance on the model's mesh in its materials' colours until the model is
-    /// imported again with its textures). Throws "not-found" when there is no model of that name.
+    /// imported on its own. Only the model file: `importOnModelInto` takes the textures (and
+    /// shared toon ramps) the library's model found along with it, so the project keeps them
+    /// too. Throws "not-found" when there is no model of that name.
     #[wasm_bindgen(js_name = mmdModelFile, unchecked_return_type = "{ fileName: string, bytes: Uint8Array }")]
     pub fn mmd_model_file(&self, name: &str) -> Result<JsValue, OdoriError> {
         let m = self.mmd.models.iter().find(|m| m.model.name == name).ok_or_else(|| {

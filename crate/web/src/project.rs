@@ -147,7 +147,8 @@ impl Project {
 
     /// What the page shows of the project (`ProjectSummary`): name, sources, song (with a key
     /// that changes only when the song does), tags, put-on clips (each with a key), the body,
-    /// texts, ρ, the music weight, the camera motions and the face tracks (each with a key).
+    /// texts, ρ, the music weight, the camera motions and the face tracks (each with a key), the
+    /// MMD files it keeps (`mmdFiles`).
     #[wasm_bindgen(unchecked_return_type = "ProjectSummary")]
     pub fn summary(&self) -> JsValue {
         to_js(&self.inner.summary())
@@ -546,9 +547,16 @@ impl Project {
 
     /// `importInto` of a VMD dance posed on an MMD model file given with it (`modelFileName`,
     /// `modelBytes`: a PMX/PMD; its bones and IK pose the dance). The project keeps the model
-    /// with the dance, so a reopened project poses it on that model again; when the model's
-    /// bytes are missing it is posed on the standard MMD skeleton and the report's warnings say so.
+    /// with the dance, and the files it is drawn with (its textures and MMD's shared toon ramps
+    /// it uses: schema 7), each once by hash, so a reopened project poses the dance on that model
+    /// and draws it textured even without the model in the library. `modelFiles`
+    /// (`{ name, bytes }[]`, as `importFiles` takes them): where its textures are found by the
+    /// paths the model names; omitted, they are the ones the library's model of that name found
+    /// (when its file is the same). When the model's bytes are missing it is posed on the standard
+    /// MMD skeleton and the report's warnings say so. Like every MMD file they stay with the
+    /// person: in the `.odori` file, never in a share link (`summary().mmdFiles` names them).
     #[wasm_bindgen(js_name = importOnModelInto)]
+    #[allow(clippy::too_many_arguments)]
     pub fn import_on_model_into(
         &mut self,
         library: &mut Library,
@@ -557,10 +565,22 @@ impl Project {
         #[wasm_bindgen(unchecked_param_type = "ImportOptions | undefined")] options: JsValue,
         model_file_name: &str,
         model_bytes: &[u8],
+        #[wasm_bindgen(unchecked_param_type = "{ name: string, bytes: Uint8Array }[] | undefined")] model_files: JsValue,
     ) -> Result<JsValue, OdoriError> {
         let o: JsImportOptions = from_js(options, "import options", &["fpsOverride", "unitScale", "gltfFps", "songOffsetFrames"])?;
         let options = ImportOptions { fps_override: o.fps_override, unit_scale: o.unit_scale, gltf_fps: o.gltf_fps.unwrap_or(ImportOptions::default().gltf_fps), song_offset_frames: o.song_offset_frames };
-        let r = self.inner.add_source_on(file_name, bytes, options, Some((model_file_name, model_bytes)))?;
+        let drawn = if model_files.is_undefined() || model_files.is_null() {
+            library.mmd_drawn_files(model_bytes)
+        } else {
+            let files = crate::mmd::files_from_js(&model_files)?;
+            let model = odori_core::import::mmd_model::read_model(model_file_name, model_bytes).map_err(|e| {
+                let e = odori_core::mmd::files::MmdFilesError::from(e);
+                OdoriError { kind: e.kind(), message: e.to_string(), file: Some(model_file_name.to_string()) }
+            })?;
+            odori_core::mmd::files::drawn_files_in(model_file_name, &model, &files)
+        };
+        let given = project::GivenModel { file_name: model_file_name, bytes: model_bytes, drawn: &drawn };
+        let r = self.inner.add_source_with_model(file_name, bytes, options, given)?;
         self.changed(());
         self.clips_into(library, r.id.0)
     }
@@ -638,7 +658,7 @@ impl Project {
     pub fn cameras_into(&mut self, library: &mut Library) -> Vec<String> {
         let mut tracks = Vec::new();
         let mut problems = Vec::new();
-        for i in 0..self.inner.doc().cameras.len() {
+        for i in 0..self.inner.doc().tracks(project::TrackKind::Camera).count() {
             match self.inner.camera_track(i) {
                 Ok(t) => tracks.push(t),
                 Err(e) => problems.push(e.to_string()),
@@ -665,7 +685,7 @@ impl Project {
         self.changed(());
         self.face_tracks_into(library);
         let info = to_js(&crate::mmd::face_track_info(&track));
-        let index = self.inner.doc().faces.len().saturating_sub(1) as u32;
+        let index = self.inner.doc().tracks(project::TrackKind::Face).count().saturating_sub(1) as u32;
         js_sys::Reflect::set(&info, &JsValue::from_str("index"), &JsValue::from(index)).map_err(|_| OdoriError::new("bad-argument", "face track info"))?;
         Ok(info)
     }
@@ -687,7 +707,7 @@ impl Project {
     pub fn face_tracks_into(&mut self, library: &mut Library) -> Vec<String> {
         let mut tracks = Vec::new();
         let mut problems = Vec::new();
-        for i in 0..self.inner.doc().faces.len() {
+        for i in 0..self.inner.doc().tracks(project::TrackKind::Face).count() {
             match self.inner.face_track(i) {
                 Ok(t) => tracks.push(t),
                 Err(e) => problems.push(e.to_string()),
@@ -838,7 +858,8 @@ impl Project {
     /// 0) whose move it repeats where the song's sections repeat (`repeats()`: found, or marked by
     /// the person), else null, and `repeatMarked` true when the person marked that repeat;
     /// `builtinWhy`, on a built-in bar under *my moves*, why no move of the person's is there
-    /// (from the last Generate), else absent; `quality` is null while no bar holds a move.
+    /// (from the Generate that filled it, kept with the bar: the same after reopening and
+    /// through undo), else absent; `quality` is null while no bar holds a move.
     /// `beatTimesSecs` as for `quality`.
     #[wasm_bindgen(js_name = barNotes)]
     pub fn bar_notes(&mut self, beat_times_secs: Option<Vec<f32>>) -> Result<JsValue, OdoriError> {
@@ -860,7 +881,7 @@ impl Project {
         // person marked the repeat.
         odori_core::project::repeats::mark_notes(&mut notes, &self.inner.repeats()?);
         // A built-in bar under *my moves* says why (issue 26's preference order).
-        odori_core::choreo::mark_builtin_why(&mut notes, self.inner.builtin_why());
+        odori_core::choreo::mark_builtin_why(&mut notes, &self.inner.builtin_why());
         Ok(to_js(&Notes { quality: Some(q), notes }))
     }
 
@@ -1002,6 +1023,8 @@ export interface ProjectSummary {
   cameras: { fileName: string; key: string }[];
   /** Face (lip-sync) tracks kept in the project (`addFaceTrack`), in order; `key` changes only when one does. */
   faceTracks: { fileName: string; key: string }[];
+  /** Every MikuMikuDance file the project keeps, by name (VMD dances, their models and the models' textures, camera and face tracks): they stay in the person's `.odori` file, never in a share link. */
+  mmdFiles: string[];
 }
 /** A face (lip-sync) track: its file, key count, the morphs it keys (each once), the motion frame that is song time 0 and the song time of its last key. */
 export interface FaceTrackInfo { source: string; keys: number; morphs: string[]; songOffsetFrames: number; durationSecs: number; }

@@ -1,6 +1,6 @@
 //! A lip-sync track (issue 28): the morph (face) keys of a VMD that MMD users load beside a dance
 //! VMD onto the same model — usually a file of face keys only, which is no motion clip (it has no
-//! bone keys). The project keeps such files ([`crate::project::faces`]); this module is what they
+//! bone keys). The project keeps such files ([`crate::project::tracks`]); this module is what they
 //! mean on a model: the track's weights at a song time, laid over the drawn clip's own face keys
 //! (a track overrides them for the morphs it keys, the clip's keys still play the others), and
 //! its keys on an export's timeline, so a dance goes back to MMD with its lip-sync.

@@ -105,6 +105,48 @@ pub struct ImportedModel {
     /// The model file's bytes as given, so a host can keep the model with a project dance
     /// later (`Project::add_source_on`) without asking for the file again.
     pub bytes: Vec<u8>,
+    /// (the file's path in the set, its bytes) of each of MMD's shared toon ramps
+    /// (`toon01.bmp` … `toon10.bmp`) the model's materials use that the set held.
+    pub shared_toons: Vec<(String, Vec<u8>)>,
+}
+
+impl ImportedModel {
+    /// The files the model draws with, as [`super::mesh::model_character`] takes them (path the
+    /// model names — `toonNN.bmp` for a shared ramp —, path in the set, bytes): its textures and
+    /// the shared toon ramps it uses. What a project keeps with a dance posed on the model
+    /// (`Project::add_source_with_model`), so a reopened project draws it textured.
+    pub fn drawn_files(&self) -> Vec<(String, String, Vec<u8>)> {
+        drawn_list(&self.textures, &self.shared_toons)
+    }
+}
+
+/// Textures then shared toon ramps (named `toonNN.bmp`), a ramp the textures hold under that
+/// name left out.
+fn drawn_list(textures: &[(String, String, Vec<u8>)], shared_toons: &[(String, Vec<u8>)]) -> Vec<(String, String, Vec<u8>)> {
+    use crate::import::mmd_model::normalize_texture_path;
+    let toon_name = |p: &str| normalize_texture_path(p).rsplit('/').next().unwrap_or_default().to_string();
+    let named = |n: &str| textures.iter().any(|(t, _, _)| normalize_texture_path(t) == n);
+    let toons = shared_toons.iter().map(|(p, b)| (toon_name(p), p.clone(), b.clone())).filter(|(n, _, _)| !named(n));
+    textures.iter().cloned().chain(toons).collect()
+}
+
+/// MMD's shared toon ramps the model's materials use (`toonNN.bmp`, which MMD ships and models
+/// name by number), found among `files` by file name: (path in the set, bytes), once each.
+pub fn shared_toon_files(model: &MmdModel, files: &[(String, Vec<u8>)]) -> Vec<(String, Vec<u8>)> {
+    use crate::import::mmd_model::{normalize_texture_path, Toon};
+    let base = |p: &str| normalize_texture_path(p).rsplit('/').next().unwrap_or_default().to_string();
+    let mut out: Vec<(String, Vec<u8>)> = Vec::new();
+    for m in &model.materials {
+        let Toon::Shared(k) = m.toon else { continue };
+        let name = format!("toon{:02}.bmp", k as u32 + 1);
+        if out.iter().any(|(p, _)| base(p) == name) {
+            continue;
+        }
+        if let Some((p, b)) = files.iter().find(|(p, _)| base(p) == name) {
+            out.push((p.clone(), b.clone()));
+        }
+    }
+    out
 }
 
 /// A VMD's bone keys posed on a rig: the clip, where it was posed, and what was set aside.
@@ -299,6 +341,16 @@ fn relative_to<'a>(path: &'a str, dir: &str) -> Option<&'a str> {
 /// folder, ignoring case and separator). Missing textures are a problem, not a failure.
 fn import_model(file: &str, bytes: &[u8], files: &[(String, Vec<u8>)]) -> Result<(ImportedModel, Option<MmdFilesError>), MmdFilesError> {
     let model = read_model(file, bytes)?;
+    let (textures, missing) = find_textures(file, &model, files);
+    let problem = (!missing.is_empty()).then(|| MmdFilesError::MissingTextures { file: file.into(), missing: missing.join(", ") });
+    let shared_toons = shared_toon_files(&model, files);
+    Ok((ImportedModel { file: file.into(), model, textures, missing_textures: missing, bytes: bytes.to_vec(), shared_toons }, problem))
+}
+
+/// The textures model `file` names, found among `files` (paths relative to the model's folder,
+/// ignoring case and separator): (path the model names, path in the set, bytes) of each found,
+/// and the paths not found (MMD's shared toon ramps, which ship with MMD, are not missing).
+pub fn find_textures(file: &str, model: &MmdModel, files: &[(String, Vec<u8>)]) -> (Vec<(String, String, Vec<u8>)>, Vec<String>) {
     let dir = folder(file);
     let rel: Vec<(usize, &str)> = files.iter().enumerate().filter_map(|(i, (p, _))| relative_to(p, dir).map(|r| (i, r))).collect();
     let names: Vec<&str> = rel.iter().map(|(_, r)| *r).collect();
@@ -316,8 +368,14 @@ fn import_model(file: &str, bytes: &[u8], files: &[(String, Vec<u8>)]) -> Result
             None => missing.push(t.clone()),
         }
     }
-    let problem = (!missing.is_empty()).then(|| MmdFilesError::MissingTextures { file: file.into(), missing: missing.join(", ") });
-    Ok((ImportedModel { file: file.into(), model, textures, missing_textures: missing, bytes: bytes.to_vec() }, problem))
+    (textures, missing)
+}
+
+/// The files model `file` draws with among `files`, as [`ImportedModel::drawn_files`] lists
+/// them: its textures ([`find_textures`]) and the shared toon ramps it uses.
+pub fn drawn_files_in(file: &str, model: &MmdModel, files: &[(String, Vec<u8>)]) -> Vec<(String, String, Vec<u8>)> {
+    let (textures, _) = find_textures(file, model, files);
+    drawn_list(&textures, &shared_toon_files(model, files))
 }
 
 /// Poses one parsed VMD on the model chosen by `options.model`, else the model its header names
@@ -373,8 +431,10 @@ pub fn pose_vmd(file: &str, vmd: Vmd, models: &[&MmdModel], options: &MmdFilesOp
 pub enum SourceModel<'a> {
     /// The built-in standard MMD skeleton.
     Standard,
-    /// A PMX/PMD model file (name, bytes): the dance is posed with its bones and IK.
-    File(&'a str, &'a [u8]),
+    /// A PMX/PMD model file (name, bytes): the dance is posed with its bones and IK, and drawn
+    /// on its mesh with the files given with it (as [`ImportedModel::drawn_files`] lists them:
+    /// its textures and shared toon ramps; none: its materials' colours).
+    File(&'a str, &'a [u8], &'a [(String, String, Vec<u8>)]),
     /// The project names a model file whose bytes are missing: posed on the standard skeleton,
     /// with a warning naming it.
     Missing(&'a str),
@@ -398,7 +458,7 @@ pub fn import_vmd_source_on(file: &str, bytes: &[u8], song_offset_frames: Option
     let vmd = vmd::read(file, bytes).map_err(|e| err(e.into()))?;
     let mut warnings = Vec::new();
     let parsed = match model {
-        SourceModel::File(model_file, model_bytes) => Some(read_model(model_file, model_bytes).map_err(|e| err(e.into()))?),
+        SourceModel::File(model_file, model_bytes, _) => Some(read_model(model_file, model_bytes).map_err(|e| err(e.into()))?),
         SourceModel::Missing(model_file) => {
             warnings.push(format!("{file}: its model {model_file} is missing from the project: posed on the {STANDARD_RIG} instead"));
             None
@@ -419,22 +479,27 @@ pub fn import_vmd_source_on(file: &str, bytes: &[u8], song_offset_frames: Option
         let on = if parsed.is_some() { format!("model {rig}") } else { format!("the {STANDARD_RIG}") };
         warnings.push(format!("{file}: {} keyed bones are not in {on} and were ignored", m.unmatched_bones.len()));
     }
-    // Drawn on the model's own mesh. The project keeps the model file, not its textures: the
-    // mesh has its materials' colours (a host draws the library's textured mesh of the same
-    // model instead when it has one).
+    // Drawn on the model's own mesh with the files kept with it (its textures and shared toon
+    // ramps: schema 7); a texture not kept leaves its materials in their colour, as said.
     let mesh = match (&parsed, model) {
-        (Some(pm), SourceModel::File(model_file, _)) => match crate::mmd::mesh::model_character(model_file, pm, &[], &[], &[]) {
-            Ok(c) => {
-                if pm.textures.iter().any(|t| !t.trim().is_empty()) {
-                    warnings.push(format!("{file}: the project keeps the model file {model_file}, not its {} textures: without the model in the library the dance is drawn on its mesh in its materials' colours", pm.textures.len()));
+        (Some(pm), SourceModel::File(model_file, _, drawn)) => {
+            let kept: Vec<String> = drawn.iter().map(|(n, _, _)| crate::import::mmd_model::normalize_texture_path(n)).collect();
+            let shared = |t: &str| t.len() <= 10 && t.to_ascii_lowercase().starts_with("toon");
+            let missing: Vec<String> = pm.textures.iter().filter(|t| !t.trim().is_empty() && !shared(t) && !kept.contains(&crate::import::mmd_model::normalize_texture_path(t))).cloned().collect();
+            match crate::mmd::mesh::model_character(model_file, pm, drawn, &missing, &[]) {
+                Ok(c) => {
+                    if !missing.is_empty() {
+                        warnings.push(format!("{file}: the project keeps the model file {model_file} without {} of its textures ({}): without the model in the library those materials are drawn in their colours", missing.len(), missing.join(", ")));
+                    }
+                    warnings.extend(c.notices.iter().filter(|n| !n.contains("is not in the files given")).cloned());
+                    Some(c.character.mesh)
                 }
-                Some(c.character.mesh)
+                Err(e) => {
+                    warnings.push(format!("{e} (the dance is posed on the model but not drawn with its mesh)"));
+                    None
+                }
             }
-            Err(e) => {
-                warnings.push(format!("{e} (the dance is posed on the model but not drawn with its mesh)"));
-                None
-            }
-        },
+        }
         _ => None,
     };
     let skeleton = m.clip.skeleton.clone();

@@ -70,7 +70,7 @@ impl Project {
         let (bars, mut doc) = self.dance_edit_start()?;
         crate::choreo::check_bar(&bars, bar)?;
         let b = &mut doc.dance.bars[bar];
-        (b.state, b.r#move) = (BarKind::Pinned, Some(key.clone()));
+        (b.state, b.r#move, b.builtin_why) = (BarKind::Pinned, Some(key.clone()), None);
         self.commit(doc);
         Ok(())
     }
@@ -92,7 +92,7 @@ impl Project {
         let (bars, mut doc) = self.dance_edit_start()?;
         crate::choreo::check_bar(&bars, bar)?;
         let b = &mut doc.dance.bars[bar];
-        (b.state, b.r#move) = (BarKind::Empty, None);
+        (b.state, b.r#move, b.builtin_why) = (BarKind::Empty, None, None);
         self.commit(doc);
         Ok(())
     }
@@ -114,15 +114,16 @@ impl Project {
         let repeat_of = self.repeat_of_bars()?;
         let d = &self.derived;
         let (states, report, _) = crate::choreo::generate_states_with_repeats(d.library(), &bars, &states, doc.dance.settings.fill, options, &repeat_of)?;
-        let why = states.iter().enumerate().map(|(i, s)| Some((s.segment()?, report.builtin_why.get(i).copied().flatten()?))).collect();
-        for (b, state) in doc.dance.bars.iter_mut().zip(states) {
+        for (i, (b, state)) in doc.dance.bars.iter_mut().zip(states).enumerate() {
             if !matches!(state, crate::choreo::BarState::Pinned { .. }) {
+                let filled = state.segment().is_some();
                 *b = d.bar_doc(state, b.search.take());
+                // Why the bar is built-in, kept with it (schema 7).
+                b.builtin_why = report.builtin_why.get(i).copied().flatten().filter(|_| filled);
             }
         }
         doc.dance.take = options.take;
         self.commit(doc);
-        self.builtin_why = why;
         Ok(report)
     }
 
@@ -200,11 +201,15 @@ impl Project {
         Ok(run)
     }
 
-    /// Per bar, the built-in move the last Generate chose there and why it is built-in though
-    /// the person's moves come first (issue 26; [`crate::choreo::mark_builtin_why`] says it
-    /// on the bar's note while the bar still holds that move). Empty before any Generate.
-    pub fn builtin_why(&self) -> &[Option<(usize, crate::choreo::BuiltinWhy)>] {
-        &self.builtin_why
+    /// Per bar, the built-in move the Generate that filled it chose there and why it is
+    /// built-in though the person's moves come first (issue 26; [`crate::choreo::mark_builtin_why`]
+    /// says it on the bar's note while the bar still holds that move). Kept with the bars
+    /// ([`BarDoc::builtin_why`], schema 7): the same after save/reopen and through undo; `None`
+    /// for a bar Generate did not make built-in, or whose move is not in the library.
+    pub fn builtin_why(&mut self) -> Vec<Option<(usize, crate::choreo::BuiltinWhy)>> {
+        self.derived.update(&self.doc, &self.history.undo, &self.history.redo, &self.blobs);
+        let d = &self.derived;
+        self.doc.dance.bars.iter().map(|b| Some((d.state_of(b).segment()?, b.builtin_why?))).collect()
     }
 
     /// The take of Generate the dance's generated bars come from (0 until "another take").

@@ -10,6 +10,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use super::models::{Drawn, ModelIn};
 use super::{decode_envelope, BarDoc, BarKind, BlobHash, BlobStore, ClipRef, MoveKey, ProjectDoc, ProjectError, SearchDoc, SongDoc, Source, SourceId};
 use crate::choreo::{BarState, BuiltinLoader, ClipSummary, FeedbackSession, SegmentLibrary, SegmentOptions};
 use crate::canon::humanoid::HumanoidStatus;
@@ -136,24 +137,26 @@ impl Derived {
     /// shows the same clips the project cuts).
     pub(crate) fn imported_source(&mut self, src: &Source, blobs: &BlobStore) -> Option<Result<Arc<Imported>, ImportError>> {
         let bytes = blobs.get(&src.blob)?.clone();
-        let model = src.model.as_ref().map(|m| (m.file_name.as_str(), &m.blob, blobs.get(&m.blob).cloned()));
-        Some(self.import_on(&src.blob, &src.file_name, &bytes, &src.options, model.as_ref().map(|(f, h, b)| (*f, *h, b.as_deref()))))
+        let model = src.model.as_ref().map(|m| (m, blobs.get(&m.blob).cloned()));
+        let on = model.as_ref().map(|(m, b)| ModelIn { file: &m.file_name, hash: &m.blob, bytes: b.as_deref(), drawn: Drawn::Kept(m, blobs) });
+        Some(self.import_on(&src.blob, &src.file_name, &bytes, &src.options, on))
     }
 
-    /// [`Derived::import`] of a VMD dance posed on an MMD model file (name, hash, bytes; `None`
-    /// bytes: named but missing, so posed on the standard skeleton with a warning), or on the
-    /// standard skeleton like any file when `model` is `None`.
-    pub(crate) fn import_on(&mut self, hash: &BlobHash, file_name: &str, bytes: &[u8], options: &ImportOptions, model: Option<(&str, &BlobHash, Option<&[u8]>)>) -> Result<Arc<Imported>, ImportError> {
+    /// [`Derived::import`] of a VMD dance posed on an MMD model file (`None` bytes: named but
+    /// missing, so posed on the standard skeleton with a warning; drawn on its mesh with the
+    /// files kept with it), or on the standard skeleton like any file when `model` is `None`.
+    pub(crate) fn import_on(&mut self, hash: &BlobHash, file_name: &str, bytes: &[u8], options: &ImportOptions, model: Option<ModelIn<'_>>) -> Result<Arc<Imported>, ImportError> {
         use crate::mmd::files::{import_vmd_source_on, SourceModel};
-        let Some((model_file, model_hash, model_bytes)) = model else { return self.import(hash, file_name, bytes, options) };
-        let key = format!("{}|on {model_file} {model_hash} {}", import_key(hash, file_name, options), model_bytes.is_some());
+        let Some(m) = model else { return self.import(hash, file_name, bytes, options) };
+        let key = format!("{}|on {} {} {} {}", import_key(hash, file_name, options), m.file, m.hash, m.bytes.is_some(), m.drawn.key());
         if let Some(i) = self.imports.get(&key) {
             return Ok(i.clone());
         }
         options.validate(file_name)?;
-        let on = match model_bytes {
-            Some(b) => SourceModel::File(model_file, b),
-            None => SourceModel::Missing(model_file),
+        let drawn = m.drawn.files();
+        let on = match m.bytes {
+            Some(b) => SourceModel::File(m.file, b, &drawn),
+            None => SourceModel::Missing(m.file),
         };
         let imported = Arc::new(import_vmd_source_on(file_name, bytes, options.song_offset_frames, on)?);
         self.imports.insert(key, imported.clone());
@@ -384,7 +387,7 @@ impl Derived {
             BarState::Pinned { segment } => (BarKind::Pinned, Some(segment)),
             BarState::Generated { segment } => (BarKind::Generated, Some(segment)),
         };
-        BarDoc { state: kind, r#move: seg.and_then(|s| self.keys.get(s).cloned()), search }
+        BarDoc { state: kind, r#move: seg.and_then(|s| self.keys.get(s).cloned()), search, builtin_why: None }
     }
 
     /// A bar's search by segment number (moves not in the library are forgotten).

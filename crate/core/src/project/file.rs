@@ -31,7 +31,7 @@ use super::{BlobHash, BlobStore, Project, ProjectDoc};
 
 /// The schema version this build writes. Bump it with a step in [`migrate`] and a golden file
 /// of the old version in `tests/golden/`.
-pub const CURRENT_SCHEMA_VERSION: u32 = 6;
+pub const CURRENT_SCHEMA_VERSION: u32 = 7;
 /// The oldest schema version this build opens.
 pub const OLDEST_SCHEMA_VERSION: u32 = 1;
 /// The value of the manifest's `format` field.
@@ -332,7 +332,79 @@ fn read_error(size_bytes: usize, what: &str, e: std::io::Error) -> FileError {
 /// The steps from each schema version to the next: `MIGRATIONS[v - OLDEST_SCHEMA_VERSION]`
 /// rewrites a version-`v` manifest (as JSON) into version `v + 1` (a renamed field, a new
 /// field's default...).
-const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes, dance_take, no_cameras, no_repeat_marks, no_face_tracks];
+const MIGRATIONS: &[fn(&mut serde_json::Value)] = &[history_as_changes, dance_take, no_cameras, no_repeat_marks, no_face_tracks, one_track_list];
+
+/// 6 → 7: camera motions and face tracks, two lists of the same fields (`cameras`, `faces`),
+/// become one list of MMD tracks with a kind (`mmdTracks`: the cameras, then the faces, each in
+/// its order, so every camera and face track keeps its index), in the document and in every
+/// state of its history (rebuilt from the changes, rewritten, and written as changes again). The
+/// two other things schema 7 keeps — a model's textures and why a bar is built-in — were not
+/// kept before, and their absence reads as none. A history that does not rebuild is left for
+/// the reader to refuse.
+fn one_track_list(m: &mut serde_json::Value) {
+    fn rewrite(doc: &mut serde_json::Value) {
+        let Some(project) = doc.as_object_mut() else { return };
+        let mut tracks = Vec::new();
+        for (field, kind) in [("cameras", "camera"), ("faces", "face")] {
+            if let Some(serde_json::Value::Array(list)) = project.remove(field) {
+                for mut t in list {
+                    if let Some(t) = t.as_object_mut() {
+                        t.insert("kind".into(), kind.into());
+                    }
+                    tracks.push(t);
+                }
+            }
+        }
+        if !tracks.is_empty() {
+            project.insert("mmdTracks".into(), serde_json::Value::Array(tracks));
+        }
+    }
+    rewrite_every_state(m, rewrite);
+}
+
+/// Applies `rewrite` to the manifest's document and to every state of its history (schema 2's
+/// changes: each state rebuilt from the one after it, rewritten, and its change from the
+/// rewritten state after it written again). Leaves the history as it was when it does not
+/// rebuild (the reader then refuses it with the reason).
+fn rewrite_every_state(m: &mut serde_json::Value, rewrite: fn(&mut serde_json::Value)) {
+    let Some(current) = m.get("project").cloned() else { return };
+    let mut stacks = Vec::new();
+    for stack in ["undo", "redo"] {
+        let changes = match m.get(stack) {
+            Some(serde_json::Value::Array(c)) => c.clone(),
+            _ => Vec::new(),
+        };
+        // The states, last first (each from the one after it).
+        let mut states = Vec::with_capacity(changes.len());
+        let mut next = current.clone();
+        for change in changes.iter().rev() {
+            match json_patch(&next, change) {
+                Ok(state) => {
+                    states.push(state.clone());
+                    next = state;
+                }
+                Err(_) => return,
+            }
+        }
+        stacks.push((stack, states));
+    }
+    let mut project = current;
+    rewrite(&mut project);
+    for (stack, mut states) in stacks {
+        let mut next = project.clone();
+        let mut out = Vec::with_capacity(states.len());
+        for state in states.iter_mut() {
+            rewrite(state);
+            out.push(json_diff(&next, state));
+            next = state.clone();
+        }
+        out.reverse();
+        if m.get(stack).is_some() {
+            m[stack] = serde_json::Value::Array(out);
+        }
+    }
+    m["project"] = project;
+}
 
 /// 5 → 6: the project keeps the face (lip-sync) tracks imported (lip-sync VMDs, issue 28); a
 /// project saved before has none. (The step writes the empty list the reader would assume
@@ -576,6 +648,9 @@ fn named_blobs(d: &ProjectDoc) -> Vec<(BlobHash, String)> {
     for s in &d.sources {
         if let Some(m) = &s.model {
             out.push((m.blob.clone(), format!("MMD model {} of {}", m.file_name, s.file_name)));
+            for t in &m.textures {
+                out.push((t.blob.clone(), format!("texture {} of MMD model {}", t.name, m.file_name)));
+            }
         }
     }
     if let Some(song) = &d.song {
@@ -589,11 +664,105 @@ fn named_blobs(d: &ProjectDoc) -> Vec<(BlobHash, String)> {
             out.push((bvh.clone(), format!("put-on motion {name}")));
         }
     }
-    for c in &d.cameras {
-        out.push((c.blob.clone(), format!("camera motion {}", c.file_name)));
-    }
-    for f in &d.faces {
-        out.push((f.blob.clone(), format!("face track {}", f.file_name)));
+    for t in &d.mmd_tracks {
+        out.push((t.blob.clone(), format!("{} {}", t.kind.words(), t.file_name)));
     }
     out
+}
+
+#[cfg(test)]
+mod migration_tests {
+    use super::*;
+    use serde_json::json;
+
+    /// A schema-6 manifest: the current document has a camera and a face track; its history
+    /// goes back through the face track's import (undo 1) and the camera's (undo 0), and a redo
+    /// state adds a second camera.
+    fn v6() -> serde_json::Value {
+        let cam = json!({ "fileName": "cam.vmd", "blob": "a".repeat(64) });
+        let cam2 = json!({ "fileName": "cam2.vmd", "blob": "c".repeat(64), "songOffsetFrames": 5 });
+        let face = json!({ "fileName": "lip.vmd", "blob": "b".repeat(64), "songOffsetFrames": 10 });
+        let state = |cameras: Vec<serde_json::Value>, faces: Vec<serde_json::Value>| json!({ "name": "p", "cameras": cameras, "faces": faces });
+        let now = state(vec![cam.clone()], vec![face.clone()]);
+        let before_face = state(vec![cam.clone()], vec![]);
+        let before_cam = state(vec![], vec![]);
+        let redo = state(vec![cam.clone(), cam2], vec![face]);
+        json!({
+            "format": FORMAT_NAME,
+            "schemaVersion": 6,
+            "project": now,
+            "undo": [json_diff(&before_face, &before_cam), json_diff(&now, &before_face)],
+            "redo": [json_diff(&now, &redo)],
+        })
+    }
+
+    /// Every state of a manifest's stacks, rebuilt from its changes (oldest undo first; redo as stacked).
+    fn states(m: &serde_json::Value, stack: &str) -> Vec<serde_json::Value> {
+        let mut next = m["project"].clone();
+        let mut out = Vec::new();
+        for c in m[stack].as_array().expect("a stack").iter().rev() {
+            next = json_patch(&next, c).expect("patches");
+            out.push(next.clone());
+        }
+        out.reverse();
+        out
+    }
+
+    #[test]
+    fn six_to_seven_makes_one_track_list_in_the_document_and_every_history_state() {
+        let mut m = v6();
+        one_track_list(&mut m);
+        let kinds = |v: &serde_json::Value| -> Vec<(String, String)> {
+            assert!(v.get("cameras").is_none() && v.get("faces").is_none(), "the two lists are gone: {v}");
+            v.get("mmdTracks").and_then(|t| t.as_array()).map_or(Vec::new(), |t| t.iter().map(|t| (t["kind"].as_str().unwrap_or("").to_string(), t["fileName"].as_str().unwrap_or("").to_string())).collect())
+        };
+        let pair = |k: &str, f: &str| (k.to_string(), f.to_string());
+        assert_eq!(kinds(&m["project"]), vec![pair("camera", "cam.vmd"), pair("face", "lip.vmd")]);
+        let undo = states(&m, "undo");
+        assert_eq!(undo.iter().map(kinds).collect::<Vec<_>>(), vec![vec![], vec![pair("camera", "cam.vmd")]]);
+        let redo = states(&m, "redo");
+        assert_eq!(redo.iter().map(kinds).collect::<Vec<_>>(), vec![vec![pair("camera", "cam.vmd"), pair("camera", "cam2.vmd"), pair("face", "lip.vmd")]]);
+        // Fields other than the kind are kept as they were.
+        assert_eq!(redo[0]["mmdTracks"][1]["songOffsetFrames"], 5);
+        assert_eq!(m["project"]["mmdTracks"][1]["songOffsetFrames"], 10);
+        // The migrated manifest reads as a project whose history undoes and redoes the tracks.
+        let opened = read_manifest(&serde_json::to_vec(&v6_with_rest()).expect("json"), |_| None, true).expect("opens");
+        let mut p = opened.project;
+        assert_eq!(opened.migrated_from, Some(6));
+        assert_eq!((p.doc().tracks(super::super::TrackKind::Camera).count(), p.doc().tracks(super::super::TrackKind::Face).count()), (1, 1));
+        assert!(p.undo() && p.undo());
+        assert!(p.doc().mmd_tracks.is_empty());
+        assert!(p.redo() && p.redo() && p.redo());
+        assert_eq!(p.doc().tracks(super::super::TrackKind::Camera).count(), 2);
+        // Missing blobs are named by their kind.
+        let what: Vec<&str> = opened.missing.iter().map(|m| m.what.as_str()).collect();
+        assert!(what.contains(&"camera motion cam.vmd") && what.contains(&"face track lip.vmd"), "{what:?}");
+    }
+
+    /// [`v6`] with the rest of a document, so it reads as a project.
+    fn v6_with_rest() -> serde_json::Value {
+        let mut m = v6();
+        let rest = serde_json::to_value(ProjectDoc::default()).expect("json");
+        let fill = |v: &mut serde_json::Value| {
+            for (k, d) in rest.as_object().expect("an object") {
+                if v.get(k).is_none() {
+                    v[k] = d.clone();
+                }
+            }
+        };
+        fill(&mut m["project"]);
+        // The history's changes are from the document: they stay valid with the fields added.
+        m["generator"] = "test".into();
+        m["blobs"] = json!({});
+        m
+    }
+
+    #[test]
+    fn a_history_that_does_not_rebuild_is_left_for_the_reader() {
+        let mut m = v6();
+        m["undo"] = json!([{ "a": 3 }]);
+        let before = m["undo"].clone();
+        one_track_list(&mut m);
+        assert_eq!(m["undo"], before);
+    }
 }

@@ -4,8 +4,8 @@
 //! dance (each bar's state and move by a stable [`MoveKey`], never by an index into a vector;
 //! the shown and liked candidates of each bar's search; ρ and the filling's weights), clip
 //! tags, texts, the chosen character and the camera, and the MMD camera motions and face
-//! (lip-sync) tracks imported (camera VMDs, [`CameraSource`]; lip-sync VMDs, [`FaceSource`]: the
-//! bytes as given, like a source's).
+//! (lip-sync) tracks imported (one list of [`MmdTrack`]s, [`tracks`]: the bytes as given, like a
+//! source's).
 //!
 //! Edits are methods on [`Project`]; each one that changes the document records the previous
 //! document, so undo/redo is the project's history (kept and saved with it). Everything else —
@@ -21,10 +21,11 @@
 pub mod blob;
 mod dance;
 pub mod derive;
-pub mod faces;
+pub mod models;
 pub mod file;
 pub mod repeats;
 pub mod summary;
+pub mod tracks;
 
 use crate::history::History;
 use std::collections::BTreeSet;
@@ -41,7 +42,8 @@ use crate::music::{AnalysisOptions, GridCorrection, MusicError, RmsEnvelope};
 
 pub use blob::{BlobHash, BlobStore};
 pub use derive::{ClipInfo, Derived};
-pub use faces::FaceSource;
+pub use models::{GivenModel, ModelFile, ModelTexture};
+pub use tracks::{MmdTrack, TrackKeys, TrackKind};
 pub use file::{open, save, FileError, MissingBlob, Opened, CURRENT_SCHEMA_VERSION, ODORI_MIME};
 pub use repeats::{BarRange, BarRepeat, RepeatError, RepeatMark, RepeatRun};
 pub use summary::{manifest_blob_hashes, ProjectSummary};
@@ -82,14 +84,6 @@ pub struct Source {
     /// (schema 4; absent when none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model: Option<ModelFile>,
-}
-
-/// A PMX/PMD model file a VMD dance is posed on, as given.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "camelCase")]
-pub struct ModelFile {
-    pub file_name: String,
-    pub blob: BlobHash,
 }
 
 impl Source {
@@ -180,6 +174,12 @@ pub struct BarDoc {
     /// The move (with `Pinned` and `Generated`).
     pub r#move: Option<MoveKey>,
     pub search: Option<SearchDoc>,
+    /// Why the Generate that filled the bar gave it a built-in move though the person's moves
+    /// come first (issue 26, [`crate::choreo::BuiltinWhy`]): kept with the bar so its note
+    /// says the same after save/reopen and through undo, and dropped by any edit of its move
+    /// (schema 7; absent when none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub builtin_why: Option<crate::choreo::BuiltinWhy>,
 }
 
 /// The dance: one entry per bar of the song's grid, and the knobs of search and filling.
@@ -229,20 +229,6 @@ pub struct Worn {
     pub motion: WornMotion,
 }
 
-/// A camera motion the person imported (a MikuMikuDance camera VMD), kept as given: the video
-/// camera can play it ([`Project::camera_track`]). Like every MMD file it stays with the person
-/// (in the `.odori` file and the browser's store, never in a share link).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "camelCase")]
-pub struct CameraSource {
-    pub file_name: String,
-    /// The file's bytes, exactly as given.
-    pub blob: BlobHash,
-    /// The motion frame that is song time 0 (the track starts there), when one was given.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub song_offset_frames: Option<u32>,
-}
-
 /// Where the viewer looks from.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -278,12 +264,10 @@ pub struct ProjectDoc {
     /// existed, which read as none: no schema step needed).
     #[serde(default)]
     pub worn: Vec<Worn>,
-    /// Camera motions imported (schema 4; absent, read as none, when there are none).
+    /// Camera motions and face (lip-sync) tracks imported, in the order imported ([`tracks`];
+    /// schema 7, absent when none; schemas 4–6 kept them as `cameras` and `faces`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub cameras: Vec<CameraSource>,
-    /// Face (lip-sync) tracks imported ([`faces`]; schema 6, absent when none).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub faces: Vec<FaceSource>,
+    pub mmd_tracks: Vec<MmdTrack>,
 }
 
 impl ProjectDoc {
@@ -291,14 +275,13 @@ impl ProjectDoc {
     pub fn blobs(&self) -> impl Iterator<Item = &BlobHash> {
         self.sources
             .iter()
-            .flat_map(|s| std::iter::once(&s.blob).chain(s.model.iter().map(|m| &m.blob)))
+            .flat_map(|s| std::iter::once(&s.blob).chain(s.model.iter().flat_map(|m| std::iter::once(&m.blob).chain(m.textures.iter().map(|t| &t.blob)))))
             .chain(self.song.iter().flat_map(|s| s.audio.iter().chain(std::iter::once(&s.envelope))))
             .chain(self.worn.iter().filter_map(|w| match &w.motion {
                 WornMotion::Motion { bvh, .. } => Some(bvh),
                 WornMotion::Clip { .. } => None,
             }))
-            .chain(self.cameras.iter().map(|c| &c.blob))
-            .chain(self.faces.iter().map(|f| &f.blob))
+            .chain(self.mmd_tracks.iter().map(|t| &t.blob))
     }
 
     /// Every move key the document refers to for keeps: bars' moves and liked candidates.
@@ -422,9 +405,6 @@ pub struct Project {
     /// An open group of edits ([`Project::begin_group`]): `Some(true)` once its first edit
     /// recorded the undo step the rest join.
     group: Option<bool>,
-    /// Per bar, the built-in move the last Generate put there and why (issue 26's preference
-    /// order; [`Project::builtin_why`]). Not saved: a readout of that Generate.
-    builtin_why: Vec<Option<(usize, crate::choreo::BuiltinWhy)>>,
 }
 
 /// Two projects are the same when what a person made (document, history, blobs) is the same;
@@ -474,20 +454,6 @@ pub fn decode_envelope(bytes: &[u8]) -> Result<RmsEnvelope, ProjectError> {
     Ok(RmsEnvelope { hop_secs, bands })
 }
 
-/// A camera VMD's camera keys as a track (see [`Project::add_camera`]).
-fn camera_track_of(file_name: &str, bytes: &[u8], song_offset_frames: Option<u32>) -> Result<crate::mmd::files::CameraTrack, ProjectError> {
-    use crate::mmd::files::{CameraTrack, MmdFilesError};
-    let vmd = crate::import::vmd::read(file_name, bytes).map_err(|e| {
-        let e = MmdFilesError::from(e);
-        ProjectError::Import(ImportError::Mmd { file: file_name.to_string(), kind: e.kind(), message: e.to_string() })
-    })?;
-    CameraTrack::from_vmd(file_name, &vmd, song_offset_frames.unwrap_or(0)).ok_or_else(|| ProjectError::NotACamera {
-        file_name: file_name.to_string(),
-        bone_keys: vmd.bone_keys.len(),
-        morph_keys: vmd.morph_keys.len(),
-    })
-}
-
 /// The file name a put-on motion's BVH is read under (it names the clip).
 pub(crate) fn worn_file_name(name: &str) -> String {
     format!("{name}.bvh")
@@ -503,7 +469,7 @@ impl Project {
     /// names what the document refers to that was not there.
     pub(crate) fn from_parts(doc: ProjectDoc, undo: Vec<ProjectDoc>, redo: Vec<ProjectDoc>, blobs: BlobStore, missing: Vec<MissingBlob>) -> Self {
         let diffs = std::sync::Mutex::new(file::DiffCache::default());
-        Self { doc, history: History::from_parts(undo, redo), blobs, missing, derived: Derived::default(), diffs, group: None, builtin_why: Vec::new() }
+        Self { doc, history: History::from_parts(undo, redo), blobs, missing, derived: Derived::default(), diffs, group: None }
     }
 
     pub fn doc(&self) -> &ProjectDoc {
@@ -639,22 +605,6 @@ impl Project {
         (!vmd.morph_keys.is_empty()).then(|| (vmd.morph_keys, src.options.song_offset_frames.unwrap_or(0)))
     }
 
-    /// The MMD model kept with a VMD source ([`Project::add_source_on`]), read from its bytes:
-    /// `Ok(None)` when the source has no model or the project lacks the model's bytes (then the
-    /// dance is posed on the standard skeleton). A host links the dance to the model by its name
-    /// (drawing with the model's mesh, `exportVmd`'s default model). A model file that does not
-    /// read is the reader's error ([`ImportError::Mmd`]).
-    pub fn source_model(&self, source: SourceId) -> Result<Option<crate::import::mmd_model::MmdModel>, ProjectError> {
-        let src = self.doc.source(source).ok_or(ProjectError::NoSuchSource { source_id: source.0 })?;
-        let Some(m) = &src.model else { return Ok(None) };
-        let Some(bytes) = self.blobs.get(&m.blob) else { return Ok(None) };
-        let model = crate::import::mmd_model::read_model(&m.file_name, bytes).map_err(|e| {
-            let e = crate::mmd::files::MmdFilesError::from(e);
-            ImportError::Mmd { file: e.file().to_string(), kind: e.kind(), message: e.to_string() }
-        })?;
-        Ok(Some(model))
-    }
-
     /// Opens a group of edits that one undo takes back (a share link applied bar by bar and
     /// generated): every edit until [`Project::end_group`] joins the undo step of the group's
     /// first edit. Undo, redo and the end close the group.
@@ -716,35 +666,6 @@ impl Project {
         self.add_source_on(file_name, bytes, options, None)
     }
 
-    /// [`Project::add_source`] of a VMD dance posed on an MMD model file (`model`: its name and
-    /// bytes, kept in the project with the dance; `None`: the standard MMD skeleton). A model
-    /// with any other file, or one that cannot be read, is a typed error and nothing changes.
-    pub fn add_source_on(&mut self, file_name: &str, bytes: &[u8], options: ImportOptions, model: Option<(&str, &[u8])>) -> Result<SourceReport, ProjectError> {
-        let hash = BlobHash::of(bytes);
-        let imported = match model {
-            None => self.derived.import(&hash, file_name, bytes, &options)?,
-            Some((model_file, model_bytes)) => {
-                if !(bytes.starts_with(crate::import::vmd::MAGIC_V1) || bytes.starts_with(crate::import::vmd::MAGIC_V2)) {
-                    return Err(ImportError::Invalid { file: file_name.to_string(), message: format!("a model ({model_file}) goes only with a VMD dance") }.into());
-                }
-                self.derived.import_on(&hash, file_name, bytes, &options, Some((model_file, &BlobHash::of(model_bytes), Some(model_bytes))))?
-            }
-        };
-        let id = SourceId(self.doc.next_source);
-        let clips = derive::clip_infos(id, &imported);
-        let warnings = imported.warnings.clone();
-        let blob = self.blobs.put(bytes);
-        let model = model.map(|(f, b)| ModelFile { file_name: f.to_string(), blob: self.blobs.put(b) });
-        let mut doc = self.doc.clone();
-        doc.next_source += 1;
-        doc.sources.push(Source { id, file_name: file_name.to_string(), blob, options, cut_tempos_bpm: Vec::new(), model });
-        self.commit(doc);
-        // Report each clip as the dance library has it now (its cut, or why it is refused).
-        let d = self.derived();
-        let clips = clips.into_iter().map(|c| d.clip(c.clip).cloned().unwrap_or(c)).collect();
-        Ok(SourceReport { id, clips, warnings })
-    }
-
     /// Removes a source from the document. Its clips leave the library; bars that hold one of
     /// its moves keep it in the history only (undo brings everything back). Undoable.
     pub fn remove_source(&mut self, id: SourceId) -> Result<(), ProjectError> {
@@ -757,7 +678,7 @@ impl Project {
         let uses = |k: &MoveKey| matches!(k, MoveKey::Cut { clip, .. } if clip.source == id);
         for b in &mut doc.dance.bars {
             if b.r#move.as_ref().is_some_and(uses) {
-                *b = BarDoc { state: BarKind::Empty, r#move: None, search: b.search.take() };
+                *b = BarDoc { state: BarKind::Empty, r#move: None, search: b.search.take(), builtin_why: None };
             }
             if let Some(s) = &mut b.search {
                 for list in [&mut s.shown, &mut s.liked, &mut s.round] {
@@ -993,40 +914,6 @@ impl Project {
             }
         };
         Ok((character.retarget(&clip, &map)?, ch))
-    }
-
-    /// Imports a camera motion (a MikuMikuDance camera VMD) into the project: its bytes are kept
-    /// as given, `song_offset_frames` (the motion frame that is song time 0) with them. Returns
-    /// the track as the camera plays it. A file that is not a VMD, or has no camera keys, is a
-    /// typed error and the project is unchanged. Undoable.
-    pub fn add_camera(&mut self, file_name: &str, bytes: &[u8], song_offset_frames: Option<u32>) -> Result<crate::mmd::files::CameraTrack, ProjectError> {
-        let track = camera_track_of(file_name, bytes, song_offset_frames)?;
-        let blob = self.blobs.put(bytes);
-        let mut doc = self.doc.clone();
-        doc.cameras.push(CameraSource { file_name: file_name.to_string(), blob, song_offset_frames });
-        self.commit(doc);
-        Ok(track)
-    }
-
-    /// Removes camera motion `index` from the document. Undoable.
-    pub fn remove_camera(&mut self, index: usize) -> Result<(), ProjectError> {
-        let count = self.doc.cameras.len();
-        if index >= count {
-            return Err(ProjectError::NoSuchCamera { index, count });
-        }
-        let mut doc = self.doc.clone();
-        doc.cameras.remove(index);
-        self.commit(doc);
-        Ok(())
-    }
-
-    /// Camera motion `index` of the document as the camera plays it, read from its kept bytes
-    /// (refused with [`ProjectError::Incomplete`] when they were missing from the opened file).
-    pub fn camera_track(&self, index: usize) -> Result<crate::mmd::files::CameraTrack, ProjectError> {
-        let count = self.doc.cameras.len();
-        let c = self.doc.cameras.get(index).ok_or(ProjectError::NoSuchCamera { index, count })?;
-        let bytes = self.blobs.get(&c.blob).ok_or_else(|| ProjectError::Incomplete { count: 1, first: format!("camera motion {}", c.file_name) })?;
-        camera_track_of(&c.file_name, bytes, c.song_offset_frames)
     }
 
     /// Where the viewer looks from. A view setting, not an edit: kept and saved, not undone.

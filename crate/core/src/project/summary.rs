@@ -1,13 +1,13 @@
 //! What the page shows of a project, as the engine states it: [`ProjectSummary`] names each fact
 //! the page needs (the name, the sources, the song, tags, put-on clips, the body, texts, ρ,
-//! the music weight, the camera motions and face tracks) and gives a key for each thing whose change the page must notice, so the
+//! the music weight, the camera motions and face tracks, the MMD files it keeps) and gives a key for each thing whose change the page must notice, so the
 //! page never reads the document's schema ([`super::ProjectDoc`]). The whole document crosses to
 //! the page only to be stored and given back unchanged (autosave and restore);
 //! [`manifest_blob_hashes`] reads a stored manifest's blob list for the store's collection.
 
 use serde::{Deserialize, Serialize};
 
-use super::{BlobHash, ClipRef, FileError, Project, SourceId};
+use super::{BlobHash, ClipRef, FileError, Project, SourceId, TrackKind};
 use crate::music::GridCorrection;
 
 /// The project as the page shows it. See the module doc.
@@ -35,6 +35,11 @@ pub struct ProjectSummary {
     pub cameras: Vec<CameraSummary>,
     /// The face (lip-sync) tracks imported, in order (same shape: file name and key).
     pub face_tracks: Vec<CameraSummary>,
+    /// Every MikuMikuDance file the project keeps, by name: VMD dances, the models they are
+    /// posed on and those models' textures (and shared toon ramps), camera and face tracks. What
+    /// the page names when the project is saved: MMD creators' terms usually forbid passing
+    /// these on, so they stay in the person's `.odori` file and never go in a share link.
+    pub mmd_files: Vec<String>,
 }
 
 /// A camera motion as the page shows it.
@@ -97,10 +102,37 @@ impl Project {
             texts: d.texts.clone(),
             rho: d.dance.settings.rho,
             music_weight: d.dance.settings.fill.music_weight,
-            cameras: d.cameras.iter().map(|c| CameraSummary { file_name: c.file_name.clone(), key: key(serde_json::to_string(c)) }).collect(),
-            face_tracks: d.faces.iter().map(|f| CameraSummary { file_name: f.file_name.clone(), key: key(serde_json::to_string(f)) }).collect(),
+            cameras: d.tracks(TrackKind::Camera).map(|c| CameraSummary { file_name: c.file_name.clone(), key: key(serde_json::to_string(c)) }).collect(),
+            face_tracks: d.tracks(TrackKind::Face).map(|f| CameraSummary { file_name: f.file_name.clone(), key: key(serde_json::to_string(f)) }).collect(),
+            mmd_files: mmd_files(d),
         }
     }
+}
+
+/// [`ProjectSummary::mmd_files`]: each name once, in the document's order.
+fn mmd_files(d: &super::ProjectDoc) -> Vec<String> {
+    let mmd = |n: &str| [".vmd", ".pmx", ".pmd"].iter().any(|e| n.to_ascii_lowercase().ends_with(e));
+    let mut out: Vec<String> = Vec::new();
+    let mut add = |n: &str| {
+        if !out.iter().any(|o| o == n) {
+            out.push(n.to_string());
+        }
+    };
+    for s in &d.sources {
+        if mmd(&s.file_name) || s.model.is_some() {
+            add(&s.file_name);
+        }
+        if let Some(m) = &s.model {
+            add(&m.file_name);
+            for t in &m.textures {
+                add(&t.path);
+            }
+        }
+    }
+    for t in &d.mmd_tracks {
+        add(&t.file_name);
+    }
+    out
 }
 
 /// The blobs a stored manifest (as [`super::file::manifest_json`] writes it) lists, without
