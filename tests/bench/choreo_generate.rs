@@ -5,9 +5,11 @@
 //! as `tests/wasm_bench/run.sh` times it in wasm (`generate90`). The first call builds the
 //! library's transition table for the song's metre (cached, as in the app); the figure is the best
 //! of the calls after it; then the same call with each later stage off in turn, and the fill
-//! alone, so the figures say where the time goes. Prints figures; asserts only that the calls
-//! agree.
-//! `cargo bench -p odori-tests --bench choreo_generate`.
+//! alone, so the figures say where the time goes; and the default against its controls in the
+//! same run (session 15's measures, the old pipeline's settings, windowed refills). Prints
+//! figures; asserts only that the calls agree (quick measures and the control: the same dance).
+//! `cargo bench -p odori-tests --bench choreo_generate` (`GENERATE_ONLY=1`: not the stages off
+//! one at a time nor the built-in library).
 
 use std::sync::OnceLock;
 use std::time::Instant;
@@ -42,38 +44,53 @@ fn main() {
     for line in odori_tests::profile_lines(&profile) {
         println!("native:   {line}");
     }
-    // Windowed refills (GenerateOptions::windowed_refills) against the control (whole refills,
-    // the default) in the same run: times, objectives, whether the dance is the same.
-    let windowed = odori_core::choreo::GenerateOptions { windowed_refills: true, ..odori_core::choreo::GenerateOptions::default() };
+    // The default (quick measures) against the controls in the same run, best of 3 each:
+    // session 15's measures (GenerateOptions::quick_measures off), the old pipeline (67f699e's
+    // settings: measured unheld, no order stage) and windowed refills
+    // (GenerateOptions::windowed_refills): times, objectives, whether the dance is the same.
+    let d = odori_core::choreo::GenerateOptions::default;
     let run = |o: &odori_core::choreo::GenerateOptions| {
         let (states, r) = odori_core::choreo::generate_states(&lib, &bars, &[], odori_core::choreo::FillWeights::default(), o).expect("generate");
         (states.iter().map(odori_core::choreo::BarState::segment).collect::<Vec<_>>(), r.cost)
     };
+    let control = odori_core::choreo::GenerateOptions { quick_measures: false, ..d() };
     let ((), profile) = odori_core::choreo::profile::profiled(clock_ms, || {
-        run(&windowed);
+        run(&control);
     });
-    println!("native:   the same, windowed refills:");
+    println!("native:   the same, session 15's measures (quick_measures off, the control):");
     for line in odori_tests::profile_lines(&profile) {
         println!("native:   {line}");
     }
-    let (mut whole_ms, mut window_ms) = (f64::MAX, f64::MAX);
-    let (mut whole, mut window) = ((Vec::new(), 0.0), (Vec::new(), 0.0));
-    for _ in 0..3 {
-        let t = Instant::now();
-        whole = run(&odori_core::choreo::GenerateOptions::default());
-        whole_ms = whole_ms.min(t.elapsed().as_secs_f64() * 1e3);
-        let t = Instant::now();
-        window = run(&windowed);
-        window_ms = window_ms.min(t.elapsed().as_secs_f64() * 1e3);
+    println!("native: load average {}", std::fs::read_to_string("/proc/loadavg").unwrap_or_default().split_whitespace().take(3).collect::<Vec<_>>().join(" "));
+    let variants = [
+        ("quick measures (the default)", d()),
+        ("session 15's measures (control)", control),
+        ("old pipeline (67f699e's settings)", odori_core::choreo::GenerateOptions { measure_played: false, follow_order: false, ..d() }),
+        ("windowed refills", odori_core::choreo::GenerateOptions { windowed_refills: true, ..d() }),
+    ];
+    let mut timed: Vec<(f64, (Vec<Option<usize>>, f32))> = Vec::new();
+    for (_, o) in &variants {
+        let mut best = (f64::MAX, (Vec::new(), 0.0));
+        for _ in 0..3 {
+            let t = Instant::now();
+            let r = run(o);
+            best = (best.0.min(t.elapsed().as_secs_f64() * 1e3), r);
+        }
+        timed.push(best);
     }
-    let differ = whole.0.iter().zip(&window.0).filter(|(a, b)| a != b).count();
-    println!(
-        "native: Generate 90 bars, whole refills (control): {whole_ms:.0} ms, objective {:.3}; windowed refills: {window_ms:.0} ms, objective {:.3} (best of 3 each): {:.2}x, {}",
-        whole.1,
-        window.1,
-        whole_ms / window_ms,
-        if differ == 0 { "the same dance".to_string() } else { format!("dances differ in {differ} bars") }
-    );
+    for (k, ((label, _), (ms, (dance, c)))) in variants.iter().zip(&timed).enumerate() {
+        let differ = dance.iter().zip(&timed[0].1 .0).filter(|(a, b)| a != b).count();
+        let against = if k == 0 {
+            String::new()
+        } else {
+            format!(": {:.2}x the default's time, {}", ms / timed[0].0, if differ == 0 { "the same dance".to_string() } else { format!("dances differ in {differ} bars") })
+        };
+        println!("native: Generate 90 bars, {label}: {ms:.0} ms, objective {c:.3} (best of 3){against}");
+    }
+    assert_eq!(timed[1].1, timed[0].1, "quick measures keep the dance");
+    if std::env::var("GENERATE_ONLY").is_ok_and(|v| v == "1") {
+        return;
+    }
     // Where the time goes: the same call with one stage off at a time, and stage 1 alone (the
     // fill: every later stage off), best of 3 each.
     let stage = |label: &str, o: odori_core::choreo::GenerateOptions| {
@@ -87,7 +104,6 @@ fn main() {
         }
         println!("native:   {label}: {best:.0} ms (best of 3), objective {cost:.3}");
     };
-    let d = odori_core::choreo::GenerateOptions::default;
     stage("stage 2 off (beat rate)", odori_core::choreo::GenerateOptions { follow_beat_rate: false, ..d() });
     stage("stage 3 off (free skate)", odori_core::choreo::GenerateOptions { free_skate_slack: 0.0, ..d() });
     stage("stage 4 off (skate)", odori_core::choreo::GenerateOptions { follow_skate: false, ..d() });

@@ -1,6 +1,7 @@
 // Times the wasm build of odori-core under Node (built by run.sh): song analysis, then the
 // choreography core. Usage: node run.mjs path/to/odori_wasm_bench.wasm [label]
 import { readFileSync } from "node:fs";
+import { loadavg } from "node:os";
 import { performance } from "node:perf_hooks";
 
 const bytes = readFileSync(process.argv[2]);
@@ -64,12 +65,14 @@ const [firstBuiltinMs] = time(() => x.generate90_builtin());
 say(`Generate 90 bars from the built-in library alone (variety term on): ${genMs.toFixed(0)} ms (best of 3; first call with the library and table ${firstBuiltinMs.toFixed(0)} ms), objective ${cost.toFixed(3)}`);
 
 // Issue 26's speed work: where Generate's time goes per stage (fills against renders and
-// measures), and windowed refills against the control (whole refills, the default) in the same run.
+// measures), and the default (quick measures) against the controls in the same run: session
+// 15's measures (quick_measures off), the old pipeline (67f699e's settings) and windowed refills.
 const STAGES = ["1 fill", "2 beat rate", "3 free skate", "4 skate", "4b order", "5 join repair", "takes"];
-for (const windowed of [0, 1]) {
-  x.generate90_profile(windowed);
+const VARIANTS = ["quick measures (the default)", "windowed refills", "session 15's measures (control)", "old pipeline (67f699e's settings)"];
+for (const v of [0, 2]) {
+  x.generate90_profile(v);
   let all = 0, fills = 0, measures = 0;
-  say(`Generate profiled, ${windowed ? "windowed refills" : "whole refills (control)"}:`);
+  say(`Generate profiled, ${VARIANTS[v]}:`);
   STAGES.forEach((name, k) => {
     const v = [0, 1, 2, 3, 4].map((f) => x.profile_value(k, f));
     if (v[0] === 0 && v[1] === 0 && v[3] === 0) return;
@@ -78,7 +81,13 @@ for (const windowed of [0, 1]) {
   });
   say(`  stages in all ${all.toFixed(0)} ms: fills ${fills.toFixed(0)} ms, renders and measures ${measures.toFixed(0)} ms`);
 }
-const [wholeMs, wholeCost] = best(() => x.generate90_refills(0), 3);
-const [windowMs, windowCost] = best(() => x.generate90_refills(1), 3);
-const same = x.generate90_same();
-say(`Generate 90 bars, whole refills (control): ${wholeMs.toFixed(0)} ms, objective ${wholeCost.toFixed(3)}; windowed refills: ${windowMs.toFixed(0)} ms, objective ${windowCost.toFixed(3)} (best of 3 each): ${(wholeMs / windowMs).toFixed(2)}x, ${same === 1 ? "the same dance" : `dances differ in ${-same} bars`}`);
+// Best of 3 each, the default first; each variant's time against the default's (the machine's
+// load beside them: the figures are upper bounds under load).
+say(`load average ${loadavg().map((l) => l.toFixed(1)).join(" ")}`);
+// Best of 3 each, the default first; each variant's time against the default's.
+const runs = [0, 2, 3, 1].map((v) => [v, ...best(() => x.generate90_variant(v), 3)]);
+const [, quickMs] = runs[0];
+for (const [v, ms, c] of runs) {
+  const same = v === 0 ? 1 : x.generate90_same(0, v);
+  say(`Generate 90 bars, ${VARIANTS[v]}: ${ms.toFixed(0)} ms, objective ${c.toFixed(3)} (best of 3)${v === 0 ? "" : `: ${(ms / quickMs).toFixed(2)}x the default's time, ${same === 1 ? "the same dance" : `dances differ in ${-same} bars`}`}`);
+}

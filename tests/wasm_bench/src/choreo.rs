@@ -122,9 +122,11 @@ pub extern "C" fn generate90_builtin() -> f32 {
     })
 }
 
-// Issue 26's speed work: the same Generate with windowed refills (GenerateOptions::
-// windowed_refills) against the control (whole refills, the default), and where the time goes
-// per stage (odori_core::choreo::profile, on the host's clock).
+// Issue 26's speed work: the same Generate with quick measures (GenerateOptions::quick_measures,
+// the default) against the controls in the same run — session 15's measures (quick_measures
+// off), the old pipeline (67f699e's settings: measure_played off, the order stage off) and
+// windowed refills (GenerateOptions::windowed_refills) — and where the time goes per stage
+// (odori_core::choreo::profile, on the host's clock).
 
 #[link(wasm_import_module = "env")]
 extern "C" {
@@ -139,14 +141,27 @@ fn host_clock() -> f64 {
 
 thread_local! {
     static PROFILE: RefCell<Option<profile::Profile>> = const { RefCell::new(None) };
-    static DANCES: RefCell<[Vec<Option<usize>>; 2]> = const { RefCell::new([Vec::new(), Vec::new()]) };
+    static DANCES: RefCell<[Vec<Option<usize>>; 4]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
 }
 
-fn generate90_with(windowed: bool) -> (Vec<Option<usize>>, f32) {
+/// The settings of variant `v`: 0 the default (quick measures), 1 windowed refills, 2 session
+/// 15's measures (quick_measures off, the control), 3 the old pipeline (67f699e's settings:
+/// measured unheld, no order stage).
+fn variant(v: u32) -> GenerateOptions {
+    let d = GenerateOptions::default();
+    match v {
+        1 => GenerateOptions { windowed_refills: true, ..d },
+        2 => GenerateOptions { quick_measures: false, ..d },
+        3 => GenerateOptions { measure_played: false, follow_order: false, ..d },
+        _ => d,
+    }
+}
+
+fn generate90_with(v: u32) -> (Vec<Option<usize>>, f32) {
     LIB.with(|l| {
         let lib = l.borrow();
         let Some(lib) = lib.as_ref() else { return (Vec::new(), -1.0) };
-        let o = GenerateOptions { windowed_refills: windowed, ..GenerateOptions::default() };
+        let o = variant(v);
         match generate_states(lib, &odori_tests::bench_bars(), &[], FillWeights::default(), &o) {
             Ok((states, r)) => (states.iter().map(BarState::segment).collect(), r.cost),
             Err(_) => (Vec::new(), -1.0),
@@ -154,30 +169,35 @@ fn generate90_with(windowed: bool) -> (Vec<Option<usize>>, f32) {
     })
 }
 
-/// Generate as [`generate90`] with windowed refills (`windowed` 1) or whole ones (0, the
-/// control, the default); keeps the dance for [`generate90_same`]. Returns the objective.
+/// Generate as [`generate90`] with the settings of variant `v` ([`variant`]); keeps the dance
+/// for [`generate90_same`]. Returns the objective.
 #[no_mangle]
-pub extern "C" fn generate90_refills(windowed: u32) -> f32 {
-    let (dance, cost) = generate90_with(windowed == 1);
-    DANCES.with(|d| d.borrow_mut()[usize::from(windowed == 1)] = dance);
+pub extern "C" fn generate90_variant(v: u32) -> f32 {
+    let (dance, cost) = generate90_with(v);
+    DANCES.with(|d| {
+        if let Some(slot) = d.borrow_mut().get_mut(v as usize) {
+            *slot = dance;
+        }
+    });
     cost
 }
 
-/// Whether the last windowed and whole-refill dances are the same (1), and else in how many bars
+/// Whether the last dances of variants `a` and `b` are the same (1), and else in how many bars
 /// they differ (negative).
 #[no_mangle]
-pub extern "C" fn generate90_same() -> i32 {
+pub extern "C" fn generate90_same(a: u32, b: u32) -> i32 {
     DANCES.with(|d| {
         let d = d.borrow();
-        let differ = d[0].iter().zip(&d[1]).filter(|(a, b)| a != b).count() + d[0].len().abs_diff(d[1].len());
+        let (Some(x), Some(y)) = (d.get(a as usize), d.get(b as usize)) else { return 0 };
+        let differ = x.iter().zip(y).filter(|(a, b)| a != b).count() + x.len().abs_diff(y.len());
         if differ == 0 { 1 } else { -(differ as i32) }
     })
 }
 
-/// One Generate profiled (windowed refills when `windowed` is 1); read with [`profile_value`].
+/// One Generate profiled with the settings of variant `v`; read with [`profile_value`].
 #[no_mangle]
-pub extern "C" fn generate90_profile(windowed: u32) -> f32 {
-    let ((_, cost), p) = profile::profiled(host_clock, || generate90_with(windowed == 1));
+pub extern "C" fn generate90_profile(v: u32) -> f32 {
+    let ((_, cost), p) = profile::profiled(host_clock, || generate90_with(v));
     PROFILE.with(|x| *x.borrow_mut() = Some(p));
     cost
 }

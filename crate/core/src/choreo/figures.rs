@@ -6,7 +6,7 @@
 use super::generate::Problem;
 use super::profile::{self, Work};
 use super::quality::{foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, QualityMotion, QUALITY_FPS};
-use super::render::{render_switched, RenderOptions};
+use super::render::{render_measured, render_switched, RenderOptions};
 use super::segment::SegmentLibrary;
 use crate::bars::Bar;
 
@@ -27,11 +27,17 @@ pub struct DanceFigures {
 /// [`DanceFigures`] of the dance `path` fills `bars` with; `None` when it cannot be measured
 /// (too short, no bars).
 pub fn dance_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<DanceFigures> {
+    dance_figures_with(lib, bars, path, true)
+}
+
+/// [`dance_figures`]; `quick` off: the control, every rendered frame posed
+/// ([`super::GenerateOptions::quick_measures`]).
+pub fn dance_figures_with(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool) -> Option<DanceFigures> {
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
     // Unheld: holding the feet (a cost on every measure of a refill) only lowers the skate the
     // filling follows, and each bar keeps its holds only where they keep its beat figures.
     let (clip, switches) = render_switched(lib, bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
-    let m = QualityMotion::from_clip(&clip).ok()?;
+    let m = if quick { QualityMotion::from_clip(&clip) } else { QualityMotion::from_clip_every_frame(&clip) }.ok()?;
     figures_of(&m, bars, &switches)
 }
 
@@ -65,9 +71,21 @@ pub struct Played {
 /// the feet across a join, so a dance whose joins are within the goal unheld can join over it
 /// as played (the 150 BPM demo piece in 3 of `choreo_my_moves`: 1.92 held).
 pub fn played_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Option<Played> {
+    played_figures_with(lib, bars, path, true)
+}
+
+/// [`played_figures`]; `quick` off: the control, measured as before session 16 (the held-feet
+/// rule's free pass posed each round, every frame posed, the played dance measured again):
+/// [`super::GenerateOptions::quick_measures`]. The same figures either way (the test
+/// `quick_measures_keep_every_figure`).
+pub fn played_figures_with(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool) -> Option<Played> {
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
-    let (clip, switches) = render_switched(lib, bars, &choices, &RenderOptions::default());
-    let m = QualityMotion::from_clip(&clip).ok()?;
+    let (clip, switches, measured) = render_measured(lib, bars, &choices, &RenderOptions::default(), quick);
+    let m = match measured {
+        Some(m) => m,
+        None if quick => QualityMotion::from_clip(&clip).ok()?,
+        None => QualityMotion::from_clip_every_frame(&clip).ok()?,
+    };
     let whole = figures_of(&m, bars, &switches)?;
     let counts: Vec<f32> = bars.iter().flat_map(|b| {
         let n = b.beat_count().max(1);
@@ -112,7 +130,7 @@ impl Measured {
         if let Some((_, f)) = self.done.iter().find(|(q, _)| q == path) {
             return *f;
         }
-        let f = profile::timed(Work::Measure, || dance_figures(p.lib, p.bars, path));
+        let f = profile::timed(Work::Measure, || dance_figures_with(p.lib, p.bars, path, p.quick_measures));
         self.done.push((path.to_vec(), f));
         f
     }
@@ -122,7 +140,7 @@ impl Measured {
         if let Some((_, f)) = self.played.iter().find(|(q, _)| q == path) {
             return f.clone();
         }
-        let f = profile::timed(Work::Measure, || played_figures(p.lib, p.bars, path));
+        let f = profile::timed(Work::Measure, || played_figures_with(p.lib, p.bars, path, p.quick_measures));
         self.played.push((path.to_vec(), f.clone()));
         f
     }
@@ -134,6 +152,29 @@ impl Measured {
             self.played(p, path).map(|f| f.whole)
         } else {
             self.of(p, path)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::choreo::grid::bars_from_tempo;
+
+    #[test]
+    fn quick_measures_keep_every_figure() {
+        // Dances of built-in moves at four tempi (bar i plays every k-th live move: joins of
+        // every kind, some bars keeping their holds and some not), measured quick and as the
+        // control (session 15's measures): the same figures, to the bit.
+        let lib = SegmentLibrary::builtin();
+        let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired && s.counts() == 4).map(|s| s.index).collect();
+        for (k, bpm) in [(3usize, 96.0f32), (7, 120.0), (11, 138.0), (5, 160.0)] {
+            let bars = bars_from_tempo(14.0, bpm, 4, 0.0, |_, _| 0.5).unwrap();
+            let path: Vec<usize> = (0..bars.len()).map(|i| live[(i * k + bpm as usize) % live.len()]).collect();
+            let (quick, control) = (played_figures_with(&lib, &bars, &path, true), played_figures_with(&lib, &bars, &path, false));
+            assert!(quick.is_some(), "{bpm} BPM: measured");
+            assert_eq!(quick, control, "{bpm} BPM: as played");
+            assert_eq!(dance_figures_with(&lib, &bars, &path, true), dance_figures_with(&lib, &bars, &path, false), "{bpm} BPM: unheld");
         }
     }
 }

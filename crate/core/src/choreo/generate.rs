@@ -103,6 +103,12 @@ pub struct GenerateOptions {
     /// false (issue 26's speed goal: measured by `choreo_generate`, not yet the default);
     /// false: every refill is a whole fill, the control.
     pub windowed_refills: bool,
+    /// Measure each dance posing only what the measures read ([`super::figures`]: the
+    /// held-feet rule's free pass posed once for all its rounds, only the frames the 30 fps
+    /// measures read, the played dance not measured twice). The same figures and dances
+    /// (`quick_measures_keep_every_figure`, `dance_fixture`). Default true; false: the control
+    /// (session 15's measures), which `choreo_generate` times beside it.
+    pub quick_measures: bool,
 }
 
 impl Default for GenerateOptions {
@@ -119,6 +125,7 @@ impl Default for GenerateOptions {
             follow_order: true,
             measure_played: true,
             windowed_refills: false,
+            quick_measures: true,
         }
     }
 }
@@ -233,6 +240,8 @@ pub struct Problem<'a> {
     why: std::cell::RefCell<Vec<Option<BuiltinWhy>>>,
     /// Per layer, whether the charge is already lifted in `base` ([`order_stage`]).
     opened: Vec<bool>,
+    /// [`GenerateOptions::quick_measures`].
+    pub(super) quick_measures: bool,
 }
 
 impl<'a> Problem<'a> {
@@ -284,6 +293,7 @@ impl<'a> Problem<'a> {
             charge: Vec::new(),
             why: std::cell::RefCell::new(vec![None; layers.len()]),
             opened: vec![false; layers.len()],
+            quick_measures: options.quick_measures,
         };
         p.charge = p.moves_source_charge();
         p.base = p.charge.clone();

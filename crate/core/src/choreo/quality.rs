@@ -83,10 +83,39 @@ pub struct QualityMotion {
 impl QualityMotion {
     /// From any clip: mapped onto the canonical joints (missing ones filled from neighbours),
     /// then as [`QualityMotion::from_positions`].
+    /// Only the clip frames the resampling weighs are posed (at 60 fps every other one: a
+    /// [`QUALITY_FPS`] frame falling on a clip frame weighs the next by 0, and an unposed frame
+    /// is 0, so the lerp gives the same bits), the figures those of posing them all
+    /// ([`canonical_positions`]; the test `from_clip_poses_only_what_it_reads`).
     pub fn from_clip(clip: &Clip) -> Result<Self, QualityError> {
         let map = HumanoidMap::from_skeleton(&clip.skeleton);
-        let pos = canonical_positions(clip, &map);
+        let frames = clip.frame_count();
+        if !(clip.fps.is_finite() && clip.fps > 0.0) || frames < 3 {
+            return Self::from_positions(&canonical_positions(clip, &map), clip.fps);
+        }
+        let mut pos = vec![Vec3::ZERO; frames * CANON_COUNT];
+        let mut posed = vec![false; frames];
+        let mut pose = crate::motion::WorldPose::new();
+        for (f0, f1, a) in resample_frames(frames, clip.fps) {
+            for f in if a != 0.0 { [Some(f0), Some(f1)] } else { [Some(f0), None] }.into_iter().flatten() {
+                if std::mem::replace(&mut posed[f], true) {
+                    continue;
+                }
+                let world = &pose.of_frame(clip, f).positions;
+                let out = &mut pos[f * CANON_COUNT..(f + 1) * CANON_COUNT];
+                for (slot, c) in out.iter_mut().zip(Canon::ALL) {
+                    *slot = map.get(c).and_then(|j| world.get(j).copied()).unwrap_or(Vec3::NAN);
+                }
+                crate::canon::humanoid::fill_missing(out);
+            }
+        }
         Self::from_positions(&pos, clip.fps)
+    }
+
+    /// [`QualityMotion::from_clip`] posing every frame of the clip ([`canonical_positions`]):
+    /// the control ([`super::GenerateOptions::quick_measures`] off).
+    pub fn from_clip_every_frame(clip: &Clip) -> Result<Self, QualityError> {
+        Self::from_positions(&canonical_positions(clip, &HumanoidMap::from_skeleton(&clip.skeleton)), clip.fps)
     }
 
     /// From canonical positions at `fps` (frame-major): linearly resampled to
@@ -102,14 +131,10 @@ impl QualityMotion {
         if frames < 3 {
             return Err(QualityError::TooShort { frames, fps });
         }
-        let duration = (frames - 1) as f32 / fps;
-        let out_frames = ((duration * QUALITY_FPS).round() as usize + 1).max(1);
+        let samples = resample_frames(frames, fps);
+        let out_frames = samples.len();
         let mut out = Vec::with_capacity(out_frames * CANON_COUNT);
-        for k in 0..out_frames {
-            let x = (k as f32 * fps / QUALITY_FPS).min((frames - 1) as f32);
-            let f0 = x.floor() as usize;
-            let f1 = (f0 + 1).min(frames - 1);
-            let a = x - f0 as f32;
+        for (f0, f1, a) in samples {
             for j in 0..CANON_COUNT {
                 out.push(positions[f0 * CANON_COUNT + j].lerp(positions[f1 * CANON_COUNT + j], a));
             }
@@ -135,6 +160,20 @@ impl QualityMotion {
     fn at(&self, f: usize, c: Canon) -> Vec3 {
         self.positions[f * CANON_COUNT + c.index()]
     }
+}
+
+/// Each [`QUALITY_FPS`] frame of a motion of `frames` frames (at least 1) at `fps`: the two
+/// frames it lies between and how far it is from the first.
+fn resample_frames(frames: usize, fps: f32) -> Vec<(usize, usize, f32)> {
+    let duration = frames.saturating_sub(1) as f32 / fps;
+    let out_frames = ((duration * QUALITY_FPS).round() as usize + 1).max(1);
+    (0..out_frames)
+        .map(|k| {
+            let x = (k as f32 * fps / QUALITY_FPS).min(frames.saturating_sub(1) as f32);
+            let f0 = x.floor() as usize;
+            (f0, (f0 + 1).min(frames.saturating_sub(1)), x - f0 as f32)
+        })
+        .collect()
 }
 
 /// Gaussian smoothing with σ `sigma` samples; the kernel is renormalised at the ends.
@@ -587,6 +626,22 @@ mod tests {
         let pos: Vec<Vec3> = (0..10).flat_map(|_| rest_frame(Vec3::ZERO)).map(|p| p * 2.0).collect();
         let m = QualityMotion::from_positions(&pos, 30.0).unwrap();
         assert!((body_height(&m.positions) - h).abs() < 1e-3);
+    }
+
+    #[test]
+    fn from_clip_poses_only_what_it_reads() {
+        // Rendered dances at 60 fps (every other frame read alone), 48 fps and 25 fps (frames
+        // between frames): the same bits as posing every frame.
+        use crate::choreo::{grid::bars_from_tempo, render::{render, RenderOptions}, SegmentLibrary};
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(12.0, 124.0, 4, 0.0, |_, _| 0.5).unwrap();
+        let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired && s.counts() == 4).map(|s| s.index).collect();
+        let choices: Vec<Option<usize>> = (0..bars.len()).map(|i| Some(live[(i * 5 + 3) % live.len()])).collect();
+        for fps in [60.0, 48.0, 25.0] {
+            let clip = render(&lib, &bars, &choices, &RenderOptions { fps, ..RenderOptions::default() });
+            let all = QualityMotion::from_clip_every_frame(&clip).unwrap();
+            assert_eq!(QualityMotion::from_clip(&clip).unwrap(), all, "{fps} fps");
+        }
     }
 
     #[test]

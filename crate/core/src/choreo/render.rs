@@ -18,6 +18,7 @@ use std::sync::Arc;
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
+use super::quality::QualityMotion;
 use super::segment::{SegmentLibrary, LIBRARY_FPS};
 use crate::bars::Bar;
 use crate::canon::builtin::canonical_skeleton;
@@ -116,8 +117,26 @@ pub fn render_switched(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usi
     (clip, switches)
 }
 
+/// [`render_switched`], with the rendered dance measured ([`QualityMotion::from_clip`]) when the
+/// held-feet rule measured it on the way (`None` otherwise): the same motion, not measured twice.
+/// `quick` off: the control ([`super::GenerateOptions::quick_measures`]): the held-feet rule
+/// poses its free pass anew each round and every frame of what it measures, and no motion is
+/// handed back.
+pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool) -> (Clip, Vec<f32>, Option<QualityMotion>) {
+    let (clip, holds, switches) = render_traced_with(lib, bars, choices, options, quick);
+    let motion = if quick { holds.motion } else { None };
+    (clip, switches, motion)
+}
+
 /// [`render`], with what its feet were held to and where its joins fall ([`render_switched`]).
 fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Holds, Vec<f32>) {
+    render_traced_with(lib, bars, choices, options, true)
+}
+
+/// [`render_traced`]; `quick` off: the held-feet rule as before session 16 (its free pass
+/// posed anew each round, every frame posed for its measures), the control the test
+/// `keeping_the_free_pass_changes_no_frame` compares with.
+fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool) -> (Clip, Holds, Vec<f32>) {
     let fps = if options.fps.is_finite() && options.fps > 0.0 { options.fps } else { 60.0 };
     let skeleton = Arc::new(canonical_skeleton());
     let end_secs = bars.iter().map(|b| b.end_secs).fold(0.0f32, f32::max);
@@ -274,7 +293,7 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: roots }],
     };
-    let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches) } else { (clip, Holds::default()) };
+    let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches, quick) } else { (clip, Holds::default()) };
     (clip, holds, switches)
 }
 
@@ -285,6 +304,8 @@ fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], 
 struct Holds {
     planted: Vec<[bool; 4]>,
     kept: Vec<bool>,
+    /// The returned dance measured, when the rule measured it.
+    motion: Option<QualityMotion>,
 }
 
 /// Rounds of [`hold_planted_feet`]'s per-bar rule at most (each drops the holds of the bars
@@ -311,7 +332,10 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   [`HOLD_RULE_ROUNDS`] times. Last, the whole dance keeps its holds only if its BAS-music on
 ///   its counts is still as far above that on the half-shifted counts, and its kinetic beats
 ///   per count no further from the target, as unheld, and its feet slide no more in all.
-fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32]) -> (Clip, Holds) {
+/// - Every round plays the same dance with other holds: when `quick`, its free pass is posed
+///   once ([`crate::canon::character::hold_feet_in_dance`]) and each measure poses only the
+///   frames it reads ([`QualityMotion::from_clip`]): the same frames and figures as not.
+fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32], quick: bool) -> (Clip, Holds) {
     use crate::canon::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
     let frames = clip.frame_count();
     if frames < 3 || played.len() < frames {
@@ -337,8 +361,8 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     // a bar's edge) slides its feet more in all: then the dance is played unheld. One pass of
     // §J's measures per rendered dance gives both.
     type BarFigures = (f32, f32, f32, f32);
-    let figures = |c: &Clip| -> Option<(Vec<BarFigures>, (f32, f32, f32))> {
-        let m = super::quality::QualityMotion::from_clip(c).ok()?;
+    let figures = |c: &Clip| -> Option<(Vec<BarFigures>, (f32, f32, f32), QualityMotion)> {
+        let m = if quick { QualityMotion::from_clip(c) } else { QualityMotion::from_clip_every_frame(c) }.ok()?;
         let kinetic = super::quality::kinetic_beats_secs(&m);
         let q_frames = m.frames();
         let frame_of = |t: f32| ((t * super::quality::QUALITY_FPS).round().max(0.0) as usize).min(q_frames);
@@ -366,22 +390,26 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         let a = super::quality::beat_alignment(&counts, &kinetic, first.start_secs, last.end_secs);
         let kb = kinetic.iter().filter(|&&t| t >= first.start_secs && t < last.end_secs).count();
         let slide = super::quality::summarize_skate(&skate, frame_of(first.start_secs)..frame_of(last.end_secs)).mean_cm_per_s;
-        Some((per_bar, (a.bas_music - a.bas_music_shifted, super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), slide)))
+        Some((per_bar, (a.bas_music - a.bas_music_shifted, super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), slide), m))
     };
-    let Some((unheld, unheld_whole)) = figures(&clip) else { return (clip, Holds::default()) };
+    let Some((unheld, unheld_whole, unheld_m)) = figures(&clip) else { return (clip, Holds::default()) };
     let worse_whole = |(margin, cost, skate): (f32, f32, f32)| margin < unheld_whole.0 - 1e-4 || cost > unheld_whole.1 + 1e-4 || skate > unheld_whole.2;
     let mut keep = vec![true; bars.len()];
+    let mut free = None;
     for round in 0..=HOLD_RULE_ROUNDS {
+        if !quick {
+            free = None;
+        }
         let kept = |f: usize| bar_of[f].is_none_or(|b| keep.get(b).copied().unwrap_or(true));
         let track = |k: usize| -> Vec<bool> { (0..frames).map(|f| kept(f) && source[f][k]).collect() };
         let planted = [(track(0), track(1)), (track(2), track(3))];
-        let Some(held) = hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S) else { return (clip, Holds::default()) };
-        let Some((with, with_whole)) = figures(&held) else { return (clip, Holds::default()) };
+        let Some(held) = hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free) else { return (clip, Holds::default()) };
+        let Some((with, with_whole, held_m)) = figures(&held) else { return (clip, Holds::default()) };
         if round == HOLD_RULE_ROUNDS {
             if worse_whole(with_whole) {
                 break;
             }
-            return (held, Holds { planted: source, kept: keep });
+            return (held, Holds { planted: source, kept: keep, motion: Some(held_m) });
         }
         let mut dropped = false;
         for (b, (w, u)) in with.iter().zip(&unheld).enumerate() {
@@ -401,11 +429,11 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
             if worse_whole(with_whole) {
                 break;
             }
-            return (held, Holds { planted: source, kept: keep });
+            return (held, Holds { planted: source, kept: keep, motion: Some(held_m) });
         }
     }
     let kept = vec![false; bars.len()];
-    (clip, Holds { planted: source, kept })
+    (clip, Holds { planted: source, kept, motion: Some(unheld_m) })
 }
 
 /// Bollo's quintic offset at `t` of `span` (both in frames): starts at `x0` with velocity `v0`
@@ -653,6 +681,25 @@ mod tests {
         assert!(runs > 20 && across > 0 && air > 0, "{runs} holds, {across} across a join, {air} frames in the air");
         // The unheld dance slides those feet: the holds changed something.
         assert!(slid_unheld > 0.02, "unheld, the planted feet slid at most {slid_unheld} m");
+    }
+
+    #[test]
+    fn keeping_the_free_pass_changes_no_frame() {
+        // The held-feet rule's rounds with the free pass kept against posing it anew each
+        // round (the code before): the same bits, on dances that keep their holds and on ones
+        // that drop some.
+        let mut rounds_seen = 0;
+        for (bpm, secs) in [(90.0, 20.0), (120.0, 24.0), (150.0, 16.0), (170.0, 20.0)] {
+            let (lib, bars, choices) = dance(bpm, secs);
+            let (kept, holds, s1) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), true);
+            let (anew, holds_anew, s2) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), false);
+            assert_eq!(kept, anew, "{bpm} BPM");
+            assert_eq!((holds.kept.clone(), holds.motion.clone(), s1), (holds_anew.kept, holds_anew.motion, s2), "{bpm} BPM");
+            rounds_seen += usize::from(holds.kept.iter().any(|&k| k) && holds.kept.iter().any(|&k| !k));
+            // The motion the rule measured is the returned dance's.
+            assert_eq!(holds.motion, Some(QualityMotion::from_clip(&kept).unwrap()), "{bpm} BPM");
+        }
+        assert!(rounds_seen > 0, "no dance dropped some bars' holds: the rounds were not compared");
     }
 
     #[test]

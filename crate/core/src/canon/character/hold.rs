@@ -24,6 +24,22 @@ pub(super) struct GivenHolds {
     pub(super) release: Release,
 }
 
+/// Pass 0 of [`Character::play`] on one dance, kept ([`hold_feet_in_dance`]): the character
+/// posed freely (where its feet, hips and ankle hinges go, where the source's feet are) and the
+/// source's world rotations and hips per frame. None of it depends on the holds, so the
+/// held-feet rule's rounds, which play the same dance with other holds, pose it once and the
+/// held pass reads the source's pose instead of posing it again: the same figures.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct FreePass {
+    pub(super) frames: usize,
+    pub(super) feet: Vec<FootTracks>,
+    pub(super) free_hip: Vec<Vec<Vec3>>,
+    pub(super) free_hinge: Vec<Vec<Vec3>>,
+    /// The source's world rotation of every joint, frame-major, and its hips' world position.
+    pub(super) src_rotations: Vec<Quat>,
+    pub(super) src_hips: Vec<Vec3>,
+}
+
 /// Fastest a released foot in a rendered dance catches up with its free path, m/s (a
 /// foot stepping: a person's swing foot moves at 2–4 m/s, so this is a slow, visible-but-smooth
 /// glide, never a snap).
@@ -36,8 +52,10 @@ pub(crate) const DANCE_CATCH_UP_M_S: f32 = 1.0;
 /// rendered dance: each bar's source clip at its own pace). A released foot catches up with
 /// its free path at no more than `catch_up_m_s`, at its free height. Everything else as
 /// [`Character::retarget`] does it: body shift, pelvis drop, contact on ankle or toe.
-/// Returns `None` when the clip is not on the canonical skeleton.
-pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>); 2], catch_up_m_s: f32) -> Option<Clip> {
+/// Returns `None` when the clip is not on the canonical skeleton. `free` keeps the free pass
+/// ([`FreePass`]) between calls on the same `clip` (start with `None`; another clip needs
+/// another).
+pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>); 2], catch_up_m_s: f32, free: &mut Option<FreePass>) -> Option<Clip> {
     use std::sync::OnceLock;
     static FIGURE: OnceLock<Character> = OnceLock::new();
     if !is_canonical(&clip.skeleton) {
@@ -63,7 +81,7 @@ pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>);
         .collect();
     let given = GivenHolds { contacts, release: Release::CatchUp { speed: catch_up_m_s } };
     let map = HumanoidMap::from_skeleton(&clip.skeleton);
-    let mut out = figure.play(clip, &map, &RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true, release_over_swing: true }, Some(&given)).ok()?;
+    let mut out = figure.play(clip, &map, &RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true, release_over_swing: true }, Some(&given), Some(free)).ok()?;
     out.name = clip.name.clone();
     out.source = clip.source.clone();
     Some(out)
@@ -85,6 +103,7 @@ fn planted_at_canonical_size(src: &[Vec3], scale: f32, fps: f32) -> Vec<bool> {
 /// are empty for a rig without toes. `y_offset` takes the source's ankle height onto the
 /// character's ground; `scale` is the character's size over the canonical skeleton's (the
 /// source tracks are scaled by it).
+#[derive(Clone, Debug)]
 pub(super) struct FootTracks {
     pub(super) src_ankle: Vec<Vec3>,
     pub(super) src_toe: Vec<Vec3>,

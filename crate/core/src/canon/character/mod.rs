@@ -342,12 +342,13 @@ impl Character {
 
     /// [`Character::retarget`] with every choice spelled out (the benchmark's controls).
     pub fn retarget_options(&self, clip: &Clip, clip_map: &HumanoidMap, options: &RetargetOptions) -> Result<Clip, CharacterError> {
-        self.play(clip, clip_map, options, None)
+        self.play(clip, clip_map, options, None, None)
     }
 
     /// [`Character::retarget_options`], with the planted frames and the release given instead
-    /// of read from the source ([`hold_feet_in_dance`]).
-    fn play(&self, clip: &Clip, clip_map: &HumanoidMap, options: &RetargetOptions, given: Option<&GivenHolds>) -> Result<Clip, CharacterError> {
+    /// of read from the source ([`hold_feet_in_dance`]), and pass 0 kept in `free` (taken from
+    /// it when it holds this clip's: [`FreePass`]).
+    fn play(&self, clip: &Clip, clip_map: &HumanoidMap, options: &RetargetOptions, given: Option<&GivenHolds>, mut free: Option<&mut Option<FreePass>>) -> Result<Clip, CharacterError> {
         let transfer = options.transfer;
         let status = clip_map.status(&clip.skeleton, Some(clip));
         if let HumanoidStatus::NotHumanoid { reason } = status {
@@ -512,7 +513,23 @@ impl Character {
         for (k, leg) in legs.iter().enumerate() {
             foot_leg[leg.foot] = k;
         }
-        for pass in if hold { 0..2 } else { 1..2 } {
+        // Pass 0 kept from an earlier call on this clip ([`FreePass`]), or kept by this one.
+        let src_n = src.skeleton.len();
+        let fits = |c: &FreePass| c.frames == frames && c.feet.len() == legs.len() && c.src_hips.len() == frames && c.src_rotations.len() == frames * src_n;
+        let reuse = hold && free.as_deref().and_then(|c| c.as_ref()).is_some_and(fits);
+        if let Some(c) = free.as_deref().and_then(|c| c.as_ref()).filter(|_| reuse) {
+            (feet, free_hip, free_hinge) = (c.feet.clone(), c.free_hip.clone(), c.free_hinge.clone());
+        }
+        let record = hold && !reuse && free.is_some();
+        let (mut src_rotations, mut src_hips) = (Vec::with_capacity(if record { frames * src_n } else { 0 }), Vec::with_capacity(if record { frames } else { 0 }));
+        for pass in if hold && !reuse { 0..2 } else { 1..2 } {
+            if pass == 1 && record {
+                if let Some(slot) = free.as_deref_mut() {
+                    *slot = Some(FreePass { frames, feet: feet.clone(), free_hip: free_hip.clone(), free_hinge: free_hinge.clone(), src_rotations: std::mem::take(&mut src_rotations), src_hips: std::mem::take(&mut src_hips) });
+                }
+            }
+            // The source's pose per frame, as pass 0 posed it, when kept.
+            let posed = free.as_deref().and_then(|c| c.as_ref()).filter(|c| pass == 1 && hold && fits(c));
             if pass == 1 && hold {
                 let stepping;
                 (plant_target, shift_m, stepping) = match given {
@@ -545,12 +562,21 @@ impl Character {
                 t.values.clear();
             }
             for f in 0..frames {
-                let src_now = src_pose.of_frame(&src, f);
-                let (src_rot, src_pos) = (&src_now.rotations, &src_now.positions);
+                let (src_rot, src_hips_now, src_pos): (&[Quat], Vec3, &[Vec3]) = match posed {
+                    Some(c) => (&c.src_rotations[f * src_n..(f + 1) * src_n], c.src_hips[f], &[]),
+                    None => {
+                        let src_now = src_pose.of_frame(&src, f);
+                        if record && pass == 0 {
+                            src_rotations.extend_from_slice(&src_now.rotations);
+                            src_hips.push(src_now.positions[Canon::Hips.index()]);
+                        }
+                        (&src_now.rotations, src_now.positions[Canon::Hips.index()], &src_now.positions)
+                    }
+                };
                 // Hips target: the character's rest hips moved as the source's hips move from
                 // theirs, scaled by the ratio of leg lengths, lowered where a held foot would
                 // otherwise be out of reach and shifted to keep held feet put.
-                let target = self.hips_rest + lift + (src_pos[Canon::Hips.index()] - canon_hips) * scale - Vec3::Y * drop_m[f] + shift_m[f];
+                let target = self.hips_rest + lift + (src_hips_now - canon_hips) * scale - Vec3::Y * drop_m[f] + shift_m[f];
                 for &i in &order {
                     let j = &self.skeleton.joints[i];
                     let parent = j.parent.filter(|&q| q < i);
