@@ -581,23 +581,35 @@ pub fn free_skate_stage(p: &Problem, weights: &FillWeights, path: &[usize]) -> (
 /// Figure: the dance's mean foot skate ≤ [`skate_goal_cm_per_s`]. When `path`'s dance slides
 /// more, refills charging each segment's skate above its clip's as the bar plays it at each
 /// weight of [`skate_ladder`], weakest first, and returns the first dance within the goal (and
-/// still in the beat-rate band, if `path`'s was); else `path` and `cost`.
+/// still in the beat-rate band, if `path`'s was). When none is, and the dance also slides past
+/// §N's goal (each bar's source clip at the bar's pace, [`Problem::paced_source_skate_cm_per_s`]),
+/// returns the refill that slides least, if it slides less than the dance and keeps the band
+/// (session 15: with the predicted blended jump in the table's cost, [`super::JumpTerm`], no
+/// refill of the person's 150 BPM piece in 3 reached the library's 33.7 cm/s, and the stage
+/// kept a dance at 70.6 against its sources' 63.0; the least sliding refill is at 46.5).
+/// Else `path` and `cost`.
 pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
     let Some(before) = measured.of(p, &path).filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(p.lib, &path)) else {
         return Ok((path, cost));
     };
     let on_beat = in_beat_rate_band(before.kinetic_per_count);
+    let past_sources = before.foot_skate_cm_per_s > p.paced_source_skate_cm_per_s(&path);
     let over: Vec<Vec<f32>> = (0..p.layers.len()).map(|t| (0..p.lib.len()).map(|s| p.skate_excess(t, s).max(0.0) / 100.0).collect()).collect();
+    let mut least: Option<(Vec<usize>, f32, f32)> = None;
     for w in skate_ladder() {
         let extra: Vec<Vec<f32>> = over.iter().map(|v| v.iter().map(|x| w * x).collect()).collect();
         let q = p.fill(weights, &extra)?;
         let (q, c) = p.free_skate(weights, &[], &q);
         let Some(f) = measured.of(p, &q) else { continue };
-        if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)) {
+        let band = !on_beat || in_beat_rate_band(f.kinetic_per_count);
+        if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && band {
             return Ok((q, c));
         }
+        if past_sources && band && f.foot_skate_cm_per_s < least.as_ref().map_or(before.foot_skate_cm_per_s, |l| l.2) {
+            least = Some((q, c, f.foot_skate_cm_per_s));
+        }
     }
-    Ok((path, cost))
+    Ok(least.map_or((path, cost), |(q, c, _)| (q, c)))
 }
 
 /// Stage 5: joins no more abrupt than [`GenerateOptions::join_jump_goal`]
