@@ -10,8 +10,11 @@
 //! dance, foot skate no more than its sources' (each bar's source clip at the bar's pace, §N).
 //! The same with half the clips held out (every other file of the sorted list), so the rule is
 //! not fitted to one set of files. Known misses are listed in [`KNOWN_MISSES`] with the figure
-//! that misses, and asserted to be the only ones. Figures per song are printed by
-//! `tests/bench/choreo_person.rs`.
+//! that misses, and asserted to be the only ones. Each dance is printed beside two controls
+//! made in the same run: session 13's rule ("control") and the table's cost without the
+//! predicted blended jump ("term off", `JumpTerm::OFF`). Figures per song are also printed by
+//! `tests/bench/choreo_person.rs`. `ODORI_ONLY=a|b` keeps the songs whose label contains a or b,
+//! `ODORI_LIBS=all,half 0` the libraries named; the goals are then printed, not asserted.
 
 #[path = "music_audio.rs"]
 mod music_audio;
