@@ -1,7 +1,7 @@
 //! The predicted blended jump in the table's cost (issue 26 item 1, spec §G and §J): the
 //! transition table's C(a, b) with [`JumpTerm::MEASURED`] adds 2 × max(0, J − 1.5), J the §J
 //! join jump predicted after the inertialized join ([`odori_core::choreo::blended_join_jump`]).
-//! (The default since session 15: see [`JumpTerm::MEASURED`].) Here every dance is made twice in the same
+//! (Not the default yet: see [`JumpTerm::MEASURED`].) Here every dance is made twice in the same
 //! run, at default settings: with that term in the table's cost, and with the cost before it
 //! (the control, [`JumpTerm::OFF`]; each a copy of the library with its table installed, so the
 //! whole Generate pipeline — fill, ladders, join repair — runs on that C). The songs are

@@ -11,7 +11,7 @@
 //! ([`odori_core::choreo::blended_join_jump_at`]) by Spearman's ρ, on each half: the
 //! prediction has no fitted weight, so each half is held out. Asserted: ρ ≥ [`RHO_FLOOR`] on
 //! both halves, and above the table's C by [`RHO_MARGIN`] (the control). Since session 14 the
-//! table's cost holds the prediction ([`odori_core::choreo::JumpTerm`], by default since s15):
+//! table's cost may hold the prediction ([`odori_core::choreo::JumpTerm`], not by default yet):
 //! "the table's C" here is the cost without it ([`JumpTerm::OFF`]); the table's cost with the
 //! whole prediction added (weight 1, nothing free: the table's own 5-sample term) must rank the
 //! joins above C by [`TABLE_RHO_MARGIN`] on each half; [`JumpTerm::MEASURED`]'s is printed.

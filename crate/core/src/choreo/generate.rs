@@ -584,7 +584,7 @@ pub fn free_skate_stage(p: &Problem, weights: &FillWeights, path: &[usize]) -> (
 /// still in the beat-rate band, if `path`'s was). When none is, and the dance also slides past
 /// §N's goal (each bar's source clip at the bar's pace, [`Problem::paced_source_skate_cm_per_s`]),
 /// returns the refill that slides least, if it slides less than the dance and keeps the band
-/// (session 15: with the predicted blended jump in the table's cost, [`super::JumpTerm`], no
+/// (measured in session 15 with the predicted blended jump in the table's cost, [`super::JumpTerm`], no
 /// refill of the person's 150 BPM piece in 3 reached the library's 33.7 cm/s, and the stage
 /// kept a dance at 70.6 against its sources' 63.0; the least sliding refill is at 46.5).
 /// Else `path` and `cost`.

@@ -99,17 +99,17 @@ impl JumpTerm {
 
 impl JumpTerm {
     /// [`BLENDED_JUMP_WEIGHT`] and [`BLENDED_JUMP_FREE`]: the term measured in
-    /// `tests/native/choreo_blended_cost.rs`, the default since session 15. It had been left off
-    /// because the skate stage ([`super::generate::skate_stage`]) found no refill of the
-    /// person's 150 BPM piece in 3 within the library's skate and kept one sliding past its
-    /// sources' (66.8 against 63.0 cm/s); the stage now keeps its least sliding refill there.
+    /// `tests/native/choreo_blended_cost.rs`. Not the default yet: with the person's library it
+    /// let the feet slide more than the sources' on the 150 BPM piece in 3 (66.8 against 63.0
+    /// cm/s; 103.7 against 64.0 on half 0 of the files) and joined one piece at 1.63
+    /// (`choreo_my_moves`), and the drum take at 1.51 (`choreo_beats`).
     pub const MEASURED: JumpTerm = JumpTerm { weight: BLENDED_JUMP_WEIGHT, free: BLENDED_JUMP_FREE };
 }
 
 impl Default for JumpTerm {
-    /// [`JumpTerm::MEASURED`]: the table's cost holds the predicted blended jump.
+    /// [`JumpTerm::OFF`] for now (see [`JumpTerm::MEASURED`]): the dances are those before it.
     fn default() -> Self {
-        JumpTerm::MEASURED
+        JumpTerm::OFF
     }
 }
 

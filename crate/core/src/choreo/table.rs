@@ -14,9 +14,9 @@
 //! also hold what the viewer sees after the blend ([`JumpTerm`]): [`BLENDED_JUMP_WEIGHT`] ×
 //! max(0, J − [`BLENDED_JUMP_FREE`]), J the §J join jump predicted after the inertialized join
 //! ([`blended_join_jump`], sampled at [`TABLE_BLEND_SAMPLES`] points of the decay), which ranks
-//! the measured jumps at Spearman ρ 0.6 where C alone ranks them at 0.17. The default, since
-//! session 15, is [`JumpTerm::MEASURED`] ([`JumpTerm::OFF`]: the cost before it, the control);
-//! a table extended block by block keeps its term.
+//! the measured jumps at Spearman ρ 0.6 where C alone ranks them at 0.17. The default is
+//! [`JumpTerm::OFF`], the cost before it, until the term stops costing the person's dances foot
+//! skate ([`JumpTerm::MEASURED`]); a table extended block by block keeps its term.
 //!
 //! Speed. The costs need one square root and one division per link and pair (the jump
 //! direction h(v_l(j_B) − v_l(i_A)) cannot be factored), so the work is M² · 20 of those;
@@ -1065,7 +1065,7 @@ mod tests {
         let scope = TableScope::all_pairs();
         let all = JumpTerm { weight: 1.0, free: 0.0 };
         let (with, without) = (TransitionTable::for_scope_with_term(&lib, 0.0, &scope, all), TransitionTable::for_scope_with_term(&lib, 0.0, &scope, JumpTerm::OFF));
-        assert_eq!(TransitionTable::for_scope(&lib, 0.0, &TableScope::none()).jump_term(), JumpTerm::MEASURED, "the default cost holds the term");
+        assert_eq!(TransitionTable::for_scope(&lib, 0.0, &TableScope::none()).jump_term(), JumpTerm::OFF);
         assert_eq!(without.jump_term(), JumpTerm::OFF);
         let m = lib.len();
         let (mut worst_over, mut ratios) = (0.0f32, Vec::new());
