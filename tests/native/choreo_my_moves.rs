@@ -58,13 +58,14 @@ use odori_core::music::{analyze, envelope, AnalysisOptions, RmsEnvelope};
 /// control; its 0.823 refill slid more).
 /// Session 16: each dance is also made on the table with the predicted blended jump
 /// (`JumpTerm::MEASURED`, printed on its "term on" line); the term stays off by default
-/// (`docs/benchmarks-notes-choreo.md`: with it half 1's 108 BPM piece in 3 joins at 1.48, but
-/// half 1's Sugar Plum falls to 0.718 against random 0.671 + 0.05).
+/// (`docs/benchmarks-notes-choreo.md`, session 16: with it and the join repair's skate cap, half
+/// 1's 108 BPM piece in 3 joined at 1.48, but half 1's Sugar Plum fell to 0.718 against random
+/// 0.671 + 0.05).
 const KNOWN_MISSES: &[(&str, &str, &str, &str)] = &[
     ("all", "solo-trumpet-06", "skate", "one bar: skate 53.4 against its sources' 37.7 cm/s (as before the change)"),
-    ("half 1", "Lets_Go_Fishin", "rate", "1.30 kinetic beats a count (control 1.26; term on the same)"),
-    ("half 1", "demo in 3, 108", "join", "join 1.58 as played (control 1.46; term on 1.48)"),
-    ("half 1", "demo in 4, 90→130", "random", "BAS-music 0.736 against random 0.695 + 0.05 (control 0.736; term on the same): the refill on the beat slid more"),
+    ("half 1", "Lets_Go_Fishin", "rate", "1.30 kinetic beats a count (control 1.26)"),
+    ("half 1", "demo in 3, 108", "join", "join 1.58 as played (control 1.46)"),
+    ("half 1", "demo in 4, 90→130", "random", "BAS-music 0.736 against random 0.695 + 0.05 (control 0.736): the refill on the beat slid more"),
 ];
 
 /// The person's files: every humanoid dance clip and RobotExpressive's Dance; `half` keeps

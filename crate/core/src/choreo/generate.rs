@@ -581,35 +581,23 @@ pub fn free_skate_stage(p: &Problem, weights: &FillWeights, path: &[usize]) -> (
 /// Figure: the dance's mean foot skate ≤ [`skate_goal_cm_per_s`]. When `path`'s dance slides
 /// more, refills charging each segment's skate above its clip's as the bar plays it at each
 /// weight of [`skate_ladder`], weakest first, and returns the first dance within the goal (and
-/// still in the beat-rate band, if `path`'s was). When none is, and the dance also slides past
-/// §N's goal (each bar's source clip at the bar's pace, [`Problem::paced_source_skate_cm_per_s`]),
-/// returns the refill that slides least, if it slides less than the dance and keeps the band
-/// (measured in session 15 with the predicted blended jump in the table's cost, [`super::JumpTerm`], no
-/// refill of the person's 150 BPM piece in 3 reached the library's 33.7 cm/s, and the stage
-/// kept a dance at 70.6 against its sources' 63.0; the least sliding refill is at 46.5).
-/// Else `path` and `cost`.
+/// still in the beat-rate band, if `path`'s was); else `path` and `cost`.
 pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
     let Some(before) = measured.of(p, &path).filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(p.lib, &path)) else {
         return Ok((path, cost));
     };
     let on_beat = in_beat_rate_band(before.kinetic_per_count);
-    let past_sources = before.foot_skate_cm_per_s > p.paced_source_skate_cm_per_s(&path);
     let over: Vec<Vec<f32>> = (0..p.layers.len()).map(|t| (0..p.lib.len()).map(|s| p.skate_excess(t, s).max(0.0) / 100.0).collect()).collect();
-    let mut least: Option<(Vec<usize>, f32, f32)> = None;
     for w in skate_ladder() {
         let extra: Vec<Vec<f32>> = over.iter().map(|v| v.iter().map(|x| w * x).collect()).collect();
         let q = p.fill(weights, &extra)?;
         let (q, c) = p.free_skate(weights, &[], &q);
         let Some(f) = measured.of(p, &q) else { continue };
-        let band = !on_beat || in_beat_rate_band(f.kinetic_per_count);
-        if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && band {
+        if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)) {
             return Ok((q, c));
         }
-        if past_sources && band && f.foot_skate_cm_per_s < least.as_ref().map_or(before.foot_skate_cm_per_s, |l| l.2) {
-            least = Some((q, c, f.foot_skate_cm_per_s));
-        }
     }
-    Ok(least.map_or((path, cost), |(q, c, _)| (q, c)))
+    Ok((path, cost))
 }
 
 /// Stage 5: joins no more abrupt than [`GenerateOptions::join_jump_goal`]
@@ -624,8 +612,8 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 /// the preference order of issue 26 — built-in moves fill only bars where no imported move
 /// meets the goals — where the charge alone kept them out of every bar an imported move fits. A refill whose feet slide past the goal the dance met makes the next
 /// one charge skate too, at the next weight of [`skate_ladder`]. The best dance that keeps what
-/// the first one met (beat-rate band, skate goal; a dance already past the skate goal slides no
-/// more than it did) with a better worst join is returned; else `path` and `cost`.
+/// the first one met (beat-rate band, skate goal) with a better worst join is returned; else
+/// `path` and `cost`.
 pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
     let (mut path, mut cost) = (path, cost);
     if p.layers.len() < 2 {
@@ -636,10 +624,6 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
     let (mut trial_path, mut trial) = (path.clone(), current);
     let mut best = current;
     let skate_met = current.is_some_and(|f| f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &path));
-    // The skate a refill may reach: the goal, or, when the dance slid past it already, no more
-    // than it did (session 16: a dance 1 cm/s over the goal let every refill slide freely).
-    let entry_skate = if skate_met { 0.0 } else { current.map_or(f32::INFINITY, |f| f.foot_skate_cm_per_s) };
-    let skate_cap = |q: &[usize]| skate_goal_cm_per_s(p.lib, q).max(entry_skate);
     let on_beat = current.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
     let mut ban: Vec<Vec<f32>> = Vec::new();
     // Bars whose imported move missed the join goal, opened to built-in moves (*my moves*).
@@ -649,7 +633,7 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
     for _ in 0..options.join_repairs {
         let Some(f) = trial else { break };
         let joins_ok = f.join_jump_max <= options.join_jump_goal;
-        let skate_ok = f.foot_skate_cm_per_s <= skate_cap(&trial_path);
+        let skate_ok = !skate_met || f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &trial_path);
         if joins_ok && skate_ok {
             break;
         }
@@ -695,7 +679,7 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
             // Kept only when its worst join is better and nothing the dance met is lost: the
             // beat rate's band, and the skate goal.
             let keeps_rate = !on_beat || in_beat_rate_band(a.kinetic_per_count);
-            let keeps_skate = a.foot_skate_cm_per_s <= skate_cap(&q);
+            let keeps_skate = !skate_met || a.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q);
             if a.join_jump_max < b.join_jump_max && keeps_rate && keeps_skate {
                 (path, cost, best) = (q.clone(), c, after);
             }
