@@ -622,8 +622,8 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 /// the preference order of issue 26 — built-in moves fill only bars where no imported move
 /// meets the goals — where the charge alone kept them out of every bar an imported move fits. A refill whose feet slide past the goal the dance met makes the next
 /// one charge skate too, at the next weight of [`skate_ladder`]. The best dance that keeps what
-/// the first one met (beat-rate band, skate goal) with a better worst join is returned; else
-/// `path` and `cost`.
+/// the first one met (beat-rate band, skate goal; a dance already past the skate goal slides no
+/// more than it did) with a better worst join is returned; else `path` and `cost`.
 pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
     let (mut path, mut cost) = (path, cost);
     if p.layers.len() < 2 {
@@ -634,6 +634,10 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
     let (mut trial_path, mut trial) = (path.clone(), current);
     let mut best = current;
     let skate_met = current.is_some_and(|f| f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &path));
+    // The skate a refill may reach: the goal, or, when the dance slid past it already, no more
+    // than it did (session 16: a dance 1 cm/s over the goal let every refill slide freely).
+    let entry_skate = if skate_met { 0.0 } else { current.map_or(f32::INFINITY, |f| f.foot_skate_cm_per_s) };
+    let skate_cap = |q: &[usize]| skate_goal_cm_per_s(p.lib, q).max(entry_skate);
     let on_beat = current.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
     let mut ban: Vec<Vec<f32>> = Vec::new();
     // Bars whose imported move missed the join goal, opened to built-in moves (*my moves*).
@@ -643,7 +647,7 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
     for _ in 0..options.join_repairs {
         let Some(f) = trial else { break };
         let joins_ok = f.join_jump_max <= options.join_jump_goal;
-        let skate_ok = !skate_met || f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &trial_path);
+        let skate_ok = f.foot_skate_cm_per_s <= skate_cap(&trial_path);
         if joins_ok && skate_ok {
             break;
         }
@@ -689,7 +693,7 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
             // Kept only when its worst join is better and nothing the dance met is lost: the
             // beat rate's band, and the skate goal.
             let keeps_rate = !on_beat || in_beat_rate_band(a.kinetic_per_count);
-            let keeps_skate = !skate_met || a.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q);
+            let keeps_skate = a.foot_skate_cm_per_s <= skate_cap(&q);
             if a.join_jump_max < b.join_jump_max && keeps_rate && keeps_skate {
                 (path, cost, best) = (q.clone(), c, after);
             }
