@@ -5,7 +5,7 @@
 // and a camera in front of the face.
 import { readFileSync, existsSync } from "node:fs";
 import { join } from "node:path";
-import { root, canvasPixels } from "./harness.mjs";
+import { root, canvasPixels, waitUntil } from "./harness.mjs";
 
 const parserPath = join(root, "node_modules", "three-mmd", "examples", "jsm", "libs", "mmdparser.module.js");
 if (!existsSync(parserPath)) throw new Error("node_modules/three-mmd (three@0.171.0) is missing: run npm ci");
@@ -113,8 +113,35 @@ export const inBox = (b, x, y) => x >= b.x0 && x <= b.x1 && y >= b.y0 && y <= b.
 /** How many pixels of `img` inside box `b` satisfy `pred(x, y)`. */
 export const countIn = (img, b, pred) => { let n = 0; for (let y = Math.max(0, b.y0); y <= Math.min(img.height - 1, b.y1); y++) for (let x = Math.max(0, b.x0); x <= Math.min(img.width - 1, b.x1); x++) if (pred(x, y)) n++; return n; };
 
-/** Headless screenshots of the page's frame (`player.drawNow`) with the viewer's camera at `camera`, morphs on and off (the control): { on, off }, each { img, drawn } (`viewer.lastDrawn()[0]`); drawn again until the shot is of this camera and both are of one size. Morphs are left on. */
+/**
+ * The test owns the camera while it shoots: waits until every long clip is made on its body
+ * (the page frames the figures again when one is), then holds off the page's own re-framing (a
+ * resize of the view, a body made) until the returned `release()` is awaited.
+ */
+export async function holdCamera(page) {
+  await waitUntil(() => page.evaluate(() => {
+    const { viewer, player } = window.odori;
+    if (viewer.bodiesPending === 0) return true;
+    player.drawNow();
+    return false;
+  }), { what: "every clip made on its body (no re-framing pending)", timeoutMs: 60000, intervalMs: 100 });
+  await page.evaluate(() => {
+    const p = window.odori.player;
+    if (!Object.hasOwn(p, "reframe")) p.reframe = () => {};
+  });
+  return () => page.evaluate(() => { delete window.odori.player.reframe; });
+}
+
+/** What differs between the viewer's camera `now` and `camera`, and the view's size: for a failure's message. */
+export const cameraDiff = (now, camera, img) => JSON.stringify({ wanted: camera, now, view: img && [img.width, img.height] });
+
+/** Headless screenshots of the page's frame (`player.drawNow`) with the viewer's camera at `camera`, morphs on and off (the control): { on, off }, each { img, drawn } (`viewer.lastDrawn()[0]`); drawn again until the shot is of this camera and both are of one size (the page's re-framing held off meanwhile: `holdCamera`). Morphs are left on. */
 export async function shotsMorphsOnOff(page, camera, file) {
+  const release = await holdCamera(page);
+  try { return await shotsOnOff(page, camera, file); } finally { await release(); }
+}
+
+async function shotsOnOff(page, camera, file) {
   const shots = {};
   for (const on of [true, false]) {
     for (let tries = 0; ; tries++) {
@@ -131,7 +158,8 @@ export async function shotsMorphsOnOff(page, camera, file) {
         shots[on ? "on" : "off"] = { img, drawn };
         break;
       }
-      if (tries >= 10) throw new Error("the camera keeps being moved by the page");
+      if (tries >= 10) throw new Error(`the camera keeps being moved by the page, or the view changes size: ${cameraDiff(now, camera, img)}`);
+      await new Promise((r) => setTimeout(r, 200));
     }
   }
   await page.evaluate(() => window.odori.viewer.setMorphs(true));
