@@ -115,8 +115,9 @@ export const countIn = (img, b, pred) => { let n = 0; for (let y = Math.max(0, b
 
 /**
  * The test owns the camera while it shoots: waits until every long clip is made on its body
- * (the page frames the figures again when one is), then holds off the page's own re-framing (a
- * resize of the view, a body made) until the returned `release()` is awaited.
+ * (the page frames the figures again when one is) and the view's size has settled, then holds
+ * off the page's own re-framing (a resize of the view, a body made) until the returned
+ * `release()` is awaited.
  */
 export async function holdCamera(page) {
   await waitUntil(() => page.evaluate(() => {
@@ -125,6 +126,14 @@ export async function holdCamera(page) {
     player.drawNow();
     return false;
   }), { what: "every clip made on its body (no re-framing pending)", timeoutMs: 60000, intervalMs: 100 });
+  // The view's size settled: the same for 300 ms.
+  let last = null;
+  await waitUntil(async () => {
+    const size = await page.evaluate(() => { const c = document.querySelector("#view"); return `${c.clientWidth}×${c.clientHeight}`; });
+    const settled = size === last;
+    last = size;
+    return settled;
+  }, { what: "the view's size to settle", timeoutMs: 30000, intervalMs: 300 });
   await page.evaluate(() => {
     const p = window.odori.player;
     if (!Object.hasOwn(p, "reframe")) p.reframe = () => {};
@@ -142,9 +151,11 @@ export async function shotsMorphsOnOff(page, camera, file) {
 }
 
 async function shotsOnOff(page, camera, file) {
-  const shots = {};
-  for (const on of [true, false]) {
-    for (let tries = 0; ; tries++) {
+  // Both shots again when the camera moved or the view changed size between them (the page's
+  // layout can still move when a notice or a status line comes or goes): a pair is of one view.
+  for (let tries = 0; ; tries++) {
+    const shots = {};
+    for (const on of [true, false]) {
       const drawn = await page.evaluate(({ on, camera }) => {
         const { viewer, player } = window.odori;
         viewer.setCamera(camera);
@@ -152,18 +163,17 @@ async function shotsOnOff(page, camera, file) {
         player.drawNow();
         return viewer.lastDrawn()[0];
       }, { on, camera });
-      const img = await canvasPixels(page, `${file}-${on ? "on" : "off"}.png`);
-      const now = await page.evaluate(() => window.odori.viewer.camera);
-      if (sameCamera(now, camera) && (on || (img.width === shots.on.img.width && img.height === shots.on.img.height))) {
-        shots[on ? "on" : "off"] = { img, drawn };
-        break;
-      }
-      if (tries >= 10) throw new Error(`the camera keeps being moved by the page, or the view changes size: ${cameraDiff(now, camera, img)}`);
-      await new Promise((r) => setTimeout(r, 200));
+      shots[on ? "on" : "off"] = { img: await canvasPixels(page, `${file}-${on ? "on" : "off"}.png`), drawn };
     }
+    const now = await page.evaluate(() => window.odori.viewer.camera);
+    const { on, off } = shots;
+    if (sameCamera(now, camera) && on.img.width === off.img.width && on.img.height === off.img.height) {
+      await page.evaluate(() => window.odori.viewer.setMorphs(true));
+      return shots;
+    }
+    if (tries >= 10) throw new Error(`the camera keeps being moved by the page, or the view changes size: ${cameraDiff(now, camera, off.img)}; the shot with morphs on was ${on.img.width}×${on.img.height}`);
+    await new Promise((r) => setTimeout(r, 300));
   }
-  await page.evaluate(() => window.odori.viewer.setMorphs(true));
-  return shots;
 }
 
 /** The head 頭's world pose ({ q, p }) and the body drawn, for clip `clip` at `t` s in the page's viewer (drawn there first). */
