@@ -29,7 +29,7 @@ mod music_audio;
 mod person_common;
 
 use odori_core::bars::Bar;
-use odori_core::choreo::{bar_counts, FillWeights, GenerateOptions, JumpTerm, SegmentLibrary, TableScope, TransitionTable};
+use odori_core::choreo::{FillWeights, GenerateOptions, JumpTerm, SegmentLibrary, TableScope, TransitionTable};
 use odori_core::music::{analyze, AnalysisOptions};
 use odori_tests::{best_ms, dance_quality_of, random_moves_bas, RANDOM_MOVES_SEED};
 
@@ -51,17 +51,6 @@ fn person_library() -> SegmentLibrary {
     person_common::person_library(None).0
 }
 
-/// A copy of `lib` whose cached table (the blocks `bars` need) is built with `term`: Generate on
-/// it runs on that cost.
-fn with_table(lib: &SegmentLibrary, bars: &[Bar], term: JumpTerm) -> SegmentLibrary {
-    let copy = lib.clone();
-    copy.drop_table();
-    let scope = TableScope::for_bar_counts(&bar_counts(lib, bars));
-    let penalty = FillWeights::default().repeat_penalty;
-    assert!(copy.install_table_for(TransitionTable::for_scope_with_term(lib, penalty, &scope, term), &scope), "table refused");
-    copy
-}
-
 /// One dance's figures.
 #[derive(Clone, Copy, Debug)]
 struct Figures {
@@ -74,7 +63,7 @@ struct Figures {
 }
 
 fn dance(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], take: u32, random: f32, term: JumpTerm) -> Figures {
-    let lib = with_table(lib, bars, term);
+    let lib = person_common::with_table(lib, bars, term);
     let mut doc = odori_tests::Dance::new(bars.to_vec());
     doc.generate_with(&lib, &GenerateOptions { take, ..GenerateOptions::default() }).expect("generate");
     let penalty = FillWeights::default().repeat_penalty;

@@ -21,7 +21,7 @@ mod person_common;
 
 use odori_core::bars::Bar;
 use odori_core::choreo::quality::{dance_quality, dance_quality_switched, DanceQuality};
-use odori_core::choreo::{bar_counts, count_rate_bpm, skate_goal_cm_per_s, FillWeights, GenerateOptions, JumpTerm, RenderOptions, SegmentLibrary, TableScope, TransitionTable};
+use odori_core::choreo::{bar_counts, count_rate_bpm, skate_goal_cm_per_s, GenerateOptions, JumpTerm, RenderOptions, SegmentLibrary};
 use odori_core::music::{analyze, AnalysisOptions, RmsEnvelope};
 
 
@@ -74,17 +74,6 @@ fn person_library(half: Option<usize>) -> (SegmentLibrary, usize) {
 
 fn songs() -> Vec<(String, RmsEnvelope)> {
     person_common::songs()
-}
-
-/// A copy of `lib` whose cached table (the blocks `bars` need) is built with `term`: Generate on
-/// it runs on that cost (the term-on comparison).
-fn with_table(lib: &SegmentLibrary, bars: &[Bar], term: JumpTerm) -> SegmentLibrary {
-    let copy = lib.clone();
-    copy.drop_table();
-    let scope = TableScope::for_bar_counts(&bar_counts(lib, bars));
-    let penalty = FillWeights::default().repeat_penalty;
-    assert!(copy.install_table_for(TransitionTable::for_scope_with_term(lib, penalty, &scope, term), &scope), "table refused");
-    copy
 }
 
 fn quality(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], choices: &[Option<usize>]) -> DanceQuality {
@@ -168,7 +157,7 @@ fn my_moves_are_the_default_and_fill_half_the_bars_on_the_beat_with_smooth_joins
             );
             // The term-on comparison, same run: the table's cost with the predicted blended
             // jump (JumpTerm::MEASURED), every stage as the product's.
-            let off_lib = with_table(&lib, &bars, JumpTerm::MEASURED);
+            let off_lib = person_common::with_table(&lib, &bars, JumpTerm::MEASURED);
             let mut off = odori_tests::Dance::new(bars.clone());
             off.generate(&off_lib).unwrap_or_else(|e| panic!("{label}: {e}"));
             let off_chosen = off.segments();

@@ -1,14 +1,15 @@
 //! The person's library, shared by the native tests and the benchmark that dance with the
 //! moves a person imported (`choreo_my_moves`, `choreo_join_points`, `choreo_blended_cost`,
 //! `choreo_join_cost`, `tests/bench/choreo_person.rs`): one list of the person's files and one
-//! way they are loaded, so the tests' figures are all on the same library; and the songs they
-//! dance to ([`songs`]).
+//! way they are loaded, so the tests' figures are all on the same library; the songs they
+//! dance to ([`songs`]); and a library whose table is built with a given jump term ([`with_table`]).
 #![allow(dead_code)]
 
 #[path = "music_audio.rs"]
 mod music_audio;
 
-use odori_core::choreo::{ClipSummary, SegmentError, SegmentLibrary, SegmentOptions};
+use odori_core::bars::Bar;
+use odori_core::choreo::{bar_counts, ClipSummary, FillWeights, JumpTerm, SegmentError, SegmentLibrary, SegmentOptions, TableScope, TransitionTable};
 use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{envelope, RmsEnvelope};
@@ -62,4 +63,15 @@ pub fn songs() -> Vec<(String, RmsEnvelope)> {
         out.push((format!("demo in {bpb}, {bpm}→{end} BPM"), envelope(&[&song.samples], 22050.0).expect("envelope")));
     }
     out
+}
+
+/// A copy of `lib` whose cached table (the blocks `bars` need) is built with `term`: Generate on
+/// it runs on that cost, every stage as the product's (the term-on comparisons).
+pub fn with_table(lib: &SegmentLibrary, bars: &[Bar], term: JumpTerm) -> SegmentLibrary {
+    let copy = lib.clone();
+    copy.drop_table();
+    let scope = TableScope::for_bar_counts(&bar_counts(lib, bars));
+    let penalty = FillWeights::default().repeat_penalty;
+    assert!(copy.install_table_for(TransitionTable::for_scope_with_term(lib, penalty, &scope, term), &scope), "table refused");
+    copy
 }
