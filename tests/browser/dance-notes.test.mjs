@@ -1,7 +1,8 @@
 // Legible bars, honest candidates and the share note (issue 26 items 5–6), on both back ends:
 // import a salsa BVH, Generate → every bar of the Dance strip names its move and its source,
 // and a bar holding the salsa names it; every candidate the engine flags says so in words on
-// its chip, after the clean ones; the strip keeps its height; a dance with an imported move
+// its chip, after the clean ones; every line of a cell shows (none cut off by the strip, a thin
+// scrollbar's room kept); the strip keeps its height; a dance with an imported move
 // shows the share note (a link cannot carry the person's files; the .odori file is offered)
 // and a dance of built-in moves alone does not.
 import { test, before, after } from "node:test";
@@ -19,6 +20,16 @@ const strip = (page) => page.evaluate(() => [...document.querySelectorAll("#danc
   flags: b.querySelector(".bar-flags")?.textContent ?? "",
   title: b.title,
   height: b.getBoundingClientRect().height,
+  // What of the cell shows: each line's bottom (px) over the cell's and over the strip's visible
+  // bottom, with a thin scrollbar's room (11 px) kept when the browser hides its scrollbars
+  // (headless does): a positive figure is a line cut off.
+  cut: (() => {
+    const s = document.querySelector("#dance-bars");
+    const sr = s.getBoundingClientRect();
+    const room = s.offsetHeight === s.clientHeight ? 11 : 0;
+    const visible = Math.min(b.getBoundingClientRect().bottom, sr.top + s.clientHeight - room);
+    return Math.max(0, ...[...b.querySelectorAll("span")].filter((x) => x.textContent).map((x) => x.getBoundingClientRect().bottom - visible));
+  })(),
 })));
 
 for (const backend of Object.keys(BACKENDS)) {
@@ -61,6 +72,8 @@ for (const backend of Object.keys(BACKENDS)) {
         for (const f of n.flags) assert.ok(bars[n.bar].title.includes(f.words), `bar ${n.bar + 1}: "${f.words}" not in its title`);
       }
       for (const n of notes.filter((n) => !n.flags.length)) assert.equal(bars[n.bar].flags, "", `bar ${n.bar + 1} is clean but shows "${bars[n.bar].flags}"`);
+      // Every line of every cell shows (number and move, source, weak spots), a thin scrollbar's room kept.
+      for (const [i, b] of bars.entries()) assert.ok(b.cut < 0.5, `bar ${i + 1}: a line is cut off by ${b.cut.toFixed(1)} px (${JSON.stringify({ move: b.move, src: b.src, flags: b.flags })})`);
       // The strip kept its height through Generate and the notes.
       const after = await page.evaluate(() => document.querySelector("#dance-bars").getBoundingClientRect().height);
       assert.ok(Math.abs(after - stripHeight) < 0.5, `the strip's height went from ${stripHeight} to ${after} px`);
