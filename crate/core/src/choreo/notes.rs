@@ -21,6 +21,20 @@ use crate::bars::Bar;
 /// Margin of BAS-music over the half-shifted control below which a bar is off the beat.
 pub const OFF_BEAT_MARGIN: f32 = 0.10;
 
+/// A bar's foot skate is flagged only when it is visibly more than its source's at the bar's
+/// pace: more by [`SKATE_FLAG_MARGIN_CM_PER_S`] and by [`SKATE_FLAG_RATIO`] (a flag reading
+/// "foot skate 1 cm/s (its source 1 cm/s)" or "33 cm/s (its source 33)" named no weakness a
+/// person can see; the tolerance is retargeting's, spec §L's check: the source's + 1 cm/s).
+pub const SKATE_FLAG_MARGIN_CM_PER_S: f32 = 1.0;
+/// See [`SKATE_FLAG_MARGIN_CM_PER_S`]: 10 % over the source's, the figures' own spread from bar
+/// to bar of one clip being of that order.
+pub const SKATE_FLAG_RATIO: f32 = 1.1;
+
+/// Whether a bar sliding `skate` cm/s, its source `paced` cm/s at the bar's pace, is flagged.
+pub fn skate_flagged(skate: f32, paced: f32) -> bool {
+    skate.is_finite() && paced.is_finite() && skate > paced + SKATE_FLAG_MARGIN_CM_PER_S && skate > paced * SKATE_FLAG_RATIO
+}
+
 /// Why notes could not be made.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum NotesError {
@@ -138,7 +152,7 @@ fn note_of(lib: &SegmentLibrary, bars: &[Bar], bar: usize, segment: Option<usize
         let rate = super::count_rate_bpm(s.counts(), bars.get(bar).map_or(1.0, Bar::duration_secs));
         let paced = s.clip_skate_cm_per_s * if s.tempo_bpm > 0.0 { rate / s.tempo_bpm } else { 1.0 };
         let skate = q.foot_skate.mean_cm_per_s;
-        if skate.is_finite() && paced.is_finite() && skate > paced {
+        if skate_flagged(skate, paced) {
             flags.push(Flag { kind: FlagKind::FootSkate, words: format!("foot skate {skate:.0} cm/s (its source {paced:.0} cm/s)"), value: skate, goal: paced });
         }
     }
@@ -209,6 +223,17 @@ mod tests {
     use crate::choreo::bars_from_tempo;
 
     #[test]
+    fn foot_skate_is_flagged_only_when_visibly_over_its_source() {
+        // Within the display's rounding or the bar-to-bar spread: no flag.
+        assert!(!skate_flagged(1.3, 0.9));
+        assert!(!skate_flagged(0.4, 0.0) && !skate_flagged(36.0, 33.0) && !skate_flagged(33.4, 33.0));
+        // Visibly more: flagged.
+        assert!(skate_flagged(13.0, 5.0) && skate_flagged(41.0, 37.0) && skate_flagged(2.5, 0.0));
+        // No figure, no flag.
+        assert!(!skate_flagged(f32::NAN, 1.0) && !skate_flagged(5.0, f32::NAN));
+    }
+
+    #[test]
     fn notes_name_every_move_and_rank_clean_candidates_first() {
         let lib = SegmentLibrary::builtin();
         let bars = bars_from_tempo(16.0, 120.0, 4, 0.0, |_, _| 0.5).unwrap();
@@ -225,6 +250,9 @@ mod tests {
             let bq = &q.bars[n.bar];
             assert_eq!(n.flags.iter().any(|f| f.kind == FlagKind::OffBeat), bq.beats.bas_music - bq.beats.bas_music_shifted < OFF_BEAT_MARGIN);
             assert_eq!(n.flags.iter().any(|f| f.kind == FlagKind::JoinJump), bq.join_jump.is_some_and(|j| j > JOIN_JUMP_GOAL));
+            let s = &lib.segments()[c.unwrap()];
+            let paced = s.clip_skate_cm_per_s * if s.tempo_bpm > 0.0 { crate::choreo::count_rate_bpm(s.counts(), bars[n.bar].duration_secs()) / s.tempo_bpm } else { 1.0 };
+            assert_eq!(n.flags.iter().any(|f| f.kind == FlagKind::FootSkate), skate_flagged(bq.foot_skate.mean_cm_per_s, paced));
         }
         // Candidates: ranked by flags, the search's order kept among equals.
         let candidates: Vec<usize> = (0..12).map(|i| i * 31 % 420).collect();
