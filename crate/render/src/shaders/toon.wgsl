@@ -3,7 +3,9 @@
 // colour at the top to the shadow colour at the bottom: v = ½(1 − N·L)), alpha blended.
 // Before the ramp, the sphere map as MMD's shader applies it: looked up by the view-space
 // normal (u = ½ + ½x, v = ½ − ½y, the top of the image facing up), multiplied (.sph) or added
-// (.spa). Both bindings are always there: white multiplied and black added are no change.
+// (.spa); or, in PMX's sub-texture mode, sampled at the vertex's additional UV 1 (`sphere_uv`,
+// its z 1) and multiplied, as MMD's shader does. Both bindings are always there: white
+// multiplied and black added are no change.
 // The part's material morphs (group 3, `Look` in look.wgsl) act on the diffuse colour, the
 // texture's colour, the sphere map's, the toon ramp's, and add their change to MMD's ambient
 // and specular terms (three r171's MMDToonShader and MMD's own: the ambient is emissive-like,
@@ -24,6 +26,7 @@ struct VOut {
     @location(1) color: vec4<f32>,
     @location(2) uv: vec2<f32>,
     @location(3) world: vec3<f32>,
+    @location(4) sphere_uv: vec3<f32>,
 };
 
 @vertex
@@ -36,6 +39,7 @@ fn vs_main(
     @location(5) uv: vec2<f32>,
     @location(8) morph: vec3<f32>,
     @location(9) uv_morph: vec2<f32>,
+    @location(10) sphere_uv: vec3<f32>,
 ) -> VOut {
     let skin = skin_matrix(joints, weights);
     var o: VOut;
@@ -46,6 +50,7 @@ fn vs_main(
     o.color = color;
     // The UV morphs' offsets (zero without), as MMD adds them to the vertex's UV.
     o.uv = uv + uv_morph;
+    o.sphere_uv = sphere_uv;
     return o;
 }
 
@@ -62,7 +67,7 @@ fn fs_main(i: VOut) -> @location(0) vec4<f32> {
     let right = normalize(vec3<f32>(m[0].x, m[1].x, m[2].x));
     let up = normalize(vec3<f32>(m[0].y, m[1].y, m[2].y));
     let n = normalize(i.normal);
-    let suv = vec2<f32>(0.5 + 0.5 * dot(n, right), 0.5 - 0.5 * dot(n, up));
+    let suv = select(vec2<f32>(0.5 + 0.5 * dot(n, right), 0.5 - 0.5 * dot(n, up)), i.sphere_uv.xy, i.sphere_uv.z > 0.5);
     let sphere = clamp(textureSample(sphere_mul_tex, sphere_sampler, suv) * look.sph_mul + look.sph_add, vec4<f32>(0.0), vec4<f32>(1.0)).rgb;
     let sphere_add = clamp(textureSample(sphere_add_tex, sphere_sampler, suv) * look.spa_mul + look.spa_add, vec4<f32>(0.0), vec4<f32>(1.0)).rgb;
     // The change the morphs make to MMD's highlight (none without morphs).
