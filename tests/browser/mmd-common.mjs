@@ -198,16 +198,24 @@ export async function holdCamera(page) {
 /** What differs between the viewer's camera `now` and `camera`, and the view's size: for a failure's message. */
 export const cameraDiff = (now, camera, img) => JSON.stringify({ wanted: camera, now, view: img && [img.width, img.height] });
 
-/** Headless screenshots of the page's frame (`player.drawNow`) with the viewer's camera at `camera`, morphs on and off (the control): { on, off }, each { img, drawn } (`viewer.lastDrawn()[0]`); drawn again until the shot is of this camera and both are of one size (the page's re-framing held off meanwhile: `holdCamera`). Morphs are left on. */
+/** Headless screenshots of the page's frame (`player.drawNow`) with the viewer's camera at `camera`, morphs on and off (the control): { on, off }, each { img, drawn } (`viewer.lastDrawn()[0]`); both drawn again until both are of this camera and of one layout of the view (its drawing buffer's size and its place on the page, unchanged from each draw to its screenshot; the page's re-framing held off meanwhile: `holdCamera`). Morphs are left on. */
 export async function shotsMorphsOnOff(page, camera, file) {
   const release = await holdCamera(page);
   try { return await shotsOnOff(page, camera, file); } finally { await release(); }
 }
 
+/** The view's drawing-buffer size and its place on the page: a shot is of one layout only when these hold from its draw to its screenshot. */
+const viewLayout = (page) => page.evaluate(() => {
+  const c = document.querySelector("#view");
+  const r = c.getBoundingClientRect();
+  return [c.width, c.height, r.x, r.y, r.width, r.height].join(",");
+});
+
 async function shotsOnOff(page, camera, file) {
-  const shots = {};
-  for (const on of [true, false]) {
-    for (let tries = 0; ; tries++) {
+  for (let tries = 0; ; tries++) {
+    const shots = {};
+    let diff = null;
+    for (const on of [true, false]) {
       const drawn = await page.evaluate(({ on, camera }) => {
         const { viewer, player } = window.odori;
         viewer.setCamera(camera);
@@ -215,18 +223,24 @@ async function shotsOnOff(page, camera, file) {
         player.drawNow();
         return viewer.lastDrawn()[0];
       }, { on, camera });
+      const layout = await viewLayout(page);
       const img = await canvasPixels(page, `${file}-${on ? "on" : "off"}.png`);
       const now = await page.evaluate(() => window.odori.viewer.camera);
-      if (sameCamera(now, camera) && (on || (img.width === shots.on.img.width && img.height === shots.on.img.height))) {
-        shots[on ? "on" : "off"] = { img, drawn };
+      const after = await viewLayout(page);
+      if (!sameCamera(now, camera) || layout !== after || (!on && layout !== shots.on.layout)) {
+        diff = `${cameraDiff(now, camera, img)}; the view (buffer w, h; x, y, w, h on the page) ${on ? "" : `with morphs on ${shots.on.layout}, off `}${layout} → ${after}`;
         break;
       }
-      if (tries >= 10) throw new Error(`the camera keeps being moved by the page, or the view changes size: ${cameraDiff(now, camera, img)}`);
-      await new Promise((r) => setTimeout(r, 200));
+      shots[on ? "on" : "off"] = { img, drawn, layout };
     }
+    if (!diff) {
+      await page.evaluate(() => window.odori.viewer.setMorphs(true));
+      return shots;
+    }
+    // The page moved the camera, resized or moved the view between the shots: both again.
+    if (tries >= 10) throw new Error(`the camera keeps being moved by the page, or the view changes: ${diff}`);
+    await new Promise((r) => setTimeout(r, 200));
   }
-  await page.evaluate(() => window.odori.viewer.setMorphs(true));
-  return shots;
 }
 
 /** The head 頭's world pose ({ q, p }) and the body drawn, for clip `clip` at `t` s in the page's viewer (drawn there first). */
