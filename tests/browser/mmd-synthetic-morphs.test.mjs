@@ -7,9 +7,10 @@
 // sphere map (.sph, a BMP) and its own toon ramp —, the legs' (下半身) of material B, plain
 // colour, and one beside the torso of material C, untextured, its sphere map a sub-texture (PMX
 // sphere mode 3) red on its left half and blue on its right, sampled at the additional UV 1 that
-// runs 0 → 1 across the quad. Its morphs: one bone morph moving and turning 頭, and five
+// runs 0 → 1 across the quad. Its morphs: one bone morph moving and turning 頭, and six
 // material morphs on A alone, each changing one factor: diffuse × (1, 0.3, 0.3), ambient + 0.5,
-// specular + 0.8, sphere + 0.5, toon × (0.3, 1, 1). A VMD, written too, keys each at weight 1 at
+// specular + 0.8, sphere + 0.5, toon × (0.3, 1, 1), sphere × 0 (alpha too: the map blended away, as
+// MMD's shader does). A VMD, written too, keys each at weight 1 at
 // its own frame (0 five frames either side), the body at rest.
 // Three r171's MMDParser (`three-mmd`, a reader no one here wrote) reads both files back: every
 // field written, every morph offset and key, as the test meant them.
@@ -72,6 +73,10 @@ const MORPHS = [
   { name: "specular", frame: 40, type: "material", offsets: () => [materialOffset(0, 1, { specular: [0.8, 0.8, 0.8] })], expect: ["up", "up", "up"] },
   { name: "sphere", frame: 50, type: "material", offsets: () => [materialOffset(0, 1, { sphere: [0.5, 0.5, 0.5, 0] })], expect: ["up", "up", "up"] },
   { name: "toon", frame: 60, type: "material", offsets: () => [materialOffset(0, 0, { toon: [0.3, 1, 1, 1] })], expect: ["down", "same", "same"] },
+  // Sphere × 0 in every channel, alpha too: MMD's shader blends the map away by mul.a + add.a,
+  // so the grey (160) multiplied sphere goes and the colour brightens (× 0 per channel alone
+  // would turn it black).
+  { name: "sphere-off", frame: 70, type: "material", offsets: () => [materialOffset(0, 0, { sphere: [0, 0, 0, 0] })], expect: ["up", "up", "up"] },
 ];
 const LAST_FRAME = 80;
 /** The sub-texture's two halves. */
