@@ -1,9 +1,11 @@
 // Helpers the browser MMD tests share (mmd-face, mmd-morphs, mmd-material-morphs, mmd-uv-morphs,
-// mmd-draw): three r171's MMDParser (`three-mmd`, a reader no one here wrote) and what the
-// tests read with it — a VMD's morph keys, a PMD's vertex morphs and the vertices 頭 alone
-// carries — and the quaternion maths that puts a head-rest point where the posed head has it
-// and a camera in front of the face.
-import { readFileSync, existsSync } from "node:fs";
+// mmd-draw, mmd-synthetic-morphs): three r171's MMDParser (`three-mmd`, a reader no one here
+// wrote) and what the tests read with it — a VMD's morph keys, a PMD's vertex morphs and the
+// vertices 頭 alone carries —, the quaternion maths that puts a head-rest point where the posed
+// head has it and a camera in front of the face, and a model folder and its VMD imported in the
+// page (`modelFiles`, `importOnModel`).
+import assert from "node:assert/strict";
+import { readFileSync, readdirSync, existsSync } from "node:fs";
 import { join } from "node:path";
 import { root, canvasPixels, waitUntil } from "./harness.mjs";
 
@@ -16,6 +18,67 @@ export const M = 0.08;
 
 /** A Node Buffer's bytes as the ArrayBuffer MMDParser reads. */
 export const ab = (buf) => buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.byteLength);
+
+/**
+ * A model folder as `importFiles` takes it from the test ({ name, b64 }): the model file `model`
+ * of `dir` under the name `${prefix}/${model}`, then the files of `dir` (or of its subfolders
+ * `sub`, each `${prefix}/${sub}/…`) that `keep` accepts, then each extra file ({ name, bytes }).
+ */
+export function modelFiles(dir, prefix, model, { subfolders = [], keep = () => true, extra = [] } = {}) {
+  const files = [{ name: `${prefix}/${model}`, b64: readFileSync(join(dir, model)).toString("base64") }];
+  for (const sub of subfolders.length ? subfolders : [""]) {
+    for (const f of readdirSync(join(dir, sub))) {
+      const name = sub ? `${sub}/${f}` : f;
+      if (name !== model && keep(f)) files.push({ name: `${prefix}/${name}`, b64: readFileSync(join(dir, sub, f)).toString("base64") });
+    }
+  }
+  for (const f of extra) files.push({ name: f.name, b64: Buffer.from(f.bytes).toString("base64") });
+  return files;
+}
+
+/**
+ * Imports `files` ({ name, b64 }) in the page with `library.importFiles`, the VMDs posed on the
+ * model named `modelName`; turns the springs off (both draws of a frame then pose every bone
+ * alike), selects the first motion and pauses. Asserts no file is a problem and the motion plays
+ * on the model's mesh, then waits for its textures. Returns { clip, notices, rig, morphsDefault }
+ * (the motion's clip and rig, the import's notices, whether morphs were on before).
+ */
+export async function importOnModel(page, files, modelName, what = modelName) {
+  const setup = await page.evaluate(({ files, modelName }) => {
+    const { library, player, viewer } = window.odori;
+    const r = library.importFiles(files.map((f) => ({ name: f.name, bytes: window.__test.bytes(f.b64) })), { model: modelName });
+    const clip = r.motions[0]?.clip;
+    viewer.setSprings(false);
+    if (clip) player.select(clip.id);
+    player.pause();
+    return { problems: r.problems, notices: r.notices, clip, rig: r.motions[0]?.rig, morphsDefault: viewer.morphs };
+  }, { files, modelName });
+  assert.equal(setup.problems.length, 0, JSON.stringify(setup.problems));
+  assert.ok(setup.clip && setup.clip.hasMesh, `the motion plays on ${what}'s mesh (posed on ${setup.rig}): ${JSON.stringify(setup.notices)}`);
+  await waitUntil(() => page.evaluate(() => { window.odori.player.drawNow(); return window.odori.viewer.texturesLoading === 0; }), { what: `${what}'s textures decoded` });
+  return setup;
+}
+
+/** Shift-JIS bytes of `s` (double-byte characters and ASCII), by decoding every double-byte code with the browser-independent TextDecoder. */
+export function shiftJis(s) {
+  const sjis = new TextDecoder("shift_jis");
+  if (!shiftJis.table) {
+    shiftJis.table = new Map();
+    for (const lead of [...Array(0x1f).keys()].map((i) => 0x81 + i).concat([...Array(0x10).keys()].map((i) => 0xe0 + i)))
+      for (let trail = 0x40; trail <= 0xfc; trail++) {
+        const ch = sjis.decode(Uint8Array.of(lead, trail));
+        if (ch.length === 1 && !shiftJis.table.has(ch)) shiftJis.table.set(ch, [lead, trail]);
+      }
+  }
+  const out = [];
+  for (const ch of s) {
+    if (ch.charCodeAt(0) < 0x80) out.push(ch.charCodeAt(0));
+    else if (shiftJis.table.has(ch)) out.push(...shiftJis.table.get(ch));
+    else throw new Error(`no Shift-JIS code for ${ch}`);
+  }
+  if (sjis.decode(Uint8Array.from(out)) !== s) throw new Error(`${s} does not decode back from Shift-JIS`);
+  return Buffer.from(out);
+}
 
 /** Fails with a clear message when a file of the shared MMD data is absent. */
 export function needData(...paths) {
@@ -144,17 +207,25 @@ export async function holdCamera(page) {
 /** What differs between the viewer's camera `now` and `camera`, and the view's size: for a failure's message. */
 export const cameraDiff = (now, camera, img) => JSON.stringify({ wanted: camera, now, view: img && [img.width, img.height] });
 
-/** Headless screenshots of the page's frame (`player.drawNow`) with the viewer's camera at `camera`, morphs on and off (the control): { on, off }, each { img, drawn } (`viewer.lastDrawn()[0]`); drawn again until the shot is of this camera and both are of one size (the page's re-framing held off meanwhile: `holdCamera`). Morphs are left on. */
+/** Headless screenshots of the page's frame (`player.drawNow`) with the viewer's camera at `camera`, morphs on and off (the control): { on, off }, each { img, drawn } (`viewer.lastDrawn()[0]`); both drawn again until both are of this camera and of one layout of the view (its drawing buffer's size and its place on the page, unchanged from each draw to its screenshot; the page's re-framing held off meanwhile: `holdCamera`). Morphs are left on. */
 export async function shotsMorphsOnOff(page, camera, file) {
   const release = await holdCamera(page);
   try { return await shotsOnOff(page, camera, file); } finally { await release(); }
 }
 
+/** The view's drawing-buffer size and its place on the page: a shot is of one layout only when these hold from its draw to its screenshot. */
+const viewLayout = (page) => page.evaluate(() => {
+  const c = document.querySelector("#view");
+  const r = c.getBoundingClientRect();
+  return [c.width, c.height, r.x, r.y, r.width, r.height].join(",");
+});
+
 async function shotsOnOff(page, camera, file) {
-  // Both shots again when the camera moved or the view changed size between them (the page's
-  // layout can still move when a notice or a status line comes or goes): a pair is of one view.
+  // Both shots again when the camera moved or the view changed size or place between them (the
+  // page's layout can still move when a notice or a status line comes or goes): a pair is of one view.
   for (let tries = 0; ; tries++) {
     const shots = {};
+    let diff = null;
     for (const on of [true, false]) {
       const drawn = await page.evaluate(({ on, camera }) => {
         const { viewer, player } = window.odori;
@@ -163,16 +234,23 @@ async function shotsOnOff(page, camera, file) {
         player.drawNow();
         return viewer.lastDrawn()[0];
       }, { on, camera });
-      shots[on ? "on" : "off"] = { img: await canvasPixels(page, `${file}-${on ? "on" : "off"}.png`), drawn };
+      const layout = await viewLayout(page);
+      const img = await canvasPixels(page, `${file}-${on ? "on" : "off"}.png`);
+      const now = await page.evaluate(() => window.odori.viewer.camera);
+      const after = await viewLayout(page);
+      if (!sameCamera(now, camera) || layout !== after || (!on && layout !== shots.on.layout)) {
+        diff = `${cameraDiff(now, camera, img)}; the view (buffer w, h; x, y, w, h on the page) ${on ? "" : `with morphs on ${shots.on.layout}, off `}${layout} → ${after}`;
+        break;
+      }
+      shots[on ? "on" : "off"] = { img, drawn, layout };
     }
-    const now = await page.evaluate(() => window.odori.viewer.camera);
-    const { on, off } = shots;
-    if (sameCamera(now, camera) && on.img.width === off.img.width && on.img.height === off.img.height) {
+    if (!diff) {
       await page.evaluate(() => window.odori.viewer.setMorphs(true));
       return shots;
     }
-    if (tries >= 10) throw new Error(`the camera keeps being moved by the page, or the view changes size: ${cameraDiff(now, camera, off.img)}; the shot with morphs on was ${on.img.width}×${on.img.height}`);
-    await new Promise((r) => setTimeout(r, 300));
+    // The page moved the camera, resized or moved the view between the shots: both again.
+    if (tries >= 10) throw new Error(`the camera keeps being moved by the page, or the view changes: ${diff}`);
+    await new Promise((r) => setTimeout(r, 200));
   }
 }
 

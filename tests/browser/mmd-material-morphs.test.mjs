@@ -14,10 +14,10 @@
 // Screenshots go to tests/artifacts/.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
-import { readFileSync, readdirSync } from "node:fs";
+import { readFileSync } from "node:fs";
 import { join } from "node:path";
-import { data, startServer, launch, openApp, pixel, waitUntil } from "./harness.mjs";
-import { MMDParser, M, ab, needData, faceCamera, onPosedHead, headPose, shotsMorphsOnOff, CHANGED } from "./mmd-common.mjs";
+import { data, startServer, launch, openApp, pixel } from "./harness.mjs";
+import { MMDParser, M, ab, needData, faceCamera, onPosedHead, headPose, shotsMorphsOnOff, CHANGED, modelFiles, importOnModel } from "./mmd-common.mjs";
 
 const geneDir = join(data, "mmd", "gene");
 const vmdPath = join(geneDir, "motion", "29_Terrified.vmd");
@@ -78,26 +78,13 @@ for (const backend of ["webgl2", "webgpu"]) {
     assert.ok(strong.length, `29_Terrified keys ${MORPH} at 1: ${JSON.stringify(keys)}`);
     // A frame inside a run of keys at 1 (held between them), away from the gesture's start.
     const frame = strong.length > 1 ? Math.round((strong[0].frame + strong[1].frame) / 2) : strong[0].frame;
-    const files = [{ name: "gene/Gene_light.pmx", b64: readFileSync(join(geneDir, "Gene_light.pmx")).toString("base64") }];
-    for (const f of readdirSync(join(geneDir, "light"))) files.push({ name: `gene/light/${f}`, b64: readFileSync(join(geneDir, "light", f)).toString("base64") });
-    files.push({ name: "29_Terrified_pale.vmd", b64: vmd.toString("base64") });
+    const files = modelFiles(geneDir, "gene", "Gene_light.pmx", { subfolders: ["light"], extra: [{ name: "29_Terrified_pale.vmd", bytes: vmd }] });
     const { browser, page, logs } = await launch(backend);
     try {
       await openApp(page, server, backend);
-      const setup = await page.evaluate(({ files, modelName }) => {
-        const { library, player, viewer } = window.odori;
-        const r = library.importFiles(files.map((f) => ({ name: f.name, bytes: window.__test.bytes(f.b64) })), { model: modelName });
-        const clip = r.motions[0]?.clip;
-        viewer.setSprings(false);
-        if (clip) player.select(clip.id);
-        player.pause();
-        return { problems: r.problems, notices: r.notices, clip };
-      }, { files, modelName: model.name });
-      assert.equal(setup.problems.length, 0, JSON.stringify(setup.problems));
-      assert.ok(setup.clip && setup.clip.hasMesh, `the gesture plays on Gene's mesh: ${JSON.stringify(setup.notices)}`);
+      const setup = await importOnModel(page, files, model.name, "Gene");
       // Gene's one UV morph (メッシュなし, base UV) is played, not named as unplayed (mmd-uv-morphs).
       assert.ok(!setup.notices.some((n) => /not played/.test(n)), `no morph is named as not played: ${setup.notices.join("\n")}`);
-      await waitUntil(() => page.evaluate(() => { window.odori.player.drawNow(); return window.odori.viewer.texturesLoading === 0; }), { what: "Gene's textures decoded" });
 
       const pose = await headPose(page, setup.clip.id, frame / 30);
       assert.equal(pose.body, "own", "drawn with the model's own mesh");

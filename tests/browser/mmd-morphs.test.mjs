@@ -16,10 +16,10 @@
 // Screenshots go to tests/artifacts/.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
-import { readFileSync, readdirSync } from "node:fs";
+import { readFileSync } from "node:fs";
 import { join } from "node:path";
-import { data, startServer, launch, openApp, pixel, waitUntil } from "./harness.mjs";
-import { needData, readMorphKeys, readPmdMorphs, faceCamera, headPose, shotsMorphsOnOff, morphBox, movingBoxes, inBox, countIn, CHANGED } from "./mmd-common.mjs";
+import { data, startServer, launch, openApp, pixel } from "./harness.mjs";
+import { needData, readMorphKeys, readPmdMorphs, faceCamera, headPose, shotsMorphsOnOff, morphBox, movingBoxes, inBox, countIn, CHANGED, modelFiles, importOnModel } from "./mmd-common.mjs";
 
 const mikuDir = join(data, "mmd", "miku_v2");
 const vmdPath = join(data, "mmd", "motion", "wavefile_v2.vmd");
@@ -44,26 +44,14 @@ for (const backend of ["webgl2", "webgpu"]) {
     const mouth = strongest("あ");
     const blink = strongest("まばたき");
     assert.ok(mouth.weight >= 0.3 && blink.weight >= 0.99, `あ ${mouth.weight} at ${mouth.frame}, まばたき ${blink.weight} at ${blink.frame}`);
-    const files = readdirSync(mikuDir).filter((f) => /\.(pmd|bmp)$/i.test(f)).map((f) => ({ name: `miku_v2/${f}`, b64: readFileSync(join(mikuDir, f)).toString("base64") }));
-    files.push({ name: "wavefile_v2.vmd", b64: readFileSync(vmdPath).toString("base64") });
+    const vmd = readFileSync(vmdPath);
+    const files = modelFiles(mikuDir, "miku_v2", "miku_v2.pmd", { keep: (f) => /\.bmp$/i.test(f), extra: [{ name: "wavefile_v2.vmd", bytes: vmd }] });
     const { browser, page, logs } = await launch(backend);
     try {
       await openApp(page, server, backend);
-      const setup = await page.evaluate(({ files, modelName }) => {
-        const { library, player, viewer } = window.odori;
-        const r = library.importFiles(files.map((f) => ({ name: f.name, bytes: window.__test.bytes(f.b64) })), { model: modelName });
-        const clip = r.motions[0]?.clip;
-        // The hair's springs off: both draws of a frame then pose every bone alike.
-        viewer.setSprings(false);
-        player.select(clip.id);
-        player.pause();
-        return { problems: r.problems, notices: r.notices, clip, rig: r.motions[0]?.rig, morphsDefault: viewer.morphs };
-      }, { files, modelName: model.name });
-      assert.equal(setup.problems.length, 0, JSON.stringify(setup.problems));
-      assert.ok(setup.clip && setup.clip.hasMesh, `WAVEFILE plays on miku_v2's mesh (posed on ${setup.rig})`);
+      const setup = await importOnModel(page, files, model.name, "miku_v2");
       assert.equal(setup.morphsDefault, true, "morphs are on by default");
       assert.ok(setup.notices.some((n) => /morph \(face\) keys kept aside: played/.test(n)), setup.notices.join("\n"));
-      await waitUntil(() => page.evaluate(() => { window.odori.player.drawNow(); return window.odori.viewer.texturesLoading === 0; }), { what: "miku's textures decoded" });
 
       /** Draws frame `frame` with the camera on the face, morphs on and off; returns the screenshots, the head's pose and what was drawn. */
       const shoot = async (frame, label) => {
@@ -124,7 +112,7 @@ for (const backend of ["webgl2", "webgpu"]) {
         const out = { on: drawAt(id, true), off: drawAt(id, false), library: drawAt(libClip, true) };
         viewer.setMorphs(true);
         return out;
-      }, { vmd: files.at(-1).b64, pmd: files.find((f) => /\.pmd$/i.test(f.name)).b64, t: mouth.frame / 30, libClip: setup.clip.id, modelName: model.name });
+      }, { vmd: vmd.toString("base64"), pmd: files[0].b64, t: mouth.frame / 30, libClip: setup.clip.id, modelName: model.name });
       console.log(`${backend}: WAVEFILE as a project source on miku_v2 (its own model's mesh): ${proj.on.morphed} drawn vertices morphed at frame ${mouth.frame} (the library's import: ${proj.library.morphed}), ${proj.off.morphed} with morphs off`);
       assert.equal(proj.on.body, "own");
       assert.ok(proj.on.morphed > 0 && proj.on.morphed === proj.library.morphed && proj.off.morphed === 0, JSON.stringify(proj));

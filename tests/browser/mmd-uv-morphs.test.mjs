@@ -15,33 +15,15 @@
 // UVs' alone). Screenshots go to tests/artifacts/.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
-import { readFileSync, readdirSync } from "node:fs";
+import { readFileSync } from "node:fs";
 import { join } from "node:path";
-import { data, startServer, launch, openApp, pixel, waitUntil } from "./harness.mjs";
-import { MMDParser, M, ab, needData, faceCamera, onPosedHead, headPose, shotsMorphsOnOff, projectedBox, inBox, countIn, CHANGED } from "./mmd-common.mjs";
+import { data, startServer, launch, openApp, pixel } from "./harness.mjs";
+import { MMDParser, M, ab, needData, faceCamera, onPosedHead, headPose, shotsMorphsOnOff, projectedBox, inBox, countIn, CHANGED, shiftJis, modelFiles, importOnModel } from "./mmd-common.mjs";
 
 const geneDir = join(data, "mmd", "gene");
 const vmdPath = join(geneDir, "motion", "29_Terrified.vmd");
 needData(join(geneDir, "Gene_light.pmx"), vmdPath);
 const MORPH = "メッシュなし";
-
-/** Shift-JIS bytes of `s` (double-byte characters and ASCII), by decoding every double-byte code. */
-function shiftJis(s) {
-  const sjis = new TextDecoder("shift_jis");
-  const table = new Map();
-  for (const lead of [...Array(0x1f).keys()].map((i) => 0x81 + i).concat([...Array(0x10).keys()].map((i) => 0xe0 + i)))
-    for (let trail = 0x40; trail <= 0xfc; trail++) {
-      const ch = sjis.decode(Uint8Array.of(lead, trail));
-      if (ch.length === 1 && !table.has(ch)) table.set(ch, [lead, trail]);
-    }
-  const out = [];
-  for (const ch of s) {
-    if (ch.charCodeAt(0) < 0x80) out.push(ch.charCodeAt(0));
-    else { assert.ok(table.has(ch), `no Shift-JIS code for ${ch}`); out.push(...table.get(ch)); }
-  }
-  assert.equal(sjis.decode(Uint8Array.from(out)), s);
-  return Buffer.from(out);
-}
 
 /** 29_Terrified's bone keys without the hair's, and one key of `name` at weight 1, frame 0. */
 function vmdKeying(buf, name) {
@@ -85,25 +67,12 @@ for (const backend of ["webgl2", "webgpu"]) {
     assert.ok(model.rest.length >= 0.9 * model.all, `${model.rest.length} of the morph's ${model.all} vertices move with 頭 rigidly`);
     const { vmd, dropped } = vmdKeying(readFileSync(vmdPath), MORPH);
     assert.ok(dropped > 0, "the hair's keys are dropped");
-    const files = [{ name: "gene/Gene_light.pmx", b64: readFileSync(join(geneDir, "Gene_light.pmx")).toString("base64") }];
-    for (const f of readdirSync(join(geneDir, "light"))) files.push({ name: `gene/light/${f}`, b64: readFileSync(join(geneDir, "light", f)).toString("base64") });
-    files.push({ name: "29_Terrified_uv.vmd", b64: vmd.toString("base64") });
+    const files = modelFiles(geneDir, "gene", "Gene_light.pmx", { subfolders: ["light"], extra: [{ name: "29_Terrified_uv.vmd", bytes: vmd }] });
     const { browser, page, logs } = await launch(backend);
     try {
       await openApp(page, server, backend);
-      const setup = await page.evaluate(({ files, modelName }) => {
-        const { library, player, viewer } = window.odori;
-        const r = library.importFiles(files.map((f) => ({ name: f.name, bytes: window.__test.bytes(f.b64) })), { model: modelName });
-        const clip = r.motions[0]?.clip;
-        viewer.setSprings(false);
-        if (clip) player.select(clip.id);
-        player.pause();
-        return { problems: r.problems, notices: r.notices, clip };
-      }, { files, modelName: model.name });
-      assert.equal(setup.problems.length, 0, JSON.stringify(setup.problems));
-      assert.ok(setup.clip && setup.clip.hasMesh, `the gesture plays on Gene's mesh: ${JSON.stringify(setup.notices)}`);
+      const setup = await importOnModel(page, files, model.name, "Gene");
       assert.ok(!setup.notices.some((n) => n.includes(MORPH) && /not played/.test(n)), `the UV morph is played: ${setup.notices.join("\n")}`);
-      await waitUntil(() => page.evaluate(() => { window.odori.player.drawNow(); return window.odori.viewer.texturesLoading === 0; }), { what: "Gene's textures decoded" });
 
       const t = 1.0;
       const pose = await headPose(page, setup.clip.id, t);

@@ -16,7 +16,8 @@
 //! MMD models (feature `toon`, on in the full engine, off in the player): a part with a
 //! [`odori_core::import::ToonLook`] is drawn with MMD's toon shading (its ramp texture looked
 //! up on N·L, alpha blended; its sphere map, if any, looked up by the view-space normal and
-//! multiplied or added as MMD does) and, where its edge width is above 0, an outline by the
+//! multiplied or added as MMD does, or in PMX's sub-texture mode sampled at the vertex's
+//! additional UV 1 and multiplied) and, where its edge width is above 0, an outline by the
 //! inverted hull (the skinned mesh pushed out along its normals by the width, times the
 //! vertex's edge scale, times the distance to the camera, front faces culled, in the edge
 //! colour). Without the feature they draw as plain parts.
@@ -25,10 +26,11 @@
 //! (vertex buffer 1, 12 bytes a vertex, `skin.wgsl`): zero from a buffer each mesh keeps, or
 //! for a draw that gives [`MeshDraw::morph`] (an MMD model's face morphs at the drawn time;
 //! feature `toon`) that draw's offsets, written whole into a buffer of its draw slot each frame
-//! — the 100-byte vertices are never rewritten. Toon and outline read the same offsets, so the
+//! — the 112-byte vertices are never rewritten. Toon and outline read the same offsets, so the
 //! outline follows an opened mouth. A mesh with toon parts also has a UV offset per vertex
 //! (vertex buffer 2, 8 bytes, read by the toon pipeline only): zeros, or a draw's
-//! [`MeshDraw::uv_morph`] (an MMD model's UV morphs) written the same way.
+//! [`MeshDraw::uv_morph`] (an MMD model's UV morphs) written the same way, but only when they
+//! differ from what the slot last had.
 //!
 //! Its pipelines can be made one at a time ([`Renderer::new_deferred`], then
 //! [`Renderer::prepare`]): on WebGL2 each one is a shader compile and link that holds the
@@ -166,6 +168,9 @@ struct MeshVertex {
     /// MMD outline colour (RGBA) and width (metres per metre from the camera; 0: none).
     edge: [f32; 4],
     edge_width: f32,
+    /// MMD sub-texture (PMX sphere mode 3): the UV its sphere map is sampled at, and 1 (else
+    /// 0: the sphere map, if any, looked up by the view-space normal). Read by toon.wgsl only.
+    sphere_uv: [f32; 3],
 }
 
 /// One stick figure to draw this frame.
@@ -218,6 +223,9 @@ struct ToonDraw {
     outline: bool,
     /// The sphere map, and whether it is added (else multiplied).
     sphere: Option<(usize, bool)>,
+    /// The sphere map is a sub-texture (sampled at the vertices' `sphere_uv`, with its own
+    /// sampler), not looked up by the normal.
+    sub_texture: bool,
 }
 
 /// A skinned mesh uploaded once.
@@ -412,8 +420,10 @@ pub struct Renderer {
     /// Per draw slot (as `palettes`), the morph offsets of the draw in it when it has any,
     /// grown to the largest mesh given morphs.
     morph_slots: Vec<Option<wgpu::Buffer>>,
-    /// Per draw slot, the UV offsets of the draw in it when it has any (as `morph_slots`).
-    uv_slots: Vec<Option<wgpu::Buffer>>,
+    /// Per draw slot, the UV offsets of the draw in it when it has any (as `morph_slots`), and
+    /// the offsets last written to it: a frame giving the same offsets writes nothing (UV
+    /// morphs are keyed sparsely, so most frames repeat the last).
+    uv_slots: Vec<Option<(wgpu::Buffer, Vec<[f32; 2]>)>>,
     /// MMD parts' looks (group 3 of the toon pipeline, 2 of the outline): per draw slot, grown
     /// to the most parts drawn in it; the layout, and the bytes between two parts' blocks.
     look_slots: Vec<Option<LookSlot>>,
@@ -638,7 +648,7 @@ impl Renderer {
         let mesh_buffer = wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<MeshVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x2, 6 => Float32x4, 7 => Float32],
+            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x2, 6 => Float32x4, 7 => Float32, 10 => Float32x3],
         };
         // Skinned pipelines' second buffer: the per-vertex morph offsets (skin.wgsl).
         let morph_buffer = wgpu::VertexBufferLayout {
@@ -738,6 +748,7 @@ impl Renderer {
             let (edge, edge_width) = toon.map_or(([0.0; 4], 0.0), |t| (t.edge_colour, t.edge_width.max(0.0)));
             // The outline's width per vertex: the part's times the vertex's edge scale.
             let edge_scale = |k: usize| part.edge_scales.get(k).copied().filter(|e| e.is_finite()).map_or(1.0, |e| e.max(0.0));
+            let sub_texture = toon.is_some_and(|t| t.sphere.is_some_and(|s| s < mesh.textures.len()) && !t.sphere_add) && part.sphere_uvs.len() == part.positions.len();
             for k in 0..part.positions.len() {
                 let j = part.joints[k];
                 vertices.push(MeshVertex {
@@ -753,12 +764,16 @@ impl Renderer {
                     },
                     edge,
                     edge_width: edge_width * edge_scale(k),
+                    sphere_uv: match part.sphere_uvs.get(k) {
+                        Some(u) if sub_texture => [u[0], u[1], 1.0],
+                        _ => [0.0; 3],
+                    },
                 });
             }
             let start = indices.len() as u32;
             indices.extend(part.indices.iter().map(|i| i + base));
             let n_tex = mesh.textures.len();
-            let toon = toon.map(|t| ToonDraw { ramp: t.ramp.filter(|r| *r < n_tex), outline: t.edge_width > 0.0, sphere: t.sphere.filter(|s| *s < n_tex).map(|s| (s, t.sphere_add)) });
+            let toon = toon.map(|t| ToonDraw { ramp: t.ramp.filter(|r| *r < n_tex), outline: t.edge_width > 0.0, sphere: t.sphere.filter(|s| *s < n_tex).map(|s| (s, t.sphere_add)), sub_texture });
             parts.push(PartDraw { range: start..indices.len() as u32, texture: textured, toon });
         }
         if indices.is_empty() {
@@ -949,22 +964,28 @@ impl Renderer {
             }
         }
 
-        // UV offsets the same way (8 B a vertex), for toon meshes.
+        // UV offsets the same way (8 B a vertex), for toon meshes, written only when they differ
+        // from what the slot's buffer holds.
         let uv_given: Vec<bool> = drawable.iter().map(|m| cfg!(feature = "toon") && self.meshes[m.mesh.0].no_uv.is_some() && m.uv_morph.is_some_and(|o| o.len() == self.meshes[m.mesh.0].vertex_count)).collect();
         self.uv_slots.resize_with(self.uv_slots.len().max(drawable.len()), || None);
         for (slot, m) in drawable.iter().enumerate() {
             let Some(offsets) = m.uv_morph.filter(|_| uv_given[slot]) else { continue };
             let bytes: &[u8] = bytemuck::cast_slice(offsets);
-            if self.uv_slots[slot].as_ref().is_none_or(|b| b.size() < bytes.len() as u64) {
-                self.uv_slots[slot] = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
+            if self.uv_slots[slot].as_ref().is_none_or(|(b, _)| b.size() < bytes.len() as u64) {
+                let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("uv offsets"),
                     size: bytes.len() as u64,
                     usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
-                }));
+                });
+                self.uv_slots[slot] = Some((buffer, Vec::new()));
             }
-            if let Some(b) = &self.uv_slots[slot] {
-                self.queue.write_buffer(b, 0, bytes);
+            if let Some((b, written)) = &mut self.uv_slots[slot] {
+                if written.as_slice() != offsets {
+                    self.queue.write_buffer(b, 0, bytes);
+                    written.clear();
+                    written.extend_from_slice(offsets);
+                }
             }
         }
 
@@ -1068,7 +1089,7 @@ impl Renderer {
                     pass.set_vertex_buffer(1, morph_of(slot, g));
                     if let Some(zeros) = &g.no_uv {
                         // Only the toon pipeline reads it.
-                        let given = self.uv_slots.get(slot).and_then(Option::as_ref).filter(|_| uv_given[slot]);
+                        let given = self.uv_slots.get(slot).and_then(Option::as_ref).map(|(b, _)| b).filter(|_| uv_given[slot]);
                         pass.set_vertex_buffer(2, given.map_or(zeros.slice(..), |b| b.slice(..(g.vertex_count * 8) as u64)));
                     }
                     pass.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
@@ -1123,7 +1144,7 @@ impl Renderer {
     fn make_toon_groups(&mut self, h: usize) {
         let Some(g) = self.meshes.get_mut(h) else { return };
         for k in 0..g.parts.len() {
-            let Some(ToonDraw { ramp, sphere, .. }) = g.parts[k].toon else { continue };
+            let Some(ToonDraw { ramp, sphere, sub_texture, .. }) = g.parts[k].toon else { continue };
             if g.toon_groups[k].is_some() {
                 continue;
             }
@@ -1139,6 +1160,11 @@ impl Renderer {
             let sphere_view = |add: bool| sphere.filter(|s| s.1 == add).and_then(|s| pick(Some(s.0))).map(|(v, _)| v);
             let sphere_mul = sphere_view(false).unwrap_or(&self.white_view);
             let sphere_add = sphere_view(true).unwrap_or(&self.black_view);
+            // A sub-texture is sampled at the vertices' UVs as an ordinary texture: with its own sampler.
+            let sphere_sampler = match sphere.filter(|_| sub_texture) {
+                Some((s, _)) => make_sampler(&self.device, &g.samplers[s]),
+                None => make_sampler(&self.device, &clamp),
+            };
             g.toon_groups[k] = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("toon textures"),
                 layout: &self.toon_texture_layout,
@@ -1149,7 +1175,7 @@ impl Renderer {
                     wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::Sampler(&ramp_sampler) },
                     wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(sphere_mul) },
                     wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(sphere_add) },
-                    wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(&ramp_sampler) },
+                    wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(&sphere_sampler) },
                 ],
             }));
         }

@@ -251,6 +251,10 @@ pub struct Viewer {
     /// Offset buffers (one per drawn vertex) reused from frame to frame.
     #[cfg(feature = "authoring")]
     morph_pool: Vec<Vec<Vec3>>,
+    /// Per (figure index, mesh key), the UV morphs' offsets last drawn and the weights they
+    /// came from: reused from frame to frame, computed again only when the weights change.
+    #[cfg(feature = "authoring")]
+    uv_morphs: HashMap<(usize, u32), UvMorphs>,
     /// A drawn MMD model's sampled local pose with its bone morphs on (reused), and the
     /// per-bone morphs they came from.
     #[cfg(feature = "authoring")]
@@ -582,6 +586,8 @@ impl Viewer {
             faces: HashMap::new(),
             #[cfg(feature = "authoring")]
             morph_pool: Vec::new(),
+            #[cfg(feature = "authoring")]
+            uv_morphs: HashMap::new(),
             #[cfg(feature = "authoring")]
             bone_locals: Default::default(),
             bounds: HashMap::new(),
@@ -1038,9 +1044,10 @@ impl Viewer {
         // Per skinned draw, its parts' looks under material morphs (none in the player).
         #[cfg_attr(not(feature = "authoring"), allow(unused_mut))]
         let mut looks: Vec<Option<Vec<PartLook>>> = Vec::new();
-        // Per skinned draw, its UV morphs' offsets (none in the player).
+        // Per skinned draw, its UV morphs' offsets, taken out of `self.uv_morphs` for the draw
+        // and put back after it (none in the player).
         #[cfg_attr(not(feature = "authoring"), allow(unused_mut))]
-        let mut uv_morphs: Vec<Option<Vec<[f32; 2]>>> = Vec::new();
+        let mut uv_morphs: Vec<Option<((usize, u32), UvMorphs)>> = Vec::new();
         // One figure is drawn as it is; several (candidates, overlays) each take a wash of
         // their figure colour, so a skinned candidate matches its chip as a stick one does.
         let several = specs.len() > 1;
@@ -1134,7 +1141,7 @@ impl Viewer {
                     #[cfg(feature = "authoring")]
                     looks.push(self.face_looks(library, e, key, &mesh, s.time_secs));
                     #[cfg(feature = "authoring")]
-                    uv_morphs.push(self.uv_offsets(library, e, key, s.time_secs));
+                    uv_morphs.push(self.uv_offsets(library, e, i, key, s.time_secs));
                     palettes.push((h, pal, tint, morph));
                     drawn.push(Drawn {
                         clip: s.clip,
@@ -1183,6 +1190,8 @@ impl Viewer {
                 self.shown = None;
                 #[cfg(feature = "authoring")]
                 self.morph_pool.extend(palettes.into_iter().filter_map(|p| p.3));
+                #[cfg(feature = "authoring")]
+                self.uv_morphs.extend(uv_morphs.into_iter().flatten());
                 return Ok(false);
             }
         }
@@ -1196,7 +1205,7 @@ impl Viewer {
                 tint: *tint,
                 morph: morph.as_deref(),
                 looks: looks.get(k).and_then(Option::as_deref),
-                uv_morph: uv_morphs.get(k).and_then(Option::as_deref),
+                uv_morph: uv_morphs.get(k).and_then(Option::as_ref).filter(|(_, u)| u.moved > 0).map(|(_, u)| u.offsets.as_slice()),
             })
             .collect();
         self.last_drawn = drawn;
@@ -1213,6 +1222,8 @@ impl Viewer {
         drop(meshes);
         #[cfg(feature = "authoring")]
         self.morph_pool.extend(palettes.into_iter().filter_map(|p| p.3));
+        #[cfg(feature = "authoring")]
+        self.uv_morphs.extend(uv_morphs.into_iter().flatten());
         #[cfg(feature = "authoring")]
         {
             self.frames_drawn += u32::from(self.shown.is_some());
@@ -1274,18 +1285,26 @@ impl Viewer {
         (!weights.is_empty()).then_some((drawn, weights))
     }
 
-    /// The UV offsets an MMD model's UV morphs give its drawn vertices for clip `e` drawn at
-    /// `time_secs` on the mesh under `mesh_key` (the face keys' weights `face_offsets` plays),
-    /// or `None` when morphs are off, the model has no UV morph or none moves a UV.
+    /// The UV offsets an MMD model's UV morphs give its drawn vertices for clip `e` drawn as
+    /// figure `figure` at `time_secs` on the mesh under `mesh_key` (the face keys' weights
+    /// `face_offsets` plays), taken out of `self.uv_morphs` under its key (the draw puts it
+    /// back) and computed again only when the weights differ from the last draw's; `None` when
+    /// morphs are off or the model has no UV morph. Its `moved` is 0 when none moves a UV.
     #[cfg(feature = "authoring")]
-    fn uv_offsets(&mut self, library: &Library, e: &Entry, mesh_key: u32, time_secs: f32) -> Option<Vec<[f32; 2]>> {
+    fn uv_offsets(&mut self, library: &Library, e: &Entry, figure: usize, mesh_key: u32, time_secs: f32) -> Option<((usize, u32), UvMorphs)> {
         let drawn = library.drawn_morphs(mesh_key).filter(|d| self.morphs_on && d.has_uv_morphs())?;
         let faces = self.layered_faces(library, e, mesh_key, drawn);
         if faces.is_empty() {
             return None;
         }
-        let mut out = Vec::new();
-        (drawn.uv_offsets_into(&faces.weights_at(face_frame(e, &faces, time_secs), time_secs), &mut out) > 0).then_some(out)
+        let weights = faces.weights_at(face_frame(e, &faces, time_secs), time_secs);
+        let key = (figure, mesh_key);
+        let mut uv = self.uv_morphs.remove(&key).unwrap_or_default();
+        if uv.weights != weights || uv.offsets.len() != drawn.drawn_len() {
+            uv.moved = drawn.uv_offsets_into(&weights, &mut uv.offsets);
+            uv.weights = weights;
+        }
+        Some((key, uv))
     }
 
     /// The looks an MMD model's material morphs give its mesh's parts for clip `e` drawn at
@@ -1396,6 +1415,16 @@ impl Viewer {
         self.renderer.queue().present(frame);
         true
     }
+}
+
+/// A drawn MMD figure's UV morph offsets (one per drawn vertex), how many of them move a UV,
+/// and the morph weights they were made from (none in the player, which plays no morphs).
+#[cfg_attr(not(feature = "authoring"), allow(dead_code))]
+#[derive(Default)]
+struct UvMorphs {
+    weights: Vec<(usize, f32)>,
+    offsets: Vec<[f32; 2]>,
+    moved: usize,
 }
 
 /// The VMD motion frame whose face keys clip `e` plays at `time_secs`: the clip's start in the

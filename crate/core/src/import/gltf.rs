@@ -46,6 +46,11 @@ pub struct MeshPart {
     /// 0 where a vertex's edge flag turns the edge off). Empty: 1 everywhere (glTF parts).
     #[serde(default)]
     pub edge_scales: Vec<f32>,
+    /// MMD: per vertex, the UV the sphere map is sampled at as an ordinary texture (PMX sphere
+    /// mode 3, the sub-texture: the vertex's additional UV 1). Empty: the sphere map, if any,
+    /// is looked up by the view-space normal.
+    #[serde(default)]
+    pub sphere_uvs: Vec<[f32; 2]>,
 }
 
 /// How an MMD material is drawn besides its colour and texture: its toon ramp looked up on
@@ -64,7 +69,8 @@ pub struct ToonLook {
     #[serde(default)]
     pub sphere: Option<usize>,
     /// How the sphere map combines with the colour: added (`.spa`, PMX mode 2), else
-    /// multiplied (`.sph`, PMX mode 1).
+    /// multiplied (`.sph`, PMX mode 1; the sub-texture, mode 3, sampled at the part's
+    /// [`MeshPart::sphere_uvs`]).
     #[serde(default)]
     pub sphere_add: bool,
 }

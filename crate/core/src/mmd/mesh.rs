@@ -15,8 +15,10 @@
 //! - Sphere maps (`.sph` multiplied, `.spa` added; PMX modes 1 and 2) go to the part's
 //!   [`ToonLook`] for the toon shader, which looks them up by the view-space normal as MMD
 //!   does; a missing one is a notice and the material is drawn without it. PMX's sub-texture
-//!   mode (3, indexed by the additional UV 1) is not drawn (three.js r171 does not either):
-//!   a notice names the material.
+//!   mode (3) is drawn as MMD's shader (MME's `use_subtexture`) draws it: the sphere texture
+//!   sampled at the vertex's additional UV 1 (x, y; [`MeshPart::sphere_uvs`]) and multiplied,
+//!   as an ordinary second texture (three.js r171 leaves it out); a model with no additional
+//!   UV draws it without, with a notice.
 //! - Outline width per vertex: the material's edge size times the vertex's edge scale (PMX),
 //!   or 0 where a PMD vertex's edge flag turns the edge off ([`MeshPart::edge_scales`]).
 
@@ -257,17 +259,21 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
             Toon::Texture(i) => model_tex(Some(i)),
         };
         let sphere = match m.sphere_mode {
-            SphereMode::Multiply | SphereMode::Add => model_tex(m.sphere),
-            SphereMode::SubTexture => {
-                if m.sphere.is_some() {
-                    notices.push(format!("{file}: material {mi} ('{}') uses its sphere map as a sub-texture (PMX sphere mode 3), which is not drawn", m.name));
-                }
-                None
-            }
+            SphereMode::Multiply | SphereMode::Add | SphereMode::SubTexture => model_tex(m.sphere),
             SphereMode::None => None,
         };
-        // The sphere map is looked up by the normal, not the UVs: a part with only a sphere
-        // map still needs none.
+        // Sub-texture mode samples the sphere map at the vertex's additional UV 1, which a
+        // model without additional UVs does not have: drawn without it, with a notice.
+        let sub_texture = m.sphere_mode == SphereMode::SubTexture && sphere.is_some();
+        let sphere = if sub_texture && model.additional_uv_count == 0 {
+            notices.push(format!("{file}: material {mi} ('{}') uses its sphere map as a sub-texture (PMX sphere mode 3), but the model has no additional UV: drawn without it", m.name));
+            None
+        } else {
+            sphere
+        };
+        let sub_texture = sub_texture && sphere.is_some();
+        // The sphere map is looked up by the normal, not the UVs (but in sub-texture mode): a
+        // part with only a sphere map still needs none.
         let mut part = MeshPart { color: m.diffuse.to_array(), texture, ..Default::default() };
         let mut used = Vec::new();
         for (k, tri) in run.chunks_exact(3).enumerate() {
@@ -294,6 +300,10 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
             part.edge_scales.push(if mv.edge_scale.is_finite() { mv.edge_scale.max(0.0) } else { 1.0 });
             if texture.is_some() {
                 part.uvs.push(mv.uv.to_array());
+            }
+            if sub_texture {
+                let uv1 = model.additional_uvs.get(v * model.additional_uv_count).copied().unwrap_or_default();
+                part.sphere_uvs.push([uv1.x, uv1.y]);
             }
             local[v] = u32::MAX;
         }

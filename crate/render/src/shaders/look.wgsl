@@ -1,6 +1,7 @@
 // An MMD part's material morphs at the drawn time (renderer `PartLook`, the one declaration the
 // toon and outline shaders share; prepended to each by `build_pipeline`, and checked field for
-// field against `PartLook` by a test): each colour × mul + add. The sphere factors act on the
+// field against `PartLook` by a test): each colour × mul + add (a map's factors as MMD applies them:
+// rgb × mul + add, blended from no change by mul.a + add.a; toon.wgsl's `factor`). The sphere factors act on the
 // sphere map of the part's mode only (`sph_*` multiplied maps, `spa_*` added ones: the viewer
 // leaves the other at no change), so a part without a sphere map is not tinted. Ambient and
 // specular go in as MMD's shader uses them, as the change a morph makes to MMD's terms: `ambient_add`
