@@ -1022,7 +1022,9 @@ mod tests {
     #[test]
     fn stage_5_bars_the_move_after_every_join_over_the_goal_at_once() {
         let lib = builtin();
-        let bars = bars_at(120.0);
+        // 32 bars: a refill barring one move changes the dance near it and keeps it elsewhere.
+        let secs = 32.0 * 2.0 + 0.01;
+        let bars = bars_from_tempo(secs, 120.0, 4, 0.0, |a, _| (a / secs).clamp(0.0, 1.0)).unwrap();
         let layers = open_layers(&bars);
         let opts = GenerateOptions::default();
         assert!(opts.join_bans_at_once, "on by default");
@@ -1044,12 +1046,15 @@ mod tests {
             join_repair_stage(&p, &p.weights, &o, path.clone(), 0.0, &mut m).unwrap();
             assert!(m.played.len() >= 2, "no refill measured");
             let q = m.played[1].0.clone();
-            over.iter().copied().filter(|s| q.contains(s)).collect::<Vec<usize>>()
+            (over.iter().copied().filter(|s| q.contains(s)).collect::<Vec<usize>>(), q)
         };
-        // At once: none of them is left; one a refill (the control): only the worst's is barred.
-        assert_eq!(refill(true), Vec::<usize>::new());
-        let left = refill(false);
-        assert!(!left.contains(&worst) && !left.is_empty(), "the control's refill kept {left:?} of {over:?}");
+        // At once: none of them is left; one a refill (the control): the worst's is barred,
+        // some of the others are still there.
+        let (left, at_once) = refill(true);
+        assert_eq!(left, Vec::<usize>::new());
+        let (left, control) = refill(false);
+        assert!(!left.contains(&worst), "the control's refill kept the worst join's move {worst}");
+        assert!(!left.is_empty() && at_once != control, "the control's refill kept none of {over:?}: {control:?}");
     }
 
     #[test]
