@@ -6,8 +6,9 @@
 //! library's transition table for the song's metre (cached, as in the app); the figure is the best
 //! of the calls after it; then the same call with each later stage off in turn, and the fill
 //! alone, so the figures say where the time goes; and the default against its controls in the
-//! same run (session 15's measures, the old pipeline's settings, windowed refills). Prints
-//! figures; asserts only that the calls agree (quick measures and the control: the same dance).
+//! same run (session 15's measures, session 16's default, the old pipeline's settings, windowed
+//! refills), with the default's and session 16's dances measured as played. Prints figures;
+//! asserts only that the calls agree (quick measures and the control: the same dance).
 //! `cargo bench -p odori-tests --bench choreo_generate` (`GENERATE_ONLY=1`: not the stages off
 //! one at a time nor the built-in library).
 
@@ -44,8 +45,9 @@ fn main() {
     for line in odori_tests::profile_lines(&profile) {
         println!("native:   {line}");
     }
-    // The default (quick measures) against the controls in the same run, best of 3 each:
-    // session 15's measures (GenerateOptions::quick_measures off), the old pipeline (67f699e's
+    // The default against the controls in the same run, best of 3 each: session 15's measures
+    // (GenerateOptions::quick_measures off), session 16's default (one join barred a refill,
+    // GenerateOptions::join_bans_at_once off), the old pipeline (67f699e's
     // settings: measured unheld, no order stage) and windowed refills
     // (GenerateOptions::windowed_refills): times, objectives, whether the dance is the same.
     let d = odori_core::choreo::GenerateOptions::default;
@@ -54,17 +56,19 @@ fn main() {
         (states.iter().map(odori_core::choreo::BarState::segment).collect::<Vec<_>>(), r.cost)
     };
     let control = odori_core::choreo::GenerateOptions { quick_measures: false, ..d() };
+    let s16 = odori_core::choreo::GenerateOptions { join_bans_at_once: false, ..d() };
     let ((), profile) = odori_core::choreo::profile::profiled(clock_ms, || {
-        run(&control);
+        run(&s16);
     });
-    println!("native:   the same, session 15's measures (quick_measures off, the control):");
+    println!("native:   the same, session 16's default (one join barred a refill, join_bans_at_once off, the control):");
     for line in odori_tests::profile_lines(&profile) {
         println!("native:   {line}");
     }
     println!("native: load average {}", std::fs::read_to_string("/proc/loadavg").unwrap_or_default().split_whitespace().take(3).collect::<Vec<_>>().join(" "));
     let variants = [
-        ("quick measures (the default)", d()),
+        ("the default (join bans at once, quick measures)", d()),
         ("session 15's measures (control)", control),
+        ("session 16's default (one join barred a refill, control)", s16),
         ("old pipeline (67f699e's settings)", odori_core::choreo::GenerateOptions { measure_played: false, follow_order: false, ..d() }),
         ("windowed refills", odori_core::choreo::GenerateOptions { windowed_refills: true, ..d() }),
     ];
@@ -88,6 +92,26 @@ fn main() {
         println!("native: Generate 90 bars, {label}: {ms:.0} ms, objective {c:.3} (best of 3){against}");
     }
     assert_eq!(timed[1].1, timed[0].1, "quick measures keep the dance");
+    // What each dance is worth, as played (the figures stage 5 and the preference order
+    // follow): the default's against session 16's, the control.
+    for (k, label) in [(0, "the default"), (2, "session 16's default (control)")] {
+        let path: Vec<usize> = timed[k].1 .0.iter().map(|s| s.expect("every bar filled")).collect();
+        let imported = path.iter().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
+        match odori_core::choreo::played_figures(&lib, &bars, &path) {
+            Some(f) => println!(
+                "native:   {label} as played: worst join {:.3} (bar {:?}; {} joins over 1.5), foot skate {:.2} cm/s (goal {:.2}), kinetic beats a count {:.3}, BAS-music {:.3}, {imported} of {} bars imported",
+                f.whole.join_jump_max,
+                f.whole.worst_join_bar,
+                f.bars.iter().filter(|b| b.join_jump.is_some_and(|j| j > 1.5)).count(),
+                f.whole.foot_skate_cm_per_s,
+                odori_core::choreo::skate_goal_cm_per_s(&lib, &path),
+                f.whole.kinetic_per_count,
+                f.bas_music,
+                path.len()
+            ),
+            None => println!("native:   {label}: not measured"),
+        }
+    }
     if std::env::var("GENERATE_ONLY").is_ok_and(|v| v == "1") {
         return;
     }

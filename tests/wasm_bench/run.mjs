@@ -65,11 +65,12 @@ const [firstBuiltinMs] = time(() => x.generate90_builtin());
 say(`Generate 90 bars from the built-in library alone (variety term on): ${genMs.toFixed(0)} ms (best of 3; first call with the library and table ${firstBuiltinMs.toFixed(0)} ms), objective ${cost.toFixed(3)}`);
 
 // Issue 26's speed work: where Generate's time goes per stage (fills against renders and
-// measures), and the default (quick measures) against the controls in the same run: session
-// 15's measures (quick_measures off), the old pipeline (67f699e's settings) and windowed refills.
+// measures), and the default against the controls in the same run: session 16's default (one
+// join barred a refill), session 15's measures (quick_measures off), the old pipeline (67f699e's
+// settings) and windowed refills.
 const STAGES = ["1 fill", "2 beat rate", "3 free skate", "4 skate", "4b order", "5 join repair", "takes"];
-const VARIANTS = ["quick measures (the default)", "windowed refills", "session 15's measures (control)", "old pipeline (67f699e's settings)"];
-for (const v of [0, 2]) {
+const VARIANTS = ["the default (join bans at once, quick measures)", "windowed refills", "session 15's measures (control)", "old pipeline (67f699e's settings)", "session 16's default (one join barred a refill, control)"];
+for (const v of [0, 4]) {
   x.generate90_profile(v);
   let all = 0, fills = 0, measures = 0;
   say(`Generate profiled, ${VARIANTS[v]}:`);
@@ -85,7 +86,7 @@ for (const v of [0, 2]) {
 // load beside them: the figures are upper bounds under load).
 say(`load average ${loadavg().map((l) => l.toFixed(1)).join(" ")}`);
 // Best of 3 each, the default first; each variant's time against the default's.
-const runs = [0, 2, 3, 1].map((v) => [v, ...best(() => x.generate90_variant(v), 3)]);
+const runs = [0, 4, 2, 3, 1].map((v) => [v, ...best(() => x.generate90_variant(v), 3)]);
 const [, quickMs] = runs[0];
 for (const [v, ms, c] of runs) {
   const same = v === 0 ? 1 : x.generate90_same(0, v);

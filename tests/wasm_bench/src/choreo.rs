@@ -122,10 +122,10 @@ pub extern "C" fn generate90_builtin() -> f32 {
     })
 }
 
-// Issue 26's speed work: the same Generate with quick measures (GenerateOptions::quick_measures,
-// the default) against the controls in the same run — session 15's measures (quick_measures
-// off), the old pipeline (67f699e's settings: measure_played off, the order stage off) and
-// windowed refills (GenerateOptions::windowed_refills) — and where the time goes per stage
+// Issue 26's speed work: the same Generate at the default settings against the controls in the
+// same run — session 15's measures (quick_measures off), the old pipeline (67f699e's settings:
+// measure_played off, the order stage off), windowed refills (GenerateOptions::windowed_refills)
+// and session 16's default (GenerateOptions::join_bans_at_once off) — and where the time goes per stage
 // (odori_core::choreo::profile, on the host's clock).
 
 #[link(wasm_import_module = "env")]
@@ -141,18 +141,19 @@ fn host_clock() -> f64 {
 
 thread_local! {
     static PROFILE: RefCell<Option<profile::Profile>> = const { RefCell::new(None) };
-    static DANCES: RefCell<[Vec<Option<usize>>; 4]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
+    static DANCES: RefCell<[Vec<Option<usize>>; 5]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
 }
 
-/// The settings of variant `v`: 0 the default (quick measures), 1 windowed refills, 2 session
-/// 15's measures (quick_measures off, the control), 3 the old pipeline (67f699e's settings:
-/// measured unheld, no order stage).
+/// The settings of variant `v`: 0 the default, 1 windowed refills, 2 session 15's measures
+/// (quick_measures off, the control), 3 the old pipeline (67f699e's settings: measured unheld,
+/// no order stage), 4 session 16's default (one join barred a refill: join_bans_at_once off).
 fn variant(v: u32) -> GenerateOptions {
     let d = GenerateOptions::default();
     match v {
         1 => GenerateOptions { windowed_refills: true, ..d },
         2 => GenerateOptions { quick_measures: false, ..d },
         3 => GenerateOptions { measure_played: false, follow_order: false, ..d },
+        4 => GenerateOptions { join_bans_at_once: false, ..d },
         _ => d,
     }
 }

@@ -121,7 +121,7 @@ fn figures_of(m: &QualityMotion, bars: &[Bar], switches: &[f32]) -> Option<Dance
 #[derive(Default)]
 pub struct Measured {
     pub(super) done: Vec<(Vec<usize>, Option<DanceFigures>)>,
-    played: Vec<(Vec<usize>, Option<Played>)>,
+    pub(super) played: Vec<(Vec<usize>, Option<Played>)>,
 }
 
 impl Measured {

@@ -17,8 +17,10 @@
 //!    built-in move only where the imported moves tried there miss the beat or join goal as
 //!    the dance is played, and says why ([`BuiltinWhy`]).
 //! 5. [`join_repair_stage`]: every join within [`GenerateOptions::join_jump_goal`]; if not,
-//!    bars the move after the worst join and refills, up to [`GenerateOptions::join_repairs`]
-//!    times, keeping a refill only when it improves that join and keeps what the dance met.
+//!    a few refills barring the move after every join over the goal at once, kept when they
+//!    meet every goal; else bars the move after the worst join and refills, up to
+//!    [`GenerateOptions::join_repairs`] times, keeping a refill only when it improves that
+//!    join and keeps what the dance met.
 //!
 //! Another take ([`GenerateOptions::take`], issue 26): take k > 0 runs the same stages on the
 //! objective plus a penalty on the moves the earlier takes' dances chose in each bar
@@ -109,6 +111,13 @@ pub struct GenerateOptions {
     /// (`quick_measures_keep_every_figure`, `dance_fixture`). Default true; false: the control
     /// (session 15's measures), which `choreo_generate` times beside it.
     pub quick_measures: bool,
+    /// Stage 5, [`join_repair_stage`], as played ([`GenerateOptions::measure_played`]): first
+    /// up to [`JOIN_BANS_AT_ONCE_TRIES`] refills that each bar the move after every join over
+    /// the goal in the measure they read, not only after the worst one, so one refill does the
+    /// work of several; their dance is kept only when it meets the join goal, the skate goal and
+    /// the beat-rate band the dance met; else the stage runs as with this off. Default true;
+    /// false: the control (session 16's stage 5: one join a refill).
+    pub join_bans_at_once: bool,
 }
 
 impl Default for GenerateOptions {
@@ -126,6 +135,7 @@ impl Default for GenerateOptions {
             measure_played: true,
             windowed_refills: false,
             quick_measures: true,
+            join_bans_at_once: true,
         }
     }
 }
@@ -617,7 +627,12 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 ///
 /// Each refill bars, from every bar, the move after the worst join of the last refill (the same
 /// move makes the same abrupt join wherever the filling puts it after a like move), so the bars
-/// add up over the tries. Under [`MovesSource::Mine`], the bar of a barred imported move is
+/// add up over the tries. Measured as played, with [`GenerateOptions::join_bans_at_once`] (the
+/// default), the stage first tries [`JOIN_BANS_AT_ONCE_TRIES`] refills that bar the move after
+/// every join over the goal in the last measure, and keeps their dance when it meets every goal
+/// (joins, skate goal, beat-rate band); else it starts again from `path` one join a refill (the
+/// 90-bar bench: 3 refills to a worst join of 0.84, where one join a refill spent all 16 and
+/// ended at 5.55; `docs/benchmarks-notes-choreo.md`). Under [`MovesSource::Mine`], the bar of a barred imported move is
 /// also opened to built-in moves (the source's charge lifted there, [`Problem::lift_charge`]):
 /// the preference order of issue 26 — built-in moves fill only bars where no imported move
 /// meets the goals — where the charge alone kept them out of every bar an imported move fits. A refill whose feet slide past the goal the dance met makes the next
@@ -625,10 +640,34 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 /// the first one met (beat-rate band, skate goal; a dance already past the skate goal slides no
 /// more than it did) with a better worst join is returned; else `path` and `cost`.
 pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
-    let (mut path, mut cost) = (path, cost);
     if p.layers.len() < 2 {
         return Ok((path, cost));
     }
+    if options.join_bans_at_once && options.measure_played {
+        let why = p.why.borrow().clone();
+        let on_beat = measured.figures(p, &path, true).is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
+        let (q, c, f) = repair_pass(p, weights, options, path.clone(), cost, measured, true, options.join_repairs.min(JOIN_BANS_AT_ONCE_TRIES))?;
+        // Kept only when it meets every goal the stage follows at the goal itself (not a
+        // dance past the skate goal on entry sliding no more than it did).
+        let met = f.is_some_and(|f| f.join_jump_max <= options.join_jump_goal && f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)));
+        if met {
+            return Ok((q, c));
+        }
+        *p.why.borrow_mut() = why;
+    }
+    repair_pass(p, weights, options, path, cost, measured, false, options.join_repairs).map(|(q, c, _)| (q, c))
+}
+
+/// Refills [`GenerateOptions::join_bans_at_once`] tries before stage 5 falls back to one join a
+/// refill ([`join_repair_stage`]).
+pub const JOIN_BANS_AT_ONCE_TRIES: usize = 4;
+
+/// One pass of [`join_repair_stage`]'s refills, up to `tries`: barring the move after the worst
+/// join of the last refill, or after every join over the goal in it (`at_once`). Returns the
+/// best dance kept, its cost and its figures.
+#[allow(clippy::too_many_arguments)]
+fn repair_pass(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured, at_once: bool, tries: usize) -> Result<(Vec<usize>, f32, Option<DanceFigures>), FillError> {
+    let (mut path, mut cost) = (path, cost);
     let played = options.measure_played;
     let current = measured.figures(p, &path, played);
     let (mut trial_path, mut trial) = (path.clone(), current);
@@ -644,7 +683,7 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
     let mut opened = vec![false; p.layers.len()];
     let mut skate_weights = skate_ladder();
     let mut skate_weight = 0.0f32;
-    for _ in 0..options.join_repairs {
+    for _ in 0..tries {
         let Some(f) = trial else { break };
         let joins_ok = f.join_jump_max <= options.join_jump_goal;
         let skate_ok = f.foot_skate_cm_per_s <= skate_cap(&trial_path);
@@ -659,22 +698,38 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
         let mut reweighted = false;
         if !joins_ok {
             // The bar after the join takes another move (the one before it, when that one is
-            // pinned; both pinned: nothing to change).
-            let Some(bar) = f.worst_join_bar else { break };
-            let Some(t) = [bar, bar - 1].into_iter().find(|&t| matches!(p.layers[t], Layer::Open { .. })) else { break };
-            let s = trial_path[t];
-            for v in ban.iter_mut() {
-                v[s] += JOIN_BAN;
+            // pinned; both pinned: nothing to change): the worst join's, and with
+            // `join_bans_at_once` every other join over the goal in the same measure.
+            let Some(worst) = f.worst_join_bar else { break };
+            let mut over = vec![worst];
+            if at_once && played {
+                if let Some(pf) = measured.played(p, &trial_path) {
+                    over.extend(pf.bars.iter().enumerate().filter(|(u, b)| *u != worst && b.join_jump.is_some_and(|j| j > options.join_jump_goal)).map(|(u, _)| u));
+                }
             }
-            changed.extend((0..trial_path.len()).filter(|&u| trial_path[u] == s));
-            if p.weights.moves_source == MovesSource::Mine && p.lib.segments().get(s).is_some_and(|seg| seg.builtin.is_none()) {
-                if !opened[t] && !p.opened.get(t).copied().unwrap_or(false) {
-                    changed.push(t);
+            let mut banned: Vec<usize> = Vec::new();
+            for bar in over {
+                let Some(t) = [bar, bar - 1].into_iter().find(|&t| matches!(p.layers[t], Layer::Open { .. })) else { continue };
+                let s = trial_path[t];
+                if !banned.contains(&s) {
+                    banned.push(s);
+                    for v in ban.iter_mut() {
+                        v[s] += JOIN_BAN;
+                    }
+                    changed.extend((0..trial_path.len()).filter(|&u| trial_path[u] == s));
                 }
-                opened[t] = true;
-                if let Some(w) = p.why.borrow_mut().get_mut(t) {
-                    w.get_or_insert(BuiltinWhy::RoughJoin);
+                if p.weights.moves_source == MovesSource::Mine && p.lib.segments().get(s).is_some_and(|seg| seg.builtin.is_none()) {
+                    if !opened[t] && !p.opened.get(t).copied().unwrap_or(false) {
+                        changed.push(t);
+                    }
+                    opened[t] = true;
+                    if let Some(w) = p.why.borrow_mut().get_mut(t) {
+                        w.get_or_insert(BuiltinWhy::RoughJoin);
+                    }
                 }
+            }
+            if banned.is_empty() {
+                break;
             }
         }
         if !skate_ok {
@@ -700,7 +755,7 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
         }
         (trial_path, trial) = (q, after);
     }
-    Ok((path, cost))
+    Ok((path, cost, best))
 }
 
 /// The whole pipeline: stages 1 to 5 in order on the problem of filling `layers` (one per bar
@@ -962,6 +1017,44 @@ mod tests {
         // No tries: nothing changes.
         let none = GenerateOptions { join_repairs: 0, ..strict };
         assert_eq!(join_repair_stage(&p, &p.weights, &none, path.clone(), 0.0, &mut m).unwrap().0, path);
+    }
+
+    #[test]
+    fn stage_5_bars_the_move_after_every_join_over_the_goal_at_once() {
+        let lib = builtin();
+        // 32 bars: a refill barring one move changes the dance near it and keeps it elsewhere.
+        let secs = 32.0 * 2.0 + 0.01;
+        let bars = bars_from_tempo(secs, 120.0, 4, 0.0, |a, _| (a / secs).clamp(0.0, 1.0)).unwrap();
+        let layers = open_layers(&bars);
+        let opts = GenerateOptions::default();
+        assert!(opts.join_bans_at_once, "on by default");
+        let p = Problem::new(lib, &bars, &layers, FillWeights::default(), &opts);
+        let path = fill_stage(&p).unwrap();
+        let f = Measured::default().played(&p, &path).unwrap();
+        // A goal a third of the joins miss: several joins over it in one measure.
+        let mut jumps: Vec<f32> = f.bars.iter().filter_map(|b| b.join_jump).collect();
+        jumps.sort_by(f32::total_cmp);
+        let goal = jumps[jumps.len() * 2 / 3];
+        let over: Vec<usize> = (1..bars.len()).filter(|&t| f.bars[t].join_jump.is_some_and(|j| j > goal)).map(|t| path[t]).collect();
+        let worst = path[f.whole.worst_join_bar.unwrap()];
+        assert!(over.iter().any(|&s| s != worst), "one move over the goal: {over:?}");
+        // One refill each way: the moves it was given after the joins over the goal, in the
+        // first refill it measured (the second dance measured as played).
+        let refill = |at_once: bool| {
+            let o = GenerateOptions { join_jump_goal: goal, join_repairs: 1, join_bans_at_once: at_once, ..opts };
+            let mut m = Measured::default();
+            join_repair_stage(&p, &p.weights, &o, path.clone(), 0.0, &mut m).unwrap();
+            assert!(m.played.len() >= 2, "no refill measured");
+            let q = m.played[1].0.clone();
+            (over.iter().copied().filter(|s| q.contains(s)).collect::<Vec<usize>>(), q)
+        };
+        // At once: none of them is left; one a refill (the control): the worst's is barred,
+        // some of the others are still there.
+        let (left, at_once) = refill(true);
+        assert_eq!(left, Vec::<usize>::new());
+        let (left, control) = refill(false);
+        assert!(!left.contains(&worst), "the control's refill kept the worst join's move {worst}");
+        assert!(!left.is_empty() && at_once != control, "the control's refill kept none of {over:?}: {control:?}");
     }
 
     #[test]
