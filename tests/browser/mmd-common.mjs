@@ -3,7 +3,7 @@
 // wrote) and what the tests read with it — a VMD's morph keys, a PMD's vertex morphs and the
 // vertices 頭 alone carries —, the quaternion maths that puts a head-rest point where the posed
 // head has it and a camera in front of the face, and a model folder and its VMD imported in the
-// page (`modelFiles`, `importOnModel`).
+// page (`modelFiles`, `importOnModel`), and pairs of shots of one view (`shotPair`).
 import assert from "node:assert/strict";
 import { readFileSync, readdirSync, existsSync } from "node:fs";
 import { join } from "node:path";
@@ -182,7 +182,7 @@ export const countIn = (img, b, pred) => { let n = 0; for (let y = Math.max(0, b
  * off the page's own re-framing (a resize of the view, a body made) until the returned
  * `release()` is awaited.
  */
-export async function holdCamera(page) {
+async function holdCamera(page) {
   await waitUntil(() => page.evaluate(() => {
     const { viewer, player } = window.odori;
     if (viewer.bodiesPending === 0) return true;
@@ -205,13 +205,7 @@ export async function holdCamera(page) {
 }
 
 /** What differs between the viewer's camera `now` and `camera`, and the view's size: for a failure's message. */
-export const cameraDiff = (now, camera, img) => JSON.stringify({ wanted: camera, now, view: img && [img.width, img.height] });
-
-/** Headless screenshots of the page's frame (`player.drawNow`) with the viewer's camera at `camera`, morphs on and off (the control): { on, off }, each { img, drawn } (`viewer.lastDrawn()[0]`); both drawn again until both are of this camera and of one layout of the view (its drawing buffer's size and its place on the page, unchanged from each draw to its screenshot; the page's re-framing held off meanwhile: `holdCamera`). Morphs are left on. */
-export async function shotsMorphsOnOff(page, camera, file) {
-  const release = await holdCamera(page);
-  try { return await shotsOnOff(page, camera, file); } finally { await release(); }
-}
+const cameraDiff = (now, camera, img) => JSON.stringify({ wanted: camera, now, view: img && [img.width, img.height] });
 
 /** The view's drawing-buffer size and its place on the page: a shot is of one layout only when these hold from its draw to its screenshot. */
 const viewLayout = (page) => page.evaluate(() => {
@@ -220,38 +214,54 @@ const viewLayout = (page) => page.evaluate(() => {
   return [c.width, c.height, r.x, r.y, r.width, r.height].join(",");
 });
 
-async function shotsOnOff(page, camera, file) {
-  // Both shots again when the camera moved or the view changed size or place between them (the
-  // page's layout can still move when a notice or a status line comes or goes): a pair is of one view.
-  for (let tries = 0; ; tries++) {
-    const shots = {};
-    let diff = null;
-    for (const on of [true, false]) {
-      const drawn = await page.evaluate(({ on, camera }) => {
-        const { viewer, player } = window.odori;
-        viewer.setCamera(camera);
-        viewer.setMorphs(on);
-        player.drawNow();
-        return viewer.lastDrawn()[0];
-      }, { on, camera });
-      const layout = await viewLayout(page);
-      const img = await canvasPixels(page, `${file}-${on ? "on" : "off"}.png`);
-      const now = await page.evaluate(() => window.odori.viewer.camera);
-      const after = await viewLayout(page);
-      if (!sameCamera(now, camera) || layout !== after || (!on && layout !== shots.on.layout)) {
-        diff = `${cameraDiff(now, camera, img)}; the view (buffer w, h; x, y, w, h on the page) ${on ? "" : `with morphs on ${shots.on.layout}, off `}${layout} → ${after}`;
-        break;
+/**
+ * Two headless screenshots of the page's frame with the viewer's camera at `camera`, the first
+ * after `draw(true)`, the second after `draw(false)` (each sets the camera and draws in the page,
+ * and resolves to what was drawn), saved as `names[0]` and `names[1]`: [{ img, drawn }, { img,
+ * drawn }]. Both are taken again until both are of this camera and of one layout of the view
+ * (its drawing buffer's size and its place on the page, unchanged from each draw to its
+ * screenshot: the page's layout can still move when a notice or a status line comes or goes);
+ * the page's re-framing is held off meanwhile (`holdCamera`).
+ */
+export async function shotPair(page, camera, names, draw) {
+  const release = await holdCamera(page);
+  try {
+    for (let tries = 0; ; tries++) {
+      const shots = [];
+      let diff = null;
+      for (const first of [true, false]) {
+        const drawn = await draw(first);
+        const layout = await viewLayout(page);
+        const img = await canvasPixels(page, names[first ? 0 : 1]);
+        const now = await page.evaluate(() => window.odori.viewer.camera);
+        const after = await viewLayout(page);
+        if (!sameCamera(now, camera) || layout !== after || (!first && layout !== shots[0].layout)) {
+          diff = `${cameraDiff(now, camera, img)}; the view (buffer w, h; x, y, w, h on the page) ${first ? "" : `at the first shot ${shots[0].layout}, at the second `}${layout} → ${after}`;
+          break;
+        }
+        shots.push({ img, drawn, layout });
       }
-      shots[on ? "on" : "off"] = { img, drawn, layout };
+      if (!diff) return shots;
+      // The page moved the camera, resized or moved the view between the shots: both again.
+      if (tries >= 10) throw new Error(`the camera keeps being moved by the page, or the view changes: ${diff}`);
+      await new Promise((r) => setTimeout(r, 200));
     }
-    if (!diff) {
-      await page.evaluate(() => window.odori.viewer.setMorphs(true));
-      return shots;
-    }
-    // The page moved the camera, resized or moved the view between the shots: both again.
-    if (tries >= 10) throw new Error(`the camera keeps being moved by the page, or the view changes: ${diff}`);
-    await new Promise((r) => setTimeout(r, 200));
+  } finally {
+    await release();
   }
+}
+
+/** Headless screenshots of the page's frame (`player.drawNow`) with the viewer's camera at `camera`, morphs on and off (the control): { on, off }, each { img, drawn } (`viewer.lastDrawn()[0]`), of one view (`shotPair`). Morphs are left on. */
+export async function shotsMorphsOnOff(page, camera, file) {
+  const [on, off] = await shotPair(page, camera, [`${file}-on.png`, `${file}-off.png`], (on) => page.evaluate(({ on, camera }) => {
+    const { viewer, player } = window.odori;
+    viewer.setCamera(camera);
+    viewer.setMorphs(on);
+    player.drawNow();
+    return viewer.lastDrawn()[0];
+  }, { on, camera }));
+  await page.evaluate(() => window.odori.viewer.setMorphs(true));
+  return { on, off };
 }
 
 /** The head 頭's world pose ({ q, p }) and the body drawn, for clip `clip` at `t` s in the page's viewer (drawn there first). */

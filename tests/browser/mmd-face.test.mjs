@@ -15,8 +15,8 @@ import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { readFileSync, readdirSync } from "node:fs";
 import { join } from "node:path";
-import { data, startServer, launch, openDemoDance, canvasPixels, pixel, waitUntil, BACKENDS } from "./harness.mjs";
-import { needData, readMorphKeys, readPmdMorphs, faceCamera, sameCamera, holdCamera, cameraDiff, morphBox, movingBoxes, inBox, countIn, CHANGED } from "./mmd-common.mjs";
+import { data, startServer, launch, openDemoDance, pixel, waitUntil, BACKENDS } from "./harness.mjs";
+import { needData, readMorphKeys, readPmdMorphs, faceCamera, shotPair, morphBox, movingBoxes, inBox, countIn, CHANGED } from "./mmd-common.mjs";
 
 const mikuDir = join(data, "mmd", "miku_v2");
 const vmdPath = join(data, "mmd", "motion", "wavefile_v2.vmd");
@@ -104,29 +104,16 @@ for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).
           return { q: j.rotations.slice(4 * i, 4 * i + 4), p: j.positions.slice(3 * i, 3 * i + 3), body: j.body };
         }, { t });
         const camera = faceCamera(pose, 0.06, 0.55);
-        const out = { pose };
-        const release = await holdCamera(page);
-        // Both shots again when the camera moved or the view changed size between them.
-        for (let tries = 0; ; tries++) {
-          for (const withTrack of [true, false]) {
-            out[withTrack ? "drawn" : "control"] = await page.evaluate(({ withTrack, camera }) => {
-              const { viewer, player, library, project } = window.odori;
-              if (!withTrack) project.project.removeFaceTrack(library, 0);
-              viewer.setCamera(camera);
-              player.drawNow();
-              const d = viewer.lastDrawn()[0];
-              if (!withTrack) { project.project.undo(); project.project.faceTracksInto(library); }
-              return d;
-            }, { withTrack, camera });
-            out[withTrack ? "img" : "ctl"] = await canvasPixels(page, `${backend}-mmd-face-${label}-${withTrack ? "track" : "none"}.png`);
-          }
-          const now = await page.evaluate(() => window.odori.viewer.camera);
-          if (sameCamera(now, camera) && out.img.width === out.ctl.width && out.img.height === out.ctl.height) break;
-          assert.ok(tries < 10, `the camera keeps being moved by the page, or the view changes size: ${cameraDiff(now, camera, out.ctl)}; the shot with the track was ${out.img.width}×${out.img.height}`);
-          await new Promise((r) => setTimeout(r, 300));
-        }
-        await release();
-        return out;
+        const [w, n] = await shotPair(page, camera, [`${backend}-mmd-face-${label}-track.png`, `${backend}-mmd-face-${label}-none.png`], (withTrack) => page.evaluate(({ withTrack, camera }) => {
+          const { viewer, player, library, project } = window.odori;
+          if (!withTrack) project.project.removeFaceTrack(library, 0);
+          viewer.setCamera(camera);
+          player.drawNow();
+          const d = viewer.lastDrawn()[0];
+          if (!withTrack) { project.project.undo(); project.project.faceTracksInto(library); }
+          return d;
+        }, { withTrack, camera }));
+        return { pose, drawn: w.drawn, img: w.img, control: n.drawn, ctl: n.img };
       };
       const check = async (label) => {
         const shot = await shoot(label);

@@ -1160,11 +1160,10 @@ impl Renderer {
             let sphere_view = |add: bool| sphere.filter(|s| s.1 == add).and_then(|s| pick(Some(s.0))).map(|(v, _)| v);
             let sphere_mul = sphere_view(false).unwrap_or(&self.white_view);
             let sphere_add = sphere_view(true).unwrap_or(&self.black_view);
-            // A sub-texture is sampled at the vertices' UVs as an ordinary texture: with its own sampler.
-            let sphere_sampler = match sphere.filter(|_| sub_texture) {
-                Some((s, _)) => make_sampler(&self.device, &g.samplers[s]),
-                None => make_sampler(&self.device, &clamp),
-            };
+            // A sub-texture is sampled at the vertices' UVs as an ordinary texture: with its own
+            // sampler; a sphere looked up by the normal shares the ramp's clamped one.
+            let sub_sampler = sphere.filter(|_| sub_texture).map(|(s, _)| make_sampler(&self.device, &g.samplers[s]));
+            let sphere_sampler = sub_sampler.as_ref().unwrap_or(&ramp_sampler);
             g.toon_groups[k] = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("toon textures"),
                 layout: &self.toon_texture_layout,
@@ -1175,7 +1174,7 @@ impl Renderer {
                     wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::Sampler(&ramp_sampler) },
                     wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(sphere_mul) },
                     wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(sphere_add) },
-                    wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(&sphere_sampler) },
+                    wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(sphere_sampler) },
                 ],
             }));
         }

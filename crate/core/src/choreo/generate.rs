@@ -391,8 +391,7 @@ impl<'a> Problem<'a> {
             .enumerate()
             .filter_map(|(t, &s)| {
                 let seg = self.lib.segments().get(s)?;
-                let rate = self.bar_bpm.get(t).copied().unwrap_or(0.0);
-                Some(if seg.tempo_bpm > 0.0 && rate > 0.0 { seg.clip_skate_cm_per_s * rate / seg.tempo_bpm } else { seg.clip_skate_cm_per_s })
+                Some(seg.clip_skate_at(self.bar_bpm.get(t).copied().unwrap_or(0.0)))
             })
             .collect();
         v.iter().sum::<f32>() / v.len().max(1) as f32

@@ -149,8 +149,7 @@ fn note_of(lib: &SegmentLibrary, bars: &[Bar], bar: usize, segment: Option<usize
             flags.push(Flag { kind: FlagKind::JoinJump, words: format!("join jump {j:.2} (goal ≤ {JOIN_JUMP_GOAL})"), value: j, goal: JOIN_JUMP_GOAL });
         }
         // The source clip's skate at the bar's pace (§N).
-        let rate = super::count_rate_bpm(s.counts(), bars.get(bar).map_or(1.0, Bar::duration_secs));
-        let paced = s.clip_skate_cm_per_s * if s.tempo_bpm > 0.0 { rate / s.tempo_bpm } else { 1.0 };
+        let paced = s.clip_skate_at(super::count_rate_bpm(s.counts(), bars.get(bar).map_or(1.0, Bar::duration_secs)));
         let skate = q.foot_skate.mean_cm_per_s;
         if skate_flagged(skate, paced) {
             flags.push(Flag { kind: FlagKind::FootSkate, words: format!("foot skate {skate:.0} cm/s (its source {paced:.0} cm/s)"), value: skate, goal: paced });
@@ -251,7 +250,7 @@ mod tests {
             assert_eq!(n.flags.iter().any(|f| f.kind == FlagKind::OffBeat), bq.beats.bas_music - bq.beats.bas_music_shifted < OFF_BEAT_MARGIN);
             assert_eq!(n.flags.iter().any(|f| f.kind == FlagKind::JoinJump), bq.join_jump.is_some_and(|j| j > JOIN_JUMP_GOAL));
             let s = &lib.segments()[c.unwrap()];
-            let paced = s.clip_skate_cm_per_s * if s.tempo_bpm > 0.0 { crate::choreo::count_rate_bpm(s.counts(), bars[n.bar].duration_secs()) / s.tempo_bpm } else { 1.0 };
+            let paced = s.clip_skate_at(crate::choreo::count_rate_bpm(s.counts(), bars[n.bar].duration_secs()));
             assert_eq!(n.flags.iter().any(|f| f.kind == FlagKind::FootSkate), skate_flagged(bq.foot_skate.mean_cm_per_s, paced));
         }
         // Candidates: ranked by flags, the search's order kept among equals.

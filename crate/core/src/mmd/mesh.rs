@@ -258,19 +258,17 @@ pub fn model_character(file: &str, model: &MmdModel, textures: &[(String, String
             Toon::Shared(k) => shared_toon(k),
             Toon::Texture(i) => model_tex(Some(i)),
         };
-        let sphere = match m.sphere_mode {
+        let mut sphere = match m.sphere_mode {
             SphereMode::Multiply | SphereMode::Add | SphereMode::SubTexture => model_tex(m.sphere),
             SphereMode::None => None,
         };
         // Sub-texture mode samples the sphere map at the vertex's additional UV 1, which a
         // model without additional UVs does not have: drawn without it, with a notice.
         let sub_texture = m.sphere_mode == SphereMode::SubTexture && sphere.is_some();
-        let sphere = if sub_texture && model.additional_uv_count == 0 {
+        if sub_texture && model.additional_uv_count == 0 {
             notices.push(format!("{file}: material {mi} ('{}') uses its sphere map as a sub-texture (PMX sphere mode 3), but the model has no additional UV: drawn without it", m.name));
-            None
-        } else {
-            sphere
-        };
+            sphere = None;
+        }
         let sub_texture = sub_texture && sphere.is_some();
         // The sphere map is looked up by the normal, not the UVs (but in sub-texture mode): a
         // part with only a sphere map still needs none.

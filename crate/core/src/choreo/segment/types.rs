@@ -132,6 +132,12 @@ impl Segment {
         (self.end_frame - self.start_frame) / LIBRARY_FPS
     }
 
+    /// Its source clip's foot skate played at `rate_bpm` counts a minute (§N: skate is a speed,
+    /// so a move played faster slides faster in its source too); the clip's own without a tempo.
+    pub fn clip_skate_at(&self, rate_bpm: f32) -> f32 {
+        if self.tempo_bpm > 0.0 && rate_bpm > 0.0 { self.clip_skate_cm_per_s * rate_bpm / self.tempo_bpm } else { self.clip_skate_cm_per_s }
+    }
+
     /// Its counts: the beats of the bar it fills (4, or 3 for a bar in 3; module docs). 4 in
     /// documents saved before counts were kept.
     pub fn counts(&self) -> usize {
