@@ -57,6 +57,14 @@ fn main() {
     };
     let control = odori_core::choreo::GenerateOptions { quick_measures: false, ..d() };
     let s16 = odori_core::choreo::GenerateOptions { join_bans_at_once: false, ..d() };
+    let s17 = odori_core::choreo::GenerateOptions { pose_read_frames_only: false, ..d() };
+    let ((), profile) = odori_core::choreo::profile::profiled(clock_ms, || {
+        run(&s17);
+    });
+    println!("native:   the same, session 17's measures (every frame of each held pass posed, pose_read_frames_only off, the control):");
+    for line in odori_tests::profile_lines(&profile) {
+        println!("native:   {line}");
+    }
     let ((), profile) = odori_core::choreo::profile::profiled(clock_ms, || {
         run(&s16);
     });
@@ -68,6 +76,7 @@ fn main() {
     let variants = [
         ("the default (join bans at once, quick measures)", d()),
         ("session 15's measures (control)", control),
+        ("session 17's measures (every frame of each held pass posed, control)", s17),
         ("session 16's default (one join barred a refill, control)", s16),
         ("old pipeline (67f699e's settings)", odori_core::choreo::GenerateOptions { measure_played: false, follow_order: false, ..d() }),
         ("windowed refills", odori_core::choreo::GenerateOptions { windowed_refills: true, ..d() }),
@@ -92,9 +101,10 @@ fn main() {
         println!("native: Generate 90 bars, {label}: {ms:.0} ms, objective {c:.3} (best of 3){against}");
     }
     assert_eq!(timed[1].1, timed[0].1, "quick measures keep the dance");
+    assert_eq!(timed[2].1, timed[0].1, "posing only the frames read keeps the dance");
     // What each dance is worth, as played (the figures stage 5 and the preference order
     // follow): the default's against session 16's, the control.
-    for (k, label) in [(0, "the default"), (2, "session 16's default (control)")] {
+    for (k, label) in [(0, "the default"), (3, "session 16's default (control)")] {
         let path: Vec<usize> = timed[k].1 .0.iter().map(|s| s.expect("every bar filled")).collect();
         let imported = path.iter().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
         match odori_core::choreo::played_figures(&lib, &bars, &path) {

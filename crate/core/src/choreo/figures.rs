@@ -79,8 +79,16 @@ pub fn played_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Opt
 /// [`super::GenerateOptions::quick_measures`]. The same figures either way (the test
 /// `quick_measures_keep_every_figure`).
 pub fn played_figures_with(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool) -> Option<Played> {
+    played_figures_posed(lib, bars, path, quick, quick)
+}
+
+/// [`played_figures_with`]; `read_only` off: session 17's measures, each round of the
+/// held-feet rule posing every frame of its held pass, not only the frames its measures read
+/// ([`super::GenerateOptions::pose_read_frames_only`], the control). The same figures either
+/// way (the test `posing_only_the_frames_read_keeps_every_figure`).
+pub fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool, read_only: bool) -> Option<Played> {
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
-    let (clip, switches, measured) = render_measured(lib, bars, &choices, &RenderOptions::default(), quick);
+    let (clip, switches, measured) = render_measured(lib, bars, &choices, &RenderOptions::default(), quick, read_only);
     let m = match measured {
         Some(m) => m,
         None if quick => QualityMotion::from_clip(&clip).ok()?,
@@ -140,7 +148,7 @@ impl Measured {
         if let Some((_, f)) = self.played.iter().find(|(q, _)| q == path) {
             return f.clone();
         }
-        let f = profile::timed(Work::Measure, || played_figures_with(p.lib, p.bars, path, p.quick_measures));
+        let f = profile::timed(Work::Measure, || played_figures_posed(p.lib, p.bars, path, p.quick_measures, p.pose_read_frames_only));
         self.played.push((path.to_vec(), f.clone()));
         f
     }
@@ -176,5 +184,24 @@ mod tests {
             assert_eq!(quick, control, "{bpm} BPM: as played");
             assert_eq!(dance_figures_with(&lib, &bars, &path, true), dance_figures_with(&lib, &bars, &path, false), "{bpm} BPM: unheld");
         }
+    }
+
+    #[test]
+    fn posing_only_the_frames_read_keeps_every_figure() {
+        // The held passes posing only the frames the measures read, against posing every
+        // frame (session 17's measures): the same figures, to the bit, on dances that keep
+        // their holds and on ones that drop some (the rule's rounds compared).
+        let lib = SegmentLibrary::builtin();
+        let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired && s.counts() == 4).map(|s| s.index).collect();
+        for (k, bpm) in [(3usize, 96.0f32), (7, 120.0), (11, 138.0), (5, 160.0), (13, 104.0)] {
+            let bars = bars_from_tempo(20.0, bpm, 4, 0.0, |_, _| 0.5).unwrap();
+            let path: Vec<usize> = (0..bars.len()).map(|i| live[(i * k + bpm as usize) % live.len()]).collect();
+            let (read, every) = (played_figures_posed(&lib, &bars, &path, true, true), played_figures_posed(&lib, &bars, &path, true, false));
+            assert!(read.is_some(), "{bpm} BPM: measured");
+            assert_eq!(read, every, "{bpm} BPM");
+        }
+        // The frames read at 60 fps are every other one: half the held pass is not posed.
+        let read = crate::choreo::quality::QualityMotion::frames_read(601, 60.0);
+        assert_eq!(read.iter().filter(|&&r| r).count(), 301);
     }
 }

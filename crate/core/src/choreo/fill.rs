@@ -776,13 +776,19 @@ pub fn free_skate_pass(
             }
             c
         };
-        let here = local(a);
+        let (here, excess_a) = (local(a), excess(a));
         let mut best: Option<(f32, f32, usize, f32)> = None; // (excess, rise, segment, new cost)
         for b in 0..m {
-            if b == a || !table.is_available(b) || excess(b) >= excess(a) || local(b) - here > slack {
+            // Each figure once per candidate (the same values as asked for anew each time).
+            if b == a || !table.is_available(b) {
                 continue;
             }
-            if best.is_some_and(|(e, r, _, _)| (excess(b), local(b) - here) >= (e, r)) {
+            let excess_b = excess(b);
+            if excess_b >= excess_a {
+                continue;
+            }
+            let rise = local(b) - here;
+            if rise > slack || best.is_some_and(|(e, r, _, _)| (excess_b, rise) >= (e, r)) {
                 continue;
             }
             path[t] = b;

@@ -118,6 +118,12 @@ pub struct GenerateOptions {
     /// the beat-rate band the dance met; else the stage runs as with this off. Default true;
     /// false: the control (session 16's stage 5: one join a refill).
     pub join_bans_at_once: bool,
+    /// Measure each dance as played posing, in every round of the held-feet rule, only the
+    /// frames its measures read (the 30 fps samples: half of the 60 fps dance;
+    /// [`super::figures::played_figures_posed`]). The same figures and dances
+    /// (`posing_only_the_frames_read_keeps_every_figure`, `dance_fixture`). Default true; false:
+    /// the control (session 17's measures), which `choreo_generate` times beside it.
+    pub pose_read_frames_only: bool,
 }
 
 impl Default for GenerateOptions {
@@ -136,6 +142,7 @@ impl Default for GenerateOptions {
             windowed_refills: false,
             quick_measures: true,
             join_bans_at_once: true,
+            pose_read_frames_only: true,
         }
     }
 }
@@ -252,6 +259,8 @@ pub struct Problem<'a> {
     opened: Vec<bool>,
     /// [`GenerateOptions::quick_measures`].
     pub(super) quick_measures: bool,
+    /// [`GenerateOptions::pose_read_frames_only`].
+    pub(super) pose_read_frames_only: bool,
 }
 
 impl<'a> Problem<'a> {
@@ -304,6 +313,7 @@ impl<'a> Problem<'a> {
             why: std::cell::RefCell::new(vec![None; layers.len()]),
             opened: vec![false; layers.len()],
             quick_measures: options.quick_measures,
+            pose_read_frames_only: options.pose_read_frames_only,
         };
         p.charge = p.moves_source_charge();
         p.base = p.charge.clone();

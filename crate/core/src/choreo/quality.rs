@@ -112,6 +112,22 @@ impl QualityMotion {
         Self::from_positions(&pos, clip.fps)
     }
 
+    /// The frames of a clip of `frames` frames at `fps` that [`QualityMotion::from_clip`] poses
+    /// (and so reads): a measure of a clip reads only these, and the others need not be posed.
+    pub(crate) fn frames_read(frames: usize, fps: f32) -> Vec<bool> {
+        if !(fps.is_finite() && fps > 0.0) || frames < 3 {
+            return vec![true; frames];
+        }
+        let mut read = vec![false; frames];
+        for (f0, f1, a) in resample_frames(frames, fps) {
+            read[f0] = true;
+            if a != 0.0 {
+                read[f1] = true;
+            }
+        }
+        read
+    }
+
     /// [`QualityMotion::from_clip`] posing every frame of the clip ([`canonical_positions`]):
     /// the control ([`super::GenerateOptions::quick_measures`] off).
     pub fn from_clip_every_frame(clip: &Clip) -> Result<Self, QualityError> {

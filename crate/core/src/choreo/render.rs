@@ -121,22 +121,25 @@ pub fn render_switched(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usi
 /// held-feet rule measured it on the way (`None` otherwise): the same motion, not measured twice.
 /// `quick` off: the control ([`super::GenerateOptions::quick_measures`]): the held-feet rule
 /// poses its free pass anew each round and every frame of what it measures, and no motion is
-/// handed back.
-pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool) -> (Clip, Vec<f32>, Option<QualityMotion>) {
-    let (clip, holds, switches) = render_traced_with(lib, bars, choices, options, quick);
+/// handed back. `read_only` (with `quick`): the held-feet rule's held passes pose only the
+/// frames its measures read ([`QualityMotion::frames_read`]), so the clip handed back is
+/// whole only where the motion was read from it: for measuring, not for playing.
+pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool, read_only: bool) -> (Clip, Vec<f32>, Option<QualityMotion>) {
+    let (clip, holds, switches) = render_traced_with(lib, bars, choices, options, quick, quick && read_only);
     let motion = if quick { holds.motion } else { None };
     (clip, switches, motion)
 }
 
 /// [`render`], with what its feet were held to and where its joins fall ([`render_switched`]).
 fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Holds, Vec<f32>) {
-    render_traced_with(lib, bars, choices, options, true)
+    render_traced_with(lib, bars, choices, options, true, false)
 }
 
 /// [`render_traced`]; `quick` off: the held-feet rule as before session 16 (its free pass
 /// posed anew each round, every frame posed for its measures), the control the test
-/// `keeping_the_free_pass_changes_no_frame` compares with.
-fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool) -> (Clip, Holds, Vec<f32>) {
+/// `keeping_the_free_pass_changes_no_frame` compares with. `read_only`: the held passes pose
+/// only the frames the measures read ([`render_measured`]).
+fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool, read_only: bool) -> (Clip, Holds, Vec<f32>) {
     let fps = if options.fps.is_finite() && options.fps > 0.0 { options.fps } else { 60.0 };
     let skeleton = Arc::new(canonical_skeleton());
     let end_secs = bars.iter().map(|b| b.end_secs).fold(0.0f32, f32::max);
@@ -293,7 +296,7 @@ fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usiz
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: roots }],
     };
-    let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches, quick) } else { (clip, Holds::default()) };
+    let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches, quick, read_only) } else { (clip, Holds::default()) };
     (clip, holds, switches)
 }
 
@@ -334,8 +337,11 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   per count no further from the target, as unheld, and its feet slide no more in all.
 /// - Every round plays the same dance with other holds: when `quick`, its free pass is posed
 ///   once ([`crate::canon::character::hold_feet_in_dance`]) and each measure poses only the
-///   frames it reads ([`QualityMotion::from_clip`]): the same frames and figures as not.
-fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32], quick: bool) -> (Clip, Holds) {
+///   frames it reads ([`QualityMotion::from_clip`]): the same frames and figures as not. With
+///   `read_only` too, each round's held pass poses only those frames (half of them at 60 fps;
+///   the held clip returned is then whole only there: for measuring, not for playing).
+#[allow(clippy::too_many_arguments)]
+fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32], quick: bool, read_only: bool) -> (Clip, Holds) {
     use crate::canon::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
     let frames = clip.frame_count();
     if frames < 3 || played.len() < frames {
@@ -396,6 +402,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     let worse_whole = |(margin, cost, skate): (f32, f32, f32)| margin < unheld_whole.0 - 1e-4 || cost > unheld_whole.1 + 1e-4 || skate > unheld_whole.2;
     let mut keep = vec![true; bars.len()];
     let mut free = None;
+    let only = (quick && read_only).then(|| QualityMotion::frames_read(frames, clip.fps));
     for round in 0..=HOLD_RULE_ROUNDS {
         if !quick {
             free = None;
@@ -403,7 +410,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         let kept = |f: usize| bar_of[f].is_none_or(|b| keep.get(b).copied().unwrap_or(true));
         let track = |k: usize| -> Vec<bool> { (0..frames).map(|f| kept(f) && source[f][k]).collect() };
         let planted = [(track(0), track(1)), (track(2), track(3))];
-        let Some(held) = hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free) else { return (clip, Holds::default()) };
+        let Some(held) = hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free, only.as_deref()) else { return (clip, Holds::default()) };
         let Some((with, with_whole, held_m)) = figures(&held) else { return (clip, Holds::default()) };
         if round == HOLD_RULE_ROUNDS {
             if worse_whole(with_whole) {
@@ -691,8 +698,8 @@ mod tests {
         let mut rounds_seen = 0;
         for (bpm, secs) in [(90.0, 20.0), (120.0, 24.0), (150.0, 16.0), (170.0, 20.0)] {
             let (lib, bars, choices) = dance(bpm, secs);
-            let (kept, holds, s1) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), true);
-            let (anew, holds_anew, s2) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), false);
+            let (kept, holds, s1) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), true, false);
+            let (anew, holds_anew, s2) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), false, false);
             assert_eq!(kept, anew, "{bpm} BPM");
             assert_eq!((holds.kept.clone(), holds.motion.clone(), s1), (holds_anew.kept, holds_anew.motion, s2), "{bpm} BPM");
             rounds_seen += usize::from(holds.kept.iter().any(|&k| k) && holds.kept.iter().any(|&k| !k));

@@ -54,8 +54,10 @@ pub(crate) const DANCE_CATCH_UP_M_S: f32 = 1.0;
 /// [`Character::retarget`] does it: body shift, pelvis drop, contact on ankle or toe.
 /// Returns `None` when the clip is not on the canonical skeleton. `free` keeps the free pass
 /// ([`FreePass`]) between calls on the same `clip` (start with `None`; another clip needs
-/// another).
-pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>); 2], catch_up_m_s: f32, free: &mut Option<FreePass>) -> Option<Clip> {
+/// another). `only`: the frames the caller reads (a measure's: the 30 fps samples
+/// `QualityMotion::from_clip` poses); the others are placeholders, not the held dance (each frame of the held
+/// pass is posed on its own, so the frames read are the same either way). `None`: every frame.
+pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>); 2], catch_up_m_s: f32, free: &mut Option<FreePass>, only: Option<&[bool]>) -> Option<Clip> {
     use std::sync::OnceLock;
     static FIGURE: OnceLock<Character> = OnceLock::new();
     if !is_canonical(&clip.skeleton) {
@@ -81,7 +83,7 @@ pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>);
         .collect();
     let given = GivenHolds { contacts, release: Release::CatchUp { speed: catch_up_m_s } };
     let map = HumanoidMap::from_skeleton(&clip.skeleton);
-    let mut out = figure.play(clip, &map, &RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true, release_over_swing: true }, Some(&given), Some(free)).ok()?;
+    let mut out = figure.play(clip, &map, &RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true, release_over_swing: true }, Some(&given), Some(free), only).ok()?;
     out.name = clip.name.clone();
     out.source = clip.source.clone();
     Some(out)

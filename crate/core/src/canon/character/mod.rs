@@ -342,13 +342,14 @@ impl Character {
 
     /// [`Character::retarget`] with every choice spelled out (the benchmark's controls).
     pub fn retarget_options(&self, clip: &Clip, clip_map: &HumanoidMap, options: &RetargetOptions) -> Result<Clip, CharacterError> {
-        self.play(clip, clip_map, options, None, None)
+        self.play(clip, clip_map, options, None, None, None)
     }
 
     /// [`Character::retarget_options`], with the planted frames and the release given instead
     /// of read from the source ([`hold_feet_in_dance`]), and pass 0 kept in `free` (taken from
-    /// it when it holds this clip's: [`FreePass`]).
-    fn play(&self, clip: &Clip, clip_map: &HumanoidMap, options: &RetargetOptions, given: Option<&GivenHolds>, mut free: Option<&mut Option<FreePass>>) -> Result<Clip, CharacterError> {
+    /// it when it holds this clip's: [`FreePass`]). `only`: the frames the caller reads (the
+    /// rest, not posed, repeat the last posed frame's pose: placeholders, [`hold_feet_in_dance`]).
+    fn play(&self, clip: &Clip, clip_map: &HumanoidMap, options: &RetargetOptions, given: Option<&GivenHolds>, mut free: Option<&mut Option<FreePass>>, only: Option<&[bool]>) -> Result<Clip, CharacterError> {
         let transfer = options.transfer;
         let status = clip_map.status(&clip.skeleton, Some(clip));
         if let HumanoidStatus::NotHumanoid { reason } = status {
@@ -562,6 +563,16 @@ impl Character {
                 t.values.clear();
             }
             for f in 0..frames {
+                // The held pass poses each frame on its own (the plan holds what carries over
+                // from frame to frame): a frame the caller does not read is left a placeholder.
+                if pass == 1 && only.is_some_and(|o| !o.get(f).copied().unwrap_or(true)) {
+                    rotations.extend_from_slice(&local);
+                    for t in tracks.iter_mut() {
+                        let last = t.values.last().copied().unwrap_or(Vec3::ZERO);
+                        t.values.push(last);
+                    }
+                    continue;
+                }
                 let (src_rot, src_hips_now, src_pos): (&[Quat], Vec3, &[Vec3]) = match posed {
                     Some(c) => (&c.src_rotations[f * src_n..(f + 1) * src_n], c.src_hips[f], &[]),
                     None => {
