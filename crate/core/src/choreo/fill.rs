@@ -32,8 +32,9 @@
 //! the pairs of metres the song's bars join ([`super::table`]; cached by
 //! [`super::SegmentLibrary::transition_table_for`]); an open layer after an open layer reads the
 //! block from the previous bar's metre to its own. In a within-metre block a column
-//! first tries only its [`TOP_K`] cheapest edges and the previous layer's [`LOW_L`] cheapest
-//! nodes, and accepts their best when it is provably optimal: any other predecessor costs at
+//! first tries only its [`TOP_K`] cheapest edges (in increasing cost, stopping where the
+//! previous layer's cheapest node with the next edge costs more than the best found) and the
+//! previous layer's [`LOW_L`] cheapest nodes, and accepts their best when it is provably optimal: any other predecessor costs at
 //! least (the cheapest node outside that set) + (the cheapest edge outside that list).
 //! Otherwise the whole column is reduced with a vectorised minimum. Either way the result is
 //! exact.
@@ -383,6 +384,9 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
         f32::INFINITY
     };
     let k = TOP_K.min(m);
+    // The cheapest node of all: with it, a column's list (in increasing cost) stops where no
+    // later edge can beat the best found.
+    let prev_min = prev.iter().copied().fold(f32::INFINITY, f32::min);
     // The cheapest nodes' rows, streamed (vectorised).
     let mut next = vec![f32::INFINITY; m];
     let mut arg = vec![0u32; m];
@@ -410,6 +414,11 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
         // prev_rest + rest_min[b], so the best found is exact when no worse.
         let (ti, tc) = (&block.top[b * k..(b + 1) * k], &block.top_cost[b * k..(b + 1) * k]);
         for (&a, &c) in ti.iter().zip(tc) {
+            // Every later entry costs at least prev_min + c (the list rises, and a sum rounds
+            // monotonically): none can reach `best` once that is above it. Exact.
+            if prev_min + c > best {
+                break;
+            }
             let v = prev[a as usize] + c;
             if v < best || (v == best && a < best_a) {
                 best = v;
@@ -845,6 +854,60 @@ pub fn path_cost_with_tempi(table: &TransitionTable, layers: &[Layer], segment_i
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_fast_path_finds_the_plain_dynamic_programmes_path() {
+        // A library larger than the top lists (every column's list stops early where it can):
+        // pseudo-random joins, a charge far above the rest on a third of the segments (as the
+        // moves source's) and per-bar costs, against the plain programme over every pair (ties
+        // to the lowest index; none here).
+        let m = 3 * TOP_K + 17;
+        let mut x = 12345u64;
+        let mut rnd = move || {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let costs: Vec<f32> = (0..m * m).map(|_| 0.05 + 2.0 * rnd() * rnd()).collect();
+        let table = TransitionTable::from_costs(m, costs);
+        let intensity: Vec<f32> = (0..m).map(|_| rnd()).collect();
+        let n = 24;
+        let layers: Vec<Layer> = (0..n).map(|t| Layer::Open { intensity: 0.5 + 0.45 * (t as f32 / 3.0).sin() }).collect();
+        let extra: Vec<Vec<f32>> = (0..n).map(|_| (0..m).map(|s| if s % 3 == 0 { 1000.0 } else { 0.3 * rnd() }).collect()).collect();
+        let weights = FillWeights { repeat_penalty: 0.0, ..FillWeights::default() };
+        let tempi = Tempi { extra: &extra, ..Tempi::default() };
+        let (path, _, stats) = fill_with_tempi(&table, &layers, &intensity, &[], &tempi, &weights).unwrap();
+        assert!(stats.full_scans < stats.open_columns / 2, "the fast path ran: {stats:?}");
+        let node = |t: usize, b: usize| {
+            let Layer::Open { intensity: i } = layers[t] else { unreachable!() };
+            weights.music_weight * (i - intensity[b]).abs() + 0.0 + tempi.cost(&weights, t, b) + 0.0
+        };
+        let mut cur: Vec<f32> = (0..m).map(|b| node(0, b)).collect();
+        let mut back: Vec<Vec<usize>> = vec![Vec::new()];
+        for t in 1..n {
+            let (mut next, mut arg) = (vec![0.0; m], vec![0usize; m]);
+            for b in 0..m {
+                let (mut best, mut at) = (f32::INFINITY, 0);
+                for (a, p) in cur.iter().enumerate() {
+                    let v = p + table.cost(a, b);
+                    if v < best {
+                        (best, at) = (v, a);
+                    }
+                }
+                (next[b], arg[b]) = (best + node(t, b), at);
+            }
+            back.push(arg);
+            cur = next;
+        }
+        let mut b = (0..m).fold(0, |k, s| if cur[s] < cur[k] { s } else { k });
+        let mut plain = vec![0; n];
+        for t in (0..n).rev() {
+            plain[t] = b;
+            if t > 0 {
+                b = back[t][b];
+            }
+        }
+        assert_eq!(path, plain);
+    }
 
     #[test]
     fn a_bar_takes_only_segments_of_its_own_count() {
