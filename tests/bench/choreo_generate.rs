@@ -6,9 +6,10 @@
 //! library's transition table for the song's metre (cached, as in the app); the figure is the best
 //! of the calls after it; then the same call with each later stage off in turn, and the fill
 //! alone, so the figures say where the time goes; and the default against its controls in the
-//! same run (session 15's measures, session 16's default, the old pipeline's settings, windowed
-//! refills), with the default's and session 16's dances measured as played. Prints figures;
-//! asserts only that the calls agree (quick measures and the control: the same dance).
+//! same run (session 15's measures, session 17's work, session 16's default, the old pipeline's
+//! settings, windowed refills), with the default's and session 16's dances measured as played.
+//! Prints figures; asserts only that the calls agree (quick measures, session 17's work and the
+//! default: the same dance).
 //! `cargo bench -p odori-tests --bench choreo_generate` (`GENERATE_ONLY=1`: not the stages off
 //! one at a time nor the built-in library).
 
@@ -57,11 +58,11 @@ fn main() {
     };
     let control = odori_core::choreo::GenerateOptions { quick_measures: false, ..d() };
     let s16 = odori_core::choreo::GenerateOptions { join_bans_at_once: false, ..d() };
-    let s17 = odori_core::choreo::GenerateOptions { pose_read_frames_only: false, ..d() };
+    let s17 = odori_core::choreo::GenerateOptions { pose_read_frames_only: false, top_lists_stop_early: false, ..d() };
     let ((), profile) = odori_core::choreo::profile::profiled(clock_ms, || {
         run(&s17);
     });
-    println!("native:   the same, session 17's measures (every frame of each held pass posed, pose_read_frames_only off, the control):");
+    println!("native:   the same, session 17's work (every top list tried whole, every frame of each held pass posed: top_lists_stop_early and pose_read_frames_only off, the control):");
     for line in odori_tests::profile_lines(&profile) {
         println!("native:   {line}");
     }
@@ -76,7 +77,7 @@ fn main() {
     let variants = [
         ("the default (join bans at once, quick measures)", d()),
         ("session 15's measures (control)", control),
-        ("session 17's measures (every frame of each held pass posed, control)", s17),
+        ("session 17's work (top lists whole, every held frame posed; control)", s17),
         ("session 16's default (one join barred a refill, control)", s16),
         ("old pipeline (67f699e's settings)", odori_core::choreo::GenerateOptions { measure_played: false, follow_order: false, ..d() }),
         ("windowed refills", odori_core::choreo::GenerateOptions { windowed_refills: true, ..d() }),
@@ -101,7 +102,7 @@ fn main() {
         println!("native: Generate 90 bars, {label}: {ms:.0} ms, objective {c:.3} (best of 3){against}");
     }
     assert_eq!(timed[1].1, timed[0].1, "quick measures keep the dance");
-    assert_eq!(timed[2].1, timed[0].1, "posing only the frames read keeps the dance");
+    assert_eq!(timed[2].1, timed[0].1, "session 18's work keeps the dance");
     // What each dance is worth, as played (the figures stage 5 and the preference order
     // follow): the default's against session 16's, the control.
     for (k, label) in [(0, "the default"), (3, "session 16's default (control)")] {

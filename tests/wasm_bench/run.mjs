@@ -69,7 +69,7 @@ say(`Generate 90 bars from the built-in library alone (variety term on): ${genMs
 // join barred a refill), session 15's measures (quick_measures off), the old pipeline (67f699e's
 // settings) and windowed refills.
 const STAGES = ["1 fill", "2 beat rate", "3 free skate", "4 skate", "4b order", "5 join repair", "takes"];
-const VARIANTS = ["the default (join bans at once, quick measures, only the frames read posed)", "windowed refills", "session 15's measures (control)", "old pipeline (67f699e's settings)", "session 16's default (one join barred a refill, control)", "session 17's measures (every frame of each held pass posed, control)"];
+const VARIANTS = ["the default (join bans at once, quick measures, top lists stopped early, only the frames read posed)", "windowed refills", "session 15's measures (control)", "old pipeline (67f699e's settings)", "session 16's default (one join barred a refill, control)", "session 17's work (top lists whole, every held frame posed; control)"];
 for (const v of [0, 5, 4]) {
   x.generate90_profile(v);
   let all = 0, fills = 0, measures = 0;

@@ -147,7 +147,8 @@ thread_local! {
 /// The settings of variant `v`: 0 the default, 1 windowed refills, 2 session 15's measures
 /// (quick_measures off, the control), 3 the old pipeline (67f699e's settings: measured unheld,
 /// no order stage), 4 session 16's default (one join barred a refill: join_bans_at_once off), 5
-/// session 17's measures (every frame of each held pass posed: pose_read_frames_only off).
+/// session 17's work (every top list tried whole, every frame of each held pass posed:
+/// top_lists_stop_early and pose_read_frames_only off).
 fn variant(v: u32) -> GenerateOptions {
     let d = GenerateOptions::default();
     match v {
@@ -155,7 +156,7 @@ fn variant(v: u32) -> GenerateOptions {
         2 => GenerateOptions { quick_measures: false, ..d },
         3 => GenerateOptions { measure_played: false, follow_order: false, ..d },
         4 => GenerateOptions { join_bans_at_once: false, ..d },
-        5 => GenerateOptions { pose_read_frames_only: false, ..d },
+        5 => GenerateOptions { pose_read_frames_only: false, top_lists_stop_early: false, ..d },
         _ => d,
     }
 }

@@ -317,7 +317,7 @@ fn column_min(prev: &[f32], col: &[f32]) -> (f32, usize) {
 /// successors in one per metre, so each group of successors reads one block: its own group's
 /// (the fast path of the module docs) or a cross block (every pair, exact); a pair outside
 /// the table's blocks is computed (the same value, slowly).
-fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f32], arg: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats) {
+fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f32], arg: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, every_top_entry: bool) {
     let m = table.len();
     let groups = table.metres().len().max(1);
     let mut from = vec![false; groups];
@@ -338,7 +338,7 @@ fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f
             [g] if table.block(*g, h).is_some() => {
                 if let Some(block) = table.block(*g, h) {
                     if *g == h {
-                        relax_within(block, prev, node, next, arg, low, stats);
+                        relax_within(block, prev, node, next, arg, low, stats, every_top_entry);
                     } else {
                         relax_across(block, prev, node, next, arg, stats);
                     }
@@ -367,8 +367,9 @@ fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f
 }
 
 /// [`relax_open`] over a within-group block: the fast path of the module docs, on the
-/// block's own (local) indices.
-fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats) {
+/// block's own (local) indices. `every_top_entry`: the control, no list stopped early.
+#[allow(clippy::too_many_arguments)]
+fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, every_top_entry: bool) {
     let m = block.to.len();
     let prev: Vec<f32> = block.from.iter().map(|&a| prev_all[a as usize]).collect();
     // The previous layer's LOW_L cheapest nodes, and the cheapest cost outside them.
@@ -386,7 +387,7 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
     let k = TOP_K.min(m);
     // The cheapest node of all: with it, a column's list (in increasing cost) stops where no
     // later edge can beat the best found.
-    let prev_min = prev.iter().copied().fold(f32::INFINITY, f32::min);
+    let prev_min = if every_top_entry { f32::NEG_INFINITY } else { prev.iter().copied().fold(f32::INFINITY, f32::min) };
     // The cheapest nodes' rows, streamed (vectorised).
     let mut next = vec![f32::INFINITY; m];
     let mut arg = vec![0u32; m];
@@ -566,6 +567,10 @@ pub struct Tempi<'a> {
     /// The variety term ([`super::variety`]): nearby bars sharing a step, arm pattern or source
     /// clip are charged, along the path. None: no such term.
     pub variety: Option<&'a super::variety::Variety>,
+    /// Every entry of a column's top list tried, not stopping where the rest cannot win
+    /// ([`super::GenerateOptions::top_lists_stop_early`] off: session 17's fills, the control).
+    /// The same paths either way.
+    pub every_top_entry: bool,
 }
 
 impl Tempi<'_> {
@@ -689,7 +694,7 @@ pub fn fill_with_tempi(
                 let node: Vec<f32> = (0..m).map(|b| music(t, intensity, b)).collect();
                 let mut next = vec![f32::INFINITY; m];
                 let mut arg = vec![0u32; m];
-                relax_open(table, prev, &node, &mut next, &mut arg, &mut low, &mut stats);
+                relax_open(table, prev, &node, &mut next, &mut arg, &mut low, &mut stats, tempi.every_top_entry);
                 if let Some(variety) = tempi.variety {
                     variety.relax(table, &back, t, prev, &node, &mut next, &mut arg);
                 }
@@ -907,6 +912,9 @@ mod tests {
             }
         }
         assert_eq!(path, plain);
+        // Every entry tried (the control): the same path.
+        let every = Tempi { every_top_entry: true, ..tempi };
+        assert_eq!(fill_with_tempi(&table, &layers, &intensity, &[], &every, &weights).unwrap().0, plain);
     }
 
     #[test]

@@ -124,6 +124,11 @@ pub struct GenerateOptions {
     /// (`posing_only_the_frames_read_keeps_every_figure`, `dance_fixture`). Default true; false:
     /// the control (session 17's measures), which `choreo_generate` times beside it.
     pub pose_read_frames_only: bool,
+    /// Each fill's columns stop trying their cheapest predecessors where no later one can win
+    /// ([`super::fill`]'s fast path, [`Tempi::every_top_entry`]). The same paths
+    /// (`the_fast_path_finds_the_plain_dynamic_programmes_path`, `dance_fixture`). Default true;
+    /// false: the control (session 17's fills), which `choreo_generate` times beside it.
+    pub top_lists_stop_early: bool,
 }
 
 impl Default for GenerateOptions {
@@ -143,6 +148,7 @@ impl Default for GenerateOptions {
             quick_measures: true,
             join_bans_at_once: true,
             pose_read_frames_only: true,
+            top_lists_stop_early: true,
         }
     }
 }
@@ -261,6 +267,8 @@ pub struct Problem<'a> {
     pub(super) quick_measures: bool,
     /// [`GenerateOptions::pose_read_frames_only`].
     pub(super) pose_read_frames_only: bool,
+    /// [`GenerateOptions::top_lists_stop_early`].
+    top_lists_stop_early: bool,
 }
 
 impl<'a> Problem<'a> {
@@ -314,6 +322,7 @@ impl<'a> Problem<'a> {
             opened: vec![false; layers.len()],
             quick_measures: options.quick_measures,
             pose_read_frames_only: options.pose_read_frames_only,
+            top_lists_stop_early: options.top_lists_stop_early,
         };
         p.charge = p.moves_source_charge();
         p.base = p.charge.clone();
@@ -377,7 +386,7 @@ impl<'a> Problem<'a> {
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
     pub(super) fn tempi<'b>(&'b self, extra: &'b [Vec<f32>]) -> Tempi<'b> {
-        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref() }
+        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref(), every_top_entry: !self.top_lists_stop_early }
     }
 
     /// The minimum-cost path with `weights` and `extra` costs.
