@@ -335,8 +335,7 @@ pub fn foot_skate_samples(m: &QualityMotion) -> Vec<[Option<f32>; 4]> {
     let mut out = vec![[None; 4]; frames];
     for (k, &c) in FOOT_JOINTS.iter().enumerate() {
         let mut heights: Vec<f32> = (0..frames).map(|f| m.at(f, c).y).collect();
-        heights.sort_by(f32::total_cmp);
-        let floor = heights[((frames - 1) as f32 * 0.01).round() as usize];
+        let floor = nth_smallest(&mut heights, ((frames - 1) as f32 * 0.01).round() as usize);
         for f in 1..frames {
             let p = m.at(f, c);
             if crate::canon::contact::within_band(p.y - floor) {
@@ -363,6 +362,12 @@ pub fn summarize_skate(samples: &[[Option<f32>; 4]], range: std::ops::Range<usiz
 pub fn foot_skate(m: &QualityMotion) -> FootSkate {
     let s = foot_skate_samples(m);
     summarize_skate(&s, 0..s.len())
+}
+
+/// The `i`-th smallest of `v` in [`f32::total_cmp`]'s order (`v` reordered): the value sorting
+/// would put at `i` (values equal in that order are the same bits), without the sort.
+fn nth_smallest(v: &mut [f32], i: usize) -> f32 {
+    *v.select_nth_unstable_by(i, f32::total_cmp).1
 }
 
 fn percentile_sorted(v: &[f32], q: f32) -> f32 {
@@ -431,8 +436,8 @@ pub fn join_jumps(m: &QualityMotion, joins: &[usize]) -> Vec<f32> {
     let n = c.len();
     let mut inside: Vec<f32> =
         (1..n.saturating_sub(1)).filter(|&f| joins.iter().all(|&j| f.abs_diff(j) >= JOIN_CLEAR_FRAMES)).map(|f| c[f]).collect();
-    inside.sort_by(f32::total_cmp);
-    let p95 = percentile_sorted(&inside, 0.95).max(1e-6);
+    let at95 = ((inside.len().saturating_sub(1) as f32) * 0.95).round() as usize;
+    let p95 = if inside.is_empty() { 0.0 } else { nth_smallest(&mut inside, at95) }.max(1e-6);
     joins
         .iter()
         .map(|&j| {
@@ -613,6 +618,28 @@ pub fn perceptual_frames(p: &[Vec3]) -> Result<Vec<Vec3>, QualityError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_nth_smallest_is_what_sorting_puts_there() {
+        // Ties, both zeros, repeats and a long run, against the sorted slice at every index.
+        let mut x = 7u32;
+        let v: Vec<f32> = (0..500)
+            .map(|i| {
+                x = x.wrapping_mul(1664525).wrapping_add(1013904223);
+                match i % 7 {
+                    0 => 0.0,
+                    1 => -0.0,
+                    2 => 1.25,
+                    _ => (x >> 8) as f32 / (1u32 << 24) as f32 - 0.5,
+                }
+            })
+            .collect();
+        let mut sorted = v.clone();
+        sorted.sort_by(f32::total_cmp);
+        for i in 0..v.len() {
+            assert_eq!(nth_smallest(&mut v.clone(), i).to_bits(), sorted[i].to_bits(), "index {i}");
+        }
+    }
 
     /// A standing canonical figure (rest pose) translated by `offset`, one frame.
     fn rest_frame(offset: Vec3) -> Vec<Vec3> {
