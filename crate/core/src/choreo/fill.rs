@@ -317,6 +317,7 @@ fn column_min(prev: &[f32], col: &[f32]) -> (f32, usize) {
 /// successors in one per metre, so each group of successors reads one block: its own group's
 /// (the fast path of the module docs) or a cross block (every pair, exact); a pair outside
 /// the table's blocks is computed (the same value, slowly).
+#[allow(clippy::too_many_arguments)]
 fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f32], arg: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, every_top_entry: bool) {
     let m = table.len();
     let groups = table.metres().len().max(1);
