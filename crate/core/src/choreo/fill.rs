@@ -202,6 +202,19 @@ pub fn beat_rate_ladder() -> impl Iterator<Item = f32> {
     (0..12).map(|k| 0.01 * std::f32::consts::SQRT_2.powi(k))
 }
 
+/// [`beat_rate_ladder`], continued in its steps until its top weighs as much beside the fill's
+/// beat term (`beat_weight`, as [`fill_weights_for`] scaled it) as the plain ladder's top did
+/// beside the default beat term it was measured with (0.45 beside 0.3): the two terms trade
+/// against each other, so a beat term 30 times heavier (*my moves* × variety) left the plain
+/// ladder too weak to move any bar (half 1 of `choreo_my_moves`' Let's Go Fishin' stayed at
+/// 1.30 kinetic beats a count through all 12 weights). The first 12 weights are the plain
+/// ladder's, so a dance one of them brings into the band is the same.
+pub fn beat_rate_ladder_for(beat_weight: f32) -> impl Iterator<Item = f32> {
+    let scale = (beat_weight / FillWeights::default().beat_weight).max(1.0);
+    let top = 0.01 * std::f32::consts::SQRT_2.powi(11) * scale * (1.0 + 1e-4);
+    beat_rate_ladder().chain((12..64).map(|k| 0.01 * std::f32::consts::SQRT_2.powi(k)).take_while(move |&w| w <= top))
+}
+
 /// Whether a predicted kinetic beats per count is inside [`BEAT_RATE_BAND`].
 pub fn in_beat_rate_band(kinetic_per_count: f32) -> bool {
     BEAT_RATE_BAND.iter().any(|&(lo, hi)| (lo..=hi).contains(&kinetic_per_count))
@@ -996,6 +1009,24 @@ mod tests {
         assert!((c3 - 2.02).abs() < 1e-5, "{c3}");
         // With no excess anywhere the path is kept.
         assert_eq!(free_skate_pass(&table, &one, &intensity, &[], &tempi, &w, FREE_SKATE_SLACK_DEFAULT, &|_, _| 0.0, &path).0, vec![0]);
+    }
+
+    #[test]
+    fn the_beat_rate_ladder_reaches_as_far_beside_a_heavier_beat_term() {
+        let plain: Vec<f32> = beat_rate_ladder().collect();
+        // The same weights (to a few ulps: `powi` is lowered differently where it is inlined).
+        let same = |a: &[f32], b: &[f32]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-6 * y.abs());
+        // At the default beat term (or lighter): the plain ladder.
+        assert!(same(&beat_rate_ladder_for(FillWeights::default().beat_weight).collect::<Vec<_>>(), &plain));
+        assert!(same(&beat_rate_ladder_for(0.0).collect::<Vec<_>>(), &plain));
+        // Beside the product's *my moves* × variety beat term: the plain ladder first, then on
+        // in its steps to its top scaled by as much (the control: the plain top, 30 times lighter).
+        let heavy = FillWeights::default().beat_weight * MINE_BEAT_FACTOR * VARIETY_BEAT_FACTOR;
+        let long: Vec<f32> = beat_rate_ladder_for(heavy).collect();
+        assert!(long.len() > plain.len() && same(&long[..plain.len()], &plain));
+        let top = plain[plain.len() - 1] * MINE_BEAT_FACTOR * VARIETY_BEAT_FACTOR;
+        let last = long[long.len() - 1];
+        assert!(last <= top && last * std::f32::consts::SQRT_2 > top, "top {last} against {top}");
     }
 
     #[test]

@@ -7,7 +7,8 @@
 //!    clip cost more, so no kind of move dominates the dance.
 //! 2. [`beat_rate_stage`]: the dance's kinetic beats per count, measured on the rendered dance,
 //!    in [`super::BEAT_RATE_BAND`]; if not, refills with the beat-rate term at each weight of
-//!    [`beat_rate_ladder`] and keeps the first dance inside it.
+//!    [`beat_rate_ladder_for`] (the plain ladder, continued to weigh as much beside the fill's
+//!    scaled beat term) and keeps the first dance inside it.
 //! 3. [`free_skate_stage`]: foot skate where it is free ([`super::free_skate_pass`]).
 //! 4. [`skate_stage`]: the dance's foot skate no worse than its source clips'
 //!    ([`skate_goal_cm_per_s`]); if not, refills charging skate at each weight of
@@ -39,7 +40,7 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use super::fill::{
-    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder, count_rate_bpm, fill_with_tempi, free_skate_pass, path_cost_with_tempi, MovesSource, MOVES_SOURCE_CHARGE, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
+    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder_for, count_rate_bpm, fill_with_tempi, free_skate_pass, path_cost_with_tempi, MovesSource, MOVES_SOURCE_CHARGE, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
 };
 use super::notes::OFF_BEAT_MARGIN;
 use super::profile::{self, Work};
@@ -589,15 +590,17 @@ pub fn order_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions
 /// measured on the dance itself as §J measures it (the segments' own rates at the bars' count
 /// rates miss what the joins and neighbours add: 0.2 a count on slow songs). Figure: kinetic
 /// beats per count in [`super::BEAT_RATE_BAND`]. When `path`'s dance is outside it, refills with the
-/// beat-rate term at each weight of [`beat_rate_ladder`], weakest first, and returns the first
-/// dance inside it with the weights that made it; else `path` and the problem's weights.
+/// beat-rate term at each weight of [`beat_rate_ladder_for`] the fill's beat term, weakest first
+/// (the beat term weighs 30 times the default under *my moves* with variety, and the plain
+/// ladder beside it moved no bar), and returns the first dance inside it with the weights that
+/// made it; else `path` and the problem's weights.
 pub fn beat_rate_stage(p: &Problem, path: Vec<usize>, measured: &mut Measured) -> Result<(Vec<usize>, FillWeights), FillError> {
     if !p.follow_beat_rate {
         return Ok((path, p.weights));
     }
     let first = measured.of(p, &path);
     if first.is_some_and(|f| !in_beat_rate_band(f.kinetic_per_count)) {
-        for w in beat_rate_ladder() {
+        for w in beat_rate_ladder_for(p.weights.beat_weight) {
             let stronger = FillWeights { beat_rate_weight: w, ..p.weights };
             let q = p.fill(&stronger, &[])?;
             if measured.of(p, &q).is_some_and(|f| in_beat_rate_band(f.kinetic_per_count)) {

@@ -36,7 +36,7 @@ pub use generate::{bar_counts, dance_figures, played_figures, skate_goal_cm_per_
 pub use feedback::{mean_pairwise_dissimilarity, FeedbackSession, LikeTerm, CANDIDATES_PER_ROUND, TAU_DECAY};
 pub use fill::{
     bar_count_rate_bpm, beat_rate_cost, count_rate_bpm, fill, fill_with_node_costs, fill_with_stats, fill_with_tempi, free_skate_pass, node_costs, node_costs_with_skate, path_cost, path_cost_with_node_costs, path_cost_with_tempi, stretch_cost, FillError, FillStats,
-    FillWeights, Layer, MovesSource, MOVES_SOURCE_CHARGE, Tempi, TransitionTable, FREE_SKATE_SLACK_DEFAULT, BEAT_RATE_BAND, beat_rate_ladder, in_beat_rate_band, skate_ladder,
+    FillWeights, Layer, MovesSource, MOVES_SOURCE_CHARGE, Tempi, TransitionTable, FREE_SKATE_SLACK_DEFAULT, BEAT_RATE_BAND, beat_rate_ladder, beat_rate_ladder_for, in_beat_rate_band, skate_ladder,
 };
 pub use grid::{bars_from_tempo, GridError};
 pub use notes::{bar_notes, candidate_notes, mark_builtin_why, mark_repeats, Flag, FlagKind, MoveNote, NotesError};
