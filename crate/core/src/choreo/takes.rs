@@ -2,10 +2,12 @@
 //! pipeline on the objective plus a penalty on the moves the earlier takes' dances chose in each
 //! bar, the weakest penalty of [`TAKE_LADDER`] that makes it differ from each earlier take in at
 //! least [`TAKE_DIFFER`] of the open bars while its objective stays within [`TAKE_SLACK`] of the
-//! best; take 0 is the dance without it.
+//! best and it keeps what take 0 met of the beat-rate band and the join goal, measured as the
+//! dance is played (feet held, joins blended: what stages 4b and 5 and the viewer see); take 0
+//! is the dance without it.
 
 use super::fill::{in_beat_rate_band, FillError, Layer};
-use super::figures::dance_figures;
+use super::figures::{dance_figures_with, played_figures_with, DanceFigures};
 use super::profile;
 use super::generate::{builtin_why, fill_stage, stages, BuiltinWhy, GenerateOptions, Problem};
 
@@ -54,10 +56,13 @@ fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -
 /// per open bar), weakest first, the first whose shortest path differs from every earlier take
 /// in at least [`TAKE_DIFFER`] of the open bars and whose dance, after every stage, does too,
 /// with objectives within [`TAKE_SLACK`] of take 0's shortest path's, and whose kinetic beats per
-/// count stay in [`super::BEAT_RATE_BAND`] when take 0's are (and its joins within
-/// [`GenerateOptions::join_jump_goal`] when take 0's are); when none does, the last
-/// dance made within the slack (in the band, if any was) (the weakest penalty's when none is). Pinned bars never change,
-/// so they never differ. Take k runs the pipeline at least k + 1 times.
+/// count stay in [`super::BEAT_RATE_BAND`] when take 0's are and whose joins stay within
+/// [`GenerateOptions::join_jump_goal`] when take 0's do, both measured as the dance is played
+/// ([`played_figures_with`], with [`GenerateOptions::measure_played`]; unheld without it).
+/// When none does, of the dances made, the one that keeps the most of those goals (the band
+/// first, then the joins; among those missing the joins, the smoothest worst join; else the
+/// last made), or the weakest penalty's when none was made. Pinned bars never change, so they
+/// never differ. Take k runs the pipeline at least k + 1 times.
 pub fn takes(p: &mut Problem, options: &GenerateOptions, take: u32) -> Result<Vec<usize>, FillError> {
     Ok(takes_explained(p, options, take)?.0)
 }
@@ -73,19 +78,28 @@ pub fn takes_explained(p: &mut Problem, options: &GenerateOptions, take: u32) ->
     let (zero, zero_why) = take_dance(p, options, base.clone())?;
     let mut earlier: Vec<Vec<usize>> = vec![zero];
     let mut whys = vec![zero_why];
-    // A take keeps take 0's beat rate in its band (when take 0's is): measured on the dance.
-    let (lib, bars) = (p.lib, p.bars);
-    // And its joins within the goal (when take 0's are): a take of the demo piece in 3 at 126 BPM
-    // joined at 2.93 before this (take 0: 0.84).
+    // A take keeps what take 0 met of the beat-rate band and the join goal, measured as stages
+    // 4b and 5 measure (as played: the test's and the viewer's measure; a take of the demo piece
+    // in 3 at 126 BPM joined at 2.93, then 2.81, while its unheld check read take 0's goal kept).
+    let (lib, bars, quick) = (p.lib, p.bars, p.quick_measures);
+    let measure = |d: &[usize]| -> Option<DanceFigures> {
+        if options.measure_played {
+            played_figures_with(lib, bars, d, quick).map(|f| f.whole)
+        } else {
+            dance_figures_with(lib, bars, d, quick)
+        }
+    };
     let goal = options.join_jump_goal;
-    let figures0 = if take > 0 { dance_figures(lib, bars, &earlier[0]) } else { None };
+    let figures0 = if take > 0 { measure(&earlier[0]) } else { None };
     let keep_joins = figures0.is_some_and(|f| f.join_jump_max <= goal);
     let band0 = figures0.is_none_or(|f| in_beat_rate_band(f.kinetic_per_count));
-    let in_band = |d: &[usize]| dance_figures(lib, bars, d).is_none_or(|f| (!band0 || in_beat_rate_band(f.kinetic_per_count)) && (!keep_joins || f.join_jump_max <= goal));
-    let keep_band = take > 0 && (band0 || keep_joins);
+    // What a take keeps of take 0's goals: (beat-rate band, joins), each true where take 0 missed it.
+    let keeps = |f: Option<DanceFigures>| f.map_or((true, true), |f| (!band0 || in_beat_rate_band(f.kinetic_per_count), !keep_joins || f.join_jump_max <= goal));
     for _ in 0..take {
         let least = |q: &[usize], earlier: &[Vec<usize>]| earlier.iter().map(|e| differ(q, e, &open)).fold(1.0f32, f32::min);
-        let mut chosen: Option<(bool, Vec<usize>, Vec<Option<BuiltinWhy>>)> = None;
+        // The dance to fall back on: what it keeps of take 0's goals, its worst join, it.
+        #[allow(clippy::type_complexity)]
+        let mut chosen: Option<((bool, bool), f32, Vec<usize>, Vec<Option<BuiltinWhy>>)> = None;
         for f in TAKE_LADDER {
             p.base = base.clone();
             let penalty = take_penalty(p, &earlier, &open, f * per_bar);
@@ -99,18 +113,22 @@ pub fn takes_explained(p: &mut Problem, options: &GenerateOptions, take: u32) ->
                 continue;
             }
             let (dance, why) = take_dance(p, options, charged)?;
-            let banded = !keep_band || in_band(&dance);
-            let done = within(p.objective(&dance)) && least(&dance, &earlier) >= TAKE_DIFFER && banded;
-            // A dance in the band replaces one out of it, not the other way round.
-            if banded || chosen.as_ref().is_none_or(|c| !c.0) {
-                chosen = Some((banded, dance, why));
+            let figures = if band0 || keep_joins { measure(&dance) } else { None };
+            let kept = keeps(figures);
+            let join = figures.map_or(0.0, |f| f.join_jump_max);
+            let done = within(p.objective(&dance)) && least(&dance, &earlier) >= TAKE_DIFFER && kept == (true, true);
+            // A dance keeping more of take 0's goals replaces one keeping fewer (the band counts
+            // first), not the other way round; of two missing the joins, the smoother stays.
+            let better = chosen.as_ref().is_none_or(|c| kept > c.0 || (kept == c.0 && (kept.1 || join < c.1)));
+            if better {
+                chosen = Some((kept, join, dance, why));
             }
             if done {
                 break;
             }
         }
         let (dance, why) = match chosen {
-            Some((_, d, w)) => (d, w),
+            Some((_, _, d, w)) => (d, w),
             None => {
                 p.base = base.clone();
                 let penalty = take_penalty(p, &earlier, &open, TAKE_LADDER[0] * per_bar);
