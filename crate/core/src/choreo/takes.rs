@@ -1,10 +1,11 @@
 //! Another take (issue 26, [`super::generate::GenerateOptions::take`]): take k > 0 runs the whole
 //! pipeline on the objective plus a penalty on the moves the earlier takes' dances chose in each
-//! bar, the weakest penalty of [`TAKE_LADDER`] that makes it differ from each earlier take in at
-//! least [`TAKE_DIFFER`] of the open bars while its objective stays within [`TAKE_SLACK`] of the
-//! best and it keeps what take 0 met of the beat-rate band and the join goal, measured as the
-//! dance is played (feet held, joins blended: what stages 4b and 5 and the viewer see); take 0
-//! is the dance without it.
+//! bar (and on their other sides: a built-in move mirrored costs and measures the same, so it is
+//! not another move), the weakest penalty of [`TAKE_LADDER`] that makes it differ from each
+//! earlier take in at least [`TAKE_DIFFER`] of the open bars while its objective stays within
+//! [`TAKE_SLACK`] of the best, it keeps take 0's beat-rate band (when take 0 is in it) and it
+//! meets the join goal, measured as the dance is played (feet held, joins blended: what stages 4b
+//! and 5 and the viewer see); take 0 is the dance without it.
 
 use super::fill::{in_beat_rate_band, FillError, Layer};
 use super::figures::{dance_figures_with, played_figures_with, DanceFigures};
@@ -79,11 +80,12 @@ fn take_dance(p: &mut Problem, options: &GenerateOptions, base: Vec<Vec<f32>>) -
 /// Takes 0 to `take` in order (issue 26, [`GenerateOptions::take`]); returns the last. Take 0 is
 /// the pipeline on `p`. Take k > 0 adds a penalty on the move each earlier take's dance (as the
 /// whole pipeline made it) chose in each open bar: of [`TAKE_LADDER`] (times take 0's mean cost
-/// per open bar), weakest first, the first whose shortest path differs from every earlier take
-/// in at least [`TAKE_DIFFER`] of the open bars and whose dance, after every stage, does too,
+/// per open bar; also on that move's other side, [`other_sides`]), weakest first, the first whose
+/// shortest path differs from every earlier take in at least [`TAKE_DIFFER`] of the open bars
+/// (by more than a move's side) and whose dance, after every stage, does too,
 /// with objectives within [`TAKE_SLACK`] of take 0's shortest path's, and whose kinetic beats per
 /// count stay in [`super::BEAT_RATE_BAND`] when take 0's are and whose joins stay within
-/// [`GenerateOptions::join_jump_goal`] when take 0's do, both measured as the dance is played
+/// [`GenerateOptions::join_jump_goal`] (every dance's goal, §J), both measured as the dance is played
 /// ([`played_figures_with`], with [`GenerateOptions::measure_played`]; unheld without it).
 /// When none does, of the dances made, the one that keeps the most of those goals (the band
 /// first, then the joins; among those missing the joins, the smoothest worst join; else the
@@ -105,7 +107,7 @@ pub fn takes_explained(p: &mut Problem, options: &GenerateOptions, take: u32) ->
     let (zero, zero_why) = take_dance(p, options, base.clone())?;
     let mut earlier: Vec<Vec<usize>> = vec![zero];
     let mut whys = vec![zero_why];
-    // A take keeps what take 0 met of the beat-rate band and meets the join goal, measured as stages
+    // A take keeps take 0's beat-rate band and meets the join goal, measured as stages
     // 4b and 5 measure (as played: the test's and the viewer's measure; a take of the demo piece
     // in 3 at 126 BPM joined at 2.93, then 2.81, while its unheld check read take 0's goal kept).
     let (lib, bars, quick) = (p.lib, p.bars, p.quick_measures);
