@@ -172,3 +172,27 @@ pub fn takes_explained(p: &mut Problem, options: &GenerateOptions, take: u32) ->
     p.base = base;
     Ok((earlier.pop().unwrap_or_default(), whys.pop().unwrap_or_default()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_built_in_move_has_its_other_side_and_a_side_is_no_difference() {
+        let lib = SegmentLibrary::builtin();
+        let sides = other_sides(&lib);
+        for s in lib.segments().iter().filter(|s| s.builtin.is_some()) {
+            let o = sides[s.index].unwrap_or_else(|| panic!("{}: no other side", s.index));
+            let (a, b) = (s.builtin.unwrap(), lib.segments()[o].builtin.unwrap());
+            assert!(o != s.index && a.mirrored != b.mirrored && MoveInfo { mirrored: a.mirrored, ..b } == a, "{a:?} against {b:?}");
+            assert_eq!(sides[o], Some(s.index), "the other side's other side is the move");
+        }
+        // Two bars: the other side in the first, another move in the second.
+        let (s, o) = (0, sides[0].unwrap());
+        let other = (1..lib.len()).find(|&u| u != o && Some(u) != sides[o]).unwrap();
+        assert_eq!(differ(&[s, s], &[o, s], &[0, 1], &sides), 0.0);
+        assert_eq!(differ(&[s, s], &[o, other], &[0, 1], &sides), 0.5);
+        // The control: by segment alone, the other side counts as a difference.
+        assert_eq!(differ(&[s, s], &[o, s], &[0, 1], &[]), 0.5);
+    }
+}
