@@ -63,7 +63,10 @@ use odori_core::music::{analyze, AnalysisOptions, RmsEnvelope};
 /// one (`beat_rate_ladder_for`): half 1's Let's Go Fishin' at 1.20 kinetic beats a count
 /// (BAS-music 0.768 against random 0.690, join 1.19, skate 24.1 against 29.4), where all 12
 /// plain weights left stage 1's 1.28; no other dance here changed. The three left, stage by
-/// stage (`docs/benchmarks-notes-choreo.md`, 2026-11-30).
+/// stage (`docs/benchmarks-notes-choreo.md`, 2026-11-30). Then stage 4 prefers a skate refill
+/// that lands no more bars off their counts as played than the dance entering it, or keeps its
+/// BAS-music as played (§J's floor): half 1's 90→130 BPM piece 0.797 against random 0.695 (was 0.736; skate 19.9
+/// against 30.2), off this list.
 const KNOWN_MISSES: &[(&str, &str, &str, &str)] = &[
     (
         "all",
@@ -73,7 +76,6 @@ const KNOWN_MISSES: &[(&str, &str, &str, &str)] = &[
          and plays at 53.4, so stage 4's refills, charged by the prediction, keep it; 95 of the 234 imported cuts meet the skate goal alone in the bar, 25 every goal",
     ),
     ("half 1", "demo in 3, 108", "join", "join 1.58 as played (control 1.46): stage 4's skate refill enters stage 5 at 3.59; its last refill's worst joins (1.58, 1.56) are between windows of one clip in its own order"),
-    ("half 1", "demo in 4, 90→130", "random", "BAS-music 0.736 against random 0.695 + 0.05 (control 0.736): made by stage 4's skate refill (stage 1's dance 0.778, skate 48.8 → 19.2 against a goal of 31.4); stage 4b keeps no refill"),
 ];
 
 /// The person's files: every humanoid dance clip and RobotExpressive's Dance; `half` keeps

@@ -12,7 +12,8 @@
 //! 3. [`free_skate_stage`]: foot skate where it is free ([`super::free_skate_pass`]).
 //! 4. [`skate_stage`]: the dance's foot skate no worse than its source clips'
 //!    ([`skate_goal_cm_per_s`]); if not, refills charging skate at each weight of
-//!    [`skate_ladder`].
+//!    [`skate_ladder`], preferring one that lands no more bars off their counts as played or
+//!    keeps its BAS-music as played.
 //!
 //!    4b. [`order_stage`], the preference order (issue 26): under *my moves*, a bar takes a
 //!    built-in move only where the imported moves tried there miss the beat or join goal as
@@ -622,23 +623,37 @@ pub fn free_skate_stage(p: &Problem, weights: &FillWeights, path: &[usize]) -> (
 /// Figure: the dance's mean foot skate ≤ [`skate_goal_cm_per_s`]. When `path`'s dance slides
 /// more, refills charging each segment's skate above its clip's as the bar plays it at each
 /// weight of [`skate_ladder`], weakest first, and returns the first dance within the goal (and
-/// still in the beat-rate band, if `path`'s was); else `path` and `cost`.
+/// still in the beat-rate band, if `path`'s was); beat alignment being a floor (§J, §N), a dance
+/// with both more bars off their counts as played ([`PlayedBar::beat_margin`] under
+/// [`OFF_BEAT_MARGIN`]) and a lower BAS-music as played than `path`'s is returned only when no
+/// weight gives one without; else `path` and `cost`.
 pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
     let Some(before) = measured.of(p, &path).filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(p.lib, &path)) else {
         return Ok((path, cost));
     };
     let on_beat = in_beat_rate_band(before.kinetic_per_count);
+    // Beat alignment is a floor (spec §J, §N): bars landing off their counts as played (BAS-music
+    // less than OFF_BEAT_MARGIN above the half-shifted counts') and BAS-music as played, on entry.
+    let off_beat = |m: &mut Measured, q: &[usize]| m.played(p, q).map(|f| (f.bars.iter().filter(|b| b.beat_margin < OFF_BEAT_MARGIN).count(), f.bas_music));
+    let off_on_entry = off_beat(measured, &path);
     let over: Vec<Vec<f32>> = (0..p.layers.len()).map(|t| (0..p.lib.len()).map(|s| p.skate_excess(t, s).max(0.0) / 100.0).collect()).collect();
+    // The first refill within the goals that lands more bars off their counts at a lower
+    // BAS-music: kept only if no later one keeps either.
+    let mut off_the_counts: Option<(Vec<usize>, f32)> = None;
     for w in skate_ladder() {
         let extra: Vec<Vec<f32>> = over.iter().map(|v| v.iter().map(|x| w * x).collect()).collect();
         let q = p.fill(weights, &extra)?;
         let (q, c) = p.free_skate(weights, &[], &q);
         let Some(f) = measured.of(p, &q) else { continue };
         if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)) {
+            if off_on_entry.is_some_and(|(n, bas)| off_beat(measured, &q).is_none_or(|(m, b)| m > n && b < bas)) {
+                off_the_counts.get_or_insert((q, c));
+                continue;
+            }
             return Ok((q, c));
         }
     }
-    Ok((path, cost))
+    Ok(off_the_counts.unwrap_or((path, cost)))
 }
 
 /// Stage 5: joins no more abrupt than [`GenerateOptions::join_jump_goal`]
