@@ -441,7 +441,11 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       });
       // The control: the same figures at the fixed 1.3 m spacing the panel used before.
       const control = () => page.evaluate(() => {
-        const { player } = window.odori;
+        const { player, choreo } = window.odori;
+        // A late page event (e.g. the last imported file's clip selected) can end the comparison
+        // between the measure and here (seen once on WebGPU under the full suite's load): show
+        // the same candidates again rather than read a comparison that is gone.
+        if (!player.compare) choreo.showCandidates(choreo.candidates);
         const shown = player.compare;
         const fixed = { ...shown, figures: (t) => shown.figures(t).map((f, k, all) => ({ ...f, offset: [(k - (all.length - 1) / 2) * 1.3, 0, 0] })) };
         player.setCompare(fixed);
