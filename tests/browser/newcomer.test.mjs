@@ -406,7 +406,10 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       const D = join(data, "mocap");
       await importFiles(page, [join(D, "cmu-salsa/salsa_01.bvh"), join(D, "cmu-modern/005_01.bvh"), join(D, "cmu-indian/indian_04.bvh"), join(D, "cmu-martial/martial_04.bvh")], { "salsa_01.bvh": { fps: 60 } });
       await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].filter((li) => /dance segments/.test(li.textContent)).length >= 3, null, { timeout: 120000 });
-      await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready", null, { timeout: 120000 });
+      // Every file imported (each import selects its clip, which ends a comparison shown
+      // before it: the last one must not land inside the loop below), then settled.
+      await page.waitForFunction((names) => names.every((n) => window.odori.library.clips().some((c) => c.name === n)), ["salsa_01", "005_01", "indian_04", "martial_04"], { timeout: 120000 });
+      await waitSettled(page);
       // The largest pairwise overlap (intersection / the smaller box) of the figures' screen
       // boxes — each the bounding box of its joints projected by the viewer's own camera — at
       // 13 times over the bar, for the figures the player shows (`figures(t)`) or given ones.
@@ -442,14 +445,14 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
       // The control: the same figures at the fixed 1.3 m spacing the panel used before.
       const control = () => page.evaluate(() => {
         const { player, choreo } = window.odori;
-        // A late page event (e.g. the last imported file's clip selected) can end the comparison
-        // between the measure and here (seen once on WebGPU under the full suite's load): show
-        // the same candidates again rather than read a comparison that is gone.
-        if (!player.compare) choreo.showCandidates(choreo.candidates);
+        // Should a page event still end the comparison between the measure and here, the
+        // same candidates are shown again (and it is said), rather than read one that is gone.
+        let reshown = false;
+        if (!player.compare) { choreo.showCandidates(choreo.candidates); reshown = true; }
         const shown = player.compare;
         const fixed = { ...shown, figures: (t) => shown.figures(t).map((f, k, all) => ({ ...f, offset: [(k - (all.length - 1) / 2) * 1.3, 0, 0] })) };
         player.setCompare(fixed);
-        return true;
+        return reshown;
       });
       const rows = [];
       const bars = await page.evaluate(() => window.odori.choreo.view.length);
@@ -459,7 +462,7 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) {
           else await page.evaluate(() => window.odori.choreo.search());
           await page.waitForFunction(() => document.querySelector("#dance").dataset.candidates === "6");
           const laid = await measure();
-          await control();
+          if (await control()) console.log(`# ${backend}: bar ${bar + 1} ${round}: the comparison had ended before the control; shown again`);
           const fixed = await measure();
           // Back to the panel's own layout, on the same candidates (selectBar would start over).
           await page.evaluate(() => { const c = window.odori.choreo; c.showCandidates(c.candidates); });
