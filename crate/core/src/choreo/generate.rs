@@ -556,10 +556,9 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 /// meets the goals — where the charge alone kept them out of every bar an imported move fits. A refill whose feet slide past the goal the dance
 /// met makes the next one charge skate too, at the next weight of [`skate_ladder`]. When the
 /// refills end over the join goal and stage 4 kept a refill charging skate, they run again from
-/// `path` charging stage 4's weight from the first (the ladder climbs a weight a refill, so
-/// refills that drop stage 4's charge slide back past the goal and are refused: half 1's 108
-/// BPM piece in 3 of `choreo_my_moves`, whose stage 4 needed 1.6, slid 61 cm/s against 31.4
-/// in every refill barring its joins at once), and the smoother of the two is kept. The best dance that keeps what
+/// `path` charging stage 4's weight from the first refill (the ladder climbs a weight a refill,
+/// so refills that drop stage 4's charge slide back past the goal and are refused;
+/// `docs/benchmarks-notes-choreo.md`), and the smoother of the two is kept. The best dance that keeps what
 /// the first one met (beat-rate band, skate goal; a dance already past the skate goal slides no
 /// more than it did) with a better worst join is returned; else `path` and `cost`.
 pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {

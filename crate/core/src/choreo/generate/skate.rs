@@ -12,12 +12,13 @@ pub const SKATE_BAN_ROUNDS: usize = 3;
 
 /// Stage 4's measured bans, when its ladder reached no dance within the goal and `path`'s dance
 /// as played ([`played_figures`]) slides past §N's goal (its bars' source clips at the bars'
-/// pace, [`Problem::paced_source_skate_cm_per_s`]): measures it bar by bar, bars from every bar the move of each open
-/// bar sliding past its own source clip's skate at the bar's pace (§N), and
-/// refills; a refill's own sliding moves are barred in the next, up to [`SKATE_BAN_ROUNDS`]. Returns the first refill within stage 4's goal
-/// ([`skate_goal_cm_per_s`]) and §N's as played that keeps what `path`'s dance met: the beat-rate band, its bars on
-/// their counts as played or its BAS-music as played (stage 4's floor), and its worst join as
-/// played within the join goal (or no worse than it was); else `None`.
+/// pace, [`Problem::paced_source_skate_cm_per_s`]): bars from every bar the move of each open
+/// bar sliding past its own source clip's skate at the bar's pace as played, and refills; a
+/// refill's own sliding moves are barred in the next, up to [`SKATE_BAN_ROUNDS`]. Returns the
+/// first refill within stage 4's goal ([`skate_goal_cm_per_s`]) and §N's as played that keeps
+/// what `path`'s dance met: the beat-rate band, its bars on their counts as played or its
+/// BAS-music as played (stage 4's floor), and its worst join as played within the join goal
+/// (or no worse than it was); else `None`.
 pub(super) fn skate_bans(p: &Problem, weights: &FillWeights, path: &[usize], measured: &mut Measured) -> Result<Option<(Vec<usize>, f32)>, FillError> {
     let (Some(unheld), Some(played)) = (measured.of(p, path), measured.played(p, path)) else { return Ok(None) };
     // Only a dance that slides past §N's goal as played: its bars' source clips at their pace.
