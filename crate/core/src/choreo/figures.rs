@@ -51,6 +51,8 @@ pub struct PlayedBar {
     pub beat_margin: f32,
     /// The join jump at the bar's start (§J), `None` for the first bar.
     pub join_jump: Option<f32>,
+    /// The bar's mean foot skate (§J), centimetres per second.
+    pub foot_skate_cm_per_s: f32,
 }
 
 /// The dance as it is played, measured ([`played_figures`]).
@@ -100,7 +102,7 @@ pub fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], 
         (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32)
     }).collect();
     let q = super::quality::dance_quality_switched_of(&m, bars, &counts, &switches).ok()?;
-    let per_bar = q.bars.iter().map(|b| PlayedBar { beat_margin: b.beats.bas_music - b.beats.bas_music_shifted, join_jump: b.join_jump }).collect();
+    let per_bar = q.bars.iter().map(|b| PlayedBar { beat_margin: b.beats.bas_music - b.beats.bas_music_shifted, join_jump: b.join_jump, foot_skate_cm_per_s: b.foot_skate.mean_cm_per_s }).collect();
     Some(Played { whole, bas_music: q.beats.bas_music, bars: per_bar })
 }
 

@@ -13,7 +13,9 @@
 //! 4. [`skate_stage`]: the dance's foot skate no worse than its source clips'
 //!    ([`skate_goal_cm_per_s`]); if not, refills charging skate at each weight of
 //!    [`skate_ladder`], preferring one that lands no more bars off their counts as played or
-//!    keeps its BAS-music as played.
+//!    keeps its BAS-music as played; when no weight gives one, bars the moves whose bars slide
+//!    past their own source clip's skate as played and refills ([`SKATE_BAN_ROUNDS`]: the
+//!    ladder charges each move's predicted skate, which some cuts play far above).
 //!
 //!    4b. [`order_stage`], the preference order (issue 26): under *my moves*, a bar takes a
 //!    built-in move only where the imported moves tried there miss the beat or join goal as
@@ -22,7 +24,9 @@
 //!    a few refills barring the move after every join over the goal at once, kept when they
 //!    meet every goal; else bars the move after the worst join and refills, up to
 //!    [`GenerateOptions::join_repairs`] times, keeping a refill only when it improves that
-//!    join and keeps what the dance met.
+//!    join and keeps what the dance met; when that ends over the goal, the same again with
+//!    stage 4's skate charge kept from the first refill (without it refills slide back past
+//!    the skate goal and are refused), the smoother kept.
 //!
 //! Another take ([`GenerateOptions::take`], issue 26): take k > 0 runs the same stages on the
 //! objective plus a penalty on the moves the earlier takes' dances chose in each bar
@@ -52,7 +56,9 @@ pub use super::figures::{dance_figures, played_figures, DanceFigures, Measured, 
 pub use super::takes::{takes, takes_explained, MAX_TAKE, TAKE_DIFFER, TAKE_LADDER, TAKE_SLACK};
 
 mod order;
+mod skate;
 pub use order::{order_stage, ORDER_IMPORTED_FLOOR, ORDER_ROUNDS};
+pub use skate::SKATE_BAN_ROUNDS;
 use crate::bars::Bar;
 
 /// Refills the join repair tries at most by default ([`GenerateOptions::join_repairs`]).
@@ -255,6 +261,11 @@ pub struct Problem<'a> {
     follow_beat_rate: bool,
     /// Stage 3's slack ([`GenerateOptions::free_skate_slack`]).
     free_skate_slack: f32,
+    /// [`GenerateOptions::join_jump_goal`], which stage 4's bans keep.
+    join_jump_goal: f32,
+    /// The skate weight of the refill stage 4 kept (0: none), which stage 5's second run
+    /// charges ([`join_repair_stage`]).
+    skate_weight: std::cell::Cell<f32>,
     /// The variety term ([`GenerateOptions::variety_weight`]); None when off.
     variety: Option<super::variety::Variety>,
     /// Per layer, per segment: a cost every fill of this problem adds (the moves source's
@@ -320,6 +331,8 @@ impl<'a> Problem<'a> {
             beat_rate,
             follow_beat_rate,
             free_skate_slack: options.free_skate_slack,
+            join_jump_goal: options.join_jump_goal,
+            skate_weight: std::cell::Cell::new(0.0),
             variety,
             base: Vec::new(),
             charge: Vec::new(),
@@ -482,7 +495,11 @@ pub fn free_skate_stage(p: &Problem, weights: &FillWeights, path: &[usize]) -> (
 /// still in the beat-rate band, if `path`'s was); beat alignment being a floor (§J, §N), a dance
 /// with both more bars off their counts as played ([`PlayedBar::beat_margin`] under
 /// [`OFF_BEAT_MARGIN`]) and a lower BAS-music as played than `path`'s is returned only when no
-/// weight gives one without; else `path` and `cost`.
+/// weight gives one without. When no weight gives a dance within the goals, the moves whose bars
+/// slide past their own goal as played are barred and the dance refilled ([`SKATE_BAN_ROUNDS`],
+/// `generate/skate.rs`: the ladder charges a prediction that some cuts play far above, e.g.
+/// the trumpet loop of `choreo_my_moves`, 28.5 cm/s predicted, 53.4 played); else `path` and
+/// `cost`. Stage 5 may charge the weight of the refill kept ([`join_repair_stage`]).
 pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
     let Some(before) = measured.of(p, &path).filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(p.lib, &path)) else {
         return Ok((path, cost));
@@ -495,7 +512,7 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
     let over: Vec<Vec<f32>> = (0..p.layers.len()).map(|t| (0..p.lib.len()).map(|s| p.skate_excess(t, s).max(0.0) / 100.0).collect()).collect();
     // The first refill within the goals that lands more bars off their counts at a lower
     // BAS-music: kept only if no later one keeps either.
-    let mut off_the_counts: Option<(Vec<usize>, f32)> = None;
+    let mut off_the_counts: Option<(Vec<usize>, f32, f32)> = None;
     for w in skate_ladder() {
         let extra: Vec<Vec<f32>> = over.iter().map(|v| v.iter().map(|x| w * x).collect()).collect();
         let q = p.fill(weights, &extra)?;
@@ -503,13 +520,22 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
         let Some(f) = measured.of(p, &q) else { continue };
         if f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)) {
             if off_on_entry.is_some_and(|(n, bas)| off_beat(measured, &q).is_none_or(|(m, b)| m > n && b < bas)) {
-                off_the_counts.get_or_insert((q, c));
+                off_the_counts.get_or_insert((q, c, w));
                 continue;
             }
+            p.skate_weight.set(w);
             return Ok((q, c));
         }
     }
-    Ok(off_the_counts.unwrap_or((path, cost)))
+    if off_the_counts.is_none() {
+        if let Some(found) = skate::skate_bans(p, weights, &path, measured)? {
+            return Ok(found);
+        }
+    }
+    Ok(off_the_counts.map_or((path, cost), |(q, c, w)| {
+        p.skate_weight.set(w);
+        (q, c)
+    }))
 }
 
 /// Stage 5: joins no more abrupt than [`GenerateOptions::join_jump_goal`]
@@ -527,18 +553,41 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 /// ended at 5.55; `docs/benchmarks-notes-choreo.md`). Under [`MovesSource::Mine`], the bar of a barred imported move is
 /// also opened to built-in moves (the source's charge lifted there, [`Problem::lift_charge`]):
 /// the preference order of issue 26 — built-in moves fill only bars where no imported move
-/// meets the goals — where the charge alone kept them out of every bar an imported move fits. A refill whose feet slide past the goal the dance met makes the next
-/// one charge skate too, at the next weight of [`skate_ladder`]. The best dance that keeps what
+/// meets the goals — where the charge alone kept them out of every bar an imported move fits. A refill whose feet slide past the goal the dance
+/// met makes the next one charge skate too, at the next weight of [`skate_ladder`]. When the
+/// refills end over the join goal and stage 4 kept a refill charging skate, they run again from
+/// `path` charging stage 4's weight from the first refill (the ladder climbs a weight a refill,
+/// so refills that drop stage 4's charge slide back past the goal and are refused;
+/// `docs/benchmarks-notes-choreo.md`), and the smoother of the two is kept. The best dance that keeps what
 /// the first one met (beat-rate band, skate goal; a dance already past the skate goal slides no
 /// more than it did) with a better worst join is returned; else `path` and `cost`.
 pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
     if p.layers.len() < 2 {
         return Ok((path, cost));
     }
+    let why = p.why.borrow().clone();
+    let (q, c) = repairs(p, weights, options, path.clone(), cost, measured, 0.0)?;
+    let carried = p.skate_weight.get();
+    let worst = |m: &mut Measured, q: &[usize]| m.figures(p, q, options.measure_played).map_or(f32::INFINITY, |f| f.join_jump_max);
+    if carried > 0.0 && worst(measured, &q) > options.join_jump_goal {
+        let first_why = std::mem::replace(&mut *p.why.borrow_mut(), why);
+        let (r, d) = repairs(p, weights, options, path, cost, measured, carried)?;
+        if worst(measured, &r) < worst(measured, &q) {
+            return Ok((r, d));
+        }
+        *p.why.borrow_mut() = first_why;
+    }
+    Ok((q, c))
+}
+
+/// Stage 5's refills from `path`, charging skate at `carried` and heavier weights of
+/// [`skate_ladder`] ([`join_repair_stage`]): bans at once first, then one join a refill.
+#[allow(clippy::too_many_arguments)]
+fn repairs(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured, carried: f32) -> Result<(Vec<usize>, f32), FillError> {
     if options.join_bans_at_once && options.measure_played {
         let why = p.why.borrow().clone();
         let on_beat = measured.figures(p, &path, true).is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
-        let (q, c, f) = repair_pass(p, weights, options, path.clone(), cost, measured, true, options.join_repairs.min(JOIN_BANS_AT_ONCE_TRIES))?;
+        let (q, c, f) = repair_pass(p, weights, options, path.clone(), cost, measured, (true, carried), options.join_repairs.min(JOIN_BANS_AT_ONCE_TRIES))?;
         // Kept only when it meets every goal the stage follows at the goal itself (not a
         // dance past the skate goal on entry sliding no more than it did).
         let met = f.is_some_and(|f| f.join_jump_max <= options.join_jump_goal && f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)));
@@ -547,7 +596,7 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
         }
         *p.why.borrow_mut() = why;
     }
-    repair_pass(p, weights, options, path, cost, measured, false, options.join_repairs).map(|(q, c, _)| (q, c))
+    repair_pass(p, weights, options, path, cost, measured, (false, carried), options.join_repairs).map(|(q, c, _)| (q, c))
 }
 
 /// Refills [`GenerateOptions::join_bans_at_once`] tries before stage 5 falls back to one join a
@@ -555,10 +604,10 @@ pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateO
 pub const JOIN_BANS_AT_ONCE_TRIES: usize = 4;
 
 /// One pass of [`join_repair_stage`]'s refills, up to `tries`: barring the move after the worst
-/// join of the last refill, or after every join over the goal in it (`at_once`). Returns the
-/// best dance kept, its cost and its figures.
+/// join of the last refill, or after every join over the goal in it (`at_once`), each refill
+/// charging skate at least at `carried`. Returns the best dance kept, its cost and its figures.
 #[allow(clippy::too_many_arguments)]
-fn repair_pass(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured, at_once: bool, tries: usize) -> Result<(Vec<usize>, f32, Option<DanceFigures>), FillError> {
+fn repair_pass(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured, (at_once, carried): (bool, f32), tries: usize) -> Result<(Vec<usize>, f32, Option<DanceFigures>), FillError> {
     let (mut path, mut cost) = (path, cost);
     let played = options.measure_played;
     let current = measured.figures(p, &path, played);
@@ -573,8 +622,9 @@ fn repair_pass(p: &Problem, weights: &FillWeights, options: &GenerateOptions, pa
     let mut ban: Vec<Vec<f32>> = Vec::new();
     // Bars whose imported move missed the join goal, opened to built-in moves (*my moves*).
     let mut opened = vec![false; p.layers.len()];
-    let mut skate_weights = skate_ladder();
-    let mut skate_weight = 0.0f32;
+    // The skate charge carried (0, or stage 4's weight), then the ladder's heavier weights.
+    let mut skate_weights = skate_ladder().filter(|&w| w > carried);
+    let mut skate_weight = carried;
     for _ in 0..tries {
         let Some(f) = trial else { break };
         let joins_ok = f.join_jump_max <= options.join_jump_goal;
@@ -711,6 +761,7 @@ pub fn generate_with_repeats_explained(lib: &SegmentLibrary, bars: &[Bar], layer
 /// and `p.why` says why each bar the order opened was.
 pub(super) fn stages(p: &mut Problem, options: &GenerateOptions, path: Vec<usize>) -> Result<(Vec<usize>, f32), FillError> {
     let mut measured = Measured::default();
+    p.skate_weight.set(0.0);
     let (path, weights) = profile::stage("2 beat rate", || beat_rate_stage(p, path, &mut measured))?;
     let (path, cost) = profile::stage("3 free skate", || free_skate_stage(p, &weights, &path));
     let (path, cost) = if options.follow_skate { profile::stage("4 skate", || skate_stage(p, &weights, path, cost, &mut measured))? } else { (path, cost) };
