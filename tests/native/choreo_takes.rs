@@ -52,8 +52,10 @@ const KNOWN_UNDER_MARGIN: &[&str] = &["Lets_Go_Fishin"];
 /// (session 19, stage by stage): stage 1's dance joins at 2.02 as played (bar 11), stages 2–4b
 /// leave 2.04; stage 5's refills barring every join over the goal at once reach 1.43 but slide
 /// 27.0 cm/s past the skate goal of 22.5 the dance met (20.2), and the skate weights they step
-/// through (0.1–0.4) leave that dance as it was; one join a refill then keeps 1.59 (bar 5). A
-/// piece listed here whose take 0 joins within 1.5 fails (unlist it).
+/// through (0.1–0.4) leave that dance as it was; one join a refill then keeps 1.59 (bar 5).
+/// With those weights scaled beside the fill's beat term (`GenerateOptions::skate_beside_beat_term`,
+/// off by default: see its docs) take 0 joins at 1.47. A piece listed here whose take 0 joins
+/// within 1.5 fails (unlist it).
 const KNOWN_TAKE_0_JOINS: &[(&str, f32)] = &[("Vibe_Ace", 1.6)];
 
 #[test]

@@ -189,6 +189,16 @@ pub fn skate_ladder() -> impl Iterator<Item = f32> {
     (0..8).map(|k| 0.1 * 2f32.powi(k))
 }
 
+/// [`skate_ladder`] beside the fill's beat term (`beat_weight`, as [`fill_weights_for`] scaled
+/// it), for the join repair's refills with [`super::GenerateOptions::skate_beside_beat_term`]:
+/// each weight times as much as that term outweighs the default one the ladder was measured
+/// beside (0.3; at least ×1, so 0 gives the plain ladder), as [`beat_rate_ladder_for`] reaches
+/// further.
+pub fn skate_ladder_for(beat_weight: f32) -> impl Iterator<Item = f32> {
+    let scale = (beat_weight / FillWeights::default().beat_weight).max(1.0);
+    skate_ladder().map(move |w| w * scale)
+}
+
 /// The kinetic beats per count [`super::GenerateOptions::follow_beat_rate`] accepts: one turn a count or
 /// one every other count, each within 20 % (the §J goal is 25 %; the 5 % between is a margin
 /// for beats the grid's bars hold more or fewer of than 4).
