@@ -115,8 +115,8 @@ fn beat_goals(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], chosen: &[usize
 /// refills) does not find a smooth join there among the varied moves. 1.59 since the repair
 /// measures the dance as played, feet held (s14; the control still 1.47). (With the beat term ×2
 /// it was the 90 → 130 BPM ramp instead, 1.89, and the 100 BPM demo fell to 0.024 over random
-/// moves in `choreo_takes`.) Still 1.59 on 2026-11-30 (control 1.47); why, stage by stage:
-/// `choreo_takes`' `KNOWN_TAKE_0_JOINS`. At the default weight, a piece listed here that meets
+/// moves in `choreo_takes`.) Still 1.59 on 2026-11-30 (control 1.47); why, stage by stage, and
+/// the option that joins it at 1.47 (off by default): `choreo_takes`' `KNOWN_TAKE_0_JOINS`. At the default weight, a piece listed here that meets
 /// its goal (or whose control misses it) fails: unlist it.
 const KNOWN_LOST_GOALS: &[(&str, usize)] = &[("Vibe_Ace", 3)];
 

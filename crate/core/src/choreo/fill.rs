@@ -1052,6 +1052,20 @@ mod tests {
     }
 
     #[test]
+    fn the_skate_ladder_beside_a_heavier_beat_term_scales_each_weight() {
+        let plain: Vec<f32> = skate_ladder().collect();
+        // At the default beat term, lighter, or 0 (the option off): the plain ladder, bit for bit.
+        for w in [0.0, 0.1, FillWeights::default().beat_weight] {
+            assert_eq!(skate_ladder_for(w).collect::<Vec<_>>(), plain);
+        }
+        // Beside the variety term's ×3 beat term: every weight ×3 (the control: the plain one).
+        let heavy = FillWeights::default().beat_weight * VARIETY_BEAT_FACTOR;
+        let scaled: Vec<f32> = skate_ladder_for(heavy).collect();
+        assert_eq!(scaled.len(), plain.len());
+        assert!(scaled.iter().zip(&plain).all(|(s, p)| (s - p * VARIETY_BEAT_FACTOR).abs() <= 1e-6 * s && s > p), "{scaled:?}");
+    }
+
+    #[test]
     fn one_beat_weight_rule_for_moves_source_and_variety() {
         let w = FillWeights::default();
         let beat = |source: MovesSource, imported: bool, variety: bool| fill_weights_for(FillWeights { moves_source: source, ..w }, imported, variety).beat_weight;
