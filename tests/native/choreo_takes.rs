@@ -32,18 +32,30 @@ fn songs() -> Vec<(String, odori_core::music::RmsEnvelope)> {
 
 /// Pieces whose takes miss a beat goal: Let's Go Fishin', kinetic beats per count 1.44–1.51 on
 /// every take, take 0 (Generate's own dance) at 1.44 (2026-11-30; over random moves by +0.075 to
-/// +0.123 now, so only the rate misses). Why: its bars run at 88.5 counts a minute, where the
+/// +0.123, so only the rate misses). Why: its bars run at 88.5 counts a minute, where the
 /// built-in moves (made at 120) turn more often than once a count (at that rate their median is
 /// 1.27 kinetic beats a count, 74 of 420 in the band); take 0's moves predict 1.20 but the dance
 /// measures 1.44 (the joins add the rest), and stage 2's beat-rate ladder finds no dance in the
-/// band, so take 0 misses and the takes keep what take 0 met. A stage-2 matter (every dance),
-/// not the takes' rule. The ceiling for this listed miss is 1.6 (a rate of 1.6 or more fails),
-/// and its other beat goals are asserted.
+/// band, so take 0 misses and the takes keep what take 0 met. Tried in session 19 (not kept):
+/// stage 2 aiming each move's predicted rate at 1 less the offset the first measure showed
+/// (+0.235 a count) brings take 0 into the band (1.16 at the ladder's weight 0.45) but at
+/// BAS-music 0.716 against random moves' 0.753 (take 1: 1.14, 0.732): the moves slow enough
+/// there do not land on the counts, a rate traded for the beat alignment
+/// (`docs/benchmarks-notes-choreo.md`, session 19). The ceiling for this listed miss is 1.6 (a
+/// rate of 1.6 or more fails), its other beat goals are asserted, and a piece listed here whose
+/// takes all meet the goals fails (unlist it).
 const KNOWN_UNDER_MARGIN: &[&str] = &["Lets_Go_Fishin"];
 
 /// Pieces whose take 0 (Generate's own dance, tested in `choreo_variety`, whose
 /// `KNOWN_LOST_GOALS` lists it: the variety term's cost) joins over 1.5, with the ceiling of that
-/// listed miss: Vibe Ace, 1.59 (2026-11-30). Its takes 1–4 are asserted at 1.5 (1.11–1.43).
+/// listed miss: Vibe Ace, 1.59 (2026-11-30; its takes 1–4 are asserted at 1.5: 1.11–1.43). Why
+/// (session 19, stage by stage): stage 1's dance joins at 2.02 as played (bar 11), stages 2–4b
+/// leave 2.04; stage 5's refills barring every join over the goal at once reach 1.43 but slide
+/// 27.0 cm/s past the skate goal of 22.5 the dance met (20.2), and the skate weights they step
+/// through (0.1–0.4) leave that dance as it was; one join a refill then keeps 1.59 (bar 5).
+/// With those weights scaled beside the fill's beat term (`GenerateOptions::skate_beside_beat_term`,
+/// off by default: see its docs) take 0 joins at 1.47. A piece listed here whose take 0 joins
+/// within 1.5 fails (unlist it).
 const KNOWN_TAKE_0_JOINS: &[(&str, f32)] = &[("Vibe_Ace", 1.6)];
 
 #[test]
@@ -69,6 +81,9 @@ fn five_takes() -> Vec<String> {
         let (bars, beats) = (grid.bars.clone(), grid.beat_times_secs.clone());
         let random = random_moves_bas(&lib, &bars, &beats, RANDOM_MOVES_SEED_TAKES);
         let mut takes: Vec<(Vec<Option<usize>>, f32)> = Vec::new();
+        // Whether a listed miss still occurs on this piece (a list that says more than is true
+        // fails: the test then asserts what was fixed).
+        let (mut rate_missed, mut take_0_join_missed) = (false, false);
         for take in 0..5 {
             let mut doc = odori_tests::Dance::new(bars.clone());
             let report = doc.generate_with(&lib, &GenerateOptions { take, ..GenerateOptions::default() }).unwrap_or_else(|e| panic!("{label} take {take}: {e}"));
@@ -87,17 +102,25 @@ fn five_takes() -> Vec<String> {
             // piece, or any other goal missed, fails.
             let known = KNOWN_UNDER_MARGIN.iter().any(|k| label.contains(k)) && goals[0] && goals[1] && rate < 1.6;
             if bars.len() >= 3 && goals.contains(&false) && known {
+                rate_missed = true;
                 println!("  KNOWN MISS {label} take {take}: BAS-music − random {over_random:+.3} (goal +0.05), kinetic/song beats {rate:.2}");
             } else if bars.len() >= 3 && goals.contains(&false) {
                 failures.push(format!("{label} take {take}: BAS-music − random {over_random:+.3}, − shifted {over_shifted:+.3}, kinetic/song beats {rate:.2}"));
             }
             let known_join = take == 0 && KNOWN_TAKE_0_JOINS.iter().any(|&(k, ceiling)| label.contains(k) && q.join_jump_max < ceiling);
             if bars.len() >= 3 && q.join_jump_max > 1.5 && known_join {
+                take_0_join_missed = true;
                 println!("  KNOWN MISS {label} take 0: join max {:.2} (goal 1.5; Generate's own dance)", q.join_jump_max);
             } else if bars.len() >= 3 && q.join_jump_max > 1.5 {
                 failures.push(format!("{label} take {take}: join max {:.2} over 1.5", q.join_jump_max));
             }
             takes.push((chosen, report.cost));
+        }
+        if KNOWN_UNDER_MARGIN.iter().any(|k| label.contains(k)) && !rate_missed {
+            failures.push(format!("{label}: listed in KNOWN_UNDER_MARGIN, but every take meets the beat goals: unlist it"));
+        }
+        if KNOWN_TAKE_0_JOINS.iter().any(|&(k, _)| label.contains(k)) && !take_0_join_missed {
+            failures.push(format!("{label}: listed in KNOWN_TAKE_0_JOINS, but take 0 joins within 1.5: unlist it"));
         }
         let best = takes.iter().map(|t| t.1).fold(f32::INFINITY, f32::min);
         for (k, (a, cost)) in takes.iter().enumerate() {

@@ -115,7 +115,9 @@ fn beat_goals(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], chosen: &[usize
 /// refills) does not find a smooth join there among the varied moves. 1.59 since the repair
 /// measures the dance as played, feet held (s14; the control still 1.47). (With the beat term ×2
 /// it was the 90 → 130 BPM ramp instead, 1.89, and the 100 BPM demo fell to 0.024 over random
-/// moves in `choreo_takes`.)
+/// moves in `choreo_takes`.) Still 1.59 on 2026-11-30 (control 1.47); why, stage by stage, and
+/// the option that joins it at 1.47 (off by default): `choreo_takes`' `KNOWN_TAKE_0_JOINS`. At the default weight, a piece listed here that meets
+/// its goal (or whose control misses it) fails: unlist it.
 const KNOWN_LOST_GOALS: &[(&str, usize)] = &[("Vibe_Ace", 3)];
 
 #[test]
@@ -126,6 +128,13 @@ fn the_variety_term_meets_the_issue_goals_on_the_beat() {
     let (mut control_faults, mut counted) = (0, 0);
     for p in pieces(w) {
         let (on, off) = (p.on.0, p.off.0);
+        // A listed miss the dance now meets fails (at the default weight, the one the list is
+        // of): the list says only what is true.
+        for &(_, g) in KNOWN_LOST_GOALS.iter().filter(|(k, _)| w == VARIETY_WEIGHT_DEFAULT && p.label.contains(k)) {
+            if p.on.1[g] || !p.off.1[g] {
+                failures.push(format!("{}: listed in KNOWN_LOST_GOALS for '{}', which it no longer loses ({}; without the term {}): unlist it", p.label, names[g], p.on.2, p.off.2));
+            }
+        }
         for g in 0..4 {
             if p.off.1[g] && !p.on.1[g] {
                 let known = KNOWN_LOST_GOALS.iter().any(|&(k, kg)| p.label.contains(k) && kg == g);

@@ -189,6 +189,16 @@ pub fn skate_ladder() -> impl Iterator<Item = f32> {
     (0..8).map(|k| 0.1 * 2f32.powi(k))
 }
 
+/// [`skate_ladder`] beside the fill's beat term (`beat_weight`, as [`fill_weights_for`] scaled
+/// it), for the join repair's refills with [`super::GenerateOptions::skate_beside_beat_term`]:
+/// each weight times as much as that term outweighs the default one the ladder was measured
+/// beside (0.3; at least ×1, so 0 gives the plain ladder), as [`beat_rate_ladder_for`] reaches
+/// further.
+pub fn skate_ladder_for(beat_weight: f32) -> impl Iterator<Item = f32> {
+    let scale = (beat_weight / FillWeights::default().beat_weight).max(1.0);
+    skate_ladder().map(move |w| w * scale)
+}
+
 /// The kinetic beats per count [`super::GenerateOptions::follow_beat_rate`] accepts: one turn a count or
 /// one every other count, each within 20 % (the §J goal is 25 %; the 5 % between is a margin
 /// for beats the grid's bars hold more or fewer of than 4).
@@ -199,7 +209,16 @@ pub const BEAT_RATE_BAND: [(f32, f32); 2] = [(0.8, 1.2), (0.4, 0.6)];
 /// weakest that works is wanted: from about 0.1 a weight tips whole dances between kinds of
 /// move).
 pub fn beat_rate_ladder() -> impl Iterator<Item = f32> {
-    (0..12).map(|k| 0.01 * std::f32::consts::SQRT_2.powi(k))
+    beat_rate_steps().take(BEAT_RATE_RUNGS)
+}
+
+/// Rungs of the plain [`beat_rate_ladder`].
+const BEAT_RATE_RUNGS: usize = 12;
+
+/// 0.01, then each weight √2 times the last (a product, not `powi`: the same bits natively and
+/// in wasm), up to 64 weights.
+fn beat_rate_steps() -> impl Iterator<Item = f32> {
+    std::iter::successors(Some(0.01f32), |w| Some(w * std::f32::consts::SQRT_2)).take(64)
 }
 
 /// [`beat_rate_ladder`], continued in its steps until its top weighs as much beside the fill's
@@ -211,8 +230,8 @@ pub fn beat_rate_ladder() -> impl Iterator<Item = f32> {
 /// ladder's, so a dance one of them brings into the band is the same.
 pub fn beat_rate_ladder_for(beat_weight: f32) -> impl Iterator<Item = f32> {
     let scale = (beat_weight / FillWeights::default().beat_weight).max(1.0);
-    let top = 0.01 * std::f32::consts::SQRT_2.powi(11) * scale * (1.0 + 1e-4);
-    beat_rate_ladder().chain((12..64).map(|k| 0.01 * std::f32::consts::SQRT_2.powi(k)).take_while(move |&w| w <= top))
+    let top = beat_rate_ladder().last().unwrap_or(0.0) * scale * (1.0 + 1e-4);
+    beat_rate_steps().enumerate().take_while(move |&(k, w)| k < BEAT_RATE_RUNGS || w <= top).map(|(_, w)| w)
 }
 
 /// Whether a predicted kinetic beats per count is inside [`BEAT_RATE_BAND`].
@@ -1014,8 +1033,11 @@ mod tests {
     #[test]
     fn the_beat_rate_ladder_reaches_as_far_beside_a_heavier_beat_term() {
         let plain: Vec<f32> = beat_rate_ladder().collect();
-        // The same weights (to a few ulps: `powi` is lowered differently where it is inlined).
-        let same = |a: &[f32], b: &[f32]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-6 * y.abs());
+        // The same weights, bit for bit (one ladder, extended).
+        let same = |a: &[f32], b: &[f32]| a == b;
+        assert_eq!(plain.len(), 12);
+        assert_eq!(plain[0], 0.01);
+        assert!((plain[11] - 0.01 * 2f32.sqrt().powi(11)).abs() <= 1e-6 * plain[11], "{}", plain[11]);
         // At the default beat term (or lighter): the plain ladder.
         assert!(same(&beat_rate_ladder_for(FillWeights::default().beat_weight).collect::<Vec<_>>(), &plain));
         assert!(same(&beat_rate_ladder_for(0.0).collect::<Vec<_>>(), &plain));
@@ -1027,6 +1049,20 @@ mod tests {
         let top = plain[plain.len() - 1] * MINE_BEAT_FACTOR * VARIETY_BEAT_FACTOR;
         let last = long[long.len() - 1];
         assert!(last <= top && last * std::f32::consts::SQRT_2 > top, "top {last} against {top}");
+    }
+
+    #[test]
+    fn the_skate_ladder_beside_a_heavier_beat_term_scales_each_weight() {
+        let plain: Vec<f32> = skate_ladder().collect();
+        // At the default beat term, lighter, or 0 (the option off): the plain ladder, bit for bit.
+        for w in [0.0, 0.1, FillWeights::default().beat_weight] {
+            assert_eq!(skate_ladder_for(w).collect::<Vec<_>>(), plain);
+        }
+        // Beside the variety term's ×3 beat term: every weight ×3 (the control: the plain one).
+        let heavy = FillWeights::default().beat_weight * VARIETY_BEAT_FACTOR;
+        let scaled: Vec<f32> = skate_ladder_for(heavy).collect();
+        assert_eq!(scaled.len(), plain.len());
+        assert!(scaled.iter().zip(&plain).all(|(s, p)| (s - p * VARIETY_BEAT_FACTOR).abs() <= 1e-6 * s && s > p), "{scaled:?}");
     }
 
     #[test]

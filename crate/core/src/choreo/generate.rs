@@ -26,7 +26,8 @@
 //!    [`GenerateOptions::join_repairs`] times, keeping a refill only when it improves that
 //!    join and keeps what the dance met; when that ends over the goal, the same again with
 //!    stage 4's skate charge kept from the first refill (without it refills slide back past
-//!    the skate goal and are refused), the smoother kept.
+//!    the skate goal and are refused), the smoother kept. A refill sliding past the skate goal makes the next
+//!    charge skate ([`skate_ladder_for`]).
 //!
 //! Another take ([`GenerateOptions::take`], issue 26): take k > 0 runs the same stages on the
 //! objective plus a penalty on the moves the earlier takes' dances chose in each bar
@@ -45,7 +46,7 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use super::fill::{
-    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder_for, count_rate_bpm, fill_with_tempi, free_skate_pass, path_cost_with_tempi, MovesSource, MOVES_SOURCE_CHARGE, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, FillError, FillWeights, Layer, Tempi, TransitionTable,
+    bar_count_rate_bpm, beat_rate_cost, beat_rate_ladder_for, count_rate_bpm, fill_with_tempi, free_skate_pass, path_cost_with_tempi, MovesSource, MOVES_SOURCE_CHARGE, in_beat_rate_band, FREE_SKATE_SLACK_DEFAULT, node_costs_with_skate, skate_ladder, skate_ladder_for, FillError, FillWeights, Layer, Tempi, TransitionTable,
 };
 use super::notes::OFF_BEAT_MARGIN;
 use super::profile::{self, Work};
@@ -140,6 +141,14 @@ pub struct GenerateOptions {
     /// (`the_fast_path_finds_the_plain_dynamic_programmes_path`, `dance_fixture`). Default true;
     /// false: the control (session 17's fills), which `choreo_generate` times beside it.
     pub top_lists_stop_early: bool,
+    /// Stage 5, [`join_repair_stage`]: a refill sliding past the skate goal makes the next one
+    /// charge skate at weights scaled beside the fill's beat term ([`skate_ladder_for`]), not the
+    /// plain [`skate_ladder`] (0.1–0.4 moved no bar of Vibe Ace's refill beside the variety
+    /// term's ×3 beat term: its take 0 joins at 1.47 with this on, 1.59 off). Default false:
+    /// on, the control dances of `choreo_blended_cost` join over 1.5 in 4 dances, not 8, as many
+    /// as with the blended-jump term, whose test asserts fewer (`docs/benchmarks-notes-choreo.md`,
+    /// session 19).
+    pub skate_beside_beat_term: bool,
 }
 
 impl Default for GenerateOptions {
@@ -160,6 +169,7 @@ impl Default for GenerateOptions {
             join_bans_at_once: true,
             pose_read_frames_only: true,
             top_lists_stop_early: true,
+            skate_beside_beat_term: false,
         }
     }
 }
@@ -554,7 +564,8 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 /// also opened to built-in moves (the source's charge lifted there, [`Problem::lift_charge`]):
 /// the preference order of issue 26 — built-in moves fill only bars where no imported move
 /// meets the goals — where the charge alone kept them out of every bar an imported move fits. A refill whose feet slide past the goal the dance
-/// met makes the next one charge skate too, at the next weight of [`skate_ladder`]. When the
+/// met makes the next one charge skate too, at the next weight of [`skate_ladder`] (with
+/// [`GenerateOptions::skate_beside_beat_term`], of [`skate_ladder_for`] the fill's beat term). When the
 /// refills end over the join goal and stage 4 kept a refill charging skate, they run again from
 /// `path` charging stage 4's weight from the first refill (the ladder climbs a weight a refill,
 /// so refills that drop stage 4's charge slide back past the goal and are refused;
@@ -623,7 +634,7 @@ fn repair_pass(p: &Problem, weights: &FillWeights, options: &GenerateOptions, pa
     // Bars whose imported move missed the join goal, opened to built-in moves (*my moves*).
     let mut opened = vec![false; p.layers.len()];
     // The skate charge carried (0, or stage 4's weight), then the ladder's heavier weights.
-    let mut skate_weights = skate_ladder().filter(|&w| w > carried);
+    let mut skate_weights = skate_ladder_for(if options.skate_beside_beat_term { p.weights.beat_weight } else { 0.0 }).filter(|&w| w > carried);
     let mut skate_weight = carried;
     for _ in 0..tries {
         let Some(f) = trial else { break };

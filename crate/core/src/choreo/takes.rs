@@ -7,6 +7,8 @@
 //! meets the join goal, measured as the dance is played (feet held, joins blended: what stages 4b
 //! and 5 and the viewer see); take 0 is the dance without it.
 
+use std::collections::HashMap;
+
 use super::fill::{in_beat_rate_band, FillError, Layer};
 use super::figures::{dance_figures_with, played_figures_with, DanceFigures};
 use super::profile;
@@ -27,17 +29,17 @@ pub const TAKE_SLACK: f32 = 0.1;
 
 /// Per segment, its built-in move's other side (the same move led by the other side, mirrored),
 /// if the library holds it: a take of every move's other side costs what take 0 costs and
-/// measures the same, so it is the same dance to the eye, not another take.
+/// measures the same, so it is the same dance to the eye, not another take. One pass over the
+/// library into a map by move (the first segment of each), then a look-up per segment.
 fn other_sides(lib: &SegmentLibrary) -> Vec<Option<usize>> {
     let segments = lib.segments();
-    segments
-        .iter()
-        .map(|s| {
-            let info = s.builtin?;
-            let other = MoveInfo { mirrored: !info.mirrored, ..info };
-            segments.iter().find(|o| o.builtin == Some(other)).map(|o| o.index)
-        })
-        .collect()
+    let mut by_move: HashMap<MoveInfo, usize> = HashMap::new();
+    for s in segments {
+        if let Some(info) = s.builtin {
+            by_move.entry(info).or_insert(s.index);
+        }
+    }
+    segments.iter().map(|s| s.builtin.and_then(|info| by_move.get(&MoveInfo { mirrored: !info.mirrored, ..info }).copied())).collect()
 }
 
 /// The share of `open` bars in which paths `a` and `b` differ: by more than a built-in move's

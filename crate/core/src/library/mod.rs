@@ -43,7 +43,7 @@ pub const MOVES_IN_THREE: usize = 90;
 pub const STANDING_HIPS_HEIGHT: f32 = 0.935;
 
 /// What a built-in move is made of.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 pub struct MoveInfo {
     pub step: Step,

@@ -15,7 +15,7 @@ use super::pose::KeyPose;
 use crate::motion::smoothstep as smooth01;
 
 /// A leg, hip and torso pattern (the "step").
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 pub enum Step {
     StepTouch,
@@ -88,7 +88,7 @@ impl Step {
 }
 
 /// An arm pattern.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 pub enum Arms {
     Swing,
@@ -129,7 +129,7 @@ impl Arms {
 }
 
 /// Energy level: how big, deep and sharp the move is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 pub enum Energy {
     Low,
