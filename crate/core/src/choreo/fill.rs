@@ -382,8 +382,9 @@ fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f
 
 /// [`relax_open`] over a within-group block: the fast path of the module docs, on the
 /// block's own (local) indices. `stop_at_rest`: a column's list stops by the cheapest node
-/// outside the previous layer's cheapest (else by the cheapest of all: session 18's, the
-/// control).
+/// outside the previous layer's cheapest, and the cheapest rows stream vectorised
+/// ([`stream_row`]); else session 18's fills, the control (the cheapest node of all, a branch
+/// per lane): the same values either way.
 #[allow(clippy::too_many_arguments)]
 fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, stop_at_rest: bool) {
     let m = block.to.len();
@@ -413,11 +414,16 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
     for &a in low.iter() {
         let pa = prev[a as usize];
         let row = &block.rows[a as usize * m..(a as usize + 1) * m];
-        for ((n, g), &c) in next.iter_mut().zip(arg.iter_mut()).zip(row) {
-            let v = pa + c;
-            let better = v < *n;
-            *n = if better { v } else { *n };
-            *g = if better { a } else { *g };
+        if stop_at_rest {
+            stream_row(pa, a, row, &mut next, &mut arg);
+        } else {
+            // Session 18's loop (the control): a store per lane under a branch.
+            for ((n, g), &c) in next.iter_mut().zip(arg.iter_mut()).zip(row) {
+                let v = pa + c;
+                let better = v < *n;
+                *n = if better { v } else { *n };
+                *g = if better { a } else { *g };
+            }
         }
     }
     for b in 0..m {
@@ -463,6 +469,21 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
         arg_all[global] = block.from.get(best_a as usize).copied().unwrap_or(0);
     }
     stats.open_columns += m;
+}
+
+/// `next[b], arg[b] = pa + row[b], a` wherever that is less than `next[b]`, by selects on the
+/// bits (the same values as a comparison and a branch): written so, the loop vectorises, where
+/// a store per lane under a branch made it the fill's hottest loop.
+fn stream_row(pa: f32, a: u32, row: &[f32], next: &mut [f32], arg: &mut [u32]) {
+    let n = row.len().min(next.len()).min(arg.len());
+    let (row, next, arg) = (&row[..n], &mut next[..n], &mut arg[..n]);
+    for ((x, g), &c) in next.iter_mut().zip(arg.iter_mut()).zip(row) {
+        let v = pa + c;
+        // All ones where the value is kept (not less), else none.
+        let keep = u32::from(v < *x).wrapping_sub(1);
+        *x = f32::from_bits((x.to_bits() & keep) | (v.to_bits() & !keep));
+        *g = (*g & keep) | (a & !keep);
+    }
 }
 
 /// [`relax_open`] over a cross block (a metre change between the bars): every pair.
@@ -597,8 +618,9 @@ pub struct Tempi<'a> {
     /// clip are charged, along the path. None: no such term.
     pub variety: Option<&'a super::variety::Variety>,
     /// A column's top list stops by the previous layer's cheapest node, not by the cheapest
-    /// outside the nodes whose every edge is tried ([`super::GenerateOptions::top_lists_stop_at_rest`]
-    /// off: session 18's fills, the control). The same paths either way.
+    /// outside the nodes whose every edge is tried, and the cheapest rows stream with a branch
+    /// per lane ([`super::GenerateOptions::top_lists_stop_at_rest`] off: session 18's fills, the
+    /// control). The same paths either way.
     pub stop_at_cheapest: bool,
 }
 

@@ -133,9 +133,10 @@ pub struct GenerateOptions {
     /// outside the previous layer's [`super::fill::LOW_L`] cheapest (whose every edge is tried
     /// first) with the next edge costs more than the best found ([`super::fill`]'s fast path).
     /// The same paths (`the_fast_path_finds_the_plain_dynamic_programmes_path`,
-    /// `dance_fixture`). Default true; false: the control (session 18's fills, stopping by the
-    /// cheapest node of all, [`Tempi::stop_at_cheapest`]), which `choreo_generate` times beside
-    /// it.
+    /// `dance_fixture`); and each layer streams its cheapest nodes' rows vectorised. Default
+    /// true; false: the control (session 18's fills, stopping by the cheapest node of all, a
+    /// branch per lane in the stream, [`Tempi::stop_at_cheapest`]), which `choreo_generate`
+    /// times beside it.
     pub top_lists_stop_at_rest: bool,
 }
 
