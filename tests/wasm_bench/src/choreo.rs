@@ -141,14 +141,15 @@ fn host_clock() -> f64 {
 
 thread_local! {
     static PROFILE: RefCell<Option<profile::Profile>> = const { RefCell::new(None) };
-    static DANCES: RefCell<[Vec<Option<usize>>; 6]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
+    static DANCES: RefCell<[Vec<Option<usize>>; 7]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
 }
 
 /// The settings of variant `v`: 0 the default, 1 windowed refills, 2 session 15's measures
 /// (quick_measures off, the control), 3 the old pipeline (67f699e's settings: measured unheld,
 /// no order stage), 4 session 16's default (one join barred a refill: join_bans_at_once off), 5
 /// session 17's work (every top list tried whole, every frame of each held pass posed:
-/// top_lists_stop_early and pose_read_frames_only off).
+/// pose_read_frames_only off and session 18's fills), 6 session 18's work (top lists stopped by
+/// the cheapest node of all: top_lists_stop_at_rest off, today's main, the control).
 fn variant(v: u32) -> GenerateOptions {
     let d = GenerateOptions::default();
     match v {
@@ -156,7 +157,8 @@ fn variant(v: u32) -> GenerateOptions {
         2 => GenerateOptions { quick_measures: false, ..d },
         3 => GenerateOptions { measure_played: false, follow_order: false, ..d },
         4 => GenerateOptions { join_bans_at_once: false, ..d },
-        5 => GenerateOptions { pose_read_frames_only: false, top_lists_stop_early: false, ..d },
+        5 => GenerateOptions { pose_read_frames_only: false, top_lists_stop_at_rest: false, ..d },
+        6 => GenerateOptions { top_lists_stop_at_rest: false, ..d },
         _ => d,
     }
 }

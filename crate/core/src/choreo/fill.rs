@@ -32,9 +32,9 @@
 //! the pairs of metres the song's bars join ([`super::table`]; cached by
 //! [`super::SegmentLibrary::transition_table_for`]); an open layer after an open layer reads the
 //! block from the previous bar's metre to its own. In a within-metre block a column
-//! first tries only its [`TOP_K`] cheapest edges (in increasing cost, stopping where the
-//! previous layer's cheapest node with the next edge costs more than the best found) and the
-//! previous layer's [`LOW_L`] cheapest nodes, and accepts their best when it is provably optimal: any other predecessor costs at
+//! first tries the previous layer's [`LOW_L`] cheapest nodes (every edge from them, streamed)
+//! and its [`TOP_K`] cheapest edges (in increasing cost, stopping where the cheapest node
+//! outside those with the next edge costs more than the best found), and accepts their best when it is provably optimal: any other predecessor costs at
 //! least (the cheapest node outside that set) + (the cheapest edge outside that list).
 //! Otherwise the whole column is reduced with a vectorised minimum. Either way the result is
 //! exact.
@@ -350,7 +350,7 @@ fn column_min(prev: &[f32], col: &[f32]) -> (f32, usize) {
 /// (the fast path of the module docs) or a cross block (every pair, exact); a pair outside
 /// the table's blocks is computed (the same value, slowly).
 #[allow(clippy::too_many_arguments)]
-fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f32], arg: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, every_top_entry: bool) {
+fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f32], arg: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, stop_at_rest: bool) {
     let m = table.len();
     let groups = table.metres().len().max(1);
     let mut from = vec![false; groups];
@@ -371,7 +371,7 @@ fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f
             [g] if table.block(*g, h).is_some() => {
                 if let Some(block) = table.block(*g, h) {
                     if *g == h {
-                        relax_within(block, prev, node, next, arg, low, stats, every_top_entry);
+                        relax_within(block, prev, node, next, arg, low, stats, stop_at_rest);
                     } else {
                         relax_across(block, prev, node, next, arg, stats);
                     }
@@ -400,9 +400,12 @@ fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f
 }
 
 /// [`relax_open`] over a within-group block: the fast path of the module docs, on the
-/// block's own (local) indices. `every_top_entry`: the control, no list stopped early.
+/// block's own (local) indices. `stop_at_rest`: a column's list stops by the cheapest node
+/// outside the previous layer's cheapest, and the cheapest rows stream vectorised
+/// ([`stream_row`]); else session 18's fills, the control (the cheapest node of all, a branch
+/// per lane): the same values either way.
 #[allow(clippy::too_many_arguments)]
-fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, every_top_entry: bool) {
+fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, stop_at_rest: bool) {
     let m = block.to.len();
     let prev: Vec<f32> = block.from.iter().map(|&a| prev_all[a as usize]).collect();
     // The previous layer's LOW_L cheapest nodes, and the cheapest cost outside them.
@@ -418,9 +421,11 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
         f32::INFINITY
     };
     let k = TOP_K.min(m);
-    // The cheapest node of all: with it, a column's list (in increasing cost) stops where no
-    // later edge can beat the best found.
-    let prev_min = if every_top_entry { f32::NEG_INFINITY } else { prev.iter().copied().fold(f32::INFINITY, f32::min) };
+    // Where a column's list (in increasing cost) stops: once the next edge from a node outside
+    // the cheapest (those streamed below, whose every edge is tried) costs more than the best
+    // found, no later entry can win (`stop_at_rest`); session 18's bound was the cheapest node
+    // of all, which the cheapest nodes' own entries kept from stopping.
+    let prev_min = if stop_at_rest { prev_rest } else { prev.iter().copied().fold(f32::INFINITY, f32::min) };
     // The cheapest nodes' rows, streamed (vectorised).
     let mut next = vec![f32::INFINITY; m];
     let mut arg = vec![0u32; m];
@@ -428,11 +433,16 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
     for &a in low.iter() {
         let pa = prev[a as usize];
         let row = &block.rows[a as usize * m..(a as usize + 1) * m];
-        for ((n, g), &c) in next.iter_mut().zip(arg.iter_mut()).zip(row) {
-            let v = pa + c;
-            let better = v < *n;
-            *n = if better { v } else { *n };
-            *g = if better { a } else { *g };
+        if stop_at_rest {
+            stream_row(pa, a, row, &mut next, &mut arg);
+        } else {
+            // Session 18's loop (the control): a store per lane under a branch.
+            for ((n, g), &c) in next.iter_mut().zip(arg.iter_mut()).zip(row) {
+                let v = pa + c;
+                let better = v < *n;
+                *n = if better { v } else { *n };
+                *g = if better { a } else { *g };
+            }
         }
     }
     for b in 0..m {
@@ -447,18 +457,25 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
         // Then the column's cheapest edges. Any other predecessor costs at least
         // prev_rest + rest_min[b], so the best found is exact when no worse.
         let (ti, tc) = (&block.top[b * k..(b + 1) * k], &block.top_cost[b * k..(b + 1) * k]);
+        let mut tried = 0;
         for (&a, &c) in ti.iter().zip(tc) {
             // Every later entry costs at least prev_min + c (the list rises, and a sum rounds
-            // monotonically): none can reach `best` once that is above it. Exact.
+            // monotonically): none can reach `best` once that is above it. Exact. With the
+            // bound outside the cheapest nodes, a later entry from one of them can reach
+            // `best` but not below it, nor at a lower index (the stream kept the lowest index
+            // of the cheapest nodes reaching their minimum), so it is skipped too.
             if prev_min + c > best {
+                stats.early_stops += 1;
                 break;
             }
+            tried += 1;
             let v = prev[a as usize] + c;
             if v < best || (v == best && a < best_a) {
                 best = v;
                 best_a = a;
             }
         }
+        stats.top_tries += tried;
         if best > prev_rest + block.rest_min[b] {
             // Not provable from the list: the whole column, contiguous (vectorised
             // minimum, then the first predecessor reaching it).
@@ -471,6 +488,21 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
         arg_all[global] = block.from.get(best_a as usize).copied().unwrap_or(0);
     }
     stats.open_columns += m;
+}
+
+/// `next[b], arg[b] = pa + row[b], a` wherever that is less than `next[b]`, by selects on the
+/// bits (the same values as a comparison and a branch): written so, the loop vectorises, where
+/// a store per lane under a branch made it the fill's hottest loop.
+fn stream_row(pa: f32, a: u32, row: &[f32], next: &mut [f32], arg: &mut [u32]) {
+    let n = row.len().min(next.len()).min(arg.len());
+    let (row, next, arg) = (&row[..n], &mut next[..n], &mut arg[..n]);
+    for ((x, g), &c) in next.iter_mut().zip(arg.iter_mut()).zip(row) {
+        let v = pa + c;
+        // All ones where the value is kept (not less), else none.
+        let keep = u32::from(v < *x).wrapping_sub(1);
+        *x = f32::from_bits((x.to_bits() & keep) | (v.to_bits() & !keep));
+        *g = (*g & keep) | (a & !keep);
+    }
 }
 
 /// [`relax_open`] over a cross block (a metre change between the bars): every pair.
@@ -522,6 +554,10 @@ pub struct FillStats {
     pub full_scans: usize,
     /// Nodes charged for repeating a segment of their path within the window.
     pub window_charges: usize,
+    /// Top-list entries tried, and columns whose list stopped before its end (no later entry
+    /// could win).
+    pub top_tries: usize,
+    pub early_stops: usize,
 }
 
 /// A minimum-cost choice of one segment per layer. `segment_intensity[s]` is segment `s`'s
@@ -600,10 +636,11 @@ pub struct Tempi<'a> {
     /// The variety term ([`super::variety`]): nearby bars sharing a step, arm pattern or source
     /// clip are charged, along the path. None: no such term.
     pub variety: Option<&'a super::variety::Variety>,
-    /// Every entry of a column's top list tried, not stopping where the rest cannot win
-    /// ([`super::GenerateOptions::top_lists_stop_early`] off: session 17's fills, the control).
-    /// The same paths either way.
-    pub every_top_entry: bool,
+    /// A column's top list stops by the previous layer's cheapest node, not by the cheapest
+    /// outside the nodes whose every edge is tried, and the cheapest rows stream with a branch
+    /// per lane ([`super::GenerateOptions::top_lists_stop_at_rest`] off: session 18's fills, the
+    /// control). The same paths either way.
+    pub stop_at_cheapest: bool,
 }
 
 impl Tempi<'_> {
@@ -727,7 +764,7 @@ pub fn fill_with_tempi(
                 let node: Vec<f32> = (0..m).map(|b| music(t, intensity, b)).collect();
                 let mut next = vec![f32::INFINITY; m];
                 let mut arg = vec![0u32; m];
-                relax_open(table, prev, &node, &mut next, &mut arg, &mut low, &mut stats, tempi.every_top_entry);
+                relax_open(table, prev, &node, &mut next, &mut arg, &mut low, &mut stats, !tempi.stop_at_cheapest);
                 if let Some(variety) = tempi.variety {
                     variety.relax(table, &back, t, prev, &node, &mut next, &mut arg);
                 }
@@ -945,9 +982,12 @@ mod tests {
             }
         }
         assert_eq!(path, plain);
-        // Every entry tried (the control): the same path.
-        let every = Tempi { every_top_entry: true, ..tempi };
-        assert_eq!(fill_with_tempi(&table, &layers, &intensity, &[], &every, &weights).unwrap().0, plain);
+        // The lists stopped by the cheapest node of all (session 18's bound, the control): the
+        // same path, more entries tried.
+        let cheapest = Tempi { stop_at_cheapest: true, ..tempi };
+        let (control, _, control_stats) = fill_with_tempi(&table, &layers, &intensity, &[], &cheapest, &weights).unwrap();
+        assert_eq!(control, plain);
+        assert!(stats.top_tries < control_stats.top_tries, "{stats:?} against {control_stats:?}");
     }
 
     #[test]

@@ -136,11 +136,15 @@ pub struct GenerateOptions {
     /// (`posing_only_the_frames_read_keeps_every_figure`, `dance_fixture`). Default true; false:
     /// the control (session 17's measures), which `choreo_generate` times beside it.
     pub pose_read_frames_only: bool,
-    /// Each fill's columns stop trying their cheapest predecessors where no later one can win
-    /// ([`super::fill`]'s fast path, [`Tempi::every_top_entry`]). The same paths
-    /// (`the_fast_path_finds_the_plain_dynamic_programmes_path`, `dance_fixture`). Default true;
-    /// false: the control (session 17's fills), which `choreo_generate` times beside it.
-    pub top_lists_stop_early: bool,
+    /// Each fill's columns stop trying their cheapest predecessors once the cheapest node
+    /// outside the previous layer's [`super::fill::LOW_L`] cheapest (whose every edge is tried
+    /// first) with the next edge costs more than the best found ([`super::fill`]'s fast path).
+    /// The same paths (`the_fast_path_finds_the_plain_dynamic_programmes_path`,
+    /// `dance_fixture`); and each layer streams its cheapest nodes' rows vectorised. Default
+    /// true; false: the control (session 18's fills, stopping by the cheapest node of all, a
+    /// branch per lane in the stream, [`Tempi::stop_at_cheapest`]), which `choreo_generate`
+    /// times beside it.
+    pub top_lists_stop_at_rest: bool,
     /// Stage 5, [`join_repair_stage`]: a refill sliding past the skate goal makes the next one
     /// charge skate at weights scaled beside the fill's beat term ([`skate_ladder_for`]), not the
     /// plain [`skate_ladder`] (0.1–0.4 moved no bar of Vibe Ace's refill beside the variety
@@ -168,7 +172,7 @@ impl Default for GenerateOptions {
             quick_measures: true,
             join_bans_at_once: true,
             pose_read_frames_only: true,
-            top_lists_stop_early: true,
+            top_lists_stop_at_rest: true,
             skate_beside_beat_term: false,
         }
     }
@@ -293,8 +297,8 @@ pub struct Problem<'a> {
     pub(super) quick_measures: bool,
     /// [`GenerateOptions::pose_read_frames_only`].
     pub(super) pose_read_frames_only: bool,
-    /// [`GenerateOptions::top_lists_stop_early`].
-    top_lists_stop_early: bool,
+    /// [`GenerateOptions::top_lists_stop_at_rest`].
+    top_lists_stop_at_rest: bool,
 }
 
 impl<'a> Problem<'a> {
@@ -350,7 +354,7 @@ impl<'a> Problem<'a> {
             opened: vec![false; layers.len()],
             quick_measures: options.quick_measures,
             pose_read_frames_only: options.pose_read_frames_only,
-            top_lists_stop_early: options.top_lists_stop_early,
+            top_lists_stop_at_rest: options.top_lists_stop_at_rest,
         };
         p.charge = p.moves_source_charge();
         p.base = p.charge.clone();
@@ -414,7 +418,7 @@ impl<'a> Problem<'a> {
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
     pub(super) fn tempi<'b>(&'b self, extra: &'b [Vec<f32>]) -> Tempi<'b> {
-        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref(), every_top_entry: !self.top_lists_stop_early }
+        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref(), stop_at_cheapest: !self.top_lists_stop_at_rest }
     }
 
     /// The minimum-cost path with `weights` and `extra` costs.

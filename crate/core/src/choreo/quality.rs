@@ -353,9 +353,11 @@ pub fn summarize_skate(samples: &[[Option<f32>; 4]], range: std::ops::Range<usiz
     if v.is_empty() {
         return FootSkate::default();
     }
+    // Sorted for the mean: summed in rising order, as its figures (and the dances that follow
+    // them, `dance_fixture`) have been measured.
     v.sort_by(f32::total_cmp);
     let mean = v.iter().sum::<f32>() / v.len() as f32;
-    FootSkate { mean_cm_per_s: mean, p95_cm_per_s: percentile_sorted(&v, 0.95), contacts: v.len() }
+    FootSkate { mean_cm_per_s: mean, p95_cm_per_s: percentile_select(&mut v, 0.95), contacts: v.len() }
 }
 
 /// Foot skate over the whole motion.
@@ -370,11 +372,15 @@ fn nth_smallest(v: &mut [f32], i: usize) -> f32 {
     *v.select_nth_unstable_by(i, f32::total_cmp).1
 }
 
-fn percentile_sorted(v: &[f32], q: f32) -> f32 {
+/// The `q` quantile of `v` (0 when empty; `v` reordered): the value sorting would put at
+/// `round((len − 1) · q)`, selected ([`nth_smallest`]). The one percentile rule of the foot
+/// skate's and the join jumps' 95th percentiles.
+fn percentile_select(v: &mut [f32], q: f32) -> f32 {
     if v.is_empty() {
         return 0.0;
     }
-    v[(((v.len() - 1) as f32) * q).round() as usize]
+    let i = ((v.len() - 1) as f32 * q).round() as usize;
+    nth_smallest(v, i)
 }
 
 /// EDGE's Physical Foot Contact score ×10⁴ (lower is better): the mean over frames of
@@ -436,8 +442,7 @@ pub fn join_jumps(m: &QualityMotion, joins: &[usize]) -> Vec<f32> {
     let n = c.len();
     let mut inside: Vec<f32> =
         (1..n.saturating_sub(1)).filter(|&f| joins.iter().all(|&j| f.abs_diff(j) >= JOIN_CLEAR_FRAMES)).map(|f| c[f]).collect();
-    let at95 = ((inside.len().saturating_sub(1) as f32) * 0.95).round() as usize;
-    let p95 = if inside.is_empty() { 0.0 } else { nth_smallest(&mut inside, at95) }.max(1e-6);
+    let p95 = percentile_select(&mut inside, 0.95).max(1e-6);
     joins
         .iter()
         .map(|&j| {
@@ -639,6 +644,16 @@ mod tests {
         for i in 0..v.len() {
             assert_eq!(nth_smallest(&mut v.clone(), i).to_bits(), sorted[i].to_bits(), "index {i}");
         }
+        // The percentile: the sorted slice at round((len − 1) · q), on every length to 500.
+        for len in 1..=v.len() {
+            let mut s = v[..len].to_vec();
+            s.sort_by(f32::total_cmp);
+            for q in [0.01f32, 0.5, 0.95] {
+                let want = s[((len - 1) as f32 * q).round() as usize];
+                assert_eq!(percentile_select(&mut v[..len].to_vec(), q).to_bits(), want.to_bits(), "len {len}, q {q}");
+            }
+        }
+        assert_eq!(percentile_select(&mut [], 0.95), 0.0);
     }
 
     /// A standing canonical figure (rest pose) translated by `offset`, one frame.
