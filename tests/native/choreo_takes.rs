@@ -46,17 +46,14 @@ fn songs() -> Vec<(String, odori_core::music::RmsEnvelope)> {
 /// takes all meet the goals fails (unlist it).
 const KNOWN_UNDER_MARGIN: &[&str] = &["Lets_Go_Fishin"];
 
-/// Pieces whose take 0 (Generate's own dance, tested in `choreo_variety`, whose
-/// `KNOWN_LOST_GOALS` lists it: the variety term's cost) joins over 1.5, with the ceiling of that
-/// listed miss: Vibe Ace, 1.59 (2026-11-30; its takes 1–4 are asserted at 1.5: 1.11–1.43). Why
-/// (session 19, stage by stage): stage 1's dance joins at 2.02 as played (bar 11), stages 2–4b
-/// leave 2.04; stage 5's refills barring every join over the goal at once reach 1.43 but slide
-/// 27.0 cm/s past the skate goal of 22.5 the dance met (20.2), and the skate weights they step
-/// through (0.1–0.4) leave that dance as it was; one join a refill then keeps 1.59 (bar 5).
-/// With those weights scaled beside the fill's beat term (`GenerateOptions::skate_beside_beat_term`,
-/// off by default: see its docs) take 0 joins at 1.47. A piece listed here whose take 0 joins
-/// within 1.5 fails (unlist it).
-const KNOWN_TAKE_0_JOINS: &[(&str, f32)] = &[("Vibe_Ace", 1.6)];
+/// Pieces whose take 0 (Generate's own dance, tested in `choreo_variety`) joins over 1.5, with
+/// the ceiling of that listed miss. None since session 19: Vibe Ace's take 0 joined at 1.59
+/// (stage 5's refills barring every rough join at once reached 1.43 but slid past the skate goal
+/// the dance met, and the plain skate weights 0.1–0.4 moved no bar beside the variety term's ×3
+/// beat term); with those weights scaled beside the fill's beat term
+/// (`GenerateOptions::skate_beside_beat_term`, on) it joins at 1.47. A piece listed here whose
+/// take 0 joins within 1.5 fails (unlist it).
+const KNOWN_TAKE_0_JOINS: &[(&str, f32)] = &[];
 
 #[test]
 fn five_takes_differ_in_half_the_bars_at_comparable_cost_on_the_beat_with_smooth_joins() {

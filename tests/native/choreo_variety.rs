@@ -110,15 +110,12 @@ fn beat_goals(lib: &SegmentLibrary, bars: &[Bar], beats: &[f32], chosen: &[usize
     (goals, format!("BAS-music {:.3} (random {random:.3}, shifted {:.3}), beat rate {rate:.2}, join max {:.2}", q.beats.bas_music, q.beats.bas_music_shifted, q.join_jump_max))
 }
 
-/// Pieces where the term loses a beat goal the control meets: Vibe Ace joins at 1.57 with the
-/// term (the control 1.47; 2026-11-29, beat term ×3 while the term is on): the join repair (16
-/// refills) does not find a smooth join there among the varied moves. 1.59 since the repair
-/// measures the dance as played, feet held (s14; the control still 1.47). (With the beat term ×2
-/// it was the 90 → 130 BPM ramp instead, 1.89, and the 100 BPM demo fell to 0.024 over random
-/// moves in `choreo_takes`.) Still 1.59 on 2026-11-30 (control 1.47); why, stage by stage, and
-/// the option that joins it at 1.47 (off by default): `choreo_takes`' `KNOWN_TAKE_0_JOINS`. At the default weight, a piece listed here that meets
-/// its goal (or whose control misses it) fails: unlist it.
-const KNOWN_LOST_GOALS: &[(&str, usize)] = &[("Vibe_Ace", 3)];
+/// Pieces where the term loses a beat goal the control meets. None since session 19: Vibe Ace
+/// joined at 1.59 with the term (the control 1.47; listed since 2026-11-29) until stage 5's skate
+/// weights were scaled beside the fill's beat term (`GenerateOptions::skate_beside_beat_term`):
+/// 1.47 now. At the default weight, a piece listed here that meets its goal (or whose control
+/// misses it) fails: unlist it.
+const KNOWN_LOST_GOALS: &[(&str, usize)] = &[];
 
 #[test]
 fn the_variety_term_meets_the_issue_goals_on_the_beat() {

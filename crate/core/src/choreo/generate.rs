@@ -148,10 +148,10 @@ pub struct GenerateOptions {
     /// Stage 5, [`join_repair_stage`]: a refill sliding past the skate goal makes the next one
     /// charge skate at weights scaled beside the fill's beat term ([`skate_ladder_for`]), not the
     /// plain [`skate_ladder`] (0.1–0.4 moved no bar of Vibe Ace's refill beside the variety
-    /// term's ×3 beat term: its take 0 joins at 1.47 with this on, 1.59 off). Default false:
-    /// on, the control dances of `choreo_blended_cost` join over 1.5 in 4 dances, not 8, as many
-    /// as with the blended-jump term, whose test asserts fewer (`docs/benchmarks-notes-choreo.md`,
-    /// session 19).
+    /// term's ×3 beat term: its take 0 joins at 1.47 with this on, 1.59 off). Default true
+    /// (session 19, with stage 5's carried skate charge: `choreo_blended_cost`'s control dances
+    /// join over 1.5 in 5 of 64, the blended-jump term's in 4); false: the plain ladder, the
+    /// control (`docs/benchmarks-notes-choreo.md`, session 19).
     pub skate_beside_beat_term: bool,
 }
 
@@ -173,7 +173,7 @@ impl Default for GenerateOptions {
             join_bans_at_once: true,
             pose_read_frames_only: true,
             top_lists_stop_at_rest: true,
-            skate_beside_beat_term: false,
+            skate_beside_beat_term: true,
         }
     }
 }
