@@ -735,8 +735,9 @@ pub fn generate_explained(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], 
 /// Generate where the song's sections repeat (issue 26 item 2: a repeated section may take the
 /// same moves, as real choreography does). `repeat_of[t]` is the earlier bar bar t repeats
 /// (`music::Sections::repeat_of_bars`; empty or all `None`: [`generate`] as it is). The pipeline
-/// runs once; then every open bar that repeats an open bar, and the bar it repeats, are pinned
-/// to the move that bar took, and the pipeline runs again for the other bars, so the bars
+/// runs once; then every open bar that repeats a bar, and the bar it repeats, are pinned to the
+/// move that bar took (its pin, when the person pinned it: a marked repeat of a pinned bar
+/// repeats the pin), and the pipeline runs again for the other bars, so the bars
 /// around a repeated section join it. Returns the dance, its objective on `layers` (the repeat
 /// is charged nothing beyond what the moves cost: a repeated section pays its repeat window and
 /// variety as any other bars) and, per bar, the bar whose move it repeats.
@@ -750,14 +751,21 @@ pub fn generate_with_repeats(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer
 pub fn generate_with_repeats_explained(lib: &SegmentLibrary, bars: &[Bar], layers: &[Layer], weights: FillWeights, options: &GenerateOptions, repeat_of: &[Option<usize>]) -> Result<(Vec<usize>, f32, Vec<Option<usize>>, Vec<Option<BuiltinWhy>>), FillError> {
     let (first, cost, first_why) = generate_explained(lib, bars, layers, weights, options)?;
     let open = |t: usize| matches!(layers.get(t), Some(Layer::Open { .. }));
-    let repeats: Vec<Option<usize>> = (0..layers.len()).map(|t| repeat_of.get(t).copied().flatten().filter(|&r| r < t && open(t) && open(r))).collect();
+    let repeats: Vec<Option<usize>> = (0..layers.len()).map(|t| repeat_of.get(t).copied().flatten().filter(|&r| r < t && open(t) && r < layers.len())).collect();
     if repeats.iter().all(Option::is_none) {
         return Ok((first, cost, repeats, first_why));
     }
     let mut pinned = layers.to_vec();
     for (t, &r) in repeats.iter().enumerate() {
         let Some(r) = r else { continue };
-        let Some(&segment) = first.get(r) else { continue };
+        // A pinned first occurrence is repeated with its pin.
+        let segment = match layers[r] {
+            Layer::Fixed { segment } => segment,
+            Layer::Open { .. } => match first.get(r) {
+                Some(&s) => s,
+                None => continue,
+            },
+        };
         pinned[t] = Layer::Fixed { segment };
         pinned[r] = Layer::Fixed { segment };
     }
@@ -1072,6 +1080,26 @@ mod tests {
         let pinned = builtin[0];
         layers[3] = Layer::Fixed { segment: pinned };
         assert_eq!(dance(MovesSource::Mine, &layers)[3], pinned);
+    }
+
+    #[test]
+    fn a_bar_repeating_a_pinned_bar_takes_the_pin() {
+        let lib = crate::choreo::segment::tests::small_library_with_an_imported_clip();
+        let bars = bars_at(100.0);
+        let n = bars.len();
+        let opts = GenerateOptions::default();
+        let mut layers = open_layers(&bars);
+        let free = generate(&lib, &bars, &layers, FillWeights::default(), &opts).unwrap().0;
+        // Bar 0 pinned to a move the free dance does not put last; the last bar repeats bar 0.
+        let pin = (0..lib.len()).find(|&s| s != free[n - 1]).unwrap();
+        layers[0] = Layer::Fixed { segment: pin };
+        let mut repeat_of = vec![None; n];
+        repeat_of[n - 1] = Some(0);
+        let (path, _, repeats) = generate_with_repeats(&lib, &bars, &layers, FillWeights::default(), &opts, &repeat_of).unwrap();
+        assert_eq!((path[0], path[n - 1], repeats[n - 1]), (pin, pin, Some(0)), "{path:?}");
+        // The control: without the repeat the last bar is filled freely (not the pin here).
+        let plain = generate(&lib, &bars, &layers, FillWeights::default(), &opts).unwrap().0;
+        assert_ne!(plain[n - 1], pin, "the control already ends on the pin: {plain:?}");
     }
 
     #[test]
