@@ -277,9 +277,6 @@ pub struct Problem<'a> {
     free_skate_slack: f32,
     /// [`GenerateOptions::join_jump_goal`], which stage 4's bans keep.
     join_jump_goal: f32,
-    /// The skate weight of the refill stage 4 kept (0: none), which stage 5's second run
-    /// charges ([`join_repair_stage`]).
-    skate_weight: std::cell::Cell<f32>,
     /// The variety term ([`GenerateOptions::variety_weight`]); None when off.
     variety: Option<super::variety::Variety>,
     /// Per layer, per segment: a cost every fill of this problem adds (the moves source's
@@ -346,7 +343,6 @@ impl<'a> Problem<'a> {
             follow_beat_rate,
             free_skate_slack: options.free_skate_slack,
             join_jump_goal: options.join_jump_goal,
-            skate_weight: std::cell::Cell::new(0.0),
             variety,
             base: Vec::new(),
             charge: Vec::new(),
@@ -513,10 +509,11 @@ pub fn free_skate_stage(p: &Problem, weights: &FillWeights, path: &[usize]) -> (
 /// slide past their own goal as played are barred and the dance refilled ([`SKATE_BAN_ROUNDS`],
 /// `generate/skate.rs`: the ladder charges a prediction that some cuts play far above, e.g.
 /// the trumpet loop of `choreo_my_moves`, 28.5 cm/s predicted, 53.4 played); else `path` and
-/// `cost`. Stage 5 may charge the weight of the refill kept ([`join_repair_stage`]).
-pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
+/// `cost`. Also returns the skate weight of the ladder's refill kept (0: none), which stage 5
+/// may charge ([`join_repair_stage`]'s `carried`).
+pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32, f32), FillError> {
     let Some(before) = measured.of(p, &path).filter(|f| f.foot_skate_cm_per_s > skate_goal_cm_per_s(p.lib, &path)) else {
-        return Ok((path, cost));
+        return Ok((path, cost, 0.0));
     };
     let on_beat = in_beat_rate_band(before.kinetic_per_count);
     // Beat alignment is a floor (spec §J, §N): bars landing off their counts as played (BAS-music
@@ -537,19 +534,15 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
                 off_the_counts.get_or_insert((q, c, w));
                 continue;
             }
-            p.skate_weight.set(w);
-            return Ok((q, c));
+            return Ok((q, c, w));
         }
     }
     if off_the_counts.is_none() {
-        if let Some(found) = skate::skate_bans(p, weights, &path, measured)? {
-            return Ok(found);
+        if let Some((q, c)) = skate::skate_bans(p, weights, &path, measured)? {
+            return Ok((q, c, 0.0));
         }
     }
-    Ok(off_the_counts.map_or((path, cost), |(q, c, w)| {
-        p.skate_weight.set(w);
-        (q, c)
-    }))
+    Ok(off_the_counts.unwrap_or((path, cost, 0.0)))
 }
 
 /// Stage 5: joins no more abrupt than [`GenerateOptions::join_jump_goal`]
@@ -570,19 +563,18 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 /// meets the goals — where the charge alone kept them out of every bar an imported move fits. A refill whose feet slide past the goal the dance
 /// met makes the next one charge skate too, at the next weight of [`skate_ladder`] (with
 /// [`GenerateOptions::skate_beside_beat_term`], of [`skate_ladder_for`] the fill's beat term). When the
-/// refills end over the join goal and stage 4 kept a refill charging skate, they run again from
-/// `path` charging stage 4's weight from the first refill (the ladder climbs a weight a refill,
+/// refills end over the join goal and stage 4 kept a refill charging skate (`carried`, its weight
+/// from [`skate_stage`]), they run again from `path` charging that weight from the first refill (the ladder climbs a weight a refill,
 /// so refills that drop stage 4's charge slide back past the goal and are refused;
 /// `docs/benchmarks-notes-choreo.md`), and the smoother of the two is kept. The best dance that keeps what
 /// the first one met (beat-rate band, skate goal; a dance already past the skate goal slides no
 /// more than it did) with a better worst join is returned; else `path` and `cost`.
-pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
+pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, carried: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
     if p.layers.len() < 2 {
         return Ok((path, cost));
     }
     let why = p.why.borrow().clone();
     let (q, c) = repairs(p, weights, options, path.clone(), cost, measured, 0.0)?;
-    let carried = p.skate_weight.get();
     let worst = |m: &mut Measured, q: &[usize]| m.figures(p, q, options.measure_played).map_or(f32::INFINITY, |f| f.join_jump_max);
     if carried > 0.0 && worst(measured, &q) > options.join_jump_goal {
         let first_why = std::mem::replace(&mut *p.why.borrow_mut(), why);
@@ -784,10 +776,9 @@ pub fn generate_with_repeats_explained(lib: &SegmentLibrary, bars: &[Bar], layer
 /// and `p.why` says why each bar the order opened was.
 pub(super) fn stages(p: &mut Problem, options: &GenerateOptions, path: Vec<usize>) -> Result<(Vec<usize>, f32), FillError> {
     let mut measured = Measured::default();
-    p.skate_weight.set(0.0);
     let (path, weights) = profile::stage("2 beat rate", || beat_rate_stage(p, path, &mut measured))?;
     let (path, cost) = profile::stage("3 free skate", || free_skate_stage(p, &weights, &path));
-    let (path, cost) = if options.follow_skate { profile::stage("4 skate", || skate_stage(p, &weights, path, cost, &mut measured))? } else { (path, cost) };
+    let (path, cost, carried) = if options.follow_skate { profile::stage("4 skate", || skate_stage(p, &weights, path, cost, &mut measured))? } else { (path, cost, 0.0) };
     let (order_path, order, why) = profile::stage("4b order", || order_stage(p, &weights, options, path.clone(), &mut measured))?;
     let (base, opened) = (p.base.clone(), p.opened.clone());
     if !order.is_empty() {
@@ -800,7 +791,7 @@ pub(super) fn stages(p: &mut Problem, options: &GenerateOptions, path: Vec<usize
     }
     *p.why.borrow_mut() = why;
     let cost = if order_path == path { cost } else { path_cost_with_tempi(&p.table, p.layers, &p.intensity, &p.node_cost, &p.tempi(&p.base), &weights, &order_path) };
-    let out = if options.follow_joins { profile::stage("5 join repair", || join_repair_stage(p, &weights, options, order_path, cost, &mut measured)) } else { Ok((order_path, cost)) };
+    let out = if options.follow_joins { profile::stage("5 join repair", || join_repair_stage(p, &weights, options, order_path, cost, carried, &mut measured)) } else { Ok((order_path, cost)) };
     (p.base, p.opened) = (base, opened);
     out
 }
@@ -952,11 +943,11 @@ mod tests {
         let before = m.of(&p, &sliding).unwrap();
         let goal = skate_goal_cm_per_s(&lib, &sliding);
         assert!(before.foot_skate_cm_per_s > goal, "the control does not slide past its goal: {before:?} against {goal}");
-        let (q, _) = skate_stage(&p, &p.weights, sliding.clone(), 0.0, &mut m).unwrap();
+        let (q, _, _) = skate_stage(&p, &p.weights, sliding.clone(), 0.0, &mut m).unwrap();
         let after = m.of(&p, &q).unwrap();
         assert!(after.foot_skate_cm_per_s <= skate_goal_cm_per_s(&lib, &q), "{after:?}");
         // A dance within the goal is left as it is (its cost too).
-        let (same, c) = skate_stage(&p, &p.weights, q.clone(), 7.0, &mut m).unwrap();
+        let (same, c, _) = skate_stage(&p, &p.weights, q.clone(), 7.0, &mut m).unwrap();
         assert_eq!((same, c), (q, 7.0));
     }
 
@@ -972,17 +963,17 @@ mod tests {
         let path = fill_stage(&p).unwrap();
         let f = m.of(&p, &path).unwrap();
         assert!(f.join_jump_max <= opts.join_jump_goal, "{f:?}");
-        let (same, _) = join_repair_stage(&p, &p.weights, &opts, path.clone(), 0.0, &mut m).unwrap();
+        let (same, _) = join_repair_stage(&p, &p.weights, &opts, path.clone(), 0.0, 0.0, &mut m).unwrap();
         assert_eq!(same, path);
         // A strict goal (below what this dance has) makes it look for smoother joins: the dance
         // it returns has a smaller worst join than the one it was given, or is that one.
         let strict = GenerateOptions { join_jump_goal: f.join_jump_max * 0.5, ..opts };
-        let (q, _) = join_repair_stage(&p, &p.weights, &strict, path.clone(), 0.0, &mut m).unwrap();
+        let (q, _) = join_repair_stage(&p, &p.weights, &strict, path.clone(), 0.0, 0.0, &mut m).unwrap();
         let g = m.of(&p, &q).unwrap();
         assert!(q == path || g.join_jump_max < f.join_jump_max, "{g:?} against {f:?}");
         // No tries: nothing changes.
         let none = GenerateOptions { join_repairs: 0, ..strict };
-        assert_eq!(join_repair_stage(&p, &p.weights, &none, path.clone(), 0.0, &mut m).unwrap().0, path);
+        assert_eq!(join_repair_stage(&p, &p.weights, &none, path.clone(), 0.0, 0.0, &mut m).unwrap().0, path);
     }
 
     #[test]
@@ -1009,7 +1000,7 @@ mod tests {
         let refill = |at_once: bool| {
             let o = GenerateOptions { join_jump_goal: goal, join_repairs: 1, join_bans_at_once: at_once, ..opts };
             let mut m = Measured::default();
-            join_repair_stage(&p, &p.weights, &o, path.clone(), 0.0, &mut m).unwrap();
+            join_repair_stage(&p, &p.weights, &o, path.clone(), 0.0, 0.0, &mut m).unwrap();
             assert!(m.played.len() >= 2, "no refill measured");
             let q = m.played[1].0.clone();
             (over.iter().copied().filter(|s| q.contains(s)).collect::<Vec<usize>>(), q)
@@ -1152,7 +1143,7 @@ mod tests {
         let path = fill_stage(&p).unwrap();
         let (path, w) = beat_rate_stage(&p, path, &mut m).unwrap();
         let (path, c) = free_skate_stage(&p, &w, &path);
-        let (path, c) = skate_stage(&p, &w, path, c, &mut m).unwrap();
+        let (path, c, carried) = skate_stage(&p, &w, path, c, &mut m).unwrap();
         let (path, order, why) = order_stage(&p, &w, &opts, path, &mut m).unwrap();
         if !order.is_empty() {
             p.base = p.with_base(&order).into_owned();
@@ -1160,7 +1151,7 @@ mod tests {
                 p.opened[t] |= w.is_some();
             }
         }
-        let (path, _) = join_repair_stage(&p, &w, &opts, path, c, &mut m).unwrap();
+        let (path, _) = join_repair_stage(&p, &w, &opts, path, c, carried, &mut m).unwrap();
         assert_eq!((whole, cost), (path.clone(), p.objective(&path)));
     }
 }
