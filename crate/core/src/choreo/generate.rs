@@ -142,7 +142,7 @@ pub struct GenerateOptions {
     /// The same paths (`the_fast_path_finds_the_plain_dynamic_programmes_path`,
     /// `dance_fixture`); and each layer streams its cheapest nodes' rows vectorised. Default
     /// true; false: the control (session 18's fills, stopping by the cheapest node of all, a
-    /// branch per lane in the stream, [`Tempi::stop_at_cheapest`]), which `choreo_generate`
+    /// branch per lane in the stream, [`Tempi::top_lists_stop_at_rest`]), which `choreo_generate`
     /// times beside it.
     pub top_lists_stop_at_rest: bool,
     /// Stage 5, [`join_repair_stage`]: a refill sliding past the skate goal makes the next one
@@ -418,7 +418,7 @@ impl<'a> Problem<'a> {
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
     pub(super) fn tempi<'b>(&'b self, extra: &'b [Vec<f32>]) -> Tempi<'b> {
-        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref(), stop_at_cheapest: !self.top_lists_stop_at_rest }
+        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref(), top_lists_stop_at_rest: self.top_lists_stop_at_rest }
     }
 
     /// The minimum-cost path with `weights` and `extra` costs.
