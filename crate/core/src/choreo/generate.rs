@@ -145,6 +145,10 @@ pub struct GenerateOptions {
     /// branch per lane in the stream, [`Tempi::top_lists_stop_at_rest`]), which `choreo_generate`
     /// times beside it.
     pub top_lists_stop_at_rest: bool,
+    /// A fill's whole-column scans skip each chunk of predecessors whose cheapest node and
+    /// edge already cost more than the best found ([`super::scan`]). The same paths. Default
+    /// true; false: every entry scanned (session 19's fills, the control `choreo_generate` times).
+    pub columns_scanned_by_chunks: bool,
     /// Stage 5, [`join_repair_stage`]: a refill sliding past the skate goal makes the next one
     /// charge skate at weights scaled beside the fill's beat term ([`skate_ladder_for`]), not the
     /// plain [`skate_ladder`] (0.1–0.4 moved no bar of Vibe Ace's refill beside the variety
@@ -173,6 +177,7 @@ impl Default for GenerateOptions {
             join_bans_at_once: true,
             pose_read_frames_only: true,
             top_lists_stop_at_rest: true,
+            columns_scanned_by_chunks: true,
             skate_beside_beat_term: true,
         }
     }
@@ -297,8 +302,9 @@ pub struct Problem<'a> {
     pub(super) quick_measures: bool,
     /// [`GenerateOptions::pose_read_frames_only`].
     pub(super) pose_read_frames_only: bool,
-    /// [`GenerateOptions::top_lists_stop_at_rest`].
+    /// [`GenerateOptions::top_lists_stop_at_rest`], [`GenerateOptions::columns_scanned_by_chunks`].
     top_lists_stop_at_rest: bool,
+    columns_scanned_by_chunks: bool,
 }
 
 impl<'a> Problem<'a> {
@@ -355,6 +361,7 @@ impl<'a> Problem<'a> {
             quick_measures: options.quick_measures,
             pose_read_frames_only: options.pose_read_frames_only,
             top_lists_stop_at_rest: options.top_lists_stop_at_rest,
+            columns_scanned_by_chunks: options.columns_scanned_by_chunks,
         };
         p.charge = p.moves_source_charge();
         p.base = p.charge.clone();
@@ -418,7 +425,7 @@ impl<'a> Problem<'a> {
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
     pub(super) fn tempi<'b>(&'b self, extra: &'b [Vec<f32>]) -> Tempi<'b> {
-        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref(), top_lists_stop_at_rest: self.top_lists_stop_at_rest }
+        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref(), top_lists_stop_at_rest: self.top_lists_stop_at_rest, columns_scanned_by_chunks: self.columns_scanned_by_chunks }
     }
 
     /// The minimum-cost path with `weights` and `extra` costs.
