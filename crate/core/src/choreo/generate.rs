@@ -119,7 +119,8 @@ pub struct GenerateOptions {
     pub windowed_refills: bool,
     /// Measure each dance posing only what the measures read ([`super::figures`]: the
     /// held-feet rule's free pass posed once for all its rounds, only the frames the 30 fps
-    /// measures read, the played dance not measured twice). The same figures and dances
+    /// measures read, the played dance not measured twice, and since session 20 each of §J's
+    /// measures of it taken once for the whole dance and its bars). The same figures and dances
     /// (`quick_measures_keep_every_figure`, `dance_fixture`). Default true; false: the control
     /// (session 15's measures), which `choreo_generate` times beside it.
     pub quick_measures: bool,
