@@ -141,7 +141,7 @@ fn host_clock() -> f64 {
 
 thread_local! {
     static PROFILE: RefCell<Option<profile::Profile>> = const { RefCell::new(None) };
-    static DANCES: RefCell<[Vec<Option<usize>>; 7]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
+    static DANCES: RefCell<[Vec<Option<usize>>; 8]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
 }
 
 /// The settings of variant `v`: 0 the default, 1 windowed refills, 2 session 15's measures
@@ -149,7 +149,8 @@ thread_local! {
 /// no order stage), 4 session 16's default (one join barred a refill: join_bans_at_once off), 5
 /// session 17's work (every top list tried whole, every frame of each held pass posed:
 /// pose_read_frames_only off and session 18's fills), 6 session 18's work (top lists stopped by
-/// the cheapest node of all: top_lists_stop_at_rest off, today's main, the control).
+/// the cheapest node of all: top_lists_stop_at_rest off), 7 session 19's work (whole columns
+/// scanned entry by entry: columns_scanned_by_chunks off, today's main, the control).
 fn variant(v: u32) -> GenerateOptions {
     let d = GenerateOptions::default();
     match v {
@@ -157,8 +158,9 @@ fn variant(v: u32) -> GenerateOptions {
         2 => GenerateOptions { quick_measures: false, ..d },
         3 => GenerateOptions { measure_played: false, follow_order: false, ..d },
         4 => GenerateOptions { join_bans_at_once: false, ..d },
-        5 => GenerateOptions { pose_read_frames_only: false, top_lists_stop_at_rest: false, ..d },
-        6 => GenerateOptions { top_lists_stop_at_rest: false, ..d },
+        5 => GenerateOptions { pose_read_frames_only: false, top_lists_stop_at_rest: false, columns_scanned_by_chunks: false, ..d },
+        6 => GenerateOptions { top_lists_stop_at_rest: false, columns_scanned_by_chunks: false, ..d },
+        7 => GenerateOptions { columns_scanned_by_chunks: false, ..d },
         _ => d,
     }
 }

@@ -350,7 +350,7 @@ fn column_min(prev: &[f32], col: &[f32]) -> (f32, usize) {
 /// (the fast path of the module docs) or a cross block (every pair, exact); a pair outside
 /// the table's blocks is computed (the same value, slowly).
 #[allow(clippy::too_many_arguments)]
-fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f32], arg: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, stop_at_rest: bool) {
+fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f32], arg: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, switches: (bool, bool)) {
     let m = table.len();
     let groups = table.metres().len().max(1);
     let mut from = vec![false; groups];
@@ -371,7 +371,7 @@ fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f
             [g] if table.block(*g, h).is_some() => {
                 if let Some(block) = table.block(*g, h) {
                     if *g == h {
-                        relax_within(block, prev, node, next, arg, low, stats, stop_at_rest);
+                        relax_within(block, prev, node, next, arg, low, stats, switches);
                     } else {
                         relax_across(block, prev, node, next, arg, stats);
                     }
@@ -400,12 +400,12 @@ fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f
 }
 
 /// [`relax_open`] over a within-group block: the fast path of the module docs, on the
-/// block's own (local) indices. `stop_at_rest`: a column's list stops by the cheapest node
+/// block's own (local) indices. `top_lists_stop_at_rest`: a column's list stops by the cheapest node
 /// outside the previous layer's cheapest, and the cheapest rows stream vectorised
 /// ([`stream_row`]); else session 18's fills, the control (the cheapest node of all, a branch
 /// per lane): the same values either way.
 #[allow(clippy::too_many_arguments)]
-fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, stop_at_rest: bool) {
+fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, (top_lists_stop_at_rest, by_chunks): (bool, bool)) {
     let m = block.to.len();
     let prev: Vec<f32> = block.from.iter().map(|&a| prev_all[a as usize]).collect();
     // The previous layer's LOW_L cheapest nodes, and the cheapest cost outside them.
@@ -423,9 +423,13 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
     let k = TOP_K.min(m);
     // Where a column's list (in increasing cost) stops: once the next edge from a node outside
     // the cheapest (those streamed below, whose every edge is tried) costs more than the best
-    // found, no later entry can win (`stop_at_rest`); session 18's bound was the cheapest node
+    // found, no later entry can win (`top_lists_stop_at_rest`); session 18's bound was the cheapest node
     // of all, which the cheapest nodes' own entries kept from stopping.
-    let prev_min = if stop_at_rest { prev_rest } else { prev.iter().copied().fold(f32::INFINITY, f32::min) };
+    let prev_min = if top_lists_stop_at_rest { prev_rest } else { prev.iter().copied().fold(f32::INFINITY, f32::min) };
+    let mut prev_chunk = Vec::new();
+    if by_chunks {
+        super::scan::chunk_mins(&prev, &mut prev_chunk);
+    }
     // The cheapest nodes' rows, streamed (vectorised).
     let mut next = vec![f32::INFINITY; m];
     let mut arg = vec![0u32; m];
@@ -433,7 +437,7 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
     for &a in low.iter() {
         let pa = prev[a as usize];
         let row = &block.rows[a as usize * m..(a as usize + 1) * m];
-        if stop_at_rest {
+        if top_lists_stop_at_rest {
             stream_row(pa, a, row, &mut next, &mut arg);
         } else {
             // Session 18's loop (the control): a store per lane under a branch.
@@ -478,10 +482,17 @@ fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mu
         stats.top_tries += tried;
         if best > prev_rest + block.rest_min[b] {
             // Not provable from the list: the whole column, contiguous (vectorised
-            // minimum, then the first predecessor reaching it).
-            let (min, at) = column_min(&prev, block.column(b));
-            best = min;
-            best_a = at as u32;
+            // minimum, then the first predecessor reaching it), by chunks when kept.
+            let chunks = prev_chunk.len();
+            if by_chunks && block.chunk_min.len() == chunks * m {
+                let scanned;
+                (best, best_a, scanned) = super::scan::column_min_by_chunks(&prev, &prev_chunk, block.column(b), &block.chunk_min[b * chunks..(b + 1) * chunks], best, best_a);
+                stats.chunks_scanned += scanned;
+            } else {
+                let (min, at) = column_min(&prev, block.column(b));
+                best = min;
+                best_a = at as u32;
+            }
             stats.full_scans += 1;
         }
         next_all[global] = best + node;
@@ -558,6 +569,8 @@ pub struct FillStats {
     /// could win).
     pub top_tries: usize,
     pub early_stops: usize,
+    /// Chunks read by the whole scans done by chunks ([`super::scan`]).
+    pub chunks_scanned: usize,
 }
 
 /// A minimum-cost choice of one segment per layer. `segment_intensity[s]` is segment `s`'s
@@ -618,7 +631,7 @@ pub fn fill_with_node_costs(
 /// The count rates the tempo-stretch term ([`FillWeights::stretch_weight`]) compares: per layer
 /// the rate its bar plays a segment at ([`bar_count_rate_bpm`]), per segment its own count
 /// tempo. Either empty: no stretch term.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub struct Tempi<'a> {
     pub bar_bpm: &'a [f32],
     pub segment_bpm: &'a [f32],
@@ -636,11 +649,20 @@ pub struct Tempi<'a> {
     /// The variety term ([`super::variety`]): nearby bars sharing a step, arm pattern or source
     /// clip are charged, along the path. None: no such term.
     pub variety: Option<&'a super::variety::Variety>,
-    /// A column's top list stops by the previous layer's cheapest node, not by the cheapest
-    /// outside the nodes whose every edge is tried, and the cheapest rows stream with a branch
-    /// per lane ([`super::GenerateOptions::top_lists_stop_at_rest`] off: session 18's fills, the
-    /// control). The same paths either way.
-    pub stop_at_cheapest: bool,
+    /// [`super::GenerateOptions::top_lists_stop_at_rest`] (default true): a column's top list
+    /// stops by the cheapest node outside those whose every edge is tried, and their rows stream
+    /// vectorised; false stops by the previous layer's cheapest node, a branch per lane in the
+    /// stream (session 18's fills, the control). The same paths either way.
+    pub top_lists_stop_at_rest: bool,
+    /// [`super::GenerateOptions::columns_scanned_by_chunks`] (default true): a whole column is
+    /// scanned by chunks ([`super::scan`]); false: every entry (the control). The same paths.
+    pub columns_scanned_by_chunks: bool,
+}
+
+impl Default for Tempi<'_> {
+    fn default() -> Self {
+        Tempi { bar_bpm: &[], segment_bpm: &[], beat_rate: &[], extra: &[], bar_counts: &[], segment_counts: &[], variety: None, top_lists_stop_at_rest: true, columns_scanned_by_chunks: true }
+    }
 }
 
 impl Tempi<'_> {
@@ -764,7 +786,7 @@ pub fn fill_with_tempi(
                 let node: Vec<f32> = (0..m).map(|b| music(t, intensity, b)).collect();
                 let mut next = vec![f32::INFINITY; m];
                 let mut arg = vec![0u32; m];
-                relax_open(table, prev, &node, &mut next, &mut arg, &mut low, &mut stats, !tempi.stop_at_cheapest);
+                relax_open(table, prev, &node, &mut next, &mut arg, &mut low, &mut stats, (tempi.top_lists_stop_at_rest, tempi.columns_scanned_by_chunks));
                 if let Some(variety) = tempi.variety {
                     variety.relax(table, &back, t, prev, &node, &mut next, &mut arg);
                 }
@@ -984,10 +1006,13 @@ mod tests {
         assert_eq!(path, plain);
         // The lists stopped by the cheapest node of all (session 18's bound, the control): the
         // same path, more entries tried.
-        let cheapest = Tempi { stop_at_cheapest: true, ..tempi };
+        let cheapest = Tempi { top_lists_stop_at_rest: false, ..tempi };
         let (control, _, control_stats) = fill_with_tempi(&table, &layers, &intensity, &[], &cheapest, &weights).unwrap();
         assert_eq!(control, plain);
         assert!(stats.top_tries < control_stats.top_tries, "{stats:?} against {control_stats:?}");
+        // Whole columns scanned entry by entry (the control of super::scan): the same path.
+        let every = fill_with_tempi(&table, &layers, &intensity, &[], &Tempi { columns_scanned_by_chunks: false, ..tempi }, &weights).unwrap();
+        assert_eq!((every.0, every.2.chunks_scanned), (plain, 0));
     }
 
     #[test]

@@ -119,7 +119,8 @@ pub struct GenerateOptions {
     pub windowed_refills: bool,
     /// Measure each dance posing only what the measures read ([`super::figures`]: the
     /// held-feet rule's free pass posed once for all its rounds, only the frames the 30 fps
-    /// measures read, the played dance not measured twice). The same figures and dances
+    /// measures read, the played dance not measured twice, and since session 20 each of §J's
+    /// measures of it taken once for the whole dance and its bars). The same figures and dances
     /// (`quick_measures_keep_every_figure`, `dance_fixture`). Default true; false: the control
     /// (session 15's measures), which `choreo_generate` times beside it.
     pub quick_measures: bool,
@@ -142,9 +143,13 @@ pub struct GenerateOptions {
     /// The same paths (`the_fast_path_finds_the_plain_dynamic_programmes_path`,
     /// `dance_fixture`); and each layer streams its cheapest nodes' rows vectorised. Default
     /// true; false: the control (session 18's fills, stopping by the cheapest node of all, a
-    /// branch per lane in the stream, [`Tempi::stop_at_cheapest`]), which `choreo_generate`
+    /// branch per lane in the stream, [`Tempi::top_lists_stop_at_rest`]), which `choreo_generate`
     /// times beside it.
     pub top_lists_stop_at_rest: bool,
+    /// A fill's whole-column scans skip each chunk of predecessors whose cheapest node and
+    /// edge already cost more than the best found ([`super::scan`]). The same paths. Default
+    /// true; false: every entry scanned (session 19's fills, the control `choreo_generate` times).
+    pub columns_scanned_by_chunks: bool,
     /// Stage 5, [`join_repair_stage`]: a refill sliding past the skate goal makes the next one
     /// charge skate at weights scaled beside the fill's beat term ([`skate_ladder_for`]), not the
     /// plain [`skate_ladder`] (0.1–0.4 moved no bar of Vibe Ace's refill beside the variety
@@ -173,6 +178,7 @@ impl Default for GenerateOptions {
             join_bans_at_once: true,
             pose_read_frames_only: true,
             top_lists_stop_at_rest: true,
+            columns_scanned_by_chunks: true,
             skate_beside_beat_term: true,
         }
     }
@@ -294,8 +300,9 @@ pub struct Problem<'a> {
     pub(super) quick_measures: bool,
     /// [`GenerateOptions::pose_read_frames_only`].
     pub(super) pose_read_frames_only: bool,
-    /// [`GenerateOptions::top_lists_stop_at_rest`].
+    /// [`GenerateOptions::top_lists_stop_at_rest`], [`GenerateOptions::columns_scanned_by_chunks`].
     top_lists_stop_at_rest: bool,
+    columns_scanned_by_chunks: bool,
 }
 
 impl<'a> Problem<'a> {
@@ -351,6 +358,7 @@ impl<'a> Problem<'a> {
             quick_measures: options.quick_measures,
             pose_read_frames_only: options.pose_read_frames_only,
             top_lists_stop_at_rest: options.top_lists_stop_at_rest,
+            columns_scanned_by_chunks: options.columns_scanned_by_chunks,
         };
         p.charge = p.moves_source_charge();
         p.base = p.charge.clone();
@@ -414,7 +422,7 @@ impl<'a> Problem<'a> {
 
     /// The count rates and metres of the problem, with `extra` added per bar and segment.
     pub(super) fn tempi<'b>(&'b self, extra: &'b [Vec<f32>]) -> Tempi<'b> {
-        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref(), stop_at_cheapest: !self.top_lists_stop_at_rest }
+        Tempi { bar_bpm: &self.bar_bpm, segment_bpm: &self.segment_bpm, beat_rate: &self.beat_rate, extra, bar_counts: &self.bar_counts, segment_counts: &self.segment_counts, variety: self.variety.as_ref(), top_lists_stop_at_rest: self.top_lists_stop_at_rest, columns_scanned_by_chunks: self.columns_scanned_by_chunks }
     }
 
     /// The minimum-cost path with `weights` and `extra` costs.

@@ -24,6 +24,7 @@ pub mod profile;
 pub mod quality;
 pub mod refill;
 pub mod render;
+pub mod scan;
 pub mod segment;
 pub mod switch;
 pub mod table;

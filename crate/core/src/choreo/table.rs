@@ -188,6 +188,9 @@ pub(crate) struct Block {
     pub(crate) top_cost: Vec<f32>,
     /// Per column, the cheapest cost outside its top list (a lower bound for the rest).
     pub(crate) rest_min: Vec<f32>,
+    /// Per column, its cheapest cost from each chunk of predecessors
+    /// ([`super::scan::chunk_mins`], within-group blocks only): the bounds of its chunked scan.
+    pub(crate) chunk_min: Vec<f32>,
 }
 
 impl Block {
@@ -621,6 +624,7 @@ struct Job {
     top: Vec<u32>,
     top_cost: Vec<f32>,
     rest_min: Vec<f32>,
+    chunk_min: Vec<f32>,
     rows: Vec<f32>,
     scratch: Vec<f32>,
 }
@@ -639,8 +643,8 @@ impl Job {
     }
 
     fn into_block(self) -> Block {
-        let Job { from, to, costs, rows, top, top_cost, rest_min, .. } = self;
-        Block { from, to, costs: costs.into(), rows, top, top_cost, rest_min }
+        let Job { from, to, costs, rows, top, top_cost, rest_min, chunk_min, .. } = self;
+        Block { from, to, costs: costs.into(), rows, top, top_cost, rest_min, chunk_min }
     }
 }
 
@@ -746,6 +750,7 @@ impl TableBuilder {
                 top: Vec::new(),
                 top_cost: Vec::new(),
                 rest_min: Vec::new(),
+                chunk_min: Vec::new(),
                 rows: Vec::new(),
                 scratch: Vec::new(),
             });
@@ -915,6 +920,7 @@ impl Job {
         let k = TOP_K.min(m);
         for b in b0..b1 {
             let col = &self.costs[b * m..(b + 1) * m];
+            super::scan::chunk_mins(col, &mut self.chunk_min);
             let start = self.top.len();
             if k < m {
                 // The k-th and (k+1)-th smallest costs: the list holds every cost below the
