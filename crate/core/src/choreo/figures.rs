@@ -5,7 +5,7 @@
 
 use super::generate::Problem;
 use super::profile::{self, Work};
-use super::quality::{beat_alignment, foot_skate_samples, join_jumps, kinetic_beats_secs, summarize_skate, switch_of, QualityMotion, QUALITY_FPS};
+use super::quality::{beat_alignment, summarize_skate, DanceMeasures, QualityMotion};
 use super::render::{render_measured, render_switched, RenderOptions};
 use super::segment::SegmentLibrary;
 use crate::bars::Bar;
@@ -102,24 +102,19 @@ pub fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], 
     }
     let counts = bar_counts_secs(bars);
     super::quality::check_beats(&counts).ok()?;
-    // Each of §J's measures once, read by both the whole dance's figures and each bar's (as
-    // [`figures_of`] and [`super::quality::dance_quality_switched_of`] each measure them).
-    let parts = Parts::of(&m, bars, &switches);
-    let whole = parts.figures(bars)?;
-    let frame_of = parts.frame_of();
-    let mut jumps = parts.jumps.iter();
-    let per_bar = bars
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            let a = beat_alignment(&counts, &parts.kinetic, b.start_secs, b.end_secs);
-            let join_jump = if i > 0 && frame_of(switch_of(bars, &switches, i)) + 1 < parts.frames { jumps.next().copied() } else { None };
-            PlayedBar { beat_margin: a.bas_music - a.bas_music_shifted, join_jump, foot_skate_cm_per_s: summarize_skate(&parts.skate, frame_of(b.start_secs)..frame_of(b.end_secs)).mean_cm_per_s }
-        })
-        .collect();
+    // Each of §J's measures once, read by both the whole dance's figures and each bar's.
+    let measures = DanceMeasures::of(&m, bars, &switches);
+    let whole = whole_figures(&measures, bars)?;
+    let per_bar = measures.bar_qualities(bars, &counts).iter().map(PlayedBar::of).collect();
     let (first, last) = (bars.first()?, bars.last()?);
-    let bas_music = beat_alignment(&counts, &parts.kinetic, first.start_secs, last.end_secs).bas_music;
+    let bas_music = beat_alignment(&counts, &measures.kinetic, first.start_secs, last.end_secs).bas_music;
     Some(Played { whole, bas_music, bars: per_bar })
+}
+
+impl PlayedBar {
+    fn of(b: &super::quality::BarQuality) -> PlayedBar {
+        PlayedBar { beat_margin: b.beats.bas_music - b.beats.bas_music_shifted, join_jump: b.join_jump, foot_skate_cm_per_s: b.foot_skate.mean_cm_per_s }
+    }
 }
 
 /// Every count of `bars`, seconds (a bar of n beats: n counts evenly over it).
@@ -134,69 +129,28 @@ fn bar_counts_secs(bars: &[Bar]) -> Vec<f32> {
 
 /// [`played_figures_posed`]'s figures measured as before session 20: the whole dance's
 /// ([`figures_of`]) and the readout's ([`super::quality::dance_quality_switched_of`]) each
-/// measuring §J anew. The control of `measuring_once_keeps_every_figure`.
+/// measuring §J anew. The control of `quick_measures_keep_every_figure`.
 fn played_of_control(m: &QualityMotion, bars: &[Bar], switches: &[f32]) -> Option<Played> {
     let whole = figures_of(m, bars, switches)?;
     let q = super::quality::dance_quality_switched_of(m, bars, &bar_counts_secs(bars), switches).ok()?;
-    let per_bar = q.bars.iter().map(|b| PlayedBar { beat_margin: b.beats.bas_music - b.beats.bas_music_shifted, join_jump: b.join_jump, foot_skate_cm_per_s: b.foot_skate.mean_cm_per_s }).collect();
+    let per_bar = q.bars.iter().map(PlayedBar::of).collect();
     Some(Played { whole, bas_music: q.beats.bas_music, bars: per_bar })
-}
-
-/// §J's measures of a rendered dance over its bars, each taken once: kinetic beats, foot skate
-/// samples, and the join jumps at each switch that has a frame after it.
-struct Parts {
-    frames: usize,
-    kinetic: Vec<f32>,
-    skate: Vec<[Option<f32>; 4]>,
-    /// Per join kept (bars 1.., in order), its bar and jump.
-    joins: Vec<usize>,
-    jumps: Vec<f32>,
-}
-
-impl Parts {
-    fn of(m: &QualityMotion, bars: &[Bar], switches: &[f32]) -> Parts {
-        let frames = m.frames();
-        let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
-        let joins: Vec<(usize, usize)> = (1..bars.len()).map(|i| (i, frame_of(switch_of(bars, switches, i)))).filter(|&(_, f)| f + 1 < frames).collect();
-        let jumps = join_jumps(m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
-        Parts { frames, kinetic: kinetic_beats_secs(m), skate: foot_skate_samples(m), joins: joins.into_iter().map(|j| j.0).collect(), jumps }
-    }
-
-    fn frame_of(&self) -> impl Fn(f32) -> usize {
-        let frames = self.frames;
-        move |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames)
-    }
-
-    /// [`DanceFigures`] as [`figures_of`] measures them.
-    fn figures(&self, bars: &[Bar]) -> Option<DanceFigures> {
-        let (first, last) = (bars.first()?, bars.last()?);
-        let frame_of = self.frame_of();
-        let kinetic = self.kinetic.iter().filter(|&&t| t >= first.start_secs && t < last.end_secs).count();
-        let skate = summarize_skate(&self.skate, frame_of(first.start_secs)..frame_of(last.end_secs));
-        let counts: usize = bars.iter().map(Bar::beat_count).sum();
-        let worst = self.jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (self.joins[k], j));
-        Some(DanceFigures {
-            kinetic_per_count: kinetic as f32 / counts.max(1) as f32,
-            foot_skate_cm_per_s: skate.mean_cm_per_s,
-            join_jump_max: worst.map_or(0.0, |w| w.1),
-            worst_join_bar: worst.map(|w| w.0),
-        })
-    }
 }
 
 /// [`DanceFigures`] of a rendered dance `m` over `bars`, its joins falling at `switches`
 /// ([`super::render_switched`]).
 fn figures_of(m: &QualityMotion, bars: &[Bar], switches: &[f32]) -> Option<DanceFigures> {
+    whole_figures(&DanceMeasures::of(m, bars, switches), bars)
+}
+
+/// [`DanceFigures`] of the whole dance over `bars`, from its measures.
+fn whole_figures(d: &DanceMeasures, bars: &[Bar]) -> Option<DanceFigures> {
     let (first, last) = (bars.first()?, bars.last()?);
-    let kinetic = kinetic_beats_secs(m).into_iter().filter(|&t| t >= first.start_secs && t < last.end_secs).count();
-    let frames = m.frames();
-    let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
-    let skate = summarize_skate(&foot_skate_samples(m), frame_of(first.start_secs)..frame_of(last.end_secs));
+    let kinetic = d.kinetic.iter().filter(|&&t| t >= first.start_secs && t < last.end_secs).count();
+    let skate = summarize_skate(&d.skate, d.frame_of(first.start_secs)..d.frame_of(last.end_secs));
     let counts: usize = bars.iter().map(Bar::beat_count).sum();
     // Join jumps as dance_quality measures them (at each switch, wherever it falls).
-    let joins: Vec<(usize, usize)> = (1..bars.len()).map(|i| (i, frame_of(super::quality::switch_of(bars, switches, i)))).filter(|&(_, f)| f + 1 < frames).collect();
-    let jumps = join_jumps(m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
-    let worst = jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (joins[k].0, j));
+    let worst = d.jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (d.joins[k], j));
     Some(DanceFigures {
         kinetic_per_count: kinetic as f32 / counts.max(1) as f32,
         foot_skate_cm_per_s: skate.mean_cm_per_s,

@@ -350,7 +350,7 @@ fn column_min(prev: &[f32], col: &[f32]) -> (f32, usize) {
 /// (the fast path of the module docs) or a cross block (every pair, exact); a pair outside
 /// the table's blocks is computed (the same value, slowly).
 #[allow(clippy::too_many_arguments)]
-fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f32], arg: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, switches: (bool, bool)) {
+fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f32], arg: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, tempi: &Tempi) {
     let m = table.len();
     let groups = table.metres().len().max(1);
     let mut from = vec![false; groups];
@@ -371,7 +371,7 @@ fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f
             [g] if table.block(*g, h).is_some() => {
                 if let Some(block) = table.block(*g, h) {
                     if *g == h {
-                        relax_within(block, prev, node, next, arg, low, stats, switches);
+                        relax_within(block, prev, node, next, arg, low, stats, tempi);
                     } else {
                         relax_across(block, prev, node, next, arg, stats);
                     }
@@ -400,12 +400,13 @@ fn relax_open(table: &TransitionTable, prev: &[f32], node: &[f32], next: &mut [f
 }
 
 /// [`relax_open`] over a within-group block: the fast path of the module docs, on the
-/// block's own (local) indices. `top_lists_stop_at_rest`: a column's list stops by the cheapest node
-/// outside the previous layer's cheapest, and the cheapest rows stream vectorised
+/// block's own (local) indices. [`Tempi::top_lists_stop_at_rest`]: a column's list stops by the
+/// cheapest node outside the previous layer's cheapest, and the cheapest rows stream vectorised
 /// ([`stream_row`]); else session 18's fills, the control (the cheapest node of all, a branch
-/// per lane): the same values either way.
+/// per lane); [`Tempi::columns_scanned_by_chunks`]: whole columns by chunks. The same values.
 #[allow(clippy::too_many_arguments)]
-fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, (top_lists_stop_at_rest, by_chunks): (bool, bool)) {
+fn relax_within(block: &Block, prev_all: &[f32], node_all: &[f32], next_all: &mut [f32], arg_all: &mut [u32], low: &mut Vec<u32>, stats: &mut FillStats, tempi: &Tempi) {
+    let (top_lists_stop_at_rest, by_chunks) = (tempi.top_lists_stop_at_rest, tempi.columns_scanned_by_chunks);
     let m = block.to.len();
     let prev: Vec<f32> = block.from.iter().map(|&a| prev_all[a as usize]).collect();
     // The previous layer's LOW_L cheapest nodes, and the cheapest cost outside them.
@@ -786,7 +787,7 @@ pub fn fill_with_tempi(
                 let node: Vec<f32> = (0..m).map(|b| music(t, intensity, b)).collect();
                 let mut next = vec![f32::INFINITY; m];
                 let mut arg = vec![0u32; m];
-                relax_open(table, prev, &node, &mut next, &mut arg, &mut low, &mut stats, (tempi.top_lists_stop_at_rest, tempi.columns_scanned_by_chunks));
+                relax_open(table, prev, &node, &mut next, &mut arg, &mut low, &mut stats, tempi);
                 if let Some(variety) = tempi.variety {
                     variety.relax(table, &back, t, prev, &node, &mut next, &mut arg);
                 }

@@ -555,37 +555,68 @@ pub fn switch_of(bars: &[Bar], switch_secs: &[f32], i: usize) -> f32 {
 pub fn dance_quality_switched_of(m: &QualityMotion, bars: &[Bar], music_beats_secs: &[f32], switch_secs: &[f32]) -> Result<DanceQuality, QualityError> {
     check_beats(music_beats_secs)?;
     let (Some(first), Some(last)) = (bars.first(), bars.last()) else { return Err(QualityError::NoBars) };
-    let kinetic = kinetic_beats_secs(m);
-    let frames = m.frames();
-    let frame_of = |t: f32| ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames);
-    let join_of = |i: usize| frame_of(switch_of(bars, switch_secs, i));
-    let joins: Vec<usize> = (1..bars.len()).map(join_of).filter(|&f| f + 1 < frames).collect();
-    let jumps = join_jumps(m, &joins);
-    let skate = foot_skate_samples(m);
-    let mut per_bar = Vec::with_capacity(bars.len());
-    let mut ji = 0;
-    for (i, b) in bars.iter().enumerate() {
-        let join_jump = if i > 0 && join_of(i) + 1 < frames {
-            ji += 1;
-            jumps.get(ji - 1).copied()
-        } else {
-            None
-        };
-        per_bar.push(BarQuality {
-            bar: i,
-            beats: beat_alignment(music_beats_secs, &kinetic, b.start_secs, b.end_secs),
-            foot_skate: summarize_skate(&skate, frame_of(b.start_secs)..frame_of(b.end_secs)),
-            join_jump,
-        });
-    }
+    let d = DanceMeasures::of(m, bars, switch_secs);
+    let jumps = &d.jumps;
     Ok(DanceQuality {
-        beats: beat_alignment(music_beats_secs, &kinetic, first.start_secs, last.end_secs),
-        foot_skate: summarize_skate(&skate, frame_of(first.start_secs)..frame_of(last.end_secs)),
+        beats: beat_alignment(music_beats_secs, &d.kinetic, first.start_secs, last.end_secs),
+        foot_skate: summarize_skate(&d.skate, d.frame_of(first.start_secs)..d.frame_of(last.end_secs)),
         pfc: pfc(m),
         join_jump_mean: if jumps.is_empty() { 0.0 } else { jumps.iter().sum::<f32>() / jumps.len() as f32 },
         join_jump_max: jumps.iter().copied().fold(0.0, f32::max),
-        bars: per_bar,
+        bars: d.bar_qualities(bars, music_beats_secs),
     })
+}
+
+/// The frame of a motion of `frames` frames at [`QUALITY_FPS`] that time `t` (seconds) falls
+/// on: the nearest, clamped to `0..=frames`.
+pub fn frame_at(t: f32, frames: usize) -> usize {
+    ((t * QUALITY_FPS).round().max(0.0) as usize).min(frames)
+}
+
+/// §J's measures of a rendered dance over its bars, each taken once, for every figure read of
+/// them (the readout [`dance_quality_switched_of`] and the pipeline's
+/// [`super::figures`]): kinetic beats, foot skate samples, and the join jump at each switch
+/// that has a frame after it.
+pub struct DanceMeasures {
+    /// The motion's frames.
+    pub frames: usize,
+    /// Kinetic beats, seconds ([`kinetic_beats_secs`]).
+    pub kinetic: Vec<f32>,
+    /// Foot skate samples per frame ([`foot_skate_samples`]).
+    pub skate: Vec<[Option<f32>; 4]>,
+    /// The bar after each join measured (bars 1.., in order; a join with no frame after it is
+    /// left out), and its jump ([`join_jumps`]).
+    pub joins: Vec<usize>,
+    pub jumps: Vec<f32>,
+}
+
+impl DanceMeasures {
+    /// The measures of `m` over `bars`, its joins falling at `switch_secs` ([`switch_of`]).
+    pub fn of(m: &QualityMotion, bars: &[Bar], switch_secs: &[f32]) -> DanceMeasures {
+        let frames = m.frames();
+        let joins: Vec<(usize, usize)> = (1..bars.len()).map(|i| (i, frame_at(switch_of(bars, switch_secs, i), frames))).filter(|&(_, f)| f + 1 < frames).collect();
+        let jumps = join_jumps(m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
+        DanceMeasures { frames, kinetic: kinetic_beats_secs(m), skate: foot_skate_samples(m), joins: joins.into_iter().map(|j| j.0).collect(), jumps }
+    }
+
+    /// [`frame_at`] in this motion.
+    pub fn frame_of(&self, t: f32) -> usize {
+        frame_at(t, self.frames)
+    }
+
+    /// Each bar's readout against `music_beats_secs`.
+    pub fn bar_qualities(&self, bars: &[Bar], music_beats_secs: &[f32]) -> Vec<BarQuality> {
+        let mut jumps = self.joins.iter().zip(&self.jumps).peekable();
+        bars.iter()
+            .enumerate()
+            .map(|(i, b)| BarQuality {
+                bar: i,
+                beats: beat_alignment(music_beats_secs, &self.kinetic, b.start_secs, b.end_secs),
+                foot_skate: summarize_skate(&self.skate, self.frame_of(b.start_secs)..self.frame_of(b.end_secs)),
+                join_jump: jumps.next_if(|&(&bar, _)| bar == i).map(|(_, &j)| j),
+            })
+            .collect()
+    }
 }
 
 /// The perceptual distance of the preference test (spec §J), deliberately not the one the
