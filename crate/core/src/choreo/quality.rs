@@ -128,6 +128,32 @@ impl QualityMotion {
         read
     }
 
+    /// [`QualityMotion::from_clip`] of `clip` from its joints' world positions already posed
+    /// (`world`: frame-major, the clip's skeleton's joints, [`crate::motion::WorldPose::of_frame`]'s
+    /// on every frame [`QualityMotion::frames_read`] marks; the others are not read): the same
+    /// motion, the clip not posed again. `None` where `from_clip` would not pose frames one by
+    /// one (too short, a bad frame rate) or `world` is not of the clip.
+    pub(crate) fn from_posed(clip: &Clip, world: &[Vec3]) -> Option<Result<Self, QualityError>> {
+        let (frames, n) = (clip.frame_count(), clip.skeleton.len());
+        if !(clip.fps.is_finite() && clip.fps > 0.0) || frames < 3 || world.len() != frames * n {
+            return None;
+        }
+        let map = HumanoidMap::from_skeleton(&clip.skeleton);
+        let mut pos = vec![Vec3::ZERO; frames * CANON_COUNT];
+        for (f, read) in Self::frames_read(frames, clip.fps).into_iter().enumerate() {
+            if !read {
+                continue;
+            }
+            let posed = &world[f * n..(f + 1) * n];
+            let out = &mut pos[f * CANON_COUNT..(f + 1) * CANON_COUNT];
+            for (slot, c) in out.iter_mut().zip(Canon::ALL) {
+                *slot = map.get(c).and_then(|j| posed.get(j).copied()).unwrap_or(Vec3::NAN);
+            }
+            crate::canon::humanoid::fill_missing(out);
+        }
+        Some(Self::from_positions(&pos, clip.fps))
+    }
+
     /// [`QualityMotion::from_clip`] posing every frame of the clip ([`canonical_positions`]):
     /// the control ([`super::GenerateOptions::quick_measures`] off).
     pub fn from_clip_every_frame(clip: &Clip) -> Result<Self, QualityError> {
