@@ -476,3 +476,18 @@ fn a_released_foot_eases_over_its_swing_against_the_fixed_ease_control() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+
+/// Session 21 (issue 26's speed goal): pass 0 posing only the joints it reads (the hips and
+/// legs, and what they hang from: RobotExpressive's feet hang from an IK bone at the root)
+/// against posing every joint, the control: the same retargeted clip, to the bit, on every rig
+/// (the MMD models' extra bones and the robot's detached feet included), on a salsa take.
+#[test]
+fn the_free_pass_posing_its_legs_alone_changes_no_rigs_frame() {
+    let (clip, map) = salsa();
+    let clip = clip.slice(0, 600, "salsa_01 (10 s)");
+    for ch in every_rig() {
+        let lean = ch.retarget_options(&clip, &map, &RetargetOptions::default()).unwrap_or_else(|e| panic!("{}: {e}", ch.name));
+        let whole = ch.retarget_options(&clip, &map, &RetargetOptions { free_pass_legs_only: false, ..Default::default() }).unwrap();
+        assert!(lean == whole, "{}: the retargeted clip changed", ch.name);
+    }
+}

@@ -7,8 +7,10 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-# The web build's rustflags, from wasm-pack.toml (one place for them): ["-C", "x"] -> -C x.
-web_flags=$(sed -n 's/^rustflags *= *\[\(.*\)\].*/\1/p' "$root/wasm-pack.toml" | head -1 | sed 's/"//g; s/, */ /g')
+# The web build's rustflags, from wasm-pack.toml (one place for them): the full engine's, its
+# [toolchain] section's (not the player's, whose own flags come first in the file; until session
+# 21 this read those, so the bench ran without simd128). ["-C", "x"] -> -C x.
+web_flags=$(awk '/^\[/ { section = $0 } section == "[toolchain]" && /^rustflags *=/' "$root/wasm-pack.toml" | sed -n 's/^rustflags *= *\[\(.*\)\].*/\1/p' | head -1 | sed 's/"//g; s/, */ /g')
 
 build() { # target-dir rustflags
   local dir=$1 flags=$2

@@ -141,7 +141,7 @@ fn host_clock() -> f64 {
 
 thread_local! {
     static PROFILE: RefCell<Option<profile::Profile>> = const { RefCell::new(None) };
-    static DANCES: RefCell<[Vec<Option<usize>>; 8]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
+    static DANCES: RefCell<[Vec<Option<usize>>; 9]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
 }
 
 /// The settings of variant `v`: 0 the default, 1 windowed refills, 2 session 15's measures
@@ -150,7 +150,8 @@ thread_local! {
 /// session 17's work (every top list tried whole, every frame of each held pass posed:
 /// pose_read_frames_only off and session 18's fills), 6 session 18's work (top lists stopped by
 /// the cheapest node of all: top_lists_stop_at_rest off), 7 session 19's work (whole columns
-/// scanned entry by entry: columns_scanned_by_chunks off, today's main, the control).
+/// scanned entry by entry: columns_scanned_by_chunks off), 8 session 20's work (the held-feet
+/// rule's free pass posing every joint: free_pass_legs_only off, today's main, the control).
 fn variant(v: u32) -> GenerateOptions {
     let d = GenerateOptions::default();
     match v {
@@ -161,6 +162,7 @@ fn variant(v: u32) -> GenerateOptions {
         5 => GenerateOptions { pose_read_frames_only: false, top_lists_stop_at_rest: false, columns_scanned_by_chunks: false, ..d },
         6 => GenerateOptions { top_lists_stop_at_rest: false, columns_scanned_by_chunks: false, ..d },
         7 => GenerateOptions { columns_scanned_by_chunks: false, ..d },
+        8 => GenerateOptions { free_pass_legs_only: false, ..d },
         _ => d,
     }
 }

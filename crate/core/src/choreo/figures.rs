@@ -82,16 +82,18 @@ pub fn played_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Opt
 /// [`super::GenerateOptions::quick_measures`]. The same figures either way (the test
 /// `quick_measures_keep_every_figure`).
 pub fn played_figures_with(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool) -> Option<Played> {
-    played_figures_posed(lib, bars, path, quick, quick)
+    played_figures_posed(lib, bars, path, quick, quick, quick)
 }
 
 /// [`played_figures_with`]; `read_only` off: session 17's measures, each round of the
 /// held-feet rule posing every frame of its held pass, not only the frames its measures read
 /// ([`super::GenerateOptions::pose_read_frames_only`], the control). The same figures either
-/// way (the test `posing_only_the_frames_read_keeps_every_figure`).
-pub fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool, read_only: bool) -> Option<Played> {
+/// way (the test `posing_only_the_frames_read_keeps_every_figure`). `legs_only` off: the
+/// held-feet rule's free pass poses every joint, not only those it reads (session 20's
+/// measures, [`super::GenerateOptions::free_pass_legs_only`], the control; the same figures).
+pub fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool, read_only: bool, legs_only: bool) -> Option<Played> {
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
-    let (clip, switches, measured) = render_measured(lib, bars, &choices, &RenderOptions::default(), quick, read_only);
+    let (clip, switches, measured) = render_measured(lib, bars, &choices, &RenderOptions::default(), quick, read_only, legs_only);
     let m = match measured {
         Some(m) => m,
         None if quick => QualityMotion::from_clip(&clip).ok()?,
@@ -182,7 +184,7 @@ impl Measured {
         if let Some((_, f)) = self.played.iter().find(|(q, _)| q == path) {
             return f.clone();
         }
-        let f = profile::timed(Work::Measure, || played_figures_posed(p.lib, p.bars, path, p.quick_measures, p.pose_read_frames_only));
+        let f = profile::timed(Work::Measure, || played_figures_posed(p.lib, p.bars, path, p.quick_measures, p.pose_read_frames_only, p.free_pass_legs_only));
         self.played.push((path.to_vec(), f.clone()));
         f
     }
@@ -230,12 +232,28 @@ mod tests {
         for (k, bpm) in [(3usize, 96.0f32), (7, 120.0), (11, 138.0), (5, 160.0), (13, 104.0)] {
             let bars = bars_from_tempo(20.0, bpm, 4, 0.0, |_, _| 0.5).unwrap();
             let path: Vec<usize> = (0..bars.len()).map(|i| live[(i * k + bpm as usize) % live.len()]).collect();
-            let (read, every) = (played_figures_posed(&lib, &bars, &path, true, true), played_figures_posed(&lib, &bars, &path, true, false));
+            let (read, every) = (played_figures_posed(&lib, &bars, &path, true, true, true), played_figures_posed(&lib, &bars, &path, true, false, true));
             assert!(read.is_some(), "{bpm} BPM: measured");
             assert_eq!(read, every, "{bpm} BPM");
         }
         // The frames read at 60 fps are every other one: half the held pass is not posed.
         let read = crate::choreo::quality::QualityMotion::frames_read(601, 60.0);
         assert_eq!(read.iter().filter(|&&r| r).count(), 301);
+    }
+
+    #[test]
+    fn the_free_pass_posing_its_legs_alone_keeps_every_figure() {
+        // The held-feet rule's free pass posing only the hips and legs, against posing every
+        // joint (session 20's measures): the same figures, to the bit, on dances that keep
+        // their holds and on ones that drop some, one of them a minute long.
+        let lib = SegmentLibrary::builtin();
+        let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired && s.counts() == 4).map(|s| s.index).collect();
+        for (k, bpm, secs) in [(3usize, 96.0f32, 20.0), (7, 120.0, 60.0), (11, 138.0, 20.0), (5, 160.0, 20.0)] {
+            let bars = bars_from_tempo(secs, bpm, 4, 0.0, |_, _| 0.5).unwrap();
+            let path: Vec<usize> = (0..bars.len()).map(|i| live[(i * k + bpm as usize) % live.len()]).collect();
+            let (lean, whole) = (played_figures_posed(&lib, &bars, &path, true, true, true), played_figures_posed(&lib, &bars, &path, true, true, false));
+            assert!(lean.is_some(), "{bpm} BPM: measured");
+            assert_eq!(lean, whole, "{bpm} BPM");
+        }
     }
 }

@@ -158,6 +158,12 @@ pub struct GenerateOptions {
     /// join over 1.5 in 5 of 64, the blended-jump term's in 4); false: the plain ladder, the
     /// control (`docs/benchmarks-notes-choreo.md`, session 19).
     pub skate_beside_beat_term: bool,
+    /// Measure each dance as played with the held-feet rule's free pass posing only the joints
+    /// it reads (hips and legs, [`crate::canon::character::RetargetOptions::free_pass_legs_only`]),
+    /// and the unheld dance measured from the source poses that pass posed, not posed again.
+    /// The same figures and dances (`the_free_pass_posing_its_legs_alone_keeps_every_figure`,
+    /// `dance_fixture`). Default true; false: the control (session 20's measures).
+    pub free_pass_legs_only: bool,
 }
 
 impl Default for GenerateOptions {
@@ -180,6 +186,7 @@ impl Default for GenerateOptions {
             top_lists_stop_at_rest: true,
             columns_scanned_by_chunks: true,
             skate_beside_beat_term: true,
+            free_pass_legs_only: true,
         }
     }
 }
@@ -300,6 +307,8 @@ pub struct Problem<'a> {
     pub(super) quick_measures: bool,
     /// [`GenerateOptions::pose_read_frames_only`].
     pub(super) pose_read_frames_only: bool,
+    /// [`GenerateOptions::free_pass_legs_only`].
+    pub(super) free_pass_legs_only: bool,
     /// [`GenerateOptions::top_lists_stop_at_rest`], [`GenerateOptions::columns_scanned_by_chunks`].
     top_lists_stop_at_rest: bool,
     columns_scanned_by_chunks: bool,
@@ -357,6 +366,7 @@ impl<'a> Problem<'a> {
             opened: vec![false; layers.len()],
             quick_measures: options.quick_measures,
             pose_read_frames_only: options.pose_read_frames_only,
+            free_pass_legs_only: options.free_pass_legs_only,
             top_lists_stop_at_rest: options.top_lists_stop_at_rest,
             columns_scanned_by_chunks: options.columns_scanned_by_chunks,
         };

@@ -128,6 +128,32 @@ impl QualityMotion {
         read
     }
 
+    /// [`QualityMotion::from_clip`] of `clip` from its joints' world positions already posed
+    /// (`world`: frame-major, the clip's skeleton's joints, [`crate::motion::WorldPose::of_frame`]'s
+    /// on every frame [`QualityMotion::frames_read`] marks; the others are not read): the same
+    /// motion, the clip not posed again. `None` where `from_clip` would not pose frames one by
+    /// one (too short, a bad frame rate) or `world` is not of the clip.
+    pub(crate) fn from_posed(clip: &Clip, world: &[Vec3]) -> Option<Result<Self, QualityError>> {
+        let (frames, n) = (clip.frame_count(), clip.skeleton.len());
+        if !(clip.fps.is_finite() && clip.fps > 0.0) || frames < 3 || world.len() != frames * n {
+            return None;
+        }
+        let map = HumanoidMap::from_skeleton(&clip.skeleton);
+        let mut pos = vec![Vec3::ZERO; frames * CANON_COUNT];
+        for (f, read) in Self::frames_read(frames, clip.fps).into_iter().enumerate() {
+            if !read {
+                continue;
+            }
+            let posed = &world[f * n..(f + 1) * n];
+            let out = &mut pos[f * CANON_COUNT..(f + 1) * CANON_COUNT];
+            for (slot, c) in out.iter_mut().zip(Canon::ALL) {
+                *slot = map.get(c).and_then(|j| posed.get(j).copied()).unwrap_or(Vec3::NAN);
+            }
+            crate::canon::humanoid::fill_missing(out);
+        }
+        Some(Self::from_positions(&pos, clip.fps))
+    }
+
     /// [`QualityMotion::from_clip`] posing every frame of the clip ([`canonical_positions`]):
     /// the control ([`super::GenerateOptions::quick_measures`] off).
     pub fn from_clip_every_frame(clip: &Clip) -> Result<Self, QualityError> {
@@ -218,9 +244,15 @@ fn gaussian_smooth(x: &[f32], sigma: f32) -> Vec<f32> {
 pub fn kinetic_speed(m: &QualityMotion) -> Vec<f32> {
     let frames = m.frames();
     let mut e = vec![0.0f32; frames];
-    for f in 1..frames {
-        let s: f32 = (0..CANON_COUNT).map(|j| (m.positions[f * CANON_COUNT + j] - m.positions[(f - 1) * CANON_COUNT + j]).length()).sum();
-        e[f] = s / CANON_COUNT as f32 * QUALITY_FPS;
+    // Joint by joint over every frame: each frame's sum still adds its joints in order (the
+    // same bits), and the frames' sums no longer wait on each other.
+    for j in 0..CANON_COUNT {
+        for f in 1..frames {
+            e[f] += (m.positions[f * CANON_COUNT + j] - m.positions[(f - 1) * CANON_COUNT + j]).length();
+        }
+    }
+    for s in e.iter_mut().skip(1) {
+        *s = *s / CANON_COUNT as f32 * QUALITY_FPS;
     }
     if frames > 1 {
         e[0] = e[1];
@@ -423,13 +455,17 @@ pub fn pfc(m: &QualityMotion) -> f32 {
 pub fn velocity_changes(m: &QualityMotion) -> Vec<f32> {
     let frames = m.frames();
     let mut out = vec![0.0f32; frames];
+    // The largest squared change first, then its length: a square root and a product by a
+    // positive constant are correctly rounded and never decrease, so the length of the
+    // largest is the largest length, to the bit (one root a frame, not one a joint).
     for f in 1..frames.saturating_sub(1) {
-        out[f] = (0..CANON_COUNT)
+        let most = (0..CANON_COUNT)
             .map(|j| {
                 let x = |t: usize| m.positions[t * CANON_COUNT + j];
-                ((x(f + 1) - x(f)) - (x(f) - x(f - 1))).length() * QUALITY_FPS
+                ((x(f + 1) - x(f)) - (x(f) - x(f - 1))).length_squared()
             })
             .fold(0.0, f32::max);
+        out[f] = most.sqrt() * QUALITY_FPS;
     }
     out
 }
@@ -716,6 +752,61 @@ mod tests {
         let pos: Vec<Vec3> = (0..10).flat_map(|_| rest_frame(Vec3::ZERO)).map(|p| p * 2.0).collect();
         let m = QualityMotion::from_positions(&pos, 30.0).unwrap();
         assert!((body_height(&m.positions) - h).abs() < 1e-3);
+    }
+
+    #[test]
+    fn kinetic_speed_joint_by_joint_keeps_every_bit() {
+        // The speeds summed joint by joint over the frames against each frame's joints summed
+        // in turn (the code before): the same bits on a rendered dance.
+        use crate::choreo::{grid::bars_from_tempo, render::{render, RenderOptions}, SegmentLibrary};
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(16.0, 108.0, 4, 0.0, |_, _| 0.5).unwrap();
+        let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired && s.counts() == 4).map(|s| s.index).collect();
+        let choices: Vec<Option<usize>> = (0..bars.len()).map(|i| Some(live[(i * 11 + 5) % live.len()])).collect();
+        let m = QualityMotion::from_clip(&render(&lib, &bars, &choices, &RenderOptions::default())).unwrap();
+        let frames = m.frames();
+        let mut e = vec![0.0f32; frames];
+        for f in 1..frames {
+            let s: f32 = (0..CANON_COUNT).map(|j| (m.positions[f * CANON_COUNT + j] - m.positions[(f - 1) * CANON_COUNT + j]).length()).sum();
+            e[f] = s / CANON_COUNT as f32 * QUALITY_FPS;
+        }
+        e[0] = e[1];
+        let before = gaussian_smooth(&e, SPEED_SIGMA_FRAMES);
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&kinetic_speed(&m)), bits(&before));
+        assert!(!kinetic_beat_frames(&before).is_empty());
+    }
+
+    #[test]
+    fn velocity_changes_are_the_largest_length_to_the_bit() {
+        // One root a frame (of the largest squared change) against a length a joint, the
+        // largest kept: the same bits on a rendered dance, feet held, and on still frames.
+        use crate::choreo::{grid::bars_from_tempo, render::{render, RenderOptions}, SegmentLibrary};
+        let lib = SegmentLibrary::builtin();
+        let bars = bars_from_tempo(16.0, 132.0, 4, 0.0, |_, _| 0.5).unwrap();
+        let live: Vec<usize> = lib.segments().iter().filter(|s| !s.retired && s.counts() == 4).map(|s| s.index).collect();
+        let choices: Vec<Option<usize>> = (0..bars.len()).map(|i| Some(live[(i * 7 + 2) % live.len()])).collect();
+        let dance = QualityMotion::from_clip(&render(&lib, &bars, &choices, &RenderOptions::default())).unwrap();
+        let still = QualityMotion::from_positions(&(0..12).flat_map(|_| rest_frame(Vec3::ZERO)).collect::<Vec<_>>(), 30.0).unwrap();
+        for m in [dance, still] {
+            let frames = m.frames();
+            let lengths: Vec<f32> = (0..frames)
+                .map(|f| {
+                    if f == 0 || f + 1 >= frames {
+                        return 0.0;
+                    }
+                    (0..CANON_COUNT)
+                        .map(|j| {
+                            let x = |t: usize| m.positions[t * CANON_COUNT + j];
+                            ((x(f + 1) - x(f)) - (x(f) - x(f - 1))).length() * QUALITY_FPS
+                        })
+                        .fold(0.0, f32::max)
+                })
+                .collect();
+            let fast = velocity_changes(&m);
+            assert_eq!(fast.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), lengths.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+            assert!(frames < 20 || fast.iter().any(|&v| v > 0.0));
+        }
     }
 
     #[test]

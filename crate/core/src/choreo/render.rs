@@ -124,22 +124,24 @@ pub fn render_switched(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usi
 /// handed back. `read_only` (with `quick`): the held-feet rule's held passes pose only the
 /// frames its measures read ([`QualityMotion::frames_read`]), so the clip handed back is
 /// whole only where the motion was read from it: for measuring, not for playing.
-pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool, read_only: bool) -> (Clip, Vec<f32>, Option<QualityMotion>) {
-    let (clip, holds, switches) = render_traced_with(lib, bars, choices, options, quick, quick && read_only);
+/// `legs_only`: the held-feet rule's free pass poses only the joints it reads
+/// ([`crate::canon::character::RetargetOptions::free_pass_legs_only`]; off: the control).
+pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool, read_only: bool, legs_only: bool) -> (Clip, Vec<f32>, Option<QualityMotion>) {
+    let (clip, holds, switches) = render_traced_with(lib, bars, choices, options, quick, quick && read_only, legs_only);
     let motion = if quick { holds.motion } else { None };
     (clip, switches, motion)
 }
 
 /// [`render`], with what its feet were held to and where its joins fall ([`render_switched`]).
 fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Holds, Vec<f32>) {
-    render_traced_with(lib, bars, choices, options, true, false)
+    render_traced_with(lib, bars, choices, options, true, false, true)
 }
 
 /// [`render_traced`]; `quick` off: the held-feet rule as before session 16 (its free pass
 /// posed anew each round, every frame posed for its measures), the control the test
 /// `keeping_the_free_pass_changes_no_frame` compares with. `read_only`: the held passes pose
 /// only the frames the measures read ([`render_measured`]).
-fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool, read_only: bool) -> (Clip, Holds, Vec<f32>) {
+fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool, read_only: bool, legs_only: bool) -> (Clip, Holds, Vec<f32>) {
     let fps = if options.fps.is_finite() && options.fps > 0.0 { options.fps } else { 60.0 };
     let skeleton = Arc::new(canonical_skeleton());
     let end_secs = bars.iter().map(|b| b.end_secs).fold(0.0f32, f32::max);
@@ -296,7 +298,7 @@ fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usiz
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: roots }],
     };
-    let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches, quick, read_only) } else { (clip, Holds::default()) };
+    let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches, (quick, read_only, legs_only)) } else { (clip, Holds::default()) };
     (clip, holds, switches)
 }
 
@@ -341,7 +343,7 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   `read_only` too, each round's held pass poses only those frames (half of them at 60 fps;
 ///   the held clip returned is then whole only there: for measuring, not for playing).
 #[allow(clippy::too_many_arguments)]
-fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32], quick: bool, read_only: bool) -> (Clip, Holds) {
+fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32], (quick, read_only, legs_only): (bool, bool, bool)) -> (Clip, Holds) {
     use crate::canon::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
     let frames = clip.frame_count();
     if frames < 3 || played.len() < frames {
@@ -367,8 +369,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     // a bar's edge) slides its feet more in all: then the dance is played unheld. One pass of
     // §J's measures per rendered dance gives both.
     type BarFigures = (f32, f32, f32, f32);
-    let figures = |c: &Clip| -> Option<(Vec<BarFigures>, (f32, f32, f32), QualityMotion)> {
-        let m = if quick { QualityMotion::from_clip(c) } else { QualityMotion::from_clip_every_frame(c) }.ok()?;
+    let measure = |m: QualityMotion| -> Option<(Vec<BarFigures>, (f32, f32, f32), QualityMotion)> {
         let kinetic = super::quality::kinetic_beats_secs(&m);
         let q_frames = m.frames();
         let frame_of = |t: f32| ((t * super::quality::QUALITY_FPS).round().max(0.0) as usize).min(q_frames);
@@ -398,11 +399,27 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         let slide = super::quality::summarize_skate(&skate, frame_of(first.start_secs)..frame_of(last.end_secs)).mean_cm_per_s;
         Some((per_bar, (a.bas_music - a.bas_music_shifted, super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), slide), m))
     };
-    let Some((unheld, unheld_whole, unheld_m)) = figures(&clip) else { return (clip, Holds::default()) };
+    let figures = |c: &Clip| measure(if quick { QualityMotion::from_clip(c) } else { QualityMotion::from_clip_every_frame(c) }.ok()?);
+    let only = (quick && read_only).then(|| QualityMotion::frames_read(frames, clip.fps));
+    let mut free = None;
+    // With `legs_only` (and the frames read only): round 0's held pass first, and the unheld
+    // dance measured from the source poses its free pass posed on the frames read
+    // ([`QualityMotion::from_posed`]): the same motion, the unheld dance not posed twice.
+    let mut first = None;
+    let unheld_figures = if only.is_some() && legs_only {
+        let planted = [0, 2].map(|k| ((0..frames).map(|f| source[f][k]).collect(), (0..frames).map(|f| source[f][k + 1]).collect()));
+        let Some(held) = hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free, only.as_deref(), legs_only) else { return (clip, Holds::default()) };
+        first = Some(held);
+        match free.as_ref().and_then(|p| p.source_positions()).and_then(|w| QualityMotion::from_posed(&clip, w)) {
+            Some(m) => m.ok().and_then(measure),
+            None => figures(&clip),
+        }
+    } else {
+        figures(&clip)
+    };
+    let Some((unheld, unheld_whole, unheld_m)) = unheld_figures else { return (clip, Holds::default()) };
     let worse_whole = |(margin, cost, skate): (f32, f32, f32)| margin < unheld_whole.0 - 1e-4 || cost > unheld_whole.1 + 1e-4 || skate > unheld_whole.2;
     let mut keep = vec![true; bars.len()];
-    let mut free = None;
-    let only = (quick && read_only).then(|| QualityMotion::frames_read(frames, clip.fps));
     for round in 0..=HOLD_RULE_ROUNDS {
         if !quick {
             free = None;
@@ -410,7 +427,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         let kept = |f: usize| bar_of[f].is_none_or(|b| keep.get(b).copied().unwrap_or(true));
         let track = |k: usize| -> Vec<bool> { (0..frames).map(|f| kept(f) && source[f][k]).collect() };
         let planted = [(track(0), track(1)), (track(2), track(3))];
-        let Some(held) = hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free, only.as_deref()) else { return (clip, Holds::default()) };
+        let Some(held) = first.take().or_else(|| hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free, only.as_deref(), legs_only)) else { return (clip, Holds::default()) };
         let Some((with, with_whole, held_m)) = figures(&held) else { return (clip, Holds::default()) };
         if round == HOLD_RULE_ROUNDS {
             if worse_whole(with_whole) {
@@ -698,8 +715,8 @@ mod tests {
         let mut rounds_seen = 0;
         for (bpm, secs) in [(90.0, 20.0), (120.0, 24.0), (150.0, 16.0), (170.0, 20.0)] {
             let (lib, bars, choices) = dance(bpm, secs);
-            let (kept, holds, s1) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), true, false);
-            let (anew, holds_anew, s2) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), false, false);
+            let (kept, holds, s1) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), true, false, true);
+            let (anew, holds_anew, s2) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), false, false, false);
             assert_eq!(kept, anew, "{bpm} BPM");
             assert_eq!((holds.kept.clone(), holds.motion.clone(), s1), (holds_anew.kept, holds_anew.motion, s2), "{bpm} BPM");
             rounds_seen += usize::from(holds.kept.iter().any(|&k| k) && holds.kept.iter().any(|&k| !k));

@@ -38,6 +38,20 @@ pub(crate) struct FreePass {
     /// The source's world rotation of every joint, frame-major, and its hips' world position.
     pub(super) src_rotations: Vec<Quat>,
     pub(super) src_hips: Vec<Vec3>,
+    /// With [`RetargetOptions::free_pass_legs_only`] and the frames read given: the source's
+    /// world position of every joint on those frames, frame-major (zero on the others), as
+    /// pass 0 posed them; empty otherwise ([`FreePass::source_positions`]).
+    pub(super) src_positions: Vec<Vec3>,
+}
+
+impl FreePass {
+    /// The source's world position of every joint (frame-major, its skeleton's joints) on the
+    /// frames the caller reads (zero on the others), as pass 0 posed the source: the same bits
+    /// as posing those frames of the source clip again ([`crate::motion::WorldPose::of_frame`]).
+    /// `None` when not kept.
+    pub(crate) fn source_positions(&self) -> Option<&[Vec3]> {
+        Some(self.src_positions.as_slice()).filter(|p| !p.is_empty())
+    }
 }
 
 /// Fastest a released foot in a rendered dance catches up with its free path, m/s (a
@@ -57,7 +71,8 @@ pub(crate) const DANCE_CATCH_UP_M_S: f32 = 1.0;
 /// another). `only`: the frames the caller reads (a measure's: the 30 fps samples
 /// `QualityMotion::from_clip` poses); the others are placeholders, not the held dance (each frame of the held
 /// pass is posed on its own, so the frames read are the same either way). `None`: every frame.
-pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>); 2], catch_up_m_s: f32, free: &mut Option<FreePass>, only: Option<&[bool]>) -> Option<Clip> {
+/// `legs_only`: pass 0 poses only the joints it reads ([`RetargetOptions::free_pass_legs_only`]).
+pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>); 2], catch_up_m_s: f32, free: &mut Option<FreePass>, only: Option<&[bool]>, legs_only: bool) -> Option<Clip> {
     use std::sync::OnceLock;
     static FIGURE: OnceLock<Character> = OnceLock::new();
     if !is_canonical(&clip.skeleton) {
@@ -83,7 +98,7 @@ pub(crate) fn hold_feet_in_dance(clip: &Clip, planted: &[(Vec<bool>, Vec<bool>);
         .collect();
     let given = GivenHolds { contacts, release: Release::CatchUp { speed: catch_up_m_s } };
     let map = HumanoidMap::from_skeleton(&clip.skeleton);
-    let mut out = figure.play(clip, &map, &RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true, release_over_swing: true }, Some(&given), Some(free), only).ok()?;
+    let mut out = figure.play(clip, &map, &RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true, release_over_swing: true, free_pass_legs_only: legs_only }, Some(&given), Some(free), only).ok()?;
     out.name = clip.name.clone();
     out.source = clip.source.clone();
     Some(out)

@@ -448,6 +448,9 @@ impl Character {
             leg_of[leg.hip] = k;
             leg_of[leg.knee] = k;
         }
+        // The joints pass 0 reads (its hips, legs, feet and toes, and every joint they are
+        // posed from): with `free_pass_legs_only`, the only ones it poses.
+        let free_reads = free_pass_joints(&self.skeleton, hips, &legs, &detached);
         // Pass 0 poses the character freely and records where its feet (ankles and toes) and
         // hips go and where the source's are; the plants and the pelvis drop follow from
         // those; pass 1 poses again with the feet held.
@@ -523,10 +526,22 @@ impl Character {
         }
         let record = hold && !reuse && free.is_some();
         let (mut src_rotations, mut src_hips) = (Vec::with_capacity(if record { frames * src_n } else { 0 }), Vec::with_capacity(if record { frames } else { 0 }));
+        // The source's positions on the frames the caller reads, kept for its measure of the
+        // unheld dance ([`FreePass::source_positions`]).
+        let keep_positions = record && options.free_pass_legs_only && only.is_some_and(|o| o.len() == frames);
+        let mut src_positions = if keep_positions { vec![Vec3::ZERO; frames * src_n] } else { Vec::new() };
         for pass in if hold && !reuse { 0..2 } else { 1..2 } {
             if pass == 1 && record {
                 if let Some(slot) = free.as_deref_mut() {
-                    *slot = Some(FreePass { frames, feet: feet.clone(), free_hip: free_hip.clone(), free_hinge: free_hinge.clone(), src_rotations: std::mem::take(&mut src_rotations), src_hips: std::mem::take(&mut src_hips) });
+                    *slot = Some(FreePass {
+                        frames,
+                        feet: feet.clone(),
+                        free_hip: free_hip.clone(),
+                        free_hinge: free_hinge.clone(),
+                        src_rotations: std::mem::take(&mut src_rotations),
+                        src_hips: std::mem::take(&mut src_hips),
+                        src_positions: std::mem::take(&mut src_positions),
+                    });
                 }
             }
             // The source's pose per frame, as pass 0 posed it, when kept.
@@ -580,6 +595,9 @@ impl Character {
                         if record && pass == 0 {
                             src_rotations.extend_from_slice(&src_now.rotations);
                             src_hips.push(src_now.positions[Canon::Hips.index()]);
+                            if keep_positions && only.is_some_and(|o| o[f]) && src_now.positions.len() == src_n {
+                                src_positions[f * src_n..(f + 1) * src_n].copy_from_slice(&src_now.positions);
+                            }
                         }
                         (&src_now.rotations, src_now.positions[Canon::Hips.index()], &src_now.positions)
                     }
@@ -589,6 +607,9 @@ impl Character {
                 // otherwise be out of reach and shifted to keep held feet put.
                 let target = self.hips_rest + lift + (src_hips_now - canon_hips) * scale - Vec3::Y * drop_m[f] + shift_m[f];
                 for &i in &order {
+                    if pass == 0 && options.free_pass_legs_only && !free_reads[i] {
+                        continue;
+                    }
                     let j = &self.skeleton.joints[i];
                     let parent = j.parent.filter(|&q| q < i);
                     let (pg, pp) = parent.map(|q| (g[q], p[q])).unwrap_or((Quat::IDENTITY, Vec3::ZERO));
@@ -662,6 +683,36 @@ impl Character {
     }
 }
 
+/// The joints of `skeleton` pass 0 of [`Character::play`] reads: `hips`, each leg's hip, knee,
+/// foot and toe, and every joint one of those is posed from (its parent before it, or the
+/// joint a detached one hangs from, `detached`). The rest (spine, arms, head) pass 0 need not
+/// pose: what it keeps is where the feet, hips and ankle hinges go, and each frame of pass 1
+/// poses every joint anew.
+fn free_pass_joints(skeleton: &Skeleton, hips: usize, legs: &[Leg], detached: &[Option<(usize, Vec3)>]) -> Vec<bool> {
+    let n = skeleton.len();
+    let mut reads = vec![false; n];
+    for i in std::iter::once(hips).chain(legs.iter().flat_map(|l| [Some(l.hip), Some(l.knee), Some(l.foot), l.toe]).flatten()) {
+        if let Some(r) = reads.get_mut(i) {
+            *r = true;
+        }
+    }
+    loop {
+        let mut grew = false;
+        for i in 0..n {
+            if !reads[i] {
+                continue;
+            }
+            let from = [skeleton.joints[i].parent.filter(|&q| q < i), detached[i].map(|d| d.0)];
+            for q in from.into_iter().flatten() {
+                grew |= !std::mem::replace(&mut reads[q], true);
+            }
+        }
+        if !grew {
+            return reads;
+        }
+    }
+}
+
 /// A take's first frame within this angle of its skeleton's rest pose on every humanoid bone
 /// is the capture's calibration frame, not motion (see [`starts_on_calibration_frame`]).
 /// Capture noise on a calibration pose is a few degrees (the CMU takes: under 8°); a danced
@@ -712,11 +763,16 @@ pub struct RetargetOptions {
     /// lands again (`hold.rs`, `Release::Ease`); off only as the control (over 0.15 s, the hold
     /// before issue 27's mend).
     pub release_over_swing: bool,
+    /// Pass 0 (the character posed freely, to plan the held feet) poses only the joints it
+    /// reads: the hips and legs and what they hang from, not the spine, arms and head. The
+    /// same clip either way (pass 0 keeps only where the feet, hips and ankle hinges go); off
+    /// only as the control (`GenerateOptions::free_pass_legs_only`).
+    pub free_pass_legs_only: bool,
 }
 
 impl Default for RetargetOptions {
     fn default() -> Self {
-        RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true, release_over_swing: true }
+        RetargetOptions { transfer: Transfer::Conjugate, hold_feet: true, release_over_swing: true, free_pass_legs_only: true }
     }
 }
 
@@ -852,6 +908,28 @@ mod tests {
                 assert!((*x - *y).length() < 1e-4, "frame {f}: {x} vs {y}");
             }
         }
+    }
+
+    #[test]
+    fn the_free_pass_posing_its_legs_alone_changes_no_frame() {
+        // Feet held (pass 0 plans the holds): pass 0 posing only the hips and legs against
+        // posing every joint, the control. The same clip to the bit, and on the canonical rig
+        // 9 of its 21 joints posed.
+        let demo = demo_clip();
+        let sk = demo.skeleton.clone();
+        let map = HumanoidMap::from_skeleton(&sk);
+        let ch = Character::build("body", sk.clone(), builtin_body(&sk), map.clone());
+        let lean = ch.retarget_options(&demo, &map, &RetargetOptions::default()).unwrap();
+        let whole = ch.retarget_options(&demo, &map, &RetargetOptions { free_pass_legs_only: false, ..Default::default() }).unwrap();
+        assert_eq!(lean, whole);
+        let free = ch.retarget_options(&demo, &map, &RetargetOptions { hold_feet: false, ..Default::default() }).unwrap();
+        assert_ne!(lean, free, "the holds changed the dance: pass 0 was read");
+        let legs: Vec<Leg> = [(Canon::LeftUpperLeg, Canon::LeftLowerLeg, Canon::LeftFoot, Canon::LeftToe), (Canon::RightUpperLeg, Canon::RightLowerLeg, Canon::RightFoot, Canon::RightToe)]
+            .into_iter()
+            .map(|(a, b, c, d)| Leg { canon_knee: b, canon_foot: c, canon_toe: d, hip: map.get(a).unwrap(), knee: map.get(b).unwrap(), foot: map.get(c).unwrap(), toe: map.get(d), thigh_m: 0.4, shin_m: 0.4, thigh_local: Vec3::Y, shin_local: Vec3::Y })
+            .collect();
+        let reads = free_pass_joints(&sk, map.get(Canon::Hips).unwrap(), &legs, &vec![None; sk.len()]);
+        assert_eq!(reads.iter().filter(|&&r| r).count(), 9);
     }
 
     #[test]
