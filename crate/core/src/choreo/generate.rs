@@ -27,7 +27,10 @@
 //!    join and keeps what the dance met; when that ends over the goal, the same again with
 //!    stage 4's skate charge kept from the first refill (without it refills slide back past
 //!    the skate goal and are refused), the smoother kept. A refill sliding past the skate goal makes the next
-//!    charge skate ([`skate_ladder_for`]).
+//!    charge skate ([`skate_ladder_for`]). With [`GenerateOptions::join_wider_reach`], when all
+//!    that ends over the goal, it runs once more with a wider reach: each barred built-in move's
+//!    other side barred with it (the mirrored pair joins with the same jump) and each refill
+//!    windowed around the barred moves' bars (a whole refill moved the rough join elsewhere).
 //!
 //! Another take ([`GenerateOptions::take`], issue 26): take k > 0 runs the same stages on the
 //! objective plus a penalty on the moves the earlier takes' dances chose in each bar
@@ -57,8 +60,10 @@ pub use super::figures::{dance_figures, played_figures, DanceFigures, Measured, 
 pub use super::takes::{takes, takes_explained, MAX_TAKE, TAKE_DIFFER, TAKE_LADDER, TAKE_SLACK};
 
 mod order;
+mod repair;
 mod skate;
 pub use order::{order_stage, ORDER_IMPORTED_FLOOR, ORDER_ROUNDS};
+pub use repair::JOIN_BANS_AT_ONCE_TRIES;
 pub use skate::SKATE_BAN_ROUNDS;
 use crate::bars::Bar;
 
@@ -164,6 +169,12 @@ pub struct GenerateOptions {
     /// The same figures and dances (`the_free_pass_posing_its_legs_alone_keeps_every_figure`,
     /// `dance_fixture`). Default true; false: the control (session 20's measures).
     pub free_pass_legs_only: bool,
+    /// Stage 5, [`join_repair_stage`]: when its runs end over the join goal, run them once more
+    /// with a wider reach (`generate/repair.rs`: each barred built-in move's other side barred
+    /// too, refills windowed) and keep the smoother dance. Default false: with the 48 moves held
+    /// on the counts (session 20, not landed) it brings Vibe Ace's take 3 from 1.67 to 1.43 and
+    /// changes no dance within the goal (`docs/benchmarks-notes-choreo.md`, session 21).
+    pub join_wider_reach: bool,
 }
 
 impl Default for GenerateOptions {
@@ -187,6 +198,7 @@ impl Default for GenerateOptions {
             columns_scanned_by_chunks: true,
             skate_beside_beat_term: true,
             free_pass_legs_only: true,
+            join_wider_reach: false,
         }
     }
 }
@@ -586,143 +598,28 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 /// so refills that drop stage 4's charge slide back past the goal and are refused;
 /// `docs/benchmarks-notes-choreo.md`), and the smoother of the two is kept. The best dance that keeps what
 /// the first one met (beat-rate band, skate goal; a dance already past the skate goal slides no
-/// more than it did) with a better worst join is returned; else `path` and `cost`.
+/// more than it did) with a better worst join is returned; else `path` and `cost`. With
+/// [`GenerateOptions::join_wider_reach`], when that dance is still over the goal, all of it runs
+/// again from `path` with a wider reach
+/// (`generate/repair.rs`: each barred move's other side barred too, refills windowed,
+/// [`super::refill`]), and the smoother dance is kept: a dance within the goal is as before.
 pub fn join_repair_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, carried: f32, measured: &mut Measured) -> Result<(Vec<usize>, f32), FillError> {
     if p.layers.len() < 2 {
         return Ok((path, cost));
     }
     let why = p.why.borrow().clone();
-    let (q, c) = repairs(p, weights, options, path.clone(), cost, measured, 0.0)?;
     let worst = |m: &mut Measured, q: &[usize]| m.figures(p, q, options.measure_played).map_or(f32::INFINITY, |f| f.join_jump_max);
-    if carried > 0.0 && worst(measured, &q) > options.join_jump_goal {
-        let first_why = std::mem::replace(&mut *p.why.borrow_mut(), why);
-        let (r, d) = repairs(p, weights, options, path, cost, measured, carried)?;
-        if worst(measured, &r) < worst(measured, &q) {
-            return Ok((r, d));
-        }
-        *p.why.borrow_mut() = first_why;
+    let (q, c) = repair::runs(p, weights, options, &path, cost, carried, measured, false)?;
+    if !options.join_wider_reach || worst(measured, &q) <= options.join_jump_goal {
+        return Ok((q, c));
     }
+    let first_why = std::mem::replace(&mut *p.why.borrow_mut(), why);
+    let (r, d) = repair::runs(p, weights, options, &path, cost, carried, measured, true)?;
+    if worst(measured, &r) < worst(measured, &q) {
+        return Ok((r, d));
+    }
+    *p.why.borrow_mut() = first_why;
     Ok((q, c))
-}
-
-/// Stage 5's refills from `path`, charging skate at `carried` and heavier weights of
-/// [`skate_ladder`] ([`join_repair_stage`]): bans at once first, then one join a refill.
-#[allow(clippy::too_many_arguments)]
-fn repairs(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured, carried: f32) -> Result<(Vec<usize>, f32), FillError> {
-    if options.join_bans_at_once && options.measure_played {
-        let why = p.why.borrow().clone();
-        let on_beat = measured.figures(p, &path, true).is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
-        let (q, c, f) = repair_pass(p, weights, options, path.clone(), cost, measured, (true, carried), options.join_repairs.min(JOIN_BANS_AT_ONCE_TRIES))?;
-        // Kept only when it meets every goal the stage follows at the goal itself (not a
-        // dance past the skate goal on entry sliding no more than it did).
-        let met = f.is_some_and(|f| f.join_jump_max <= options.join_jump_goal && f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)));
-        if met {
-            return Ok((q, c));
-        }
-        *p.why.borrow_mut() = why;
-    }
-    repair_pass(p, weights, options, path, cost, measured, (false, carried), options.join_repairs).map(|(q, c, _)| (q, c))
-}
-
-/// Refills [`GenerateOptions::join_bans_at_once`] tries before stage 5 falls back to one join a
-/// refill ([`join_repair_stage`]).
-pub const JOIN_BANS_AT_ONCE_TRIES: usize = 4;
-
-/// One pass of [`join_repair_stage`]'s refills, up to `tries`: barring the move after the worst
-/// join of the last refill, or after every join over the goal in it (`at_once`), each refill
-/// charging skate at least at `carried`. Returns the best dance kept, its cost and its figures.
-#[allow(clippy::too_many_arguments)]
-fn repair_pass(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured, (at_once, carried): (bool, f32), tries: usize) -> Result<(Vec<usize>, f32, Option<DanceFigures>), FillError> {
-    let (mut path, mut cost) = (path, cost);
-    let played = options.measure_played;
-    let current = measured.figures(p, &path, played);
-    let (mut trial_path, mut trial) = (path.clone(), current);
-    let mut best = current;
-    let skate_met = current.is_some_and(|f| f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &path));
-    // The skate a refill may reach: the goal, or, when the dance slid past it already, no more
-    // than it did (session 16: a dance 1 cm/s over the goal let every refill slide freely).
-    let entry_skate = if skate_met { 0.0 } else { current.map_or(f32::INFINITY, |f| f.foot_skate_cm_per_s) };
-    let skate_cap = |q: &[usize]| skate_goal_cm_per_s(p.lib, q).max(entry_skate);
-    let on_beat = current.is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
-    let mut ban: Vec<Vec<f32>> = Vec::new();
-    // Bars whose imported move missed the join goal, opened to built-in moves (*my moves*).
-    let mut opened = vec![false; p.layers.len()];
-    // The skate charge carried (0, or stage 4's weight), then the ladder's heavier weights.
-    let mut skate_weights = skate_ladder_for(if options.skate_beside_beat_term { p.weights.beat_weight } else { 0.0 }).filter(|&w| w > carried);
-    let mut skate_weight = carried;
-    for _ in 0..tries {
-        let Some(f) = trial else { break };
-        let joins_ok = f.join_jump_max <= options.join_jump_goal;
-        let skate_ok = f.foot_skate_cm_per_s <= skate_cap(&trial_path);
-        if joins_ok && skate_ok {
-            break;
-        }
-        if ban.is_empty() {
-            ban = vec![vec![0.0; p.lib.len()]; p.layers.len()];
-        }
-        // The bars whose cost this refill changes (for a windowed refill, [`super::refill`]).
-        let mut changed: Vec<usize> = Vec::new();
-        let mut reweighted = false;
-        if !joins_ok {
-            // The bar after the join takes another move (the one before it, when that one is
-            // pinned; both pinned: nothing to change): the worst join's, and with
-            // `join_bans_at_once` every other join over the goal in the same measure.
-            let Some(worst) = f.worst_join_bar else { break };
-            let mut over = vec![worst];
-            if at_once && played {
-                if let Some(pf) = measured.played(p, &trial_path) {
-                    over.extend(pf.bars.iter().enumerate().filter(|(u, b)| *u != worst && b.join_jump.is_some_and(|j| j > options.join_jump_goal)).map(|(u, _)| u));
-                }
-            }
-            let mut banned: Vec<usize> = Vec::new();
-            for bar in over {
-                let Some(t) = [bar, bar - 1].into_iter().find(|&t| matches!(p.layers[t], Layer::Open { .. })) else { continue };
-                let s = trial_path[t];
-                if !banned.contains(&s) {
-                    banned.push(s);
-                    for v in ban.iter_mut() {
-                        v[s] += JOIN_BAN;
-                    }
-                    changed.extend((0..trial_path.len()).filter(|&u| trial_path[u] == s));
-                }
-                if p.weights.moves_source == MovesSource::Mine && p.lib.segments().get(s).is_some_and(|seg| seg.builtin.is_none()) {
-                    if !opened[t] && !p.opened.get(t).copied().unwrap_or(false) {
-                        changed.push(t);
-                    }
-                    opened[t] = true;
-                    if let Some(w) = p.why.borrow_mut().get_mut(t) {
-                        w.get_or_insert(BuiltinWhy::RoughJoin);
-                    }
-                }
-            }
-            if banned.is_empty() {
-                break;
-            }
-        }
-        if !skate_ok {
-            let Some(w) = skate_weights.next() else { break };
-            skate_weight = w;
-            reweighted = true;
-        }
-        let mut extra: Vec<Vec<f32>> = ban.iter().enumerate().map(|(t, v)| v.iter().enumerate().map(|(s, b)| b + skate_weight * p.skate_excess(t, s).max(0.0) / 100.0).collect()).collect();
-        for t in (0..opened.len()).filter(|&t| opened[t]) {
-            p.lift_charge(&mut extra, t);
-        }
-        let q = if options.windowed_refills && !reweighted { p.fill_window(weights, &extra, &trial_path, &changed)? } else { p.fill(weights, &extra)? };
-        let (q, c) = p.free_skate(weights, &extra, &q);
-        let after = measured.figures(p, &q, played);
-        if let (Some(a), Some(b)) = (after, best) {
-            // Kept only when its worst join is better and nothing the dance met is lost: the
-            // beat rate's band, and the skate goal.
-            let keeps_rate = !on_beat || in_beat_rate_band(a.kinetic_per_count);
-            let keeps_skate = a.foot_skate_cm_per_s <= skate_cap(&q);
-            if a.join_jump_max < b.join_jump_max && keeps_rate && keeps_skate {
-                (path, cost, best) = (q.clone(), c, after);
-            }
-        }
-        (trial_path, trial) = (q, after);
-    }
-    Ok((path, cost, best))
 }
 
 /// The whole pipeline: stages 1 to 5 in order on the problem of filling `layers` (one per bar

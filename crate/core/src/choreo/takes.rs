@@ -31,7 +31,7 @@ pub const TAKE_SLACK: f32 = 0.1;
 /// if the library holds it: a take of every move's other side costs what take 0 costs and
 /// measures the same, so it is the same dance to the eye, not another take. One pass over the
 /// library into a map by move (the first segment of each), then a look-up per segment.
-fn other_sides(lib: &SegmentLibrary) -> Vec<Option<usize>> {
+pub(crate) fn other_sides(lib: &SegmentLibrary) -> Vec<Option<usize>> {
     let segments = lib.segments();
     let mut by_move: HashMap<MoveInfo, usize> = HashMap::new();
     for s in segments {
