@@ -14,11 +14,11 @@ use super::*;
 pub(super) fn runs(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: &[usize], cost: f32, carried: f32, measured: &mut Measured, wide: bool) -> Result<(Vec<usize>, f32), FillError> {
     let why = p.why.borrow().clone();
     let options = &GenerateOptions { windowed_refills: options.windowed_refills || wide, ..*options };
-    let (q, c) = repairs(p, weights, options, path.to_vec(), cost, measured, (0.0, wide))?;
+    let (q, c) = repairs(p, weights, options, path.to_vec(), cost, measured, 0.0, wide)?;
     let worst = |m: &mut Measured, q: &[usize]| m.figures(p, q, options.measure_played).map_or(f32::INFINITY, |f| f.join_jump_max);
     if carried > 0.0 && worst(measured, &q) > options.join_jump_goal {
         let first_why = std::mem::replace(&mut *p.why.borrow_mut(), why);
-        let (r, d) = repairs(p, weights, options, path.to_vec(), cost, measured, (carried, wide))?;
+        let (r, d) = repairs(p, weights, options, path.to_vec(), cost, measured, carried, wide)?;
         if worst(measured, &r) < worst(measured, &q) {
             return Ok((r, d));
         }
@@ -28,13 +28,14 @@ pub(super) fn runs(p: &Problem, weights: &FillWeights, options: &GenerateOptions
 }
 
 /// Stage 5's refills from `path`, charging skate at `carried` and heavier weights of
-/// [`skate_ladder`] ([`join_repair_stage`]): bans at once first, then one join a refill.
+/// [`skate_ladder`] ([`join_repair_stage`]): bans at once first, then one join a refill;
+/// `wide`: each barred move's other side barred too ([`Reach`]).
 #[allow(clippy::too_many_arguments)]
-fn repairs(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured, (carried, wide): (f32, bool)) -> Result<(Vec<usize>, f32), FillError> {
+fn repairs(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured, carried: f32, wide: bool) -> Result<(Vec<usize>, f32), FillError> {
     if options.join_bans_at_once && options.measure_played {
         let why = p.why.borrow().clone();
         let on_beat = measured.figures(p, &path, true).is_some_and(|f| in_beat_rate_band(f.kinetic_per_count));
-        let (q, c, f) = repair_pass(p, weights, options, path.clone(), cost, measured, (true, carried, wide), options.join_repairs.min(JOIN_BANS_AT_ONCE_TRIES))?;
+        let (q, c, f) = repair_pass(p, weights, options, path.clone(), cost, measured, Reach { at_once: true, carried, wide }, options.join_repairs.min(JOIN_BANS_AT_ONCE_TRIES))?;
         // Kept only when it meets every goal the stage follows at the goal itself (not a
         // dance past the skate goal on entry sliding no more than it did).
         let met = f.is_some_and(|f| f.join_jump_max <= options.join_jump_goal && f.foot_skate_cm_per_s <= skate_goal_cm_per_s(p.lib, &q) && (!on_beat || in_beat_rate_band(f.kinetic_per_count)));
@@ -43,7 +44,18 @@ fn repairs(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: 
         }
         *p.why.borrow_mut() = why;
     }
-    repair_pass(p, weights, options, path, cost, measured, (false, carried, wide), options.join_repairs).map(|(q, c, _)| (q, c))
+    repair_pass(p, weights, options, path, cost, measured, Reach { at_once: false, carried, wide }, options.join_repairs).map(|(q, c, _)| (q, c))
+}
+
+/// How one pass of stage 5's refills reaches ([`repair_pass`]).
+#[derive(Clone, Copy)]
+struct Reach {
+    /// Bar the move after every join over the goal in a refill, not only after the worst.
+    at_once: bool,
+    /// The skate charge each refill keeps at least: 0, or stage 4's kept weight.
+    carried: f32,
+    /// Each barred built-in move's other side barred with it.
+    wide: bool,
 }
 
 /// Refills [`GenerateOptions::join_bans_at_once`] tries before stage 5 falls back to one join a
@@ -54,7 +66,8 @@ pub const JOIN_BANS_AT_ONCE_TRIES: usize = 4;
 /// join of the last refill, or after every join over the goal in it (`at_once`), each refill
 /// charging skate at least at `carried`. Returns the best dance kept, its cost and its figures.
 #[allow(clippy::too_many_arguments)]
-fn repair_pass(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured, (at_once, carried, wide): (bool, f32, bool), tries: usize) -> Result<(Vec<usize>, f32, Option<DanceFigures>), FillError> {
+fn repair_pass(p: &Problem, weights: &FillWeights, options: &GenerateOptions, path: Vec<usize>, cost: f32, measured: &mut Measured, reach: Reach, tries: usize) -> Result<(Vec<usize>, f32, Option<DanceFigures>), FillError> {
+    let Reach { at_once, carried, wide } = reach;
     let (mut path, mut cost) = (path, cost);
     let played = options.measure_played;
     let current = measured.figures(p, &path, played);
@@ -178,7 +191,7 @@ mod tests {
         let refill = |wide: bool| {
             let o = GenerateOptions { windowed_refills: wide, ..strict };
             let mut m = Measured::default();
-            repair_pass(&p, &p.weights, &o, path.clone(), 0.0, &mut m, (false, 0.0, wide), 1).unwrap();
+            repair_pass(&p, &p.weights, &o, path.clone(), 0.0, &mut m, Reach { at_once: false, carried: 0.0, wide }, 1).unwrap();
             assert!(m.played.len() >= 2, "no refill measured");
             m.played[1].0.clone()
         };
