@@ -133,11 +133,14 @@ pub(super) struct HoldWork {
     pub legs_only: bool,
 }
 
+/// A rendered dance measured ([`QualityMotion`]) and, when handed on, its §J measures.
+pub(super) type MeasuredDance = (QualityMotion, Option<DanceMeasures>);
+
 /// [`render_switched`], with the rendered dance measured ([`QualityMotion::from_clip`]) and its
 /// §J measures ([`DanceMeasures::of`]) when the held-feet rule took them on the way (`None`
 /// otherwise; the measures `None` when a join falls on the motion's last frame): not taken
 /// twice. With `work.quick` off (the control) nothing is handed back.
-pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, work: HoldWork) -> (Clip, Vec<f32>, Option<(QualityMotion, Option<DanceMeasures>)>) {
+pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, work: HoldWork) -> (Clip, Vec<f32>, Option<MeasuredDance>) {
     let work = HoldWork { read_only: work.quick && work.read_only, ..work };
     let (clip, holds, switches) = render_traced_with(lib, bars, choices, options, work);
     let motion = if work.quick { holds.motion.map(|m| (m, holds.measures.filter(|d| d.every_join_inside))) } else { None };
