@@ -6,7 +6,7 @@
 use super::generate::Problem;
 use super::profile::{self, Work};
 use super::quality::{beat_alignment, summarize_skate, DanceMeasures, QualityMotion};
-use super::render::{render_measured, render_switched, RenderOptions};
+use super::render::{render_measured, render_switched, HoldWork, RenderOptions};
 use super::segment::SegmentLibrary;
 use crate::bars::Bar;
 
@@ -93,19 +93,23 @@ pub fn played_figures_with(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], q
 /// measures, [`super::GenerateOptions::free_pass_legs_only`], the control; the same figures).
 pub fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool, read_only: bool, legs_only: bool) -> Option<Played> {
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
-    let (clip, switches, measured) = render_measured(lib, bars, &choices, &RenderOptions::default(), quick, read_only, legs_only);
-    let m = match measured {
-        Some(m) => m,
-        None if quick => QualityMotion::from_clip(&clip).ok()?,
-        None => QualityMotion::from_clip_every_frame(&clip).ok()?,
+    let (clip, switches, measured) = render_measured(lib, bars, &choices, &RenderOptions::default(), HoldWork { quick, read_only, legs_only });
+    let (m, handed) = match measured {
+        Some((m, d)) => (m, d),
+        None if quick => (QualityMotion::from_clip(&clip).ok()?, None),
+        None => (QualityMotion::from_clip_every_frame(&clip).ok()?, None),
     };
     if !quick {
         return played_of_control(&m, bars, &switches);
     }
     let counts = bar_counts_secs(bars);
     super::quality::check_beats(&counts).ok()?;
-    // Each of §J's measures once, read by both the whole dance's figures and each bar's.
-    let measures = DanceMeasures::of(&m, bars, &switches);
+    // Each of §J's measures once, read by both the whole dance's figures and each bar's: those
+    // the held-feet rule took of this motion last, when it hands them on.
+    let measures = match handed {
+        Some(d) => d,
+        None => DanceMeasures::of(&m, bars, &switches),
+    };
     let whole = whole_figures(&measures, bars)?;
     let per_bar = measures.bar_qualities(bars, &counts).iter().map(PlayedBar::of).collect();
     let (first, last) = (bars.first()?, bars.last()?);
@@ -120,7 +124,7 @@ impl PlayedBar {
 }
 
 /// Every count of `bars`, seconds (a bar of n beats: n counts evenly over it).
-fn bar_counts_secs(bars: &[Bar]) -> Vec<f32> {
+pub(super) fn bar_counts_secs(bars: &[Bar]) -> Vec<f32> {
     bars.iter()
         .flat_map(|b| {
             let n = b.beat_count().max(1);

@@ -613,6 +613,7 @@ pub fn frame_at(t: f32, frames: usize) -> usize {
 /// them (the readout [`dance_quality_switched_of`] and the pipeline's
 /// [`super::figures`]): kinetic beats, foot skate samples, and the join jump at each switch
 /// that has a frame after it.
+#[derive(Clone, Debug, PartialEq)]
 pub struct DanceMeasures {
     /// The motion's frames.
     pub frames: usize,
@@ -621,18 +622,40 @@ pub struct DanceMeasures {
     /// Foot skate samples per frame ([`foot_skate_samples`]).
     pub skate: Vec<[Option<f32>; 4]>,
     /// The bar after each join measured (bars 1.., in order; a join with no frame after it is
-    /// left out), and its jump ([`join_jumps`]).
+    /// left out, except by [`DanceMeasures::of_every_join`]), and its jump ([`join_jumps`]).
     pub joins: Vec<usize>,
     pub jumps: Vec<f32>,
+    /// Whether every join has a frame after it: then [`DanceMeasures::of`] and
+    /// [`DanceMeasures::of_every_join`] are the same measures.
+    pub every_join_inside: bool,
 }
 
 impl DanceMeasures {
     /// The measures of `m` over `bars`, its joins falling at `switch_secs` ([`switch_of`]).
     pub fn of(m: &QualityMotion, bars: &[Bar], switch_secs: &[f32]) -> DanceMeasures {
+        Self::with_joins(m, bars, switch_secs, false)
+    }
+
+    /// [`DanceMeasures::of`] keeping every join, one on the motion's last frame too (its jump
+    /// read over the frames before it): what the held-feet rule has always read
+    /// ([`super::render`]), a jump for every bar after the first. A join lands there only on a
+    /// last bar shorter than about two frames (a switch is at most a count past its bar line).
+    pub(crate) fn of_every_join(m: &QualityMotion, bars: &[Bar], switch_secs: &[f32]) -> DanceMeasures {
+        Self::with_joins(m, bars, switch_secs, true)
+    }
+
+    fn with_joins(m: &QualityMotion, bars: &[Bar], switch_secs: &[f32], every: bool) -> DanceMeasures {
         let frames = m.frames();
-        let joins: Vec<(usize, usize)> = (1..bars.len()).map(|i| (i, frame_at(switch_of(bars, switch_secs, i), frames))).filter(|&(_, f)| f + 1 < frames).collect();
+        let all: Vec<(usize, usize)> = (1..bars.len()).map(|i| (i, frame_at(switch_of(bars, switch_secs, i), frames))).collect();
+        let every_join_inside = all.iter().all(|&(_, f)| f + 1 < frames);
+        let joins: Vec<(usize, usize)> = all.into_iter().filter(|&(_, f)| every || f + 1 < frames).collect();
         let jumps = join_jumps(m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
-        DanceMeasures { frames, kinetic: kinetic_beats_secs(m), skate: foot_skate_samples(m), joins: joins.into_iter().map(|j| j.0).collect(), jumps }
+        DanceMeasures { frames, kinetic: kinetic_beats_secs(m), skate: foot_skate_samples(m), joins: joins.into_iter().map(|j| j.0).collect(), jumps, every_join_inside }
+    }
+
+    /// The jump of the join into bar `bar`, if it was measured.
+    pub fn jump_into(&self, bar: usize) -> Option<f32> {
+        self.joins.binary_search(&bar).ok().and_then(|k| self.jumps.get(k)).copied()
     }
 
     /// [`frame_at`] in this motion.

@@ -18,7 +18,7 @@ use std::sync::Arc;
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::quality::QualityMotion;
+use super::quality::{DanceMeasures, QualityMotion};
 use super::segment::{SegmentLibrary, LIBRARY_FPS};
 use crate::bars::Bar;
 use crate::canon::builtin::canonical_skeleton;
@@ -117,31 +117,45 @@ pub fn render_switched(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usi
     (clip, switches)
 }
 
-/// [`render_switched`], with the rendered dance measured ([`QualityMotion::from_clip`]) when the
-/// held-feet rule measured it on the way (`None` otherwise): the same motion, not measured twice.
-/// `quick` off: the control ([`super::GenerateOptions::quick_measures`]): the held-feet rule
-/// poses its free pass anew each round and every frame of what it measures, and no motion is
-/// handed back. `read_only` (with `quick`): the held-feet rule's held passes pose only the
-/// frames its measures read ([`QualityMotion::frames_read`]), so the clip handed back is
-/// whole only where the motion was read from it: for measuring, not for playing.
-/// `legs_only`: the held-feet rule's free pass poses only the joints it reads
-/// ([`crate::canon::character::RetargetOptions::free_pass_legs_only`]; off: the control).
-pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool, read_only: bool, legs_only: bool) -> (Clip, Vec<f32>, Option<QualityMotion>) {
-    let (clip, holds, switches) = render_traced_with(lib, bars, choices, options, quick, quick && read_only, legs_only);
-    let motion = if quick { holds.motion } else { None };
+/// What the held-feet rule ([`hold_planted_feet`]) spares itself; each off is the control of a
+/// [`super::GenerateOptions`] switch, the same figures either way.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct HoldWork {
+    /// The free pass posed once, not each round; each measure poses only the frames it reads;
+    /// the dance measured is handed back ([`super::GenerateOptions::quick_measures`]).
+    pub quick: bool,
+    /// With `quick`: the held passes pose only the frames the measures read
+    /// ([`QualityMotion::frames_read`], [`super::GenerateOptions::pose_read_frames_only`]), so
+    /// the clip handed back is whole only there: for measuring, not for playing.
+    pub read_only: bool,
+    /// The free pass poses only the joints it reads
+    /// ([`crate::canon::character::RetargetOptions::free_pass_legs_only`]).
+    pub legs_only: bool,
+}
+
+/// A rendered dance measured ([`QualityMotion`]) and, when handed on, its §J measures.
+pub(super) type MeasuredDance = (QualityMotion, Option<DanceMeasures>);
+
+/// [`render_switched`], with the rendered dance measured ([`QualityMotion::from_clip`]) and its
+/// §J measures ([`DanceMeasures::of`]) when the held-feet rule took them on the way (`None`
+/// otherwise; the measures `None` when a join falls on the motion's last frame): not taken
+/// twice. With `work.quick` off (the control) nothing is handed back.
+pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, work: HoldWork) -> (Clip, Vec<f32>, Option<MeasuredDance>) {
+    let work = HoldWork { read_only: work.quick && work.read_only, ..work };
+    let (clip, holds, switches) = render_traced_with(lib, bars, choices, options, work);
+    let motion = if work.quick { holds.motion.map(|m| (m, holds.measures.filter(|d| d.every_join_inside))) } else { None };
     (clip, switches, motion)
 }
 
 /// [`render`], with what its feet were held to and where its joins fall ([`render_switched`]).
 fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Holds, Vec<f32>) {
-    render_traced_with(lib, bars, choices, options, true, false, true)
+    render_traced_with(lib, bars, choices, options, HoldWork { quick: true, read_only: false, legs_only: true })
 }
 
-/// [`render_traced`]; `quick` off: the held-feet rule as before session 16 (its free pass
+/// [`render_traced`]; `work.quick` off: the held-feet rule as before session 16 (its free pass
 /// posed anew each round, every frame posed for its measures), the control the test
-/// `keeping_the_free_pass_changes_no_frame` compares with. `read_only`: the held passes pose
-/// only the frames the measures read ([`render_measured`]).
-fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, quick: bool, read_only: bool, legs_only: bool) -> (Clip, Holds, Vec<f32>) {
+/// `keeping_the_free_pass_changes_no_frame` compares with ([`HoldWork`]).
+fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, work: HoldWork) -> (Clip, Holds, Vec<f32>) {
     let fps = if options.fps.is_finite() && options.fps > 0.0 { options.fps } else { 60.0 };
     let skeleton = Arc::new(canonical_skeleton());
     let end_secs = bars.iter().map(|b| b.end_secs).fold(0.0f32, f32::max);
@@ -298,7 +312,7 @@ fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usiz
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: roots }],
     };
-    let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches, (quick, read_only, legs_only)) } else { (clip, Holds::default()) };
+    let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches, work) } else { (clip, Holds::default()) };
     (clip, holds, switches)
 }
 
@@ -309,8 +323,10 @@ fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usiz
 struct Holds {
     planted: Vec<[bool; 4]>,
     kept: Vec<bool>,
-    /// The returned dance measured, when the rule measured it.
+    /// The returned dance measured, when the rule measured it, and §J's measures of it
+    /// ([`DanceMeasures::of_every_join`]).
     motion: Option<QualityMotion>,
+    measures: Option<DanceMeasures>,
 }
 
 /// Rounds of [`hold_planted_feet`]'s per-bar rule at most (each drops the holds of the bars
@@ -343,8 +359,9 @@ const HOLD_RULE_ROUNDS: usize = 4;
 ///   `read_only` too, each round's held pass poses only those frames (half of them at 60 fps;
 ///   the held clip returned is then whole only there: for measuring, not for playing).
 #[allow(clippy::too_many_arguments)]
-fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32], (quick, read_only, legs_only): (bool, bool, bool)) -> (Clip, Holds) {
+fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32], work: HoldWork) -> (Clip, Holds) {
     use crate::canon::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
+    let HoldWork { quick, read_only, legs_only } = work;
     let frames = clip.frame_count();
     if frames < 3 || played.len() < frames {
         return (clip, Holds::default());
@@ -359,45 +376,12 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         v.get(i).copied().unwrap_or(false)
     };
     let source: Vec<[bool; 4]> = (0..frames).map(|f| [0, 1, 2, 3].map(|k| flag(f, k))).collect();
-    // The rule's figures of a dance: per bar, BAS-music on its own counts, the beat-rate cost
-    // of its kinetic beats per count, the join jump at its start (0 for the first bar) and its
-    // mean foot skate; and, for the whole dance, BAS-music on every bar's counts less BAS-music on the counts
-    // moved by half a count (§J's control), the beat-rate cost of its kinetic beats per count
-    // and its mean foot skate. Bars that each keep their figures can still add up to a dance
-    // that follows its counts less clearly (a kinetic beat gained between counts here, one lost
-    // on a count there) or that leaves the beat-rate band, or (a lifted foot catching up across
-    // a bar's edge) slides its feet more in all: then the dance is played unheld. One pass of
-    // §J's measures per rendered dance gives both.
-    type BarFigures = (f32, f32, f32, f32);
-    let measure = |m: QualityMotion| -> Option<(Vec<BarFigures>, (f32, f32, f32), QualityMotion)> {
-        let kinetic = super::quality::kinetic_beats_secs(&m);
-        let q_frames = m.frames();
-        let frame_of = |t: f32| ((t * super::quality::QUALITY_FPS).round().max(0.0) as usize).min(q_frames);
-        let joins: Vec<usize> = bars.iter().enumerate().skip(1).map(|(i, b)| frame_of(switches.get(i - 1).copied().unwrap_or(b.start_secs))).collect();
-        let jumps = super::quality::join_jumps(&m, &joins);
-        let skate = super::quality::foot_skate_samples(&m);
-        fn bar_counts(b: &Bar) -> impl Iterator<Item = f32> + '_ {
-            let n = b.beat_count().max(1);
-            (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32)
-        }
-        let per_bar = bars
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                let counts: Vec<f32> = bar_counts(b).collect();
-                let a = super::quality::beat_alignment(&counts, &kinetic, b.start_secs, b.end_secs);
-                let kb = kinetic.iter().filter(|&&t| t >= b.start_secs && t < b.end_secs).count();
-                let jump = i.checked_sub(1).and_then(|j| jumps.get(j)).copied().unwrap_or(0.0);
-                let slide = super::quality::summarize_skate(&skate, frame_of(b.start_secs)..frame_of(b.end_secs)).mean_cm_per_s;
-                (a.bas_music, super::fill::beat_rate_cost(kb as f32 / counts.len() as f32), jump, slide)
-            })
-            .collect();
-        let counts: Vec<f32> = bars.iter().flat_map(bar_counts).collect();
-        let (first, last) = (bars.first()?, bars.last()?);
-        let a = super::quality::beat_alignment(&counts, &kinetic, first.start_secs, last.end_secs);
-        let kb = kinetic.iter().filter(|&&t| t >= first.start_secs && t < last.end_secs).count();
-        let slide = super::quality::summarize_skate(&skate, frame_of(first.start_secs)..frame_of(last.end_secs)).mean_cm_per_s;
-        Some((per_bar, (a.bas_music - a.bas_music_shifted, super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), slide), m))
+    // One pass of §J's measures per rendered dance gives the rule's figures ([`rule_figures`]),
+    // handed on with the dance they measure.
+    let measure = |m: QualityMotion| -> Option<(Vec<BarFigures>, WholeFigures, QualityMotion, DanceMeasures)> {
+        let d = DanceMeasures::of_every_join(&m, bars, switches);
+        let (per_bar, whole) = rule_figures(&d, bars)?;
+        Some((per_bar, whole, m, d))
     };
     let figures = |c: &Clip| measure(if quick { QualityMotion::from_clip(c) } else { QualityMotion::from_clip_every_frame(c) }.ok()?);
     let only = (quick && read_only).then(|| QualityMotion::frames_read(frames, clip.fps));
@@ -417,7 +401,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     } else {
         figures(&clip)
     };
-    let Some((unheld, unheld_whole, unheld_m)) = unheld_figures else { return (clip, Holds::default()) };
+    let Some((unheld, unheld_whole, unheld_m, unheld_d)) = unheld_figures else { return (clip, Holds::default()) };
     let worse_whole = |(margin, cost, skate): (f32, f32, f32)| margin < unheld_whole.0 - 1e-4 || cost > unheld_whole.1 + 1e-4 || skate > unheld_whole.2;
     let mut keep = vec![true; bars.len()];
     for round in 0..=HOLD_RULE_ROUNDS {
@@ -428,12 +412,12 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
         let track = |k: usize| -> Vec<bool> { (0..frames).map(|f| kept(f) && source[f][k]).collect() };
         let planted = [(track(0), track(1)), (track(2), track(3))];
         let Some(held) = first.take().or_else(|| hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free, only.as_deref(), legs_only)) else { return (clip, Holds::default()) };
-        let Some((with, with_whole, held_m)) = figures(&held) else { return (clip, Holds::default()) };
+        let Some((with, with_whole, held_m, held_d)) = figures(&held) else { return (clip, Holds::default()) };
         if round == HOLD_RULE_ROUNDS {
             if worse_whole(with_whole) {
                 break;
             }
-            return (held, Holds { planted: source, kept: keep, motion: Some(held_m) });
+            return (held, Holds { planted: source, kept: keep, motion: Some(held_m), measures: Some(held_d) });
         }
         let mut dropped = false;
         for (b, (w, u)) in with.iter().zip(&unheld).enumerate() {
@@ -453,11 +437,47 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
             if worse_whole(with_whole) {
                 break;
             }
-            return (held, Holds { planted: source, kept: keep, motion: Some(held_m) });
+            return (held, Holds { planted: source, kept: keep, motion: Some(held_m), measures: Some(held_d) });
         }
     }
     let kept = vec![false; bars.len()];
-    (clip, Holds { planted: source, kept, motion: Some(unheld_m) })
+    (clip, Holds { planted: source, kept, motion: Some(unheld_m), measures: Some(unheld_d) })
+}
+
+/// The held-feet rule's figures of one bar: BAS-music on its own counts, the beat-rate cost of
+/// its kinetic beats per count ([`super::beat_rate_cost`]), the join jump at its start (0 for
+/// the first bar) and its mean foot skate.
+type BarFigures = (f32, f32, f32, f32);
+/// The rule's figures of the whole dance: BAS-music on every bar's counts less BAS-music on the
+/// counts moved by half a count (§J's control), the beat-rate cost of its kinetic beats per
+/// count, and its mean foot skate.
+type WholeFigures = (f32, f32, f32);
+
+/// [`hold_planted_feet`]'s figures of a rendered dance from its §J measures, per bar and whole.
+/// Bars that each keep their figures can still add up to a dance that follows its counts less
+/// clearly (a kinetic beat gained between counts here, one lost on a count there) or that
+/// leaves the beat-rate band, or (a lifted foot catching up across a bar's edge) slides its feet
+/// more in all: hence the whole dance's too.
+fn rule_figures(d: &DanceMeasures, bars: &[Bar]) -> Option<(Vec<BarFigures>, WholeFigures)> {
+    use super::quality::{beat_alignment, summarize_skate};
+    let kinetic_in = |b0: f32, b1: f32| d.kinetic.iter().filter(|&&t| t >= b0 && t < b1).count();
+    let per_bar = bars
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let counts = super::figures::bar_counts_secs(std::slice::from_ref(b));
+            let a = beat_alignment(&counts, &d.kinetic, b.start_secs, b.end_secs);
+            let kb = kinetic_in(b.start_secs, b.end_secs);
+            let slide = summarize_skate(&d.skate, d.frame_of(b.start_secs)..d.frame_of(b.end_secs)).mean_cm_per_s;
+            (a.bas_music, super::fill::beat_rate_cost(kb as f32 / counts.len() as f32), d.jump_into(i).unwrap_or(0.0), slide)
+        })
+        .collect();
+    let counts = super::figures::bar_counts_secs(bars);
+    let (first, last) = (bars.first()?, bars.last()?);
+    let a = beat_alignment(&counts, &d.kinetic, first.start_secs, last.end_secs);
+    let kb = kinetic_in(first.start_secs, last.end_secs);
+    let slide = summarize_skate(&d.skate, d.frame_of(first.start_secs)..d.frame_of(last.end_secs)).mean_cm_per_s;
+    Some((per_bar, (a.bas_music - a.bas_music_shifted, super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), slide)))
 }
 
 /// Bollo's quintic offset at `t` of `span` (both in frames): starts at `x0` with velocity `v0`
@@ -631,6 +651,77 @@ mod tests {
         Vec3::new(v.x, 0.0, v.z)
     }
 
+    /// The held-feet rule's figures as its `measure` closure took them before session 22 (its
+    /// own frame index, bar counts and joins, every join kept): the control of
+    /// `the_rules_figures_from_dance_measures_are_the_closures`.
+    fn rule_figures_before(m: &QualityMotion, bars: &[Bar], switches: &[f32]) -> Option<(Vec<BarFigures>, WholeFigures)> {
+        let kinetic = super::super::quality::kinetic_beats_secs(m);
+        let q_frames = m.frames();
+        let frame_of = |t: f32| ((t * super::super::quality::QUALITY_FPS).round().max(0.0) as usize).min(q_frames);
+        let joins: Vec<usize> = bars.iter().enumerate().skip(1).map(|(i, b)| frame_of(switches.get(i - 1).copied().unwrap_or(b.start_secs))).collect();
+        let jumps = super::super::quality::join_jumps(m, &joins);
+        let skate = super::super::quality::foot_skate_samples(m);
+        fn bar_counts(b: &Bar) -> impl Iterator<Item = f32> + '_ {
+            let n = b.beat_count().max(1);
+            (0..n).map(move |k| b.start_secs + b.duration_secs() * k as f32 / n as f32)
+        }
+        let per_bar = bars
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let counts: Vec<f32> = bar_counts(b).collect();
+                let a = super::super::quality::beat_alignment(&counts, &kinetic, b.start_secs, b.end_secs);
+                let kb = kinetic.iter().filter(|&&t| t >= b.start_secs && t < b.end_secs).count();
+                let jump = i.checked_sub(1).and_then(|j| jumps.get(j)).copied().unwrap_or(0.0);
+                let slide = super::super::quality::summarize_skate(&skate, frame_of(b.start_secs)..frame_of(b.end_secs)).mean_cm_per_s;
+                (a.bas_music, super::super::fill::beat_rate_cost(kb as f32 / counts.len() as f32), jump, slide)
+            })
+            .collect();
+        let counts: Vec<f32> = bars.iter().flat_map(bar_counts).collect();
+        let (first, last) = (bars.first()?, bars.last()?);
+        let a = super::super::quality::beat_alignment(&counts, &kinetic, first.start_secs, last.end_secs);
+        let kb = kinetic.iter().filter(|&&t| t >= first.start_secs && t < last.end_secs).count();
+        let slide = super::super::quality::summarize_skate(&skate, frame_of(first.start_secs)..frame_of(last.end_secs)).mean_cm_per_s;
+        Some((per_bar, (a.bas_music - a.bas_music_shifted, super::super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), slide)))
+    }
+
+    fn figure_bits((per_bar, whole): &(Vec<BarFigures>, WholeFigures)) -> (Vec<[u32; 4]>, [u32; 3]) {
+        (per_bar.iter().map(|b| [b.0, b.1, b.2, b.3].map(f32::to_bits)).collect(), [whole.0, whole.1, whole.2].map(f32::to_bits))
+    }
+
+    #[test]
+    fn the_rules_figures_from_dance_measures_are_the_closures() {
+        // The held-feet rule's figures from §J's measures taken once (`DanceMeasures`), against
+        // the closure it had before: the same bits, held and unheld, at five tempi, and on
+        // dances whose last bar is a sliver, so that a join falls on the motion's last frame
+        // (which `DanceMeasures::of` leaves out and the rule has always measured).
+        let mut at_the_end = 0;
+        for (bpm, secs, sliver) in [(90.0, 20.0, None), (120.0, 24.0, None), (150.0, 16.0, None), (170.0, 20.0, None), (104.0, 12.0, None), (120.0, 8.0, Some(0.004f32)), (96.0, 10.0, Some(0.006)), (96.0, 10.0, Some(0.05))] {
+            let (lib, mut bars, mut choices) = dance(bpm, secs);
+            if let Some(d) = sliver {
+                // The last bar ends half a 60 fps frame past an odd frame, so the sliver's join
+                // rounds onto the 30 fps motion's last frame.
+                let last = bars.last_mut().unwrap();
+                last.end_secs = ((last.end_secs * 30.0).floor() * 2.0 + 1.5) / 60.0;
+                let last = *last;
+                bars.push(Bar { index: last.index + 1, start_secs: last.end_secs, end_secs: last.end_secs + d, ..last });
+                choices.push(choices[0]);
+            }
+            for hold_feet in [true, false] {
+                let (clip, switches) = render_switched(&lib, &bars, &choices, &RenderOptions { hold_feet, ..RenderOptions::default() });
+                let m = QualityMotion::from_clip(&clip).unwrap();
+                let d = DanceMeasures::of_every_join(&m, &bars, &switches);
+                let (now, before) = (rule_figures(&d, &bars).unwrap(), rule_figures_before(&m, &bars, &switches).unwrap());
+                assert_eq!(figure_bits(&now), figure_bits(&before), "{bpm} BPM, last bar {sliver:?}, held {hold_feet}");
+                // Where every join is inside, they are `DanceMeasures::of`'s, which the played
+                // figures read when handed on.
+                assert_eq!(d.every_join_inside, d == DanceMeasures::of(&m, &bars, &switches), "{bpm} BPM, last bar {sliver:?}");
+                at_the_end += usize::from(!d.every_join_inside);
+            }
+        }
+        assert!(at_the_end > 0, "no join fell on a motion's last frame: the case was not compared");
+    }
+
     #[test]
     fn planted_feet_stay_put_across_joins_and_the_dance_keeps_its_time() {
         // The whole-dance rule may play a dance unheld (then its frames are the unheld ones,
@@ -715,8 +806,8 @@ mod tests {
         let mut rounds_seen = 0;
         for (bpm, secs) in [(90.0, 20.0), (120.0, 24.0), (150.0, 16.0), (170.0, 20.0)] {
             let (lib, bars, choices) = dance(bpm, secs);
-            let (kept, holds, s1) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), true, false, true);
-            let (anew, holds_anew, s2) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), false, false, false);
+            let (kept, holds, s1) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), HoldWork { quick: true, read_only: false, legs_only: true });
+            let (anew, holds_anew, s2) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), HoldWork { quick: false, read_only: false, legs_only: false });
             assert_eq!(kept, anew, "{bpm} BPM");
             assert_eq!((holds.kept.clone(), holds.motion.clone(), s1), (holds_anew.kept, holds_anew.motion, s2), "{bpm} BPM");
             rounds_seen += usize::from(holds.kept.iter().any(|&k| k) && holds.kept.iter().any(|&k| !k));

@@ -355,9 +355,11 @@ impl Character {
         if let HumanoidStatus::NotHumanoid { reason } = status {
             return Err(CharacterError::SourceNotHumanoid { clip: clip.name.clone(), reason });
         }
-        let mut src = if is_canonical(&clip.skeleton) { clip.clone() } else { to_canonical(clip, clip_map, clip.fps) };
+        // A canonical clip is read as it is (a held pass of a rendered dance: no copy of it),
+        // copied only where its calibration frame is rewritten.
+        let mut src = if is_canonical(&clip.skeleton) { std::borrow::Cow::Borrowed(clip) } else { std::borrow::Cow::Owned(to_canonical(clip, clip_map, clip.fps)) };
         if given.is_none() && starts_on_calibration_frame(clip, clip_map) {
-            hold_first_pose(&mut src);
+            hold_first_pose(src.to_mut());
         }
         // The canonical rest is the T-pose with identity rest rotations: a source bone's world
         // rotation is already its rotation away from the reference.
