@@ -120,7 +120,7 @@ for (const backend of ["webgl2", "webgpu"]) {
         const step = () => {
           // This callback runs after the player's own (registered earlier) in the same frame.
           const f = p.lastFrame;
-          samples.push({ song: f.songTimeSecs, clip: f.clipTimeSecs, audio: audio.currentTime, nowMs: performance.now() });
+          samples.push({ song: f.songTimeSecs, clip: f.clipTimeSecs, audio: audio.currentTime, nowMs: performance.now(), drawn: p.framesDrawn });
           if (samples.length < 90) requestAnimationFrame(step);
           else resolve({ samples, clipDur, drawFps: Math.min(p.maxFps, p.clip.fps) });
         };
@@ -134,14 +134,20 @@ for (const backend of ["webgl2", "webgpu"]) {
       // The audio clock runs on while the frame is drawn, so the figure trails it by the draw
       // time; a stall of the shared test machine (the test run has another test file and the
       // fuzz run beside this one) can hold the page between the player's callback and this
-      // one: the 95th percentile must be within one frame, and at most two of the 90 frames
-      // more than two frames off.
+      // one. Drift is read on the frames the player drew: there the figure's time must be the
+      // audio's within one frame at the 95th percentile. A frame the draw cap skips shows the
+      // last drawn pose, up to one drawing interval older plus the audio clock's own steps (it
+      // measured 34.6 ms against the 33.3 ms interval on a loaded run): over every frame, at
+      // most two of the 90 may be more than two frames off.
       const gaps = sync.samples.map((s) => Math.abs(s.song - s.audio)).sort((x, y) => x - y);
-      const worst = gaps.at(-1), p95 = gaps[Math.floor(gaps.length * 0.95)];
+      const drawnGaps = sync.samples.filter((s, i) => i > 0 && s.drawn > sync.samples[i - 1].drawn).map((s) => Math.abs(s.song - s.audio)).sort((x, y) => x - y);
+      const worst = gaps.at(-1), p95 = drawnGaps[Math.floor(drawnGaps.length * 0.95)];
       const advanced = sync.samples.at(-1).audio - sync.samples[0].audio;
-      console.log(`${backend}: figure vs audio time over ${sync.samples.length} frames: 95th percentile ${(p95 * 1000).toFixed(2)} ms, worst ${(worst * 1000).toFixed(2)} ms, frame ${(frame * 1000).toFixed(1)} ms; audio advanced ${advanced.toFixed(2)} s`);
+      console.log(`${backend}: figure vs audio time over ${drawnGaps.length} drawn frames: 95th percentile ${(p95 * 1000).toFixed(2)} ms; over all ${sync.samples.length} frames: 95th percentile ${(gaps[Math.floor(gaps.length * 0.95)] * 1000).toFixed(2)} ms, worst ${(worst * 1000).toFixed(2)} ms; frame ${(frame * 1000).toFixed(1)} ms; audio advanced ${advanced.toFixed(2)} s`);
       assert.ok(advanced > 0.5, `the audio clock barely moved (${advanced} s over 90 frames)`);
-      assert.ok(p95 <= frame, `figure time strays ${p95} s from audio time in 5 % of frames (more than one frame, ${frame} s)`);
+      // And it draws: at least a third as many frames as the cap allows over the song time that passed.
+      assert.ok(drawnGaps.length >= Math.min(sync.samples.length, advanced * sync.drawFps) / 3, `only ${drawnGaps.length} of ${sync.samples.length} frames drawn over ${advanced.toFixed(2)} s of song`);
+      assert.ok(p95 <= frame, `figure time strays ${p95} s from audio time in 5 % of drawn frames (more than one frame, ${frame} s)`);
       const late = gaps.filter((g) => g > 2 * frame).length;
       assert.ok(late <= 2, `figure time strays more than two frames (${frame} s each) from audio time in ${late} of ${gaps.length} frames (worst ${worst} s)`);
       for (const s of sync.samples) assert.ok(Math.abs(s.clip - (s.song % sync.clipDur)) < 1e-3, "the clip time is the song time modulo the clip");
