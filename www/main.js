@@ -265,6 +265,7 @@ async function main() {
     // The library as it was left (order, selected clip); from here on it is kept.
     panel.restore();
     if (!session.project.summary().song) await loadDemoSong(songPanel, messages, session);
+    keepRows(session);
     performance.mark("odori:project-ready");
     document.body.dataset.project = "ready";
   });
@@ -424,6 +425,25 @@ function bindSongInput(input, songPanel, messages, session) {
     if (!file) return;
     await loadSongBytes(file.name, new Uint8Array(await file.arrayBuffer()), songPanel, messages, session);
   });
+}
+
+/**
+ * The Dance strip's rows that come and go with the project, remembered per project whenever one
+ * shows or hides, for boot.js to hold their lines on the next load; the lines held for this load
+ * are let go once the project is restored (each row then is as the project has it).
+ */
+function keepRows(session) {
+  const ids = ["dance-clip-row", "dance-share-note"];
+  const remember = () => {
+    const id = session.store && session.store.projectId;
+    if (!id) return;
+    const shown = ids.filter((x) => document.getElementById(x)?.hidden === false);
+    try { if (shown.length) localStorage.setItem(`odori.rows.${id}`, shown.join(" ")); else localStorage.removeItem(`odori.rows.${id}`); } catch { /* storage off */ }
+  };
+  const watch = new MutationObserver(remember);
+  for (const x of ids) { const el = document.getElementById(x); if (el) watch.observe(el, { attributes: true, attributeFilter: ["hidden"] }); }
+  remember();
+  delete document.documentElement.dataset.rows;
 }
 
 function fitCanvas(canvas) {

@@ -259,11 +259,17 @@ export function installShare({ choreo, messages, songReady, song, loadSong }) {
     });
     // Where Share is offered: a dance with moves from the person's own files cannot go in a
     // link (the files would not be on the other machine); say so and offer the .odori file.
-    const note = document.createElement("span");
-    note.id = "dance-share-note";
-    note.className = "share-note";
-    note.hidden = true;
-    note.setAttribute("role", "note");
+    // In the page from the start (boot.js may hold its line), else made here.
+    let note = choreo.root.querySelector("#dance-share-note");
+    if (!note) {
+      note = document.createElement("span");
+      note.id = "dance-share-note";
+      note.className = "share-note";
+      note.hidden = true;
+      note.setAttribute("role", "note");
+      // At the end of the Dance controls: shown, it adds a line below them, not one in the middle.
+      button.parentElement.append(note);
+    }
     const text = document.createElement("span");
     const save = document.createElement("button");
     save.type = "button";
@@ -271,9 +277,7 @@ export function installShare({ choreo, messages, songReady, song, loadSong }) {
     save.textContent = "Save the .odori file";
     save.title = "The project file holds your motion files too: whoever opens it sees this dance";
     save.addEventListener("click", () => document.getElementById("project-save")?.click());
-    note.append(text, save);
-    // At the end of the Dance controls: shown, it adds a line below them, not one in the middle.
-    button.parentElement.append(note);
+    note.replaceChildren(text, save);
     choreo.root.addEventListener("dance-refresh", (e) => {
       const notes = (e.detail?.notes ?? []).filter((n) => n.segment != null && !n.builtin);
       const fileOf = (n) => choreo.choreographer.segment(n.segment)?.source ?? n.source;

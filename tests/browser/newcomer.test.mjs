@@ -139,7 +139,7 @@ const SONG = "music/Kevin_MacLeod_-_Vibe_Ace.hq.ogg";
 /** Layout shift allowed over the whole path (Web Vitals call under 0.1 good). */
 const MAX_SHIFT = 0.05;
 /** Layout shift allowed in one load of the page (a whole path allows MAX_SHIFT). */
-const MAX_LOAD_SHIFT = 0.005;
+const MAX_LOAD_SHIFT = 0.002;
 
 for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) for (const size of SIZES) {
   test(`a newcomer's path on ${backend} at ${size.width}×${size.height}: no layout shift, the next step in view, plain messages, the Export dialog, reopened as left`, async () => {
@@ -290,6 +290,10 @@ for (const backend of (process.env.BACKENDS || "webgl2,webgpu").split(",")) for 
       const worst = [...shifts].sort((a, b) => b.value - a.value).slice(0, 5);
       for (const x of worst) console.log(`#   ${x.phase} +${x.atMs} ms: ${x.value.toFixed(4)} ${x.what.join(" | ")}`);
       assert.ok(total < MAX_SHIFT, `${size.name}: layout shift ${total.toFixed(4)} ≥ ${MAX_SHIFT}; the largest: ${JSON.stringify(worst, null, 1)}`);
+      // A load of the project left (reload, Open) moves nothing: the Dance strip's clip row and
+      // share note, which this project shows, have their lines held from the first frame (their
+      // coming pushed the bars and the song strip down 28 px: 0.0046 a load before).
+      for (const phase of ["load", "reload", "New", "Open"]) assert.ok((byPhase[phase] || 0) < MAX_LOAD_SHIFT, `${size.name}: ${phase}: layout shift ${(byPhase[phase] || 0).toFixed(4)} ≥ ${MAX_LOAD_SHIFT}: ${JSON.stringify(shifts.filter((x) => x.phase === phase), null, 1)}`);
     } catch (e) {
       console.log(logs.slice(-40).join("\n"));
       console.log("Messages:\n" + (await page.evaluate(() => [...document.querySelectorAll("#messages li")].map((li) => `${li.className}: ${li.textContent}`).join("\n")).catch(() => "")));
