@@ -379,7 +379,7 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     let source: Vec<[bool; 4]> = (0..frames).map(|f| [0, 1, 2, 3].map(|k| flag(f, k))).collect();
     // One pass of §J's measures per rendered dance gives the rule's figures ([`rule_figures`]),
     // handed on with the dance they measure.
-    let measure = |m: QualityMotion| -> Option<(Vec<BarFigures>, WholeFigures, QualityMotion, (DanceMeasures, DanceReadout))> {
+    let measure = |m: QualityMotion| -> Option<RuleMeasure> {
         let d = DanceMeasures::of_every_join(&m, bars, switches);
         let (per_bar, whole, readout) = rule_figures(&d, bars)?;
         Some((per_bar, whole, m, (d, readout)))
@@ -453,6 +453,10 @@ type BarFigures = (f32, f32, f32, f32);
 /// counts moved by half a count (§J's control), the beat-rate cost of its kinetic beats per
 /// count, and its mean foot skate.
 type WholeFigures = (f32, f32, f32);
+
+/// One rendered dance as the rule measures it: its figures per bar and whole, the motion, and
+/// §J's measures and readout, handed on with the dance the rule keeps.
+type RuleMeasure = (Vec<BarFigures>, WholeFigures, QualityMotion, (DanceMeasures, DanceReadout));
 
 /// [`hold_planted_feet`]'s figures of a rendered dance from its §J measures, per bar and whole.
 /// Bars that each keep their figures can still add up to a dance that follows its counts less
