@@ -5,7 +5,7 @@
 
 use super::generate::Problem;
 use super::profile::{self, Work};
-use super::quality::{beat_alignment, summarize_skate, DanceMeasures, QualityMotion};
+use super::quality::{summarize_skate, DanceMeasures, FootSkate, QualityMotion};
 use super::render::{render_measured, render_switched, HoldWork, RenderOptions};
 use super::segment::SegmentLibrary;
 use crate::bars::Bar;
@@ -82,18 +82,19 @@ pub fn played_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Opt
 /// [`super::GenerateOptions::quick_measures`]. The same figures either way (the test
 /// `quick_measures_keep_every_figure`).
 pub fn played_figures_with(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool) -> Option<Played> {
-    played_figures_posed(lib, bars, path, quick, quick, quick)
+    played_figures_posed(lib, bars, path, HoldWork { quick, read_only: quick, legs_only: quick })
 }
 
-/// [`played_figures_with`]; `read_only` off: session 17's measures, each round of the
-/// held-feet rule posing every frame of its held pass, not only the frames its measures read
-/// ([`super::GenerateOptions::pose_read_frames_only`], the control). The same figures either
-/// way (the test `posing_only_the_frames_read_keeps_every_figure`). `legs_only` off: the
-/// held-feet rule's free pass poses every joint, not only those it reads (session 20's
-/// measures, [`super::GenerateOptions::free_pass_legs_only`], the control; the same figures).
-pub fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool, read_only: bool, legs_only: bool) -> Option<Played> {
+/// [`played_figures_with`] with the held-feet rule's work named ([`HoldWork`]): `read_only`
+/// off is session 17's measures, each round of the rule posing every frame of its held pass,
+/// not only the frames its measures read ([`super::GenerateOptions::pose_read_frames_only`],
+/// the control; the test `posing_only_the_frames_read_keeps_every_figure`); `legs_only` off,
+/// the rule's free pass posing every joint, not only those it reads (session 20's measures,
+/// [`super::GenerateOptions::free_pass_legs_only`], the control). The same figures either way.
+pub(super) fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], work: HoldWork) -> Option<Played> {
+    let quick = work.quick;
     let choices: Vec<Option<usize>> = path.iter().map(|&s| Some(s)).collect();
-    let (clip, switches, measured) = render_measured(lib, bars, &choices, &RenderOptions::default(), HoldWork { quick, read_only, legs_only });
+    let (clip, switches, measured) = render_measured(lib, bars, &choices, &RenderOptions::default(), work);
     let (m, handed) = match measured {
         Some((m, d)) => (m, d),
         None if quick => (QualityMotion::from_clip(&clip).ok()?, None),
@@ -104,17 +105,20 @@ pub fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], 
     }
     let counts = bar_counts_secs(bars);
     super::quality::check_beats(&counts).ok()?;
-    // Each of §J's measures once, read by both the whole dance's figures and each bar's: those
-    // the held-feet rule took of this motion last, when it hands them on.
-    let measures = match handed {
+    // Each of §J's measures and their readout once, read by both the whole dance's figures and
+    // each bar's: those the held-feet rule took of this motion last, when it hands them on
+    // (read on these bars' counts, as here).
+    let (measures, readout) = match handed {
         Some(d) => d,
-        None => DanceMeasures::of(&m, bars, &switches),
+        None => {
+            let d = DanceMeasures::of(&m, bars, &switches);
+            let r = d.readout(bars, &counts)?;
+            (d, r)
+        }
     };
-    let whole = whole_figures(&measures, bars)?;
-    let per_bar = measures.bar_qualities(bars, &counts).iter().map(PlayedBar::of).collect();
-    let (first, last) = (bars.first()?, bars.last()?);
-    let bas_music = beat_alignment(&counts, &measures.kinetic, first.start_secs, last.end_secs).bas_music;
-    Some(Played { whole, bas_music, bars: per_bar })
+    let whole = whole_figures(&measures, readout.kinetic_beats, readout.foot_skate, bars);
+    let per_bar = readout.bars.iter().map(PlayedBar::of).collect();
+    Some(Played { whole, bas_music: readout.beats.bas_music, bars: per_bar })
 }
 
 impl PlayedBar {
@@ -146,23 +150,24 @@ fn played_of_control(m: &QualityMotion, bars: &[Bar], switches: &[f32]) -> Optio
 /// [`DanceFigures`] of a rendered dance `m` over `bars`, its joins falling at `switches`
 /// ([`super::render_switched`]).
 fn figures_of(m: &QualityMotion, bars: &[Bar], switches: &[f32]) -> Option<DanceFigures> {
-    whole_figures(&DanceMeasures::of(m, bars, switches), bars)
+    let d = DanceMeasures::of(m, bars, switches);
+    let (first, last) = (bars.first()?, bars.last()?);
+    let skate = summarize_skate(&d.skate, d.frame_of(first.start_secs)..d.frame_of(last.end_secs));
+    Some(whole_figures(&d, d.kinetic_in(first.start_secs, last.end_secs), skate, bars))
 }
 
-/// [`DanceFigures`] of the whole dance over `bars`, from its measures.
-fn whole_figures(d: &DanceMeasures, bars: &[Bar]) -> Option<DanceFigures> {
-    let (first, last) = (bars.first()?, bars.last()?);
-    let kinetic = d.kinetic.iter().filter(|&&t| t >= first.start_secs && t < last.end_secs).count();
-    let skate = summarize_skate(&d.skate, d.frame_of(first.start_secs)..d.frame_of(last.end_secs));
+/// [`DanceFigures`] of the whole dance over `bars`, from its measures, the kinetic beats within
+/// the bars and the foot skate over them ([`super::quality::DanceReadout`]'s).
+fn whole_figures(d: &DanceMeasures, kinetic: usize, skate: FootSkate, bars: &[Bar]) -> DanceFigures {
     let counts: usize = bars.iter().map(Bar::beat_count).sum();
     // Join jumps as dance_quality measures them (at each switch, wherever it falls).
     let worst = d.jumps.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, &j)| (d.joins[k], j));
-    Some(DanceFigures {
+    DanceFigures {
         kinetic_per_count: kinetic as f32 / counts.max(1) as f32,
         foot_skate_cm_per_s: skate.mean_cm_per_s,
         join_jump_max: worst.map_or(0.0, |w| w.1),
         worst_join_bar: worst.map(|w| w.0),
-    })
+    }
 }
 
 /// The figures of the paths measured so far (a render and a measure each: kept, not redone).
@@ -188,7 +193,7 @@ impl Measured {
         if let Some((_, f)) = self.played.iter().find(|(q, _)| q == path) {
             return f.clone();
         }
-        let f = profile::timed(Work::Measure, || played_figures_posed(p.lib, p.bars, path, p.quick_measures, p.pose_read_frames_only, p.free_pass_legs_only));
+        let f = profile::timed(Work::Measure, || played_figures_posed(p.lib, p.bars, path, HoldWork { quick: p.quick_measures, read_only: p.pose_read_frames_only, legs_only: p.free_pass_legs_only }));
         self.played.push((path.to_vec(), f.clone()));
         f
     }
@@ -236,7 +241,7 @@ mod tests {
         for (k, bpm) in [(3usize, 96.0f32), (7, 120.0), (11, 138.0), (5, 160.0), (13, 104.0)] {
             let bars = bars_from_tempo(20.0, bpm, 4, 0.0, |_, _| 0.5).unwrap();
             let path: Vec<usize> = (0..bars.len()).map(|i| live[(i * k + bpm as usize) % live.len()]).collect();
-            let (read, every) = (played_figures_posed(&lib, &bars, &path, true, true, true), played_figures_posed(&lib, &bars, &path, true, false, true));
+            let (read, every) = (played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: true, legs_only: true }), played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: false, legs_only: true }));
             assert!(read.is_some(), "{bpm} BPM: measured");
             assert_eq!(read, every, "{bpm} BPM");
         }
@@ -255,7 +260,7 @@ mod tests {
         for (k, bpm, secs) in [(3usize, 96.0f32, 20.0), (7, 120.0, 60.0), (11, 138.0, 20.0), (5, 160.0, 20.0)] {
             let bars = bars_from_tempo(secs, bpm, 4, 0.0, |_, _| 0.5).unwrap();
             let path: Vec<usize> = (0..bars.len()).map(|i| live[(i * k + bpm as usize) % live.len()]).collect();
-            let (lean, whole) = (played_figures_posed(&lib, &bars, &path, true, true, true), played_figures_posed(&lib, &bars, &path, true, true, false));
+            let (lean, whole) = (played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: true, legs_only: true }), played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: true, legs_only: false }));
             assert!(lean.is_some(), "{bpm} BPM: measured");
             assert_eq!(lean, whole, "{bpm} BPM");
         }

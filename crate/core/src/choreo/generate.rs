@@ -138,7 +138,7 @@ pub struct GenerateOptions {
     pub join_bans_at_once: bool,
     /// Measure each dance as played posing, in every round of the held-feet rule, only the
     /// frames its measures read (the 30 fps samples: half of the 60 fps dance;
-    /// [`super::figures::played_figures_posed`]). The same figures and dances
+    /// `figures::played_figures_posed`). The same figures and dances
     /// (`posing_only_the_frames_read_keeps_every_figure`, `dance_fixture`). Default true; false:
     /// the control (session 17's measures), which `choreo_generate` times beside it.
     pub pose_read_frames_only: bool,

@@ -676,6 +676,58 @@ impl DanceMeasures {
             })
             .collect()
     }
+
+    /// Each bar's readout on `counts` ([`DanceMeasures::bar_qualities`]) and the whole dance's
+    /// over `bars`, taken once for every figure read of them: the held-feet rule's last round
+    /// and the played figures read the same one ([`super::render`], [`super::figures`]).
+    pub fn readout(&self, bars: &[Bar], counts: &[f32]) -> Option<DanceReadout> {
+        let (first, last) = (bars.first()?, bars.last()?);
+        Some(DanceReadout {
+            bars: self.bar_qualities(bars, counts),
+            beats: beat_alignment(counts, &self.kinetic, first.start_secs, last.end_secs),
+            foot_skate: summarize_skate(&self.skate, self.frame_of(first.start_secs)..self.frame_of(last.end_secs)),
+            kinetic_beats: self.kinetic_in(first.start_secs, last.end_secs),
+        })
+    }
+
+    /// Kinetic beats in `start_secs..end_secs`.
+    pub fn kinetic_in(&self, start_secs: f32, end_secs: f32) -> usize {
+        self.kinetic.iter().filter(|&&t| t >= start_secs && t < end_secs).count()
+    }
+}
+
+/// §J's readout of a dance from its [`DanceMeasures`] ([`DanceMeasures::readout`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DanceReadout {
+    /// Each bar's, on the counts given.
+    pub bars: Vec<BarQuality>,
+    /// The whole dance's (its bars' span), on the counts given.
+    pub beats: BeatAlignment,
+    pub foot_skate: FootSkate,
+    /// Kinetic beats within the bars.
+    pub kinetic_beats: usize,
+}
+
+/// For each bar, whether its window (`start_secs..end_secs`) holds exactly its own counts of
+/// `counts` ([`super::figures::bar_counts_secs`]: each bar's counts in turn): then
+/// [`beat_alignment`] on the bar over all `counts` is the same, to the bit, as on its own
+/// counts (it keeps the counts inside the window, in their order). Not always so: a bar that
+/// ends an ulp past the next one's start (`start + bar` against `first + (i + 1)·bar`, as
+/// [`super::bars_from_tempo`] makes them) holds the next bar's first count too.
+pub fn bars_hold_own_counts(bars: &[Bar], counts: &[f32]) -> Vec<bool> {
+    // Sorted counts: those before a bar's are outside its window when the one just before is,
+    // and those after when the one just after is.
+    let sorted = counts.windows(2).all(|w| w[0] <= w[1]) && bars.iter().map(Bar::beat_count).sum::<usize>() == counts.len();
+    let mut at = 0;
+    bars.iter()
+        .map(|b| {
+            let n = b.beat_count();
+            let own = (at, at + n);
+            at += n;
+            let inside = |t: f32| t >= b.start_secs && t < b.end_secs;
+            sorted && counts[own.0..own.1].iter().all(|&t| inside(t)) && !own.0.checked_sub(1).is_some_and(|k| inside(counts[k])) && !counts.get(own.1).is_some_and(|&t| inside(t))
+        })
+        .collect()
 }
 
 /// The perceptual distance of the preference test (spec §J), deliberately not the one the

@@ -18,7 +18,7 @@ use std::sync::Arc;
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::quality::{DanceMeasures, QualityMotion};
+use super::quality::{beat_alignment, DanceMeasures, DanceReadout, QualityMotion};
 use super::segment::{SegmentLibrary, LIBRARY_FPS};
 use crate::bars::Bar;
 use crate::canon::builtin::canonical_skeleton;
@@ -133,8 +133,9 @@ pub(super) struct HoldWork {
     pub legs_only: bool,
 }
 
-/// A rendered dance measured ([`QualityMotion`]) and, when handed on, its §J measures.
-pub(super) type MeasuredDance = (QualityMotion, Option<DanceMeasures>);
+/// A rendered dance measured ([`QualityMotion`]) and, when handed on, its §J measures and
+/// their readout on its bars' counts.
+pub(super) type MeasuredDance = (QualityMotion, Option<(DanceMeasures, DanceReadout)>);
 
 /// [`render_switched`], with the rendered dance measured ([`QualityMotion::from_clip`]) and its
 /// §J measures ([`DanceMeasures::of`]) when the held-feet rule took them on the way (`None`
@@ -143,7 +144,7 @@ pub(super) type MeasuredDance = (QualityMotion, Option<DanceMeasures>);
 pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, work: HoldWork) -> (Clip, Vec<f32>, Option<MeasuredDance>) {
     let work = HoldWork { read_only: work.quick && work.read_only, ..work };
     let (clip, holds, switches) = render_traced_with(lib, bars, choices, options, work);
-    let motion = if work.quick { holds.motion.map(|m| (m, holds.measures.filter(|d| d.every_join_inside))) } else { None };
+    let motion = if work.quick { holds.motion.map(|m| (m, holds.measures.filter(|(d, _)| d.every_join_inside))) } else { None };
     (clip, switches, motion)
 }
 
@@ -323,10 +324,10 @@ fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usiz
 struct Holds {
     planted: Vec<[bool; 4]>,
     kept: Vec<bool>,
-    /// The returned dance measured, when the rule measured it, and §J's measures of it
-    /// ([`DanceMeasures::of_every_join`]).
+    /// The returned dance measured, when the rule measured it, §J's measures of it
+    /// ([`DanceMeasures::of_every_join`]) and their readout ([`DanceMeasures::readout`]).
     motion: Option<QualityMotion>,
-    measures: Option<DanceMeasures>,
+    measures: Option<(DanceMeasures, DanceReadout)>,
 }
 
 /// Rounds of [`hold_planted_feet`]'s per-bar rule at most (each drops the holds of the bars
@@ -378,10 +379,10 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     let source: Vec<[bool; 4]> = (0..frames).map(|f| [0, 1, 2, 3].map(|k| flag(f, k))).collect();
     // One pass of §J's measures per rendered dance gives the rule's figures ([`rule_figures`]),
     // handed on with the dance they measure.
-    let measure = |m: QualityMotion| -> Option<(Vec<BarFigures>, WholeFigures, QualityMotion, DanceMeasures)> {
+    let measure = |m: QualityMotion| -> Option<RuleMeasure> {
         let d = DanceMeasures::of_every_join(&m, bars, switches);
-        let (per_bar, whole) = rule_figures(&d, bars)?;
-        Some((per_bar, whole, m, d))
+        let (per_bar, whole, readout) = rule_figures(&d, bars)?;
+        Some((per_bar, whole, m, (d, readout)))
     };
     let figures = |c: &Clip| measure(if quick { QualityMotion::from_clip(c) } else { QualityMotion::from_clip_every_frame(c) }.ok()?);
     let only = (quick && read_only).then(|| QualityMotion::frames_read(frames, clip.fps));
@@ -453,31 +454,37 @@ type BarFigures = (f32, f32, f32, f32);
 /// count, and its mean foot skate.
 type WholeFigures = (f32, f32, f32);
 
+/// One rendered dance as the rule measures it: its figures per bar and whole, the motion, and
+/// §J's measures and readout, handed on with the dance the rule keeps.
+type RuleMeasure = (Vec<BarFigures>, WholeFigures, QualityMotion, (DanceMeasures, DanceReadout));
+
 /// [`hold_planted_feet`]'s figures of a rendered dance from its §J measures, per bar and whole.
 /// Bars that each keep their figures can still add up to a dance that follows its counts less
 /// clearly (a kinetic beat gained between counts here, one lost on a count there) or that
 /// leaves the beat-rate band, or (a lifted foot catching up across a bar's edge) slides its feet
 /// more in all: hence the whole dance's too.
-fn rule_figures(d: &DanceMeasures, bars: &[Bar]) -> Option<(Vec<BarFigures>, WholeFigures)> {
-    use super::quality::{beat_alignment, summarize_skate};
-    let kinetic_in = |b0: f32, b1: f32| d.kinetic.iter().filter(|&&t| t >= b0 && t < b1).count();
+fn rule_figures(d: &DanceMeasures, bars: &[Bar]) -> Option<(Vec<BarFigures>, WholeFigures, DanceReadout)> {
+    use super::fill::beat_rate_cost;
+    let counts = super::figures::bar_counts_secs(bars);
+    // §J's readout, which the played figures read too when handed on: each bar's BAS-music on
+    // every count in its window, the same bits as on its own counts where the window holds
+    // just its own (`bars_hold_own_counts`). A bar whose window holds another's count (bars
+    // that overlap, even by an ulp) keeps the rule's own figure: the bar's counts alone.
+    let readout = d.readout(bars, &counts)?;
+    let own = super::quality::bars_hold_own_counts(bars, &counts);
     let per_bar = bars
         .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            let counts = super::figures::bar_counts_secs(std::slice::from_ref(b));
-            let a = beat_alignment(&counts, &d.kinetic, b.start_secs, b.end_secs);
-            let kb = kinetic_in(b.start_secs, b.end_secs);
-            let slide = summarize_skate(&d.skate, d.frame_of(b.start_secs)..d.frame_of(b.end_secs)).mean_cm_per_s;
-            (a.bas_music, super::fill::beat_rate_cost(kb as f32 / counts.len() as f32), d.jump_into(i).unwrap_or(0.0), slide)
+        .zip(&readout.bars)
+        .zip(own)
+        .map(|((b, q), own)| {
+            let n = b.beat_count();
+            let bas = if own { q.beats.bas_music } else { beat_alignment(&super::figures::bar_counts_secs(std::slice::from_ref(b)), &d.kinetic, b.start_secs, b.end_secs).bas_music };
+            (bas, beat_rate_cost(d.kinetic_in(b.start_secs, b.end_secs) as f32 / n as f32), q.join_jump.unwrap_or(0.0), q.foot_skate.mean_cm_per_s)
         })
         .collect();
-    let counts = super::figures::bar_counts_secs(bars);
-    let (first, last) = (bars.first()?, bars.last()?);
-    let a = beat_alignment(&counts, &d.kinetic, first.start_secs, last.end_secs);
-    let kb = kinetic_in(first.start_secs, last.end_secs);
-    let slide = summarize_skate(&d.skate, d.frame_of(first.start_secs)..d.frame_of(last.end_secs)).mean_cm_per_s;
-    Some((per_bar, (a.bas_music - a.bas_music_shifted, super::fill::beat_rate_cost(kb as f32 / counts.len().max(1) as f32), slide)))
+    let a = &readout.beats;
+    let whole = (a.bas_music - a.bas_music_shifted, beat_rate_cost(readout.kinetic_beats as f32 / counts.len().max(1) as f32), readout.foot_skate.mean_cm_per_s);
+    Some((per_bar, whole, readout))
 }
 
 /// Bollo's quintic offset at `t` of `span` (both in frames): starts at `x0` with velocity `v0`
@@ -711,7 +718,8 @@ mod tests {
                 let (clip, switches) = render_switched(&lib, &bars, &choices, &RenderOptions { hold_feet, ..RenderOptions::default() });
                 let m = QualityMotion::from_clip(&clip).unwrap();
                 let d = DanceMeasures::of_every_join(&m, &bars, &switches);
-                let (now, before) = (rule_figures(&d, &bars).unwrap(), rule_figures_before(&m, &bars, &switches).unwrap());
+                let (per_bar, whole, _) = rule_figures(&d, &bars).unwrap();
+                let (now, before) = ((per_bar, whole), rule_figures_before(&m, &bars, &switches).unwrap());
                 assert_eq!(figure_bits(&now), figure_bits(&before), "{bpm} BPM, last bar {sliver:?}, held {hold_feet}");
                 // Where every join is inside, they are `DanceMeasures::of`'s, which the played
                 // figures read when handed on.
@@ -720,6 +728,51 @@ mod tests {
             }
         }
         assert!(at_the_end > 0, "no join fell on a motion's last frame: the case was not compared");
+    }
+
+    #[test]
+    fn a_bars_counts_among_every_count_are_its_own() {
+        // What lets the rule read §J's readout (`DanceMeasures::readout`): on a song grid's bars
+        // (a sliver last bar too), BAS-music on a bar over every count in its window is the
+        // same bits as over the bar's own counts, and the readout's walk of the joins gives
+        // `jump_into`'s binary search. Bars that overlap (a count of the next bar in this
+        // one's window; a grid's bar can end an ulp past the next one's start) are caught
+        // (`bars_hold_own_counts`), and the rule keeps its own figures there, the control's.
+        use super::super::quality::bars_hold_own_counts;
+        let (mut compared, mut differed) = (0, 0);
+        for (bpm, secs, sliver, overlap) in [(90.0, 20.0, None, false), (150.0, 16.0, None, false), (120.0, 8.0, Some(0.004f32), false), (96.0, 10.0, Some(0.05), false), (120.0, 12.0, None, true), (104.0, 12.0, None, true)] {
+            let (lib, mut bars, mut choices) = dance(bpm, secs);
+            if let Some(d) = sliver {
+                let last = *bars.last().unwrap();
+                bars.push(Bar { index: last.index + 1, start_secs: last.end_secs, end_secs: last.end_secs + d, ..last });
+                choices.push(choices[0]);
+            }
+            if overlap {
+                bars[2].end_secs += 0.6 * bars[3].duration_secs();
+            }
+            let counts = super::super::figures::bar_counts_secs(&bars);
+            let own = bars_hold_own_counts(&bars, &counts);
+            assert!(!overlap || !own[2], "{bpm} BPM: bar 2 overlaps bar 3");
+            let (clip, switches) = render_switched(&lib, &bars, &choices, &RenderOptions::default());
+            let m = QualityMotion::from_clip(&clip).unwrap();
+            let d = DanceMeasures::of_every_join(&m, &bars, &switches);
+            let readout = d.readout(&bars, &counts).unwrap();
+            for (i, (b, q)) in bars.iter().zip(&readout.bars).enumerate() {
+                let holds_own = own[i];
+                let own = beat_alignment(&super::super::figures::bar_counts_secs(std::slice::from_ref(b)), &d.kinetic, b.start_secs, b.end_secs).bas_music;
+                if !holds_own {
+                    differed += usize::from(own.to_bits() != q.beats.bas_music.to_bits());
+                } else {
+                    assert_eq!(own.to_bits(), q.beats.bas_music.to_bits(), "{bpm} BPM, bar {i}");
+                    compared += 1;
+                }
+                assert_eq!(d.jump_into(i).map(f32::to_bits), q.join_jump.map(f32::to_bits), "{bpm} BPM, bar {i}");
+            }
+            let (per_bar, whole, _) = rule_figures(&d, &bars).unwrap();
+            assert_eq!(figure_bits(&(per_bar, whole)), figure_bits(&rule_figures_before(&m, &bars, &switches).unwrap()), "{bpm} BPM, overlap {overlap}");
+        }
+        eprintln!("{compared} bars hold their own counts (compared), {differed} of the rest differ");
+        assert!(compared > 20 && differed > 0, "{compared} bars compared, {differed} overlapping bars differed: a case was not reached");
     }
 
     #[test]

@@ -15,6 +15,7 @@ use crate::clip::Clip;
 use crate::canon::humanoid::HumanoidMap;
 use crate::import::SkinnedMesh;
 use crate::motion;
+use crate::skeleton::Skeleton;
 use crate::canon::retarget::is_canonical;
 
 /// Planted frames and release for [`Character::play`], from outside the source's own tracks.
@@ -507,6 +508,66 @@ pub(super) fn pelvis_drop(legs: &[Leg], hips: &[Vec<Vec3>], targets: &[Vec<Optio
     let window = |f: usize| f.saturating_sub(w)..(f + w + 1).min(frames);
     let held: Vec<f32> = (0..frames).map(|f| raw[window(f)].iter().copied().fold(0.0, f32::max)).collect();
     (0..frames).map(|f| held[window(f)].iter().sum::<f32>() / window(f).len() as f32).collect()
+}
+
+/// The joints whose world position pass 1 of [`super::Character::play`] reads (what it hands back is
+/// local rotations and the tracks' translations): each leg's hip (its IK starts there), the
+/// joint a detached one hangs from, the parent of the hips and of a detached joint (their
+/// translations are read from it), and every joint one of those is posed from. The others'
+/// positions (spine, arms, head, knees, feet) it need not compute.
+pub(super) fn held_pass_positions(skeleton: &Skeleton, hips: usize, legs: &[Leg], detached: &[Option<(usize, Vec3)>]) -> Vec<bool> {
+    let n = skeleton.len();
+    let parent = |i: usize| skeleton.joints.get(i).and_then(|j| j.parent).filter(|&q| q < i);
+    let mut read = vec![false; n];
+    let mut mark = |i: usize| {
+        if let Some(r) = read.get_mut(i) {
+            *r = true;
+        }
+    };
+    legs.iter().for_each(|l| mark(l.hip));
+    parent(hips).into_iter().for_each(&mut mark);
+    for (i, d) in detached.iter().enumerate() {
+        if let Some((jp, _)) = d {
+            mark(*jp);
+            parent(i).into_iter().for_each(&mut mark);
+        }
+    }
+    for i in (0..n).rev() {
+        if let Some(q) = parent(i).filter(|_| read[i]) {
+            read[q] = true;
+        }
+    }
+    read
+}
+
+/// The joints of `skeleton` pass 0 of [`super::Character::play`] reads: `hips`, each leg's hip, knee,
+/// foot and toe, and every joint one of those is posed from (its parent before it, or the
+/// joint a detached one hangs from, `detached`). The rest (spine, arms, head) pass 0 need not
+/// pose: what it keeps is where the feet, hips and ankle hinges go, and each frame of pass 1
+/// poses every joint anew.
+pub(super) fn free_pass_joints(skeleton: &Skeleton, hips: usize, legs: &[Leg], detached: &[Option<(usize, Vec3)>]) -> Vec<bool> {
+    let n = skeleton.len();
+    let mut reads = vec![false; n];
+    for i in std::iter::once(hips).chain(legs.iter().flat_map(|l| [Some(l.hip), Some(l.knee), Some(l.foot), l.toe]).flatten()) {
+        if let Some(r) = reads.get_mut(i) {
+            *r = true;
+        }
+    }
+    loop {
+        let mut grew = false;
+        for i in 0..n {
+            if !reads[i] {
+                continue;
+            }
+            let from = [skeleton.joints[i].parent.filter(|&q| q < i), detached[i].map(|d| d.0)];
+            for q in from.into_iter().flatten() {
+                grew |= !std::mem::replace(&mut reads[q], true);
+            }
+        }
+        if !grew {
+            return reads;
+        }
+    }
 }
 
 #[cfg(test)]

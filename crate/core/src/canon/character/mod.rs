@@ -453,6 +453,7 @@ impl Character {
         // The joints pass 0 reads (its hips, legs, feet and toes, and every joint they are
         // posed from): with `free_pass_legs_only`, the only ones it poses.
         let free_reads = free_pass_joints(&self.skeleton, hips, &legs, &detached);
+        let held_reads = held_pass_positions(&self.skeleton, hips, &legs, &detached);
         // Pass 0 poses the character freely and records where its feet (ankles and toes) and
         // hips go and where the source's are; the plants and the pelvis drop follow from
         // those; pass 1 poses again with the feet held.
@@ -633,7 +634,9 @@ impl Character {
                     if track_of[i] != usize::MAX {
                         tracks[track_of[i]].values.push(t);
                     }
-                    p[i] = pp + pg * t;
+                    if pass == 0 || held_reads[i] {
+                        p[i] = pp + pg * t;
+                    }
                     // Held foot: thigh and shin turned onto the two-bone solution by the
                     // kernel's solver, at the thigh; the shin (turned from the world rotation
                     // the transfer gives it) is set when its turn comes. The foot keeps its
@@ -682,36 +685,6 @@ impl Character {
             rotations,
             translations: tracks,
         })
-    }
-}
-
-/// The joints of `skeleton` pass 0 of [`Character::play`] reads: `hips`, each leg's hip, knee,
-/// foot and toe, and every joint one of those is posed from (its parent before it, or the
-/// joint a detached one hangs from, `detached`). The rest (spine, arms, head) pass 0 need not
-/// pose: what it keeps is where the feet, hips and ankle hinges go, and each frame of pass 1
-/// poses every joint anew.
-fn free_pass_joints(skeleton: &Skeleton, hips: usize, legs: &[Leg], detached: &[Option<(usize, Vec3)>]) -> Vec<bool> {
-    let n = skeleton.len();
-    let mut reads = vec![false; n];
-    for i in std::iter::once(hips).chain(legs.iter().flat_map(|l| [Some(l.hip), Some(l.knee), Some(l.foot), l.toe]).flatten()) {
-        if let Some(r) = reads.get_mut(i) {
-            *r = true;
-        }
-    }
-    loop {
-        let mut grew = false;
-        for i in 0..n {
-            if !reads[i] {
-                continue;
-            }
-            let from = [skeleton.joints[i].parent.filter(|&q| q < i), detached[i].map(|d| d.0)];
-            for q in from.into_iter().flatten() {
-                grew |= !std::mem::replace(&mut reads[q], true);
-            }
-        }
-        if !grew {
-            return reads;
-        }
     }
 }
 
