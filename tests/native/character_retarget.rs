@@ -477,10 +477,11 @@ fn a_released_foot_eases_over_its_swing_against_the_fixed_ease_control() {
 }
 
 
-/// Session 21 (issue 26's speed goal): pass 0 posing only the joints it reads (the hips and
-/// legs, and what they hang from: RobotExpressive's feet hang from an IK bone at the root)
-/// against posing every joint, the control: the same retargeted clip, to the bit, on every rig
-/// (the MMD models' extra bones and the robot's detached feet included), on a salsa take.
+/// Sessions 21 and 23 (issue 26's speed goal): pass 0 posing only the joints it reads (the hips
+/// and legs, and what they hang from: RobotExpressive's feet hang from an IK bone at the root)
+/// and pass 1 placing only the joints whose positions it reads, against posing and placing
+/// every joint, the control: the same retargeted clip, to the bit, on every rig (the MMD
+/// models' extra bones and the robot's detached feet included), on a salsa take.
 #[test]
 fn the_free_pass_posing_its_legs_alone_changes_no_rigs_frame() {
     let (clip, map) = salsa();

@@ -634,7 +634,7 @@ impl Character {
                     if track_of[i] != usize::MAX {
                         tracks[track_of[i]].values.push(t);
                     }
-                    if pass == 0 || held_reads[i] {
+                    if pass == 0 || held_reads[i] || !options.free_pass_legs_only {
                         p[i] = pp + pg * t;
                     }
                     // Held foot: thigh and shin turned onto the two-bone solution by the
@@ -739,9 +739,10 @@ pub struct RetargetOptions {
     /// before issue 27's mend).
     pub release_over_swing: bool,
     /// Pass 0 (the character posed freely, to plan the held feet) poses only the joints it
-    /// reads: the hips and legs and what they hang from, not the spine, arms and head. The
-    /// same clip either way (pass 0 keeps only where the feet, hips and ankle hinges go); off
-    /// only as the control (`GenerateOptions::free_pass_legs_only`).
+    /// reads: the hips and legs and what they hang from, not the spine, arms and head; and
+    /// pass 1 places in the world only the joints whose positions it reads (the legs' hips and
+    /// what the hips and detached joints hang from). The same clip either way; off only as the
+    /// control, every joint posed and placed in both passes (`GenerateOptions::free_pass_legs_only`).
     pub free_pass_legs_only: bool,
 }
 
