@@ -259,17 +259,9 @@ export function installShare({ choreo, messages, songReady, song, loadSong }) {
     });
     // Where Share is offered: a dance with moves from the person's own files cannot go in a
     // link (the files would not be on the other machine); say so and offer the .odori file.
-    // In the page from the start (boot.js may hold its line), else made here.
-    let note = choreo.root.querySelector("#dance-share-note");
-    if (!note) {
-      note = document.createElement("span");
-      note.id = "dance-share-note";
-      note.className = "share-note";
-      note.hidden = true;
-      note.setAttribute("role", "note");
-      // At the end of the Dance controls: shown, it adds a line below them, not one in the middle.
-      button.parentElement.append(note);
-    }
+    // In the page from the start, at the end of the Dance controls (shown, it adds a line below
+    // them; boot.js may hold that line).
+    const note = choreo.root.querySelector("#dance-share-note");
     const text = document.createElement("span");
     const save = document.createElement("button");
     save.type = "button";

@@ -5,7 +5,7 @@
 
 use super::generate::Problem;
 use super::profile::{self, Work};
-use super::quality::{summarize_skate, DanceMeasures, FootSkate, QualityMotion};
+use super::quality::{DanceMeasures, FootSkate, QualityMotion};
 use super::render::{render_measured, render_switched, HoldWork, RenderOptions};
 use super::segment::SegmentLibrary;
 use crate::bars::Bar;
@@ -152,8 +152,7 @@ fn played_of_control(m: &QualityMotion, bars: &[Bar], switches: &[f32]) -> Optio
 fn figures_of(m: &QualityMotion, bars: &[Bar], switches: &[f32]) -> Option<DanceFigures> {
     let d = DanceMeasures::of(m, bars, switches);
     let (first, last) = (bars.first()?, bars.last()?);
-    let skate = summarize_skate(&d.skate, d.frame_of(first.start_secs)..d.frame_of(last.end_secs));
-    Some(whole_figures(&d, d.kinetic_in(first.start_secs, last.end_secs), skate, bars))
+    Some(whole_figures(&d, d.kinetic_in(first.start_secs, last.end_secs), d.skate_in(first.start_secs, last.end_secs), bars))
 }
 
 /// [`DanceFigures`] of the whole dance over `bars`, from its measures, the kinetic beats within

@@ -595,7 +595,7 @@ pub fn dance_quality_switched_of(m: &QualityMotion, bars: &[Bar], music_beats_se
     let jumps = &d.jumps;
     Ok(DanceQuality {
         beats: beat_alignment(music_beats_secs, &d.kinetic, first.start_secs, last.end_secs),
-        foot_skate: summarize_skate(&d.skate, d.frame_of(first.start_secs)..d.frame_of(last.end_secs)),
+        foot_skate: d.skate_in(first.start_secs, last.end_secs),
         pfc: pfc(m),
         join_jump_mean: if jumps.is_empty() { 0.0 } else { jumps.iter().sum::<f32>() / jumps.len() as f32 },
         join_jump_max: jumps.iter().copied().fold(0.0, f32::max),
@@ -671,7 +671,7 @@ impl DanceMeasures {
             .map(|(i, b)| BarQuality {
                 bar: i,
                 beats: beat_alignment(music_beats_secs, &self.kinetic, b.start_secs, b.end_secs),
-                foot_skate: summarize_skate(&self.skate, self.frame_of(b.start_secs)..self.frame_of(b.end_secs)),
+                foot_skate: self.skate_in(b.start_secs, b.end_secs),
                 join_jump: jumps.next_if(|&(&bar, _)| bar == i).map(|(_, &j)| j),
             })
             .collect()
@@ -685,7 +685,7 @@ impl DanceMeasures {
         Some(DanceReadout {
             bars: self.bar_qualities(bars, counts),
             beats: beat_alignment(counts, &self.kinetic, first.start_secs, last.end_secs),
-            foot_skate: summarize_skate(&self.skate, self.frame_of(first.start_secs)..self.frame_of(last.end_secs)),
+            foot_skate: self.skate_in(first.start_secs, last.end_secs),
             kinetic_beats: self.kinetic_in(first.start_secs, last.end_secs),
         })
     }
@@ -693,6 +693,11 @@ impl DanceMeasures {
     /// Kinetic beats in `start_secs..end_secs`.
     pub fn kinetic_in(&self, start_secs: f32, end_secs: f32) -> usize {
         self.kinetic.iter().filter(|&&t| t >= start_secs && t < end_secs).count()
+    }
+
+    /// Foot skate over the frames of `start_secs..end_secs`.
+    pub fn skate_in(&self, start_secs: f32, end_secs: f32) -> FootSkate {
+        summarize_skate(&self.skate, self.frame_of(start_secs)..self.frame_of(end_secs))
     }
 }
 
