@@ -40,8 +40,11 @@ pub fn bars_from_tempo(
     }
     Ok((0..count as usize)
         .map(|i| {
+            // Each bar ends where the next starts, to the bit (`start + bar_secs` could end a bar
+            // an ulp past the next one's start, and that bar's window then held the next bar's
+            // first count).
             let start_secs = first + i as f32 * bar_secs;
-            let end_secs = start_secs + bar_secs;
+            let end_secs = first + (i + 1) as f32 * bar_secs;
             Bar { index: i, start_secs, end_secs, intensity: intensity(start_secs, end_secs).clamp(0.0, 1.0), beats: beats_per_bar as u32 }
         })
         .collect())
@@ -57,5 +60,25 @@ mod tests {
         assert_eq!(bars.len(), 4);
         assert!((bars[3].end_secs - 8.5).abs() < 1e-5);
         assert!(matches!(bars_from_tempo(1.5, 120.0, 4, 0.0, |_, _| 0.5), Err(GridError::ShorterThanABar { .. })));
+    }
+
+    #[test]
+    fn each_bar_ends_where_the_next_starts_to_the_bit() {
+        // Over tempi and first downbeats where `start + bar_secs` (the rule before) ends some
+        // bar an ulp off the next bar's start: the control counts them, so the test can fail.
+        let (mut checked, mut off_before) = (0, 0);
+        for tenth_bpm in (600..=2000).step_by(7) {
+            let bpm = tenth_bpm as f32 / 10.0;
+            for first in [0.0f32, 0.137, 0.5, 1.03] {
+                let bars = bars_from_tempo(300.0, bpm, 4, first, |_, _| 0.5).unwrap();
+                let bar_secs = 4.0 * 60.0 / bpm;
+                for w in bars.windows(2) {
+                    assert_eq!(w[0].end_secs.to_bits(), w[1].start_secs.to_bits(), "{bpm} BPM from {first} s, bar {}", w[0].index);
+                    off_before += usize::from((w[0].start_secs + bar_secs).to_bits() != w[1].start_secs.to_bits());
+                    checked += 1;
+                }
+            }
+        }
+        assert!(off_before > 100, "the rule before ended only {off_before} of {checked} bars off the next start: the test would not catch it");
     }
 }
