@@ -736,7 +736,8 @@ mod tests {
         // (a sliver last bar too), BAS-music on a bar over every count in its window is the
         // same bits as over the bar's own counts, and the readout's walk of the joins gives
         // `jump_into`'s binary search. Bars that overlap (a count of the next bar in this
-        // one's window; a grid's bar can end an ulp past the next one's start) are caught
+        // one's window: bars a caller hands in may; `bars_from_tempo`'s did by an ulp before
+        // session 24) are caught
         // (`bars_hold_own_counts`), and the rule keeps its own figures there, the control's.
         use super::super::quality::bars_hold_own_counts;
         let (mut compared, mut differed) = (0, 0);
