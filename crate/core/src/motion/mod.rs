@@ -452,7 +452,7 @@ mod tests {
 
     #[test]
     fn two_bone_ik_reaches_near_stretched_targets_that_glams_arc_misses() {
-        // A leg near full stretch (the target 0.2–2 mm inside its reach) solved once, then the
+        // A leg near full stretch (the target 0.6–6 mm inside its reach) solved once, then the
         // whole leg turned about the hip by 1.6e-4..2.4e-4 rad (a held foot's small correction):
         // solving again must turn it back, the thigh by about that arc. With the kernel's arc
         // the ankle lands within 1e-5 m of the target; the control, the same solver with glam's
