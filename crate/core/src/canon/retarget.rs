@@ -18,13 +18,6 @@ use crate::canon::SOLE_HEIGHT;
 use crate::canon::normalize::body_height;
 use crate::skeleton::Skeleton;
 
-fn arc(from: Vec3, to: Vec3) -> Quat {
-    match (from.try_normalize(), to.try_normalize()) {
-        (Some(a), Some(b)) => Quat::from_rotation_arc(a, b),
-        _ => Quat::IDENTITY,
-    }
-}
-
 /// World rotation whose +X is along `left` and +Y along `up` (orthogonalised), or `None` when
 /// the two are degenerate.
 fn frame(left: Vec3, up: Vec3) -> Option<Quat> {
@@ -70,7 +63,7 @@ pub fn to_canonical(clip: &Clip, map: &HumanoidMap, fps: f32) -> Clip {
             if to.length_squared() < 1e-12 {
                 parent_world
             } else {
-                arc(parent_world * off(child), to) * parent_world
+                crate::motion::shortest_arc(parent_world * off(child), to) * parent_world
             }
         };
         let set = |c: Canon, w: Quat, parent: Canon, world: &mut [Quat; CANON_COUNT], local: &mut [Quat; CANON_COUNT]| {

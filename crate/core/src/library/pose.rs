@@ -148,14 +148,6 @@ pub fn interpolate_channel(keys: &[KeyPose], spacing: f32, t: f32, channel: impl
 /// Two-bone IK lives in the motion kernel.
 pub use crate::motion::{two_bone, two_bone_rotations};
 
-/// Rotation taking `from` to `to` (both any length).
-fn arc(from: Vec3, to: Vec3) -> Quat {
-    match (from.try_normalize(), to.try_normalize()) {
-        (Some(a), Some(b)) => Quat::from_rotation_arc(a, b),
-        _ => Quat::IDENTITY,
-    }
-}
-
 /// Local rotations and root translation of the canonical skeleton for one key pose, and the
 /// height of the lowest foot joint (ankle or toe tip: the feet are always the lowest part of
 /// these poses).
@@ -264,7 +256,7 @@ pub fn solve_legs(skeleton: &Skeleton, pose: &KeyPose, standing_hips_height: f32
         let flat = facing * off(toe);
         let shin = (ank - knee).normalize_or_zero() * off(toe).length();
         let toe_dir = flat.lerp(shin, point.clamp(0.0, 1.0) * 0.8);
-        let fq = arc(lq * off(toe), toe_dir) * lq;
+        let fq = crate::motion::shortest_arc(lq * off(toe), toe_dir) * lq;
         out.local[side * 4] = hips_q.inverse() * uq;
         out.local[side * 4 + 1] = uq.inverse() * lq;
         out.local[side * 4 + 2] = lq.inverse() * fq;

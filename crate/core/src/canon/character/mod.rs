@@ -293,10 +293,7 @@ impl Character {
                 (Some(ja), Some(jb)) => {
                     let have = rest_pos[jb] - rest_pos[ja];
                     let want = canon_pos[b.index()] - canon_pos[a.index()];
-                    match (have.try_normalize(), want.try_normalize()) {
-                        (Some(h), Some(w)) => Quat::from_rotation_arc(h, w),
-                        _ => Quat::IDENTITY,
-                    }
+                    motion::shortest_arc(have, want)
                 }
                 _ => Quat::IDENTITY,
             };
@@ -499,11 +496,7 @@ impl Character {
                     // Swing the reference so the bone points where the source's does.
                     let (a, b) = direction_bone(c);
                     let rest_dir = canon_rest[b.index()] - canon_rest[a.index()];
-                    let swing = match (rest_dir.try_normalize(), (src_rot[c.index()] * rest_dir).try_normalize()) {
-                        (Some(f), Some(t)) => Quat::from_rotation_arc(f, t),
-                        _ => Quat::IDENTITY,
-                    };
-                    swing * self.reference[c.index()]
+                    motion::shortest_arc(rest_dir, src_rot[c.index()] * rest_dir) * self.reference[c.index()]
                 }
             }
         };
