@@ -154,6 +154,12 @@ pub fn profile_lines(p: &odori_core::choreo::profile::Profile) -> Vec<String> {
         out.push(format!("stage {name:<14} {:>7.0} ms: {:>2} fills {:>7.0} ms, {:>2} measures {:>7.0} ms", s.total_ms, s.fills, s.fill_ms, s.measures, s.measure_ms));
     }
     out.push(format!("stages in all {all:.0} ms: fills {fills:.0} ms, renders and measures {measures:.0} ms"));
+    // Inside the renders and measures, over every stage.
+    for (name, s) in odori_core::choreo::profile::PARTS.iter().zip(&p.parts) {
+        if s.count > 0 {
+            out.push(format!("  {name:<34} {:>3} x {:>7.0} ms", s.count, s.ms));
+        }
+    }
     out
 }
 

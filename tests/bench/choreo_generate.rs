@@ -6,7 +6,7 @@
 //! library's transition table for the song's metre (cached, as in the app); the figure is the best
 //! of the calls after it; then the same call with each later stage off in turn, and the fill
 //! alone, so the figures say where the time goes; and the default against its controls in the
-//! same run (session 20's measures, session 19's fills, session 18's fills, session 15's measures, every held frame posed, session 16's default, the old pipeline's
+//! same run (session 24's measures: every held round posed anew, session 20's measures, session 19's fills, session 18's fills, session 15's measures, every held frame posed, session 16's default, the old pipeline's
 //! settings, windowed refills), with the default's and session 16's dances measured as played.
 //! Prints figures; asserts only that the calls agree (session 20's measures, session 19's and 18's fills, quick measures, every
 //! held frame posed and the default: the same dance).
@@ -46,6 +46,33 @@ fn main() {
     for line in odori_tests::profile_lines(&profile) {
         println!("native:   {line}");
     }
+    // One measure as played of the default's dance (what the order stage and stage 5 take 8
+    // of a Generate), profiled by part: best of 5, then where its time goes. `MEASURES=n`: n
+    // more of them and nothing else (for `perf record`).
+    let path: Vec<usize> = {
+        let (states, _) = odori_core::choreo::generate_states(&lib, &bars, &[], odori_core::choreo::FillWeights::default(), &odori_core::choreo::GenerateOptions::default()).expect("generate");
+        states.iter().map(|b| b.segment().expect("every bar filled")).collect()
+    };
+    let mut best_measure = f64::MAX;
+    for _ in 0..5 {
+        let t = Instant::now();
+        let f = odori_core::choreo::played_figures(&lib, &bars, &path);
+        best_measure = best_measure.min(t.elapsed().as_secs_f64() * 1e3);
+        assert!(f.is_some(), "the default's dance is measured");
+    }
+    let ((), profile) = odori_core::choreo::profile::profiled(clock_ms, || {
+        odori_core::choreo::played_figures(&lib, &bars, &path);
+    });
+    println!("native: one measure as played of the default's dance: {best_measure:.1} ms (best of 5); by part, one call:");
+    for line in odori_tests::profile_lines(&profile) {
+        println!("native:   {line}");
+    }
+    if let Some(n) = std::env::var("MEASURES").ok().and_then(|v| v.parse::<usize>().ok()) {
+        for _ in 0..n {
+            odori_core::choreo::played_figures(&lib, &bars, &path);
+        }
+        return;
+    }
     // The default against the controls in the same run, best of 3 each: session 15's measures
     // (GenerateOptions::quick_measures off), session 16's default (one join barred a refill,
     // GenerateOptions::join_bans_at_once off), the old pipeline (67f699e's
@@ -62,10 +89,11 @@ fn main() {
     let s18 = odori_core::choreo::GenerateOptions { top_lists_stop_at_rest: false, columns_scanned_by_chunks: false, ..d() };
     let s19 = odori_core::choreo::GenerateOptions { columns_scanned_by_chunks: false, ..d() };
     let s20 = odori_core::choreo::GenerateOptions { free_pass_legs_only: false, ..d() };
+    let s24 = odori_core::choreo::GenerateOptions { rounds_copy_same_frames: false, ..d() };
     let ((), profile) = odori_core::choreo::profile::profiled(clock_ms, || {
-        run(&s20);
+        run(&s24);
     });
-    println!("native:   the same, session 20's work (the held-feet rule's free pass posing every joint: free_pass_legs_only off, today's main, the control):");
+    println!("native:   the same, session 24's measures (every held round posed anew: rounds_copy_same_frames off, today's main, the control):");
     for line in odori_tests::profile_lines(&profile) {
         println!("native:   {line}");
     }
@@ -79,7 +107,8 @@ fn main() {
     println!("native: load average {}", std::fs::read_to_string("/proc/loadavg").unwrap_or_default().split_whitespace().take(3).collect::<Vec<_>>().join(" "));
     let variants = [
         ("the default (join bans at once, quick measures)", d()),
-        ("session 20's work (the free pass posing every joint; today's main, the control)", s20),
+        ("session 24's measures (every held round posed anew; today's main, the control)", s24),
+        ("session 20's work (the free pass posing every joint; control)", s20),
         ("session 19's work (whole columns scanned entry by entry; control)", s19),
         ("session 18's work (top lists stopped by the cheapest node; control)", s18),
         ("session 15's measures (control)", control),
@@ -107,14 +136,15 @@ fn main() {
         };
         println!("native: Generate 90 bars, {label}: {ms:.0} ms, objective {c:.3} (best of 3){against}");
     }
-    assert_eq!(timed[1].1, timed[0].1, "the free pass posing its legs alone keeps the dance");
-    assert_eq!(timed[2].1, timed[0].1, "whole columns scanned by chunks keep the dance");
-    assert_eq!(timed[3].1, timed[0].1, "top lists stopped at the rest keep the dance");
-    assert_eq!(timed[4].1, timed[0].1, "quick measures keep the dance");
-    assert_eq!(timed[5].1, timed[0].1, "posing only the frames read keeps the dance");
+    assert_eq!(timed[1].1, timed[0].1, "the rounds copying their same frames keep the dance");
+    assert_eq!(timed[2].1, timed[0].1, "the free pass posing its legs alone keeps the dance");
+    assert_eq!(timed[3].1, timed[0].1, "whole columns scanned by chunks keep the dance");
+    assert_eq!(timed[4].1, timed[0].1, "top lists stopped at the rest keep the dance");
+    assert_eq!(timed[5].1, timed[0].1, "quick measures keep the dance");
+    assert_eq!(timed[6].1, timed[0].1, "posing only the frames read keeps the dance");
     // What each dance is worth, as played (the figures stage 5 and the preference order
     // follow): the default's against session 16's, the control.
-    for (k, label) in [(0, "the default"), (6, "session 16's default (control)")] {
+    for (k, label) in [(0, "the default"), (7, "session 16's default (control)")] {
         let path: Vec<usize> = timed[k].1 .0.iter().map(|s| s.expect("every bar filled")).collect();
         let imported = path.iter().filter(|&&s| lib.segments()[s].builtin.is_none()).count();
         match odori_core::choreo::played_figures(&lib, &bars, &path) {

@@ -141,7 +141,7 @@ fn host_clock() -> f64 {
 
 thread_local! {
     static PROFILE: RefCell<Option<profile::Profile>> = const { RefCell::new(None) };
-    static DANCES: RefCell<[Vec<Option<usize>>; 9]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
+    static DANCES: RefCell<[Vec<Option<usize>>; 10]> = const { RefCell::new([Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new()]) };
 }
 
 /// The settings of variant `v`: 0 the default, 1 windowed refills, 2 session 15's measures
@@ -151,7 +151,8 @@ thread_local! {
 /// pose_read_frames_only off and session 18's fills), 6 session 18's work (top lists stopped by
 /// the cheapest node of all: top_lists_stop_at_rest off), 7 session 19's work (whole columns
 /// scanned entry by entry: columns_scanned_by_chunks off), 8 session 20's work (the held-feet
-/// rule's free pass posing every joint: free_pass_legs_only off, today's main, the control).
+/// rule's free pass posing every joint: free_pass_legs_only off), 9 session 24's measures (every
+/// round of the held-feet rule posed anew: rounds_copy_same_frames off, today's main, the control).
 fn variant(v: u32) -> GenerateOptions {
     let d = GenerateOptions::default();
     match v {
@@ -163,6 +164,7 @@ fn variant(v: u32) -> GenerateOptions {
         6 => GenerateOptions { top_lists_stop_at_rest: false, columns_scanned_by_chunks: false, ..d },
         7 => GenerateOptions { columns_scanned_by_chunks: false, ..d },
         8 => GenerateOptions { free_pass_legs_only: false, ..d },
+        9 => GenerateOptions { rounds_copy_same_frames: false, ..d },
         _ => d,
     }
 }
@@ -225,6 +227,21 @@ pub extern "C" fn profile_value(stage: u32, field: u32) -> f64 {
             2 => s.fill_ms,
             3 => s.measures as f64,
             4 => s.measure_ms,
+            _ => -1.0,
+        }
+    })
+}
+
+/// Of the last profile, part `k` of a measure (index into `profile::PARTS`): `field` 0 how many,
+/// 1 its ms over every stage (-1 when none).
+#[no_mangle]
+pub extern "C" fn profile_part(k: u32, field: u32) -> f64 {
+    PROFILE.with(|x| {
+        let x = x.borrow();
+        let Some(s) = x.as_ref().and_then(|p| p.parts.get(k as usize)) else { return -1.0 };
+        match field {
+            0 => s.count as f64,
+            1 => s.ms,
             _ => -1.0,
         }
     })

@@ -37,8 +37,8 @@ pub fn dance_figures_with(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], qu
     // Unheld: holding the feet (a cost on every measure of a refill) only lowers the skate the
     // filling follows, and each bar keeps its holds only where they keep its beat figures.
     let (clip, switches) = render_switched(lib, bars, &choices, &RenderOptions { hold_feet: false, ..RenderOptions::default() });
-    let m = if quick { QualityMotion::from_clip(&clip) } else { QualityMotion::from_clip_every_frame(&clip) }.ok()?;
-    figures_of(&m, bars, &switches)
+    let m = profile::part(profile::Part::Posed, || if quick { QualityMotion::from_clip(&clip) } else { QualityMotion::from_clip_every_frame(&clip) }).ok()?;
+    profile::part(profile::Part::Measures, || figures_of(&m, bars, &switches))
 }
 
 /// One bar of the dance as it is played ([`played_figures`]), measured as the strip's notes
@@ -82,7 +82,7 @@ pub fn played_figures(lib: &SegmentLibrary, bars: &[Bar], path: &[usize]) -> Opt
 /// [`super::GenerateOptions::quick_measures`]. The same figures either way (the test
 /// `quick_measures_keep_every_figure`).
 pub fn played_figures_with(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], quick: bool) -> Option<Played> {
-    played_figures_posed(lib, bars, path, HoldWork { quick, read_only: quick, legs_only: quick })
+    played_figures_posed(lib, bars, path, HoldWork { quick, read_only: quick, legs_only: quick, reuse_frames: quick })
 }
 
 /// [`played_figures_with`] with the held-feet rule's work named ([`HoldWork`]): `read_only`
@@ -97,7 +97,7 @@ pub(super) fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[u
     let (clip, switches, measured) = render_measured(lib, bars, &choices, &RenderOptions::default(), work);
     let (m, handed) = match measured {
         Some((m, d)) => (m, d),
-        None if quick => (QualityMotion::from_clip(&clip).ok()?, None),
+        None if quick => (profile::part(profile::Part::Posed, || QualityMotion::from_clip(&clip)).ok()?, None),
         None => (QualityMotion::from_clip_every_frame(&clip).ok()?, None),
     };
     if !quick {
@@ -111,9 +111,12 @@ pub(super) fn played_figures_posed(lib: &SegmentLibrary, bars: &[Bar], path: &[u
     let (measures, readout) = match handed {
         Some(d) => d,
         None => {
-            let d = DanceMeasures::of(&m, bars, &switches);
-            let r = d.readout(bars, &counts)?;
-            (d, r)
+            let (d, r) = profile::part(profile::Part::Measures, || {
+                let d = DanceMeasures::of(&m, bars, &switches);
+                let r = d.readout(bars, &counts);
+                (d, r)
+            });
+            (d, r?)
         }
     };
     let whole = whole_figures(&measures, readout.kinetic_beats, readout.foot_skate, bars);
@@ -192,7 +195,7 @@ impl Measured {
         if let Some((_, f)) = self.played.iter().find(|(q, _)| q == path) {
             return f.clone();
         }
-        let f = profile::timed(Work::Measure, || played_figures_posed(p.lib, p.bars, path, HoldWork { quick: p.quick_measures, read_only: p.pose_read_frames_only, legs_only: p.free_pass_legs_only }));
+        let f = profile::timed(Work::Measure, || played_figures_posed(p.lib, p.bars, path, HoldWork { quick: p.quick_measures, read_only: p.pose_read_frames_only, legs_only: p.free_pass_legs_only, reuse_frames: p.rounds_copy_same_frames }));
         self.played.push((path.to_vec(), f.clone()));
         f
     }
@@ -240,7 +243,7 @@ mod tests {
         for (k, bpm) in [(3usize, 96.0f32), (7, 120.0), (11, 138.0), (5, 160.0), (13, 104.0)] {
             let bars = bars_from_tempo(20.0, bpm, 4, 0.0, |_, _| 0.5).unwrap();
             let path: Vec<usize> = (0..bars.len()).map(|i| live[(i * k + bpm as usize) % live.len()]).collect();
-            let (read, every) = (played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: true, legs_only: true }), played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: false, legs_only: true }));
+            let (read, every) = (played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: true, legs_only: true, reuse_frames: true }), played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: false, legs_only: true, reuse_frames: true }));
             assert!(read.is_some(), "{bpm} BPM: measured");
             assert_eq!(read, every, "{bpm} BPM");
         }
@@ -259,7 +262,7 @@ mod tests {
         for (k, bpm, secs) in [(3usize, 96.0f32, 20.0), (7, 120.0, 60.0), (11, 138.0, 20.0), (5, 160.0, 20.0)] {
             let bars = bars_from_tempo(secs, bpm, 4, 0.0, |_, _| 0.5).unwrap();
             let path: Vec<usize> = (0..bars.len()).map(|i| live[(i * k + bpm as usize) % live.len()]).collect();
-            let (lean, whole) = (played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: true, legs_only: true }), played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: true, legs_only: false }));
+            let (lean, whole) = (played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: true, legs_only: true, reuse_frames: true }), played_figures_posed(&lib, &bars, &path, HoldWork { quick: true, read_only: true, legs_only: false, reuse_frames: true }));
             assert!(lean.is_some(), "{bpm} BPM: measured");
             assert_eq!(lean, whole, "{bpm} BPM");
         }

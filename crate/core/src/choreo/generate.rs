@@ -175,6 +175,14 @@ pub struct GenerateOptions {
     /// on the counts (session 20, not landed) it brings Vibe Ace's take 3 from 1.67 to 1.43 and
     /// changes no dance within the goal (`docs/benchmarks-notes-choreo.md`, session 21).
     pub join_wider_reach: bool,
+    /// Measure each dance as played with the held-feet rule's rounds after the first copying
+    /// the last round's held frames whose plan (each foot's target, the pelvis drop, the body's
+    /// shift, the toe pitch) is the same bits, and the positions its measure posed of frames
+    /// that are the same bits, not posing them again (`canon::character`'s `HeldFrames`,
+    /// `QualityMotion::from_clip_reusing`). The same figures and dances
+    /// (`copying_the_rounds_same_frames_keeps_every_figure`). Default true; false: the control
+    /// (session 24's measures).
+    pub rounds_copy_same_frames: bool,
 }
 
 impl Default for GenerateOptions {
@@ -199,6 +207,7 @@ impl Default for GenerateOptions {
             skate_beside_beat_term: true,
             free_pass_legs_only: true,
             join_wider_reach: false,
+            rounds_copy_same_frames: true,
         }
     }
 }
@@ -321,6 +330,8 @@ pub struct Problem<'a> {
     pub(super) pose_read_frames_only: bool,
     /// [`GenerateOptions::free_pass_legs_only`].
     pub(super) free_pass_legs_only: bool,
+    /// [`GenerateOptions::rounds_copy_same_frames`].
+    pub(super) rounds_copy_same_frames: bool,
     /// [`GenerateOptions::top_lists_stop_at_rest`], [`GenerateOptions::columns_scanned_by_chunks`].
     top_lists_stop_at_rest: bool,
     columns_scanned_by_chunks: bool,
@@ -379,6 +390,7 @@ impl<'a> Problem<'a> {
             quick_measures: options.quick_measures,
             pose_read_frames_only: options.pose_read_frames_only,
             free_pass_legs_only: options.free_pass_legs_only,
+            rounds_copy_same_frames: options.rounds_copy_same_frames,
             top_lists_stop_at_rest: options.top_lists_stop_at_rest,
             columns_scanned_by_chunks: options.columns_scanned_by_chunks,
         };

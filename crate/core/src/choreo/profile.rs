@@ -23,10 +23,26 @@ pub struct StageProfile {
     pub measure_ms: f64,
 }
 
-/// Per stage of [`STAGES`], its [`StageProfile`].
+/// The parts of a render and measure ([`Work::Measure`]) that [`Profile::parts`] reports, over
+/// every stage: the render before the feet are held (each bar's move sampled, placed and
+/// joined); the held-feet rule's first call of its kernel (`hold_feet_in_dance`: the free pass,
+/// pass 0, and round 0's held pass); each later round's held pass; the dances posed for §J
+/// (`QualityMotion`); §J's measures and their readout (`DanceMeasures`).
+pub const PARTS: [&str; 5] = ["render (sampled, placed, joined)", "free pass + round 0's held pass", "held pass, later rounds", "posed for §J (QualityMotion)", "§J measures and readout"];
+
+/// One part's count and time, milliseconds ([`PARTS`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PartProfile {
+    pub count: usize,
+    pub ms: f64,
+}
+
+/// Per stage of [`STAGES`], its [`StageProfile`]; per part of a measure ([`PARTS`]), its
+/// [`PartProfile`] over every stage.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Profile {
     pub stages: [StageProfile; 7],
+    pub parts: [PartProfile; 5],
 }
 
 impl Profile {
@@ -84,6 +100,43 @@ pub(super) fn timed<R>(work: Work, f: impl FnOnce() -> R) -> R {
     out
 }
 
+/// A part of a measure ([`PARTS`]), in order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Part {
+    Render = 0,
+    FreePass = 1,
+    HeldPass = 2,
+    Posed = 3,
+    Measures = 4,
+}
+
+/// Runs `f`, recording its time as `part` of a measure (when profiled), whatever the stage.
+pub(crate) fn part<R>(part: Part, f: impl FnOnce() -> R) -> R {
+    let t0 = part_start();
+    let out = f();
+    part_end(part, t0);
+    out
+}
+
+/// The clock's reading for [`part_end`] (`None` when not profiled): a part's start where a
+/// closure ([`part`]) will not fit.
+pub(crate) fn part_start() -> Option<f64> {
+    now()
+}
+
+/// Records the time since `t0` ([`part_start`]) as `part` of a measure.
+pub(crate) fn part_end(part: Part, t0: Option<f64>) {
+    let Some(t0) = t0 else { return };
+    RECORDER.with(|r| {
+        if let Some(r) = r.borrow_mut().as_mut() {
+            let ms = (r.clock)() - t0;
+            if let Some(s) = r.profile.parts.get_mut(part as usize) {
+                (s.count, s.ms) = (s.count + 1, s.ms + ms);
+            }
+        }
+    });
+}
+
 /// Runs `f` as stage `name` (one of [`STAGES`]): its fills and measures are recorded there, and
 /// its whole time; the stage before is restored after.
 pub(super) fn stage<R>(name: &str, f: impl FnOnce() -> R) -> R {
@@ -131,7 +184,15 @@ mod tests {
         assert_eq!((s.fill_ms, s.measure_ms), (1.0, 2.0));
         assert!(s.total_ms >= 7.0, "{s:?}");
         assert_eq!(p.stage("1 fill"), Some(&StageProfile::default()));
+        assert_eq!(p.parts, [PartProfile::default(); 5]);
+        let ((), p) = profiled(tick, || {
+            part(Part::HeldPass, || ());
+            stage("5 join repair", || part(Part::HeldPass, || ()));
+        });
+        assert_eq!(p.parts[Part::HeldPass as usize], PartProfile { count: 2, ms: 2.0 });
+        assert_eq!(p.parts[Part::Render as usize], PartProfile::default());
         // Without a clock: runs, records nothing.
         assert_eq!(stage("4b order", || timed(Work::Fill, || 3)), 3);
+        assert_eq!(part(Part::Posed, || 4), 4);
     }
 }

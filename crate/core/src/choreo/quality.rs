@@ -10,9 +10,9 @@
 //! height above the floor matter for foot skate, and one scale makes centimetres comparable
 //! between a small and a tall dancer.
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
-use glam::Vec3;
+use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -88,17 +88,39 @@ impl QualityMotion {
     /// is 0, so the lerp gives the same bits), the figures those of posing them all
     /// ([`canonical_positions`]; the test `from_clip_poses_only_what_it_reads`).
     pub fn from_clip(clip: &Clip) -> Result<Self, QualityError> {
+        Self::from_clip_reusing(clip, None).0
+    }
+
+    /// [`QualityMotion::from_clip`], each frame that is the same bits in `last` (a clip and the
+    /// canonical positions this gave it, handed back as the second value: the held-feet rule's
+    /// rounds measure one dance held differently) copied from it, not posed again: the same
+    /// motion. Also how many frames were copied.
+    pub(crate) fn from_clip_reusing(clip: &Clip, last: Option<(&Clip, &[Vec3])>) -> (Result<Self, QualityError>, Vec<Vec3>, usize) {
         let map = HumanoidMap::from_skeleton(&clip.skeleton);
         let frames = clip.frame_count();
         if !(clip.fps.is_finite() && clip.fps > 0.0) || frames < 3 {
-            return Self::from_positions(&canonical_positions(clip, &map), clip.fps);
+            return (Self::from_positions(&canonical_positions(clip, &map), clip.fps), Vec::new(), 0);
         }
+        let n = clip.skeleton.len();
+        let last = last.filter(|(c, p)| p.len() == frames * CANON_COUNT && c.fps.to_bits() == clip.fps.to_bits() && c.frame_count() == frames && Arc::ptr_eq(&c.skeleton, &clip.skeleton) && c.translations.len() == clip.translations.len() && c.translations.iter().zip(&clip.translations).all(|(a, b)| a.joint == b.joint && a.values.len() == b.values.len() && b.values.len() == frames));
+        let bits = |q: &Quat| q.to_array().map(f32::to_bits);
+        let same = |c: &Clip, f: usize| {
+            c.rotations[f * n..(f + 1) * n].iter().zip(&clip.rotations[f * n..(f + 1) * n]).all(|(a, b)| bits(a) == bits(b))
+                && c.translations.iter().zip(&clip.translations).all(|(a, b)| a.values[f].to_array().map(f32::to_bits) == b.values[f].to_array().map(f32::to_bits))
+        };
         let mut pos = vec![Vec3::ZERO; frames * CANON_COUNT];
         let mut posed = vec![false; frames];
+        let mut copied = 0;
         let mut pose = crate::motion::WorldPose::new();
         for (f0, f1, a) in resample_frames(frames, clip.fps) {
             for f in if a != 0.0 { [Some(f0), Some(f1)] } else { [Some(f0), None] }.into_iter().flatten() {
                 if std::mem::replace(&mut posed[f], true) {
+                    continue;
+                }
+                let out = f * CANON_COUNT..(f + 1) * CANON_COUNT;
+                if let Some((_, p)) = last.filter(|(c, _)| same(c, f)) {
+                    pos[out.clone()].copy_from_slice(&p[out]);
+                    copied += 1;
                     continue;
                 }
                 let world = &pose.of_frame(clip, f).positions;
@@ -109,7 +131,7 @@ impl QualityMotion {
                 crate::canon::humanoid::fill_missing(out);
             }
         }
-        Self::from_positions(&pos, clip.fps)
+        (Self::from_positions(&pos, clip.fps), pos, copied)
     }
 
     /// The frames of a clip of `frames` frames at `fps` that [`QualityMotion::from_clip`] poses

@@ -18,6 +18,7 @@ use std::sync::Arc;
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
+use super::profile::{part, Part};
 use super::quality::{beat_alignment, DanceMeasures, DanceReadout, QualityMotion};
 use super::segment::{SegmentLibrary, LIBRARY_FPS};
 use crate::bars::Bar;
@@ -131,6 +132,10 @@ pub(super) struct HoldWork {
     /// The free pass poses only the joints it reads
     /// ([`crate::canon::character::RetargetOptions::free_pass_legs_only`]).
     pub legs_only: bool,
+    /// With `quick`: each round after the first copies the last round's held frames whose plan
+    /// is the same bits, and the positions its measure posed of frames that are the same bits,
+    /// not posing them again ([`super::GenerateOptions::rounds_copy_same_frames`]).
+    pub reuse_frames: bool,
 }
 
 /// A rendered dance measured ([`QualityMotion`]) and, when handed on, its §J measures and
@@ -150,13 +155,14 @@ pub(super) fn render_measured(lib: &SegmentLibrary, bars: &[Bar], choices: &[Opt
 
 /// [`render`], with what its feet were held to and where its joins fall ([`render_switched`]).
 fn render_traced(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions) -> (Clip, Holds, Vec<f32>) {
-    render_traced_with(lib, bars, choices, options, HoldWork { quick: true, read_only: false, legs_only: true })
+    render_traced_with(lib, bars, choices, options, HoldWork { quick: true, read_only: false, legs_only: true, reuse_frames: true })
 }
 
 /// [`render_traced`]; `work.quick` off: the held-feet rule as before session 16 (its free pass
 /// posed anew each round, every frame posed for its measures), the control the test
 /// `keeping_the_free_pass_changes_no_frame` compares with ([`HoldWork`]).
 fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usize>], options: &RenderOptions, work: HoldWork) -> (Clip, Holds, Vec<f32>) {
+    let t0 = super::profile::part_start();
     let fps = if options.fps.is_finite() && options.fps > 0.0 { options.fps } else { 60.0 };
     let skeleton = Arc::new(canonical_skeleton());
     let end_secs = bars.iter().map(|b| b.end_secs).fold(0.0f32, f32::max);
@@ -313,6 +319,7 @@ fn render_traced_with(lib: &SegmentLibrary, bars: &[Bar], choices: &[Option<usiz
         rotations,
         translations: vec![TranslationTrack { joint: 0, values: roots }],
     };
+    super::profile::part_end(Part::Render, t0);
     let (clip, holds) = if options.hold_feet { hold_planted_feet(lib, bars, clip, &played, &bar_of, &switches, work) } else { (clip, Holds::default()) };
     (clip, holds, switches)
 }
@@ -328,6 +335,11 @@ struct Holds {
     /// ([`DanceMeasures::of_every_join`]) and their readout ([`DanceMeasures::readout`]).
     motion: Option<QualityMotion>,
     measures: Option<(DanceMeasures, DanceReadout)>,
+    /// Held frames the rounds copied from the round before ([`HoldWork::reuse_frames`]) and
+    /// posed, over every round; frames the rounds' measures copied.
+    copied: usize,
+    posed: usize,
+    measure_copied: usize,
 }
 
 /// Rounds of [`hold_planted_feet`]'s per-bar rule at most (each drops the holds of the bars
@@ -362,7 +374,8 @@ const HOLD_RULE_ROUNDS: usize = 4;
 #[allow(clippy::too_many_arguments)]
 fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[Option<(usize, f32)>], bar_of: &[Option<usize>], switches: &[f32], work: HoldWork) -> (Clip, Holds) {
     use crate::canon::character::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
-    let HoldWork { quick, read_only, legs_only } = work;
+    let HoldWork { quick, read_only, legs_only, reuse_frames } = work;
+    let reuse_frames = quick && reuse_frames;
     let frames = clip.frame_count();
     if frames < 3 || played.len() < frames {
         return (clip, Holds::default());
@@ -380,11 +393,15 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     // One pass of §J's measures per rendered dance gives the rule's figures ([`rule_figures`]),
     // handed on with the dance they measure.
     let measure = |m: QualityMotion| -> Option<RuleMeasure> {
-        let d = DanceMeasures::of_every_join(&m, bars, switches);
-        let (per_bar, whole, readout) = rule_figures(&d, bars)?;
+        let (d, figures) = part(Part::Measures, || {
+            let d = DanceMeasures::of_every_join(&m, bars, switches);
+            let f = rule_figures(&d, bars);
+            (d, f)
+        });
+        let (per_bar, whole, readout) = figures?;
         Some((per_bar, whole, m, (d, readout)))
     };
-    let figures = |c: &Clip| measure(if quick { QualityMotion::from_clip(c) } else { QualityMotion::from_clip_every_frame(c) }.ok()?);
+    let figures = |c: &Clip| measure(part(Part::Posed, || if quick { QualityMotion::from_clip(c) } else { QualityMotion::from_clip_every_frame(c) }).ok()?);
     let only = (quick && read_only).then(|| QualityMotion::frames_read(frames, clip.fps));
     let mut free = None;
     // With `legs_only` (and the frames read only): round 0's held pass first, and the unheld
@@ -393,9 +410,9 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     let mut first = None;
     let unheld_figures = if only.is_some() && legs_only {
         let planted = [0, 2].map(|k| ((0..frames).map(|f| source[f][k]).collect(), (0..frames).map(|f| source[f][k + 1]).collect()));
-        let Some(held) = hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free, only.as_deref(), legs_only) else { return (clip, Holds::default()) };
+        let Some(held) = part(Part::FreePass, || hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free, only.as_deref(), legs_only)) else { return (clip, Holds::default()) };
         first = Some(held);
-        match free.as_ref().and_then(|p| p.source_positions()).and_then(|w| QualityMotion::from_posed(&clip, w)) {
+        match part(Part::Posed, || free.as_ref().and_then(|p| p.source_positions()).and_then(|w| QualityMotion::from_posed(&clip, w))) {
             Some(m) => m.ok().and_then(measure),
             None => figures(&clip),
         }
@@ -405,20 +422,41 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
     let Some((unheld, unheld_whole, unheld_m, unheld_d)) = unheld_figures else { return (clip, Holds::default()) };
     let worse_whole = |(margin, cost, skate): (f32, f32, f32)| margin < unheld_whole.0 - 1e-4 || cost > unheld_whole.1 + 1e-4 || skate > unheld_whole.2;
     let mut keep = vec![true; bars.len()];
+    // The last round's held dance and the positions its measure posed ([`HoldWork::reuse_frames`]).
+    let mut last_held: Option<(Clip, Vec<Vec3>)> = None;
+    let mut measure_copied = 0;
+    let counts = |free: &Option<crate::canon::character::FreePass>, measure_copied: usize| Holds {
+        copied: free.as_ref().map_or(0, |c| c.held_reused),
+        posed: free.as_ref().map_or(0, |c| c.held_posed),
+        measure_copied,
+        ..Holds::default()
+    };
     for round in 0..=HOLD_RULE_ROUNDS {
         if !quick {
             free = None;
         }
+        if !reuse_frames {
+            if let Some(c) = free.as_mut() {
+                c.held = None;
+            }
+        }
         let kept = |f: usize| bar_of[f].is_none_or(|b| keep.get(b).copied().unwrap_or(true));
         let track = |k: usize| -> Vec<bool> { (0..frames).map(|f| kept(f) && source[f][k]).collect() };
         let planted = [(track(0), track(1)), (track(2), track(3))];
-        let Some(held) = first.take().or_else(|| hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free, only.as_deref(), legs_only)) else { return (clip, Holds::default()) };
-        let Some((with, with_whole, held_m, held_d)) = figures(&held) else { return (clip, Holds::default()) };
+        let Some(held) = first.take().or_else(|| part(if free.is_none() { Part::FreePass } else { Part::HeldPass }, || hold_feet_in_dance(&clip, &planted, DANCE_CATCH_UP_M_S, &mut free, only.as_deref(), legs_only))) else { return (clip, Holds::default()) };
+        let (measured, posed) = if reuse_frames {
+            let (m, pos, copied) = part(Part::Posed, || QualityMotion::from_clip_reusing(&held, last_held.as_ref().map(|(c, p)| (c, p.as_slice()))));
+            measure_copied += copied;
+            (m.ok().and_then(measure), pos)
+        } else {
+            (figures(&held), Vec::new())
+        };
+        let Some((with, with_whole, held_m, held_d)) = measured else { return (clip, Holds::default()) };
         if round == HOLD_RULE_ROUNDS {
             if worse_whole(with_whole) {
                 break;
             }
-            return (held, Holds { planted: source, kept: keep, motion: Some(held_m), measures: Some(held_d) });
+            return (held, Holds { planted: source, kept: keep, motion: Some(held_m), measures: Some(held_d), ..counts(&free, measure_copied) });
         }
         let mut dropped = false;
         for (b, (w, u)) in with.iter().zip(&unheld).enumerate() {
@@ -438,11 +476,14 @@ fn hold_planted_feet(lib: &SegmentLibrary, bars: &[Bar], clip: Clip, played: &[O
             if worse_whole(with_whole) {
                 break;
             }
-            return (held, Holds { planted: source, kept: keep, motion: Some(held_m), measures: Some(held_d) });
+            return (held, Holds { planted: source, kept: keep, motion: Some(held_m), measures: Some(held_d), ..counts(&free, measure_copied) });
+        }
+        if reuse_frames {
+            last_held = Some((held, posed));
         }
     }
     let kept = vec![false; bars.len()];
-    (clip, Holds { planted: source, kept, motion: Some(unheld_m), measures: Some(unheld_d) })
+    (clip, Holds { planted: source, kept, motion: Some(unheld_m), measures: Some(unheld_d), ..counts(&free, measure_copied) })
 }
 
 /// The held-feet rule's figures of one bar: BAS-music on its own counts, the beat-rate cost of
@@ -860,8 +901,8 @@ mod tests {
         let mut rounds_seen = 0;
         for (bpm, secs) in [(90.0, 20.0), (120.0, 24.0), (150.0, 16.0), (170.0, 20.0)] {
             let (lib, bars, choices) = dance(bpm, secs);
-            let (kept, holds, s1) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), HoldWork { quick: true, read_only: false, legs_only: true });
-            let (anew, holds_anew, s2) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), HoldWork { quick: false, read_only: false, legs_only: false });
+            let (kept, holds, s1) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), HoldWork { quick: true, read_only: false, legs_only: true, reuse_frames: true });
+            let (anew, holds_anew, s2) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), HoldWork { quick: false, read_only: false, legs_only: false, reuse_frames: false });
             assert_eq!(kept, anew, "{bpm} BPM");
             assert_eq!((holds.kept.clone(), holds.motion.clone(), s1), (holds_anew.kept, holds_anew.motion, s2), "{bpm} BPM");
             rounds_seen += usize::from(holds.kept.iter().any(|&k| k) && holds.kept.iter().any(|&k| !k));
@@ -869,6 +910,37 @@ mod tests {
             assert_eq!(holds.motion, Some(QualityMotion::from_clip(&kept).unwrap()), "{bpm} BPM");
         }
         assert!(rounds_seen > 0, "no dance dropped some bars' holds: the rounds were not compared");
+    }
+
+    #[test]
+    fn copying_the_rounds_same_frames_changes_no_frame() {
+        // The held-feet rule's rounds after the first copying the last round's held frames
+        // whose plan is the same bits (and its measure's posed positions of frames that are the
+        // same bits), against posing every frame anew each round (session 24's rounds, the
+        // control): the same bits, every frame posed and only the frames read, on dances that
+        // keep their holds and on ones that drop some. And both ways were taken: frames
+        // copied and frames posed anew in a later round (a rule of one round copies nothing).
+        let bits = |c: &Clip| (c.rotations.iter().flat_map(|q| q.to_array()).map(f32::to_bits).collect::<Vec<_>>(), c.translations.iter().flat_map(|t| t.values.iter().flat_map(|v| v.to_array())).map(f32::to_bits).collect::<Vec<_>>());
+        let (mut copied, mut anew, mut measure_copied) = (0, 0, 0);
+        for (bpm, secs) in [(90.0, 20.0), (120.0, 24.0), (150.0, 16.0), (170.0, 20.0), (104.0, 40.0)] {
+            let (lib, bars, choices) = dance(bpm, secs);
+            for read_only in [false, true] {
+                let work = |reuse_frames: bool| HoldWork { quick: true, read_only, legs_only: true, reuse_frames };
+                let (with, holds, s1) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), work(true));
+                let (without, holds_without, s2) = render_traced_with(&lib, &bars, &choices, &RenderOptions::default(), work(false));
+                assert!(bits(&with) == bits(&without), "{bpm} BPM, read only {read_only}: the held dance");
+                assert_eq!((holds.kept.clone(), s1), (holds_without.kept.clone(), s2), "{bpm} BPM");
+                let motion_bits = |h: &Holds| h.motion.as_ref().map(|m| m.positions.iter().flat_map(|v| v.to_array()).map(f32::to_bits).collect::<Vec<_>>());
+                assert!(motion_bits(&holds) == motion_bits(&holds_without), "{bpm} BPM, read only {read_only}: the motion measured");
+                assert_eq!(holds.measures.as_ref().map(|m| &m.1), holds_without.measures.as_ref().map(|m| &m.1), "{bpm} BPM: the readout");
+                assert_eq!((holds_without.copied, holds_without.measure_copied), (0, 0), "the control copies nothing");
+                let read = if read_only { QualityMotion::frames_read(with.frame_count(), with.fps).iter().filter(|&&r| r).count() } else { with.frame_count() };
+                copied += holds.copied;
+                anew += holds.posed.saturating_sub(read);
+                measure_copied += holds.measure_copied;
+            }
+        }
+        assert!(copied > 0 && anew > 0 && measure_copied > 0, "copied {copied} held frames, posed {anew} anew in later rounds, measures copied {measure_copied}");
     }
 
     #[test]

@@ -43,6 +43,50 @@ pub(crate) struct FreePass {
     /// world position of every joint on those frames, frame-major (zero on the others), as
     /// pass 0 posed them; empty otherwise ([`FreePass::source_positions`]).
     pub(super) src_positions: Vec<Vec3>,
+    /// The last held pass on this clip ([`HeldFrames`]), when kept: the next round's frames
+    /// whose plan is the same to the bit are copied from it, not posed again.
+    pub(crate) held: Option<HeldFrames>,
+    /// Frames the held passes on this clip copied from the last one ([`HeldFrames`]), and posed.
+    pub(crate) held_reused: usize,
+    pub(crate) held_posed: usize,
+}
+
+/// A held pass of [`super::Character::play`] kept for the next on the same clip (the held-feet
+/// rule's rounds play one dance with other holds): per frame, the plan it was posed from (each
+/// leg's target, the pelvis drop, the body's shift, each foot's toe pitch, as bits) and what it
+/// gave (every joint's local rotation and the translation tracks' values). A held frame is posed
+/// on its own from the source's frame and these (the plan carries what passes from frame to
+/// frame), so a frame whose plan is the same bits gives the same bits: copied, not posed.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct HeldFrames {
+    pub(super) keys: Vec<HeldKey>,
+    pub(super) posed: Vec<bool>,
+    pub(super) rotations: Vec<Quat>,
+    pub(super) tracks: Vec<Vec<Vec3>>,
+}
+
+/// One frame's plan for [`HeldFrames`], as bits: per leg (two) its target (a flag and three
+/// coordinates) and toe pitch (a flag and four components); the drop; the shift.
+pub(super) type HeldKey = [u32; 22];
+
+/// [`HeldKey`] of a frame: `targets` and `pitches` per leg (two legs), `drop`, `shift`.
+pub(super) fn held_key(targets: [Option<Vec3>; 2], pitches: [Option<Quat>; 2], drop: f32, shift: Vec3) -> HeldKey {
+    let mut k = [0u32; 22];
+    for (l, t) in targets.iter().enumerate() {
+        if let Some(v) = t {
+            k[l * 4] = 1;
+            k[l * 4 + 1..l * 4 + 4].copy_from_slice(&v.to_array().map(f32::to_bits));
+        }
+    }
+    for (l, q) in pitches.iter().enumerate() {
+        if let Some(q) = q {
+            k[8 + l * 5] = 1;
+            k[9 + l * 5..13 + l * 5].copy_from_slice(&q.to_array().map(f32::to_bits));
+        }
+    }
+    k[18] = drop.to_bits();
+    k[19..22].copy_from_slice(&shift.to_array().map(f32::to_bits));
+    k
 }
 
 impl FreePass {

@@ -58,7 +58,7 @@ use crate::skeleton::Skeleton;
 mod hold;
 
 use hold::*;
-pub(crate) use hold::{hold_feet_in_dance, DANCE_CATCH_UP_M_S};
+pub(crate) use hold::{hold_feet_in_dance, FreePass, DANCE_CATCH_UP_M_S};
 
 /// Why a character cannot play humanoid motion, naming what is missing.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -537,9 +537,17 @@ impl Character {
                         src_rotations: std::mem::take(&mut src_rotations),
                         src_hips: std::mem::take(&mut src_hips),
                         src_positions: std::mem::take(&mut src_positions),
+                        ..FreePass::default()
                     });
                 }
             }
+            // The last held pass on this clip ([`HeldFrames`]): its frames whose plan is this
+            // one's to the bit are copied. Kept in the free pass, so only for this clip.
+            let memo_on = pass == 1 && hold && legs.len() == 2 && free.as_deref().and_then(|c| c.as_ref()).is_some_and(fits);
+            let last = if memo_on { free.as_deref_mut().and_then(|c| c.as_mut()).and_then(|c| c.held.take()) } else { None };
+            let last = last.filter(|m| m.keys.len() == frames && m.rotations.len() == frames * n && m.tracks.len() == tracks.len() && m.tracks.iter().all(|t| t.len() == frames));
+            let mut keys: Vec<HeldKey> = Vec::with_capacity(if memo_on { frames } else { 0 });
+            let (mut reused, mut posed_now) = (0usize, 0usize);
             // The source's pose per frame, as pass 0 posed it, when kept.
             let posed = free.as_deref().and_then(|c| c.as_ref()).filter(|c| pass == 1 && hold && fits(c));
             if pass == 1 && hold {
@@ -574,6 +582,21 @@ impl Character {
                 t.values.clear();
             }
             for f in 0..frames {
+                if memo_on {
+                    let key = held_key([plant_target[0][f], plant_target[1][f]], [toe_pitch[0][f], toe_pitch[1][f]], drop_m[f], shift_m[f]);
+                    keys.push(key);
+                    let read = only.is_none_or(|o| o.get(f).copied().unwrap_or(true));
+                    if let Some(m) = last.as_ref().filter(|m| read && m.posed[f] && m.keys[f] == key) {
+                        local.copy_from_slice(&m.rotations[f * n..(f + 1) * n]);
+                        rotations.extend_from_slice(&local);
+                        for (t, v) in tracks.iter_mut().zip(&m.tracks) {
+                            t.values.push(v[f]);
+                        }
+                        reused += 1;
+                        continue;
+                    }
+                    posed_now += usize::from(read);
+                }
                 // The held pass poses each frame on its own (the plan holds what carries over
                 // from frame to frame): a frame the caller does not read is left a placeholder.
                 if pass == 1 && only.is_some_and(|o| !o.get(f).copied().unwrap_or(true)) {
@@ -667,6 +690,13 @@ impl Character {
                     }
                 } else {
                     rotations.extend_from_slice(&local);
+                }
+            }
+            if memo_on {
+                if let Some(c) = free.as_deref_mut().and_then(|c| c.as_mut()) {
+                    let posed = (0..frames).map(|f| only.is_none_or(|o| o.get(f).copied().unwrap_or(true))).collect();
+                    c.held = Some(HeldFrames { keys: std::mem::take(&mut keys), posed, rotations: rotations.clone(), tracks: tracks.iter().map(|t| t.values.clone()).collect() });
+                    (c.held_reused, c.held_posed) = (c.held_reused + reused, c.held_posed + posed_now);
                 }
             }
         }
