@@ -180,7 +180,7 @@ pub struct GenerateOptions {
     /// shift, the toe pitch) is the same bits, and the positions its measure posed of frames
     /// that are the same bits, not posing them again (`canon::character`'s `HeldFrames`,
     /// `QualityMotion::from_clip_reusing`). The same figures and dances
-    /// (`copying_the_rounds_same_frames_keeps_every_figure`). Default true; false: the control
+    /// (`copying_the_rounds_same_frames_changes_no_frame`). Default true; false: the control
     /// (session 24's measures).
     pub rounds_copy_same_frames: bool,
 }

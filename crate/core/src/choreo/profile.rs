@@ -1,6 +1,7 @@
 //! Where Generate's time goes (issue 26's speed goal, [`super::generate`]): per stage, the
 //! time in the fills (shortest paths, and the free-skate pass after a refill) against the
-//! renders and measures of the dance ([`super::figures`]). Off unless a caller lends a clock
+//! renders and measures of the dance ([`super::figures`]), and inside those the parts of a
+//! measure ([`PARTS`]). Off unless a caller lends a clock
 //! ([`profiled`]): the core reads no clock of its own (a wasm module has none without its
 //! host's), so the benches pass theirs, natively `Instant` and in wasm the host's
 //! `performance.now()`. When off, each record is one thread-local read.
