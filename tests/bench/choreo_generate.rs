@@ -7,7 +7,9 @@
 //! of the calls after it; then the same call with each later stage off in turn, and the fill
 //! alone, so the figures say where the time goes; and the default against its controls in the
 //! same run (session 24's measures: every held round posed anew, session 20's measures, session 19's fills, session 18's fills, session 15's measures, every held frame posed, session 16's default, the old pipeline's
-//! settings, windowed refills), with the default's and session 16's dances measured as played.
+//! settings, windowed refills), with the default's and session 16's dances measured as played,
+//! and the default alternated with session 24's measures (best of 5 each); before those, one
+//! measure as played of the default's dance, profiled by part (`MEASURES=n`: n more, then stop).
 //! Prints figures; asserts only that the calls agree (session 20's measures, session 19's and 18's fills, quick measures, every
 //! held frame posed and the default: the same dance).
 //! `cargo bench -p odori-tests --bench choreo_generate` (`GENERATE_ONLY=1`: not the stages off
