@@ -205,6 +205,14 @@ pub fn smoothstep(x: f32) -> f32 {
     x * x * (3.0 - 2.0 * x)
 }
 
+/// Smootherstep (quintic): 0..1 onto 0..1 with zero slope and zero curvature at both ends
+/// (`x` clamped). The built-in moves held on the counts ease from each count's pose to the next
+/// by it, so every joint comes to rest on the count without a jolt of acceleration there.
+pub fn smootherstep(x: f32) -> f32 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * x * (x * (6.0 * x - 15.0) + 10.0)
+}
+
 /// Two-bone IK: the middle joint (knee, elbow) and the end (ankle, wrist) of a chain from
 /// `root` with bone lengths `l1`, `l2` reaching for `target`, bending towards `pole`. A target
 /// out of reach is pulled in along the line from the root.
@@ -351,6 +359,33 @@ mod tests {
         let (_, pos) = rest_world(&sk);
         for (a, b) in pos.iter().zip(sk.rest_positions()) {
             assert!((*a - b).length() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn smootherstep_rests_with_zero_slope_and_curvature_at_both_ends() {
+        // Finite differences at the ends: slope and curvature vanish for smootherstep; the
+        // control, smoothstep, has zero slope but a curvature of ±6 there.
+        let h = 1e-2_f32;
+        let slope = |f: fn(f32) -> f32, x: f32| (f(x + h) - f(x - h)) / (2.0 * h);
+        let curve = |f: fn(f32) -> f32, x: f32| (f(x + h) - 2.0 * f(x) + f(x - h)) / (h * h);
+        // One-sided at the ends (the curves are clamped outside 0..1): second differences inward.
+        let curve_in = |f: fn(f32) -> f32, x: f32, dir: f32| (f(x + 2.0 * dir * h) - 2.0 * f(x + dir * h) + f(x)) / (h * h);
+        for (x, dir) in [(0.0, 1.0), (1.0, -1.0)] {
+            // One-sided differences read 60·h for smootherstep (0 in the limit), 6 − 12·h for
+            // smoothstep.
+            assert!(curve_in(smootherstep, x, dir).abs() < 1.0, "smootherstep curvature at {x}: {}", curve_in(smootherstep, x, dir));
+            assert!(curve_in(smoothstep, x, dir).abs() > 5.0, "the control's curvature at {x}: {}", curve_in(smoothstep, x, dir));
+            assert!((smootherstep(x) - x).abs() < 1e-7);
+        }
+        assert!(slope(smootherstep, h).abs() < 1e-2 && slope(smootherstep, 1.0 - h).abs() < 1e-2);
+        assert!((smootherstep(0.5) - 0.5).abs() < 1e-7 && (slope(smootherstep, 0.5) - 1.875).abs() < 1e-2);
+        assert!(curve(smootherstep, 0.5).abs() < 0.1);
+        let mut last = 0.0;
+        for i in 0..=100 {
+            let y = smootherstep(i as f32 / 100.0);
+            assert!(y >= last, "not rising at {i}");
+            last = y;
         }
     }
 
