@@ -103,7 +103,7 @@ export async function importFiles(page, files, options = {}) {
 export async function importSalsaForDance(page) {
   await importFiles(page, join(data, "mocap/cmu-salsa/salsa_02.bvh"), { "salsa_02.bvh": { fps: 60 } });
   await page.waitForFunction(() => [...document.querySelectorAll("#messages li")].some((li) => /dance segments/.test(li.textContent)), null, { timeout: 30000 });
-  await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready" && window.odori.choreo.lastPrepare?.segments > 510, null, { timeout: 60000 });
+  await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready" && window.odori.choreo.lastPrepare?.segments > 558, null, { timeout: 60000 });
 }
 
 /** Waits until the dance is not busy and every bar holds a move (after Generate, Another take…). */

@@ -52,7 +52,7 @@ for (const backend of (process.env.BACKENDS || Object.keys(BACKENDS).join(",")).
       assert.deepEqual(s.source?.options?.song_offset_frames, 160, JSON.stringify(s.source));
 
       // Generate with my moves: bars dance WAVEFILE's segments, and the strip names it.
-      await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready" && window.odori.choreo.lastPrepare?.segments > 510, null, { timeout: 180000 });
+      await page.waitForFunction(() => document.querySelector("#dance").dataset.joins === "ready" && window.odori.choreo.lastPrepare?.segments > 558, null, { timeout: 180000 });
       await page.selectOption("#dance-moves-source", "mine");
       await page.click("#dance-generate");
       await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 180000 });

@@ -432,7 +432,7 @@ fn builtin_moves_made_in_slices_give_the_same_library_and_dance() {
     while sliced.load_builtin(37) < 1.0 {
         slices += 1;
     }
-    assert!(slices >= 10, "510 moves in slices of 37: {slices} slices");
+    assert!(slices >= 10, "558 moves in slices of 37: {slices} slices");
     let mut at_once = Project::new();
     for p in [&mut sliced, &mut at_once] {
         p.set_song("Vibe_Ace.ogg", None, env, AnalysisOptions::default()).expect("song");

@@ -718,7 +718,7 @@ impl Project {
     }
 
     /// Makes up to `count` more built-in moves of the dance library; returns the fraction
-    /// made (1: all). Call between frames until 1, so the page never blocks for all 510.
+    /// made (1: all). Call between frames until 1, so the page never blocks for all 558.
     #[wasm_bindgen(js_name = loadBuiltin)]
     pub fn load_builtin(&mut self, count: u32) -> f32 {
         self.inner.load_builtin(count as usize)

@@ -110,7 +110,7 @@ thread_local! {
     static BUILTIN: RefCell<Option<SegmentLibrary>> = const { RefCell::new(None) };
 }
 
-/// Generate on the same 90 bars from the built-in library alone (510 segments), where the
+/// Generate on the same 90 bars from the built-in library alone (558 segments), where the
 /// variety term is on (it is off while a library holds imported moves, as the medley is); the
 /// library is built on the first call. Returns the objective.
 #[no_mangle]

@@ -171,9 +171,10 @@ pub struct GenerateOptions {
     pub free_pass_legs_only: bool,
     /// Stage 5, [`join_repair_stage`]: when its runs end over the join goal, run them once more
     /// with a wider reach (`generate/repair.rs`: each barred built-in move's other side barred
-    /// too, refills windowed) and keep the smoother dance. Default false: with the 48 moves held
-    /// on the counts (session 20, not landed) it brings Vibe Ace's take 3 from 1.67 to 1.43 and
-    /// changes no dance within the goal (`docs/benchmarks-notes-choreo.md`, session 21).
+    /// too, refills windowed) and keep the smoother dance. Default true (with the built-in
+    /// moves held on the counts, session 26): with those moves it brings Vibe Ace's take 3 from
+    /// 1.67 to 1.43 and changes no dance within the goal (`docs/benchmarks-notes-choreo.md`,
+    /// session 21); false: the control.
     pub join_wider_reach: bool,
     /// Measure each dance as played with the held-feet rule's rounds after the first copying
     /// the last round's held frames whose plan (each foot's target, the pelvis drop, the body's
@@ -206,7 +207,7 @@ impl Default for GenerateOptions {
             columns_scanned_by_chunks: true,
             skate_beside_beat_term: true,
             free_pass_legs_only: true,
-            join_wider_reach: false,
+            join_wider_reach: true,
             rounds_copy_same_frames: true,
         }
     }

@@ -6,8 +6,12 @@
 //! 420 moves of one bar of 4 counts. In 3, so a waltz needs no mocap: every combination of a
 //! step in 3 (the forward and back halves of the waltz box, balancé, a waltz turn, a
 //! hesitation) with an arm pattern in 3 (waltz frame, port de bras, open arms), at the same
-//! energies and sides: 90 moves of one bar of 3 counts. Each at 120 counts per minute, 30 fps,
-//! with one extra frame (the next bar's first pose) so segment ends have a velocity.
+//! energies and sides: 90 moves of one bar of 3 counts. Held on the counts, so the dance turns
+//! once a count at slow tempi too: every combination of a step keyed only on its counts (side
+//! touch, slow grapevine, slow box, sway) with an arm pattern likewise (presses, open and
+//! close), at the same energies and sides: 48 moves of one bar of 4 counts. 558 moves in all.
+//! Each at 120 counts per minute, 30 fps, with one extra frame (the next bar's first pose) so
+//! segment ends have a velocity.
 //!
 //! Limbs are placed by two-bone IK on authored foot and hand targets ([`pose`]), so planted
 //! feet stay on the floor; the root height is then corrected so the lowest point of the body
@@ -39,6 +43,9 @@ pub const COUNTS: usize = 4;
 pub const MOVES_IN_FOUR: usize = 420;
 /// Built-in moves in 3 (after those in 4).
 pub const MOVES_IN_THREE: usize = 90;
+/// Built-in moves in 4 held on the counts (after those in 3, so every earlier move keeps its
+/// place).
+pub const MOVES_ON_COUNTS: usize = 48;
 /// Standing hips height of the built-in figure with soft knees, metres.
 pub const STANDING_HIPS_HEIGHT: f32 = 0.935;
 
@@ -72,10 +79,11 @@ impl MoveInfo {
 }
 
 /// Every built-in move, in a fixed order: the moves in 4 (step, arms, energy, side), then
-/// those in 3 (the same order), so the moves in 4 keep their places.
+/// those in 3, then those held on the counts (the same order), so earlier moves keep their
+/// places.
 pub fn builtin_moves() -> Vec<MoveInfo> {
-    let mut out = Vec::with_capacity(MOVES_IN_FOUR + MOVES_IN_THREE);
-    for (steps, arm_patterns) in [(&Step::ALL[..], &Arms::ALL[..]), (&Step::THREE[..], &Arms::THREE[..])] {
+    let mut out = Vec::with_capacity(MOVES_IN_FOUR + MOVES_IN_THREE + MOVES_ON_COUNTS);
+    for (steps, arm_patterns) in [(&Step::ALL[..], &Arms::ALL[..]), (&Step::THREE[..], &Arms::THREE[..]), (&Step::ON_COUNTS[..], &Arms::ON_COUNTS[..])] {
         for &step in steps {
             for &arms in arm_patterns {
                 for energy in Energy::ALL {
@@ -102,7 +110,7 @@ pub fn frame_count_of(counts: usize) -> usize {
 /// Renders one built-in move as a clip on `skeleton` (the canonical skeleton).
 pub fn build_move(info: &MoveInfo, skeleton: &Arc<Skeleton>) -> Clip {
     let legs = moves::leg_poses(info.step, info.energy);
-    let track = leg_track(&legs, info.step.counts(), info.mirrored, skeleton);
+    let track = leg_track(info.step, info.energy, &legs, info.mirrored, skeleton);
     build_move_on_legs(info, skeleton, &legs, &track)
 }
 
@@ -114,12 +122,12 @@ fn frame_counts(f: usize) -> f32 {
 /// The solved legs of a step's key poses (at one energy, on one side), frame by frame: the
 /// same for every arm pattern, so [`builtin_clips`] solves them once per step, energy and
 /// side instead of once per move.
-fn leg_track(legs: &[pose::KeyPose], counts: usize, mirrored: bool, skeleton: &Skeleton) -> Vec<pose::LegSolution> {
-    (0..frame_count_of(counts))
+fn leg_track(step: Step, energy: Energy, legs: &[pose::KeyPose], mirrored: bool, skeleton: &Skeleton) -> Vec<pose::LegSolution> {
+    (0..frame_count_of(step.counts()))
         .map(|f| {
             // The legs' fields of `moves::pose_at`: the leg keys interpolated (arms change
             // nothing below the hips).
-            let p = pose::interpolate(legs, 0.5, frame_counts(f));
+            let p = moves::legs_at(step, energy, legs, frame_counts(f));
             let p = if mirrored { p.mirrored() } else { p };
             pose::solve_legs(skeleton, &p, STANDING_HIPS_HEIGHT)
         })
@@ -132,7 +140,7 @@ fn build_move_on_legs(info: &MoveInfo, skeleton: &Arc<Skeleton>, legs: &[pose::K
     let mut rotations = Vec::with_capacity(frames * CANON_COUNT);
     let mut root = Vec::with_capacity(frames);
     for (f, leg) in track.iter().enumerate().take(frames) {
-        let mut p = moves::pose_at(info.arms, info.energy, frame_counts(f), legs);
+        let mut p = moves::pose_at(info.step, info.arms, info.energy, frame_counts(f), legs);
         if info.mirrored {
             p = p.mirrored();
         }
@@ -177,8 +185,7 @@ pub fn builtin_clips_lazily() -> impl Iterator<Item = (Clip, MoveInfo)> {
                     // Moves come step by step: the previous step's tracks are done with.
                     tracks.retain(|(s, _, _, _)| *s == m.step);
                     let keys = moves::leg_poses(m.step, m.energy);
-                    let counts = m.step.counts();
-                    let sides = [leg_track(&keys, counts, false, &skeleton), leg_track(&keys, counts, true, &skeleton)];
+                    let sides = [leg_track(m.step, m.energy, &keys, false, &skeleton), leg_track(m.step, m.energy, &keys, true, &skeleton)];
                     tracks.push((m.step, m.energy, keys, sides));
                     tracks.len() - 1
                 }
@@ -255,7 +262,7 @@ mod tests {
             let mut rotations = Vec::new();
             let mut root = Vec::new();
             for f in 0..frame_count_of(info.counts()) {
-                let p = moves::pose_at(info.arms, info.energy, frame_counts(f), &keys);
+                let p = moves::pose_at(info.step, info.arms, info.energy, frame_counts(f), &keys);
                 let p = if info.mirrored { p.mirrored() } else { p };
                 let (local, mut r, lowest) = pose::solve(&sk, &p, STANDING_HIPS_HEIGHT);
                 if lowest < 0.015 {
@@ -268,6 +275,67 @@ mod tests {
             assert_eq!(clips[i].translations[0].values, root, "{}", clips[i].name);
             assert_eq!(clips[i].rotations, build_move(info, &sk).rotations);
         }
+    }
+
+    /// Mean foot skate (§J: ankles and toes within the contact band) of a move, cm/s.
+    fn skate(info: &MoveInfo, sk: &Arc<Skeleton>) -> f32 {
+        let c = build_move(info, sk);
+        let frames: Vec<Vec<Vec3>> = (0..c.frame_count()).map(|f| c.world_positions(f)).collect();
+        let mut speeds = Vec::new();
+        for j in [Canon::LeftFoot, Canon::RightFoot, Canon::LeftToe, Canon::RightToe] {
+            let track: Vec<Vec3> = frames.iter().map(|p| p[j.index()]).collect();
+            speeds.extend(crate::motion::skate_speeds_cm_s(&track, c.fps));
+        }
+        crate::motion::mean_p95(&speeds).0
+    }
+
+    #[test]
+    fn moves_on_the_counts_skate_no_more_than_their_half_count_siblings() {
+        // Each step held on the counts against the step keyed on the half count it is made
+        // from, at every energy and on both sides: a travelling foot lifted clear between the
+        // counts slides less on the floor than one that passes through the "and" keys.
+        let sk = Arc::new(canonical_skeleton());
+        let moves = builtin_moves();
+        assert_eq!(moves.len(), MOVES_IN_FOUR + MOVES_IN_THREE + MOVES_ON_COUNTS);
+        assert!(moves[MOVES_IN_FOUR + MOVES_IN_THREE..].iter().all(|m| m.step.on_counts() && m.counts() == 4));
+        assert!(moves[..MOVES_IN_FOUR + MOVES_IN_THREE].iter().all(|m| !m.step.on_counts()));
+        let mut figures = Vec::new();
+        for (held, sibling) in [(Step::SideTouch, Step::StepTouch), (Step::SlowGrapevine, Step::Grapevine), (Step::SlowBox, Step::BoxStep), (Step::Sway, Step::HipSway)] {
+            for energy in Energy::ALL {
+                for mirrored in [false, true] {
+                    let a = skate(&MoveInfo { step: held, arms: Arms::Presses, energy, mirrored }, &sk);
+                    let b = skate(&MoveInfo { step: sibling, arms: Arms::Swing, energy, mirrored }, &sk);
+                    figures.push(format!("{} {} {}: {a:.1} against {b:.1}", held.name(), energy.name(), mirrored));
+                    assert!(a <= b, "{} ({}, mirrored {mirrored}) skates {a:.1} cm/s, its sibling {} {b:.1}", held.name(), energy.name(), sibling.name());
+                }
+            }
+        }
+        println!("{}", figures.join("\n"));
+    }
+
+    #[test]
+    fn moves_on_the_counts_rest_on_every_count() {
+        // Every joint's speed has a minimum on each count (within a frame) in the moves held on
+        // the counts; the control, the same step keyed on the half count, moves through counts.
+        let sk = Arc::new(canonical_skeleton());
+        let speed_at = |c: &Clip, f: usize| -> f32 {
+            let (a, b) = (c.world_positions(f - 1), c.world_positions(f + 1));
+            a.iter().zip(&b).map(|(p, q)| (*q - *p).length()).sum::<f32>()
+        };
+        let frames_per_count = (BUILTIN_FPS * 60.0 / BUILTIN_BPM).round() as usize;
+        for step in Step::ON_COUNTS {
+            for arms in Arms::ON_COUNTS {
+                let c = build_move(&MoveInfo { step, arms, energy: Energy::High, mirrored: false }, &sk);
+                for count in 1..4 {
+                    let f = count * frames_per_count;
+                    let (on, between) = (speed_at(&c, f), speed_at(&c, f - frames_per_count / 2));
+                    assert!(on < 0.1 * between, "{}: speed on count {} {on:.4} against mid-count {between:.4}", c.name, count + 1);
+                }
+            }
+        }
+        let control = build_move(&MoveInfo { step: Step::StepTouch, arms: Arms::Swing, energy: Energy::High, mirrored: false }, &sk);
+        let f = frames_per_count;
+        assert!(speed_at(&control, f) > 0.1 * speed_at(&control, f - frames_per_count / 2), "the control rests on its count too");
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! The built-in moves: leg and hip patterns, arm patterns and their combinations, at three
 //! energy levels and mirrored, authored as key poses on the half count (legs) and quarter count
-//! (arms) and interpolated smoothly. Secondary motion is derived, not keyed: the hips follow the
+//! (arms) and interpolated smoothly; the moves held on the counts ([`Step::ON_COUNTS`],
+//! [`Arms::ON_COUNTS`]) are keyed on the counts alone, each pose eased into the next. Secondary motion is derived, not keyed: the hips follow the
 //! weight onto the supporting foot and drop on the free side, the chest counters the hips, the
 //! head steadies against the chest and nods a little after each bounce, the arms trail the body
 //! by a fraction of a count and the shoulders lift with the arms.
@@ -13,6 +14,7 @@ use serde::{Deserialize, Serialize};
 use super::pose::KeyPose;
 // Smoothstep 0..1: the motion kernel's one easing curve.
 use crate::motion::smoothstep as smooth01;
+use crate::motion::smootherstep as smoother01;
 
 /// A leg, hip and torso pattern (the "step").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -38,6 +40,14 @@ pub enum Step {
     WaltzTurn,
     /// Hesitation: one step taken, then held for two counts while the free foot draws in.
     Hesitation,
+    /// Step-touch held on the counts: one foot steps out on each count, the other touches in.
+    SideTouch,
+    /// The grapevine's count steps (side, behind, side, touch), held on the counts.
+    SlowGrapevine,
+    /// The box step's count steps, held on the counts (no hip turn).
+    SlowBox,
+    /// A sway of the weight from foot to foot, on the counts, the feet in place.
+    Sway,
 }
 
 impl Step {
@@ -56,6 +66,16 @@ impl Step {
 
     /// The steps in 3 (one bar of 3/4 each).
     pub const THREE: [Step; 5] = [Step::WaltzBoxForward, Step::WaltzBoxBack, Step::Balance, Step::WaltzTurn, Step::Hesitation];
+
+    /// The steps in 4 held on the counts: keyed only on the counts, each count's pose eased
+    /// into the next, so every joint comes to rest on the count (one kinetic beat a count at
+    /// any tempo, where the steps keyed on the half count turn on the "and" when played slowly).
+    pub const ON_COUNTS: [Step; 4] = [Step::SideTouch, Step::SlowGrapevine, Step::SlowBox, Step::Sway];
+
+    /// Keyed on the counts only ([`Step::ON_COUNTS`]).
+    pub fn on_counts(self) -> bool {
+        Step::ON_COUNTS.contains(&self)
+    }
 
     /// Counts of one bar of the step: 3 for the steps in 3, else 4.
     pub fn counts(self) -> usize {
@@ -83,6 +103,10 @@ impl Step {
             Step::Bounce => "bounce",
             Step::HipSway => "hip sway",
             Step::BodyRoll => "body roll",
+            Step::SideTouch => "side touch",
+            Step::SlowGrapevine => "slow grapevine",
+            Step::SlowBox => "slow box",
+            Step::Sway => "sway",
         }
     }
 }
@@ -104,6 +128,11 @@ pub enum Arms {
     PortDeBras,
     /// Both arms open from low in front to wide at shoulder height and close again (in 3).
     OpenArms,
+    /// Presses held on the counts: both hands press to the front, draw to the chest, press
+    /// overhead and draw to the chest again (in 4).
+    Presses,
+    /// Both arms close low in front and open wide on alternate counts (in 4, on the counts).
+    OpenClose,
 }
 
 impl Arms {
@@ -112,11 +141,16 @@ impl Arms {
     /// The arm patterns of the steps in 3 (each one bar of 3 counts, ending where it began).
     pub const THREE: [Arms; 3] = [Arms::Frame, Arms::PortDeBras, Arms::OpenArms];
 
+    /// The arm patterns of the steps held on the counts (one bar of 4, a pose on each count).
+    pub const ON_COUNTS: [Arms; 2] = [Arms::Presses, Arms::OpenClose];
+
     pub fn name(self) -> &'static str {
         match self {
             Arms::Frame => "waltz frame",
             Arms::PortDeBras => "port de bras",
             Arms::OpenArms => "open arms",
+            Arms::Presses => "presses",
+            Arms::OpenClose => "open and close",
             Arms::Swing => "arm swing",
             Arms::Waves => "waves",
             Arms::Punches => "punches",
@@ -174,10 +208,12 @@ fn lk(l: [f32; 3], r: [f32; 3], w_left: f32, drop: f32) -> LegKey {
     LegKey { l: Vec3::from(l), r: Vec3::from(r), w_left, drop, yaw: 0.0, torso: [0.0; 4] }
 }
 
-/// Half-count keys (2 per count and the next bar's one: 9 for a step in 4, 7 for one in 3) of
-/// each step, for the figure's right side leading (mirroring gives the left-leading version).
+/// Half-count keys (2 per count and the next bar's one: 9 for a step in 4, 7 for one in 3), or
+/// count keys (5) for a step held on the counts, of each step, for the figure's right side leading (mirroring gives the left-leading version).
 fn leg_keys(step: Step) -> Vec<LegKey> {
-    if step.counts() == 3 {
+    if step.on_counts() {
+        leg_keys_on_counts(step)
+    } else if step.counts() == 3 {
         leg_keys_in_three(step)
     } else {
         leg_keys_in_four(step)
@@ -188,6 +224,7 @@ fn leg_keys(step: Step) -> Vec<LegKey> {
 fn leg_keys_in_four(step: Step) -> Vec<LegKey> {
     match step {
         Step::WaltzBoxForward | Step::WaltzBoxBack | Step::Balance | Step::WaltzTurn | Step::Hesitation => leg_keys_in_three(step),
+        Step::SideTouch | Step::SlowGrapevine | Step::SlowBox | Step::Sway => leg_keys_on_counts(step),
         Step::StepTouch => vec![
             lk([0.25, 0.0, 0.0], [-0.25, 0.0, 0.0], 0.3, -0.07),
             lk([0.09, 0.07, 0.0], [-0.25, 0.0, 0.0], 0.0, -0.02),
@@ -374,6 +411,80 @@ fn leg_keys_in_three(step: Step) -> Vec<LegKey> {
     }
 }
 
+/// Count keys (5: counts 1, 2, 3, 4, next 1) of each step held on the counts, right side
+/// leading: the count keys of the step-touch, grapevine and box step (their "and" keys left
+/// out: a travelling foot is lifted between counts by [`legs_at`]), and a sway. Every key
+/// stands on both feet.
+fn leg_keys_on_counts(step: Step) -> Vec<LegKey> {
+    match step {
+        Step::SideTouch => vec![
+            lk([0.25, 0.0, 0.0], [-0.25, 0.0, 0.0], 0.3, -0.07),
+            lk([-0.07, 0.0, 0.03], [-0.25, 0.0, 0.0], 0.0, -0.08),
+            lk([0.25, 0.0, 0.0], [-0.25, 0.0, 0.0], 0.7, -0.07),
+            lk([0.25, 0.0, 0.0], [0.07, 0.0, 0.03], 1.0, -0.08),
+            lk([0.25, 0.0, 0.0], [-0.25, 0.0, 0.0], 0.3, -0.07),
+        ],
+        Step::SlowGrapevine => vec![
+            lk([0.12, 0.0, 0.0], [-0.3, 0.0, 0.0], 0.3, -0.06),
+            lk([-0.42, 0.0, -0.14], [-0.3, 0.0, 0.0], 0.7, -0.07),
+            lk([-0.42, 0.0, -0.14], [-0.72, 0.0, 0.0], 0.3, -0.07),
+            lk([-0.52, 0.0, 0.03], [-0.72, 0.0, 0.0], 0.0, -0.09),
+            lk([-0.48, 0.0, 0.0], [-0.72, 0.0, 0.0], 0.4, -0.05),
+        ],
+        // The box step's hip turn is left out: with it, held feet jumped past the retargeting
+        // bound on RobotExpressive (`character_retarget`).
+        Step::SlowBox => vec![
+            lk([0.12, 0.0, 0.0], [0.06, 0.0, 0.22], 0.3, -0.06),
+            lk([0.16, 0.0, -0.2], [0.06, 0.0, 0.22], 0.7, -0.07),
+            lk([0.16, 0.0, -0.2], [-0.22, 0.0, -0.15], 0.3, -0.07),
+            lk([0.13, 0.0, 0.08], [-0.22, 0.0, -0.15], 0.6, -0.07),
+            lk([0.12, 0.0, 0.0], [0.06, 0.0, 0.22], 0.3, -0.06),
+        ],
+        Step::Sway => [0.2, 0.8, 0.2, 0.8, 0.2]
+            .into_iter()
+            .map(|w| {
+                let mut key = lk([0.17, 0.0, 0.0], [-0.17, 0.0, 0.0], w, -0.07);
+                key.torso[3] = (w - 0.5) * 0.1;
+                key
+            })
+            .collect(),
+        _ => leg_keys(step),
+    }
+}
+
+/// Lift of a foot that travels between two counts of a step held on the counts (metres, at
+/// medium energy).
+const ON_COUNTS_LIFT: f32 = 0.07;
+
+/// The legs' key pose of a step at `t` counts: the half-count keys interpolated, or for a step
+/// held on the counts, each count's key eased into the next by a smootherstep, the foot that
+/// travels (the farther one where both do) lifted by a sin² bump that is flat at both counts
+/// and keeps its pointing.
+pub(crate) fn legs_at(step: Step, energy: Energy, legs: &[KeyPose], t: f32) -> KeyPose {
+    if !step.on_counts() {
+        return super::pose::interpolate(legs, 0.5, t);
+    }
+    let last = legs.len() - 1;
+    let x = t.clamp(0.0, last as f32);
+    let i = (x.floor() as usize).min(last - 1);
+    let u = x - i as f32;
+    let e = smoother01(u);
+    let (a, b) = (&legs[i], &legs[i + 1]);
+    let mut p = a.scaled(1.0 - e).add(&b.scaled(e));
+    let travel = |from: Vec3, to: Vec3| Vec3::new(to.x - from.x, 0.0, to.z - from.z).length();
+    let (dl, dr) = (travel(a.left_foot, b.left_foot), travel(a.right_foot, b.right_foot));
+    if dl.max(dr) > 0.005 {
+        let s = (u * PI).sin();
+        let lift = ON_COUNTS_LIFT * energy.amplitude() * s * s;
+        if dl >= dr {
+            p.left_foot.y += lift;
+        } else {
+            p.right_foot.y += lift;
+        }
+    }
+    p
+}
+
 /// `values[k]` on count k (0..=3 over a bar in 3), eased from each count to the next.
 fn through_counts(values: &[f32; 4], t: f32) -> f32 {
     let x = t.clamp(0.0, 3.0);
@@ -386,6 +497,14 @@ fn through_points(points: &[Vec3; 4], t: f32) -> Vec3 {
     let x = t.clamp(0.0, 3.0);
     let i = (x.floor() as usize).min(2);
     points[i].lerp(points[i + 1], smooth01(x - i as f32))
+}
+
+/// `points[k]` on count k (0..=4 over a bar in 4), eased from each count to the next by a
+/// smootherstep (the moves held on the counts).
+fn through_counts_eased(points: &[Vec3; 5], t: f32) -> Vec3 {
+    let x = t.clamp(0.0, 4.0);
+    let i = (x.floor() as usize).min(3);
+    points[i].lerp(points[i + 1], smoother01(x - i as f32))
 }
 
 /// Left-hand target relative to the left shoulder (chest frame) and the right's, at time
@@ -494,6 +613,22 @@ fn arm_targets(arms: Arms, t: f32, amp: f32) -> (Vec3, Vec3, f32) {
             let r = Vec3::new(-l.x, l.y, l.z);
             (l, r, 0.0)
         }
+        // The arm patterns held on the counts: a pose on each count, eased into the next by a
+        // smootherstep (as the legs of their steps).
+        Arms::Presses => {
+            let front = Vec3::new(0.06, -0.12 + 0.04 * amp, 0.28 + 0.12 * amp);
+            let chest = Vec3::new(0.0, -0.24, 0.2);
+            let over = Vec3::new(0.1, 0.3 + 0.12 * amp, 0.1);
+            let l = through_counts_eased(&[front, chest, over, chest, front], t);
+            (l, Vec3::new(-l.x, l.y, l.z), 0.0)
+        }
+        Arms::OpenClose => {
+            let closed = Vec3::new(-0.04, -0.32, 0.27);
+            let open = Vec3::new(0.4, -0.05 + 0.08 * (amp - 1.0), 0.1);
+            let open_high = open + Vec3::new(-0.05, 0.12 * amp, 0.05);
+            let l = through_counts_eased(&[closed, open, closed, open_high, closed], t);
+            (l, Vec3::new(-l.x, l.y, l.z), 0.0)
+        }
         Arms::ArmWave => {
             let ph = t * PI;
             let a = 0.1 * amp;
@@ -505,11 +640,11 @@ fn arm_targets(arms: Arms, t: f32, amp: f32) -> (Vec3, Vec3, f32) {
 }
 
 
-/// The key pose of a move at `t_counts` (0..=4): leg keys interpolated on the half count, arms
+/// The key pose of a move at `t_counts` (0..=4): leg keys interpolated ([`legs_at`]), arms
 /// evaluated with a small lag (follow-through), secondary motion added.
-pub(crate) fn pose_at(arms: Arms, energy: Energy, t: f32, legs: &[KeyPose]) -> KeyPose {
+pub(crate) fn pose_at(step: Step, arms: Arms, energy: Energy, t: f32, legs: &[KeyPose]) -> KeyPose {
     let amp = energy.amplitude();
-    let mut p = super::pose::interpolate(legs, 0.5, t);
+    let mut p = legs_at(step, energy, legs, t);
     // Arms trail the body a little (follow-through); rolls and claps keep strict time.
     let lag = match arms {
         Arms::Swing | Arms::Waves | Arms::ArmWave => 0.12,
@@ -523,7 +658,11 @@ pub(crate) fn pose_at(arms: Arms, energy: Energy, t: f32, legs: &[KeyPose]) -> K
     p.left_shrug = 0.12 * smooth01((l.y + 0.1) / 0.6);
     p.right_shrug = 0.12 * smooth01((r.y + 0.1) / 0.6);
     // The head steadies against the chest and nods a fraction after the bounce.
-    let later_drop = super::pose::interpolate_channel(legs, 0.5, (t - 0.15).max(0.0), |k| k.hips.y);
+    let later_drop = if step.on_counts() {
+        legs_at(step, energy, legs, (t - 0.15).max(0.0)).hips.y
+    } else {
+        super::pose::interpolate_channel(legs, 0.5, (t - 0.15).max(0.0), |k| k.hips.y)
+    };
     p.head_roll = -0.5 * p.chest_roll - 0.3 * p.hips_roll;
     p.head_pitch += -0.6 * later_drop - 0.3 * p.chest_pitch;
     p.head_yaw = -0.4 * p.chest_yaw;

@@ -333,11 +333,18 @@ impl SegmentLibrary {
 
     /// Rescales every segment's intensity to the range of the library's segments of its count
     /// (a bar in 3 chooses among 3-count moves only, so they are scaled among themselves; and
-    /// the 4-count moves keep the scale they had before 3-count ones were cut).
+    /// the 4-count moves keep the scale they had before 3-count ones were cut). The built-in
+    /// moves held on the counts are placed on that scale but do not set it: they are calmer
+    /// versions of built-in steps, and with them in the range every other move's intensity rose
+    /// by 0.013–0.018, which moved the person's dances (session 24's trace of `choreo_my_moves`).
     fn rescale(&mut self) {
         let metres: std::collections::BTreeSet<usize> = self.segments.iter().map(Segment::counts).collect();
+        let sets_scale = |s: &Segment| !s.builtin.is_some_and(|m| m.step.on_counts());
         for n in metres {
-            let mut v: Vec<f32> = self.segments.iter().filter(|s| s.counts() == n).map(|s| s.intensity).collect();
+            let mut v: Vec<f32> = self.segments.iter().filter(|s| s.counts() == n && sets_scale(s)).map(|s| s.intensity).collect();
+            if v.is_empty() {
+                v = self.segments.iter().filter(|s| s.counts() == n).map(|s| s.intensity).collect();
+            }
             v.sort_by(f32::total_cmp);
             let lo = v[v.len() * 5 / 100];
             let hi = v[(v.len() * 95 / 100).min(v.len() - 1)];
