@@ -24,8 +24,10 @@ fi
 step "core dependency tree has no web crate"
 cargo run -q -p xtask -- check-core-deps
 
-step "native tests (cargo test: the core, its real-data integration tests, the build tool)"
-cargo test -q
+# One test binary per core, longest first (cargo test runs them one after another, and many hold
+# a single long real-data test): crate/xtask/src/native_tests.rs.
+step "native tests (the core, its real-data integration tests, the build tool; one binary per core)"
+cargo run -q -p xtask -- test-native
 
 # The Node and browser tests run two files at a time (each file its own Chromium; much of their
 # time is spent waiting on the page), and the short fuzz run goes beside them at low priority

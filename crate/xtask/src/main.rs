@@ -9,6 +9,10 @@
 //!   `/examples/` → `examples/`), on
 //!   127.0.0.1, printing the URL.
 //! - `check-core-deps`: fails when the core's dependency tree contains a web crate.
+//! - `test-native [cargo test args]`: the native tests, one test binary per core, longest first
+//!   (`native_tests.rs`).
+
+mod native_tests;
 
 use std::io::{BufRead, BufReader, Write};
 use std::net::{TcpListener, TcpStream};
@@ -518,6 +522,7 @@ fn main() {
             serve(port)
         }
         Some("check-core-deps") => check_core_deps(),
-        _ => fail("usage: xtask build-web [--dev] [--only full|player] | serve [--port N] | check-core-deps"),
+        Some("test-native") => native_tests::run(&root(), &args[1..]),
+        _ => fail("usage: xtask build-web [--dev] [--only full|player] | serve [--port N] | check-core-deps | test-native [cargo test args]"),
     }
 }
