@@ -66,9 +66,27 @@ test("dance: candidates, Set, Search twice, Generate, play", async () => {
     assert.ok(Math.abs(v2.tau - 0.95 * 0.95) < 1e-4, `τ after two searches: ${v2.tau}`);
     const third = await page.evaluate(() => window.odori.choreo.candidates.slice());
     assert.ok(third.every((s) => !first.includes(s)), "shown candidates never come back");
+    // Generate says so, on a painted frame, before the engine holds the page: at the engine's
+    // call the button reads "Generating…" and a frame has run since it did.
+    await page.evaluate(() => {
+      const c = window.odori.choreo.choreographer;
+      const generate = c.generate;
+      const button = document.querySelector("#dance-generate");
+      window.__gen = { labelAt: null, frames: 0, label: null };
+      new MutationObserver(() => { if (button.textContent === "Generating…" && window.__gen.labelAt === null) window.__gen.labelAt = performance.now(); }).observe(button, { childList: true, characterData: true, subtree: true });
+      // Read the clock in the callback: a frame's own timestamp is its vsync's, which may come
+      // before the click that set the label.
+      const tick = () => { if (window.__gen.label !== null) return; if (window.__gen.labelAt !== null && performance.now() > window.__gen.labelAt) window.__gen.frames++; requestAnimationFrame(tick); };
+      requestAnimationFrame(tick);
+      c.generate = function (...args) { window.__gen.label = button.textContent; c.generate = generate; return generate.apply(c, args); };
+    });
     // Generate: every bar filled, the pinned bar unchanged.
     await page.click("#dance-generate");
     await page.waitForFunction(() => !document.querySelector("#dance").dataset.busy && window.odori.choreo.view.every((v) => v.state.kind !== "empty"), null, { timeout: 30000 });
+    const gen = await page.evaluate(() => ({ ...window.__gen, now: document.querySelector("#dance-generate").textContent }));
+    assert.equal(gen.label, "Generating…", `the button at the engine's call: ${JSON.stringify(gen)}`);
+    assert.ok(gen.frames >= 1, `no frame ran between "Generating…" and the engine's call: ${JSON.stringify(gen)}`);
+    assert.equal(gen.now, "Generate", "the button's label is back");
     const view = await page.evaluate(() => window.odori.choreo.view);
     assert.equal(view.length, nBars);
     assert.ok(view.every((v) => v.state.kind !== "empty"), "an empty bar after Generate");

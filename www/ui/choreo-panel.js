@@ -385,8 +385,14 @@ export class ChoreoPanel {
     if (this.generating) return;
     this.generating = true;
     this.root.dataset.busy = "generate";
+    // The engine holds the page while it composes (a second or more for a long song on a
+    // phone): the button says so first, and a frame is painted with it before the engine runs.
+    const button = this.$(another ? "#dance-another-take" : "#dance-generate");
+    const label = button?.textContent;
+    if (button) button.textContent = "Generating…";
     try {
       await this.prepareJoins();
+      await new Promise((done) => requestAnimationFrame(() => setTimeout(done, 0)));
       const take = another ? ((this.choreographer.take ?? 0) + 1) % 16 : 0;
       const r = this.act(() => this.choreographer.generate({ take }));
       if (r) {
@@ -395,6 +401,7 @@ export class ChoreoPanel {
         this.renderDance();
       }
     } finally {
+      if (button) button.textContent = label;
       this.generating = false;
       delete this.root.dataset.busy;
     }
