@@ -88,13 +88,26 @@ pub fn fps_override_for(rel: &str) -> Option<f32> {
 /// plus every built-in move concatenated into one 420-bar clip, cut at every count at its
 /// stated 120 counts per minute.
 pub fn builtin_medley_library() -> odori_core::choreo::SegmentLibrary {
+    medley_library(1)
+}
+
+/// A second library for the Generate benches, so their figures are not of one library alone:
+/// the built-in moves plus a medley of every other built-in clip (the 1st, 3rd, …), cut at every
+/// count as [`builtin_medley_library`]'s is. Other clips meet at the medley's joins, so its
+/// segments and the moves they join are other ones.
+pub fn every_other_medley_library() -> odori_core::choreo::SegmentLibrary {
+    medley_library(2)
+}
+
+/// The built-in moves plus one clip of every `step`-th built-in clip in a row, cut at every count.
+fn medley_library(step: usize) -> odori_core::choreo::SegmentLibrary {
     use odori_core::choreo::{SegmentLibrary, SegmentOptions};
     use odori_core::clip::{Clip, TranslationTrack};
     let mut lib = SegmentLibrary::builtin();
     let clips = odori_core::library::builtin_clips();
     let sk = clips[0].skeleton.clone();
     let (mut rotations, mut root) = (Vec::new(), Vec::new());
-    for c in &clips {
+    for c in clips.iter().step_by(step.max(1)) {
         let n = c.frame_count() - 1;
         rotations.extend_from_slice(&c.rotations[..n * sk.len()]);
         root.extend_from_slice(&c.translations[0].values[..n]);

@@ -108,6 +108,29 @@ pub extern "C" fn generate90() -> f32 {
 
 thread_local! {
     static BUILTIN: RefCell<Option<SegmentLibrary>> = const { RefCell::new(None) };
+    static OTHER: RefCell<Option<SegmentLibrary>> = const { RefCell::new(None) };
+}
+
+/// Builds the second library (`odori_tests::every_other_medley_library`: the built-in moves plus
+/// a medley of every other built-in clip, cut at every count), so Generate's figure is not of
+/// one library alone; returns its segment count.
+#[no_mangle]
+pub extern "C" fn setup_every_other() -> u32 {
+    let lib = odori_tests::every_other_medley_library();
+    let m = lib.len() as u32;
+    OTHER.with(|l| *l.borrow_mut() = Some(lib));
+    m
+}
+
+/// Generate as [`generate90`] from the second library ([`setup_every_other`]); returns the
+/// objective (-1 without the library).
+#[no_mangle]
+pub extern "C" fn generate90_every_other() -> f32 {
+    OTHER.with(|l| {
+        let lib = l.borrow();
+        let Some(lib) = lib.as_ref() else { return -1.0 };
+        odori_tests::generate_all(lib, &odori_tests::bench_bars()).1
+    })
 }
 
 /// Generate on the same 90 bars from the built-in library alone (558 segments), where the
