@@ -5,6 +5,7 @@
 
 use std::cell::RefCell;
 use std::sync::Arc;
+use std::thread::LocalKey;
 
 use odori_core::choreo::*;
 
@@ -25,10 +26,24 @@ pub extern "C" fn build_builtin() -> u32 {
 /// Builds the ≥ 2,000-segment library; returns its segment count.
 #[no_mangle]
 pub extern "C" fn setup() -> u32 {
-    let lib = odori_tests::builtin_medley_library();
+    install(&LIB, odori_tests::builtin_medley_library())
+}
+
+/// Keeps `lib` in `slot` for the calls after; returns its segment count.
+fn install(slot: &'static LocalKey<RefCell<Option<SegmentLibrary>>>, lib: SegmentLibrary) -> u32 {
     let m = lib.len() as u32;
-    LIB.with(|l| *l.borrow_mut() = Some(lib));
+    slot.with(|l| *l.borrow_mut() = Some(lib));
     m
+}
+
+/// Generate (every stage, default settings) on `odori_tests::bench_bars` from the library in
+/// `slot`; returns the objective (-1 without a library).
+fn generate90_from(slot: &'static LocalKey<RefCell<Option<SegmentLibrary>>>) -> f32 {
+    slot.with(|l| {
+        let lib = l.borrow();
+        let Some(lib) = lib.as_ref() else { return -1.0 };
+        odori_tests::generate_all(lib, &odori_tests::bench_bars()).1
+    })
 }
 
 /// The transition table in one go (not cached between calls: a fresh library copy is not
@@ -99,11 +114,7 @@ fn fill90_with(w: FillWeights) -> f32 {
 /// in the app); returns the dance's objective (-1 without a library).
 #[no_mangle]
 pub extern "C" fn generate90() -> f32 {
-    LIB.with(|l| {
-        let lib = l.borrow();
-        let Some(lib) = lib.as_ref() else { return -1.0 };
-        odori_tests::generate_all(lib, &odori_tests::bench_bars()).1
-    })
+    generate90_from(&LIB)
 }
 
 thread_local! {
@@ -116,21 +127,14 @@ thread_local! {
 /// one library alone; returns its segment count.
 #[no_mangle]
 pub extern "C" fn setup_every_other() -> u32 {
-    let lib = odori_tests::every_other_medley_library();
-    let m = lib.len() as u32;
-    OTHER.with(|l| *l.borrow_mut() = Some(lib));
-    m
+    install(&OTHER, odori_tests::every_other_medley_library())
 }
 
 /// Generate as [`generate90`] from the second library ([`setup_every_other`]); returns the
 /// objective (-1 without the library).
 #[no_mangle]
 pub extern "C" fn generate90_every_other() -> f32 {
-    OTHER.with(|l| {
-        let lib = l.borrow();
-        let Some(lib) = lib.as_ref() else { return -1.0 };
-        odori_tests::generate_all(lib, &odori_tests::bench_bars()).1
-    })
+    generate90_from(&OTHER)
 }
 
 /// Generate on the same 90 bars from the built-in library alone (558 segments), where the
