@@ -134,7 +134,7 @@ pub fn bench_layers(segments: usize) -> Vec<odori_core::choreo::Layer> {
         .map(|i| match i {
             0 => Layer::Fixed { segment: 17 % segments.max(1) },
             91 => Layer::Fixed { segment: 1234 % segments.max(1) },
-            _ => Layer::Open { intensity: 0.5 + 0.45 * (i as f32 / 7.0).sin() },
+            _ => Layer::Open { intensity: 0.5 + 0.45 * odori_core::fmath::sin(i as f32 / 7.0) },
         })
         .collect()
 }
@@ -144,7 +144,7 @@ pub fn bench_layers(segments: usize) -> Vec<odori_core::choreo::Layer> {
 /// 120 BPM whose intensity swells and falls as [`bench_layers`]' does.
 pub fn bench_bars() -> Vec<odori_core::bars::Bar> {
     let bar_secs = 2.0f32;
-    odori_core::choreo::bars_from_tempo(90.0 * bar_secs + 0.01, 120.0, 4, 0.0, |start, _| 0.5 + 0.45 * ((start / bar_secs).round() / 7.0).sin()).expect("90 bars at 120 BPM")
+    odori_core::choreo::bars_from_tempo(90.0 * bar_secs + 0.01, 120.0, 4, 0.0, |start, _| 0.5 + 0.45 * odori_core::fmath::sin((start / bar_secs).round() / 7.0)).expect("90 bars at 120 BPM")
 }
 
 /// Generate (the whole pipeline, [`odori_core::choreo::generate_states`], default settings) on

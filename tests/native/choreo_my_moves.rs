@@ -89,11 +89,13 @@ const KNOWN_MISSES: &[(&str, &str, &str, &str)] = &[];
 /// one of the new moves (0.752 against main's 0.768). The asserted control is now the dance's
 /// own pool ([`random_bas_same_pool`]); this one is printed on every line and held to this list:
 /// an unlisted miss fails, so does a listed one past its ceiling or one that meets the goal.
+/// Half 1's demo in 4 at 100 BPM came off the list in session 32, when the core's sines and
+/// exponentials became libm's in every build (the bits the wasm app ships): its dance is another
+/// (BAS-music 0.785, 0.019 over the whole library's random + 0.05).
 const KNOWN_UNDER_WHOLE_LIBRARY_RANDOM: &[(&str, &str, f32)] = &[
     ("half 1", "Lets_Go_Fishin", 0.01),
     ("half 1", "Sugar_Plum", 0.05),
     ("half 1", "funk-groove1_138", 0.01),
-    ("half 1", "demo in 4, 100→100", 0.01),
 ];
 
 /// The person's files: every humanoid dance clip and RobotExpressive's Dance; `half` keeps

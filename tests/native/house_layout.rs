@@ -43,3 +43,45 @@ fn every_core_source_file_says_what_it_is() {
     let undocumented: Vec<String> = core_sources().into_iter().filter(|(_, text)| !text.trim_start().starts_with("//!")).map(|(name, _)| name).collect();
     assert!(undocumented.is_empty(), "core source files without a `//!` module doc: {undocumented:?}");
 }
+
+/// The std float methods `crate::fmath` stands for: in a native build they call the platform's
+/// C library, whose last bits differ from the libm port the wasm build's std uses.
+const STD_TRANSCENDENTALS: [&str; 15] = ["sin", "cos", "sin_cos", "tan", "asin", "acos", "atan", "atan2", "exp", "exp2", "ln", "log2", "log10", "powf", "tanh"];
+
+#[test]
+fn the_core_calls_libm_for_its_transcendentals_not_std() {
+    // Code, not comments or strings' prose: a `.sin(` after `//` on its line is skipped.
+    let mut found = Vec::new();
+    for (name, text) in core_sources() {
+        if name == "fmath.rs" {
+            continue;
+        }
+        for (n, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            for f in STD_TRANSCENDENTALS {
+                if code.contains(&format!(".{f}(")) {
+                    found.push(format!("{name}:{}: .{f}(", n + 1));
+                }
+            }
+        }
+    }
+    assert!(found.is_empty(), "std transcendental methods in the core (call crate::fmath's, the same libm in every build): {found:?}");
+}
+
+#[test]
+fn glam_computes_with_libm_as_the_core_does() {
+    // glam's `libm` feature (the workspace's glam line): a rotation's sine and cosine are libm's
+    // bits, even where the platform's C library's differ (the case this test needs to be able
+    // to fail, so it counts them too).
+    let (mut differ_from_std, mut checked) = (0, 0);
+    for k in 0..20_000 {
+        let half = 0.000_37 + k as f32 * 0.000_731;
+        let q = glam::Quat::from_rotation_y(2.0 * half);
+        let (s, c) = odori_core::fmath::sin_cos(half);
+        assert_eq!((q.y.to_bits(), q.w.to_bits()), (s.to_bits(), c.to_bits()), "glam's rotation by {} is not libm's sine and cosine", 2.0 * half);
+        differ_from_std += usize::from(half.sin() != s || half.cos() != c);
+        checked += 1;
+    }
+    assert!(differ_from_std > 0, "over {checked} angles, std's sine and cosine never differed from libm's: this test cannot tell them apart here");
+    println!("std's sine or cosine differ from libm's at {differ_from_std} of {checked} angles; glam's rotations follow libm at all");
+}

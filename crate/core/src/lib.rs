@@ -12,6 +12,7 @@ pub mod canon;
 pub mod choreo;
 pub mod clip;
 pub mod export;
+pub mod fmath;
 pub mod history;
 pub mod import;
 pub mod library;

@@ -16,6 +16,7 @@
 //!   relative to its start, minus the cubic Hermite curve fitted to its start and end values
 //!   and angular velocities, is the sway; it is added to motion 1's rotation of that joint.
 
+use crate::fmath;
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -93,7 +94,7 @@ fn effector_track(clip: &Clip, part: BodyPart) -> (Vec<Vec3>, Vec<Vec3>) {
         let world = &pose.of_frame(clip, f).positions;
         let hips = world[Canon::Hips.index()];
         let fwd = clip.frame_rotations(f)[0] * Vec3::Z;
-        let unyaw = Quat::from_rotation_y(-fwd.x.atan2(fwd.z));
+        let unyaw = Quat::from_rotation_y(-fmath::atan2(fwd.x, fwd.z));
         let eff: Vec3 = part.end_effectors().iter().map(|c| world[c.index()] - hips).sum::<Vec3>() / part.end_effectors().len() as f32;
         pos.push(unyaw * eff);
     }
@@ -204,7 +205,7 @@ pub fn compose(base: &Clip, overlay: &Clip, part: BodyPart, opts: &ComposeOption
                 let hi = (nominal + search).min(na - 1);
                 for i in lo..=hi {
                     let stretch = (j - tb) as f32 / (i - ta) as f32;
-                    let f = f_of(i, j) + opts.gamma * stretch.ln().abs();
+                    let f = f_of(i, j) + opts.gamma * fmath::ln(stretch).abs();
                     if f < best_end.0 {
                         best_end = (f, i, j);
                     }
@@ -276,7 +277,7 @@ pub fn compose(base: &Clip, overlay: &Clip, part: BodyPart, opts: &ComposeOption
         part,
         times,
         f_start: f_of(ta, tb),
-        f_end: f_of(ta2, tb2) + opts.gamma * stretch.ln().abs(),
+        f_end: f_of(ta2, tb2) + opts.gamma * fmath::ln(stretch).abs(),
         start_blend_secs: d_in,
         end_blend_secs: d_out,
         start_gap_cm: (pa[ta] - pb[tb]).length() * 100.0,

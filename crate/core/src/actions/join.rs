@@ -26,6 +26,7 @@
 //!   a foot rejoins motion 2 at its first landing there. So no foot near the floor slides: a
 //!   blend that would drag a foot along the floor (run → sit) lifts it over instead.
 
+use crate::fmath;
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -110,7 +111,7 @@ struct PlanFrame {
 
 fn heading(q: Quat) -> f32 {
     let f = q * Vec3::Z;
-    f.x.atan2(f.z)
+    fmath::atan2(f.x, f.z)
 }
 
 /// Mean heading of the hips over `±half` frames around `frame`: a gait's pelvis swings from
@@ -121,9 +122,9 @@ fn mean_heading(clip: &Clip, frame: usize, half: usize) -> f32 {
     let mut sum = Vec3::ZERO;
     for f in lo..=hi {
         let h = heading(clip.frame_rotations(f)[0]);
-        sum += Vec3::new(h.sin(), 0.0, h.cos());
+        sum += Vec3::new(fmath::sin(h), 0.0, fmath::cos(h));
     }
-    sum.x.atan2(sum.z)
+    fmath::atan2(sum.x, sum.z)
 }
 
 /// A foot counts as planted during a blend only when both motions plant it: then both roots

@@ -10,6 +10,7 @@
 //! position keeps a planted foot where it landed, so the feet do not slide; frames where no
 //! foot is in contact follow a ballistic parabola.
 
+use crate::fmath;
 use std::f32::consts::{FRAC_PI_2, PI, TAU};
 use std::sync::Arc;
 
@@ -233,7 +234,7 @@ fn with_secondary(time_secs: f32, pose_at: &dyn Fn(f32) -> Pose) -> Pose {
             p.set_arm(s, k, v);
         }
     }
-    let breath = (time_secs * TAU / 3.6).sin();
+    let breath = fmath::sin(time_secs * TAU / 3.6);
     p.0[idx::CHEST] += 0.012 * breath;
     p.0[idx::HEAD] -= 0.008 * breath;
     p
@@ -418,10 +419,10 @@ fn gait_leg(g: &Gait, phase: f32) -> (f32, f32, f32, bool) {
     let p = phase.rem_euclid(1.0);
     if p < g.stance {
         let u = p / g.stance;
-        let knee = 0.05 + g.knee_stance * (PI * u).sin();
+        let knee = 0.05 + g.knee_stance * fmath::sin(PI * u);
         // Hip flexion such that the ankle moves back under the hip at a constant speed: the
         // body then travels at an even pace over a planted foot.
-        let reach = |flex: f32, knee: f32| THIGH * flex.sin() + SHIN * (flex - knee).sin();
+        let reach = |flex: f32, knee: f32| THIGH * fmath::sin(flex) + SHIN * fmath::sin(flex - knee);
         let (z0, z1) = (reach(g.flex_fwd, 0.05), reach(g.flex_back, 0.05));
         let want = z0 + (z1 - z0) * u;
         let (mut lo, mut hi) = (g.flex_back - 0.3, g.flex_fwd + 0.3);
@@ -439,7 +440,7 @@ fn gait_leg(g: &Gait, phase: f32) -> (f32, f32, f32, bool) {
     } else {
         let u = (p - g.stance) / (1.0 - g.stance);
         let flex = g.flex_back + (g.flex_fwd - g.flex_back) * smooth(u);
-        let knee = 0.05 + g.knee_swing * (PI * u.powf(0.8)).sin();
+        let knee = 0.05 + g.knee_swing * fmath::sin(PI * fmath::powf(u, 0.8));
         let ankle = 0.35 * (1.0 - smooth(u / 0.35)) - 0.12 * smooth((u - 0.8) / 0.2);
         (flex, knee, ankle, false)
     }
@@ -471,7 +472,7 @@ fn gait_pose(g: &Gait, time_secs: f32) -> Pose {
     p.0[idx::HEAD + 1] = -0.4 * twist;
     p.0[idx::SPINE] = g.lean;
     p.0[idx::HEAD] = -g.lean * 0.8;
-    p.0[idx::HIPS_ROLL] = 0.04 * (TAU * phase).sin();
+    p.0[idx::HIPS_ROLL] = 0.04 * fmath::sin(TAU * phase);
     p
 }
 

@@ -5,6 +5,7 @@
 //! axis, turned by yaw (y) then pitch (x); keys one frame apart (MMD's cuts) are not eased.
 //! Roll (z) is not kept: the renderer's camera stays upright.
 
+use crate::fmath;
 use glam::{EulerRot, Quat, Vec3};
 
 use super::{CameraError, CameraPose};
@@ -54,8 +55,8 @@ impl MmdCameraState {
         }
         Ok(CameraPose {
             target: self.target_m.to_array(),
-            yaw: v.x.atan2(v.z),
-            pitch: (v.y / distance).clamp(-1.0, 1.0).asin(),
+            yaw: fmath::atan2(v.x, v.z),
+            pitch: fmath::asin((v.y / distance).clamp(-1.0, 1.0)),
             distance,
             fov_y: self.fov_deg.to_radians(),
         })

@@ -11,6 +11,7 @@
 //! A camera track read from a file (an MMD camera VMD) can replace the plan later: the
 //! viewer takes one [`CameraPose`] at a time, whatever made it.
 
+use crate::fmath;
 use glam::{Mat4, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -52,8 +53,8 @@ pub struct CameraPose {
 impl CameraPose {
     /// The eye's position.
     pub fn eye(&self) -> Vec3 {
-        let (sy, cy) = self.yaw.sin_cos();
-        let (sp, cp) = self.pitch.sin_cos();
+        let (sy, cy) = fmath::sin_cos(self.yaw);
+        let (sp, cp) = fmath::sin_cos(self.pitch);
         Vec3::from(self.target) + Vec3::new(sy * cp, sp, cy * cp) * self.distance
     }
 
@@ -75,8 +76,8 @@ impl CameraPose {
 
     /// The camera's axes: towards the eye from the target, right, up.
     fn axes(yaw: f32, pitch: f32) -> (Vec3, Vec3, Vec3) {
-        let (sy, cy) = yaw.sin_cos();
-        let (sp, cp) = pitch.sin_cos();
+        let (sy, cy) = fmath::sin_cos(yaw);
+        let (sp, cp) = fmath::sin_cos(pitch);
         let back = Vec3::new(sy * cp, sp, cy * cp);
         let right = Vec3::Y.cross(back).normalize_or(Vec3::X);
         let up = back.cross(right);
@@ -90,8 +91,8 @@ impl CameraPose {
 /// depth` and `|v·up| ≤ fill · tanᵥ · depth`.
 fn fit_distance(points: impl Iterator<Item = Vec3>, target: Vec3, yaw: f32, pitch: f32, fov_y: f32, aspect: f32, fill: f32) -> f32 {
     let (back, right, up) = CameraPose::axes(yaw, pitch);
-    let tan_v = (fov_y * 0.5).tan() * fill;
-    let tan_h = (fov_y * 0.5).tan() * aspect * fill;
+    let tan_v = fmath::tan(fov_y * 0.5) * fill;
+    let tan_h = fmath::tan(fov_y * 0.5) * aspect * fill;
     let mut d: f32 = MIN_DISTANCE_M;
     for p in points {
         let v = p - target;
@@ -286,7 +287,7 @@ pub fn plan(input: &CameraInput, options: &CameraOptions) -> Result<CameraPlan, 
             let tight = (0..n)
                 .map(|i| fit_distance(input.joints[i].iter().copied(), centre, yaw_at(input.times_secs[i]), base.pitch, fov, aspect, fill))
                 .fold(MIN_DISTANCE_M, f32::max);
-            let distance = if centre.y + base.pitch.sin() * tight >= MIN_EYE_HEIGHT_M { tight.min(base.distance) } else { base.distance };
+            let distance = if centre.y + fmath::sin(base.pitch) * tight >= MIN_EYE_HEIGHT_M { tight.min(base.distance) } else { base.distance };
             let poses = input.times_secs.iter().map(|&t| CameraPose { yaw: yaw_at(t), distance, ..base }).collect();
             Ok(CameraPlan { poses, shots: vec![Cut { frame: 0, bar: 0, shot: Shot::Wide }], phrase_bars: phrase })
         }
@@ -374,11 +375,11 @@ fn fitted(points: impl Iterator<Item = Vec3> + Clone, target: Vec3, yaw: f32, pi
     let mut pitch = pitch;
     let mut d = fit_distance(points.clone(), target, yaw, pitch, fov_y, aspect, fill);
     for _ in 0..4 {
-        let eye_y = target.y + pitch.sin() * d;
+        let eye_y = target.y + fmath::sin(pitch) * d;
         if eye_y >= MIN_EYE_HEIGHT_M {
             break;
         }
-        pitch = ((MIN_EYE_HEIGHT_M - target.y) / d).clamp(-1.0, 1.0).asin() + 0.01;
+        pitch = fmath::asin(((MIN_EYE_HEIGHT_M - target.y) / d).clamp(-1.0, 1.0)) + 0.01;
         d = fit_distance(points.clone(), target, yaw, pitch, fov_y, aspect, fill);
     }
     CameraPose { target: target.to_array(), yaw, pitch, distance: d, fov_y }

@@ -1,5 +1,6 @@
 //! Unit tests of the camera (fixed, orbit, follow, director): framing, cuts on phrase starts.
 
+use crate::fmath;
 use super::*;
 use crate::music::sections::Section;
 
@@ -10,9 +11,9 @@ fn swaying(secs: f32) -> (Vec<f32>, Vec<Vec<Vec3>>) {
     let joints = times
         .iter()
         .map(|&t| {
-            let x = (t * 0.7).sin() * 1.5;
-            let z = (t * 0.3).cos() * 0.8;
-            let arm = (t * 3.0).sin() * 0.7;
+            let x = fmath::sin(t * 0.7) * 1.5;
+            let z = fmath::cos(t * 0.3) * 0.8;
+            let arm = fmath::sin(t * 3.0) * 0.7;
             vec![
                 Vec3::new(x, 0.0, z),
                 Vec3::new(x, 1.0, z),

@@ -1,6 +1,7 @@
 //! The engine's own motion: the canonical humanoid skeleton and the built-in demo clip the app
 //! opens on (no file needed, nothing from outside the project).
 
+use crate::fmath;
 use std::f32::consts::{PI, TAU};
 use std::sync::Arc;
 
@@ -80,8 +81,8 @@ pub fn demo_clip() -> Clip {
         // Side of the step: counts 0,1 → right; 2,3 → left; ...
         let side = if (step / 2) % 2 == 0 { 1.0 } else { -1.0 };
         let phase = (beat / 4.0) * TAU; // one full left-right cycle per 4 counts
-        let sway = (phase).sin(); // -1..1 lateral position
-        let bounce = (beat * TAU).cos() * 0.5 + 0.5; // 1 on the count, 0 between
+        let sway = fmath::sin(phase); // -1..1 lateral position
+        let bounce = fmath::cos(beat * TAU) * 0.5 + 0.5; // 1 on the count, 0 between
         let mut r = [Quat::IDENTITY; CANON_COUNT];
         // Weight shifts: the standing leg bends on the count (a bounce), the free leg touches.
         let knee = 0.25 + 0.2 * bounce;
@@ -106,7 +107,7 @@ pub fn demo_clip() -> Clip {
         // Arms: down by the sides (from the T-pose) swinging across; clap overhead on 7-8.
         let clap = smooth(((beat - 6.0) * 2.0).clamp(0.0, 1.0)) * smooth(((8.0 - beat) * 3.0).clamp(0.0, 1.0));
         for (s, ua, fa, sh) in [(1.0, LeftUpperArm, LeftForearm, LeftShoulder), (-1.0, RightUpperArm, RightForearm, RightShoulder)] {
-            let swing = 0.5 * (phase + if s > 0.0 { PI } else { 0.0 }).sin();
+            let swing = 0.5 * fmath::sin(phase + if s > 0.0 { PI } else { 0.0 });
             let down = -s * (1.25 - 0.25 * bounce); // arms down by the sides
             let up = s * 1.35; // arms up over the head
             let z = down + (up - down) * clap;

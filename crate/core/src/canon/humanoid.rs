@@ -6,6 +6,7 @@
 //! into neck and arms). A rig whose mapped body is not upright and two-legged in its rest pose
 //! (the Fox) is reported as not humanoid, with the reason.
 
+use crate::fmath;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -505,7 +506,7 @@ impl HumanoidMap {
                 poses.push(c.world_positions(k * n.saturating_sub(1) / 4));
             }
         }
-        let tilt = |v: Vec3, dir: Vec3| v.normalize_or_zero().dot(dir).clamp(-1.0, 1.0).acos().to_degrees();
+        let tilt = |v: Vec3, dir: Vec3| fmath::acos(v.normalize_or_zero().dot(dir).clamp(-1.0, 1.0)).to_degrees();
         // (spine tilt from vertical, leg tilt from straight down) per pose; keep the most upright.
         let best = poses
             .iter()

@@ -4,6 +4,7 @@
 //! choice), and distances are divided by body height. Per frame, so turning in place is not a
 //! difference (paper 002 §4.4); by height, so dancers of different sizes match (§4.5).
 
+use crate::fmath;
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -60,7 +61,7 @@ pub fn facing_rotation(right: Vec3, left: Vec3) -> Quat {
         return Quat::IDENTITY;
     }
     // Angle of v in the ground plane measured from +Z towards +X; rotate by its negative.
-    let angle = x.atan2(z);
+    let angle = fmath::atan2(x, z);
     Quat::from_rotation_y(-angle)
 }
 

@@ -446,7 +446,7 @@ mod tests {
     fn kwas_is_one_for_itself_and_lower_for_other_motion() {
         let dims = 4;
         let along = |axis: usize| -> Vec<f32> {
-            (0..50).flat_map(|f| (0..dims).map(move |d| if d == axis { (f as f32 * 0.3).sin() } else { 0.01 * (f as f32 * (d as f32 + 1.0)).cos() })).collect()
+            (0..50).flat_map(|f| (0..dims).map(move |d| if d == axis { crate::fmath::sin(f as f32 * 0.3) } else { 0.01 * crate::fmath::cos(f as f32 * (d as f32 + 1.0)) })).collect()
         };
         let a = Signature::of(&along(0), dims, 3);
         let b = Signature::of(&along(2), dims, 3);
@@ -461,7 +461,7 @@ mod tests {
         // signatures cannot tell them apart; uncentred ones can, and keep the sign (a plain
         // |cos| of the mean would not).
         let dims = 3;
-        let at = |offset: f32| -> Vec<f32> { (0..40).flat_map(|f| [offset + 0.1 * (f as f32 * 0.4).sin(), 0.05 * (f as f32 * 0.7).cos(), 1.0]).collect() };
+        let at = |offset: f32| -> Vec<f32> { (0..40).flat_map(|f| [offset + 0.1 * crate::fmath::sin(f as f32 * 0.4), 0.05 * crate::fmath::cos(f as f32 * 0.7), 1.0]).collect() };
         let (a, b, c) = (at(0.8), at(-0.8), at(0.7));
         let centred = |x: &[f32]| Signature::of(x, dims, 2);
         assert!(centred(&a).similarity(&centred(&b)) > 0.99);

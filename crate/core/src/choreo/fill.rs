@@ -39,6 +39,7 @@
 //! Otherwise the whole column is reduced with a vectorised minimum. Either way the result is
 //! exact.
 
+use crate::fmath;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -281,7 +282,7 @@ pub fn beat_rate_cost(kinetic_per_count: f32) -> f32 {
         return 0.0;
     }
     let r = kinetic_per_count.max(0.25);
-    r.log2().abs().min((2.0 * r).log2().abs())
+    fmath::log2(r).abs().min(fmath::log2(2.0 * r).abs())
 }
 
 /// Count rate (counts per minute) a segment of 4 counts is played at over a bar of
@@ -302,7 +303,7 @@ pub fn stretch_cost(weight: f32, bar_bpm: f32, segment_bpm: f32) -> f32 {
     if weight == 0.0 || !(bar_bpm > 0.0 && segment_bpm > 0.0) || !bar_bpm.is_finite() || !segment_bpm.is_finite() {
         return 0.0;
     }
-    weight * (bar_bpm / segment_bpm).log2().abs()
+    weight * fmath::log2(bar_bpm / segment_bpm).abs()
 }
 
 
@@ -969,7 +970,7 @@ mod tests {
         let table = TransitionTable::from_costs(m, costs);
         let intensity: Vec<f32> = (0..m).map(|_| rnd()).collect();
         let n = 24;
-        let layers: Vec<Layer> = (0..n).map(|t| Layer::Open { intensity: 0.5 + 0.45 * (t as f32 / 3.0).sin() }).collect();
+        let layers: Vec<Layer> = (0..n).map(|t| Layer::Open { intensity: 0.5 + 0.45 * fmath::sin(t as f32 / 3.0) }).collect();
         let extra: Vec<Vec<f32>> = (0..n).map(|_| (0..m).map(|s| if s % 3 == 0 { 1000.0 } else { 0.3 * rnd() }).collect()).collect();
         let weights = FillWeights { repeat_penalty: 0.0, ..FillWeights::default() };
         let tempi = Tempi { extra: &extra, ..Tempi::default() };
@@ -1185,7 +1186,7 @@ mod tests {
         assert_eq!(beat_rate_cost(0.5), 0.0);
         // Twice a count is an octave from 1; three quarters is between ½ and 1.
         assert!((beat_rate_cost(2.0) - 1.0).abs() < 1e-6);
-        assert!((beat_rate_cost(0.75) - (0.75f32 / 0.5).log2().min((1.0f32 / 0.75).log2())).abs() < 1e-6);
+        assert!((beat_rate_cost(0.75) - fmath::log2(0.75f32 / 0.5).min(fmath::log2(1.0f32 / 0.75))).abs() < 1e-6);
         // Never turning is charged as a quarter turn per count: an octave below ½.
         assert!((beat_rate_cost(0.0) - 1.0).abs() < 1e-6);
         assert_eq!(beat_rate_cost(f32::NAN), 0.0);

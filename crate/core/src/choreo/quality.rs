@@ -10,6 +10,7 @@
 //! height above the floor matter for foot skate, and one scale makes centimetres comparable
 //! between a small and a tall dancer.
 
+use crate::fmath;
 use std::sync::{Arc, OnceLock};
 
 use glam::{Quat, Vec3};
@@ -243,7 +244,7 @@ fn resample_frames(frames: usize, fps: f32) -> Vec<(usize, usize, f32)> {
 /// Gaussian smoothing with σ `sigma` samples; the kernel is renormalised at the ends.
 fn gaussian_smooth(x: &[f32], sigma: f32) -> Vec<f32> {
     let r = (3.0 * sigma).ceil() as isize;
-    let kernel: Vec<f32> = (-r..=r).map(|k| (-(k * k) as f32 / (2.0 * sigma * sigma)).exp()).collect();
+    let kernel: Vec<f32> = (-r..=r).map(|k| fmath::exp(-(k * k) as f32 / (2.0 * sigma * sigma))).collect();
     let n = x.len() as isize;
     (0..n)
         .map(|i| {
@@ -316,7 +317,7 @@ fn alignment(targets: &[f32], against: &[f32], sigma_secs: f32) -> Option<f32> {
                 .map(|&k| (k - t).abs())
                 .fold(f32::INFINITY, f32::min);
             if d.is_finite() {
-                (-(d * d) / (2.0 * sigma_secs * sigma_secs)).exp()
+                fmath::exp(-(d * d) / (2.0 * sigma_secs * sigma_secs))
             } else {
                 0.0
             }
@@ -843,7 +844,7 @@ mod tests {
     /// (give a phase off the frame grid: an exactly symmetric turn makes a two-frame tie, no
     /// strict minimum).
     fn bobbing(frames: usize, period: f32, phase: f32) -> QualityMotion {
-        motion(frames, |f| Vec3::new(0.0, 0.1 * ((f as f32 - phase) / period * std::f32::consts::PI).cos(), 0.0))
+        motion(frames, |f| Vec3::new(0.0, 0.1 * fmath::cos((f as f32 - phase) / period * std::f32::consts::PI), 0.0))
     }
 
     #[test]
@@ -978,7 +979,7 @@ mod tests {
         let off: Vec<f32> = music.iter().map(|t| t + 0.25).collect();
         // exp(−0.25² / 0.02) ≈ 0.044.
         let s = bas_music(&music, &off).unwrap();
-        assert!((s - (-0.0625f32 / 0.02).exp()).abs() < 0.01, "{s}");
+        assert!((s - fmath::exp(-0.0625f32 / 0.02)).abs() < 0.01, "{s}");
         assert_eq!(bas_music(&[], &music), None);
         assert_eq!(bas_music(&music, &[]), Some(0.0));
         // The control is half a beat later.
@@ -1029,7 +1030,7 @@ mod tests {
         // Bobbing motion; a velocity kink at frame 150 (the motion reverses direction sideways).
         let smooth = bobbing(300, 15.0, 0.3);
         let kinked = motion(300, |f| {
-            let y = 0.1 * ((f as f32 - 0.3) / 15.0 * std::f32::consts::PI).cos();
+            let y = 0.1 * fmath::cos((f as f32 - 0.3) / 15.0 * std::f32::consts::PI);
             let x = if f < 150 { 0.01 * f as f32 } else { 1.5 - 0.01 * (f - 150) as f32 };
             Vec3::new(x, y, 0.0)
         });
@@ -1060,9 +1061,9 @@ mod tests {
 
     #[test]
     fn perceptual_distance_ignores_placement_and_length_but_not_pose() {
-        let a: Vec<Vec3> = (0..40).flat_map(|f| rest_frame(Vec3::new(0.0, 0.05 * (f as f32 * 0.2).sin(), 0.0))).collect();
+        let a: Vec<Vec3> = (0..40).flat_map(|f| rest_frame(Vec3::new(0.0, 0.05 * fmath::sin(f as f32 * 0.2), 0.0))).collect();
         // The same motion at double the frame count, elsewhere on the floor.
-        let b: Vec<Vec3> = (0..79).flat_map(|f| rest_frame(Vec3::new(3.0, 0.05 * (f as f32 * 0.1).sin(), -2.0))).collect();
+        let b: Vec<Vec3> = (0..79).flat_map(|f| rest_frame(Vec3::new(3.0, 0.05 * fmath::sin(f as f32 * 0.1), -2.0))).collect();
         assert!(perceptual_distance(&a, &b).unwrap() < 0.01);
         // Raising one hand by 30 cm is a difference.
         let hand = Canon::RightHand.index();

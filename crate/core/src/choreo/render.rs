@@ -13,6 +13,7 @@
 //! ([`super::switch`]); [`render_switched`] reports where each falls, for the join measures.
 //! Frame 0 is song time 0.
 
+use crate::fmath;
 use std::sync::Arc;
 
 use glam::{Quat, Vec3};
@@ -78,7 +79,7 @@ pub const INERTIAL_BLEND_SECS: f32 = 0.3;
 /// Yaw (about +Y) of a root rotation's forward (+Z) direction.
 fn yaw_of(q: Quat) -> f32 {
     let f = q * Vec3::Z;
-    f.x.atan2(f.z)
+    fmath::atan2(f.x, f.z)
 }
 
 /// Samples segment `seg` at `u` in 0..=1 of its length (or up to a count before it, −¼..0,

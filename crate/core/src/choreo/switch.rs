@@ -9,6 +9,7 @@
 //! needs the clip's frames there, so a move cut at its clip's start or end (every built-in move,
 //! one bar a clip) switches on the bar line.
 
+use crate::fmath;
 use glam::{Quat, Vec3};
 
 use super::render::inertialize_at;
@@ -41,7 +42,7 @@ pub(super) struct Placement {
 /// Yaw (about +Y) of a root rotation's forward (+Z) direction.
 pub(super) fn yaw_of(q: Quat) -> f32 {
     let f = q * Vec3::Z;
-    f.x.atan2(f.z)
+    fmath::atan2(f.x, f.z)
 }
 
 /// The clip frame (at [`LIBRARY_FPS`]) segment `s` plays at `u` of its bar: within the bar

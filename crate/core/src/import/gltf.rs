@@ -6,6 +6,7 @@
 //! warning), so the clip's forward kinematics stays rigid and in metres. Buffers are checked
 //! against every accessor before anything is read, so a broken file is an error, not a panic.
 
+use crate::fmath;
 use std::collections::{BTreeSet, HashMap};
 use std::sync::Arc;
 
@@ -95,7 +96,7 @@ impl Default for UvTransform {
 impl UvTransform {
     /// Where `uv` samples the texture.
     pub fn apply(&self, uv: [f32; 2]) -> [f32; 2] {
-        let (s, c) = self.rotation_rad.sin_cos();
+        let (s, c) = fmath::sin_cos(self.rotation_rad);
         let (x, y) = (uv[0] * self.scale[0], uv[1] * self.scale[1]);
         [c * x + s * y + self.offset[0], -s * x + c * y + self.offset[1]]
     }

@@ -5,6 +5,7 @@
 //! rigidly to the joint that carries their bone (weight 1), with the rest pose's exact inverse
 //! as bind matrix, so the body skins with the same matrices the stick figure uses.
 
+use crate::fmath;
 use std::f32::consts::PI;
 
 use glam::{Mat4, Vec3};
@@ -42,7 +43,7 @@ fn capsule(part: &mut MeshPart, a: Vec3, b: Vec3, r: f32, slot: u16) {
             let phi = k as f32 * PI / (2 * RINGS) as f32; // 0 at a's pole, π at b's
             for s in 0..AROUND {
                 let lambda = s as f32 * 2.0 * PI / AROUND as f32;
-                let n = -d * phi.cos() + (u * lambda.cos() + v * lambda.sin()) * phi.sin();
+                let n = -d * fmath::cos(phi) + (u * fmath::cos(lambda) + v * fmath::sin(lambda)) * fmath::sin(phi);
                 push(centre + n * r, n);
             }
             rings += 1;

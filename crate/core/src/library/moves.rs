@@ -6,6 +6,7 @@
 //! head steadies against the chest and nods a little after each bounce, the arms trail the body
 //! by a fraction of a count and the shoulders lift with the arms.
 
+use crate::fmath;
 use std::f32::consts::{FRAC_PI_2, PI, TAU};
 
 use glam::Vec3;
@@ -328,7 +329,7 @@ fn leg_keys_in_four(step: Step) -> Vec<LegKey> {
             .collect(),
         Step::HipSway => (0..9)
             .map(|i| {
-                let w = 0.5 + 0.5 * (i as f32 * FRAC_PI_2 + FRAC_PI_2).sin();
+                let w = 0.5 + 0.5 * fmath::sin(i as f32 * FRAC_PI_2 + FRAC_PI_2);
                 let mut key = lk([0.17, 0.0, 0.0], [-0.17, 0.0, 0.0], w, if i % 2 == 0 { -0.07 } else { -0.04 });
                 key.torso[3] = (w - 0.5) * 0.1;
                 key
@@ -339,8 +340,8 @@ fn leg_keys_in_four(step: Step) -> Vec<LegKey> {
                 // Two rolls per bar: chest leads forward, then the spine, then the hips push
                 // through as the knees bend, and the body rises back.
                 let ph = i as f32 / 4.0 * TAU;
-                let mut key = lk([0.16, 0.0, 0.0], [-0.16, 0.0, 0.0], 0.5, -0.08 + 0.07 * (ph - 1.6).cos());
-                key.torso = [0.18 * (ph - 1.9).sin(), 0.2 * (ph - 0.9).sin(), 0.3 * ph.sin(), 0.0];
+                let mut key = lk([0.16, 0.0, 0.0], [-0.16, 0.0, 0.0], 0.5, -0.08 + 0.07 * fmath::cos(ph - 1.6));
+                key.torso = [0.18 * fmath::sin(ph - 1.9), 0.2 * fmath::sin(ph - 0.9), 0.3 * fmath::sin(ph), 0.0];
                 key.l.z = 0.02;
                 key
             })
@@ -474,7 +475,7 @@ pub(crate) fn legs_at(step: Step, energy: Energy, legs: &[KeyPose], t: f32) -> K
     let travel = |from: Vec3, to: Vec3| Vec3::new(to.x - from.x, 0.0, to.z - from.z).length();
     let (dl, dr) = (travel(a.left_foot, b.left_foot), travel(a.right_foot, b.right_foot));
     if dl.max(dr) > 0.005 {
-        let s = (u * PI).sin();
+        let s = fmath::sin(u * PI);
         let lift = ON_COUNTS_LIFT * energy.amplitude() * s * s;
         if dl >= dr {
             p.left_foot.y += lift;
@@ -514,23 +515,23 @@ fn arm_targets(arms: Arms, t: f32, amp: f32) -> (Vec3, Vec3, f32) {
     let down_r = Vec3::new(-0.07, -0.49, 0.08);
     let count = t.floor();
     let within = t - count;
-    let pulse = |x: f32| (x * PI).sin().max(0.0); // 0 → 1 → 0 over one count
+    let pulse = |x: f32| fmath::sin(x * PI).max(0.0); // 0 → 1 → 0 over one count
     let sharp = |x: f32| {
         let y = (x * 2.0).min(1.0);
         y * y * (3.0 - 2.0 * y) * (1.0 - smooth01((x - 0.55) / 0.45))
     };
     match arms {
         Arms::Swing => {
-            let s = (t * PI).sin();
+            let s = fmath::sin(t * PI);
             let l = down_l + Vec3::new(0.0, 0.05 * amp * s.abs(), 0.22 * amp * s);
             let r = down_r + Vec3::new(0.0, 0.05 * amp * s.abs(), -0.22 * amp * s);
             (l + Vec3::new(0.0, 0.08, 0.05), r + Vec3::new(0.0, 0.08, 0.05), 0.12 * amp * s)
         }
         Arms::Waves => {
-            let s = (t * FRAC_PI_2).sin();
+            let s = fmath::sin(t * FRAC_PI_2);
             let up = 0.3 + 0.15 * amp;
-            let l = Vec3::new(0.12 + 0.22 * amp * s, up + 0.05 * (t * PI).cos(), 0.08);
-            let r = Vec3::new(-0.12 + 0.22 * amp * s, up - 0.05 * (t * PI).cos(), 0.08);
+            let l = Vec3::new(0.12 + 0.22 * amp * s, up + 0.05 * fmath::cos(t * PI), 0.08);
+            let r = Vec3::new(-0.12 + 0.22 * amp * s, up - 0.05 * fmath::cos(t * PI), 0.08);
             (l, r, 0.0)
         }
         Arms::Punches => {
@@ -562,9 +563,9 @@ fn arm_targets(arms: Arms, t: f32, amp: f32) -> (Vec3, Vec3, f32) {
             let th = t * TAU * if amp > 1.1 { 1.0 } else { 0.5 };
             let rad = 0.06 + 0.03 * amp;
             let base_y = -0.18 + if count >= 2.0 { 0.12 * amp } else { 0.0 };
-            let l = Vec3::new(-0.1 + rad * th.cos(), base_y + rad * th.sin(), 0.3);
-            let r = Vec3::new(0.1 + rad * (th + PI).cos(), base_y + rad * (th + PI).sin(), 0.28);
-            (l, r, 0.05 * th.sin())
+            let l = Vec3::new(-0.1 + rad * fmath::cos(th), base_y + rad * fmath::sin(th), 0.3);
+            let r = Vec3::new(0.1 + rad * fmath::cos(th + PI), base_y + rad * fmath::sin(th + PI), 0.28);
+            (l, r, 0.05 * fmath::sin(th))
         }
         Arms::OverheadReaches => {
             // Right reaches on 1, left on 3, each held through the next count.
@@ -632,8 +633,8 @@ fn arm_targets(arms: Arms, t: f32, amp: f32) -> (Vec3, Vec3, f32) {
         Arms::ArmWave => {
             let ph = t * PI;
             let a = 0.1 * amp;
-            let l = Vec3::new(0.4, -0.05 + a * ph.sin(), 0.15 + 0.05 * (ph * 0.5).cos());
-            let r = Vec3::new(-0.4, -0.05 + a * (ph - 1.2).sin(), 0.15 + 0.05 * (ph * 0.5).cos());
+            let l = Vec3::new(0.4, -0.05 + a * fmath::sin(ph), 0.15 + 0.05 * fmath::cos(ph * 0.5));
+            let r = Vec3::new(-0.4, -0.05 + a * fmath::sin(ph - 1.2), 0.15 + 0.05 * fmath::cos(ph * 0.5));
             (l, r, 0.0)
         }
     }

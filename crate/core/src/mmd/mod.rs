@@ -25,6 +25,7 @@ pub use motion::{bezier_ratio, BoneKeys, BoneSampler, MmdClipOptions, MmdMotion,
 pub use names::english_alias;
 pub use standard::standard_rig;
 
+use crate::fmath;
 use glam::{Quat, Vec3};
 use thiserror::Error;
 
@@ -467,7 +468,7 @@ impl MmdRig {
                 // three computes acos(dot) in f64; in f32 acos near 1 has a floor of ~3e-4 rad,
                 // so an effector already on its target would turn. atan2(|e × t|, e · t) is
                 // exact near 0 in f32 and equals three's angle everywhere else.
-                let mut angle = effector_vec.cross(target_vec).length().atan2(target_vec.dot(effector_vec));
+                let mut angle = fmath::atan2(effector_vec.cross(target_vec).length(), target_vec.dot(effector_vec));
                 if angle < 1e-5 {
                     continue;
                 }
@@ -525,19 +526,19 @@ pub fn euler_xyz_from_quat(q: Quat) -> Vec3 {
     let m23 = 2.0 * (y * z - w * x);
     let m32 = 2.0 * (y * z + w * x);
     let m33 = 1.0 - 2.0 * (x * x + y * y);
-    let ey = m13.clamp(-1.0, 1.0).asin();
+    let ey = fmath::asin(m13.clamp(-1.0, 1.0));
     if m13.abs() < 0.9999999 {
-        Vec3::new((-m23).atan2(m33), ey, (-m12).atan2(m11))
+        Vec3::new(fmath::atan2(-m23, m33), ey, fmath::atan2(-m12, m11))
     } else {
-        Vec3::new(m32.atan2(m22), ey, 0.0)
+        Vec3::new(fmath::atan2(m32, m22), ey, 0.0)
     }
 }
 
 /// The rotation of XYZ Euler angles (three.js's `Quaternion.setFromEuler`, order 'XYZ').
 pub fn quat_from_euler_xyz(e: Vec3) -> Quat {
-    let (s1, c1) = (e.x * 0.5).sin_cos();
-    let (s2, c2) = (e.y * 0.5).sin_cos();
-    let (s3, c3) = (e.z * 0.5).sin_cos();
+    let (s1, c1) = fmath::sin_cos(e.x * 0.5);
+    let (s2, c2) = fmath::sin_cos(e.y * 0.5);
+    let (s3, c3) = fmath::sin_cos(e.z * 0.5);
     Quat::from_xyzw(
         s1 * c2 * c3 + c1 * s2 * s3,
         c1 * s2 * c3 - s1 * c2 * s3,

@@ -443,7 +443,7 @@ mod tests {
         let (mut worst, mut worst_glam, mut dead) = (0.0f32, f32::MAX, 0);
         for _ in 0..4000 {
             let from = unit(&mut next);
-            let angle = 10f32.powf(-5.5 + 1.25 * (next() + 1.0));
+            let angle = crate::fmath::powf(10f32, -5.5 + 1.25 * (next() + 1.0));
             let to = turned(&mut next, from, angle);
             worst = worst.max((shortest_arc(from, to) * from - to).length());
             let glam = Quat::from_rotation_arc(from, to);
@@ -474,7 +474,7 @@ mod tests {
             let q = shortest_arc(from, to);
             quarter = quarter.max((q * from - to).length()).max((q.w - std::f32::consts::FRAC_1_SQRT_2).abs());
             // Near a half turn (1e-6..1e-2 rad short of it) and exactly opposite.
-            let short = 10f32.powf(-6.0 + 2.0 * (next() + 1.0));
+            let short = crate::fmath::powf(10f32, -6.0 + 2.0 * (next() + 1.0));
             let to = turned(&mut next, -from, short);
             half = half.max((shortest_arc(from, to) * from - to).length());
             half_glam = half_glam.max((Quat::from_rotation_arc(from, to) * from - to).length());
@@ -501,7 +501,7 @@ mod tests {
             let (upper_bone, lower_bone) = (unit(&mut next) * l1, unit(&mut next) * l2);
             let root = Vec3::new(next(), 1.0 + next() * 0.2, next());
             let dir = Vec3::new(next() * 0.5, -1.0, next() * 0.5).normalize();
-            let target = root + dir * (l1 + l2 - 10f32.powf(-3.2 + 0.5 * (next() + 1.0)));
+            let target = root + dir * (l1 + l2 - crate::fmath::powf(10f32, -3.2 + 0.5 * (next() + 1.0)));
             let pole = unit(&mut next);
             let upper0 = Quat::from_scaled_axis(unit(&mut next) * 3.0 * next());
             let knee0 = Quat::from_scaled_axis(unit(&mut next) * 3.0 * next());

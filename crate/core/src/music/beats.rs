@@ -9,11 +9,13 @@
 //! the later beat (from [`super::tempo::local_periods`]), so the penalty follows the tempo
 //! instead of pulling every interval back to one global period.
 
+use crate::fmath;
+
 /// Gaussian smoothing of the onset curve (σ in frames), so a beat need not hit the exact onset
 /// frame to collect it.
 fn smooth(onset: &[f32], sigma: f32) -> Vec<f32> {
     let radius = (3.0 * sigma).ceil() as isize;
-    let kernel: Vec<f32> = (-radius..=radius).map(|i| (-0.5 * (i as f32 / sigma).powi(2)).exp()).collect();
+    let kernel: Vec<f32> = (-radius..=radius).map(|i| fmath::exp(-0.5 * (i as f32 / sigma).powi(2))).collect();
     let n = onset.len() as isize;
     (0..n)
         .map(|t| {
@@ -70,7 +72,7 @@ fn track(onset: &[f32], period_frames: f32, periods: Option<&[f32]>, tightness: 
     let max_step = (longest * 2.0).round().max(min_step as f32 + 1.0) as usize;
     // Transition penalty per step length, precomputed for the steady case.
     let penalty: Vec<f32> = (0..=max_step)
-        .map(|d| if d == 0 { f32::INFINITY } else { tightness * (d as f32 / period_frames).ln().powi(2) })
+        .map(|d| if d == 0 { f32::INFINITY } else { tightness * fmath::ln(d as f32 / period_frames).powi(2) })
         .collect();
     let mut cumulative = vec![0.0f32; n];
     let mut back: Vec<Option<usize>> = vec![None; n];
@@ -86,7 +88,7 @@ fn track(onset: &[f32], period_frames: f32, periods: Option<&[f32]>, tightness: 
             let lo = t.saturating_sub(hi_step);
             for tau in lo..=t - lo_step {
                 let d = t - tau;
-                let cost = if periods.is_some() { tightness * (d as f32 / p_t).ln().powi(2) } else { penalty[d] };
+                let cost = if periods.is_some() { tightness * fmath::ln(d as f32 / p_t).powi(2) } else { penalty[d] };
                 let s = cumulative[tau] - cost;
                 if s > best {
                     best = s;

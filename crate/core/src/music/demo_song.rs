@@ -13,6 +13,7 @@
 //! still exact by construction. The default options give the demo song itself, sample for
 //! sample.
 
+use crate::fmath;
 use serde::{Deserialize, Serialize};
 
 use super::MusicError;
@@ -168,7 +169,7 @@ const MELODY: [(usize, f32, f32, u8); 18] = [
 ];
 
 fn midi_hz(note: u8) -> f32 {
-    440.0 * 2f32.powf((f32::from(note) - 69.0) / 12.0)
+    440.0 * fmath::powf(2f32, (f32::from(note) - 69.0) / 12.0)
 }
 
 /// Deterministic white noise (xorshift32), values in [-1, 1).
@@ -221,7 +222,7 @@ impl Mix {
             let f = 48.0 + 110.0 * sweep.next();
             phase = (phase + f / self.fs).fract();
             let click = if (j as f32) < click_n { 0.3 * (1.0 - j as f32 / click_n) } else { 0.0 };
-            self.out[i] += gain * ((2.0 * std::f32::consts::PI * phase).sin() * amp.next() + click);
+            self.out[i] += gain * (fmath::sin(2.0 * std::f32::consts::PI * phase) * amp.next() + click);
         }
     }
 
@@ -257,7 +258,7 @@ impl Mix {
     #[allow(clippy::too_many_arguments)]
     fn saw(&mut self, t0: f32, len_secs: f32, hz: f32, gain: f32, attack: f32, release: f32, cutoff_hz: f32, detune: f32) {
         let (a, b) = self.span(t0, len_secs + release);
-        let k = 1.0 - (-2.0 * std::f32::consts::PI * cutoff_hz / self.fs).exp();
+        let k = 1.0 - fmath::exp(-2.0 * std::f32::consts::PI * cutoff_hz / self.fs);
         let mut lp = 0.0f32;
         let mut phases = [0.0f32, 0.37];
         let dts = [hz * (1.0 + detune) / self.fs, hz * (1.0 - detune) / self.fs];
@@ -299,7 +300,7 @@ impl Mix {
             let jf = j as f32;
             let vib = 1.0 + 0.004 * vibrato.next() * (jf / fade_n).min(1.0);
             phase = (phase + hz * vib / self.fs).fract();
-            let (s1, c1) = (2.0 * std::f32::consts::PI * phase).sin_cos();
+            let (s1, c1) = fmath::sin_cos(2.0 * std::f32::consts::PI * phase);
             let (s2, s3) = (2.0 * s1 * c1, s1 * (3.0 - 4.0 * s1 * s1));
             let env = if jf < len_n {
                 level = (jf / attack_n).min(1.0) * (1.0 - 0.3 * jf / len_n);
@@ -320,7 +321,7 @@ struct Decay {
 
 impl Decay {
     fn new(tau_secs: f32, fs: f32) -> Self {
-        Self { value: 1.0, factor: (-1.0 / (tau_secs.max(1e-4) * fs)).exp() }
+        Self { value: 1.0, factor: fmath::exp(-1.0 / (tau_secs.max(1e-4) * fs)) }
     }
 
     fn next(&mut self) -> f32 {
@@ -342,7 +343,7 @@ struct Phasor {
 impl Phasor {
     fn new(hz: f32, fs: f32) -> Self {
         let w = 2.0 * std::f64::consts::PI * f64::from(hz) / f64::from(fs);
-        Self { re: 1.0, im: 0.0, step_re: w.cos(), step_im: w.sin() }
+        Self { re: 1.0, im: 0.0, step_re: fmath::cos(w), step_im: fmath::sin(w) }
     }
 
     /// The sine, then one step on.
@@ -523,7 +524,7 @@ pub fn demo_song_with(sample_rate_hz: f32, options: &DemoSongOptions) -> Result<
         bar0 += bars;
     }
     // Gentle saturation, then a fixed peak of 0.9.
-    mix.out.iter_mut().for_each(|s| *s = (1.2 * *s).tanh());
+    mix.out.iter_mut().for_each(|s| *s = fmath::tanh(1.2 * *s));
     let peak = mix.out.iter().fold(0.0f32, |m, s| m.max(s.abs()));
     if peak > 0.0 {
         mix.out.iter_mut().for_each(|s| *s *= 0.9 / peak);

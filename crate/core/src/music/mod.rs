@@ -258,8 +258,8 @@ mod tests {
             let in_beat = (phase_beats.fract()) * beat;
             let in_eighth = (phase_beats * 2.0).fract() * beat / 2.0;
             let accent = if (phase_beats as usize).is_multiple_of(beats_per_bar) { 1.0 } else { 0.5 };
-            bands[1][n] += accent * (-in_beat / 0.08).exp();
-            bands[3][n] += 0.2 * (-in_eighth / 0.03).exp();
+            bands[1][n] += accent * crate::fmath::exp(-in_beat / 0.08);
+            bands[3][n] += 0.2 * crate::fmath::exp(-in_eighth / 0.03);
             bands[2][n] += 0.1;
             bands[0][n] = bands[1][n] + bands[2][n] + bands[3][n];
         }

@@ -2,6 +2,7 @@
 //! before, band by band, on a log scale, half-wave rectified and summed. Beats sit on strong
 //! onsets; the low band's own onset curve is kept for downbeat (bar-phase) estimation.
 
+use crate::fmath;
 use super::rms::RmsEnvelope;
 
 /// Log compression: `ln(1 + LOG_GAIN · rms / ref)`, about a 60 dB usable range per band.
@@ -27,7 +28,7 @@ fn log_band(band: &[f32]) -> Option<Vec<f32>> {
     if reference <= 1e-9 {
         return None;
     }
-    Some(band.iter().map(|&v| (1.0 + LOG_GAIN * v / reference).ln()).collect())
+    Some(band.iter().map(|&v| fmath::ln(1.0 + LOG_GAIN * v / reference)).collect())
 }
 
 /// Half-wave rectified first difference, with silence before the first frame.

@@ -77,6 +77,7 @@
 //! }
 //! ```
 
+use crate::fmath;
 use serde::{Deserialize, Serialize};
 
 use super::MusicError;
@@ -204,17 +205,17 @@ impl BiquadCoefficients {
         let fs = f64::from(sample_rate_hz);
         let f0 = f64::from(frequency_hz).clamp(0.0, fs / 2.0);
         let w0 = 2.0 * std::f64::consts::PI * f0 / fs;
-        let (sin_w0, cos_w0) = w0.sin_cos();
+        let (sin_w0, cos_w0) = fmath::sin_cos(w0);
         let q = f64::from(q);
         let (b0, b1, b2, a0, a1, a2) = match kind {
             BandKind::Full => return None,
             BandKind::Lowpass => {
-                let alpha = sin_w0 / (2.0 * 10f64.powf(q / 20.0));
+                let alpha = sin_w0 / (2.0 * fmath::powf(10f64, q / 20.0));
                 let b = (1.0 - cos_w0) / 2.0;
                 (b, 1.0 - cos_w0, b, 1.0 + alpha, -2.0 * cos_w0, 1.0 - alpha)
             }
             BandKind::Highpass => {
-                let alpha = sin_w0 / (2.0 * 10f64.powf(q / 20.0));
+                let alpha = sin_w0 / (2.0 * fmath::powf(10f64, q / 20.0));
                 let b = (1.0 + cos_w0) / 2.0;
                 (b, -(1.0 + cos_w0), b, 1.0 + alpha, -2.0 * cos_w0, 1.0 - alpha)
             }
@@ -356,7 +357,7 @@ mod tests {
     use super::*;
 
     fn sine(freq: f32, fs: f32, secs: f32) -> Vec<f32> {
-        (0..(fs * secs) as usize).map(|i| (2.0 * std::f32::consts::PI * freq * i as f32 / fs).sin()).collect()
+        (0..(fs * secs) as usize).map(|i| fmath::sin(2.0 * std::f32::consts::PI * freq * i as f32 / fs)).collect()
     }
 
     #[test]

@@ -15,6 +15,7 @@
 //! its label. Deterministic, O(bars · kernel² · features) for the novelty and O(sections² · bars) for the labels, memory
 //! linear in the bars: about a millisecond for a 3-minute song natively.
 
+use crate::fmath;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -196,7 +197,7 @@ pub fn bar_features(grid: &SongGrid, envelope: &RmsEnvelope) -> Result<Vec<Vec<f
         let last = frames.saturating_sub(1);
         let lo = ((start_secs / hop).ceil().max(0.0) as usize).min(last);
         let hi = ((end_secs / hop).ceil().max(0.0) as usize).min(frames).max(lo + 1);
-        let db: Vec<f32> = band[lo..hi].iter().map(|&v| 20.0 * v.max(FLOOR_RMS).log10()).collect();
+        let db: Vec<f32> = band[lo..hi].iter().map(|&v| 20.0 * fmath::log10(v.max(FLOOR_RMS))).collect();
         let mean = db.iter().sum::<f32>() / db.len() as f32;
         let var = db.iter().map(|d| (d - mean) * (d - mean)).sum::<f32>() / db.len() as f32;
         (mean, var.sqrt())
@@ -277,7 +278,7 @@ impl BarSimilarity {
             let sum: f32 = range.clone().map(|d| (a[d] - b[d]).powi(2)).sum();
             d2 += weight * sum / range.len() as f32;
         }
-        (-d2).exp()
+        fmath::exp(-d2)
     }
 }
 
@@ -422,8 +423,8 @@ mod tests {
                 for (b, band) in bands.iter_mut().enumerate() {
                     seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
                     let ripple = 1.0 + 0.02 * ((seed >> 16) as f32 / 65536.0 - 0.5);
-                    let pulse = if b == 1 { 0.3 + (-in_beat / 0.08).exp() } else { 1.0 };
-                    band.push(10f32.powf(levels[b] / 20.0) * pulse * ripple);
+                    let pulse = if b == 1 { 0.3 + fmath::exp(-in_beat / 0.08) } else { 1.0 };
+                    band.push(fmath::powf(10f32, levels[b] / 20.0) * pulse * ripple);
                 }
             }
         }

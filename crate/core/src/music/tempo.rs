@@ -10,6 +10,7 @@
 //! away). A piece whose path (but for its 10 % extremes) stays within [`STEADY_SPREAD`] of one tempo is
 //! taken to be steady.
 
+use crate::fmath;
 use serde::{Deserialize, Serialize};
 
 /// One tempo hypothesis and its score.
@@ -41,7 +42,7 @@ pub struct TempoSettings {
 fn loop_fit(bpm: f32, duration_secs: f32, beats_per_bar: u32) -> f32 {
     let bars = duration_secs * bpm / 60.0 / beats_per_bar.max(1) as f32;
     let d = (bars - bars.round().max(1.0)).abs();
-    0.25 + 0.75 * (-0.5 * (d / 0.05).powi(2)).exp()
+    0.25 + 0.75 * fmath::exp(-0.5 * (d / 0.05).powi(2))
 }
 
 /// Unbiased, normalised autocorrelation of the mean-removed curve for lags `0..=max_lag`.
@@ -113,8 +114,8 @@ pub fn tempo_candidates(onset: &[f32], fps: f32, settings: &TempoSettings) -> Ve
                 }
             })
             .sum();
-        let octaves = (bpm / settings.prior_bpm).log2() / settings.prior_octaves.max(0.05);
-        let mut prior = (-0.5 * octaves * octaves).exp();
+        let octaves = fmath::log2(bpm / settings.prior_bpm) / settings.prior_octaves.max(0.05);
+        let mut prior = fmath::exp(-0.5 * octaves * octaves);
         if let Some((duration_secs, beats_per_bar)) = settings.loop_bars {
             prior *= loop_fit(bpm, duration_secs, beats_per_bar);
         }
@@ -206,8 +207,8 @@ fn window_scores(onset: &[f32], fps: f32, bins: &[f32], combs: usize) -> Option<
 /// make the song-wide comb prefer the double tempo; within a window the tempo is nearly steady.
 pub fn local_level(onset: &[f32], fps: f32, global_bpm: f32, settings: &TempoSettings) -> f32 {
     let prior = |bpm: f32| {
-        let octaves = (bpm / settings.prior_bpm).log2() / settings.prior_octaves.max(0.05);
-        (-0.5 * octaves * octaves).exp()
+        let octaves = fmath::log2(bpm / settings.prior_bpm) / settings.prior_octaves.max(0.05);
+        fmath::exp(-0.5 * octaves * octaves)
     };
     let mut best = (global_bpm, f32::NEG_INFINITY);
     for level in [global_bpm, global_bpm / 2.0, global_bpm * 2.0] {

@@ -4,6 +4,7 @@
 //! [`super::Character`] plays with), and a rendered dance held the same way
 //! ([`hold_feet_in_dance`]).
 
+use crate::fmath;
 use std::sync::Arc;
 
 use glam::{Quat, Vec3};
@@ -334,7 +335,7 @@ pub(super) fn hold_plan_stepping(feet: &[FootTracks], fps: f32, contacts: Option
                                     // A long ease is a step: the foot rises clear of the floor
                                     // while it travels (not a slide along it), and comes down
                                     // as it ends.
-                                    let step = if swing[k] > w { RELEASE_STEP_LIFT_M * t.scale * (std::f32::consts::PI * u).sin() } else { 0.0 };
+                                    let step = if swing[k] > w { RELEASE_STEP_LIFT_M * t.scale * fmath::sin(std::f32::consts::PI * u) } else { 0.0 };
                                     targets[k][f] = Some(Vec3::new(across.x, lifted.y + step, across.z));
                                     stepping[k][f] = swing[k] > w;
                                 }
@@ -504,12 +505,12 @@ pub(super) fn toe_clearance(feet: &[FootTracks], hinge: &[Vec<Vec3>], toe_y_offs
             }
             // The toe-up turn that takes the toe highest, in [0, 2π): a foot pointed past
             // straight down (b < 0) first goes a little lower, then up.
-            let top = b.atan2(a).rem_euclid(std::f32::consts::TAU);
-            let level = (top - (-p / m).clamp(-1.0, 1.0).acos()).clamp(0.0, top).min(TOE_PITCH_MAX_RAD);
+            let top = fmath::atan2(b, a).rem_euclid(std::f32::consts::TAU);
+            let level = (top - fmath::acos((-p / m).clamp(-1.0, 1.0))).clamp(0.0, top).min(TOE_PITCH_MAX_RAD);
             let at = targets[k][f].unwrap_or(t.free_ankle[f] + shift[f]);
             let want = (t.src_toe[f].y + toe_y_offset[k] - at.y).min(0.0);
             if want > p + a {
-                pitch[f] = (top - ((want - p) / m).clamp(-1.0, 1.0).acos()).clamp(0.0, level);
+                pitch[f] = (top - fmath::acos(((want - p) / m).clamp(-1.0, 1.0))).clamp(0.0, level);
             }
         }
         let w = ((RELEASE_S * fps).round() as usize).max(1);

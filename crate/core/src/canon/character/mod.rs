@@ -42,6 +42,7 @@
 //!   the CMU files) is not played: the character starts in the take's first real pose. The
 //!   report measures the source without it too.
 
+use crate::fmath;
 use std::sync::Arc;
 
 use glam::{Quat, Vec3};
@@ -829,7 +830,7 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
         for &(s, c) in &bones {
             let (Some(js), Some(jc)) = (character.map.get(s), character.map.get(c)) else { continue };
             if let (Some(a), Some(b)) = ((sp[c.index()] - sp[s.index()]).try_normalize(), (cp[jc] - cp[js]).try_normalize()) {
-                dir_err.push(a.dot(b).clamp(-1.0, 1.0).acos());
+                dir_err.push(fmath::acos(a.dot(b).clamp(-1.0, 1.0)));
             }
         }
         for c in [Canon::LeftForearm, Canon::RightForearm, Canon::LeftHand, Canon::RightHand] {
@@ -841,7 +842,7 @@ pub fn report(source: &Clip, source_map: &HumanoidMap, character: &Character, ou
             let d_out = cr[j] * character.reference[c.index()].inverse();
             let across = |v: Vec3| (v - axis * v.dot(axis)).try_normalize();
             if let (Some(u), Some(w)) = (across(d_src * Vec3::Z), across(d_out * Vec3::Z)) {
-                twist_err.push(u.dot(w).clamp(-1.0, 1.0).acos());
+                twist_err.push(fmath::acos(u.dot(w).clamp(-1.0, 1.0)));
             }
         }
         for (k, c) in feet.iter().enumerate() {
@@ -1073,7 +1074,7 @@ mod tests {
         // (its toe circles its ankle), so its ankle must circle the held toe.
         let fps = 60.0;
         let frames = 60;
-        let src_ankle: Vec<Vec3> = (0..frames).map(|f| Vec3::new(0.0, if (10..50).contains(&f) { 0.2 } else { 0.08 + 0.3 * (f as f32 * 0.3).sin().abs() }, 0.0)).collect();
+        let src_ankle: Vec<Vec3> = (0..frames).map(|f| Vec3::new(0.0, if (10..50).contains(&f) { 0.2 } else { 0.08 + 0.3 * fmath::sin(f as f32 * 0.3).abs() }, 0.0)).collect();
         let src_toe: Vec<Vec3> = (0..frames).map(|f| Vec3::new(0.0, if (10..50).contains(&f) { 0.02 } else { 0.3 }, 0.15)).collect();
         let turn = |f: usize| Quat::from_rotation_y(0.02 * f as f32);
         let free_ankle: Vec<Vec3> = (0..frames).map(|_| Vec3::new(0.3, 0.25, 0.0)).collect();

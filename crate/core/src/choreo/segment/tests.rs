@@ -1,6 +1,7 @@
 //! Unit tests of the segment library: links, tempo detection, cutting in 3 and 4, the count
 //! warp, beat fit, kinetic beats per count, loading in slices, signatures.
 
+use crate::fmath;
 use super::library::*;
 use super::signature::*;
 use super::tempo::*;
@@ -21,7 +22,7 @@ fn links_match_the_canonical_tree() {
 fn detects_the_tempo_of_a_pulsing_speed_curve() {
     // 110 counts per minute with dips on every count.
     let period = LIBRARY_FPS * 60.0 / 110.0;
-    let speed: Vec<f32> = (0..600).map(|f| 2.0 - (f as f32 / period * std::f32::consts::TAU).cos() + 0.1 * ((f * 7 % 13) as f32 / 13.0)).collect();
+    let speed: Vec<f32> = (0..600).map(|f| 2.0 - fmath::cos(f as f32 / period * std::f32::consts::TAU) + 0.1 * ((f * 7 % 13) as f32 / 13.0)).collect();
     let (beats, p) = detect_beats(&speed);
     assert!((p - period).abs() < 0.5, "period {p} vs {period}");
     assert!(beats.len() >= 30);
@@ -49,11 +50,11 @@ fn comb_finds_the_count_of_uneven_steps_not_their_octave_or_three_to_four() {
         .map(|f| {
             let c = f as f32 / count;
             let in_bar = c.rem_euclid(4.0);
-            let step = if in_bar < 3.0 { (std::f32::consts::PI * in_bar.fract()).sin().powi(2) } else { 0.0 };
+            let step = if in_bar < 3.0 { fmath::sin(std::f32::consts::PI * in_bar.fract()).powi(2) } else { 0.0 };
             1.0 + step + noise(f)
         })
         .collect();
-    let body: Vec<f32> = (0..900).map(|f| 2.0 + (f as f32 / (4.0 * count) * std::f32::consts::TAU).sin() + noise(f + 13)).collect();
+    let body: Vec<f32> = (0..900).map(|f| 2.0 + fmath::sin(f as f32 / (4.0 * count) * std::f32::consts::TAU) + noise(f + 13)).collect();
     let (period, support) = comb_period(&[feet, body], fps).expect("a period");
     assert!(support > 0.0);
     assert!((period / count - 1.0).abs() < 0.03, "period {period:.2} frames ({:.1}/min) vs {count:.2} (82/min)", fps * 60.0 / period);
@@ -166,7 +167,7 @@ fn kinetic_beats_per_count_follow_the_count_rate() {
     let frames = 240;
     let pos: Vec<Vec3> = (0..frames)
         .flat_map(|f| {
-            let y = 0.08 * ((f as f32 - 0.3) / 30.0 * std::f32::consts::PI).cos();
+            let y = 0.08 * fmath::cos((f as f32 - 0.3) / 30.0 * std::f32::consts::PI);
             rest.iter().map(move |p| *p + Vec3::Y * y)
         })
         .collect();

@@ -3,6 +3,7 @@
 //! beats), what adding or re-cutting a clip gave, and the links whose ends the transition cost
 //! reads.
 
+use crate::fmath;
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -192,7 +193,7 @@ impl Segment {
         }
         for i in 1..r.len() {
             if count_rate_bpm <= r[i] {
-                let a = (count_rate_bpm / r[i - 1]).log2() / (r[i] / r[i - 1]).log2();
+                let a = fmath::log2(count_rate_bpm / r[i - 1]) / fmath::log2(r[i] / r[i - 1]);
                 return v[i - 1] + a * (v[i] - v[i - 1]);
             }
         }

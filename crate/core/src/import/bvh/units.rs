@@ -6,6 +6,7 @@
 //! person's height in file units, so the unit that makes it a person's height follows. The
 //! figure's overall extent alone cannot (a rest pose may lie down or be baked into the motion).
 
+use crate::fmath;
 use glam::Vec3;
 
 use crate::canon::humanoid::{Canon, HumanoidMap};
@@ -227,7 +228,7 @@ pub fn guess(skeleton: &Skeleton, local: &[Vec3]) -> UnitGuess {
     }
     let n = heights.len();
     let height_units = if n % 2 == 1 { heights[n / 2] } else { 0.5 * (heights[n / 2 - 1] + heights[n / 2]) };
-    let misfit = |u: &LengthUnit| (height_units * u.metres / TYPICAL_HEIGHT_M).ln().abs();
+    let misfit = |u: &LengthUnit| fmath::ln(height_units * u.metres / TYPICAL_HEIGHT_M).abs();
     let best = |units: &mut dyn Iterator<Item = LengthUnit>| units.min_by(|a, b| misfit(a).total_cmp(&misfit(b)));
     let usual = best(&mut rig.usual_units().iter().copied().filter(|u| USUAL_UNIT_HEIGHT_M.contains(&(height_units * u.metres))));
     let unit = usual
