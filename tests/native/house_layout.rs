@@ -70,7 +70,7 @@ fn the_core_calls_libm_for_its_transcendentals_not_std() {
 
 #[test]
 fn glam_computes_with_libm_as_the_core_does() {
-    // glam's `libm` feature (the workspace's glam line): a rotation's sine and cosine are libm's
+    // glam's `libm` feature (native builds only: the core's Cargo.toml): a rotation's sine and cosine are libm's
     // bits, even where the platform's C library's differ (the case this test needs to be able
     // to fail, so it counts them too).
     let (mut differ_from_std, mut checked) = (0, 0);
