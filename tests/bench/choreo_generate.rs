@@ -7,7 +7,10 @@
 //! of the calls after it; then the same call with each later stage off in turn, and the fill
 //! alone, so the figures say where the time goes; and the default against its controls in the
 //! same run (session 24's measures: every held round posed anew, session 20's measures, session 19's fills, session 18's fills, session 15's measures, every held frame posed, session 16's default, the old pipeline's
-//! settings, windowed refills), with the default's and session 16's dances measured as played,
+//! settings, windowed refills, every refill measured whole: `windowed_measures` off), with the
+//! default's and session 16's dances measured as played; on the second library, the default
+//! alternated with every refill measured whole (best of 3 each; whether the dance is the same is
+//! printed);
 //! and the default alternated with session 24's measures (best of 5 each); before those, one
 //! measure as played of the default's dance, profiled by part (`MEASURES=n`: n more, then stop).
 //! Prints figures; asserts only that the calls agree (session 20's measures, session 19's and 18's fills, quick measures, every
@@ -66,6 +69,28 @@ fn main() {
     for line in odori_tests::profile_lines(&profile) {
         println!("native:   {line}");
     }
+    // Measures near a refill's changes (GenerateOptions::windowed_measures, the default) against
+    // every measure of the whole dance (the control) on this library, where stage 5's one join a
+    // refill measures most: best of 3 each, alternated.
+    let whole_measures = odori_core::choreo::GenerateOptions { windowed_measures: false, ..odori_core::choreo::GenerateOptions::default() };
+    let (mut near_ms, mut whole_ms) = (f64::MAX, f64::MAX);
+    let mut whole_dance = None;
+    for _ in 0..3 {
+        let t = Instant::now();
+        odori_tests::generate_all(&other, &bars);
+        near_ms = near_ms.min(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        let (states, r) = odori_core::choreo::generate_states(&other, &bars, &[], odori_core::choreo::FillWeights::default(), &whole_measures).expect("generate");
+        whole_ms = whole_ms.min(t.elapsed().as_secs_f64() * 1e3);
+        whole_dance = Some((states.iter().map(odori_core::choreo::BarState::segment).collect::<Vec<_>>(), r.cost));
+    }
+    let (whole_path, whole_cost) = whole_dance.expect("timed");
+    let differ = whole_path.iter().zip(&other_first).filter(|(a, b)| a != b).count();
+    println!(
+        "native: Generate 90 bars from the second library, every measure of the whole dance (windowed_measures off, the control): {whole_ms:.0} ms, objective {whole_cost:.3} (best of 3), against the default's {near_ms:.0} ms in the same run: {:.2}x the default's time, {}",
+        whole_ms / near_ms,
+        if differ == 0 { "the same dance".to_string() } else { format!("dances differ in {differ} bars") }
+    );
     drop(other);
     // One measure as played of the default's dance (what the order stage and stage 5 take 8
     // of a Generate), profiled by part: best of 5, then where its time goes. `MEASURES=n`: n
@@ -137,6 +162,7 @@ fn main() {
         ("session 16's default (one join barred a refill, control)", s16),
         ("old pipeline (67f699e's settings)", odori_core::choreo::GenerateOptions { measure_played: false, follow_order: false, ..d() }),
         ("windowed refills", odori_core::choreo::GenerateOptions { windowed_refills: true, ..d() }),
+        ("every measure of the whole dance (windowed_measures off; control)", odori_core::choreo::GenerateOptions { windowed_measures: false, ..d() }),
     ];
     let mut timed: Vec<(f64, (Vec<Option<usize>>, f32))> = Vec::new();
     for (_, o) in &variants {

@@ -91,9 +91,11 @@ const KNOWN_MISSES: &[(&str, &str, &str, &str)] = &[];
 /// an unlisted miss fails, so does a listed one past its ceiling or one that meets the goal.
 /// Half 1's demo in 4 at 100 BPM came off the list in session 32, when the core's sines and
 /// exponentials became libm's in every build (the bits the wasm app ships): its dance is another
-/// (BAS-music 0.785, 0.019 over the whole library's random + 0.05).
+/// (BAS-music 0.785, 0.019 over the whole library's random + 0.05). Half 1's Let's Go Fishin'
+/// came off it in session 33, when stages 4b and 5 began screening refills by measures near
+/// their changes (`GenerateOptions::windowed_measures`): its dance is another (BAS-music 0.760,
+/// 0.005 over).
 const KNOWN_UNDER_WHOLE_LIBRARY_RANDOM: &[(&str, &str, f32)] = &[
-    ("half 1", "Lets_Go_Fishin", 0.01),
     ("half 1", "Sugar_Plum", 0.05),
     ("half 1", "funk-groove1_138", 0.01),
 ];

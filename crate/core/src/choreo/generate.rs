@@ -122,6 +122,15 @@ pub struct GenerateOptions {
     /// false (issue 26's speed goal: measured by `choreo_generate`, not yet the default);
     /// false: every refill is a whole fill, the control.
     pub windowed_refills: bool,
+    /// Stages 4b and 5 screen each refill by a measure near the bars it changes from the
+    /// nearest dance measured whole ([`super::figures::Measured::screened`],
+    /// [`super::figures::played_near`]: those bars and their neighbours rendered and measured,
+    /// the rest kept), when the changed bars' windows are under half the dance; a refill the
+    /// screen would keep (or that would end stage 5's pass) is measured whole before it is kept.
+    /// Default true (issue 26's speed goal, session 33: the second bench library's Generate in
+    /// 0.7 of the time, the same dance on both bench libraries); false: every refill measured
+    /// whole, the control.
+    pub windowed_measures: bool,
     /// Measure each dance posing only what the measures read ([`super::figures`]: the
     /// held-feet rule's free pass posed once for all its rounds, only the frames the 30 fps
     /// measures read, the played dance not measured twice, and since session 20 each of §J's
@@ -200,6 +209,7 @@ impl Default for GenerateOptions {
             follow_order: true,
             measure_played: true,
             windowed_refills: false,
+            windowed_measures: true,
             quick_measures: true,
             join_bans_at_once: true,
             pose_read_frames_only: true,
@@ -327,6 +337,8 @@ pub struct Problem<'a> {
     opened: Vec<bool>,
     /// [`GenerateOptions::quick_measures`].
     pub(super) quick_measures: bool,
+    /// [`GenerateOptions::windowed_measures`].
+    pub(super) windowed_measures: bool,
     /// [`GenerateOptions::pose_read_frames_only`].
     pub(super) pose_read_frames_only: bool,
     /// [`GenerateOptions::free_pass_legs_only`].
@@ -389,6 +401,7 @@ impl<'a> Problem<'a> {
             why: std::cell::RefCell::new(vec![None; layers.len()]),
             opened: vec![false; layers.len()],
             quick_measures: options.quick_measures,
+            windowed_measures: options.windowed_measures,
             pose_read_frames_only: options.pose_read_frames_only,
             free_pass_legs_only: options.free_pass_legs_only,
             rounds_copy_same_frames: options.rounds_copy_same_frames,

@@ -498,19 +498,47 @@ pub fn velocity_changes(m: &QualityMotion) -> Vec<f32> {
 /// change over the frames at least [`JOIN_CLEAR_FRAMES`] from every join (inside segments).
 /// 1 means a join is as abrupt as the sharpest moments of the segments themselves.
 pub fn join_jumps(m: &QualityMotion, joins: &[usize]) -> Vec<f32> {
+    join_jumps_normed(m, joins).0
+}
+
+thread_local! {
+    /// The divisor [`join_jumps_normed`] uses instead of the motion's own 95th percentile, while
+    /// [`with_join_normaliser`] runs.
+    static JOIN_NORMALISER: std::cell::Cell<Option<f32>> = const { std::cell::Cell::new(None) };
+}
+
+/// Runs `f` with every join jump divided by `p95` instead of the measured motion's own 95th
+/// percentile: a stretch of a dance measured as part of the whole
+/// ([`super::figures::played_near`]), by the whole dance's divisor.
+pub(crate) fn with_join_normaliser<R>(p95: f32, f: impl FnOnce() -> R) -> R {
+    let outer = JOIN_NORMALISER.with(|n| n.replace(Some(p95)));
+    let out = f();
+    JOIN_NORMALISER.with(|n| n.set(outer));
+    out
+}
+
+/// [`join_jumps`] and the divisor they were taken by (the 95th percentile, or the one
+/// [`with_join_normaliser`] gives).
+pub(crate) fn join_jumps_normed(m: &QualityMotion, joins: &[usize]) -> (Vec<f32>, f32) {
     let c = velocity_changes(m);
     let n = c.len();
-    let mut inside: Vec<f32> =
-        (1..n.saturating_sub(1)).filter(|&f| joins.iter().all(|&j| f.abs_diff(j) >= JOIN_CLEAR_FRAMES)).map(|f| c[f]).collect();
-    let p95 = percentile_select(&mut inside, 0.95).max(1e-6);
-    joins
+    let p95 = match JOIN_NORMALISER.with(|n| n.get()) {
+        Some(p) => p,
+        None => {
+            let mut inside: Vec<f32> =
+                (1..n.saturating_sub(1)).filter(|&f| joins.iter().all(|&j| f.abs_diff(j) >= JOIN_CLEAR_FRAMES)).map(|f| c[f]).collect();
+            percentile_select(&mut inside, 0.95).max(1e-6)
+        }
+    };
+    let jumps = joins
         .iter()
         .map(|&j| {
             let lo = j.saturating_sub(JOIN_REACH_FRAMES).max(1);
             let hi = (j + JOIN_REACH_FRAMES).min(n.saturating_sub(2));
             (lo..=hi).map(|f| c[f]).fold(0.0f32, f32::max) / p95
         })
-        .collect()
+        .collect();
+    (jumps, p95)
 }
 
 /// Beat alignment of one stretch: on the true beats and on the half-shifted control.
@@ -651,6 +679,8 @@ pub struct DanceMeasures {
     /// Whether every join has a frame after it: then [`DanceMeasures::of`] and
     /// [`DanceMeasures::of_every_join`] are the same measures.
     pub every_join_inside: bool,
+    /// The divisor of the join jumps ([`join_jumps_normed`]).
+    pub join_norm: f32,
 }
 
 impl DanceMeasures {
@@ -672,8 +702,8 @@ impl DanceMeasures {
         let all: Vec<(usize, usize)> = (1..bars.len()).map(|i| (i, frame_at(switch_of(bars, switch_secs, i), frames))).collect();
         let every_join_inside = all.iter().all(|&(_, f)| f + 1 < frames);
         let joins: Vec<(usize, usize)> = all.into_iter().filter(|&(_, f)| every || f + 1 < frames).collect();
-        let jumps = join_jumps(m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
-        DanceMeasures { frames, kinetic: kinetic_beats_secs(m), skate: foot_skate_samples(m), joins: joins.into_iter().map(|j| j.0).collect(), jumps, every_join_inside }
+        let (jumps, join_norm) = join_jumps_normed(m, &joins.iter().map(|&(_, f)| f).collect::<Vec<_>>());
+        DanceMeasures { frames, kinetic: kinetic_beats_secs(m), skate: foot_skate_samples(m), joins: joins.into_iter().map(|j| j.0).collect(), jumps, every_join_inside, join_norm }
     }
 
     /// The jump of the join into bar `bar`, if it was measured.

@@ -82,6 +82,21 @@ pub fn order_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions
             && (!skate_met || f.whole.foot_skate_cm_per_s <= p.paced_source_skate_cm_per_s(q))
             && f.whole.foot_skate_cm_per_s <= cap
     };
+    // Whether a refill `q` with figures `f` and misses `m` is kept over `best`: fewer misses (or
+    // as many, by less), BAS-music no lower, what the dance met kept, and the floor of imported
+    // bars.
+    let accepts = |q: &[usize], f: &Played, m: &[(usize, BuiltinWhy, f32)], best: &[usize], best_miss: &[(usize, BuiltinWhy, f32)], best_bas: f32| {
+        better(m, best_miss) && f.bas_music >= best_bas - 1e-4 && keeps(q, f) && count_imported(q) >= floor.min(count_imported(best))
+    };
+    // A refill's figures: screened near its changes ([`Measured::screened`]), and measured whole
+    // when the screen would keep it (so a dance is kept only by its whole measure).
+    let screen = |measured: &mut Measured, q: &[usize], best: &[usize], best_miss: &[(usize, BuiltinWhy, f32)], best_bas: f32| -> Option<Played> {
+        let f = measured.screened(p, q)?;
+        if measured.is_near(q) && accepts(q, &f, &misses(q, &f.bars), best, best_miss, best_bas) {
+            return measured.played(p, q);
+        }
+        Some(f)
+    };
     let mut best = path;
     if best_miss.is_empty() {
         return Ok((best, Vec::new(), why));
@@ -107,10 +122,10 @@ pub fn order_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions
         } else {
             p.fill(weights, &tried)?
         };
-        if let Some(f) = measured.played(p, &q) {
+        if let Some(f) = screen(measured, &q, &best, &best_miss, best_bas) {
             let m = misses(&q, &f.bars);
             (last, last_miss) = (q.clone(), m.clone());
-            if better(&m, &best_miss) && f.bas_music >= best_bas - 1e-4 && keeps(&q, &f) && count_imported(&q) >= floor.min(count_imported(&best)) {
+            if accepts(&q, &f, &m, &best, &best_miss, best_bas) {
                 (best, best_miss, best_bas, extra) = (q, m, f.bas_music, tried);
             }
         }
@@ -135,9 +150,9 @@ pub fn order_stage(p: &Problem, weights: &FillWeights, options: &GenerateOptions
         } else {
             p.fill(weights, &tried)?
         };
-        if let Some(f) = measured.played(p, &q) {
+        if let Some(f) = screen(measured, &q, &best, &best_miss, best_bas) {
             let m = misses(&q, &f.bars);
-            if better(&m, &best_miss) && f.bas_music >= best_bas - 1e-4 && keeps(&q, &f) && count_imported(&q) >= floor.min(count_imported(&best)) {
+            if accepts(&q, &f, &m, &best, &best_miss, best_bas) {
                 (best, best_miss, best_bas, extra) = (q, m, f.bas_music, tried);
                 for &(t, w) in &newly {
                     opened[t] = true;

@@ -107,7 +107,7 @@ fn repair_pass(p: &Problem, weights: &FillWeights, options: &GenerateOptions, pa
             let Some(worst) = f.worst_join_bar else { break };
             let mut over = vec![worst];
             if at_once && played {
-                if let Some(pf) = measured.played(p, &trial_path) {
+                if let Some(pf) = measured.screened(p, &trial_path) {
                     over.extend(pf.bars.iter().enumerate().filter(|(u, b)| *u != worst && b.join_jump.is_some_and(|j| j > options.join_jump_goal)).map(|(u, _)| u));
                 }
             }
@@ -151,7 +151,18 @@ fn repair_pass(p: &Problem, weights: &FillWeights, options: &GenerateOptions, pa
         }
         let q = if options.windowed_refills && !reweighted { p.fill_window(weights, &extra, &trial_path, &changed)? } else { p.fill(weights, &extra)? };
         let (q, c) = p.free_skate(weights, &extra, &q);
-        let after = measured.figures(p, &q, played);
+        // Screened first ([`Measured::screened`]: near its changes); measured whole before it is
+        // kept or ends the pass.
+        let mut after = if played { measured.screened(p, &q).map(|f| f.whole) } else { measured.figures(p, &q, played) };
+        if played && measured.is_near(&q) {
+            let keeps = after.is_some_and(|a| {
+                let within = a.join_jump_max <= options.join_jump_goal && a.foot_skate_cm_per_s <= skate_cap(&q);
+                within || best.is_some_and(|b| a.join_jump_max < b.join_jump_max)
+            });
+            if keeps {
+                after = measured.figures(p, &q, played);
+            }
+        }
         if let (Some(a), Some(b)) = (after, best) {
             // Kept only when its worst join is better and nothing the dance met is lost: the
             // beat rate's band, and the skate goal.
