@@ -272,10 +272,10 @@ impl Measured {
 /// (its join) and one more each side (the held feet carry across a join).
 pub const NEAR_READ_BARS: usize = 1;
 
-/// Bars rendered beyond those a windowed measure reads, each side: the held-feet rule's plan
-/// and the join measure's normaliser settle within them (a scratch comparison on the bench's
-/// dances: with 4, each read bar's join jump within 0.2 % and skate within 0.3 cm/s of the
-/// whole measure's, its beat margin the same).
+/// Bars rendered beyond those a windowed measure reads, each side, so the joins and held feet of
+/// the read bars have their neighbours. Four were no closer to the whole measure than two (the
+/// test `a_dance_measured_near_its_changes_reads_its_joins_as_the_whole_measure`: the gap left
+/// is the whole dance's rules, not the window's reach).
 pub const NEAR_MARGIN_BARS: usize = 2;
 
 /// [`played_figures_posed`] of `path` from `reference`'s figures `known` (a dance of the same
@@ -327,8 +327,7 @@ pub(super) fn played_near(lib: &SegmentLibrary, bars: &[Bar], path: &[usize], re
             bas_sum += (new.bas_music as f64 - old.bas_music as f64) * counts;
             skate_sum += new.foot_skate_cm_per_s as f64 * new.skate_contacts as f64 - old.foot_skate_cm_per_s as f64 * old.skate_contacts as f64;
             contacts += new.skate_contacts as i64 - old.skate_contacts as i64;
-            // The run's first bar keeps its own join (the window starts there or before).
-            out.bars[t] = PlayedBar { join_jump: if t == lo { old.join_jump } else { new.join_jump }, ..new };
+            out.bars[t] = new;
         }
     }
     out.skate_contacts = contacts.max(0) as usize;
