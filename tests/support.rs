@@ -83,10 +83,58 @@ pub fn fps_override_for(rel: &str) -> Option<f32> {
     rel.contains("cmu-salsa").then_some(60.0)
 }
 
+/// The person's files, in the order they are added: every BVH take in ../shared/data/mocap
+/// but the martial-arts takes and modern dance's 005_01 (sorted, as [`all_bvh`] lists them),
+/// then RobotExpressive's glTF (its `Dance` clip). (The tests' person library,
+/// `tests/native/person_common.rs`, and the Generate benches' library of real files.)
+pub fn person_files() -> Vec<String> {
+    let mut files: Vec<String> = all_bvh().into_iter().filter(|r| is_person_bvh(r)).collect();
+    files.push("gltf/RobotExpressive.glb".into());
+    files
+}
+
+/// Whether a BVH take of ../shared/data/mocap (`rel`, relative to the data directory) is one of
+/// the person's files ([`person_files`]): a dance, not a martial-arts take or 005_01's walk.
+pub fn is_person_bvh(rel: &str) -> bool {
+    !rel.contains("cmu-martial") && !rel.ends_with("005_01.bvh")
+}
+
+/// The two VMD dances of ../shared/data/mmd/motion, relative to the data directory.
+pub const VMD_DANCES: [&str; 2] = ["mmd/motion/tokino_kakera.vmd", "mmd/motion/wavefile_v2.vmd"];
+
+/// The library of real files the Generate benches time beside the medleys (natively
+/// tests/bench/choreo_generate.rs, in wasm tests/wasm_bench, which passes the files' bytes in):
+/// the built-in moves, then `files` ((path relative to the data directory, bytes): the person's
+/// files and [`VMD_DANCES`]) each imported as the app imports it (a glTF gives its `Dance` clip)
+/// and cut at every count (`SegmentOptions::hop_counts` 1); a clip the segmenter refuses is left
+/// out, as the app leaves it. Panics naming a file that does not import.
+pub fn real_file_library(files: &[(String, Vec<u8>)]) -> odori_core::choreo::SegmentLibrary {
+    use odori_core::import::{import_bytes, ImportOptions};
+    let mut lib = odori_core::choreo::SegmentLibrary::builtin();
+    let opts = odori_core::choreo::SegmentOptions { hop_counts: 1, ..Default::default() };
+    for (rel, bytes) in files {
+        let io = ImportOptions { fps_override: fps_override_for(rel), ..Default::default() };
+        let imp = import_bytes(rel, bytes, &io).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        for clip in imp.clips.iter().filter(|c| !rel.ends_with(".glb") || c.name == "Dance") {
+            let _ = lib.add_clip(clip, &imp.humanoid, &imp.status, &opts);
+        }
+    }
+    lib
+}
+
+/// [`real_file_library`] of the person's files and [`VMD_DANCES`], read from ../shared/data.
+pub fn real_files_library() -> odori_core::choreo::SegmentLibrary {
+    let files: Vec<(String, Vec<u8>)> = person_files().into_iter().chain(VMD_DANCES.iter().map(|r| r.to_string())).map(|r| {
+        let b = read(&r);
+        (r, b)
+    }).collect();
+    real_file_library(&files)
+}
+
 /// The ≥ 2,000-segment library the choreography benches time both natively and in wasm
 /// (tests/bench/choreo.rs, tests/wasm_bench), built without file access: the built-in moves
-/// plus every built-in move (558 clips of one bar each, in 4 or in 3) concatenated into one
-/// clip, cut at every count at its stated 120 counts per minute.
+/// plus every built-in move (558 clips of one bar each, in 4 or in 3) danced one after another
+/// as one clip ([`medley_library`]), cut at every count at its stated 120 counts per minute.
 pub fn builtin_medley_library() -> odori_core::choreo::SegmentLibrary {
     medley_library(1)
 }
@@ -99,29 +147,27 @@ pub fn every_other_medley_library() -> odori_core::choreo::SegmentLibrary {
     medley_library(2)
 }
 
-/// The built-in moves plus one clip of every `step`-th built-in clip in a row, cut at every count.
+/// The built-in moves plus a medley of every `step`-th built-in clip, cut at every count: the
+/// clips danced one after another, a bar each at their own tempo, as the engine plays a dance
+/// ([`odori_core::choreo::render`]: each placed where the one before ended, the joins
+/// inertialized, the feet held), then imported as one clip. Until session 34 the medley was the
+/// clips' frames laid end to end: every clip began where it was recorded, so each seam was a
+/// jump of the whole body, and every segment of the medley held one (a segment spans a bar,
+/// cut at every count); the joins as played read 2.7–8.8 where the table's blended jump read
+/// 0.4–0.7, no motion a person imports.
 fn medley_library(step: usize) -> odori_core::choreo::SegmentLibrary {
-    use odori_core::choreo::{SegmentLibrary, SegmentOptions};
-    use odori_core::clip::{Clip, TranslationTrack};
+    use odori_core::choreo::{render, RenderOptions, SegmentLibrary, SegmentOptions};
     let mut lib = SegmentLibrary::builtin();
-    let clips = odori_core::library::builtin_clips();
-    let sk = clips[0].skeleton.clone();
-    let (mut rotations, mut root) = (Vec::new(), Vec::new());
-    for c in clips.iter().step_by(step.max(1)) {
-        let n = c.frame_count() - 1;
-        rotations.extend_from_slice(&c.rotations[..n * sk.len()]);
-        root.extend_from_slice(&c.translations[0].values[..n]);
-    }
-    let medley = Clip {
-        name: "medley".into(),
-        source: "built-in".into(),
-        fps: 30.0,
-        skeleton: sk.clone(),
-        rotations,
-        translations: vec![TranslationTrack { joint: 0, values: root }],
-    };
-    let map = odori_core::canon::humanoid::HumanoidMap::from_skeleton(&sk);
-    let opts = SegmentOptions { tempo_bpm: Some(odori_core::library::BUILTIN_BPM), first_beat_secs: Some(0.0), hop_counts: 1 , ..Default::default() };
+    let clips = odori_core::library::builtin_clips().len();
+    let choices: Vec<Option<usize>> = (0..clips).step_by(step.max(1)).map(|c| lib.segments().iter().position(|s| s.clip == c)).collect();
+    let bpm = odori_core::library::BUILTIN_BPM;
+    let bar_secs = 4.0 * 60.0 / bpm;
+    let bars = odori_core::choreo::bars_from_tempo(choices.len() as f32 * bar_secs + 0.01, bpm, 4, 0.0, |_, _| 0.5).expect("a bar per clip");
+    let mut medley = render(&lib, &bars, &choices, &RenderOptions { fps: odori_core::choreo::LIBRARY_FPS, ..RenderOptions::default() });
+    medley.name = "medley".into();
+    medley.source = "built-in".into();
+    let map = odori_core::canon::humanoid::HumanoidMap::from_skeleton(&medley.skeleton);
+    let opts = SegmentOptions { tempo_bpm: Some(bpm), first_beat_secs: Some(0.0), hop_counts: 1, ..Default::default() };
     lib.add_clip(&medley, &map, &odori_core::HumanoidStatus::Complete, &opts).expect("the medley of built-in moves cuts into segments");
     lib
 }

@@ -1,22 +1,27 @@
 //! Generate on 90 bars with ≥ 2,000 segments (issue 26's speed goal: under 300 ms in wasm),
 //! natively: the library of the wasm bench (`odori_tests::builtin_medley_library`: the built-in
-//! moves plus a medley of every built-in move cut at every count) and its 90 bars
-//! (`odori_tests::bench_bars`), every stage at the default settings (`odori_tests::generate_all`),
-//! as `tests/wasm_bench/run.sh` times it in wasm (`generate90`). The first call builds the
-//! library's transition table for the song's metre (cached, as in the app); the figure is the best
-//! of the calls after it; then the same call with each later stage off in turn, and the fill
-//! alone, so the figures say where the time goes; and the default against its controls in the
-//! same run (session 24's measures: every held round posed anew, session 20's measures, session 19's fills, session 18's fills, session 15's measures, every held frame posed, session 16's default, the old pipeline's
-//! settings, windowed refills, every refill measured whole: `windowed_measures` off), with the
-//! default's and session 16's dances measured as played; on the second library, the default
-//! alternated with every refill measured whole (best of 3 each; whether the dance is the same is
-//! printed);
-//! and the default alternated with session 24's measures (best of 5 each); before those, one
-//! measure as played of the default's dance, profiled by part (`MEASURES=n`: n more, then stop).
+//! moves plus a medley of every built-in move, danced one after another and cut at every count)
+//! and its 90 bars (`odori_tests::bench_bars`), every stage at the default settings
+//! (`odori_tests::generate_all`), as `tests/wasm_bench/run.sh` times it in wasm (`generate90`).
+//! The first call builds the library's transition table for the song's metre (cached, as in the
+//! app); the figure is the best of the calls after it. Then the second library (a medley of every
+//! other built-in move) and a library of real files (`../shared/data`: the person's files and
+//! the two VMD dances, each cut at every count), each with where its time goes; on the real
+//! files the default alternated with every refill measured whole (`windowed_measures` off; best
+//! of 3 each; whether the dance is the same is printed), one measure as played of the default's
+//! dance profiled by part (`MEASURES=n`: n more, then stop), the default alternated with session
+//! 24's measures (best of 5 each) and against its controls in the same run (session 24's
+//! measures: every held round posed anew, session 20's measures, session 19's fills, session
+//! 18's fills, session 15's measures, every held frame posed, session 16's default, the old
+//! pipeline's settings, windowed refills, every refill measured whole), with the default's and
+//! session 16's dances measured as played; then the same call with each later stage off in
+//! turn, and the fill alone, so the figures say where the time goes. The medleys' dances need no
+//! refill (stages 4b and 5 measure once and stop), so the controls run on the real files, where
+//! the later stages work.
 //! Prints figures; asserts only that the calls agree (session 20's measures, session 19's and 18's fills, quick measures, every
 //! held frame posed and the default: the same dance).
 //! `cargo bench -p odori-tests --bench choreo_generate` (`GENERATE_ONLY=1`: not the stages off
-//! one at a time nor the built-in library).
+//! one at a time nor the built-in library). Needs `../shared/data` (fails naming it when absent).
 
 use std::sync::OnceLock;
 use std::time::Instant;
@@ -69,29 +74,54 @@ fn main() {
     for line in odori_tests::profile_lines(&profile) {
         println!("native:   {line}");
     }
+    // A third library, from real files (../shared/data): the person's files (every humanoid
+    // dance clip in ../shared/data/mocap and RobotExpressive's Dance) and the two VMD dances of
+    // ../shared/data/mmd/motion, each cut at every count: moves recorded by people, at their own
+    // tempi, where the medleys above are the built-in moves danced at the song's tempo (a dance
+    // from them can play the medley's bars in a row, joined as recorded).
+    let real = odori_tests::real_files_library();
+    let (real_first, real_cost) = odori_tests::generate_all(&real, &bars);
+    let mut real_best = f64::MAX;
+    for _ in 0..3 {
+        let t = Instant::now();
+        let again = odori_tests::generate_all(&real, &bars);
+        real_best = real_best.min(t.elapsed().as_secs_f64() * 1e3);
+        assert_eq!(again, (real_first.clone(), real_cost), "Generate is deterministic");
+    }
+    println!("native: Generate 90 bars from real files ({} segments: built-in + every count of the person's files and the two VMD dances): {real_best:.0} ms (best of 3), objective {real_cost:.3}", real.len());
+    let ((), profile) = odori_core::choreo::profile::profiled(clock_ms, || {
+        odori_tests::generate_all(&real, &bars);
+    });
+    for line in odori_tests::profile_lines(&profile) {
+        println!("native:   {line}");
+    }
     // Measures near a refill's changes (GenerateOptions::windowed_measures, the default) against
-    // every measure of the whole dance (the control) on this library, where stage 5's one join a
-    // refill measures most: best of 3 each, alternated.
+    // every measure of the whole dance (the control) on the real files: best of 3 each,
+    // alternated.
     let whole_measures = odori_core::choreo::GenerateOptions { windowed_measures: false, ..odori_core::choreo::GenerateOptions::default() };
     let (mut near_ms, mut whole_ms) = (f64::MAX, f64::MAX);
     let mut whole_dance = None;
     for _ in 0..3 {
         let t = Instant::now();
-        odori_tests::generate_all(&other, &bars);
+        odori_tests::generate_all(&real, &bars);
         near_ms = near_ms.min(t.elapsed().as_secs_f64() * 1e3);
         let t = Instant::now();
-        let (states, r) = odori_core::choreo::generate_states(&other, &bars, &[], odori_core::choreo::FillWeights::default(), &whole_measures).expect("generate");
+        let (states, r) = odori_core::choreo::generate_states(&real, &bars, &[], odori_core::choreo::FillWeights::default(), &whole_measures).expect("generate");
         whole_ms = whole_ms.min(t.elapsed().as_secs_f64() * 1e3);
         whole_dance = Some((states.iter().map(odori_core::choreo::BarState::segment).collect::<Vec<_>>(), r.cost));
     }
     let (whole_path, whole_cost) = whole_dance.expect("timed");
-    let differ = whole_path.iter().zip(&other_first).filter(|(a, b)| a != b).count();
+    let differ = whole_path.iter().zip(&real_first).filter(|(a, b)| a != b).count();
     println!(
-        "native: Generate 90 bars from the second library, every measure of the whole dance (windowed_measures off, the control): {whole_ms:.0} ms, objective {whole_cost:.3} (best of 3), against the default's {near_ms:.0} ms in the same run: {:.2}x the default's time, {}",
+        "native: Generate 90 bars from real files, every measure of the whole dance (windowed_measures off, the control): {whole_ms:.0} ms, objective {whole_cost:.3} (best of 3), against the default's {near_ms:.0} ms in the same run: {:.2}x the default's time, {}",
         whole_ms / near_ms,
         if differ == 0 { "the same dance".to_string() } else { format!("dances differ in {differ} bars") }
     );
     drop(other);
+    // The measure and the controls below on the real files, where the later stages work (on the
+    // medleys a dance needs no refill: stages 4b and 5 measure once and stop).
+    drop(lib);
+    let lib = real;
     // One measure as played of the default's dance (what the order stage and stage 5 take 8
     // of a Generate), profiled by part: best of 5, then where its time goes. `MEASURES=n`: n
     // more of them and nothing else (for `perf record`).

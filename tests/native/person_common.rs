@@ -14,15 +14,13 @@ use odori_core::import::{import_bytes, ImportOptions};
 use odori_core::music::demo_song::{demo_song_with, DemoSongOptions};
 use odori_core::music::{envelope, RmsEnvelope};
 use odori_core::Clip;
-use odori_tests::{all_bvh, fps_override_for, read};
+use odori_tests::{fps_override_for, read};
 
-/// The person's files, in the order they are added: every BVH take in ../shared/data/mocap
-/// but the martial-arts takes and modern dance's 005_01 (sorted, as [`all_bvh`] lists them),
-/// then RobotExpressive's glTF (its `Dance` clip).
+/// The person's files, in the order they are added ([`odori_tests::person_files`]: every BVH
+/// take in ../shared/data/mocap but the martial-arts takes and modern dance's 005_01, then
+/// RobotExpressive's glTF).
 pub fn person_files() -> Vec<String> {
-    let mut files: Vec<String> = all_bvh().into_iter().filter(|r| !r.contains("cmu-martial") && !r.ends_with("005_01.bvh")).collect();
-    files.push("gltf/RobotExpressive.glb".into());
-    files
+    odori_tests::person_files()
 }
 
 /// The built-in moves and the person's files (`half`: every other one of [`person_files`],

@@ -1,6 +1,8 @@
 // Times the wasm build of odori-core under Node (built by run.sh): song analysis, then the
 // choreography core. Usage: node run.mjs path/to/odori_wasm_bench.wasm [label]
-import { readFileSync } from "node:fs";
+import { existsSync, readFileSync, readdirSync } from "node:fs";
+import { dirname, join, relative } from "node:path";
+import { fileURLToPath } from "node:url";
 import { loadavg } from "node:os";
 import { performance } from "node:perf_hooks";
 
@@ -66,21 +68,44 @@ const other = x.setup_every_other();
 const [firstOtherMs] = time(() => x.generate90_every_other());
 [genMs, cost] = best(() => x.generate90_every_other(), 3);
 say(`Generate 90 bars from the second library, ${other} segments (built-in + medley of every other clip): ${genMs.toFixed(0)} ms (best of 3; first call with the table ${firstOtherMs.toFixed(0)} ms), objective ${cost.toFixed(3)}`);
+// A library of real files (../shared/data, as the native bench's): the person's files (every BVH
+// take in mocap/ but the martial-arts takes and 005_01's walk, sorted, then RobotExpressive's
+// Dance) and the two VMD dances, each cut at every count; the bytes are handed to the module.
+const data = process.env.ODORI_DATA ?? join(dirname(fileURLToPath(import.meta.url)), "../../../shared/data");
+if (!existsSync(data)) throw new Error(`real-data bench: ${data} is missing (the shared real data beside the repository; set ODORI_DATA to point elsewhere)`);
+const bvh = [];
+const walk = (d) => { for (const e of readdirSync(d, { withFileTypes: true })) { const p = join(d, e.name); if (e.isDirectory()) walk(p); else if (e.name.endsWith(".bvh")) bvh.push(relative(data, p).split("\\").join("/")); } };
+walk(join(data, "mocap"));
+const realFiles = bvh.filter((r) => !r.includes("cmu-martial") && !r.endsWith("005_01.bvh")).sort().concat(["gltf/RobotExpressive.glb", "mmd/motion/tokino_kakera.vmd", "mmd/motion/wavefile_v2.vmd"]);
+const put = (u8) => { const p = x.bytes_alloc(u8.length); new Uint8Array(x.memory.buffer, p, u8.length).set(u8); return p; };
+for (const rel of realFiles) {
+  const name = new TextEncoder().encode(rel);
+  const bytes = readFileSync(join(data, rel));
+  const np = put(name);
+  const bp = put(bytes);
+  x.real_add(np, name.length, bp, bytes.length);
+}
+const [realSetupMs, real] = time(() => x.setup_real());
+const [firstRealMs] = time(() => x.generate90_real());
+[genMs, cost] = best(() => x.generate90_real(), 3);
+say(`Generate 90 bars from real files, ${real} segments (built-in + every count of ${realFiles.length} files: the person's and two VMD dances; built in ${realSetupMs.toFixed(0)} ms): ${genMs.toFixed(0)} ms (best of 3; first call with the table ${firstRealMs.toFixed(0)} ms), objective ${cost.toFixed(3)}`);
 const [firstBuiltinMs] = time(() => x.generate90_builtin());
 [genMs, cost] = best(() => x.generate90_builtin(), 3);
 say(`Generate 90 bars from the built-in library alone (variety term on): ${genMs.toFixed(0)} ms (best of 3; first call with the library and table ${firstBuiltinMs.toFixed(0)} ms), objective ${cost.toFixed(3)}`);
 
-// Issue 26's speed work: where Generate's time goes per stage (fills against renders and
+// Issue 26's speed work, on the real files (the medleys' dances need no refill: stages 4b and 5
+// measure once and stop): where Generate's time goes per stage (fills against renders and
 // measures), and the default against the controls in the same run: session 16's default (one
 // join barred a refill), session 15's measures (quick_measures off), the old pipeline (67f699e's
 // settings) and windowed refills.
+x.real_as_main();
 const PARTS = ["render (sampled, placed, joined)", "free pass + round 0's held pass", "held pass, later rounds", "posed for §J (QualityMotion)", "§J measures and readout"];
 const STAGES = ["1 fill", "2 beat rate", "3 free skate", "4 skate", "4b order", "5 join repair", "takes"];
 const VARIANTS = ["the default (join bans at once, quick measures, only the frames read posed, top lists stopped at the rest, whole columns by chunks)", "windowed refills", "session 15's measures (control)", "old pipeline (67f699e's settings)", "session 16's default (one join barred a refill, control)", "every held frame posed, session 18's fills (control)", "session 18's work (top lists stopped by the cheapest node; control)", "session 19's work (whole columns scanned entry by entry; control)", "session 20's work (the free pass posing every joint; control)", "session 24's measures (every held round posed anew; today's main, the control)"];
 for (const v of [0, 9, 4]) {
   x.generate90_profile(v);
   let all = 0, fills = 0, measures = 0;
-  say(`Generate profiled, ${VARIANTS[v]}:`);
+  say(`Generate profiled on the real files, ${VARIANTS[v]}:`);
   STAGES.forEach((name, k) => {
     const v = [0, 1, 2, 3, 4].map((f) => x.profile_value(k, f));
     if (v[0] === 0 && v[1] === 0 && v[3] === 0) return;
@@ -102,7 +127,7 @@ const runs = [0, 9, 8, 7, 6, 5, 4, 2, 3, 1].map((v) => [v, ...best(() => x.gener
 const [, quickMs] = runs[0];
 for (const [v, ms, c] of runs) {
   const same = v === 0 ? 1 : x.generate90_same(0, v);
-  say(`Generate 90 bars, ${VARIANTS[v]}: ${ms.toFixed(0)} ms, objective ${c.toFixed(3)} (best of 3)${v === 0 ? "" : `: ${(ms / quickMs).toFixed(2)}x the default's time, ${same === 1 ? "the same dance" : `dances differ in ${-same} bars`}`}`);
+  say(`Generate 90 bars from real files, ${VARIANTS[v]}: ${ms.toFixed(0)} ms, objective ${c.toFixed(3)} (best of 3)${v === 0 ? "" : `: ${(ms / quickMs).toFixed(2)}x the default's time, ${same === 1 ? "the same dance" : `dances differ in ${-same} bars`}`}`);
   // The exact controls (session 24's measures, session 20's and 19's work): the same dance, or the run fails.
   if ((v === 9 || v === 8 || v === 7) && same !== 1) process.exitCode = 1;
 }

@@ -137,6 +137,63 @@ pub extern "C" fn generate90_every_other() -> f32 {
     generate90_from(&OTHER)
 }
 
+thread_local! {
+    static FILES: RefCell<Vec<(String, Vec<u8>)>> = const { RefCell::new(Vec::new()) };
+    static REAL: RefCell<Option<SegmentLibrary>> = const { RefCell::new(None) };
+}
+
+/// Room for `len` bytes in the module's memory, for the host to write a file's name or bytes
+/// into and hand over with [`real_add`].
+#[no_mangle]
+pub extern "C" fn bytes_alloc(len: u32) -> *mut u8 {
+    let mut v = vec![0u8; len as usize];
+    let p = v.as_mut_ptr();
+    std::mem::forget(v);
+    p
+}
+
+/// Keeps one real file for [`setup_real`]: its path relative to the data directory at
+/// (`name_ptr`, `name_len`) and its bytes at (`ptr`, `len`); returns how many files are kept.
+///
+/// # Safety
+/// Each pointer must come from [`bytes_alloc`] with that very length, and is taken over.
+#[no_mangle]
+pub unsafe extern "C" fn real_add(name_ptr: *mut u8, name_len: u32, ptr: *mut u8, len: u32) -> u32 {
+    // SAFETY: the caller hands over two buffers bytes_alloc made with these lengths (a
+    // vec![0; len], whose capacity is its length).
+    let (name, bytes) = unsafe { (Vec::from_raw_parts(name_ptr, name_len as usize, name_len as usize), Vec::from_raw_parts(ptr, len as usize, len as usize)) };
+    FILES.with(|f| {
+        let mut f = f.borrow_mut();
+        f.push((String::from_utf8_lossy(&name).into_owned(), bytes));
+        f.len() as u32
+    })
+}
+
+/// Builds the library of real files (`odori_tests::real_file_library`) from the files kept by
+/// [`real_add`]; returns its segment count.
+#[no_mangle]
+pub extern "C" fn setup_real() -> u32 {
+    let files = FILES.with(|f| std::mem::take(&mut *f.borrow_mut()));
+    install(&REAL, odori_tests::real_file_library(&files))
+}
+
+/// Generate as [`generate90`] from the library of real files ([`setup_real`]); returns the
+/// objective (-1 without the library).
+#[no_mangle]
+pub extern "C" fn generate90_real() -> f32 {
+    generate90_from(&REAL)
+}
+
+/// Makes the library of real files the one [`generate90_profile`] and [`generate90_variant`]
+/// run on (the medleys' dances need no refill); returns its segment count (0 without it).
+#[no_mangle]
+pub extern "C" fn real_as_main() -> u32 {
+    match REAL.with(|r| r.borrow_mut().take()) {
+        Some(lib) => install(&LIB, lib),
+        None => 0,
+    }
+}
+
 /// Generate on the same 90 bars from the built-in library alone (558 segments), where the
 /// variety term is on (it is off while a library holds imported moves, as the medley is); the
 /// library is built on the first call. Returns the objective.

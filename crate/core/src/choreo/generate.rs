@@ -612,7 +612,7 @@ pub fn skate_stage(p: &Problem, weights: &FillWeights, path: Vec<usize>, cost: f
 /// default), the stage first tries [`JOIN_BANS_AT_ONCE_TRIES`] refills that bar the move after
 /// every join over the goal in the last measure, and keeps their dance when it meets every goal
 /// (joins, skate goal, beat-rate band); else it starts again from `path` one join a refill (the
-/// 90-bar bench: 3 refills to a worst join of 0.84, where one join a refill spent all 16 and
+/// 90-bar bench of session 17, its medley laid end to end: 3 refills to a worst join of 0.84, where one join a refill spent all 16 and
 /// ended at 5.55; `docs/benchmarks-notes-choreo.md`). Under [`MovesSource::Mine`], the bar of a barred imported move is
 /// also opened to built-in moves (the source's charge lifted there, [`Problem::lift_charge`]):
 /// the preference order of issue 26 — built-in moves fill only bars where no imported move
